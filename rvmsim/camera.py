@@ -1,0 +1,309 @@
+"""Fisheye camera model: the rear-view camera ("P camera" of the paper, section III-B).
+
+Conventions
+-----------
+Scene frame (the paper's, section III-A): X toward the driver's side, Y toward the ground,
+Z toward the rear of the vehicle; origin on the ground, on the vehicle centre line, in the
+vertical plane through the rearmost point of the rear bumper.  Units: metres.  A point at
+height ``h`` above the ground has ``Y = -h``.
+
+Camera frame (OpenCV's): x to the right of the image, y down the image, z along the optical
+axis.  With yaw = pitch = roll = 0 the camera looks straight rearward and its axes coincide
+with the scene axes (x = X, y = Y, z = Z).
+
+Mount angles, in degrees, applied as ``R_cam_to_scene = Ry(yaw) @ Rx(-pitch) @ Rz(roll)``:
+
+* ``pitch`` > 0 turns the optical axis down toward the ground;
+* ``yaw`` > 0 turns the optical axis toward +X (the driver's side);
+* ``roll`` > 0 turns the camera's x axis toward its y axis about the optical axis.
+
+Pixels: OpenCV's convention, pixel centres at integer coordinates, (u, v) = (column, row),
+origin at the centre of the top-left pixel.
+
+Lens: Kannala-Brandt, exactly as ``cv2.fisheye`` defines it.  With the incidence angle
+θ (radians, from the optical axis) and the azimuth φ of a ray,
+
+    θ_d = θ · (1 + k1·θ² + k2·θ⁴ + k3·θ⁶ + k4·θ⁸)
+    u   = fx · (θ_d·cos φ + skew · θ_d·sin φ) + cx
+    v   = fy ·  θ_d·sin φ + cy
+
+``k = 0`` is the equidistance lens r = f·θ (the paper's equation (3)).  Unlike
+``cv2.fisheye.projectPoints`` (which uses θ = atan(r/z) and so breaks down behind the
+camera's principal plane), θ = atan2(√(x²+y²), z) here, so rays beyond 90° — which a 190°
+lens sees — project correctly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "FisheyeCamera",
+    "rotation_from_ypr",
+    "distort_theta",
+    "undistort_theta",
+]
+
+
+def _rot_x(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _rot_y(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_from_ypr(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
+    """Camera-to-scene rotation from mount angles.
+
+    Parameters
+    ----------
+    yaw_deg, pitch_deg, roll_deg : float
+        Mount angles in degrees (see the module docstring for the signs).
+
+    Returns
+    -------
+    R : (3, 3) float64
+        Rotation whose columns are the camera's x, y, z axes in scene coordinates.
+    """
+    return (
+        _rot_y(np.radians(yaw_deg)) @ _rot_x(-np.radians(pitch_deg)) @ _rot_z(np.radians(roll_deg))
+    )
+
+
+def distort_theta(theta: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Distorted angle θ_d = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ + k4θ⁸), radians in and out."""
+    t2 = theta * theta
+    return theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))))
+
+
+def _distort_theta_derivative(theta: np.ndarray, k: np.ndarray) -> np.ndarray:
+    t2 = theta * theta
+    return 1.0 + t2 * (3 * k[0] + t2 * (5 * k[1] + t2 * (7 * k[2] + t2 * 9 * k[3])))
+
+
+def undistort_theta(theta_d: np.ndarray, k: np.ndarray, *, theta_max: float) -> np.ndarray:
+    """Invert :func:`distort_theta` on [0, theta_max] by Newton's method.
+
+    Parameters
+    ----------
+    theta_d : ndarray
+        Distorted angles (radians, ≥ 0).
+    k : (4,) float
+        Kannala-Brandt coefficients k1..k4.
+    theta_max : float
+        Largest incidence angle of interest (radians); the polynomial must be increasing on
+        [0, theta_max] (checked when the camera is built).
+
+    Returns
+    -------
+    theta : ndarray
+        Incidence angles (radians).  Values of ``theta_d`` beyond the lens's range give
+        angles > ``theta_max``, clipped to ``theta_max * 1.5`` so callers can mask them.
+    """
+    theta_d = np.asarray(theta_d, dtype=np.float64)
+    if not np.any(k):
+        return theta_d.copy()
+    theta = theta_d.copy()
+    limit = theta_max * 1.5
+    for _ in range(20):
+        f = distort_theta(theta, k) - theta_d
+        df = _distort_theta_derivative(theta, k)
+        df = np.where(np.abs(df) < 1e-6, 1e-6, df)
+        step = f / df
+        theta = np.clip(theta - step, 0.0, limit)
+        if np.max(np.abs(step), initial=0.0) < 1e-12:
+            break
+    return theta
+
+
+@dataclass(frozen=True)
+class FisheyeCamera:
+    """A calibrated fisheye camera at a pose in the scene.
+
+    Parameters
+    ----------
+    width, height : int
+        Image size in px.
+    fx, fy : float
+        Focal lengths in px/rad (the Kannala-Brandt / equidistance scale; fx ≠ fy allowed).
+    cx, cy : float
+        Principal point in px (pixel-centre convention).
+    k : (4,) tuple of float
+        Kannala-Brandt coefficients k1..k4; all zero for an equidistance lens.
+    skew : float
+        cv2.fisheye's alpha (K[0, 1] = fx · skew); usually 0.
+    fov_deg : float
+        Full field of view of the lens in degrees; rays beyond fov_deg / 2 from the optical axis
+        never reach the sensor (those pixels are dark and labelled void).
+    rotation : (3, 3) float
+        Camera-to-scene rotation (see :func:`rotation_from_ypr`).
+    position : (3,) float
+        Optical centre in scene coordinates, metres.
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    k: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    skew: float = 0.0
+    fov_deg: float = 190.0
+    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        if self.width <= 0 or self.height <= 0:
+            raise ValueError(f"image size must be positive, got {self.width}x{self.height}")
+        if self.fx <= 0 or self.fy <= 0:
+            raise ValueError(f"focal lengths must be positive, got fx={self.fx}, fy={self.fy}")
+        if not 0 < self.fov_deg <= 360:
+            raise ValueError(f"fov_deg must be in (0, 360], got {self.fov_deg}")
+        rot = np.asarray(self.rotation, dtype=np.float64)
+        pos = np.asarray(self.position, dtype=np.float64)
+        if rot.shape != (3, 3) or not np.allclose(rot @ rot.T, np.eye(3), atol=1e-9):
+            raise ValueError("rotation must be a (3, 3) orthonormal matrix")
+        if pos.shape != (3,):
+            raise ValueError("position must have shape (3,)")
+        rot.setflags(write=False)
+        pos.setflags(write=False)
+        object.__setattr__(self, "rotation", rot)
+        object.__setattr__(self, "position", pos)
+        object.__setattr__(self, "k", tuple(float(x) for x in self.k))
+        # The distortion polynomial must be one-to-one over the lens's field.
+        theta = np.linspace(0.0, self.theta_max, 2048)
+        if np.any(_distort_theta_derivative(theta, np.asarray(self.k)) <= 0):
+            raise ValueError(
+                "lens distortion k1..k4 is not monotonic up to fov_deg/2: the image would fold"
+            )
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def theta_max(self) -> float:
+        """Half the lens's field of view, radians."""
+        return float(np.radians(self.fov_deg) / 2.0)
+
+    @property
+    def K(self) -> np.ndarray:
+        """The 3×3 camera matrix in cv2.fisheye's layout."""
+        return np.array(
+            [[self.fx, self.fx * self.skew, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]]
+        )
+
+    @property
+    def D(self) -> np.ndarray:
+        """The (4, 1) distortion vector in cv2.fisheye's layout."""
+        return np.asarray(self.k, dtype=np.float64).reshape(4, 1)
+
+    @property
+    def rvec_tvec(self) -> tuple[np.ndarray, np.ndarray]:
+        """Scene-to-camera pose as OpenCV (rvec, tvec), for cv2.fisheye.projectPoints."""
+        import cv2
+
+        r_sc = self.rotation.T
+        rvec, _ = cv2.Rodrigues(r_sc)
+        tvec = -r_sc @ self.position
+        return rvec.reshape(3, 1), tvec.reshape(3, 1)
+
+    def scaled(self, factor: float) -> FisheyeCamera:
+        """The same lens on a sensor resampled by ``factor`` (e.g. 0.25 for a quick preview).
+
+        Focal lengths scale with the factor; the principal point scales about the pixel
+        *edges* (``(c + 0.5) · factor − 0.5``), so the image content stays in place.
+        """
+        w = max(1, int(round(self.width * factor)))
+        h = max(1, int(round(self.height * factor)))
+        sx, sy = w / self.width, h / self.height
+        return FisheyeCamera(
+            width=w,
+            height=h,
+            fx=self.fx * sx,
+            fy=self.fy * sy,
+            cx=(self.cx + 0.5) * sx - 0.5,
+            cy=(self.cy + 0.5) * sy - 0.5,
+            k=self.k,
+            skew=self.skew * sy / sx,
+            fov_deg=self.fov_deg,
+            rotation=self.rotation,
+            position=self.position,
+        )
+
+    # ------------------------------------------------------------------ projection
+    def scene_to_camera(self, points: np.ndarray) -> np.ndarray:
+        """Scene points (N, 3) in metres → camera-frame points (N, 3) in metres."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        return (pts - self.position) @ self.rotation
+
+    def project_rays(self, rays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Project camera-frame directions to pixels.
+
+        Parameters
+        ----------
+        rays : (N, 3) float
+            Directions (or points) in the camera frame; need not be unit length.
+
+        Returns
+        -------
+        uv : (N, 2) float64
+            Pixel coordinates (u = column, v = row), pixel-centre convention.
+        in_fov : (N,) bool
+            True where the ray lies within the lens's field of view.
+        """
+        r = np.asarray(rays, dtype=np.float64).reshape(-1, 3)
+        rho = np.hypot(r[:, 0], r[:, 1])
+        theta = np.arctan2(rho, r[:, 2])
+        theta_d = distort_theta(theta, np.asarray(self.k))
+        safe = np.where(rho > 0, rho, 1.0)
+        xd = np.where(rho > 0, theta_d * r[:, 0] / safe, 0.0)
+        yd = np.where(rho > 0, theta_d * r[:, 1] / safe, 0.0)
+        u = self.fx * (xd + self.skew * yd) + self.cx
+        v = self.fy * yd + self.cy
+        return np.stack([u, v], axis=1), theta <= self.theta_max
+
+    def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Project scene points (N, 3), metres, to pixels; see :meth:`project_rays`."""
+        return self.project_rays(self.scene_to_camera(points))
+
+    def pixel_rays(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Back-project pixels to unit rays in the camera frame.
+
+        Parameters
+        ----------
+        uv : (..., 2) float
+            Pixel coordinates (pixel-centre convention).
+
+        Returns
+        -------
+        rays : (..., 3) float64
+            Unit directions in the camera frame.
+        in_fov : (...) bool
+            True where the pixel lies inside the lens's image circle (θ ≤ fov/2).
+        """
+        uv = np.asarray(uv, dtype=np.float64)
+        yd = (uv[..., 1] - self.cy) / self.fy
+        xd = (uv[..., 0] - self.cx) / self.fx - self.skew * yd
+        theta_d = np.hypot(xd, yd)
+        theta = undistort_theta(theta_d, np.asarray(self.k), theta_max=self.theta_max)
+        in_fov = theta <= self.theta_max
+        safe = np.where(theta_d > 0, theta_d, 1.0)
+        s = np.sin(theta)
+        x = np.where(theta_d > 0, s * xd / safe, 0.0)
+        y = np.where(theta_d > 0, s * yd / safe, 0.0)
+        rays = np.stack([x, y, np.cos(theta)], axis=-1)
+        return rays, in_fov
+
+    def image_rays(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unit rays (H, W, 3) for every pixel centre, and the (H, W) in-field mask."""
+        u, v = np.meshgrid(np.arange(self.width), np.arange(self.height))
+        return self.pixel_rays(np.stack([u, v], axis=-1).astype(np.float64))

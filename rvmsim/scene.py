@@ -1,0 +1,534 @@
+"""Scene files: one vehicle's rear-view camera, body parts and FMVSS 111 test site, in YAML.
+
+A scene file is read with ``yaml.safe_load`` and validated by the pydantic models below
+(unknown keys are errors).  Every problem becomes a :class:`~rvmsim.errors.SceneError` that
+names the file, the line and the dotted key.  Paths inside a scene file (mesh files) are
+resolved relative to the scene file.
+
+Units: metres and degrees; pixels for image sizes and intrinsics.  Frame: see
+:mod:`rvmsim.camera` (X toward the driver's side, Y toward the ground, Z rearward, origin on
+the ground below the rearmost point of the bumper).  Heights in the vehicle and test-site
+sections are given as positive heights above the ground for readability; the camera
+position is a point in the scene frame, so a camera 1 m up has ``y = -1.0``.
+
+See ``docs/scene-format.md`` for an annotated example.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import numpy as np
+import yaml
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    model_validator,
+)
+
+from . import fmvss111
+from .camera import FisheyeCamera, rotation_from_ypr
+from .errors import SceneError
+
+__all__ = [
+    "Scene",
+    "CameraSpec",
+    "Intrinsics",
+    "Lens",
+    "Mount",
+    "BlockPart",
+    "MeshPart",
+    "Vehicle",
+    "TestSite",
+    "TestObject",
+    "Guidelines",
+    "PatternBoard",
+    "RenderSettings",
+    "load_scene",
+    "scene_from_dict",
+]
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+NonNegFloat = Annotated[float, Field(ge=0)]
+Angle180 = Annotated[float, Field(ge=-180, le=180)]
+Rgb = tuple[
+    Annotated[float, Field(ge=0, le=1)],
+    Annotated[float, Field(ge=0, le=1)],
+    Annotated[float, Field(ge=0, le=1)],
+]
+Vec3 = tuple[float, float, float]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# ---------------------------------------------------------------------------- camera
+class Intrinsics(_Model):
+    """Focal lengths and principal point, given in exactly one of four ways.
+
+    * ``fx``, ``fy`` (px/rad) [, ``cx``, ``cy`` px];
+    * ``K``: the 3×3 camera matrix of a ``cv2.fisheye`` calibration, pasted as is;
+    * ``horizontal_fov_deg``: the lens's angle across the image width (equidistance scale);
+    * ``focal_length_mm`` and ``pixel_pitch_um``.
+
+    The principal point defaults to the image centre ((W − 1)/2, (H − 1)/2).
+    """
+
+    fx: PositiveFloat | None = None
+    fy: PositiveFloat | None = None
+    cx: float | None = None
+    cy: float | None = None
+    skew: float = 0.0
+    K: tuple[Vec3, Vec3, Vec3] | None = None
+    horizontal_fov_deg: Annotated[float, Field(gt=0, le=360)] | None = None
+    focal_length_mm: PositiveFloat | None = None
+    pixel_pitch_um: PositiveFloat | None = None
+
+    @model_validator(mode="after")
+    def _one_way(self) -> Intrinsics:
+        ways = [
+            self.fx is not None or self.fy is not None,
+            self.K is not None,
+            self.horizontal_fov_deg is not None,
+            self.focal_length_mm is not None or self.pixel_pitch_um is not None,
+        ]
+        if sum(ways) != 1:
+            raise ValueError(
+                "give exactly one of: fx+fy, K, horizontal_fov_deg, focal_length_mm+pixel_pitch_um"
+            )
+        if ways[0] and (self.fx is None or self.fy is None):
+            raise ValueError("fx and fy must both be given")
+        if ways[3] and (self.focal_length_mm is None or self.pixel_pitch_um is None):
+            raise ValueError("focal_length_mm needs pixel_pitch_um (and the other way round)")
+        if self.K is not None:
+            k = np.asarray(self.K)
+            if k[0, 0] <= 0 or k[1, 1] <= 0:
+                raise ValueError("K: focal lengths K[0][0], K[1][1] must be > 0")
+            if k[1, 0] != 0 or k[2, 0] != 0 or k[2, 1] != 0 or k[2, 2] != 1:
+                raise ValueError("K must be [[fx, s, cx], [0, fy, cy], [0, 0, 1]]")
+        return self
+
+    def resolve(self, width: int, height: int) -> tuple[float, float, float, float, float]:
+        """(fx, fy, cx, cy, skew) in px for an image of ``width`` × ``height`` px."""
+        cx = (width - 1) / 2.0 if self.cx is None else self.cx
+        cy = (height - 1) / 2.0 if self.cy is None else self.cy
+        if self.K is not None:
+            k = self.K
+            return k[0][0], k[1][1], k[0][2], k[1][2], k[0][1] / k[0][0]
+        if self.horizontal_fov_deg is not None:
+            f = (width / 2.0) / math.radians(self.horizontal_fov_deg / 2.0)
+            return f, f, cx, cy, self.skew
+        if self.focal_length_mm is not None and self.pixel_pitch_um is not None:
+            f = self.focal_length_mm * 1000.0 / self.pixel_pitch_um
+            return f, f, cx, cy, self.skew
+        assert self.fx is not None and self.fy is not None
+        return self.fx, self.fy, cx, cy, self.skew
+
+
+class Lens(_Model):
+    """Lens model: equidistance (r = f·θ) or Kannala-Brandt k1..k4 as in cv2.fisheye."""
+
+    model: Literal["equidistance", "kannala_brandt"] = "equidistance"
+    k: tuple[float, float, float, float] | None = None
+    fov_deg: Annotated[float, Field(gt=0, le=360)] = 190.0
+
+    @model_validator(mode="after")
+    def _k_matches_model(self) -> Lens:
+        if self.model == "kannala_brandt" and self.k is None:
+            raise ValueError("model kannala_brandt needs k: [k1, k2, k3, k4]")
+        if self.model == "equidistance" and self.k is not None and any(self.k):
+            raise ValueError("model equidistance takes no k (use model: kannala_brandt)")
+        return self
+
+
+class Mount(_Model):
+    """Camera pose: optical centre in the scene frame (metres) and mount angles (degrees)."""
+
+    position: Vec3
+    yaw_deg: Angle180 = 0.0
+    pitch_deg: Annotated[float, Field(ge=-90, le=90)] = 0.0
+    roll_deg: Angle180 = 0.0
+
+
+class CameraSpec(_Model):
+    image_size: tuple[Annotated[int, Field(gt=0)], Annotated[int, Field(gt=0)]]
+    intrinsics: Intrinsics
+    lens: Lens = Lens()
+    mount: Mount
+
+    def to_camera(self) -> FisheyeCamera:
+        w, h = self.image_size
+        fx, fy, cx, cy, skew = self.intrinsics.resolve(w, h)
+        m = self.mount
+        return FisheyeCamera(
+            width=w,
+            height=h,
+            fx=fx,
+            fy=fy,
+            cx=cx,
+            cy=cy,
+            k=self.lens.k or (0.0, 0.0, 0.0, 0.0),
+            skew=skew,
+            fov_deg=self.lens.fov_deg,
+            rotation=rotation_from_ypr(m.yaw_deg, m.pitch_deg, m.roll_deg),
+            position=np.asarray(m.position, dtype=np.float64),
+        )
+
+
+# ---------------------------------------------------------------------------- vehicle
+class BlockPart(_Model):
+    """A parametric body part: a swept block with a curved rear face.
+
+    In plan view the rear face is ``z(x) = -setback - sweep · (2x / width)²``; it rises from
+    ``bottom`` to ``top`` (heights above ground, metres), leaning forward by ``lean_deg``
+    (0 = vertical; a tailgate or rear window leans forward with height), and the top surface
+    reaches ``depth`` metres forward from the rear face.
+    """
+
+    width: PositiveFloat
+    bottom: NonNegFloat
+    top: PositiveFloat
+    depth: PositiveFloat
+    setback: NonNegFloat = 0.0
+    sweep: NonNegFloat = 0.0
+    lean_deg: Annotated[float, Field(ge=-45, le=80)] = 0.0
+    color: Rgb | None = None
+
+    @model_validator(mode="after")
+    def _top_above_bottom(self) -> BlockPart:
+        if self.top <= self.bottom:
+            raise ValueError(f"top ({self.top}) must be above bottom ({self.bottom})")
+        return self
+
+
+class MeshPart(_Model):
+    """A body part from a mesh file (STL/OBJ/PLY/glTF/GLB, anything trimesh loads).
+
+    The file's coordinates are scaled by ``units`` to metres, rotated by
+    ``rotation_deg`` = (yaw, pitch, roll) with the camera's convention, then translated by
+    ``translation`` (scene frame, metres).  ``mesh`` is relative to the scene file.
+    """
+
+    mesh: str
+    units: Literal["m", "mm", "cm", "in"] = "m"
+    translation: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: tuple[Angle180, Angle180, Angle180] = (0.0, 0.0, 0.0)
+    color: Rgb | None = None
+
+    @property
+    def scale(self) -> float:
+        return {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}[self.units]
+
+    def transform(self) -> np.ndarray:
+        """(4, 4) file-to-scene transform (scale, then rotate, then translate)."""
+        t = np.eye(4)
+        t[:3, :3] = rotation_from_ypr(*self.rotation_deg) * self.scale
+        t[:3, 3] = self.translation
+        return t
+
+
+def _part_kind(v: Any) -> str:
+    if isinstance(v, dict):
+        return "mesh" if "mesh" in v else "block"
+    return "mesh" if isinstance(v, MeshPart) else "block"
+
+
+Part = Annotated[
+    Union[Annotated[BlockPart, Tag("block")], Annotated[MeshPart, Tag("mesh")]],
+    Discriminator(_part_kind),
+]
+
+
+class Vehicle(_Model):
+    paint: Rgb = (0.75, 0.75, 0.78)
+    bumper: Part
+    garnish: Part | None = None
+    trunk: Part | None = None
+    extra: list[MeshPart] = []
+
+
+# ---------------------------------------------------------------------------- test site
+class TestObject(_Model):
+    """Override for one FMVSS test object: its position and whether it is placed."""
+
+    __test__ = False  # not a pytest class
+    position: tuple[float, float] | None = None  # (x, z) metres
+    enabled: bool = True
+
+
+StripeFacing = Union[Literal["vehicle_centreline", "vehicle", "camera"], Angle180]
+
+
+class Guidelines(_Model):
+    """Fixed trajectory guidelines painted on the ground.
+
+    Two side lines at ``side_x`` (lateral positions, metres) running from ``side_z[0]`` to
+    ``side_z[1]`` behind the bumper, and cross lines at distances ``cross_z`` (numbered 1, 2, …
+    from the bumper) spanning the side lines.
+    """
+
+    enabled: bool = True
+    side_x: tuple[float, float] = (-0.9, 0.9)
+    side_z: tuple[NonNegFloat, PositiveFloat] = (0.2, 3.0)
+    cross_z: list[PositiveFloat] = [0.5, 1.0, 2.0, 3.0]
+    line_width: PositiveFloat = 0.05
+    color: Rgb = (0.95, 0.85, 0.1)
+
+    @model_validator(mode="after")
+    def _check(self) -> Guidelines:
+        if self.side_x[0] >= self.side_x[1]:
+            raise ValueError("side_x must be [negative-side x, positive-side x], increasing")
+        if self.side_z[0] >= self.side_z[1]:
+            raise ValueError("side_z must be [start, end] with start < end")
+        if len(self.cross_z) > 19:
+            raise ValueError("at most 19 cross lines")
+        if list(self.cross_z) != sorted(self.cross_z):
+            raise ValueError("cross_z must be increasing (line 1 nearest the bumper)")
+        return self
+
+
+class PatternBoard(_Model):
+    """Calibration pattern board: a checkerboard with a white margin.
+
+    ``placement: ground`` lays it flat on the ground (its rows running away from the car);
+    ``upright`` stands it vertically facing the car.  ``position`` is the board centre in the
+    scene frame (metres); ``yaw_deg`` turns it about the vertical.
+    """
+
+    enabled: bool = True
+    squares: tuple[Annotated[int, Field(ge=2)], Annotated[int, Field(ge=2)]] = (5, 5)
+    square_size: PositiveFloat = 0.16
+    margin: NonNegFloat = 0.04
+    placement: Literal["ground", "upright"] = "ground"
+    position: Vec3 = (0.0, 0.0, 1.5)
+    yaw_deg: Angle180 = 0.0
+
+    @property
+    def size(self) -> tuple[float, float]:
+        """(width, height) of the whole board, metres."""
+        return (
+            self.squares[0] * self.square_size + 2 * self.margin,
+            self.squares[1] * self.square_size + 2 * self.margin,
+        )
+
+
+class TestSite(_Model):
+    """The FMVSS 111 layout (defaults in :mod:`rvmsim.fmvss111`) plus customer fixtures."""
+
+    __test__ = False
+    object_height: PositiveFloat = fmvss111.OBJECT_HEIGHT_M
+    object_diameter: PositiveFloat = fmvss111.OBJECT_DIAMETER_M
+    stripe_width: PositiveFloat = fmvss111.STRIPE_WIDTH_M
+    lower_patch_height: PositiveFloat = fmvss111.LOWER_PATCH_HEIGHT_M
+    position_reference: Literal["centre", "surface"] = fmvss111.OBJECT_POSITION_REFERENCE  # type: ignore[assignment]
+    vertical_stripe_facing: StripeFacing = fmvss111.VERTICAL_STRIPE_FACING  # type: ignore[assignment]
+    objects: dict[Literal["A", "B", "C", "D", "E", "F", "G"], TestObject] = {}
+    guidelines: Guidelines = Guidelines()
+    board: PatternBoard = PatternBoard()
+    ground_size: PositiveFloat = 60.0
+    ground_color: Rgb = (0.42, 0.42, 0.42)
+
+    @model_validator(mode="after")
+    def _check(self) -> TestSite:
+        if self.stripe_width >= self.object_height:
+            raise ValueError("stripe_width must be smaller than object_height")
+        if self.lower_patch_height >= self.object_height:
+            raise ValueError("lower_patch_height must be smaller than object_height")
+        if self.stripe_width >= math.pi * self.object_diameter:
+            raise ValueError("stripe_width must be smaller than the object circumference")
+        return self
+
+    def object_centre(self, letter: str) -> tuple[float, float] | None:
+        """(x, z) of the axis of object ``letter`` in metres, or None when it is disabled."""
+        override = self.objects.get(letter)  # type: ignore[call-overload]
+        if override is not None and not override.enabled:
+            return None
+        x, z = fmvss111.OBJECT_POSITIONS_M[letter]
+        if override is not None and override.position is not None:
+            x, z = override.position
+        if self.position_reference == "surface":
+            z += self.object_diameter / 2.0
+        return (x, z)
+
+
+class RenderSettings(_Model):
+    """Renderer knobs.  ``face_size_px``: cube face resolution (None: chosen so the faces are
+    at least as dense as the fisheye image everywhere)."""
+
+    face_size_px: Annotated[int, Field(ge=16, le=8192)] | None = None
+    max_face_size_px: Annotated[int, Field(ge=16, le=8192)] = 2048
+    sky_color: Rgb = (0.62, 0.76, 0.92)
+
+
+class Scene(_Model):
+    """One vehicle at the test site.  Build with :func:`load_scene` or :func:`scene_from_dict`."""
+
+    name: str
+    description: str = ""
+    camera: CameraSpec
+    vehicle: Vehicle
+    test_site: TestSite = TestSite()
+    render: RenderSettings = RenderSettings()
+    #: Directory that relative paths in the scene are resolved against (not a YAML key).
+    base_dir: str = Field(default=".", exclude=True)
+    #: The file the scene was read from, for messages (not a YAML key).
+    source: str = Field(default="<dict>", exclude=True)
+
+    def fisheye_camera(self) -> FisheyeCamera:
+        """The rear-view camera as a :class:`~rvmsim.camera.FisheyeCamera`."""
+        return self.camera.to_camera()
+
+    def resolve_path(self, path: str) -> Path:
+        """A path from the scene file, made absolute relative to the scene file's folder."""
+        p = Path(path).expanduser()
+        return p if p.is_absolute() else (Path(self.base_dir) / p).resolve()
+
+
+# ---------------------------------------------------------------------------- loading
+_TAGS = {"block", "mesh"}
+
+
+def _key_lines(text: str) -> dict[tuple[Any, ...], int]:
+    """Map each key path in a YAML document to its 1-based line (best effort)."""
+    lines: dict[tuple[Any, ...], int] = {}
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return lines
+
+    def walk(node: Any, path: tuple[Any, ...]) -> None:
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                key = k.value
+                lines[path + (key,)] = k.start_mark.line + 1
+                walk(v, path + (key,))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, v in enumerate(node.value):
+                lines[path + (i,)] = v.start_mark.line + 1
+                walk(v, path + (i,))
+
+    if root is not None:
+        walk(root, ())
+    return lines
+
+
+def _format_validation_error(
+    err: ValidationError, source: str, key_lines: dict[tuple[Any, ...], int]
+) -> SceneError:
+    e = err.errors(include_url=False)[0]
+    loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p in _TAGS))
+    key = ".".join(str(p) for p in loc)
+    kind = e["type"]
+    msg = e["msg"]
+    if kind == "extra_forbidden":
+        msg = "unknown key"
+    elif kind == "missing":
+        msg = "missing required key"
+    elif msg.startswith("Value error, "):
+        msg = msg[len("Value error, ") :]
+    if kind not in ("extra_forbidden", "missing") and "input" in e and not isinstance(
+        e["input"], dict
+    ):
+        msg = f"{msg} (got {e['input']!r})"
+    line = None
+    for n in range(len(loc), 0, -1):
+        if loc[:n] in key_lines:
+            line = key_lines[loc[:n]]
+            break
+    return SceneError(source, key, msg, line)
+
+
+def scene_from_dict(
+    data: Any, *, base_dir: str | Path = ".", source: str = "<dict>", text: str | None = None
+) -> Scene:
+    """Validate a parsed scene document.
+
+    Parameters
+    ----------
+    data : dict
+        The document (as ``yaml.safe_load`` gives it).
+    base_dir : path
+        Folder that relative paths in the scene are resolved against.
+    source : str
+        Name used in error messages.
+    text : str, optional
+        The YAML text, to give line numbers in error messages.
+
+    Raises
+    ------
+    SceneError
+        For any invalid or missing key, or a missing mesh file.
+    """
+    if not isinstance(data, dict):
+        raise SceneError(source, "", "a scene file must be a YAML mapping (key: value)")
+    try:
+        scene = Scene.model_validate(
+            {**data, "base_dir": str(Path(base_dir).resolve()), "source": source}
+        )
+    except ValidationError as err:
+        raise _format_validation_error(err, source, _key_lines(text or "")) from None
+    key_lines = _key_lines(text or "")
+    try:
+        scene.fisheye_camera()
+    except ValueError as err:
+        raise SceneError(source, "camera", str(err), key_lines.get(("camera",))) from None
+    for key, part in _mesh_parts(scene):
+        path = scene.resolve_path(part.mesh)
+        if not path.is_file():
+            loc = tuple(int(p) if p.isdigit() else p for p in key.split("."))
+            raise SceneError(
+                source, key, f"mesh file not found: {path}", key_lines.get(loc)
+            )
+    return scene
+
+
+def _mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
+    out = []
+    for name in ("bumper", "garnish", "trunk"):
+        part = getattr(scene.vehicle, name)
+        if isinstance(part, MeshPart):
+            out.append((f"vehicle.{name}.mesh", part))
+    for i, part in enumerate(scene.vehicle.extra):
+        out.append((f"vehicle.extra.{i}.mesh", part))
+    return out
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file.
+
+    Parameters
+    ----------
+    path : path
+        The YAML scene file.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Unreadable file, malformed YAML, or any invalid key (message names file, line, key).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(str(path), "", "file not found") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise SceneError(str(path), "", f"cannot read file ({err})") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else None
+        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
+        raise SceneError(str(path), "", f"malformed YAML: {problem}", line) from None
+    return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text)
