@@ -108,7 +108,7 @@ def undistort_theta(theta_d: np.ndarray, k: np.ndarray, *, theta_max: float) -> 
     -------
     theta : ndarray
         Incidence angles (radians).  Values of ``theta_d`` beyond the lens's range give
-        angles > ``theta_max``, clipped to ``theta_max * 1.5`` so callers can mask them.
+        ``theta_max * 1.5`` (> ``theta_max``), so callers can mask them.
     """
     theta_d = np.asarray(theta_d, dtype=np.float64)
     if not np.any(k):
@@ -123,7 +123,10 @@ def undistort_theta(theta_d: np.ndarray, k: np.ndarray, *, theta_max: float) -> 
         theta = np.clip(theta - step, 0.0, limit)
         if np.max(np.abs(step), initial=0.0) < 1e-12:
             break
-    return theta
+    # Where θ_d lies beyond what the polynomial reaches, Newton lands on a wrong root (or 0):
+    # report those as out of range.
+    bad = np.abs(distort_theta(theta, k) - theta_d) > 1e-9 * np.maximum(1.0, theta_d)
+    return np.where(bad, limit, theta)
 
 
 @dataclass(frozen=True)
