@@ -83,14 +83,17 @@ class Part:
 class Landmark:
     """A known 3D point of the built scene.
 
-    ``kind`` is ``"interior"`` (well inside the surface labelled ``label``) or ``"edge"``
-    (on the border between ``label`` and something else).
+    ``kind`` is ``"interior"`` (well inside the surface labelled ``label``), ``"edge"`` (on a
+    straight border between ``label`` and something else) or ``"corner"`` (a corner of the
+    surface: the label fills only a wedge around it).  ``normal`` is the unit normal of
+    that surface at the point (scene frame), so users can tell grazing views apart.
     """
 
     name: str
     point: tuple[float, float, float]
     label: int
     kind: str
+    normal: tuple[float, float, float] = (0.0, -1.0, 0.0)
 
 
 # ---------------------------------------------------------------------------- primitives
@@ -379,6 +382,10 @@ def site_landmarks(scene: Scene) -> list[Landmark]:
         a = math.radians(az_deg)
         return (c[0] + r * math.sin(a), -h, c[1] + r * math.cos(a))
 
+    def radial(az_deg: float) -> tuple[float, float, float]:
+        a = math.radians(az_deg)
+        return (math.sin(a), 0.0, math.cos(a))
+
     cam = scene.camera.mount.position
     for letter in L.OBJECT_LETTERS:
         c = site.object_centre(letter)
@@ -391,36 +398,49 @@ def site_landmarks(scene: Scene) -> list[Landmark]:
             band0 = hgt - site.stripe_width
             lab = L.object_stripe(letter)
             out.append(Landmark(f"{letter}_stripe_centre", on_cyl(c, az, (band0 + hgt) / 2), lab,
-                                "interior"))
-            out.append(Landmark(f"{letter}_stripe_lower_edge", on_cyl(c, az, band0), lab, "edge"))
+                                "interior", radial(az)))
+            out.append(Landmark(f"{letter}_stripe_lower_edge", on_cyl(c, az, band0), lab, "edge",
+                                radial(az)))
         else:
             az = stripe_azimuth_deg(scene, letter, c)
             half = math.degrees(site.stripe_width / r) / 2
             ph = site.lower_patch_height
             patch = L.object_patch(letter)
             stripe = L.object_stripe(letter)
-            out.append(Landmark(f"{letter}_patch_centre", on_cyl(c, az, ph / 2), patch, "interior"))
+            out.append(Landmark(f"{letter}_patch_centre", on_cyl(c, az, ph / 2), patch, "interior",
+                                radial(az)))
             out.append(Landmark(f"{letter}_stripe_centre", on_cyl(c, az, (ph + hgt) / 2), stripe,
-                                "interior"))
+                                "interior", radial(az)))
             for tag, da, h in (("bl", -half, 0.0), ("br", half, 0.0), ("tl", -half, ph),
                                ("tr", half, ph)):
-                out.append(Landmark(f"{letter}_patch_{tag}", on_cyl(c, az + da, h), patch, "edge"))
+                out.append(Landmark(f"{letter}_patch_{tag}", on_cyl(c, az + da, h), patch,
+                                    "corner", radial(az + da)))
+            for tag, da, h in (("left", -half, ph / 2), ("right", half, ph / 2),
+                               ("top", 0.0, ph)):
+                out.append(Landmark(f"{letter}_patch_{tag}_edge", on_cyl(c, az + da, h), patch,
+                                    "edge", radial(az + da)))
             for tag, da in (("tl", -half), ("tr", half)):
                 out.append(Landmark(f"{letter}_stripe_{tag}", on_cyl(c, az + da, hgt), stripe,
-                                    "edge"))
+                                    "corner", radial(az + da)))
     board = site.board
     if board.enabled:
+        board_normal = tuple(float(x) for x in board_frame(board)[3])
         w, h = board.size
         for tag, sa, sb in (("00", -w / 2, -h / 2), ("10", w / 2, -h / 2), ("11", w / 2, h / 2),
                             ("01", -w / 2, h / 2)):
             out.append(Landmark(f"board_corner_{tag}", tuple(board_point(board, sa, sb)), L.BOARD,
-                                "edge"))
+                                "corner", board_normal))
+        for tag, sa, sb in (("bottom", 0.0, -h / 2), ("right", w / 2, 0.0), ("top", 0.0, h / 2),
+                            ("left", -w / 2, 0.0)):
+            out.append(Landmark(f"board_{tag}_edge", tuple(board_point(board, sa, sb)), L.BOARD,
+                                "edge", board_normal))
         s = board.square_size
         a0, b0 = -w / 2 + board.margin, -h / 2 + board.margin
         for i in range(1, board.squares[0]):
             for j in range(1, board.squares[1]):
                 p = board_point(board, a0 + i * s, b0 + j * s, _SQUARE_LIFT_M)
-                out.append(Landmark(f"board_inner_{i}_{j}", tuple(p), L.BOARD, "interior"))
+                out.append(Landmark(f"board_inner_{i}_{j}", tuple(p), L.BOARD, "interior",
+                                    board_normal))
     g = site.guidelines
     if g.enabled:
         xm = (g.side_x[0] + g.side_x[1]) / 2

@@ -36,7 +36,7 @@ from .camera import FisheyeCamera
 from .meshes import Part, build_parts
 from .scene import Scene
 
-__all__ = ["FisheyeImages", "CubeLayout", "cube_layout", "render_fisheye", "FACE_NAMES"]
+__all__ = ["FisheyeImages", "CubeLayout", "FaceCrop", "cube_layout", "render_fisheye", "FACE_NAMES"]
 
 FACE_NAMES = ("+x", "-x", "+y", "-y", "+z", "-z")
 _FACE_AXES = (  # (axis index, sign) of each face's viewing direction in the cube frame
@@ -58,17 +58,34 @@ def _face_rotation(face: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class FaceCrop:
+    """The part of one cube face that the fisheye image uses.
+
+    ``x0, y0, width, height`` are in the face's pixel grid (N + 2·GUARD_PX square, OpenCV
+    pixel centres); ``atlas_x0`` is where the crop starts in the atlas (crops side by side).
+    """
+
+    face: int
+    x0: int
+    y0: int
+    width: int
+    height: int
+    atlas_x0: int
+
+
+@dataclass(frozen=True)
 class CubeLayout:
     """Where each fisheye pixel samples the cube.
 
     Attributes
     ----------
     face_size : int
-        N, the face's inner size in px (the face image is N + 2·GUARD_PX square).
-    faces : tuple of int
-        Indices (into :data:`FACE_NAMES`) of the faces that are rendered, in atlas order.
+        N, the face's inner size in px (a full face image is N + 2·GUARD_PX square).
+    crops : tuple of FaceCrop
+        The faces that are rendered (only the rectangle the fisheye image uses), in atlas
+        order.
     atlas_x, atlas_y : (H, W) float32
-        Coordinates of each fisheye pixel in the atlas (faces side by side), for cv2.remap.
+        Coordinates of each fisheye pixel in the atlas (crops side by side), for cv2.remap.
     in_fov : (H, W) bool
         Pixels inside the lens's field.
     cube_rotation : (3, 3) float
@@ -76,15 +93,24 @@ class CubeLayout:
     """
 
     face_size: int
-    faces: tuple[int, ...]
+    crops: tuple[FaceCrop, ...]
     atlas_x: np.ndarray
     atlas_y: np.ndarray
     in_fov: np.ndarray
     cube_rotation: np.ndarray
 
     @property
-    def face_px(self) -> int:
-        return self.face_size + 2 * GUARD_PX
+    def faces(self) -> tuple[int, ...]:
+        return tuple(c.face for c in self.crops)
+
+    @property
+    def atlas_shape(self) -> tuple[int, int]:
+        return (max(c.height for c in self.crops), sum(c.width for c in self.crops))
+
+    @property
+    def centre_px(self) -> float:
+        """Principal point of every face (both axes), pixel-centre convention."""
+        return GUARD_PX + (self.face_size - 1) / 2.0
 
 
 def _face_coords(rays: np.ndarray, cube_rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -105,7 +131,8 @@ def cube_layout(
     camera: FisheyeCamera,
     *,
     face_size: int | None = None,
-    max_face_size: int = 2048,
+    oversample: float = 1.0,
+    max_face_size: int = 4096,
     cube_rotation: np.ndarray | None = None,
 ) -> CubeLayout:
     """Decide which cube faces a camera needs, their size, and the fold-back map.
@@ -115,8 +142,12 @@ def cube_layout(
     camera : FisheyeCamera
         The fisheye camera.
     face_size : int, optional
-        Face size in px.  By default, the smallest size at which every face is at least as
-        dense as the fisheye image in both directions (capped at ``max_face_size``).
+        Face size in px.  By default, ``oversample`` × the smallest size at which every face
+        is at least as dense as the fisheye image in both directions (capped at
+        ``max_face_size``).
+    oversample : float
+        Face pixels per fisheye pixel (at the least dense place) for the automatic size.
+        Nearest sampling puts a label border within 0.5 / oversample px of its true place.
     max_face_size : int
         Upper bound for the automatic size.
     cube_rotation : (3, 3) float, optional
@@ -133,28 +164,36 @@ def cube_layout(
         raise ValueError("no pixel of the camera lies inside the lens's field of view")
     if face_size is None:
         # Displacement of the unit-focal face coordinate between neighbouring fisheye pixels:
-        # the face needs focal f ≥ 1/|d| for at least 1 face px per fisheye px everywhere.
+        # a face of N px (focal N/2) has ≥ 1 px per fisheye px where N ≥ 2 / |d|.
         same_x = (face[:, 1:] == face[:, :-1]) & in_fov[:, 1:] & in_fov[:, :-1]
         same_y = (face[1:, :] == face[:-1, :]) & in_fov[1:, :] & in_fov[:-1, :]
         dx = np.linalg.norm(t[:, 1:] - t[:, :-1], axis=-1)[same_x]
         dy = np.linalg.norm(t[1:, :] - t[:-1, :], axis=-1)[same_y]
         steps = np.concatenate([dx, dy])
         min_step = float(np.min(steps)) if steps.size else 2.0 / camera.width
-        face_size = int(min(max_face_size, math.ceil(2.0 / min_step)))
+        face_size = int(min(max_face_size, math.ceil(2.0 * oversample / min_step)))
         face_size = max(face_size, 16)
-    used = tuple(int(f) for f in np.unique(face[in_fov]))
     n = face_size
-    f_px = n / 2.0
     c_px = GUARD_PX + (n - 1) / 2.0
-    slot = np.full(6, -1)
-    slot[list(used)] = np.arange(len(used))
-    fx = f_px * t[..., 0] + c_px
-    fy = f_px * t[..., 1] + c_px
-    atlas_x = (slot[face] * (n + 2 * GUARD_PX) + fx).astype(np.float32)
-    atlas_y = fy.astype(np.float32)
-    atlas_x[~in_fov] = -1.0
-    atlas_y[~in_fov] = -1.0
-    return CubeLayout(n, used, atlas_x, atlas_y, in_fov, rot)
+    full = n + 2 * GUARD_PX
+    fx = n / 2.0 * t[..., 0] + c_px
+    fy = n / 2.0 * t[..., 1] + c_px
+    crops = []
+    atlas_x = np.full(face.shape, -1.0, np.float32)
+    atlas_y = np.full(face.shape, -1.0, np.float32)
+    offset = 0
+    for f in (int(x) for x in np.unique(face[in_fov])):
+        sel = (face == f) & in_fov
+        # Bilinear sampling reads one pixel beyond the sample: keep one more for safety.
+        x0 = max(int(np.floor(fx[sel].min())) - 1, 0)
+        x1 = min(int(np.ceil(fx[sel].max())) + 2, full)
+        y0 = max(int(np.floor(fy[sel].min())) - 1, 0)
+        y1 = min(int(np.ceil(fy[sel].max())) + 2, full)
+        crops.append(FaceCrop(f, x0, y0, x1 - x0, y1 - y0, offset))
+        atlas_x[sel] = fx[sel] - x0 + offset
+        atlas_y[sel] = fy[sel] - y0
+        offset += x1 - x0
+    return CubeLayout(n, tuple(crops), atlas_x, atlas_y, in_fov, rot)
 
 
 @dataclass(frozen=True)
@@ -318,6 +357,7 @@ def render_fisheye(
     layout = cube_layout(
         cam,
         face_size=face_size or scene.render.face_size_px,
+        oversample=scene.render.oversample,
         max_face_size=scene.render.max_face_size_px,
         cube_rotation=cube_rotation,
     )
@@ -327,40 +367,44 @@ def render_fisheye(
     import pyrender
 
     pscene, seg = _pyrender_scene(parts, tuple(scene.render.sky_color))
-    s = layout.face_px
-    gl_cam = pyrender.IntrinsicsCamera(
-        fx=layout.face_size / 2.0,
-        fy=layout.face_size / 2.0,
-        cx=s / 2.0,
-        cy=s / 2.0,
-        znear=Z_NEAR_M,
-        zfar=Z_FAR_M,
-    )
-    cam_node = pscene.add(gl_cam, pose=np.eye(4))
-    renderer = pyrender.OffscreenRenderer(s, s)
+    half = layout.face_size / 2.0
+    first = layout.crops[0]
+    renderer = pyrender.OffscreenRenderer(first.width, first.height)
+    cam_node = None
     t2 = time.perf_counter()
-    color_atlas = np.zeros((s, s * len(layout.faces), 3), np.uint8)
-    label_atlas = np.zeros((s, s * len(layout.faces)), np.uint8)
-    faces = layout.faces
+    atlas_h, atlas_w = layout.atlas_shape
+    color_atlas = np.zeros((atlas_h, atlas_w, 3), np.uint8)
+    label_atlas = np.zeros((atlas_h, atlas_w), np.uint8)
+    crops = layout.crops
     if progress:
         from tqdm import tqdm
 
-        faces = tqdm(faces, desc="render cube faces", unit="face", leave=False)
+        crops = tqdm(crops, desc="render cube faces", unit="face", leave=False)
+    flags = pyrender.RenderFlags
     try:
-        for slot, f in enumerate(faces):
+        for crop in crops:
+            # pyrender's principal point counts from pixel edges: OpenCV centre + 0.5.
+            gl_cam = pyrender.IntrinsicsCamera(
+                fx=half, fy=half,
+                cx=layout.centre_px + 0.5 - crop.x0, cy=layout.centre_px + 0.5 - crop.y0,
+                znear=Z_NEAR_M, zfar=Z_FAR_M,
+            )
             pose = np.eye(4)
-            pose[:3, :3] = cam.rotation @ layout.cube_rotation @ _face_rotation(f) @ _GL_FROM_CV
+            pose[:3, :3] = (
+                cam.rotation @ layout.cube_rotation @ _face_rotation(crop.face) @ _GL_FROM_CV
+            )
             pose[:3, 3] = cam.position
-            pscene.set_pose(cam_node, pose)
-            color, _ = renderer.render(
-                pscene, flags=pyrender.RenderFlags.FLAT | pyrender.RenderFlags.SKIP_CULL_FACES
-            )
+            if cam_node is not None:
+                pscene.remove_node(cam_node)
+            cam_node = pscene.add(gl_cam, pose=pose)
+            renderer.viewport_width, renderer.viewport_height = crop.width, crop.height
+            color, _ = renderer.render(pscene, flags=flags.FLAT | flags.SKIP_CULL_FACES)
             seg_img, _ = renderer.render(
-                pscene, flags=pyrender.RenderFlags.SEG | pyrender.RenderFlags.SKIP_CULL_FACES,
-                seg_node_map=seg,
+                pscene, flags=flags.SEG | flags.SKIP_CULL_FACES, seg_node_map=seg
             )
-            color_atlas[:, slot * s : (slot + 1) * s] = color[..., :3]
-            label_atlas[:, slot * s : (slot + 1) * s] = seg_img[..., 0]
+            cols = slice(crop.atlas_x0, crop.atlas_x0 + crop.width)
+            color_atlas[: crop.height, cols] = color[..., :3]
+            label_atlas[: crop.height, cols] = seg_img[..., 0]
     finally:
         renderer.delete()
     t3 = time.perf_counter()

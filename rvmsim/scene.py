@@ -359,11 +359,16 @@ class TestSite(_Model):
 
 
 class RenderSettings(_Model):
-    """Renderer knobs.  ``face_size_px``: cube face resolution (None: chosen so the faces are
-    at least as dense as the fisheye image everywhere)."""
+    """Renderer knobs.
+
+    ``face_size_px``: cube face resolution (None: automatic, ``oversample`` face pixels per
+    fisheye pixel where the faces are least dense).  Nearest label sampling puts a label
+    border within 0.5 / ``oversample`` px of its true place.
+    """
 
     face_size_px: Annotated[int, Field(ge=16, le=8192)] | None = None
-    max_face_size_px: Annotated[int, Field(ge=16, le=8192)] = 2048
+    oversample: Annotated[float, Field(ge=0.5, le=4.0)] = 1.5
+    max_face_size_px: Annotated[int, Field(ge=16, le=8192)] = 4096
     sky_color: Rgb = (0.62, 0.76, 0.92)
 
 
