@@ -185,3 +185,16 @@ def test_missing_scene_file_cli(tmp_path):
     res = _run_cli("render", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "o"))
     assert res.returncode == 2 and "nope.yaml: file not found" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_documented_example_is_a_valid_scene():
+    """docs/scene-format.md's complete example loads (with the bundled STL for its meshes)."""
+    doc = (SCENES.parent / "docs" / "scene-format.md").read_text()
+    block = doc.split("```yaml\n", 1)[1].split("```", 1)[0]
+    text = block.replace("../assets/trunk.stl", "../assets/bumper_rounded.stl")
+    text = text.replace("../assets/tow_hitch.stl", "../assets/bumper_rounded.stl")
+    data = yaml.safe_load(text)
+    scene = scene_from_dict(data, base_dir=SCENES, text=text)
+    assert scene.camera.intrinsics.fx == 390.0
+    assert scene.test_site.object_centre("D") is None
+    assert scene.vehicle.trunk.units == "mm"
