@@ -91,6 +91,53 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     )
 
 
+@cli.command()
+@click.argument("scene", type=click.Path(path_type=Path))
+@click.option("--params", "params_file", type=click.Path(path_type=Path), default=None,
+              help="ISP params file (YAML/JSON); default: the paper's Table 2 defaults.")
+@click.option("--out", "-o", type=click.Path(path_type=Path), required=True, help="Output folder.")
+@click.option("--scale", type=click.FloatRange(0.05, 4.0), default=1.0, show_default=True,
+              help="Render the fisheye at this fraction of the sensor (RAD and shifts follow).")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def process(scene: Path, params_file: Path | None, out: Path, scale: float,
+            progress: bool) -> None:
+    """Render SCENE and run the ISP: fisheye image -> RVM image.
+
+    Writes rvm_color.png, rvm_labels.png (uint8 IDs), rvm_labels_preview.png,
+    fisheye_roi.png (the fisheye image with the region the RVM image uses outlined in green)
+    and isp.json (the parameters used).
+    """
+    from . import labels as L
+    from .imageio_utils import write_png
+    from .isp import IspParams, OutputSpec, apply_map, build_map, draw_roi, load_params
+    from .isp import params_to_dict
+    from .render import render_fisheye
+    from .scene import load_scene
+
+    try:
+        params, output = load_params(params_file) if params_file else (IspParams(), OutputSpec())
+        given = params
+        sc = load_scene(scene)
+        cam = sc.fisheye_camera()
+        if scale != 1.0:
+            cam = cam.scaled(scale)
+            params = params.for_input_scale(cam.width / sc.camera.image_size[0])
+        images = render_fisheye(sc, camera=cam, progress=progress)
+        isp_map = build_map(params, (cam.width, cam.height), output)
+        rvm_color = apply_map(images.color, isp_map, labels=False)
+        rvm_labels = apply_map(images.labels, isp_map, labels=True)
+        write_png(out / "rvm_color.png", rvm_color)
+        write_png(out / "rvm_labels.png", rvm_labels)
+        write_png(out / "rvm_labels_preview.png", L.colorize(rvm_labels))
+        write_png(out / "fisheye_roi.png", draw_roi(images.color, params, output))
+        (out / "isp.json").write_text(json.dumps(params_to_dict(given, output), indent=2))
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail(RvmsimError(f"{getattr(err, 'filename', None) or out}: {err.strerror or err}"))
+    click.echo(f"processed {sc.name}: RVM image {output.width}x{output.height} px -> {out}")
+
+
 def main() -> None:
     """Console-script entry point."""
     try:

@@ -46,3 +46,38 @@ def test_render_unwritable_output_is_one_line(tmp_path):
     )
     assert res.returncode == 2
     assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
+
+
+def test_process_writes_rvm_images_and_roi(tmp_path):
+    params = tmp_path / "p.yaml"
+    params.write_text("rad: 612\nzoom: 0.6\nadv_v_shift: 0.2\noutput: {size: [320, 180]}\n")
+    out = tmp_path / "proc"
+    res = subprocess.run(
+        [sys.executable, "-m", "rvmsim", "process", str(SCENES / "vehicle_a.yaml"), "--params",
+         str(params), "--out", str(out), "--scale", "0.25", "--no-progress"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert res.returncode == 0, res.stderr
+    labels = iio.imread(out / "rvm_labels.png")
+    color = iio.imread(out / "rvm_color.png")
+    roi = iio.imread(out / "fisheye_roi.png")
+    assert labels.shape == (180, 320) and color.shape == (180, 320, 3)
+    assert np.array_equal(iio.imread(out / "rvm_labels_preview.png"), L.colorize(labels))
+    assert {L.BOARD, L.BUMPER, L.guide_cross(2)} <= set(np.unique(labels).tolist())
+    green = (roi[..., 1] > 200) & (roi[..., 0] < 80) & (roi[..., 2] < 80)
+    assert green.sum() > 100 and roi.shape == (240, 320, 3)
+    assert json.loads((out / "isp.json").read_text())["zoom"] == 0.6
+
+
+def test_process_bad_params_is_one_line(tmp_path):
+    params = tmp_path / "p.yaml"
+    params.write_text("zoom: 20\n")
+    res = subprocess.run(
+        [sys.executable, "-m", "rvmsim", "process", str(SCENES / "vehicle_a.yaml"), "--params",
+         str(params), "--out", str(tmp_path / "o"), "--scale", "0.1", "--no-progress"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "zoom: 20 is outside" in lines[0] and str(params) in lines[0]
+    assert not (tmp_path / "o").exists()
