@@ -306,3 +306,19 @@ def test_params_follow_a_resampled_input():
     quarter = build_map_exact(p.for_input_scale(0.25), (320, 240), out)
     np.testing.assert_allclose(quarter.map_x, (full.map_x + 0.5) * 0.25 - 0.5, atol=1e-3)
     np.testing.assert_allclose(quarter.map_y, (full.map_y + 0.5) * 0.25 - 0.5, atol=1e-3)
+
+
+def test_documented_worked_example():
+    """docs/isp-model.md's hand-checkable example gives what the code gives."""
+    p = IspParams(fov=190, rad=640, h_shift=10, v_shift=-20, zoom=0.8, adv_h_shift=0.1,
+                  adv_v_shift=0.25, adv_h_scale=1.2, adv_v_scale=0.9)
+    m = build_map_exact(p, (1280, 960), OutputSpec(1280, 720, True))
+    assert m.map_x[500, 1000] == pytest.approx(497.66, abs=0.01)
+    assert m.map_y[500, 1000] == pytest.approx(662.52, abs=0.01)
+
+
+def test_bundled_params_file_is_the_paper_defaults():
+    from .conftest import SCENES
+
+    assert load_params(SCENES.parent / "params" / "paper_defaults.yaml") == (IspParams(),
+                                                                            OutputSpec())
