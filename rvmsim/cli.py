@@ -22,6 +22,12 @@ def _fail(err: Exception) -> None:
     sys.exit(2)
 
 
+def _load_isp(params_file: Path | None):
+    from .isp import IspParams, OutputSpec, load_params
+
+    return load_params(params_file) if params_file else (IspParams(), OutputSpec())
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="rvmsim")
 def cli() -> None:
@@ -109,33 +115,72 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     """
     from . import labels as L
     from .imageio_utils import write_png
-    from .isp import IspParams, OutputSpec, apply_map, build_map, draw_roi, load_params
-    from .isp import params_to_dict
-    from .render import render_fisheye
+    from .isp import draw_roi, params_to_dict
+    from .pipeline import render_rvm
     from .scene import load_scene
 
     try:
-        params, output = load_params(params_file) if params_file else (IspParams(), OutputSpec())
-        given = params
+        params, output = _load_isp(params_file)
         sc = load_scene(scene)
-        cam = sc.fisheye_camera()
-        if scale != 1.0:
-            cam = cam.scaled(scale)
-            params = params.for_input_scale(cam.width / sc.camera.image_size[0])
-        images = render_fisheye(sc, camera=cam, progress=progress)
-        isp_map = build_map(params, (cam.width, cam.height), output)
-        rvm_color = apply_map(images.color, isp_map, labels=False)
-        rvm_labels = apply_map(images.labels, isp_map, labels=True)
-        write_png(out / "rvm_color.png", rvm_color)
-        write_png(out / "rvm_labels.png", rvm_labels)
-        write_png(out / "rvm_labels_preview.png", L.colorize(rvm_labels))
-        write_png(out / "fisheye_roi.png", draw_roi(images.color, params, output))
-        (out / "isp.json").write_text(json.dumps(params_to_dict(given, output), indent=2))
+        frame = render_rvm(sc, params, output, scale=scale, progress=progress)
+        write_png(out / "rvm_color.png", frame.color)
+        write_png(out / "rvm_labels.png", frame.labels)
+        write_png(out / "rvm_labels_preview.png", L.colorize(frame.labels))
+        write_png(out / "fisheye_roi.png", draw_roi(frame.fisheye.color, frame.params, output))
+        (out / "isp.json").write_text(json.dumps(params_to_dict(params, output), indent=2))
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
         _fail(RvmsimError(f"{getattr(err, 'filename', None) or out}: {err.strerror or err}"))
     click.echo(f"processed {sc.name}: RVM image {output.width}x{output.height} px -> {out}")
+
+
+@cli.command()
+@click.argument("scene", type=click.Path(path_type=Path))
+@click.option("--params", "params_file", type=click.Path(path_type=Path), default=None,
+              help="ISP params file (YAML/JSON); default: the paper's Table 2 defaults.")
+@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
+              help="Criteria file (YAML); default: the paper's thresholds.")
+@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+              help="Output folder (default: out/<scene name>/evaluate).")
+@click.option("--scale", type=click.FloatRange(0.05, 4.0), default=1.0, show_default=True,
+              help="Render the fisheye at this fraction of the sensor (RAD and shifts follow).")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
+             out: Path | None, scale: float, progress: bool) -> None:
+    """Evaluate the RVM image of SCENE under ISP parameters: the eleven ECs and the EC score.
+
+    Prints the EC table and writes ec.json, ec_annotated.png (the measurements drawn on the RVM
+    image), rvm_color.png and rvm_labels.png.
+    """
+    from .annotate import annotate
+    from .criteria import load_criteria
+    from .criteria import evaluate as evaluate_labels
+    from .imageio_utils import write_png
+    from .isp import params_to_dict
+    from .pipeline import render_rvm
+    from .scene import load_scene
+
+    try:
+        params, output = _load_isp(params_file)
+        criteria = load_criteria(criteria_file)
+        sc = load_scene(scene)
+        out = out or Path("out") / scene.stem / "evaluate"
+        frame = render_rvm(sc, params, output, scale=scale, progress=progress)
+        result = evaluate_labels(frame.labels, criteria)
+        write_png(out / "rvm_color.png", frame.color)
+        write_png(out / "rvm_labels.png", frame.labels)
+        write_png(out / "ec_annotated.png", annotate(frame.color, frame.labels, result))
+        doc = {"scene": str(scene), "vehicle": sc.name, "criteria_file": str(criteria_file or ""),
+               "isp": params_to_dict(params, output), **result.as_dict()}
+        (out / "ec.json").write_text(json.dumps(doc, indent=2))
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail(RvmsimError(f"{getattr(err, 'filename', None) or out}: {err.strerror or err}"))
+    click.echo(f"{sc.name} — criteria: {criteria.name}")
+    click.echo(result.table())
+    click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
 
 
 def main() -> None:

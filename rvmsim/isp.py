@@ -69,6 +69,7 @@ __all__ = [
     "process",
     "roi_outline",
     "draw_roi",
+    "input_to_output",
     "load_params",
     "params_to_dict",
 ]
@@ -461,6 +462,53 @@ def process(
         None if color is None else apply_map(color, m, labels=False),
         None if labels is None else apply_map(labels, m, labels=True),
     )
+
+
+def input_to_output(
+    params: IspParams,
+    points: np.ndarray,
+    input_size: tuple[int, int],
+    output: OutputSpec = OutputSpec(),
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where fisheye pixels appear in the RVM image: the inverse of the map.
+
+    Parameters
+    ----------
+    points : (N, 2) float
+        Input (fisheye) pixel coordinates (u, v).
+
+    Returns
+    -------
+    uv : (N, 2) float64
+        Output (RVM) pixel coordinates, pixel-centre convention.
+    valid : (N,) bool
+        False where the ray misses the virtual image plane (behind it).
+    """
+    p = params
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    w_in, h_in = input_size
+    dx = pts[:, 0] - ((w_in - 1) / 2.0 + p.h_shift)
+    dy = pts[:, 1] - ((h_in - 1) / 2.0 + p.v_shift)
+    r = np.hypot(dx, dy)
+    theta = r / (p.rad / math.radians(p.fov / 2.0))
+    safe = np.where(r > 0, r, 1.0)
+    s = np.sin(theta)
+    ray = np.stack([np.where(r > 0, s * dx / safe, 0.0), np.where(r > 0, s * dy / safe, 0.0),
+                    np.cos(theta)], axis=1)
+    r_plane, r_view = _plane_and_view(p)
+    rv = ray @ r_view  # = (R_view^T · ray) per row
+    t = np.array([0.0, 0.0, p.zoom])
+    normal = r_plane[:, 2]
+    denom = rv @ normal
+    lam = (normal @ t) / np.where(np.abs(denom) > 1e-12, denom, 1e-12)
+    local = (lam[:, None] * rv - t) @ r_plane  # = R_plane^T (λ·r_v − t)
+    half = output.width / 2.0
+    xn = (local[:, 0] - p.adv_h_shift) * p.adv_h_scale
+    yn = (local[:, 1] - p.adv_v_shift) * p.adv_v_scale
+    if output.mirror:
+        xn = -xn
+    uv = np.stack([xn * half + (output.width - 1) / 2.0, yn * half + (output.height - 1) / 2.0], 1)
+    return uv, (lam > 0) & (np.abs(denom) > 1e-12)
 
 
 def roi_outline(

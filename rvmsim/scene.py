@@ -21,7 +21,6 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-import yaml
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -34,6 +33,7 @@ from pydantic import (
 
 from . import fmvss111
 from .camera import FisheyeCamera, rotation_from_ypr
+from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
 from .errors import SceneError
 
 __all__ = [
@@ -400,56 +400,6 @@ class Scene(_Model):
 _TAGS = {"block", "mesh"}
 
 
-def _key_lines(text: str) -> dict[tuple[Any, ...], int]:
-    """Map each key path in a YAML document to its 1-based line (best effort)."""
-    lines: dict[tuple[Any, ...], int] = {}
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return lines
-
-    def walk(node: Any, path: tuple[Any, ...]) -> None:
-        if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                key = k.value
-                lines[path + (key,)] = k.start_mark.line + 1
-                walk(v, path + (key,))
-        elif isinstance(node, yaml.SequenceNode):
-            for i, v in enumerate(node.value):
-                lines[path + (i,)] = v.start_mark.line + 1
-                walk(v, path + (i,))
-
-    if root is not None:
-        walk(root, ())
-    return lines
-
-
-def _format_validation_error(
-    err: ValidationError, source: str, key_lines: dict[tuple[Any, ...], int]
-) -> SceneError:
-    e = err.errors(include_url=False)[0]
-    loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p in _TAGS))
-    key = ".".join(str(p) for p in loc)
-    kind = e["type"]
-    msg = e["msg"]
-    if kind == "extra_forbidden":
-        msg = "unknown key"
-    elif kind == "missing":
-        msg = "missing required key"
-    elif msg.startswith("Value error, "):
-        msg = msg[len("Value error, ") :]
-    if kind not in ("extra_forbidden", "missing") and "input" in e and not isinstance(
-        e["input"], dict
-    ):
-        msg = f"{msg} (got {e['input']!r})"
-    line = None
-    for n in range(len(loc), 0, -1):
-        if loc[:n] in key_lines:
-            line = key_lines[loc[:n]]
-            break
-    return SceneError(source, key, msg, line)
-
-
 def scene_from_dict(
     data: Any, *, base_dir: str | Path = ".", source: str = "<dict>", text: str | None = None
 ) -> Scene:
@@ -478,18 +428,18 @@ def scene_from_dict(
             {**data, "base_dir": str(Path(base_dir).resolve()), "source": source}
         )
     except ValidationError as err:
-        raise _format_validation_error(err, source, _key_lines(text or "")) from None
-    key_lines = _key_lines(text or "")
+        raise validation_error_to_scene_error(err, source, key_lines(text or ""), _TAGS) from None
+    lines = key_lines(text or "")
     try:
         scene.fisheye_camera()
     except ValueError as err:
-        raise SceneError(source, "camera", str(err), key_lines.get(("camera",))) from None
+        raise SceneError(source, "camera", str(err), lines.get(("camera",))) from None
     for key, part in _mesh_parts(scene):
         path = scene.resolve_path(part.mesh)
         if not path.is_file():
             loc = tuple(int(p) if p.isdigit() else p for p in key.split("."))
             raise SceneError(
-                source, key, f"mesh file not found: {path}", key_lines.get(loc)
+                source, key, f"mesh file not found: {path}", lines.get(loc)
             )
     return scene
 
@@ -523,17 +473,6 @@ def load_scene(path: str | Path) -> Scene:
         Unreadable file, malformed YAML, or any invalid key (message names file, line, key).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError(str(path), "", "file not found") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise SceneError(str(path), "", f"cannot read file ({err})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else None
-        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-        raise SceneError(str(path), "", f"malformed YAML: {problem}", line) from None
+    text = read_text(path)
+    data = parse_yaml(text, str(path))
     return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text)

@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import imageio.v3 as iio
+import pytest
 import numpy as np
 
 from rvmsim import labels as L
@@ -81,3 +82,44 @@ def test_process_bad_params_is_one_line(tmp_path):
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "zoom: 20 is outside" in lines[0] and str(params) in lines[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_evaluate_prints_table_writes_json_and_annotated_image(tmp_path):
+    params = tmp_path / "p.yaml"
+    params.write_text("rad: 612\nzoom: 0.5\nadv_v_shift: 0.2\noutput: {size: [320, 180]}\n")
+    crit = tmp_path / "c.yaml"
+    crit.write_text("name: OEM test\ncriteria:\n  4-1: {enabled: false}\n")
+    out = tmp_path / "ev"
+    res = subprocess.run(
+        [sys.executable, "-m", "rvmsim", "evaluate", str(SCENES / "vehicle_a.yaml"), "--params",
+         str(params), "--criteria", str(crit), "--out", str(out), "--scale", "0.25",
+         "--no-progress"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert res.returncode == 0, res.stderr
+    for ec in ("1-1", "2-3", "4-1"):
+        assert f"\n{ec} " in res.stdout
+    assert "OEM test" in res.stdout and "EC score" in res.stdout
+    doc = json.loads((out / "ec.json").read_text())
+    assert [e["id"] for e in doc["ecs"]][:2] == ["1-1", "1-2"]
+    enabled = [e for e in doc["ecs"] if e["enabled"]]
+    assert len(enabled) == 10
+    assert doc["ec_score"] == pytest.approx(float(np.prod([e["score"] for e in enabled])))
+    ann = iio.imread(out / "ec_annotated.png")
+    assert ann.shape[0] >= 180 and ann.shape[1] > 320  # image + results panel
+    labels = iio.imread(out / "rvm_labels.png")
+    from rvmsim.criteria import evaluate, load_criteria
+
+    assert evaluate(labels, load_criteria(crit)).score == pytest.approx(doc["ec_score"])
+
+
+def test_evaluate_bad_criteria_is_one_line(tmp_path):
+    crit = tmp_path / "c.yaml"
+    crit.write_text("criteria:\n  9-9: {}\n")
+    res = subprocess.run(
+        [sys.executable, "-m", "rvmsim", "evaluate", str(SCENES / "vehicle_a.yaml"),
+         "--criteria", str(crit), "--out", str(tmp_path / "o"), "--scale", "0.1"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert res.returncode == 2 and "9-9" in res.stderr and "Traceback" not in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1

@@ -322,3 +322,17 @@ def test_bundled_params_file_is_the_paper_defaults():
 
     assert load_params(SCENES.parent / "params" / "paper_defaults.yaml") == (IspParams(),
                                                                             OutputSpec())
+
+
+@pytest.mark.parametrize("params", PARAM_SETS)
+def test_input_to_output_inverts_the_map(params):
+    from rvmsim.isp import input_to_output
+
+    out = OutputSpec(320, 180)
+    exact = build_map_exact(params, INPUT, out)
+    rng = np.random.default_rng(2)
+    v, u = rng.integers(0, 180, 50), rng.integers(0, 320, 50)
+    pts = np.stack([exact.map_x[v, u], exact.map_y[v, u]], 1)
+    back, ok = input_to_output(params, pts, INPUT, out)
+    assert ok.all()
+    np.testing.assert_allclose(back, np.stack([u, v], 1), atol=1e-3)

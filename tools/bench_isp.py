@@ -27,12 +27,8 @@ from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map, build_map_ex
 from rvmsim.render import render_fisheye  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
 
-#: Ranges a tuning run explores (within the paper's Table 2 ranges).
-SEARCH = {
-    "fov": (160.0, 200.0), "rad": (450.0, 800.0), "h_shift": (-60.0, 60.0),
-    "v_shift": (-80.0, 80.0), "zoom": (0.4, 1.5), "adv_h_shift": (-0.3, 0.3),
-    "adv_v_shift": (-0.5, 0.5), "adv_h_scale": (0.7, 1.5), "adv_v_scale": (0.7, 1.5),
-}
+from _bench_common import random_candidates  # noqa: E402
+
 
 
 def timed(fn, repeats: int = 1) -> float:
@@ -54,11 +50,7 @@ def main() -> None:
     scene = load_scene(args.scene)
     img = render_fisheye(scene)
     size = (img.camera.width, img.camera.height)
-    rng = np.random.default_rng(0)
-    cands = [IspParams()] + [
-        IspParams(**{k: rng.uniform(*r) for k, r in SEARCH.items()})
-        for _ in range(args.candidates - 1)
-    ]
+    cands = [IspParams()] + random_candidates(args.candidates - 1)
     t_map, t_lab, t_col, t_exact, errors = [], [], [], [], []
     for i, p in enumerate(cands):
         t_map.append(timed(lambda: build_map(p, size, out), 3))

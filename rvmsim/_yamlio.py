@@ -1,0 +1,91 @@
+"""Reading user YAML files safely, and turning validation errors into one-line messages."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import ValidationError
+
+from .errors import SceneError
+
+__all__ = ["read_text", "parse_yaml", "key_lines", "validation_error_to_scene_error"]
+
+
+def read_text(path: Path) -> str:
+    """The text of a user file; :class:`SceneError` naming the file when it cannot be read."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(str(path), "", "file not found") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise SceneError(str(path), "", f"cannot read file ({err})") from None
+
+
+def parse_yaml(text: str, source: str) -> Any:
+    """``yaml.safe_load`` with a one-line :class:`SceneError` (file and line) on bad YAML."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else None
+        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
+        raise SceneError(source, "", f"malformed YAML: {problem}", line) from None
+
+
+def key_lines(text: str) -> dict[tuple[Any, ...], int]:
+    """Map each key path in a YAML document to its 1-based line (best effort)."""
+    lines: dict[tuple[Any, ...], int] = {}
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return lines
+
+    def walk(node: Any, path: tuple[Any, ...]) -> None:
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                key = k.value
+                lines[path + (key,)] = k.start_mark.line + 1
+                walk(v, path + (key,))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, v in enumerate(node.value):
+                lines[path + (i,)] = v.start_mark.line + 1
+                walk(v, path + (i,))
+
+    if root is not None:
+        walk(root, ())
+    return lines
+
+
+def validation_error_to_scene_error(
+    err: ValidationError,
+    source: str,
+    lines: dict[tuple[Any, ...], int],
+    tags: set[str] = frozenset(),  # type: ignore[assignment]
+) -> SceneError:
+    """The first pydantic error as ``FILE:LINE: dotted.key: message``.
+
+    ``tags`` are discriminator tags pydantic puts into error locations; they are dropped.
+    """
+    e = err.errors(include_url=False)[0]
+    loc = tuple(p for p in e["loc"] if not (isinstance(p, str) and p in tags))
+    key = ".".join(str(p) for p in loc)
+    kind = e["type"]
+    msg = e["msg"]
+    if kind == "extra_forbidden":
+        msg = "unknown key"
+    elif kind == "missing":
+        msg = "missing required key"
+    elif msg.startswith("Value error, "):
+        msg = msg[len("Value error, ") :]
+    if kind not in ("extra_forbidden", "missing") and "input" in e and not isinstance(
+        e["input"], dict
+    ):
+        msg = f"{msg} (got {e['input']!r})"
+    line = None
+    for n in range(len(loc), 0, -1):
+        if loc[:n] in lines:
+            line = lines[loc[:n]]
+            break
+    return SceneError(source, key, msg, line)

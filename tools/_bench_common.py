@@ -1,0 +1,20 @@
+"""Shared by the benchmarks in tools/: the parameter ranges a tuning run explores."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rvmsim.isp import IspParams
+
+#: Ranges a tuning run explores around the paper's defaults (inside Table 2's ranges), for
+#: the 1280×960 bundled sensors.
+SEARCH = {
+    "fov": (160.0, 200.0), "rad": (450.0, 800.0), "h_shift": (-60.0, 60.0),
+    "v_shift": (-80.0, 80.0), "zoom": (0.4, 1.5), "adv_h_shift": (-0.3, 0.3),
+    "adv_v_shift": (-0.5, 0.5), "adv_h_scale": (0.7, 1.5), "adv_v_scale": (0.7, 1.5),
+}
+
+
+def random_candidates(n: int, seed: int = 0) -> list[IspParams]:
+    rng = np.random.default_rng(seed)
+    return [IspParams(**{k: rng.uniform(*r) for k, r in SEARCH.items()}) for _ in range(n)]
