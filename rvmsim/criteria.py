@@ -61,6 +61,9 @@ __all__ = [
     "EcValue",
     "EcResult",
     "measure",
+    "measure_source",
+    "LabelSource",
+    "GROUPS",
     "score",
     "evaluate",
     "load_criteria",
@@ -340,24 +343,69 @@ def _bbox(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     return None if w == 0 else (x, y, w, h)
 
 
-def _bumper_height(labels: np.ndarray, c0: int, c1: int) -> float:
-    cols = labels[:, c0:c1]
-    return float(np.count_nonzero(cols == L.BUMPER)) / max(c1 - c0, 1)
+#: Label groups the ECs look at, each measured inside its own window of the image.
+GROUPS: dict[str, tuple[int, ...]] = {
+    "F": (L.object_stripe("F"), L.object_patch("F")),
+    "G": (L.object_stripe("G"), L.object_patch("G")),
+    "ABC": tuple(L.object_body(c) for c in "ABC") + tuple(L.object_stripe(c) for c in "ABC"),
+    "guide2": (L.guide_cross(2),),
+    "guide3": (L.guide_cross(3),),
+    "board": (L.BOARD,),
+    "upper_body": (L.GARNISH, L.TRUNK),
+}
+
+Window = tuple[int, int, int, int]  # x0, y0, x1, y1 (exclusive), output px
 
 
-def _patch_visible(labels: np.ndarray, label: int, hist: np.ndarray) -> bool:
+class LabelSource:
+    """Where :func:`measure_source` reads label pixels from: the whole RVM label image here;
+    :class:`rvmsim.evaluator.CandidateEvaluator` remaps only the windows it is asked for.
+    """
+
+    def __init__(self, labels: np.ndarray):
+        labels = np.asarray(labels)
+        if labels.ndim != 2 or labels.dtype != np.uint8:
+            raise TypeError(f"labels must be a 2-D uint8 image, got {labels.dtype} {labels.shape}")
+        self.labels = np.ascontiguousarray(labels)
+        self.shape = self.labels.shape
+
+    def window(self, group: str) -> Window:
+        """A window that holds every pixel of ``group`` (here: the whole image)."""
+        return (0, 0, self.shape[1], self.shape[0])
+
+    def pixels(self, win: Window) -> np.ndarray:
+        """The label pixels of a window, (y1 − y0, x1 − x0) uint8."""
+        x0, y0, x1, y1 = win
+        return self.labels[y0:y1, x0:x1]
+
+
+def _count(sub: np.ndarray, label: int) -> int:
     import cv2
 
-    if hist[label] < 4:
+    return 0 if sub.size == 0 else int(cv2.countNonZero(cv2.compare(sub, label, cv2.CMP_EQ)))
+
+
+def _bumper_height(sub: np.ndarray, ncols: int) -> float:
+    return float(np.count_nonzero(sub == L.BUMPER)) / max(ncols, 1)
+
+
+def _patch_visible(sub: np.ndarray, win: Window, label: int, shape: tuple[int, int]) -> bool:
+    """Present (≥ 4 px), not touching the image border, no void/body pixel next to it."""
+    import cv2
+
+    if sub.size == 0:
         return False
-    h, w = labels.shape
-    box = _bbox(cv2.compare(labels, label, cv2.CMP_EQ))
-    assert box is not None
-    x, y, bw, bh = box
+    mask = cv2.compare(sub, label, cv2.CMP_EQ)
+    if cv2.countNonZero(mask) < 4:
+        return False
+    h, w = shape
+    bx, by, bw, bh = cv2.boundingRect(mask)
+    x, y = bx + win[0], by + win[1]
     if x == 0 or y == 0 or x + bw == w or y + bh == h:
         return False  # cut by the image border
-    crop = labels[y - 1 : y + bh + 1, x - 1 : x + bw + 1]
-    grown = cv2.dilate((crop == label).astype(np.uint8), np.ones((3, 3), np.uint8))
+    crop = sub[max(by - 1, 0) : by + bh + 1, max(bx - 1, 0) : bx + bw + 1]
+    grown = cv2.dilate((crop == label).astype(np.uint8), np.ones((3, 3), np.uint8),
+                       borderType=cv2.BORDER_CONSTANT, borderValue=0)
     blockers = cv2.LUT(crop, _LUT_BLOCKERS)
     return not np.any(blockers[grown > 0])
 
@@ -379,39 +427,45 @@ def measure(labels: np.ndarray, *, upper_region_fraction: float = 0.5,
     -------
     Measurements
     """
+    return measure_source(LabelSource(labels), upper_region_fraction=upper_region_fraction,
+                          edge_columns=edge_columns)
+
+
+def measure_source(src: LabelSource, *, upper_region_fraction: float = 0.5,
+                   edge_columns: int = 4) -> Measurements:
+    """:func:`measure` on any :class:`LabelSource` (the same measurements, window by window)."""
     import cv2
 
-    labels = np.asarray(labels)
-    if labels.ndim != 2 or labels.dtype != np.uint8:
-        raise TypeError(f"labels must be a 2-D uint8 image, got {labels.dtype} {labels.shape}")
-    labels = np.ascontiguousarray(labels)
-    h, w = labels.shape
+    h, w = src.shape
     area = float(h * w)
-    hist = cv2.calcHist([labels], [0], None, [256], [0, 256]).ravel()
     v: dict[str, float | None] = {}
 
     # EC 1-1, 1-2: F and G stripes
-    visible = {c: _patch_visible(labels, L.object_patch(c), hist) for c in "FG"}
+    visible, fg = {}, 0
+    for c in "FG":
+        win = src.window(c)
+        sub = src.pixels(win)
+        visible[c] = _patch_visible(sub, win, L.object_patch(c), (h, w))
+        fg += _count(sub, L.object_stripe(c)) + _count(sub, L.object_patch(c))
     v["1-1"] = 1.0 if all(visible.values()) else 0.0
-    fg = sum(hist[L.object_stripe(c)] + hist[L.object_patch(c)] for c in "FG")
     v["1-2"] = 1000.0 * fg / area
 
-    # EC 1-3: highest point of A, B, C (all three must be in the image)
+    # EC 1-3: highest point of A, B, C (all three must be in the image); 1-4: B's stripe
+    win = src.window("ABC")
+    sub = src.pixels(win)
     top_row = None
-    if all(hist[L.object_body(c)] + hist[L.object_stripe(c)] > 0 for c in "ABC"):
-        box = _bbox(cv2.LUT(labels, _LUT_ABC))
-        top_row = box[1] if box else None
+    if sub.size and all(_count(sub, L.object_body(c)) + _count(sub, L.object_stripe(c)) > 0
+                        for c in "ABC"):
+        box = _bbox(cv2.LUT(sub, _LUT_ABC))
+        top_row = None if box is None else box[1] + win[1]
     v["1-3"] = None if top_row is None else 100.0 * top_row / h
-
-    # EC 1-4: B's horizontal stripe
-    v["1-4"] = 1000.0 * hist[L.object_stripe("B")] / area
+    v["1-4"] = 1000.0 * _count(sub, L.object_stripe("B")) / area
 
     # EC 2-1 … 2-3: bumper heights
     k = max(1, min(edge_columns, w // 3))
-    c_mid = w / 2.0
-    spans = {"t_l": (0, k), "t_r": (w - k, w), "t_c": (int(round(c_mid - k / 2)),
-                                                      int(round(c_mid - k / 2)) + k)}
-    t = {name: _bumper_height(labels, a, b) for name, (a, b) in spans.items()}
+    c0 = int(round(w / 2.0 - k / 2))
+    spans = {"t_l": (0, k), "t_r": (w - k, w), "t_c": (c0, c0 + k)}
+    t = {n: _bumper_height(src.pixels((a, 0, b, h)), b - a) for n, (a, b) in spans.items()}
     v["2-1"] = 100.0 * t["t_c"] / h
     v["2-2"] = 100.0 * (t["t_l"] + t["t_r"]) / 2.0 / h
     v["2-3"] = abs(t["t_l"] - t["t_r"])
@@ -420,22 +474,30 @@ def measure(labels: np.ndarray, *, upper_region_fraction: float = 0.5,
 
     # EC 2-4: no garnish/trunk in the upper region
     rows = int(round(upper_region_fraction * h))
-    upper = cv2.LUT(labels[:rows], _LUT_UPPER_BODY) if rows > 0 else None
-    v["2-4"] = 1.0 if upper is None or cv2.countNonZero(upper) == 0 else 0.0
+    x0, y0, x1, y1 = src.window("upper_body")
+    y1 = min(y1, rows)
+    body_up = 0
+    if x1 > x0 and y1 > y0:
+        body_up = cv2.countNonZero(cv2.LUT(src.pixels((x0, y0, x1, y1)), _LUT_UPPER_BODY))
+    v["2-4"] = 1.0 if body_up == 0 else 0.0
 
     # EC 3-1, 3-2: guideline centres
-    g2 = _guide_center(labels, L.guide_cross(2), hist)
+    g2 = _guide_center(src, "guide2", L.guide_cross(2))
     v["3-1"] = None if g2 is None else abs(g2[0] - (w - 1) / 2.0)
-    g3 = _guide_center(labels, L.guide_cross(3), hist)
+    g3 = _guide_center(src, "guide3", L.guide_cross(3))
     v["3-2"] = None if g3 is None else 100.0 * (g3[1] + 0.5) / h
 
     # EC 4-1: board aspect
+    win = src.window("board")
+    sub = src.pixels(win)
     board = None
-    if hist[L.BOARD] > 0:
-        board = _bbox(cv2.compare(labels, L.BOARD, cv2.CMP_EQ))
+    if sub.size:
+        box = _bbox(cv2.compare(sub, L.BOARD, cv2.CMP_EQ))
+        if box is not None:
+            board = (box[0] + win[0], box[1] + win[1], box[2], box[3])
     v["4-1"] = None if board is None else board[2] / board[3]
 
-    values = {k: (None if x is None else float(x)) for k, x in v.items()}
+    values = {key: (None if x is None else float(x)) for key, x in v.items()}
     return Measurements(
         values=values, image_size=(w, h), abc_top_row=top_row, bumper_columns=bumper_columns,
         guide2_center=g2, guide3_center=g3, board_box=board, patch_visible=visible,
@@ -443,22 +505,24 @@ def measure(labels: np.ndarray, *, upper_region_fraction: float = 0.5,
     )
 
 
-def _guide_center(labels: np.ndarray, label: int, hist: np.ndarray) -> tuple[float, float] | None:
+def _guide_center(src: LabelSource, group: str, label: int) -> tuple[float, float] | None:
     import cv2
 
-    if hist[label] == 0:
+    win = src.window(group)
+    sub = src.pixels(win)
+    if sub.size == 0:
         return None
-    box = _bbox(cv2.compare(labels, label, cv2.CMP_EQ))
+    box = _bbox(cv2.compare(sub, label, cv2.CMP_EQ))
     if box is None:
         return None
     x, y, bw, bh = box
     xc = x + (bw - 1) / 2.0
     c0 = max(int(math.floor(xc)) - 1, x)
     c1 = min(int(math.ceil(xc)) + 2, x + bw)
-    band = labels[y : y + bh, c0:c1] == label
+    band = sub[y : y + bh, c0:c1] == label
     rows = np.nonzero(band)[0]
     yc = y + float(rows.mean()) if rows.size else y + (bh - 1) / 2.0
-    return (xc, yc)
+    return (xc + win[0], yc + win[1])
 
 
 # ---------------------------------------------------------------------------- scoring

@@ -65,6 +65,8 @@ __all__ = [
     "IspMap",
     "build_map",
     "build_map_exact",
+    "map_nodes",
+    "MapNodes",
     "apply_map",
     "process",
     "roi_outline",
@@ -401,18 +403,64 @@ def build_map(
     """
     import cv2
 
+    nodes = map_nodes(params, input_size, output, cell=cell, tolerance_px=tolerance_px)
+    return IspMap(nodes.window((0, 0, output.width, output.height)), input_size, output)
+
+
+@dataclass(frozen=True)
+class MapNodes:
+    """The exactly evaluated nodes of a map, from which any window of it is interpolated.
+
+    ``grid`` (rows, cols, 2) float32 holds node j at output coordinate (j − 1.5)·cell − 0.5
+    (two rings beyond the image).  ``exact`` holds the whole map instead when no node grid
+    was fine enough.
+    """
+
+    grid: np.ndarray | None
+    cell: int
+    exact: np.ndarray | None = None
+
+    def window(self, win: tuple[int, int, int, int]) -> np.ndarray:
+        """Map of the output window ``(x0, y0, x1, y1)`` (exclusive ends): (h, w, 2) float32.
+
+        cv2.resize by the factor ``cell`` reads sub-grid node s at destination
+        x'' = (s + 0.5)·cell − 0.5, so a sub-grid starting at node ja puts output u at
+        x'' = u − (ja − 2)·cell; bilinear weights depend only on x'' mod cell, so every window
+        is bit-identical to the same pixels of the whole map.
+        """
+        import cv2
+
+        x0, y0, x1, y1 = win
+        if self.exact is not None:
+            return self.exact[y0:y1, x0:x1]
+        c = self.cell
+        ja = int(math.floor((x0 + 0.5) / c - 0.5)) + 2
+        jb = int(math.ceil((x1 - 0.5) / c + 1.5))
+        ia = int(math.floor((y0 + 0.5) / c - 0.5)) + 2
+        ib = int(math.ceil((y1 - 0.5) / c + 1.5))
+        sub = self.grid[ia : ib + 1, ja : jb + 1]
+        full = cv2.resize(sub, (sub.shape[1] * c, sub.shape[0] * c),
+                          interpolation=cv2.INTER_LINEAR)
+        ox, oy = x0 - (ja - 2) * c, y0 - (ia - 2) * c
+        return full[oy : oy + (y1 - y0), ox : ox + (x1 - x0)]
+
+
+def map_nodes(
+    params: IspParams,
+    input_size: tuple[int, int],
+    output: OutputSpec = OutputSpec(),
+    *,
+    cell: int = DEFAULT_CELL_PX,
+    tolerance_px: float = MAP_TOLERANCE_PX,
+) -> MapNodes:
+    """The node grid :func:`build_map` interpolates (error-controlled, see there)."""
     while True:
-        nx, ny, grid = _nodes(params, input_size, output, cell)
-        error = _interpolation_error(grid, input_size)
-        if error <= tolerance_px:
-            break
+        _, _, grid = _nodes(params, input_size, output, cell)
+        if _interpolation_error(grid, input_size) <= tolerance_px:
+            return MapNodes(grid.astype(np.float32), cell)
         if cell <= MIN_CELL_PX:  # no grid is fine enough (a jump in the map): every pixel
-            return build_map_exact(params, input_size, output)
+            return MapNodes(None, cell, build_map_exact(params, input_size, output).xy)
         cell = max(MIN_CELL_PX, cell // 2)
-    grid = grid.astype(np.float32)
-    full = cv2.resize(grid, ((nx + 4) * cell, (ny + 4) * cell), interpolation=cv2.INTER_LINEAR)
-    o = 2 * cell
-    return IspMap(full[o : o + output.height, o : o + output.width], input_size, output)
 
 
 def apply_map(image: np.ndarray, isp_map: IspMap, *, labels: bool | None = None) -> np.ndarray:
