@@ -298,13 +298,15 @@ class PatternBoard(_Model):
     """Calibration pattern board: a checkerboard with a white margin.
 
     ``placement: ground`` lays it flat on the ground (its rows running away from the car);
-    ``upright`` stands it vertically facing the car.  ``position`` is the board centre in the
+    ``upright`` stands it vertically facing the car.  The default, 4 × 6 squares of 0.14 m
+    (0.64 m × 0.92 m with its margin) lying between cross guidelines 2 and 3, looks about
+    square from a rear-view camera, as EC 4-1 expects of a calibration board.  ``position`` is the board centre in the
     scene frame (metres); ``yaw_deg`` turns it about the vertical.
     """
 
     enabled: bool = True
-    squares: tuple[Annotated[int, Field(ge=2)], Annotated[int, Field(ge=2)]] = (5, 5)
-    square_size: PositiveFloat = 0.16
+    squares: tuple[Annotated[int, Field(ge=2)], Annotated[int, Field(ge=2)]] = (4, 6)
+    square_size: PositiveFloat = 0.14
     margin: NonNegFloat = 0.04
     placement: Literal["ground", "upright"] = "ground"
     position: Vec3 = (0.0, 0.0, 1.5)

@@ -103,12 +103,20 @@ def test_primitives_face_outward():
 
 
 def test_mesh_file_part_units_and_transform():
-    parts = _parts("f")
-    bumper = parts["bumper"].mesh
-    lo, hi = bumper.bounds
-    assert hi[0] - lo[0] == pytest.approx(1.84, abs=1e-3)  # 1840 mm file → metres
-    assert -lo[1] == pytest.approx(0.64, abs=1e-3)
-    assert hi[2] == pytest.approx(0.0, abs=1e-3)
+    scene = bundled_scene("f")
+    bumper = _parts("f")["bumper"].mesh
+    raw = trimesh.load(str(scene.resolve_path(scene.vehicle.bumper.mesh)), force="mesh")
+    np.testing.assert_allclose(bumper.bounds, raw.bounds / 1000.0, atol=1e-9)  # mm → m
+    assert raw.bounds[1, 0] - raw.bounds[0, 0] > 1000  # the file really is in millimetres
+    assert bumper.bounds[1, 2] == pytest.approx(0.0, abs=1e-3)  # rearmost point on Z = 0
+    # A transform moves it: 0.1 m rearward and turned 90° about the vertical.
+    data = scene.model_dump()
+    data["vehicle"]["bumper"].update(translation=(0.0, 0.0, 0.1), rotation_deg=(90.0, 0.0, 0.0))
+    from rvmsim.scene import scene_from_dict
+
+    moved = {p.name: p for p in build_parts(scene_from_dict(data, base_dir=scene.base_dir))}
+    lo, hi = moved["bumper"].mesh.bounds
+    assert hi[2] - lo[2] == pytest.approx(raw.bounds[1, 0] / 1000 - raw.bounds[0, 0] / 1000)
 
 
 def test_landmarks_lie_on_their_parts():

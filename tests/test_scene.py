@@ -90,7 +90,7 @@ def test_test_site_defaults_and_overrides():
     assert site.object_centre("B") == (0.2, 7.0 + 0.15)
     assert site.object_centre("D") is None
     assert site.guidelines.cross_z == [1.0, 2.0, 3.0]
-    assert site.board.size == pytest.approx((6 * 0.16 + 0.08, 4 * 0.16 + 0.08))
+    assert site.board.size == pytest.approx((6 * 0.14 + 0.08, 4 * 0.14 + 0.08))
 
 
 def test_mesh_paths_resolve_relative_to_scene_file(tmp_path):

@@ -16,7 +16,7 @@ import numpy as np
 import trimesh
 
 
-def bumper(width=1840.0, bottom=300.0, top=640.0, depth=420.0, sweep=260.0, fillet=90.0,
+def bumper(width=1860.0, bottom=420.0, top=800.0, depth=380.0, sweep=100.0, fillet=90.0,
            n_along=64, n_arc=10) -> trimesh.Trimesh:
     # Cross-section in (height h, rearward offset r) around the rear face, rounded at both
     # rear edges, closed by the (hidden) front face.
