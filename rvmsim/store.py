@@ -1,0 +1,130 @@
+"""Run store: every evaluated candidate of a tuning run, in one SQLite file.
+
+Trials are written a batch at a time in one transaction (WAL journal), so a run killed at
+any moment keeps every completed batch and nothing half-written; a resumed run reads them
+back.  Values are JSON text, never pickles.
+
+Tables: ``meta(key, value)`` (scene, config, strategy, seed, status, …) and
+``trials(idx, stage, params, score, objective, passed, ec)`` where ``params`` is the JSON of
+all 14 ISP parameters and ``ec`` maps each EC to ``[value, score, passed]``.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+from .errors import RvmsimError
+from .isp import IspParams
+
+__all__ = ["RunStore", "TrialRecord"]
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS trials (
+    idx INTEGER PRIMARY KEY,
+    stage TEXT NOT NULL,
+    params TEXT NOT NULL,
+    score REAL NOT NULL,
+    objective REAL NOT NULL,
+    passed INTEGER NOT NULL,
+    ec TEXT NOT NULL
+);
+CREATE INDEX IF NOT EXISTS trials_score ON trials (score DESC, idx);
+"""
+
+
+@dataclass(frozen=True)
+class TrialRecord:
+    """One evaluated candidate."""
+
+    idx: int
+    stage: str
+    params: IspParams
+    score: float
+    objective: float
+    passed: bool
+    ec: dict[str, list[Any]]
+
+
+class RunStore:
+    """A tuning run's SQLite database (``run.sqlite`` in the run folder)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.db = sqlite3.connect(self.path, timeout=30)
+            self.db.execute("PRAGMA journal_mode=WAL")
+            self.db.execute("PRAGMA synchronous=NORMAL")
+            self.db.executescript(_SCHEMA)
+        except sqlite3.DatabaseError as err:
+            raise RvmsimError(f"{self.path}: not a readable run database ({err})") from None
+
+    def close(self) -> None:
+        self.db.close()
+
+    # ------------------------------------------------------------------ meta
+    def set_meta(self, **items: Any) -> None:
+        with self.db:
+            self.db.executemany(
+                "INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
+                [(k, json.dumps(v)) for k, v in items.items()],
+            )
+
+    def meta(self) -> dict[str, Any]:
+        return {k: json.loads(v) for k, v in self.db.execute("SELECT key, value FROM meta")}
+
+    # ------------------------------------------------------------------ trials
+    def add_trials(self, records: Iterable[TrialRecord]) -> None:
+        """Write a batch atomically."""
+        rows = [
+            (r.idx, r.stage, json.dumps({n: getattr(r.params, n) for n in IspParams.names()}),
+             r.score, r.objective, int(r.passed), json.dumps(r.ec))
+            for r in records
+        ]
+        with self.db:
+            self.db.executemany(
+                "INSERT OR REPLACE INTO trials (idx, stage, params, score, objective, passed, ec)"
+                " VALUES (?, ?, ?, ?, ?, ?, ?)",
+                rows,
+            )
+
+    def count(self) -> int:
+        return int(self.db.execute("SELECT COUNT(*) FROM trials").fetchone()[0])
+
+    def _record(self, row: tuple) -> TrialRecord:
+        idx, stage, params, score, objective, passed, ec = row
+        return TrialRecord(idx, stage, IspParams(**json.loads(params)), score, objective,
+                           bool(passed), json.loads(ec))
+
+    def trials(self, start: int = 0, stop: int | None = None) -> list[TrialRecord]:
+        """Trials with ``start <= idx < stop``, in index order."""
+        q = "SELECT idx, stage, params, score, objective, passed, ec FROM trials WHERE idx >= ?"
+        args: list[Any] = [start]
+        if stop is not None:
+            q += " AND idx < ?"
+            args.append(stop)
+        return [self._record(r) for r in self.db.execute(q + " ORDER BY idx", args)]
+
+    def top(self, m: int, stage: str | None = None) -> list[TrialRecord]:
+        """The ``m`` best trials (highest EC score, then objective, then earliest)."""
+        q = "SELECT idx, stage, params, score, objective, passed, ec FROM trials"
+        args: list[Any] = []
+        if stage is not None:
+            q += " WHERE stage = ?"
+            args.append(stage)
+        q += " ORDER BY score DESC, objective DESC, idx ASC LIMIT ?"
+        args.append(m)
+        return [self._record(r) for r in self.db.execute(q, args)]
+
+    def best_curve(self) -> list[tuple[int, float, str]]:
+        """(idx, best EC score so far, stage) after every trial, for convergence plots."""
+        out, best = [], 0.0
+        for idx, score, stage in self.db.execute("SELECT idx, score, stage FROM trials ORDER BY idx"):
+            best = max(best, score)
+            out.append((idx, best, stage))
+        return out
