@@ -7,6 +7,7 @@ stderr and exits with status 2; it never prints a traceback for them.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -181,6 +182,118 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     click.echo(f"{sc.name} — criteria: {criteria.name}")
     click.echo(result.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
+
+
+@cli.command()
+@click.argument("scene", type=click.Path(path_type=Path), required=False)
+@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+              help="Run folder (default: runs/<scene name>).")
+@click.option("--strategy", type=click.Choice(["grid-random", "cmaes", "random"]),
+              default="grid-random", show_default=True,
+              help="grid-random: the paper's grid-to-random search; cmaes: CMA-ES.")
+@click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
+              help="Tuning config (YAML): tuned parameters, ranges, steps, N, T, budgets.")
+@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
+              help="Criteria file (YAML); default: the paper's thresholds.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--workers", type=click.IntRange(1, 64), default=os.cpu_count() or 1,
+              show_default=True, help="Worker processes.")
+@click.option("--budget", type=click.IntRange(1), default=None,
+              help="Evaluations (cmaes, random) or fine trials T per seed (grid-random).")
+@click.option("--max-time", type=click.FloatRange(0), default=None,
+              help="Stop after this many seconds (the run can be resumed).")
+@click.option("--target-score", type=click.FloatRange(0, 1), default=None,
+              help="Stop once the EC score reaches this.")
+@click.option("--resume", "resume_dir", type=click.Path(path_type=Path), default=None,
+              help="Continue the run in this folder (same settings, same final result).")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget, max_time,
+         target_score, resume_dir, progress) -> None:
+    """Tune the ISP parameters of SCENE (or continue a run with --resume RUN)."""
+    from .tune import load_tuning_config
+    from .tune import tune as run_tune
+
+    try:
+        if resume_dir is not None:
+            result = run_tune("", resume_dir, resume=True, workers=workers, max_time=max_time,
+                              target_score=target_score, progress=progress)
+        else:
+            if scene is None:
+                raise RvmsimError("tune: give a SCENE file, or --resume RUN")
+            cfg = load_tuning_config(config_file)
+            result = run_tune(scene, out or Path("runs") / scene.stem, strategy=strategy,
+                              config=cfg, criteria_file=criteria_file, seed=seed,
+                              workers=workers, budget=budget, max_time=max_time,
+                              target_score=target_score, progress=progress)
+    except RvmsimError as err:
+        _fail(err)
+    o = result.outcome
+    best = o.best
+    click.echo(f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
+               f"{o.seconds:.1f} s ({o.stopped}); best EC score "
+               f"{best.score:.4g} (trial {best.idx})" if best else "no trials")
+    if best is not None:
+        click.echo((result.run_dir / "best" / "ec_table.txt").read_text().rstrip())
+
+
+@cli.command()
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--top", "top_m", type=click.IntRange(1, 100), default=5, show_default=True)
+def status(run: Path, top_m: int) -> None:
+    """Show a run's progress and its current top candidates (works while it runs)."""
+    from .store import RunStore
+
+    db = run / "run.sqlite"
+    if not db.is_file():
+        _fail(RvmsimError(f"{run}: no run database (run.sqlite) here"))
+    store = RunStore(db)
+    meta = store.meta()
+    n = store.count()
+    total = meta.get("total")
+    click.echo(f"{run}: {meta.get('status', '?')}, strategy {meta.get('strategy', '?')}, "
+               f"{n}{'' if total is None else f' / {total}'} evaluations")
+    for k, rec in enumerate(store.top(top_m), start=1):
+        fails = [ec for ec, (_, _, ok) in rec.ec.items() if not ok]
+        click.echo(f"  #{k}  EC score {rec.score:.4g}  trial {rec.idx:>6} ({rec.stage})  "
+                   f"{'all pass' if not fails else 'fails ' + ','.join(fails)}")
+    store.close()
+
+
+@cli.command()
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--rank", type=click.IntRange(1), default=1, show_default=True)
+@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+              help="Params file to write (default: print it).")
+def select(run: Path, rank: int, out: Path | None) -> None:
+    """Export the rank-K parameter set of a run as a params file."""
+    import yaml
+
+    from .isp import OutputSpec, params_to_dict
+    from .store import RunStore
+
+    db = run / "run.sqlite"
+    if not db.is_file():
+        _fail(RvmsimError(f"{run}: no run database (run.sqlite) here"))
+    store = RunStore(db)
+    top = store.top(rank)
+    store.close()
+    if len(top) < rank:
+        _fail(RvmsimError(f"{run}: only {len(top)} candidates, no rank {rank}"))
+    rec = top[rank - 1]
+    cfg = json.loads((run / "run.json").read_text()).get("config", {}) if (run / "run.json").is_file() else {}
+    size = cfg.get("output", {}).get("size", [1280, 720])
+    mirror = cfg.get("output", {}).get("mirror", True)
+    text = (f"# rank {rank}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
+            + yaml.safe_dump(params_to_dict(rec.params, OutputSpec(size[0], size[1], mirror)),
+                             sort_keys=False))
+    if out is None:
+        click.echo(text, nl=False)
+    else:
+        try:
+            out.write_text(text)
+        except OSError as err:
+            _fail(RvmsimError(f"{out}: {err.strerror or err}"))
+        click.echo(f"wrote {out}")
 
 
 def main() -> None:

@@ -379,10 +379,20 @@ class LabelSource:
         return self.labels[y0:y1, x0:x1]
 
 
+def _eq(sub: np.ndarray, label: int) -> np.ndarray:
+    """255 where ``sub == label``, else 0 (uint8).  OpenCV takes a 1×1 image for a scalar,
+    so that case goes through numpy."""
+    import cv2
+
+    if sub.size <= 1:
+        return (sub == label).astype(np.uint8) * 255
+    return cv2.compare(sub, label, cv2.CMP_EQ)
+
+
 def _count(sub: np.ndarray, label: int) -> int:
     import cv2
 
-    return 0 if sub.size == 0 else int(cv2.countNonZero(cv2.compare(sub, label, cv2.CMP_EQ)))
+    return 0 if sub.size == 0 else int(cv2.countNonZero(_eq(sub, label)))
 
 
 def _bumper_height(sub: np.ndarray, ncols: int) -> float:
@@ -395,7 +405,7 @@ def _patch_visible(sub: np.ndarray, win: Window, label: int, shape: tuple[int, i
 
     if sub.size == 0:
         return False
-    mask = cv2.compare(sub, label, cv2.CMP_EQ)
+    mask = _eq(sub, label)
     if cv2.countNonZero(mask) < 4:
         return False
     h, w = shape
@@ -492,7 +502,7 @@ def measure_source(src: LabelSource, *, upper_region_fraction: float = 0.5,
     sub = src.pixels(win)
     board = None
     if sub.size:
-        box = _bbox(cv2.compare(sub, L.BOARD, cv2.CMP_EQ))
+        box = _bbox(_eq(sub, L.BOARD))
         if box is not None:
             board = (box[0] + win[0], box[1] + win[1], box[2], box[3])
     v["4-1"] = None if board is None else board[2] / board[3]
@@ -512,7 +522,7 @@ def _guide_center(src: LabelSource, group: str, label: int) -> tuple[float, floa
     sub = src.pixels(win)
     if sub.size == 0:
         return None
-    box = _bbox(cv2.compare(sub, label, cv2.CMP_EQ))
+    box = _bbox(_eq(sub, label))
     if box is None:
         return None
     x, y, bw, bh = box

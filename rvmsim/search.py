@@ -55,13 +55,19 @@ _SPEC = {s.name: s for s in PARAM_SPECS}
 
 @dataclass(frozen=True)
 class ParamRange:
-    """One tuned parameter: initial value, search range and coarse grid step."""
+    """One tuned parameter: initial value, search range, coarse grid step and grid points.
+
+    The coarse grid takes ``points`` values ``init + k·step`` centred on ``init``
+    (k = −(points − 1)/2 … (points − 1)/2), dropping any outside [low, high]; the range also
+    bounds the fine stage and the other strategies.
+    """
 
     name: str
     init: float
     low: float
     high: float
     step: float
+    points: int = 3
 
     def __post_init__(self) -> None:
         spec = _SPEC.get(self.name)
@@ -72,12 +78,15 @@ class ParamRange:
                              f"{spec.high:g}, got {self.low:g}, {self.init:g}, {self.high:g}")
         if self.step <= 0:
             raise ValueError(f"{self.name}: step must be > 0")
+        if self.points < 1:
+            raise ValueError(f"{self.name}: points must be >= 1")
 
     def grid(self) -> np.ndarray:
-        """``init + k·step`` for every integer k that stays inside [low, high]."""
-        k_lo = math.ceil((self.low - self.init) / self.step - 1e-9)
-        k_hi = math.floor((self.high - self.init) / self.step + 1e-9)
-        return self.init + self.step * np.arange(k_lo, k_hi + 1)
+        """The coarse grid values of this parameter, ascending."""
+        k = np.arange(self.points) - (self.points - 1) / 2.0
+        values = self.init + self.step * k
+        keep = (values >= self.low - 1e-9) & (values <= self.high + 1e-9)
+        return np.clip(values[keep], self.low, self.high)
 
 
 @dataclass(frozen=True)
@@ -129,24 +138,23 @@ def default_space(camera: FisheyeCamera, names: Sequence[str] = TUNED_BY_DEFAULT
 
     RAD starts at the radius the lens gives 180° (fx·π/2, which with FOV 180 makes the ISP's
     lens model the real one for an equidistance lens); H/V shift start at the principal
-    point's offset.  Ranges cover views from nearly uncorrected to strongly corrected, with
-    3 grid values for the parameters that matter most and 2–3 for the rest (3⁵·2⁴ = 3,888
-    coarse candidates).
+    point's offset.  Ranges cover views from nearly uncorrected to strongly corrected; the
+    coarse grid takes 3 values per parameter (3⁹ = 19,683 candidates).
     """
     rad0 = camera.fx * math.pi / 2
     h0 = camera.cx - (camera.width - 1) / 2
     v0 = camera.cy - (camera.height - 1) / 2
     q = camera.width / 1280.0  # pixel-valued ranges follow the sensor size
     table = {
-        "fov": (180.0, 150.0, 210.0, 15.0),
+        "fov": (180.0, 150.0, 210.0, 20.0),
         "rad": (rad0, 0.55 * rad0, 1.45 * rad0, 0.3 * rad0),
-        "h_shift": (h0, h0 - 40 * q, h0 + 40 * q, 40 * q),
-        "v_shift": (v0, v0 - 120 * q, v0 + 120 * q, 60 * q),
-        "zoom": (0.7, 0.25, 1.45, 0.4),
-        "adv_h_shift": (0.0, -0.3, 0.3, 0.3),
-        "adv_v_shift": (0.0, -0.6, 0.6, 0.3),
-        "adv_h_scale": (1.0, 0.5, 1.6, 0.3),
-        "adv_v_scale": (1.0, 0.6, 2.0, 0.3),
+        "h_shift": (h0, h0 - 60 * q, h0 + 60 * q, 30 * q),
+        "v_shift": (v0, v0 - 160 * q, v0 + 160 * q, 80 * q),
+        "zoom": (0.7, 0.25, 1.45, 0.3),
+        "adv_h_shift": (0.0, -0.4, 0.4, 0.2),
+        "adv_v_shift": (0.0, -0.8, 0.8, 0.4),
+        "adv_h_scale": (1.0, 0.5, 1.8, 0.3),
+        "adv_v_scale": (1.2, 0.6, 2.0, 0.4),
     }
     ranges = []
     for n in names:

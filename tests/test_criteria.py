@@ -345,3 +345,11 @@ def test_rejects_non_label_images():
         measure(np.zeros((10, 10), np.float32))
     with pytest.raises(TypeError):
         measure(np.zeros((10, 10, 3), np.uint8))
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 7), (7, 1), (2, 2)])
+def test_tiny_images_are_measured(shape):
+    labels = np.full(shape, L.object_patch("F"), np.uint8)
+    r = evaluate(labels)
+    _check_defined(r)
+    assert r["1-1"].value == 0.0  # a patch filling the image touches its border

@@ -1,0 +1,310 @@
+"""Tune one vehicle: render once (cached), search, store every candidate, write the results.
+
+A run lives in a folder: ``run.sqlite`` (every candidate, see :mod:`rvmsim.store`),
+``run.json`` (what was run), and at the end ``top/rank_K.yaml`` (the top-M parameter sets)
+and ``best/`` (the best candidate's RVM image, annotated EC image and EC table).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing as mp
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from .criteria import Criteria, EcResult, load_criteria
+from .errors import RvmsimError
+from .evaluator import CandidateEvaluator
+from .isp import IspParams, OutputSpec, params_to_dict
+from .search import (
+    STRATEGIES,
+    CmaEs,
+    GridToRandom,
+    ParamRange,
+    RandomSearch,
+    SearchOutcome,
+    SearchSpace,
+    Strategy,
+    default_space,
+    run_search,
+)
+from .store import RunStore
+
+__all__ = ["TuningConfig", "load_tuning_config", "tune", "TuneResult", "write_results"]
+
+
+class _Range(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    init: float | None = None
+    range: tuple[float, float] | None = None
+    step: Annotated[float, Field(gt=0)] | None = None
+    points: Annotated[int, Field(ge=1, le=99)] | None = None
+
+
+class _Output(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    size: tuple[Annotated[int, Field(ge=16, le=8192)], Annotated[int, Field(ge=16, le=8192)]] = (640, 360)
+    mirror: bool = True
+
+
+class _GridRandom(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    top_n: Annotated[int, Field(ge=1)] = 2
+    trials: Annotated[int, Field(ge=0)] = 20000
+
+
+class _Budget(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    budget: Annotated[int, Field(ge=1)] = 3000
+    sigma0: Annotated[float, Field(gt=0, le=1)] = 0.3
+
+
+class TuningConfig(BaseModel):
+    """A tuning config file (YAML); every key optional.
+
+    ``tuned``: the parameters to search (default: the paper's nine); ``parameters``: per
+    parameter ``init``, ``range`` and coarse ``step`` (default: fitted to the camera, see
+    :func:`rvmsim.search.default_space`); ``fixed``: values of untuned parameters;
+    ``output``: the RVM image the ECs are measured on during tuning; strategy settings.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+    tuned: list[str] | None = None
+    parameters: dict[str, _Range] = {}
+    fixed: dict[str, float] = {}
+    output: _Output = _Output()
+    top_m: Annotated[int, Field(ge=1, le=1000)] = 10
+    #: Candidates evaluated (and stored in one transaction) at a time.
+    batch: Annotated[int, Field(ge=1, le=100000)] = 512
+    grid_random: _GridRandom = _GridRandom()
+    cmaes: _Budget = _Budget()
+    random: _Budget = _Budget(budget=2000)
+
+    def space(self, camera) -> SearchSpace:
+        names = tuple(self.tuned) if self.tuned is not None else None
+        base_space = default_space(camera) if names is None else default_space(camera, names)
+        ranges = []
+        for r in base_space.ranges:
+            o = self.parameters.get(r.name)
+            if o is None:
+                ranges.append(r)
+                continue
+            lo, hi = o.range if o.range is not None else (r.low, r.high)
+            init = o.init if o.init is not None else min(max(r.init, lo), hi)
+            ranges.append(ParamRange(r.name, init, lo, hi, o.step or r.step, o.points or r.points))
+        base = IspParams().replace(**self.fixed) if self.fixed else IspParams()
+        return SearchSpace(tuple(ranges), base)
+
+    def output_spec(self) -> OutputSpec:
+        return OutputSpec(self.output.size[0], self.output.size[1], self.output.mirror)
+
+
+def load_tuning_config(path: str | Path | None) -> TuningConfig:
+    if path is None:
+        return TuningConfig()
+    path = Path(path)
+    text = read_text(path)
+    data = parse_yaml(text, str(path)) or {}
+    if not isinstance(data, dict):
+        raise RvmsimError(f"{path}: a tuning config must be a YAML mapping")
+    try:
+        cfg = TuningConfig.model_validate(data)
+    except ValidationError as err:
+        raise validation_error_to_scene_error(err, str(path), key_lines(text)) from None
+    unknown = set(cfg.tuned or []) | set(cfg.parameters) | set(cfg.fixed)
+    unknown -= set(IspParams.names())
+    if unknown:
+        raise RvmsimError(f"{path}: {sorted(unknown)[0]}: not an ISP parameter")
+    return cfg
+
+
+def make_strategy(name: str, space: SearchSpace, cfg: TuningConfig, seed: int,
+                  budget: int | None = None) -> Strategy:
+    if name == GridToRandom.name:
+        trials = cfg.grid_random.trials if budget is None else budget
+        return GridToRandom(space, seed=seed, top_n=cfg.grid_random.top_n, trials=trials,
+                            batch=cfg.batch)
+    if name == CmaEs.name:
+        return CmaEs(space, seed=seed, budget=budget or cfg.cmaes.budget, sigma0=cfg.cmaes.sigma0)
+    if name == RandomSearch.name:
+        return RandomSearch(space, seed=seed, budget=budget or cfg.random.budget, batch=cfg.batch)
+    raise RvmsimError(f"unknown strategy {name!r} (known: {', '.join(STRATEGIES)})")
+
+
+# ---------------------------------------------------------------------------- evaluation
+_WORKER: CandidateEvaluator | None = None
+
+
+def _init_worker(evaluator: CandidateEvaluator) -> None:
+    global _WORKER
+    import cv2
+
+    cv2.setNumThreads(1)
+    _WORKER = evaluator
+
+
+def _work(chunk: list[IspParams]) -> list[EcResult]:
+    assert _WORKER is not None
+    return [_WORKER(p) for p in chunk]
+
+
+class BatchEvaluator:
+    """Evaluates batches in order, in this process or in ``workers`` worker processes, each
+    holding its own copy of the evaluator (the fisheye label image is 1.2 MB).
+
+    Workers are spawned, not forked: a process that has run OpenCV's thread pool or an
+    OpenGL context cannot be forked safely."""
+
+    def __init__(self, evaluator: CandidateEvaluator, workers: int = 1):
+        self.evaluator = evaluator
+        self.workers = max(1, workers)
+        self.pool = None
+        if self.workers > 1:
+            ctx = mp.get_context("spawn")
+            self.pool = ctx.Pool(self.workers, initializer=_init_worker, initargs=(evaluator,))
+
+    def __call__(self, params: list[IspParams]) -> list[EcResult]:
+        if self.pool is None:
+            return [self.evaluator(p) for p in params]
+        n = max(1, math.ceil(len(params) / (self.workers * 4)))
+        chunks = [params[i : i + n] for i in range(0, len(params), n)]
+        return [r for part in self.pool.map(_work, chunks) for r in part]
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.terminate()
+            self.pool.join()
+            self.pool = None
+
+
+# ---------------------------------------------------------------------------- the run
+@dataclass(frozen=True)
+class TuneResult:
+    run_dir: Path
+    outcome: SearchOutcome
+    total: int | None
+
+
+def tune(
+    scene_file: str | Path,
+    run_dir: str | Path,
+    *,
+    strategy: str = GridToRandom.name,
+    config: TuningConfig | None = None,
+    criteria: Criteria | None = None,
+    criteria_file: str | Path | None = None,
+    seed: int = 0,
+    workers: int = 1,
+    budget: int | None = None,
+    max_time: float | None = None,
+    target_score: float | None = None,
+    resume: bool = False,
+    progress: bool = False,
+) -> TuneResult:
+    """Tune the ISP for one scene; see the module docstring for what is written.
+
+    Parameters
+    ----------
+    budget : int, optional
+        Evaluations for ``cmaes``/``random``; for ``grid-random`` the fine trials per seed
+        (T), replacing the config's value (a shortened protocol).
+    resume : bool
+        Continue the run in ``run_dir`` with its own settings (the other arguments that
+        define the run are taken from its ``run.json``).
+    """
+    from .cache import cached_render
+    from .scene import load_scene
+
+    run_dir = Path(run_dir)
+    run_json = run_dir / "run.json"
+    if resume:
+        if not run_json.is_file():
+            raise RvmsimError(f"{run_dir}: no run to resume (run.json missing)")
+        saved = json.loads(run_json.read_text())
+        scene_file, strategy, seed = saved["scene"], saved["strategy"], saved["seed"]
+        budget, criteria_file = saved.get("budget"), saved.get("criteria_file")
+        config = TuningConfig.model_validate(saved["config"])
+        criteria = None
+    elif (run_dir / "run.sqlite").exists():
+        raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it")
+    config = config or TuningConfig()
+    if criteria is None:
+        criteria = load_criteria(criteria_file)
+    scene = load_scene(scene_file)
+    images, _ = cached_render(scene, scene_file, progress=progress)
+    space = config.space(images.camera)
+    strat = make_strategy(strategy, space, config, seed, budget)
+    if not resume:
+        run_dir.mkdir(parents=True, exist_ok=True)
+        run_json.write_text(json.dumps({
+            "scene": str(Path(scene_file)), "vehicle": scene.name, "strategy": strategy,
+            "seed": seed, "budget": budget,
+            "criteria_file": None if criteria_file is None else str(criteria_file),
+            "config": config.model_dump(mode="json"),
+        }, indent=2))
+    store = RunStore(run_dir / "run.sqlite")
+    store.set_meta(status="running", strategy=strategy, total=strat.total())
+    evaluator = CandidateEvaluator(images.labels, config.output_spec(), criteria)
+    batch_eval = BatchEvaluator(evaluator, workers)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=strat.total(), unit="eval", desc=f"tune {scene.name}", smoothing=0.1)
+
+    def on_batch(done: int, best: float, stage: str) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            bar.set_postfix_str(f"best {best:.4g} [{stage}]")
+
+    try:
+        outcome = run_search(strat, batch_eval, store, max_time=max_time,
+                             target_score=target_score, on_batch=on_batch)
+    finally:
+        batch_eval.close()
+        if bar is not None:
+            bar.close()
+    store.set_meta(status="done" if outcome.stopped == "done" else f"stopped ({outcome.stopped})")
+    write_results(run_dir, store, scene, images, config, criteria)
+    store.close()
+    return TuneResult(run_dir, outcome, strat.total())
+
+
+def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningConfig,
+                  criteria: Criteria) -> None:
+    """top/rank_K.yaml for the top-M, and best/: RVM image, annotated ECs, EC table."""
+    import yaml
+
+    from .annotate import annotate
+    from .criteria import evaluate
+    from .imageio_utils import write_png
+    from .isp import apply_map, build_map
+
+    top = store.top(config.top_m)
+    if not top:
+        return
+    out = config.output_spec()
+    (run_dir / "top").mkdir(parents=True, exist_ok=True)
+    for k, rec in enumerate(top, start=1):
+        doc = params_to_dict(rec.params, out)
+        (run_dir / "top" / f"rank_{k}.yaml").write_text(
+            f"# rank {k} of {scene.name}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
+            + yaml.safe_dump(doc, sort_keys=False))
+    best = top[0]
+    m = build_map(best.params, (images.camera.width, images.camera.height), out)
+    color, labels = apply_map(images.color, m), apply_map(images.labels, m)
+    result = evaluate(labels, criteria)
+    write_png(run_dir / "best" / "rvm_color.png", color)
+    write_png(run_dir / "best" / "rvm_labels.png", labels)
+    write_png(run_dir / "best" / "ec_annotated.png", annotate(color, labels, result))
+    (run_dir / "best" / "ec.json").write_text(json.dumps(
+        {"vehicle": scene.name, "trial": best.idx, **result.as_dict(),
+         "isp": params_to_dict(best.params, out)}, indent=2))
+    (run_dir / "best" / "ec_table.txt").write_text(result.table() + "\n")
