@@ -206,9 +206,10 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
               help="Stop once the EC score reaches this.")
 @click.option("--resume", "resume_dir", type=click.Path(path_type=Path), default=None,
               help="Continue the run in this folder (same settings, same final result).")
+@click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget, max_time,
-         target_score, resume_dir, progress) -> None:
+         target_score, resume_dir, force, progress) -> None:
     """Tune the ISP parameters of SCENE (or continue a run with --resume RUN)."""
     from .tune import load_tuning_config
     from .tune import tune as run_tune
@@ -221,7 +222,11 @@ def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget
             if scene is None:
                 raise RvmsimError("tune: give a SCENE file, or --resume RUN")
             cfg = load_tuning_config(config_file)
-            result = run_tune(scene, out or Path("runs") / scene.stem, strategy=strategy,
+            run_dir = out or Path("runs") / scene.stem
+            if force:
+                for name in ("run.sqlite", "run.sqlite-wal", "run.sqlite-shm", "run.json"):
+                    (run_dir / name).unlink(missing_ok=True)
+            result = run_tune(scene, run_dir, strategy=strategy,
                               config=cfg, criteria_file=criteria_file, seed=seed,
                               workers=workers, budget=budget, max_time=max_time,
                               target_score=target_score, progress=progress)
@@ -234,6 +239,74 @@ def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget
                f"{best.score:.4g} (trial {best.idx})" if best else "no trials")
     if best is not None:
         click.echo((result.run_dir / "best" / "ec_table.txt").read_text().rstrip())
+
+
+@cli.command()
+@click.argument("scenes", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--out", "-o", type=click.Path(path_type=Path), default=Path("runs"),
+              show_default=True, help="Folder for the runs (one sub-folder per scene).")
+@click.option("--strategy", type=click.Choice(["grid-random", "cmaes", "random"]),
+              default="grid-random", show_default=True)
+@click.option("--config", "config_file", type=click.Path(path_type=Path), default=None)
+@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None)
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--workers", type=click.IntRange(1, 64), default=os.cpu_count() or 1,
+              show_default=True)
+@click.option("--budget", type=click.IntRange(1), default=None)
+@click.option("--progress/--no-progress", default=True)
+def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budget,
+          progress) -> None:
+    """Tune every scene in SCENES; print and write a summary table (summary.json, .txt).
+
+    A scene that cannot be loaded or tuned is reported and skipped; the others still run.
+    """
+    from .criteria import EC_IDS
+    from .tune import load_tuning_config
+    from .tune import tune as run_tune
+
+    try:
+        cfg = load_tuning_config(config_file)
+    except RvmsimError as err:
+        _fail(err)
+    rows, failed = [], 0
+    for k, scene in enumerate(scenes, start=1):
+        click.echo(f"[{k}/{len(scenes)}] {scene}")
+        run_dir = out / scene.stem
+        try:
+            result = run_tune(scene, run_dir, strategy=strategy, config=cfg,
+                              criteria_file=criteria_file, seed=seed, workers=workers,
+                              budget=budget, progress=progress)
+        except RvmsimError as err:
+            click.echo(f"rvmsim: error: {err} (skipped)", err=True)
+            rows.append({"scene": str(scene), "error": str(err)})
+            failed += 1
+            continue
+        doc = json.loads((run_dir / "best" / "ec.json").read_text())
+        rows.append({
+            "scene": str(scene), "vehicle": doc["vehicle"], "ec_score": doc["ec_score"],
+            "passed": doc["passed"], "ecs": {e["id"]: e["passed"] for e in doc["ecs"]},
+            "evaluations": result.outcome.evaluated + result.outcome.replayed,
+            "seconds": round(result.outcome.seconds, 1), "run": str(run_dir),
+        })
+    head = f"{'vehicle':28} {'EC score':>10} " + " ".join(f"{e:>3}" for e in EC_IDS)
+    lines = [head + f" {'evals':>7} {'time':>7}"]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"{r['scene']:28} {'error':>10}  {r['error']}")
+            continue
+        marks = " ".join(f"{'ok' if r['ecs'][e] else 'X':>3}" for e in EC_IDS)
+        lines.append(f"{r['vehicle'][:28]:28} {r['ec_score']:10.4g} {marks} "
+                     f"{r['evaluations']:7d} {r['seconds']:6.1f}s")
+    table = "\n".join(lines)
+    click.echo(table)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "summary.json").write_text(json.dumps(rows, indent=2))
+        (out / "summary.txt").write_text(table + "\n")
+    except OSError as err:
+        _fail(RvmsimError(f"{out}: {err.strerror or err}"))
+    if failed:
+        sys.exit(1)
 
 
 @cli.command()

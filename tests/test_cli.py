@@ -123,3 +123,70 @@ def test_evaluate_bad_criteria_is_one_line(tmp_path):
     )
     assert res.returncode == 2 and "9-9" in res.stderr and "Traceback" not in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def _rvmsim(*args, env=None, timeout=600):
+    return subprocess.run([sys.executable, "-m", "rvmsim", *args], capture_output=True,
+                          text=True, timeout=timeout, env=env)
+
+
+def test_tune_status_select_and_batch(tmp_path):
+    import os
+
+    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    cfg = tmp_path / "t.yaml"
+    cfg.write_text("tuned: [zoom, adv_v_shift, adv_v_scale]\noutput: {size: [320, 180]}\n"
+                   "top_m: 3\nbatch: 50\n")
+    run = tmp_path / "runs" / "a"
+    res = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--out", str(run), "--config",
+                  str(cfg), "--strategy", "random", "--budget", "120", "--workers", "2",
+                  "--no-progress", env=env)
+    assert res.returncode == 0, res.stderr
+    assert "120 evaluated" in res.stdout and "EC score" in res.stdout
+    for name in ("run.sqlite", "run.json", "best/rvm_color.png", "best/ec_annotated.png",
+                 "best/ec.json", "top/rank_1.yaml", "top/rank_3.yaml"):
+        assert (run / name).is_file(), name
+    st = _rvmsim("status", str(run), env=env)
+    assert st.returncode == 0 and "120 / 120 evaluations" in st.stdout and "#3" in st.stdout
+    sel = _rvmsim("select", str(run), "--rank", "2", "--out", str(tmp_path / "p2.yaml"), env=env)
+    assert sel.returncode == 0
+    from rvmsim.isp import load_params
+
+    params, out = load_params(tmp_path / "p2.yaml")
+    assert out.width == 320 and params.zoom > 0
+    # The exported file reproduces the stored score through the public pipeline.
+    from rvmsim.store import RunStore
+
+    store = RunStore(run / "run.sqlite")
+    second = store.top(2)[1]
+    store.close()
+    assert params == second.params
+    # A second tune into the same folder refuses to overwrite it.
+    again = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--out", str(run), "--no-progress",
+                    env=env)
+    assert again.returncode == 2 and "--resume" in again.stderr
+    # Batch: one good scene, one broken one; the broken one is reported and skipped.
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("name: x\ncamera: {\n")
+    b = _rvmsim("batch", str(SCENES / "vehicle_b.yaml"), str(broken), "--out",
+                str(tmp_path / "batch"), "--config", str(cfg), "--strategy", "random",
+                "--budget", "60", "--workers", "1", "--no-progress", env=env)
+    assert b.returncode == 1
+    assert "broken.yaml" in b.stderr and "skipped" in b.stderr
+    summary = json.loads((tmp_path / "batch" / "summary.json").read_text())
+    assert summary[0]["vehicle"].startswith("Vehicle B") and summary[0]["evaluations"] == 60
+    assert "error" in summary[1]
+    assert "Vehicle B" in (tmp_path / "batch" / "summary.txt").read_text()
+
+
+def test_tune_errors_are_one_line(tmp_path):
+    bad = tmp_path / "t.yaml"
+    bad.write_text("tuned: [zooom]\n")
+    res = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--config", str(bad), "--out",
+                  str(tmp_path / "r"))
+    assert res.returncode == 2 and "zooom" in res.stderr
+    assert len(res.stderr.strip().splitlines()) == 1
+    res = _rvmsim("tune", "--resume", str(tmp_path / "nothing"))
+    assert res.returncode == 2 and "no run to resume" in res.stderr
+    res = _rvmsim("status", str(tmp_path / "nothing"))
+    assert res.returncode == 2 and "no run database" in res.stderr

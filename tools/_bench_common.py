@@ -1,6 +1,9 @@
-"""Shared by the benchmarks in tools/: the parameter ranges a tuning run explores."""
+"""Shared by the benchmarks in tools/: machine description, tuning-like parameter ranges."""
 
 from __future__ import annotations
+
+import platform
+from pathlib import Path
 
 import numpy as np
 
@@ -18,3 +21,14 @@ SEARCH = {
 def random_candidates(n: int, seed: int = 0) -> list[IspParams]:
     rng = np.random.default_rng(seed)
     return [IspParams(**{k: rng.uniform(*r) for k, r in SEARCH.items()}) for _ in range(n)]
+
+
+def cpu_model() -> str:
+    """The CPU's model name (for benchmark reports)."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"

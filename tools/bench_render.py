@@ -19,20 +19,12 @@ from pathlib import Path
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
+from _bench_common import cpu_model  # noqa: E402
+
 import numpy as np  # noqa: E402
 
 from rvmsim.render import render_fisheye  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def gl_renderer() -> str:
