@@ -308,9 +308,8 @@ def _map_points(
     rho = np.hypot(ax, ay)
     theta = np.arctan2(rho, az)
     f_isp = p.rad / math.radians(p.fov / 2.0)
-    # f·θ/ρ → f/az on the axis (ρ → 0); ρ = 0 exactly only there.
+    # f·θ/ρ; where ρ = 0 (the axis) ax = ay = 0, so any finite scale gives the centre.
     scale = f_isp * theta / np.maximum(rho, 1e-300)
-    scale = np.where(rho > 1e-12, scale, f_isp / np.maximum(az, 1e-300))
     w_in, h_in = input_size
     u_in = ((w_in - 1) / 2.0 + p.h_shift) + scale * ax
     v_in = ((h_in - 1) / 2.0 + p.v_shift) + scale * ay
