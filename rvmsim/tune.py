@@ -267,6 +267,10 @@ def tune(
     try:
         outcome = run_search(strat, batch_eval, store, max_time=max_time,
                              target_score=target_score, on_batch=on_batch)
+    except KeyboardInterrupt:
+        store.set_meta(status="interrupted (continue with --resume)")
+        store.close()
+        raise
     finally:
         batch_eval.close()
         if bar is not None:

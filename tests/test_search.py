@@ -172,3 +172,39 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path):
         assert (run / "top" / f"rank_{k}.yaml").is_file()
     doc = json.loads((run / "best" / "ec.json").read_text())
     assert doc["ec_score"] == pytest.approx(top(run)[0][0][2])
+
+
+def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
+    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    cfg = tmp_path / "tune.yaml"
+    cfg.write_text(yaml.safe_dump({"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40,
+                                   "output": {"size": [320, 180]},
+                                   "grid_random": {"top_n": 2, "trials": 2000}}))
+    run = tmp_path / "run"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rvmsim", "tune", str(SCENES / "vehicle_a.yaml"), "--out",
+         str(run), "--config", str(cfg), "--workers", "1", "--no-progress"],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    db = run / "run.sqlite"
+    deadline = time.time() + 300
+    while time.time() < deadline:
+        if db.exists():
+            try:
+                if sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0] >= 120:
+                    break
+            except sqlite3.Error:
+                pass
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err
+    store = RunStore(db)
+    assert store.meta()["status"].startswith("interrupted") and 120 <= store.count() < 4081
+    store.close()
+    res = subprocess.run([sys.executable, "-m", "rvmsim", "tune", "--resume", str(run),
+                          "--workers", "1", "--no-progress"], env=env, capture_output=True,
+                         text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    store = RunStore(db)
+    assert store.count() == 81 + 4000 and store.meta()["status"] == "done"
+    store.close()
