@@ -39,6 +39,10 @@ from .store import RunStore
 
 __all__ = ["TuningConfig", "load_tuning_config", "tune", "TuneResult", "write_results"]
 
+#: Size of the RVM display image written for the best candidate (the ECs are measured at the
+#: tuning config's ``output`` size).
+DISPLAY_SIZE = (1280, 720)
+
 
 class _Range(BaseModel):
     model_config = ConfigDict(extra="forbid")
@@ -283,7 +287,8 @@ def tune(
 
 def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningConfig,
                   criteria: Criteria) -> None:
-    """top/rank_K.yaml for the top-M, and best/: RVM image, annotated ECs, EC table."""
+    """top/rank_K.yaml for the top-M, and best/: RVM image (tuning size and display size),
+    annotated ECs, EC table."""
     import yaml
 
     from .annotate import annotate
@@ -312,3 +317,8 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
         {"vehicle": scene.name, "trial": best.idx, **result.as_dict(),
          "isp": params_to_dict(best.params, out)}, indent=2))
     (run_dir / "best" / "ec_table.txt").write_text(result.table() + "\n")
+    # The same view at the display's size (the view is defined in normalised coordinates, so
+    # only the pixel count changes; aspect ratios differing from 16:9 crop or extend it).
+    display = OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], out.mirror)
+    dm = build_map(best.params, (images.camera.width, images.camera.height), display)
+    write_png(run_dir / "best" / "rvm_display.png", apply_map(images.color, dm))

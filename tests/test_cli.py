@@ -146,6 +146,8 @@ def test_tune_status_select_and_batch(tmp_path):
     for name in ("run.sqlite", "run.json", "best/rvm_color.png", "best/ec_annotated.png",
                  "best/ec.json", "top/rank_1.yaml", "top/rank_3.yaml"):
         assert (run / name).is_file(), name
+    assert iio.imread(run / "best" / "rvm_display.png").shape == (720, 1280, 3)
+    assert iio.imread(run / "best" / "rvm_color.png").shape == (180, 320, 3)
     st = _rvmsim("status", str(run), env=env)
     assert st.returncode == 0 and "120 / 120 evaluations" in st.stdout and "#3" in st.stdout
     sel = _rvmsim("select", str(run), "--rank", "2", "--out", str(tmp_path / "p2.yaml"), env=env)
