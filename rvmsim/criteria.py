@@ -516,7 +516,6 @@ def measure_source(src: LabelSource, *, upper_region_fraction: float = 0.5,
 
 
 def _guide_center(src: LabelSource, group: str, label: int) -> tuple[float, float] | None:
-    import cv2
 
     win = src.window(group)
     sub = src.pixels(win)

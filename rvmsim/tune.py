@@ -10,12 +10,10 @@ from __future__ import annotations
 import json
 import math
 import multiprocessing as mp
-import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
-import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error

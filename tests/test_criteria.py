@@ -14,7 +14,6 @@ from skimage.measure import regionprops
 from rvmsim import labels as L
 from rvmsim.criteria import (
     EC_IDS,
-    Criteria,
     Sigmoid,
     default_criteria,
     evaluate,
@@ -25,7 +24,7 @@ from rvmsim.errors import SceneError
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map, build_map_exact, input_to_output
 from rvmsim.meshes import GUIDELINE_LIFT_M, board_point, build_parts
 
-from .conftest import SCENES, bundled_scene, small_render
+from .conftest import bundled_scene, small_render
 
 #: RVM size for the analytic comparisons: no finer than the fisheye where the view is widest,
 #: so one RVM pixel never magnifies more than one fisheye pixel (nearest sampling of a

@@ -17,7 +17,7 @@ import yaml
 
 from rvmsim.criteria import default_criteria
 from rvmsim.evaluator import CandidateEvaluator
-from rvmsim.isp import IspParams, OutputSpec
+from rvmsim.isp import OutputSpec
 from rvmsim.search import (
     CmaEs,
     GridToRandom,

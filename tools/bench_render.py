@@ -15,7 +15,6 @@ import os
 import platform
 import statistics
 import time
-from pathlib import Path
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
