@@ -325,17 +325,6 @@ class Measurements:
 _BODY = (L.BUMPER, L.GARNISH, L.TRUNK)
 
 
-def _lut(ids) -> np.ndarray:
-    lut = np.zeros(256, np.uint8)
-    lut[list(ids)] = 255
-    return lut
-
-
-_LUT_ABC = _lut([L.object_body(c) for c in "ABC"] + [L.object_stripe(c) for c in "ABC"])
-_LUT_BLOCKERS = _lut(list(_BODY) + [L.VOID] + list(range(L.EXTRA_PART_BASE, 256)))
-_LUT_UPPER_BODY = _lut([L.GARNISH, L.TRUNK])
-
-
 def _bbox(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     import cv2
 
@@ -353,6 +342,10 @@ GROUPS: dict[str, tuple[int, ...]] = {
     "board": (L.BOARD,),
     "upper_body": (L.GARNISH, L.TRUNK),
 }
+
+_LUT_ABC = L.lut(GROUPS["ABC"])
+_LUT_UPPER_BODY = L.lut(GROUPS["upper_body"])
+_LUT_BLOCKERS = L.lut(list(_BODY) + [L.VOID] + list(range(L.EXTRA_PART_BASE, 256)))
 
 Window = tuple[int, int, int, int]  # x0, y0, x1, y1 (exclusive), output px
 
@@ -516,7 +509,6 @@ def measure_source(src: LabelSource, *, upper_region_fraction: float = 0.5,
 
 
 def _guide_center(src: LabelSource, group: str, label: int) -> tuple[float, float] | None:
-
     win = src.window(group)
     sub = src.pixels(win)
     if sub.size == 0:

@@ -48,9 +48,7 @@ def _group_tiles(labels: np.ndarray) -> tuple[list[str], np.ndarray]:
     for name, ids in GROUPS.items():
         if name == "upper_body":
             continue  # EC 2-4 has its own test (CandidateEvaluator._no_body_up_there)
-        lut = np.zeros(256, np.uint8)
-        lut[list(ids)] = 255
-        mask = cv2.LUT(labels, lut)
+        mask = cv2.LUT(labels, L.lut(ids))
         for ty in range(0, h, TILE_PX):
             for tx in range(0, w, TILE_PX):
                 x, y, bw, bh = cv2.boundingRect(mask[ty : ty + TILE_PX, tx : tx + TILE_PX])

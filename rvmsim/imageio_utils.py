@@ -1,4 +1,4 @@
-"""Reading and writing images with one-line errors (PNG through imageio)."""
+"""Writing images with one-line errors (PNG through imageio)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 
 from .errors import RvmsimError
 
-__all__ = ["write_png", "read_image"]
+__all__ = ["write_png"]
 
 
 def write_png(path: str | Path, image: np.ndarray) -> Path:
@@ -22,19 +22,3 @@ def write_png(path: str | Path, image: np.ndarray) -> Path:
     except OSError as err:
         raise RvmsimError(f"{path}: cannot write image ({err.strerror or err})") from None
     return path
-
-
-def read_image(path: str | Path) -> np.ndarray:
-    """Read an image file; raise :class:`RvmsimError` naming the file if it is unreadable."""
-    import imageio.v3 as iio
-
-    path = Path(path)
-    if not path.is_file():
-        raise RvmsimError(f"{path}: image file not found")
-    try:
-        img = iio.imread(path)
-    except Exception as err:  # imageio raises plugin-specific errors
-        raise RvmsimError(f"{path}: unreadable image ({type(err).__name__})") from None
-    if img.size == 0:
-        raise RvmsimError(f"{path}: empty image")
-    return np.asarray(img)

@@ -400,7 +400,6 @@ def build_map(
     IspMap
         ``map_x``/``map_y`` may be non-contiguous views of one buffer (cv2 accepts them).
     """
-
     nodes = map_nodes(params, input_size, output, cell=cell, tolerance_px=tolerance_px)
     return IspMap(nodes.window((0, 0, output.width, output.height)), input_size, output)
 

@@ -29,6 +29,7 @@ __all__ = [
     "EXTRA_PART_BASE",
     "MAX_EXTRA_PARTS",
     "label_names",
+    "lut",
     "colorize",
 ]
 
@@ -102,6 +103,14 @@ def label_names() -> dict[int, str]:
     for i in range(MAX_EXTRA_PARTS):
         names[EXTRA_PART_BASE + i] = f"extra_{i}"
     return names
+
+
+def lut(ids) -> np.ndarray:
+    """A 256-entry uint8 table, 255 at ``ids`` and 0 elsewhere: ``cv2.LUT(labels, lut(ids))``
+    is the mask of those labels in one pass."""
+    table = np.zeros(256, np.uint8)
+    table[list(ids)] = 255
+    return table
 
 
 def _palette() -> np.ndarray:

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .isp import IspParams, OutputSpec, apply_map, build_map
+from .isp import IspParams, OutputSpec, process
 from .render import FisheyeImages, render_fisheye
 from .scene import Scene
 
@@ -49,11 +49,5 @@ def render_rvm(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         cam = cam.scaled(scale)
         params = params.for_input_scale(cam.width / scene.camera.image_size[0])
     images = render_fisheye(scene, camera=cam, progress=progress)
-    isp_map = build_map(params, (cam.width, cam.height), output)
-    return RvmFrame(
-        fisheye=images,
-        params=params,
-        output=output,
-        color=apply_map(images.color, isp_map, labels=False),
-        labels=apply_map(images.labels, isp_map, labels=True),
-    )
+    color, labels = process(images.color, images.labels, params, output)
+    return RvmFrame(fisheye=images, params=params, output=output, color=color, labels=labels)

@@ -292,7 +292,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
     from .annotate import annotate
     from .criteria import evaluate
     from .imageio_utils import write_png
-    from .isp import apply_map, build_map
+    from .isp import process
 
     top = store.top(config.top_m)
     if not top:
@@ -305,8 +305,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
             f"# rank {k} of {scene.name}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
             + yaml.safe_dump(doc, sort_keys=False))
     best = top[0]
-    m = build_map(best.params, (images.camera.width, images.camera.height), out)
-    color, labels = apply_map(images.color, m), apply_map(images.labels, m)
+    color, labels = process(images.color, images.labels, best.params, out)
     result = evaluate(labels, criteria)
     write_png(run_dir / "best" / "rvm_color.png", color)
     write_png(run_dir / "best" / "rvm_labels.png", labels)
@@ -318,5 +317,5 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
     # The same view at the display's size (the view is defined in normalised coordinates, so
     # only the pixel count changes; aspect ratios differing from 16:9 crop or extend it).
     display = OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], out.mirror)
-    dm = build_map(best.params, (images.camera.width, images.camera.height), display)
-    write_png(run_dir / "best" / "rvm_display.png", apply_map(images.color, dm))
+    write_png(run_dir / "best" / "rvm_display.png",
+              process(images.color, None, best.params, display)[0])
