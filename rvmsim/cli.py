@@ -23,6 +23,20 @@ def _fail(err: Exception) -> None:
     sys.exit(2)
 
 
+def _fail_os(err: OSError, where: Path | None) -> None:
+    _fail(RvmsimError(f"{getattr(err, 'filename', None) or where}: {err.strerror or err}"))
+
+
+def _open_run(run: Path):
+    """The run store in a run folder, or a one-line error."""
+    from .store import RunStore
+
+    db = run / "run.sqlite"
+    if not db.is_file():
+        _fail(RvmsimError(f"{run}: no run database (run.sqlite) here"))
+    return RunStore(db)
+
+
 def _load_isp(params_file: Path | None):
     from .isp import IspParams, OutputSpec, load_params
 
@@ -90,7 +104,7 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
-        _fail(RvmsimError(f"{getattr(err, 'filename', None) or out}: {err.strerror or err}"))
+        _fail_os(err, out)
     total = sum(images.timings.values())
     click.echo(
         f"rendered {sc.name}: {cam.width}x{cam.height} px, {len(images.faces)} cube faces of "
@@ -132,7 +146,7 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
-        _fail(RvmsimError(f"{getattr(err, 'filename', None) or out}: {err.strerror or err}"))
+        _fail_os(err, out)
     click.echo(f"processed {sc.name}: RVM image {output.width}x{output.height} px -> {out}")
 
 
@@ -178,7 +192,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
-        _fail(RvmsimError(f"{getattr(err, 'filename', None) or out}: {err.strerror or err}"))
+        _fail_os(err, out)
     click.echo(f"{sc.name} — criteria: {criteria.name}")
     click.echo(result.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
@@ -314,12 +328,7 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
 @click.option("--top", "top_m", type=click.IntRange(1, 100), default=5, show_default=True)
 def status(run: Path, top_m: int) -> None:
     """Show a run's progress and its current top candidates (works while it runs)."""
-    from .store import RunStore
-
-    db = run / "run.sqlite"
-    if not db.is_file():
-        _fail(RvmsimError(f"{run}: no run database (run.sqlite) here"))
-    store = RunStore(db)
+    store = _open_run(run)
     meta = store.meta()
     n = store.count()
     total = meta.get("total")
@@ -342,12 +351,8 @@ def select(run: Path, rank: int, out: Path | None) -> None:
     import yaml
 
     from .isp import OutputSpec, params_to_dict
-    from .store import RunStore
 
-    db = run / "run.sqlite"
-    if not db.is_file():
-        _fail(RvmsimError(f"{run}: no run database (run.sqlite) here"))
-    store = RunStore(db)
+    store = _open_run(run)
     top = store.top(rank)
     store.close()
     if len(top) < rank:
