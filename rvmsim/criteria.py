@@ -60,6 +60,9 @@ __all__ = [
     "Measurements",
     "EcValue",
     "EcResult",
+    "EcBatch",
+    "score_batch",
+    "values_array",
     "measure",
     "measure_source",
     "LabelSource",
@@ -413,6 +416,13 @@ def _patch_visible(sub: np.ndarray, win: Window, label: int, shape: tuple[int, i
     return not np.any(blockers[grown > 0])
 
 
+def bumper_spans(width: int, edge_columns: int) -> dict[str, tuple[int, int]]:
+    """Column spans [a, b) of the bumper heights t_l, t_r (image edges) and t_c (centred)."""
+    k = max(1, min(edge_columns, width // 3))
+    c0 = int(round(width / 2.0 - k / 2))
+    return {"t_l": (0, k), "t_r": (width - k, width), "t_c": (c0, c0 + k)}
+
+
 def measure(labels: np.ndarray, *, upper_region_fraction: float = 0.5,
             edge_columns: int = 4) -> Measurements:
     """Measure the eleven ECs on an RVM label image.
@@ -465,9 +475,7 @@ def measure_source(src: LabelSource, *, upper_region_fraction: float = 0.5,
     v["1-4"] = 1000.0 * _count(sub, L.object_stripe("B")) / area
 
     # EC 2-1 … 2-3: bumper heights
-    k = max(1, min(edge_columns, w // 3))
-    c0 = int(round(w / 2.0 - k / 2))
-    spans = {"t_l": (0, k), "t_r": (w - k, w), "t_c": (c0, c0 + k)}
+    spans = bumper_spans(w, edge_columns)
     t = {n: _bumper_height(src.pixels((a, 0, b, h)), b - a) for n, (a, b) in spans.items()}
     v["2-1"] = 100.0 * t["t_c"] / h
     v["2-2"] = 100.0 * (t["t_l"] + t["t_r"]) / 2.0 / h
@@ -588,21 +596,82 @@ def _fmt(x: float | None) -> str:
     return "–" if x is None else f"{x:g}"
 
 
+@dataclass(frozen=True)
+class EcBatch:
+    """The ECs of many candidates at once (rows; columns in ``EC_IDS`` order): what tuning
+    stores for every candidate, without building an :class:`EcResult` per candidate.
+
+    ``values`` is NaN where the measured object is not in the image (``None`` in
+    :class:`EcResult`)."""
+
+    values: np.ndarray  # (n, 11) float64
+    scores: np.ndarray  # (n, 11) float64
+    passed: np.ndarray  # (n, 11) bool
+    enabled: np.ndarray  # (11,) bool
+
+    @property
+    def score(self) -> np.ndarray:
+        """EC score per candidate: the product of the enabled ECs' scores, (n,)."""
+        return np.prod(np.where(self.enabled, self.scores, 1.0), axis=1)
+
+    @property
+    def all_passed(self) -> np.ndarray:
+        """Whether every enabled EC passes, (n,) bool."""
+        return np.all(self.passed | ~self.enabled, axis=1)
+
+    def objective(self, floor: float) -> np.ndarray:
+        """Σ log(max(score_i, floor)) over the enabled ECs, (n,)."""
+        return np.sum(np.where(self.enabled, np.log(np.maximum(self.scores, floor)), 0.0), axis=1)
+
+
+def values_array(m: Measurements) -> np.ndarray:
+    """The eleven measured values in ``EC_IDS`` order, NaN for ``None``: (11,) float64."""
+    return np.array([np.nan if m.values.get(ec) is None else m.values[ec] for ec in EC_IDS])
+
+
+def score_batch(values: np.ndarray, criteria: Criteria) -> EcBatch:
+    """Score many candidates' measurements at once (vectorised :meth:`Criterion.score` and
+    :meth:`Criterion.passes`; the tests check they agree).
+
+    Parameters
+    ----------
+    values : (n, 11) float
+        Measured values in ``EC_IDS`` order, NaN where not measured.
+    criteria : Criteria
+    """
+    x = np.atleast_2d(np.asarray(values, dtype=np.float64))
+    items = [criteria.items[ec] for ec in EC_IDS]
+    big = np.finfo(np.float64).max
+    low = np.array([-big if c.low is None else c.low for c in items])
+    high = np.array([big if c.high is None else c.high for c in items])
+    binary = np.array([c.sigmoid is None for c in items])
+    only_flag = np.array([c.sigmoid is None and c.low is None and c.high is None for c in items])
+    sig = [c.sigmoid or Sigmoid() for c in items]
+    c1, c2 = np.array([s.c1 for s in sig]), np.array([s.c2 for s in sig])
+    c3, c4 = np.array([s.c3 for s in sig]), np.array([s.c4 for s in sig])
+    measured = ~np.isnan(x)
+    xs = np.where(measured, x, 0.0)
+    with np.errstate(invalid="ignore", over="ignore"):
+        # 1/(1 + e^(−z)) = (1 + tanh(z/2))/2, as Sigmoid does; an infinite threshold is 1
+        lower = np.where(np.isneginf(c2), 1.0, 0.5 * (1.0 + np.tanh(0.5 * c1 * (xs - c2))))
+        upper = np.where(np.isposinf(c4), 1.0, 0.5 * (1.0 + np.tanh(-0.5 * c3 * (xs - c4))))
+    graded = lower * upper
+    scores = np.where(measured, np.where(binary, (xs >= 1.0).astype(np.float64), graded), 0.0)
+    in_range = (xs >= low) & (xs <= high)
+    passed = measured & np.where(only_flag, xs >= 1.0, in_range)
+    enabled = np.array([c.enabled for c in items])
+    return EcBatch(x, scores, passed, enabled)
+
+
 def score(m: Measurements, criteria: Criteria) -> EcResult:
     """Score measurements with a customer's criteria."""
+    b = score_batch(values_array(m)[None, :], criteria)
     items = []
-    total = 1.0
-    passed = True
-    for d in EC_DEFINITIONS:
+    for k, d in enumerate(EC_DEFINITIONS):
         c = criteria.items[d.id]
-        value = m.values.get(d.id)
-        s = float(c.score(value))
-        ok = c.passes(value)
-        items.append(EcValue(d.id, d.name, value, d.unit, c.low, c.high, s, ok, c.enabled))
-        if c.enabled:
-            total *= s
-            passed &= ok
-    return EcResult(tuple(items), total, passed, m, criteria.name)
+        items.append(EcValue(d.id, d.name, m.values.get(d.id), d.unit, c.low, c.high,
+                             float(b.scores[0, k]), bool(b.passed[0, k]), c.enabled))
+    return EcResult(tuple(items), float(b.score[0]), bool(b.all_passed[0]), m, criteria.name)
 
 
 def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None) -> EcResult:

@@ -4,94 +4,134 @@
 eleven measurements, and each looks at one group of labels (F's stripe, the board, …) that
 covers a small part of the image.  :class:`CandidateEvaluator` therefore
 
-1. finds, once per scene, boxes around each label group's pixels in the fisheye image (one per
-   128-px tile the group touches);
-2. per candidate, maps each box's outline through the inverse ISP (:func:`isp.input_to_output`)
-   to the window of the RVM image where those pixels can appear (a smooth one-to-one map takes
-   a box's outline to the outline of its image), grown by a safety margin;
-3. remaps only those windows (plus the bumper's columns) and measures them with exactly the
-   code that measures whole images (:func:`criteria.measure_source`).
+1. computes, once per scene, each label group's distance image over the fisheye image: the
+   Chebyshev distance (px) from every pixel to the group's nearest pixel;
+2. per candidate, reads those distances under every node of the ISP map's node grid
+   (:func:`isp.map_nodes`, which the remap needs anyway) and flags a node for a group when
+   the group is within reach of it; the group's window is the box of its flagged nodes;
+3. remaps only those windows (plus the bumper's columns; or their bounding box at once when
+   that is cheaper) and measures them with exactly the code that measures whole images
+   (:func:`criteria.measure_source`).
+
+Why step 2 is exact: the fast map *is* the bilinear interpolation of the nodes, so an output
+pixel of a cell reads the fisheye label nearest to a point inside the box of the cell's four
+corner nodes, i.e. within (box extent + 1 px) of each corner, per axis.  A node is flagged
+when a group pixel is within (largest extent of the four cells around it + margin), so all
+four corners of any cell that shows a group pixel are flagged, and the cell lies inside the
+box of the flagged nodes.  Node positions are clipped to the fisheye image padded by
+``_PAD_PX`` first (clipping is monotone: the clipped box still holds the clipped point, and the
+label pixel, being inside the image, is no farther from it).  When the map was refined to a
+finer grid, the windows come from the first, coarser grid with its estimated error (twice
+over) added to the margin.
 
 The result equals ``evaluate(apply_map(labels, build_map(params, …)))`` pixel for pixel; the
-tests check this on random candidates.  Where a box's outline leaves the ISP's valid region
-(rays behind the virtual image plane) the window falls back to the whole image.
+tests check this on random candidates.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import labels as L
-from .criteria import GROUPS, Criteria, EcResult, LabelSource, Window, default_criteria
-from .criteria import measure_source, score
-from .isp import IspParams, MapNodes, OutputSpec, _map_points, input_to_output, map_nodes
+from .criteria import GROUPS, Criteria, EcResult, LabelSource, Measurements, Window
+from .criteria import bumper_spans, default_criteria, measure_source, score, values_array
+from .isp import IspParams, MapNodes, OutputSpec, map_nodes
 
 __all__ = ["CandidateEvaluator"]
 
-#: Output px added around each window: covers the fast map's ≤ 0.1 px error, nearest
-#: sampling, and the outline's sagitta between its samples.
-WINDOW_MARGIN_PX = 4
-#: Fisheye tiles (px) a label group's pixels are boxed in: a group spread over the fisheye
-#: image (the garnish around its bottom) becomes several small boxes, not one huge one.
-TILE_PX = 128
-_SIDE_SAMPLES = 8
-#: Block size (fisheye px) of the coarse garnish/trunk occupancy used for EC 2-4.
-_BLOCK_PX = 16
+#: Fisheye px around the image that node positions are clipped to.
+_PAD_PX = 8
+#: Distances are stored in 7 bits (eight groups packed in one uint64 per pixel, compared all
+#: at once); farther than this counts as "far", and reaches beyond it flag every node.
+_FAR_PX = 127
+_BYTES = np.uint64(0x0101010101010101)
+_HIGH_BITS = np.uint64(0x8080808080808080)
+#: A coarse grid whose estimated error exceeds this is not used for windows.
+_COARSE_ERROR_LIMIT_PX = 4.0
 
 
-def _group_tiles(labels: np.ndarray) -> tuple[list[str], np.ndarray]:
-    """Boxes (x, y, w, h) of each group's pixels within each fisheye tile that holds some."""
+def _group_distances(labels: np.ndarray) -> np.ndarray:
+    """(H + 2·pad, W + 2·pad) uint64 whose byte k is the Chebyshev distance (px, capped at
+    ``_FAR_PX``) from each pixel of the padded fisheye image to the nearest pixel of group k
+    (``GROUPS`` order)."""
     import cv2
 
-    names, boxes = [], []
+    if len(GROUPS) > 8:
+        raise ValueError("at most 8 label groups")
     h, w = labels.shape
-    for name, ids in GROUPS.items():
-        if name == "upper_body":
-            continue  # EC 2-4 has its own test (CandidateEvaluator._no_body_up_there)
-        mask = cv2.LUT(labels, L.lut(ids))
-        for ty in range(0, h, TILE_PX):
-            for tx in range(0, w, TILE_PX):
-                x, y, bw, bh = cv2.boundingRect(mask[ty : ty + TILE_PX, tx : tx + TILE_PX])
-                if bw:
-                    names.append(name)
-                    boxes.append((tx + x, ty + y, bw, bh))
-    return names, np.asarray(boxes, dtype=np.float64).reshape(-1, 4)
+    out = np.full((h + 2 * _PAD_PX, w + 2 * _PAD_PX, 8), _FAR_PX, np.uint8)
+    for k, ids in enumerate(GROUPS.values()):
+        far = np.full(out.shape[:2], 255, np.uint8)
+        far[_PAD_PX : _PAD_PX + h, _PAD_PX : _PAD_PX + w] = 255 - cv2.LUT(labels, L.lut(ids))
+        if far.min() == 0:
+            dist = cv2.distanceTransform(far, cv2.DIST_C, 3)
+            out[..., k] = np.minimum(dist, _FAR_PX).astype(np.uint8)
+    return np.ascontiguousarray(out).view("<u8")[..., 0]
 
 
-def _outlines(boxes: np.ndarray) -> np.ndarray:
-    """(n_boxes · 4·_SIDE_SAMPLES, 2) points around each box grown by one pixel (nearest
-    sampling reads up to half a pixel outside what it lands on)."""
-    x0 = boxes[:, 0] - 1.0
-    y0 = boxes[:, 1] - 1.0
-    x1 = boxes[:, 0] + boxes[:, 2]
-    y1 = boxes[:, 1] + boxes[:, 3]
-    t = np.linspace(0.0, 1.0, _SIDE_SAMPLES, endpoint=False)[None, :]
-    xs = np.concatenate([x0[:, None] + t * (x1 - x0)[:, None], np.repeat(x1[:, None], t.size, 1),
-                         x1[:, None] - t * (x1 - x0)[:, None], np.repeat(x0[:, None], t.size, 1)], 1)
-    ys = np.concatenate([np.repeat(y0[:, None], t.size, 1), y0[:, None] + t * (y1 - y0)[:, None],
-                         np.repeat(y1[:, None], t.size, 1), y1[:, None] - t * (y1 - y0)[:, None]], 1)
-    return np.stack([xs.ravel(), ys.ravel()], 1)
+_K2 = np.ones((2, 2), np.uint8)
+
+
+def _node_reach(grid: np.ndarray) -> np.ndarray:
+    """Per node, the largest extent (px, along x or y) of the up to four cells around it:
+    (rows, cols) float32.  ``grid`` is (rows, cols, 2) float32 node positions."""
+    import cv2
+
+    # cell (i, j) has corners (i..i+1, j..j+1): max/min over a 2×2 window anchored top-left
+    hi = cv2.dilate(grid, _K2, anchor=(0, 0), borderType=cv2.BORDER_REPLICATE)
+    lo = cv2.erode(grid, _K2, anchor=(0, 0), borderType=cv2.BORDER_REPLICATE)
+    ext = cv2.subtract(hi, lo)
+    ext = cv2.max(ext[..., 0], ext[..., 1])
+    # node (i, j) touches cells (i−1..i, j−1..j)
+    return cv2.dilate(ext, _K2, anchor=(1, 1), borderType=cv2.BORDER_REPLICATE)
+
+
+#: Cost model for remapping windows (µs per call, µs per output px; this machine): one remap
+#: of the windows' bounding box replaces separate remaps when it is cheaper, e.g. for views
+#: where the objects fill most of the image.
+_CALL_US, _PX_US = 20.0, 0.0025
 
 
 class _RemapSource(LabelSource):
-    def __init__(self, fisheye: np.ndarray, nodes: MapNodes, windows: dict[str, Window],
-                 shape: tuple[int, int]):
+    """Label pixels of one candidate, remapped on demand window by window, or all at once
+    from one remap of the windows' bounding box when that costs less."""
+
+    def __init__(self, fisheye: np.ndarray, nodes: MapNodes, windows: list[Window],
+                 shape: tuple[int, int], groups: dict[str, Window]):
         self.fisheye = fisheye
         self.nodes = nodes
-        self.windows = windows
+        self.groups = groups
         self.shape = shape
+        self.block: tuple[Window, np.ndarray] | None = None
+        wins = np.array([w for w in windows if w[2] > w[0] and w[3] > w[1]], np.int64).reshape(-1, 4)
+        if len(wins) > 1:
+            box = (int(wins[:, 0].min()), int(wins[:, 1].min()), int(wins[:, 2].max()),
+                   int(wins[:, 3].max()))
+            separate = _CALL_US * len(wins) + _PX_US * float(
+                np.sum((wins[:, 2] - wins[:, 0]) * (wins[:, 3] - wins[:, 1])))
+            if _CALL_US + _PX_US * (box[2] - box[0]) * (box[3] - box[1]) < separate:
+                self.block = (box, self._remap(box))
 
-    def window(self, group: str) -> Window:
-        return self.windows[group]
-
-    def pixels(self, win: Window) -> np.ndarray:
+    def _remap(self, win: Window) -> np.ndarray:
         import cv2
 
+        return cv2.remap(self.fisheye, self.nodes.window(win), None, cv2.INTER_NEAREST,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+
+    def window(self, group: str) -> Window:
+        return self.groups[group]
+
+    def pixels(self, win: Window) -> np.ndarray:
         x0, y0, x1, y1 = win
         if x1 <= x0 or y1 <= y0:
             return np.zeros((0, 0), np.uint8)
-        return cv2.remap(self.fisheye, self.nodes.window(win), None, cv2.INTER_NEAREST,
-                         borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+        if self.block is not None:
+            (bx0, by0, bx1, by1), img = self.block
+            if bx0 <= x0 and by0 <= y0 and x1 <= bx1 and y1 <= by1:
+                return img[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
+        return self._remap(win)
 
 
 class CandidateEvaluator:
@@ -120,86 +160,73 @@ class CandidateEvaluator:
         self.output = output
         self.criteria = criteria or default_criteria()
         self.windowed = windowed
-        names, boxes = _group_tiles(labels)
-        self._tile_group = np.array([list(GROUPS).index(n) for n in names], dtype=np.intp)
-        self._outline = _outlines(boxes)
-        # Tiles come group by group: where each group's run of tiles starts.
-        self._starts = np.flatnonzero(np.r_[True, np.diff(self._tile_group) != 0])
-        # Coarse occupancy of the garnish/trunk pixels, for EC 2-4's quick "none up there".
+        self._dist = _group_distances(labels).ravel()
+        self._dist_width = labels.shape[1] + 2 * _PAD_PX
+
+    def windows(self, params: IspParams, nodes: MapNodes | None = None) -> dict[str, Window]:
+        """The RVM window each label group can appear in, for one parameter set (``nodes``:
+        its map's node grid, when already built)."""
         import cv2
 
-        body = np.isin(labels, GROUPS["upper_body"]).astype(np.uint8)
-        self._any_body = bool(body.any())
-        gh, gw = -(-labels.shape[0] // _BLOCK_PX), -(-labels.shape[1] // _BLOCK_PX)
-        padded = np.zeros((gh * _BLOCK_PX, gw * _BLOCK_PX), np.uint8)
-        padded[: labels.shape[0], : labels.shape[1]] = body
-        occ = padded.reshape(gh, _BLOCK_PX, gw, _BLOCK_PX).max(axis=(1, 3))
-        self._body_blocks = cv2.dilate(occ, np.ones((3, 3), np.uint8))  # one block of slack
-
-    def windows(self, params: IspParams) -> dict[str, Window]:
-        """The RVM window each label group can appear in, for one parameter set."""
+        if nodes is None:
+            nodes = map_nodes(params, self.input_size, self.output)
         w, h = self.output.width, self.output.height
-        groups = list(GROUPS)
-        out: dict[str, Window] = {n: (0, 0, 0, 0) for n in groups}
-        if not len(self._tile_group):
-            return out
-        uv, ok = input_to_output(params, self._outline, self.input_size, self.output)
-        per = 4 * _SIDE_SAMPLES
-        uv = uv.reshape(-1, per, 2)
-        tile_ok = ok.reshape(-1, per).all(axis=1) & np.isfinite(uv).all(axis=(1, 2))
-        m = WINDOW_MARGIN_PX
-        uv = np.where(np.isfinite(uv), uv, 0.0)
-        lo = np.minimum.reduceat(np.floor(uv.min(axis=1)) - m, self._starts, axis=0)
-        hi = np.maximum.reduceat(np.ceil(uv.max(axis=1)) + m + 1, self._starts, axis=0)
-        all_ok = np.logical_and.reduceat(tile_ok, self._starts)
-        lo = np.clip(lo, 0, [w, h]).astype(int)
-        hi = np.clip(hi, 0, [w, h]).astype(int)
-        for k, start in enumerate(self._starts):
-            name = groups[self._tile_group[start]]
-            if not all_ok[k]:
-                out[name] = (0, 0, w, h)  # part of the group maps behind the image plane
-            elif hi[k, 0] > lo[k, 0] and hi[k, 1] > lo[k, 1]:
-                out[name] = (int(lo[k, 0]), int(lo[k, 1]), int(hi[k, 0]), int(hi[k, 1]))
         rows = int(round(self.criteria.upper_region_fraction * h))
-        out["upper_body"] = (0, 0, 0, 0) if self._no_body_up_there(params) else (0, 0, w, rows)
+        whole = {n: (0, 0, w, h) for n in GROUPS}
+        whole["upper_body"] = (0, 0, w, rows)
+        use, margin = nodes, 1.0 + 1.0  # nearest rounding + distances read at floor(position)
+        first = nodes.first
+        if first is not None and first.grid is not None and first.error_px <= _COARSE_ERROR_LIMIT_PX:
+            use, margin = first, margin + 2.0 * (first.error_px + nodes.error_px)
+        if use.grid is None:
+            return whole
+        iw, ih = self.input_size
+        grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),
+                       (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0))
+        reach = np.minimum(_node_reach(grid) + margin, _FAR_PX).astype(np.uint64)
+        idx = (grid + _PAD_PX).astype(np.intp)  # floor: positions are ≥ 0 here
+        dist = np.take(self._dist, idx[..., 1] * self._dist_width + idx[..., 0])
+        # bytewise "distance ≤ reach" for all groups at once: each byte of
+        # (reach | 0x80) − distance is 128 + reach − distance ≥ 1 (both ≤ 127, no borrow)
+        flags = ((reach * _BYTES | _HIGH_BITS) - dist) & _HIGH_BITS
+        flags = np.ascontiguousarray(flags[..., None].view(np.uint8).transpose(2, 0, 1))
+        c = use.cell
+        out: dict[str, Window] = {}
+        for k, name in enumerate(GROUPS):
+            jx, jy, nw, nh = cv2.boundingRect(flags[k])
+            if nw == 0:
+                out[name] = (0, 0, 0, 0)
+                continue
+            # node j sits at output (j − 1.5)·c − 0.5; cells between flagged nodes only
+            x0 = max(0, math.floor((jx - 1.5) * c - 0.5))
+            y0 = max(0, math.floor((jy - 1.5) * c - 0.5))
+            x1 = min(w, math.ceil((jx + nw - 2.5) * c - 0.5) + 1)
+            y1 = min(rows if name == "upper_body" else h, math.ceil((jy + nh - 2.5) * c - 0.5) + 1)
+            out[name] = (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else (0, 0, 0, 0)
         return out
-
-    def _no_body_up_there(self, params: IspParams) -> bool:
-        """True when no garnish/trunk pixel can appear in EC 2-4's upper region: the region's
-        outline, mapped into the fisheye image, encloses no block that holds one."""
-        import cv2
-
-        w = self.output.width
-        rows = int(round(self.criteria.upper_region_fraction * self.output.height))
-        if rows <= 0 or not self._any_body:
-            return True
-        t = np.linspace(0.0, 1.0, 64, endpoint=False)
-        u = np.concatenate([t * (w - 1), np.full_like(t, w - 1), (1 - t) * (w - 1), np.zeros_like(t)])
-        v = np.concatenate([np.zeros_like(t), t * (rows - 1), np.full_like(t, rows - 1),
-                            (1 - t) * (rows - 1)])
-        ux, vy, _ = _map_points(params, u, v, self.input_size, self.output)
-        poly = np.stack([ux, vy], 1) / _BLOCK_PX
-        if not np.all(np.isfinite(poly)) or np.abs(poly).max() > 1e5:
-            return False
-        canvas = np.zeros_like(self._body_blocks)
-        pts = np.round(poly * 16).astype(np.int32).reshape(-1, 1, 2)
-        cv2.fillPoly(canvas, [pts], 1, cv2.LINE_8, shift=4)
-        cv2.polylines(canvas, [pts], True, 1, 1, cv2.LINE_8, shift=4)
-        return not np.any(canvas & self._body_blocks)
 
     def source(self, params: IspParams) -> LabelSource:
         """The label pixels of one candidate's RVM image, windowed or whole."""
         nodes = map_nodes(params, self.input_size, self.output)
-        shape = (self.output.height, self.output.width)
+        w, h = self.output.width, self.output.height
         if self.windowed:
-            windows = self.windows(params)
+            groups = self.windows(params, nodes)
         else:
-            windows = {n: (0, 0, self.output.width, self.output.height) for n in GROUPS}
-        return _RemapSource(self.fisheye, nodes, windows, shape)
+            groups = {n: (0, 0, w, h) for n in GROUPS}
+        columns = [(a, 0, b, h) for a, b in bumper_spans(w, self.criteria.edge_columns).values()]
+        return _RemapSource(self.fisheye, nodes, list(groups.values()) + columns, (h, w), groups)
+
+    def measure(self, params: IspParams) -> Measurements:
+        """The raw measurements of one parameter set."""
+        c = self.criteria
+        return measure_source(self.source(params), upper_region_fraction=c.upper_region_fraction,
+                              edge_columns=c.edge_columns)
+
+    def values(self, params: IspParams) -> np.ndarray:
+        """The eleven measured values of one parameter set, (11,) in ``EC_IDS`` order, NaN
+        where not measured (what tuning ships between processes; see ``score_batch``)."""
+        return values_array(self.measure(params))
 
     def __call__(self, params: IspParams) -> EcResult:
         """The EC result of one parameter set."""
-        c = self.criteria
-        m = measure_source(self.source(params), upper_region_fraction=c.upper_region_fraction,
-                           edge_columns=c.edge_columns)
-        return score(m, c)
+        return score(self.measure(params), self.criteria)

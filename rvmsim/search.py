@@ -22,6 +22,7 @@ so a run replayed from its stored results (``--resume``) continues exactly as an
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import time
 from abc import ABC, abstractmethod
@@ -31,10 +32,10 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from .camera import FisheyeCamera
-from .criteria import EcResult
+from .criteria import EC_IDS, EcResult, score_batch
 from .isp import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
 from .errors import RvmsimError
-from .store import RunStore, TrialRecord
+from .store import RunStore, TrialRecord, params_json
 
 __all__ = [
     "ParamRange",
@@ -48,6 +49,8 @@ __all__ = [
     "objective",
     "run_search",
     "SearchOutcome",
+    "ScoredBatch",
+    "score_vectors",
 ]
 
 _SPEC = {s.name: s for s in PARAM_SPECS}
@@ -308,17 +311,37 @@ class SearchOutcome:
     seconds: float
 
 
-def _record(idx: int, stage: str, params: IspParams, result: EcResult) -> TrialRecord:
-    return TrialRecord(
-        idx=idx, stage=stage, params=params, score=float(result.score),
-        objective=objective(result), passed=bool(result.passed),
-        ec={i.id: [i.value, i.score, i.passed] for i in result.items},
-    )
+@dataclass(frozen=True)
+class ScoredBatch:
+    """A batch of evaluated candidates, ready to store: what ``evaluate_batch`` returns to
+    :func:`run_search`.  Built by :func:`score_vectors` (in worker processes, when tuning
+    runs them, so that the main process only stores and steers)."""
+
+    score: list[float]
+    objective: list[float]
+    passed: list[bool]
+    params_json: list[str]
+    ec_json: list[str]
+
+
+def score_vectors(evaluator, space: SearchSpace, xs: Sequence[np.ndarray]) -> ScoredBatch:
+    """Evaluate candidate vectors of ``space`` with a
+    :class:`~rvmsim.evaluator.CandidateEvaluator`, scored and serialised for the store."""
+    params = [space.params(x) for x in xs]
+    values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(EC_IDS))
+    b = score_batch(values, evaluator.criteria)
+    vals, scores, ok = b.values.tolist(), b.scores.tolist(), b.passed.tolist()
+    ec_json = [
+        json.dumps({e: [None if math.isnan(v[j]) else v[j], s[j], o[j]] for j, e in enumerate(EC_IDS)})
+        for v, s, o in zip(vals, scores, ok)
+    ]
+    return ScoredBatch(b.score.tolist(), b.objective(OBJECTIVE_FLOOR).tolist(),
+                       b.all_passed.tolist(), [params_json(p) for p in params], ec_json)
 
 
 def run_search(
     strategy: Strategy,
-    evaluate_batch: Callable[[list[IspParams]], list[EcResult]],
+    evaluate_batch: Callable[[list[np.ndarray]], ScoredBatch],
     store: RunStore,
     *,
     max_time: float | None = None,
@@ -335,7 +358,9 @@ def run_search(
     Parameters
     ----------
     evaluate_batch : callable
-        list of IspParams → list of EcResult, in order (may run worker processes).
+        list of candidate vectors (tuned values in ``strategy.space`` order) → their
+        :class:`ScoredBatch`, in order: ``lambda xs: score_vectors(evaluator, space, xs)``,
+        or :class:`rvmsim.tune.BatchEvaluator` (worker processes).
     max_time : float, optional
         Stop (resumably) after the batch during which this many seconds have passed.
     target_score : float, optional
@@ -344,40 +369,44 @@ def run_search(
         Called with (trials done, best EC score, stage) after every batch (progress bars).
     """
     t0 = time.perf_counter()
-    stored = {r.idx: r for r in store.trials()}
-    best = max(stored.values(), key=lambda r: (r.score, r.objective, -r.idx), default=None)
+    stored = {r.idx: (r.score, r.objective, r.params) for r in store.trials()}
+    # best as (score, objective, -idx): highest score, then objective, then earliest
+    best = max(((s, o, -i) for i, (s, o, _) in stored.items()), default=None)
     gen = strategy.batches()
     idx = evaluated = replayed = 0
     stopped = "done"
     told = None
+    space = strategy.space
     try:
         while True:
             stage, xs = gen.send(told) if told is not None else next(gen)
-            params = [strategy.space.params(x) for x in xs]
             indices = range(idx, idx + len(xs))
             if all(i in stored for i in indices):
-                records = [stored[i] for i in indices]
-                for r, x in zip(records, xs):
-                    if not np.allclose(strategy.space.vector(r.params), np.clip(
-                            x, strategy.space.low, strategy.space.high), rtol=0, atol=1e-9):
+                for i, x in zip(indices, xs):
+                    if not np.allclose(space.vector(stored[i][2]), np.clip(x, space.low, space.high),
+                                       rtol=0, atol=1e-9):
                         raise RvmsimError(
-                            f"{store.path}: trial {r.idx} differs from what this strategy, "
-                            "seed and configuration generate: resume with the run's own settings"
+                            f"{store.path}: trial {i} differs from what this strategy, seed and "
+                            "configuration generate: resume with the run's own settings"
                         )
-                replayed += len(records)
+                told = [stored[i][:2] for i in indices]
+                replayed += len(xs)
             else:
-                results = evaluate_batch(params)
-                records = [_record(i, stage, p, r) for i, p, r in zip(indices, params, results)]
-                store.add_trials(records)
-                evaluated += len(records)
+                b = evaluate_batch(list(xs))
+                store.add_rows([
+                    (i, stage, pj, s, o, int(ok), ej)
+                    for i, pj, s, o, ok, ej in zip(indices, b.params_json, b.score, b.objective,
+                                                   b.passed, b.ec_json)
+                ])
+                told = list(zip(b.score, b.objective))
+                evaluated += len(xs)
+            for i, (s, o) in zip(indices, told):
+                if best is None or (s, o) > best[:2]:
+                    best = (s, o, -i)
             idx += len(xs)
-            for r in records:
-                if best is None or (r.score, r.objective) > (best.score, best.objective):
-                    best = r
-            told = [(r.score, r.objective) for r in records]
             if on_batch is not None:
-                on_batch(idx, best.score if best else 0.0, stage)
-            if evaluated and target_score is not None and best and best.score >= target_score:
+                on_batch(idx, best[0] if best else 0.0, stage)
+            if evaluated and target_score is not None and best and best[0] >= target_score:
                 stopped = "target-score"
                 break
             if evaluated and max_time is not None and time.perf_counter() - t0 >= max_time:
@@ -385,4 +414,5 @@ def run_search(
                 break
     except StopIteration:
         pass
-    return SearchOutcome(evaluated, replayed, stopped, best, time.perf_counter() - t0)
+    best_record = store.trials(-best[2], -best[2] + 1)[0] if best is not None else None
+    return SearchOutcome(evaluated, replayed, stopped, best_record, time.perf_counter() - t0)

@@ -20,7 +20,7 @@ from typing import Any, Iterable
 from .errors import RvmsimError
 from .isp import IspParams
 
-__all__ = ["RunStore", "TrialRecord"]
+__all__ = ["RunStore", "TrialRecord", "params_json"]
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -48,6 +48,11 @@ class TrialRecord:
     objective: float
     passed: bool
     ec: dict[str, list[Any]]
+
+
+def params_json(p: IspParams) -> str:
+    """The ``params`` column: all 14 ISP parameters as a JSON object."""
+    return json.dumps({n: getattr(p, n) for n in IspParams.names()})
 
 
 class RunStore:
@@ -81,11 +86,12 @@ class RunStore:
     # ------------------------------------------------------------------ trials
     def add_trials(self, records: Iterable[TrialRecord]) -> None:
         """Write a batch atomically."""
-        rows = [
-            (r.idx, r.stage, json.dumps({n: getattr(r.params, n) for n in IspParams.names()}),
-             r.score, r.objective, int(r.passed), json.dumps(r.ec))
-            for r in records
-        ]
+        self.add_rows([(r.idx, r.stage, params_json(r.params), r.score, r.objective,
+                        int(r.passed), json.dumps(r.ec)) for r in records])
+
+    def add_rows(self, rows: list[tuple[int, str, str, float, float, int, str]]) -> None:
+        """Write a batch of already serialised trials atomically: (idx, stage, params JSON,
+        score, objective, passed, EC JSON) each."""
         with self.db:
             self.db.executemany(
                 "INSERT OR REPLACE INTO trials (idx, stage, params, score, objective, passed, ec)"

@@ -7,6 +7,7 @@ and ``best/`` (the best candidate's RVM image, annotated EC image and EC table).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import multiprocessing as mp
@@ -14,10 +15,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
+
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from .criteria import Criteria, EcResult, load_criteria
+from .criteria import Criteria, load_criteria
 from .errors import RvmsimError
 from .evaluator import CandidateEvaluator
 from .isp import IspParams, OutputSpec, params_to_dict
@@ -27,11 +30,13 @@ from .search import (
     GridToRandom,
     ParamRange,
     RandomSearch,
+    ScoredBatch,
     SearchOutcome,
     SearchSpace,
     Strategy,
     default_space,
     run_search,
+    score_vectors,
 )
 from .store import RunStore
 
@@ -141,43 +146,48 @@ def make_strategy(name: str, space: SearchSpace, cfg: TuningConfig, seed: int,
 
 
 # ---------------------------------------------------------------------------- evaluation
-_WORKER: CandidateEvaluator | None = None
+_WORKER: tuple[CandidateEvaluator, SearchSpace] | None = None
 
 
-def _init_worker(evaluator: CandidateEvaluator) -> None:
+def _init_worker(evaluator: CandidateEvaluator, space: SearchSpace) -> None:
     global _WORKER
     import cv2
 
     cv2.setNumThreads(1)
-    _WORKER = evaluator
+    _WORKER = (evaluator, space)
 
 
-def _work(chunk: list[IspParams]) -> list[EcResult]:
+def _work(xs: list[np.ndarray]) -> ScoredBatch:
     assert _WORKER is not None
-    return [_WORKER(p) for p in chunk]
+    return score_vectors(_WORKER[0], _WORKER[1], xs)
 
 
 class BatchEvaluator:
-    """Evaluates batches in order, in this process or in ``workers`` worker processes, each
-    holding its own copy of the evaluator (the fisheye label image is 1.2 MB).
+    """Evaluates batches of candidate vectors in order, in this process or in ``workers``
+    worker processes, each holding its own copy of the evaluator (the fisheye label image is
+    1.2 MB).  Workers also score and serialise their candidates (:func:`score_vectors`), so
+    the main process only stores them and steers the search.
 
     Workers are spawned, not forked: a process that has run OpenCV's thread pool or an
     OpenGL context cannot be forked safely."""
 
-    def __init__(self, evaluator: CandidateEvaluator, workers: int = 1):
+    def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace, workers: int = 1):
         self.evaluator = evaluator
+        self.space = space
         self.workers = max(1, workers)
         self.pool = None
         if self.workers > 1:
             ctx = mp.get_context("spawn")
-            self.pool = ctx.Pool(self.workers, initializer=_init_worker, initargs=(evaluator,))
+            self.pool = ctx.Pool(self.workers, initializer=_init_worker,
+                                 initargs=(evaluator, space))
 
-    def __call__(self, params: list[IspParams]) -> list[EcResult]:
+    def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
-            return [self.evaluator(p) for p in params]
-        n = max(1, math.ceil(len(params) / (self.workers * 4)))
-        chunks = [params[i : i + n] for i in range(0, len(params), n)]
-        return [r for part in self.pool.map(_work, chunks) for r in part]
+            return score_vectors(self.evaluator, self.space, xs)
+        n = max(1, math.ceil(len(xs) / (self.workers * 4)))
+        parts = self.pool.map(_work, [xs[i : i + n] for i in range(0, len(xs), n)])
+        return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
+                             for f in dataclasses.fields(ScoredBatch)))
 
     def close(self) -> None:
         if self.pool is not None:
@@ -254,7 +264,7 @@ def tune(
     store = RunStore(run_dir / "run.sqlite")
     store.set_meta(status="running", strategy=strategy, total=strat.total())
     evaluator = CandidateEvaluator(images.labels, config.output_spec(), criteria)
-    batch_eval = BatchEvaluator(evaluator, workers)
+    batch_eval = BatchEvaluator(evaluator, space, workers)
     bar = None
     if progress:
         from tqdm import tqdm

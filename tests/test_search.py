@@ -26,6 +26,7 @@ from rvmsim.search import (
     SearchSpace,
     default_space,
     run_search,
+    score_vectors,
 )
 from rvmsim.store import RunStore
 
@@ -73,7 +74,7 @@ def _small_problem(letter="a"):
 
 def _run(strategy, ev, tmp_path, name):
     store = RunStore(tmp_path / f"{name}.sqlite")
-    out = run_search(strategy, lambda ps: [ev(p) for p in ps], store)
+    out = run_search(strategy, lambda xs: score_vectors(ev, strategy.space, xs), store)
     trials = store.trials()
     store.close()
     return out, trials
