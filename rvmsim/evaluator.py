@@ -9,8 +9,8 @@ covers a small part of the image.  :class:`CandidateEvaluator` therefore
 2. per candidate, reads those distances under every node of the ISP map's node grid
    (:func:`isp.map_nodes`, which the remap needs anyway) and flags a node for a group when
    the group is within reach of it; the group's window is the box of its flagged nodes;
-3. remaps only those windows (plus the bumper's columns; or their bounding box at once when
-   that is cheaper) and measures them with exactly the code that measures whole images
+3. remaps only those windows (plus the bumper's columns; merged where one remap of a union
+   is cheaper than two) and measures them with exactly the code that measures whole images
    (:func:`criteria.measure_source`).
 
 Why step 2 is exact: the fast map *is* the bilinear interpolation of the nodes, so an output
@@ -88,15 +88,33 @@ def _node_reach(grid: np.ndarray) -> np.ndarray:
     return cv2.dilate(ext, _K2, anchor=(1, 1), borderType=cv2.BORDER_REPLICATE)
 
 
-#: Cost model for remapping windows (µs per call, µs per output px; this machine): one remap
-#: of the windows' bounding box replaces separate remaps when it is cheaper, e.g. for views
-#: where the objects fill most of the image.
+#: Cost model for remapping windows (µs per call, µs per output px; this machine): windows
+#: are merged where one remap of their union is cheaper than two, e.g. for views where the
+#: objects fill most of the image.
 _CALL_US, _PX_US = 20.0, 0.0025
 
 
+def _merge_windows(windows: list[Window]) -> list[Window]:
+    """Boxes to remap so that every window lies in one of them, merging windows where one
+    remap of their union costs less than two (``_CALL_US``, ``_PX_US``); greedy, in order."""
+    boxes: list[list[int]] = []
+    for x0, y0, x1, y1 in windows:
+        if x1 <= x0 or y1 <= y0:
+            continue
+        area = (x1 - x0) * (y1 - y0)
+        for b in boxes:
+            u = [min(b[0], x0), min(b[1], y0), max(b[2], x1), max(b[3], y1)]
+            if _PX_US * ((u[2] - u[0]) * (u[3] - u[1]) - (b[2] - b[0]) * (b[3] - b[1]) - area) < _CALL_US:
+                b[:] = u
+                break
+        else:
+            boxes.append([x0, y0, x1, y1])
+    return [tuple(b) for b in boxes]  # type: ignore[misc]
+
+
 class _RemapSource(LabelSource):
-    """Label pixels of one candidate, remapped on demand window by window, or all at once
-    from one remap of the windows' bounding box when that costs less."""
+    """Label pixels of one candidate: the windows are merged into a few boxes
+    (:func:`_merge_windows`), remapped on first use."""
 
     def __init__(self, fisheye: np.ndarray, nodes: MapNodes, windows: list[Window],
                  shape: tuple[int, int], groups: dict[str, Window]):
@@ -104,15 +122,8 @@ class _RemapSource(LabelSource):
         self.nodes = nodes
         self.groups = groups
         self.shape = shape
-        self.block: tuple[Window, np.ndarray] | None = None
-        wins = np.array([w for w in windows if w[2] > w[0] and w[3] > w[1]], np.int64).reshape(-1, 4)
-        if len(wins) > 1:
-            box = (int(wins[:, 0].min()), int(wins[:, 1].min()), int(wins[:, 2].max()),
-                   int(wins[:, 3].max()))
-            separate = _CALL_US * len(wins) + _PX_US * float(
-                np.sum((wins[:, 2] - wins[:, 0]) * (wins[:, 3] - wins[:, 1])))
-            if _CALL_US + _PX_US * (box[2] - box[0]) * (box[3] - box[1]) < separate:
-                self.block = (box, self._remap(box))
+        self.boxes = _merge_windows(windows)
+        self.images: dict[int, np.ndarray] = {}
 
     def _remap(self, win: Window) -> np.ndarray:
         import cv2
@@ -127,9 +138,11 @@ class _RemapSource(LabelSource):
         x0, y0, x1, y1 = win
         if x1 <= x0 or y1 <= y0:
             return np.zeros((0, 0), np.uint8)
-        if self.block is not None:
-            (bx0, by0, bx1, by1), img = self.block
+        for k, (bx0, by0, bx1, by1) in enumerate(self.boxes):
             if bx0 <= x0 and by0 <= y0 and x1 <= bx1 and y1 <= by1:
+                img = self.images.get(k)
+                if img is None:
+                    img = self.images[k] = self._remap(self.boxes[k])
                 return img[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
         return self._remap(win)
 

@@ -346,8 +346,9 @@ def _nodes(
     ju = (np.arange(nx + 4) - 1.5) * cell - 0.5
     jv = (np.arange(ny + 4) - 1.5) * cell - 0.5
     a = _pixel_to_ray_matrix(params, output)
-    col = a[:, 0, None] * ju[None, :] + a[:, 2, None]  # (3, cols)
-    row = a[:, 1, None] * jv[None, :]  # (3, rows)
+    # float32 throughout: rays to ~1e-7 relative, positions to ~1e-4 px
+    col = (a[:, 0, None] * ju[None, :] + a[:, 2, None]).astype(np.float32)  # (3, cols)
+    row = (a[:, 1, None] * jv[None, :]).astype(np.float32)  # (3, rows)
     ax = row[0][:, None] + col[0][None, :]
     ay = row[1][:, None] + col[1][None, :]
     az = row[2][:, None] + col[2][None, :]
@@ -355,11 +356,12 @@ def _nodes(
     theta = cv2.phase(az, rho)
     cos_t, sin_t = cv2.polarToCart(None, theta)
     theta += (rho * cos_t - az * sin_t) / cv2.magnitude(rho, az)
-    theta *= (params.rad / math.radians(params.fov / 2.0)) / np.maximum(rho, 1e-300)
+    f_isp = params.rad / math.radians(params.fov / 2.0)
+    theta *= f_isp / np.maximum(rho, np.float32(1e-30))
     w_in, h_in = input_size
-    grid = np.empty(ax.shape + (2,), np.float32)
-    grid[..., 0] = theta * ax + ((w_in - 1) / 2.0 + params.h_shift)
-    grid[..., 1] = theta * ay + ((h_in - 1) / 2.0 + params.v_shift)
+    # (numpy broadcasting over a trailing axis of 2 is slow: add the offsets per plane)
+    grid = cv2.merge([theta * ax + np.float32((w_in - 1) / 2.0 + params.h_shift),
+                      theta * ay + np.float32((h_in - 1) / 2.0 + params.v_shift)])
     return nx, ny, grid
 
 
@@ -400,9 +402,10 @@ def build_map(
 
     The formulas are evaluated exactly on nodes every ``cell`` output px (two rings beyond
     the image) and interpolated bilinearly by ``cv2.resize``, whose sample positions coincide
-    with the nodes.  The interpolation error is measured where it peaks, at the cell centres;
-    while it exceeds ``tolerance_px`` the grid is refined (down to 2 px).  Wide views near
-    the ISP's horizon need the finer grids; typical RVM views stay at 8 px.
+    with the nodes.  The interpolation error is estimated where it peaks, at the cell centres;
+    where it exceeds ``tolerance_px`` the grid is refined to 4 or 2 px (see
+    :func:`map_nodes`), and where even that is not enough (a jump in the map) every pixel is
+    evaluated.  Wide views near the ISP's horizon need the finer grids.
 
     Parameters
     ----------
@@ -476,18 +479,28 @@ def map_nodes(
     cell: int = DEFAULT_CELL_PX,
     tolerance_px: float = MAP_TOLERANCE_PX,
 ) -> MapNodes:
-    """The node grid :func:`build_map` interpolates (error-controlled, see there)."""
-    first = None
-    while True:
-        _, _, grid = _nodes(params, input_size, output, cell)
-        error = _interpolation_error(grid, input_size)
-        if error <= tolerance_px:
-            return MapNodes(grid, cell, error_px=error, first=first)
-        if first is None:
-            first = MapNodes(grid, cell, error_px=error)
-        if cell <= MIN_CELL_PX:  # no grid is fine enough (a jump in the map): every pixel
-            return MapNodes(None, cell, build_map_exact(params, input_size, output).xy, first=first)
-        cell = max(MIN_CELL_PX, cell // 2)
+    """The node grid :func:`build_map` interpolates (error-controlled, see there).
+
+    The error is estimated on the grid at ``cell`` px; bilinear interpolation's error scales
+    with the square of the spacing (the estimates at 4 and 2 px agree with this to 0.7 % on
+    random views), so the finest grid needed is chosen from that one estimate, with 2 %
+    to spare, and only that grid is evaluated besides."""
+    _, _, grid = _nodes(params, input_size, output, cell)
+    error = _interpolation_error(grid, input_size)
+    if error <= tolerance_px:
+        return MapNodes(grid, cell, error_px=error)
+    first = MapNodes(grid, cell, error_px=error)
+    fine = cell
+    while fine > MIN_CELL_PX and error * (fine / cell) ** 2 * _SCALING_SAFETY > tolerance_px:
+        fine = max(MIN_CELL_PX, fine // 2)
+    fine_error = error * (fine / cell) ** 2
+    if fine_error * _SCALING_SAFETY > tolerance_px:  # no grid is fine enough (a jump in the map)
+        return MapNodes(None, fine, build_map_exact(params, input_size, output).xy, first=first)
+    _, _, grid = _nodes(params, input_size, output, fine)
+    return MapNodes(grid, fine, error_px=fine_error, first=first)
+
+
+_SCALING_SAFETY = 1.02
 
 
 def apply_map(image: np.ndarray, isp_map: IspMap, *, labels: bool | None = None) -> np.ndarray:
