@@ -37,6 +37,7 @@ on a 640×480 label image take well under a millisecond (``tools/bench_criteria.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from importlib import resources
@@ -202,6 +203,23 @@ class Criteria:
         if set(self.items) != set(EC_IDS):
             raise ValueError(f"criteria must define every EC {EC_IDS}")
 
+    @functools.cached_property
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """Per EC in ``EC_IDS`` order, for :func:`score_batch`: low, high (±max float when
+        open), binary, pass-flag-only, c1, c2, c3, c4, enabled."""
+        items = [self.items[ec] for ec in EC_IDS]
+        big = np.finfo(np.float64).max
+        sig = [c.sigmoid or Sigmoid() for c in items]
+        return (
+            np.array([-big if c.low is None else c.low for c in items]),
+            np.array([big if c.high is None else c.high for c in items]),
+            np.array([c.sigmoid is None for c in items]),
+            np.array([c.sigmoid is None and c.low is None and c.high is None for c in items]),
+            np.array([s.c1 for s in sig]), np.array([s.c2 for s in sig]),
+            np.array([s.c3 for s in sig]), np.array([s.c4 for s in sig]),
+            np.array([c.enabled for c in items]),
+        )
+
 
 class _SigmoidModel(BaseModel):
     model_config = ConfigDict(extra="forbid")
@@ -354,8 +372,13 @@ Window = tuple[int, int, int, int]  # x0, y0, x1, y1 (exclusive), output px
 
 
 class LabelSource:
-    """Where :func:`measure_source` reads label pixels from: the whole RVM label image here;
+    """Where :func:`measure_source` reads label pixels from: here the whole RVM label image;
     :class:`rvmsim.evaluator.CandidateEvaluator` remaps only the windows it is asked for.
+
+    Each group's window is found in one pass: the image is mapped to one bit per group
+    (``cv2.LUT``), OR-ed over 8×8 blocks, and a group's window is the box of its blocks
+    grown by 1 px (the ring :func:`_patch_visible` inspects), so every measurement then
+    reads only small windows.
     """
 
     def __init__(self, labels: np.ndarray):
@@ -364,15 +387,50 @@ class LabelSource:
             raise TypeError(f"labels must be a 2-D uint8 image, got {labels.dtype} {labels.shape}")
         self.labels = np.ascontiguousarray(labels)
         self.shape = self.labels.shape
+        self._windows = _group_windows(self.labels)
 
     def window(self, group: str) -> Window:
-        """A window that holds every pixel of ``group`` (here: the whole image)."""
-        return (0, 0, self.shape[1], self.shape[0])
+        """A window that holds every pixel of ``group`` and the pixels next to them."""
+        return self._windows[group]
 
     def pixels(self, win: Window) -> np.ndarray:
         """The label pixels of a window, (y1 − y0, x1 − x0) uint8."""
         x0, y0, x1, y1 = win
         return self.labels[y0:y1, x0:x1]
+
+
+_GROUP_BITS = np.zeros(256, np.uint8)
+_BLOCK = 8
+
+
+for _k, _ids in enumerate(GROUPS.values()):
+    _GROUP_BITS[list(_ids)] |= np.uint8(1 << _k)
+
+
+def _group_windows(labels: np.ndarray) -> dict[str, Window]:
+    import cv2
+
+    h, w = labels.shape
+    bits = cv2.LUT(labels, _GROUP_BITS)
+    gh, gw = -(-h // _BLOCK), -(-w // _BLOCK)
+    if (gh * _BLOCK, gw * _BLOCK) != (h, w):
+        bits = cv2.copyMakeBorder(bits, 0, gh * _BLOCK - h, 0, gw * _BLOCK - w,
+                                  cv2.BORDER_CONSTANT, value=0)
+    # OR over 8 rows, then over the 8 bytes of each 64-bit word (8 columns)
+    # (slices, not ufunc.reduce: numpy reduces short strided axes slowly)
+    rows = bits.view(np.uint64).reshape(gh, _BLOCK, gw)
+    words = functools.reduce(np.bitwise_or, (rows[:, i] for i in range(_BLOCK)))
+    cols = words.view(np.uint8).reshape(gh, gw, 8)
+    blocks = functools.reduce(np.bitwise_or, (cols[..., i] for i in range(8)))
+    out: dict[str, Window] = {}
+    for k, name in enumerate(GROUPS):
+        bx, by, bw, bh = cv2.boundingRect(blocks & np.uint8(1 << k))
+        if bw == 0:
+            out[name] = (0, 0, 0, 0)
+        else:
+            out[name] = (max(0, bx * _BLOCK - 1), max(0, by * _BLOCK - 1),
+                         min(w, (bx + bw) * _BLOCK + 1), min(h, (by + bh) * _BLOCK + 1))
+    return out
 
 
 def _eq(sub: np.ndarray, label: int) -> np.ndarray:
@@ -640,26 +698,17 @@ def score_batch(values: np.ndarray, criteria: Criteria) -> EcBatch:
     criteria : Criteria
     """
     x = np.atleast_2d(np.asarray(values, dtype=np.float64))
-    items = [criteria.items[ec] for ec in EC_IDS]
-    big = np.finfo(np.float64).max
-    low = np.array([-big if c.low is None else c.low for c in items])
-    high = np.array([big if c.high is None else c.high for c in items])
-    binary = np.array([c.sigmoid is None for c in items])
-    only_flag = np.array([c.sigmoid is None and c.low is None and c.high is None for c in items])
-    sig = [c.sigmoid or Sigmoid() for c in items]
-    c1, c2 = np.array([s.c1 for s in sig]), np.array([s.c2 for s in sig])
-    c3, c4 = np.array([s.c3 for s in sig]), np.array([s.c4 for s in sig])
+    low, high, binary, only_flag, c1, c2, c3, c4, enabled = criteria.arrays
     measured = ~np.isnan(x)
     xs = np.where(measured, x, 0.0)
     with np.errstate(invalid="ignore", over="ignore"):
         # 1/(1 + e^(−z)) = (1 + tanh(z/2))/2, as Sigmoid does; an infinite threshold is 1
-        lower = np.where(np.isneginf(c2), 1.0, 0.5 * (1.0 + np.tanh(0.5 * c1 * (xs - c2))))
-        upper = np.where(np.isposinf(c4), 1.0, 0.5 * (1.0 + np.tanh(-0.5 * c3 * (xs - c4))))
+        lower = np.where(np.isneginf(c2), 1.0, 0.5 * (1.0 + np.tanh(0.5 * (c1 * (xs - c2)))))
+        upper = np.where(np.isposinf(c4), 1.0, 0.5 * (1.0 + np.tanh(0.5 * (-c3 * (xs - c4)))))
     graded = lower * upper
     scores = np.where(measured, np.where(binary, (xs >= 1.0).astype(np.float64), graded), 0.0)
     in_range = (xs >= low) & (xs <= high)
     passed = measured & np.where(only_flag, xs >= 1.0, in_range)
-    enabled = np.array([c.enabled for c in items])
     return EcBatch(x, scores, passed, enabled)
 
 

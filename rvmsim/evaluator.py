@@ -5,7 +5,8 @@ eleven measurements, and each looks at one group of labels (F's stripe, the boar
 covers a small part of the image.  :class:`CandidateEvaluator` therefore
 
 1. computes, once per scene, each label group's distance image over the fisheye image: the
-   Chebyshev distance (px) from every pixel to the group's nearest pixel;
+   Chebyshev distance (px) from every pixel to the group's nearest pixel, kept as the
+   minimum per 4×4 block;
 2. per candidate, reads those distances under every node of the ISP map's node grid
    (:func:`isp.map_nodes`, which the remap needs anyway) and flags a node for a group when
    the group is within reach of it; the group's window is the box of its flagged nodes;
@@ -43,6 +44,8 @@ __all__ = ["CandidateEvaluator"]
 
 #: Fisheye px around the image that node positions are clipped to.
 _PAD_PX = 8
+#: Fisheye px per block of the stored group distances.
+_DIST_BLOCK_PX = 4
 #: Distances are stored in 7 bits (eight groups packed in one uint64 per pixel, compared all
 #: at once); farther than this counts as "far", and reaches beyond it flag every node.
 _FAR_PX = 127
@@ -53,21 +56,24 @@ _COARSE_ERROR_LIMIT_PX = 4.0
 
 
 def _group_distances(labels: np.ndarray) -> np.ndarray:
-    """(H + 2·pad, W + 2·pad) uint64 whose byte k is the Chebyshev distance (px, capped at
-    ``_FAR_PX``) from each pixel of the padded fisheye image to the nearest pixel of group k
-    (``GROUPS`` order)."""
+    """Per ``_DIST_BLOCK_PX``-square block of the fisheye image padded by ``_PAD_PX``: a uint64
+    whose byte k is the smallest Chebyshev distance (px, capped at ``_FAR_PX``) from a pixel
+    of the block to the nearest pixel of group k (``GROUPS`` order).  (rows, cols) uint64;
+    small enough (~0.6 MB) to stay in the cache."""
     import cv2
 
     if len(GROUPS) > 8:
         raise ValueError("at most 8 label groups")
     h, w = labels.shape
-    out = np.full((h + 2 * _PAD_PX, w + 2 * _PAD_PX, 8), _FAR_PX, np.uint8)
+    b = _DIST_BLOCK_PX
+    gh, gw = -(-(h + 2 * _PAD_PX) // b), -(-(w + 2 * _PAD_PX) // b)
+    out = np.full((gh, gw, 8), _FAR_PX, np.uint8)
     for k, ids in enumerate(GROUPS.values()):
-        far = np.full(out.shape[:2], 255, np.uint8)
+        far = np.full((gh * b, gw * b), 255, np.uint8)
         far[_PAD_PX : _PAD_PX + h, _PAD_PX : _PAD_PX + w] = 255 - cv2.LUT(labels, L.lut(ids))
         if far.min() == 0:
-            dist = cv2.distanceTransform(far, cv2.DIST_C, 3)
-            out[..., k] = np.minimum(dist, _FAR_PX).astype(np.uint8)
+            dist = np.minimum(cv2.distanceTransform(far, cv2.DIST_C, 3), _FAR_PX)
+            out[..., k] = dist.reshape(gh, b, gw, b).min(axis=(1, 3)).astype(np.uint8)
     return np.ascontiguousarray(out).view("<u8")[..., 0]
 
 
@@ -173,8 +179,8 @@ class CandidateEvaluator:
         self.output = output
         self.criteria = criteria or default_criteria()
         self.windowed = windowed
-        self._dist = _group_distances(labels).ravel()
-        self._dist_width = labels.shape[1] + 2 * _PAD_PX
+        dist = _group_distances(labels)
+        self._dist, self._dist_width = dist.ravel(), dist.shape[1]
 
     def windows(self, params: IspParams, nodes: MapNodes | None = None) -> dict[str, Window]:
         """The RVM window each label group can appear in, for one parameter set (``nodes``:
@@ -187,7 +193,9 @@ class CandidateEvaluator:
         rows = int(round(self.criteria.upper_region_fraction * h))
         whole = {n: (0, 0, w, h) for n in GROUPS}
         whole["upper_body"] = (0, 0, w, rows)
-        use, margin = nodes, 1.0 + 1.0  # nearest rounding + distances read at floor(position)
+        # nearest rounding (1 px) + distances are block minima: a node's own distance is at
+        # least its block's minimum − the block size
+        use, margin = nodes, 1.0 + _DIST_BLOCK_PX
         first = nodes.first
         if first is not None and first.grid is not None and first.error_px <= _COARSE_ERROR_LIMIT_PX:
             use, margin = first, margin + 2.0 * (first.error_px + nodes.error_px)
@@ -197,7 +205,8 @@ class CandidateEvaluator:
         grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),
                        (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0))
         reach = np.minimum(_node_reach(grid) + margin, _FAR_PX).astype(np.uint64)
-        idx = (grid + _PAD_PX).astype(np.intp)  # floor: positions are ≥ 0 here
+        # block of each node (floor: positions are ≥ 0 here)
+        idx = ((grid + _PAD_PX) * (1.0 / _DIST_BLOCK_PX)).astype(np.intp)
         dist = np.take(self._dist, idx[..., 1] * self._dist_width + idx[..., 0])
         # bytewise "distance ≤ reach" for all groups at once: each byte of
         # (reach | 0x80) − distance is 128 + reach − distance ≥ 1 (both ≤ 127, no borrow)
@@ -211,10 +220,11 @@ class CandidateEvaluator:
                 out[name] = (0, 0, 0, 0)
                 continue
             # node j sits at output (j − 1.5)·c − 0.5; cells between flagged nodes only
-            x0 = max(0, math.floor((jx - 1.5) * c - 0.5))
-            y0 = max(0, math.floor((jy - 1.5) * c - 0.5))
-            x1 = min(w, math.ceil((jx + nw - 2.5) * c - 0.5) + 1)
-            y1 = min(rows if name == "upper_body" else h, math.ceil((jy + nh - 2.5) * c - 0.5) + 1)
+            # (grown by 1 px: the ring around a patch that _patch_visible inspects)
+            x0 = max(0, math.floor((jx - 1.5) * c - 0.5) - 1)
+            y0 = max(0, math.floor((jy - 1.5) * c - 0.5) - 1)
+            x1 = min(w, math.ceil((jx + nw - 2.5) * c - 0.5) + 2)
+            y1 = min(rows if name == "upper_body" else h, math.ceil((jy + nh - 2.5) * c - 0.5) + 2)
             out[name] = (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else (0, 0, 0, 0)
         return out
 

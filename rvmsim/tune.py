@@ -184,7 +184,8 @@ class BatchEvaluator:
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
             return score_vectors(self.evaluator, self.space, xs)
-        n = max(1, math.ceil(len(xs) / (self.workers * 4)))
+        # small chunks: the batch ends when its slowest chunk does
+        n = max(1, math.ceil(len(xs) / (self.workers * 16)))
         parts = self.pool.map(_work, [xs[i : i + n] for i in range(0, len(xs), n)])
         return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
                              for f in dataclasses.fields(ScoredBatch)))

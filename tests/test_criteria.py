@@ -14,11 +14,14 @@ from skimage.measure import regionprops
 from rvmsim import labels as L
 from rvmsim.criteria import (
     EC_IDS,
+    LabelSource,
     Sigmoid,
     default_criteria,
     evaluate,
     load_criteria,
     measure,
+    measure_source,
+    score_batch,
 )
 from rvmsim.errors import SceneError
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map, build_map_exact, input_to_output
@@ -252,6 +255,59 @@ def test_default_criteria_reproduce_the_papers_scores():
     for ec, (x, s) in paper.items():
         assert c.items[ec].score(x) == pytest.approx(s, abs=0.006), ec
     assert c.items["2-1"].passes(3.45) is False and c.items["3-2"].passes(55) is True
+
+
+def test_vectorised_scores_agree_with_each_criterion(tmp_path):
+    """score_batch (what tuning stores) gives Criterion.score / passes for every EC, for
+    measured and missing values, with the defaults and with a customer's file using
+    tolerances, one-sided ranges and a switched-off EC."""
+    f = tmp_path / "c.yaml"
+    f.write_text("criteria:\n  2-1: {range: [3, 9], tolerance: 2}\n"
+                 "  1-3: {range: [20, null], tolerance: 5}\n  4-1: {enabled: false}\n")
+    rng = np.random.default_rng(3)
+    for crit in (default_criteria(), load_criteria(f)):
+        values = rng.uniform(-5, 60, size=(400, len(EC_IDS)))
+        values[:, [0, 7]] = rng.integers(0, 2, size=(400, 2))  # the binary ECs
+        values[rng.random(values.shape) < 0.1] = np.nan
+        b = score_batch(values, crit)
+        for i in range(len(values)):
+            total, ok = 1.0, True
+            for j, ec in enumerate(EC_IDS):
+                c = crit.items[ec]
+                v = None if np.isnan(values[i, j]) else float(values[i, j])
+                # (np.tanh and math.tanh may differ in the last bit: 1e-15 absolute)
+                assert b.scores[i, j] == pytest.approx(c.score(v), rel=1e-12, abs=1e-15)
+                assert bool(b.passed[i, j]) == c.passes(v)
+                if c.enabled:
+                    total *= c.score(v)
+                    ok &= c.passes(v)
+            assert b.score[i] == pytest.approx(total, rel=1e-9, abs=1e-15)
+            assert bool(b.all_passed[i]) == ok
+
+
+class _Whole(LabelSource):
+    """Every measurement reads the whole image (the reference for the group windows)."""
+
+    def window(self, group):
+        return (0, 0, self.shape[1], self.shape[0])
+
+
+@pytest.mark.parametrize("letter", ["a", "c"])
+def test_group_windows_change_no_measurement(letter):
+    """measure() reads each group from the box of its 8×8 blocks; the values equal reading
+    the whole image, on real RVM label images of many views."""
+    img = small_render(letter)
+    size = (img.camera.width, img.camera.height)
+    rng = np.random.default_rng(11)
+    for _ in range(25):
+        p = IspParams(fov=rng.uniform(160, 200), rad=rng.uniform(200, 420),
+                      zoom=rng.uniform(0.3, 1.3), adv_v_shift=rng.uniform(-0.6, 0.6),
+                      adv_h_shift=rng.uniform(-0.3, 0.3), v_shift=rng.uniform(-60, 60))
+        w, h = rng.choice([(320, 240), (317, 181)])  # also sizes that are not multiples of 8
+        labels = apply_map(img.labels, build_map(p, size, OutputSpec(int(w), int(h))))
+        fast, ref = measure(labels), measure_source(_Whole(labels))
+        assert fast.values == ref.values
+        assert fast.patch_visible == ref.patch_visible and fast.board_box == ref.board_box
 
 
 # ---------------------------------------------------------------------------- criteria files

@@ -124,7 +124,7 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path):
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({
         "tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,
-        "output": {"size": [320, 180]}, "grid_random": {"top_n": 2, "trials": 400},
+        "output": {"size": [320, 180]}, "grid_random": {"top_n": 2, "trials": 3000},
     }))
     scene = str(SCENES / "vehicle_d.yaml")
 
@@ -154,7 +154,7 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     stored = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-    assert 200 <= stored < 81 + 800, stored  # killed mid-run, completed batches kept
+    assert 200 <= stored < 81 + 6000, stored  # killed mid-run, completed batches kept
     assert stored % 40 in (0, 81 % 40)  # whole batches only
     resumed = subprocess.run(tune(None, "--resume", str(run)), env=env, capture_output=True,
                              text=True, timeout=600)
@@ -180,7 +180,7 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40,
                                    "output": {"size": [320, 180]},
-                                   "grid_random": {"top_n": 2, "trials": 2000}}))
+                                   "grid_random": {"top_n": 2, "trials": 6000}}))
     run = tmp_path / "run"
     proc = subprocess.Popen(
         [sys.executable, "-m", "rvmsim", "tune", str(SCENES / "vehicle_a.yaml"), "--out",
@@ -200,12 +200,12 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err
     store = RunStore(db)
-    assert store.meta()["status"].startswith("interrupted") and 120 <= store.count() < 4081
+    assert store.meta()["status"].startswith("interrupted") and 120 <= store.count() < 12081
     store.close()
     res = subprocess.run([sys.executable, "-m", "rvmsim", "tune", "--resume", str(run),
                           "--workers", "1", "--no-progress"], env=env, capture_output=True,
                          text=True, timeout=600)
     assert res.returncode == 0, res.stderr
     store = RunStore(db)
-    assert store.count() == 81 + 4000 and store.meta()["status"] == "done"
+    assert store.count() == 81 + 12000 and store.meta()["status"] == "done"
     store.close()
