@@ -283,25 +283,44 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
     except RvmsimError as err:
         _fail(err)
     rows, failed = [], 0
+    overall = None
+    if progress:  # the overall bar on top, each vehicle's tuning bar below it
+        from tqdm import tqdm
+
+        overall = tqdm(total=len(scenes), unit="vehicle", desc="batch", position=0)
+
+    def say(msg: str, err: bool = False) -> None:
+        if overall is not None:
+            overall.write(msg, file=sys.stderr if err else sys.stdout)
+        else:
+            click.echo(msg, err=err)
+
     for k, scene in enumerate(scenes, start=1):
-        click.echo(f"[{k}/{len(scenes)}] {scene}")
+        say(f"[{k}/{len(scenes)}] {scene}")
         run_dir = out / scene.stem
         try:
             result = run_tune(scene, run_dir, strategy=strategy, config=cfg,
                               criteria_file=criteria_file, seed=seed, workers=workers,
-                              budget=budget, progress=progress)
+                              budget=budget, progress=progress, progress_position=1)
         except RvmsimError as err:
-            click.echo(f"rvmsim: error: {err} (skipped)", err=True)
+            say(f"rvmsim: error: {err} (skipped)", err=True)
             rows.append({"scene": str(scene), "error": str(err)})
             failed += 1
+            if overall is not None:
+                overall.update(1)
             continue
         doc = json.loads((run_dir / "best" / "ec.json").read_text())
+        if overall is not None:
+            overall.update(1)
+            overall.set_postfix_str(f"{doc['vehicle'][:20]}: EC {doc['ec_score']:.3g}")
         rows.append({
             "scene": str(scene), "vehicle": doc["vehicle"], "ec_score": doc["ec_score"],
             "passed": doc["passed"], "ecs": {e["id"]: e["passed"] for e in doc["ecs"]},
             "evaluations": result.outcome.evaluated + result.outcome.replayed,
             "seconds": round(result.outcome.seconds, 1), "run": str(run_dir),
         })
+    if overall is not None:
+        overall.close()
     head = f"{'vehicle':28} {'EC score':>10} " + " ".join(f"{e:>3}" for e in EC_IDS)
     lines = [head + f" {'evals':>7} {'time':>7}"]
     for r in rows:

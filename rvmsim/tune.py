@@ -220,6 +220,7 @@ def tune(
     target_score: float | None = None,
     resume: bool = False,
     progress: bool = False,
+    progress_position: int = 0,
 ) -> TuneResult:
     """Tune the ISP for one scene; see the module docstring for what is written.
 
@@ -231,6 +232,10 @@ def tune(
     resume : bool
         Continue the run in ``run_dir`` with its own settings (the other arguments that
         define the run are taken from its ``run.json``).
+    progress : bool
+        Show a progress bar (evaluations/s, best EC score, ETA).
+    progress_position : int
+        Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
     from .cache import cached_render
     from .scene import load_scene
@@ -270,7 +275,8 @@ def tune(
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=strat.total(), unit="eval", desc=f"tune {scene.name}", smoothing=0.1)
+        bar = tqdm(total=strat.total(), unit="eval", desc=f"tune {scene.name}", smoothing=0.1,
+                   position=progress_position, leave=progress_position == 0)
 
     def on_batch(done: int, best: float, stage: str) -> None:
         if bar is not None:

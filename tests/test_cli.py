@@ -179,6 +179,13 @@ def test_tune_status_select_and_batch(tmp_path):
     assert summary[0]["vehicle"].startswith("Vehicle B") and summary[0]["evaluations"] == 60
     assert "error" in summary[1]
     assert "Vehicle B" in (tmp_path / "batch" / "summary.txt").read_text()
+    # With progress bars: an overall bar over the vehicles besides each vehicle's own bar.
+    b = _rvmsim("batch", str(SCENES / "vehicle_b.yaml"), str(broken), "--out",
+                str(tmp_path / "batch2"), "--config", str(cfg), "--strategy", "random",
+                "--budget", "60", "--workers", "1", env=env)
+    assert b.returncode == 1 and "skipped" in b.stderr
+    assert "batch: 100%" in b.stderr and "2/2" in b.stderr and "vehicle" in b.stderr
+    assert "tune Vehicle B" in b.stderr and "eval" in b.stderr
 
 
 def test_tune_errors_are_one_line(tmp_path):
