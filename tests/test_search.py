@@ -185,7 +185,9 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     proc = subprocess.Popen(
         [sys.executable, "-m", "rvmsim", "tune", str(SCENES / "vehicle_a.yaml"), "--out",
          str(run), "--config", str(cfg), "--workers", "1", "--no-progress"],
-        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        # a shell's background job ignores SIGINT, and children inherit that: restore it
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     db = run / "run.sqlite"
     deadline = time.time() + 300
     while time.time() < deadline:
