@@ -9,7 +9,9 @@ the *narrowed* range ``[x − step, x + step]`` (one coarse step around the seed
 parameter's range).  The ``top_m`` best of everything are the result.
 
 ``cmaes`` — CMA-ES (the ``cmaes`` package) on the tuned parameters scaled to [0, 1], bounded,
-seeded, restarted with a new seed when it converges, until ``budget`` evaluations.  It
+seeded.  A tenth of the budget (at most 300) first explores uniformly at random; CMA-ES starts
+from the best explored point and, each time it converges, restarts from the next best, until
+``budget`` evaluations (default 8,000).  It
 maximises ``Σ log(max(score_i, 1e-4))`` over the enabled ECs: the log of the EC score with a
 floor per EC, so that a criterion stuck at ~0 still leaves a slope to climb.
 
@@ -263,14 +265,20 @@ class RandomSearch(Strategy):
 
 
 class CmaEs(Strategy):
-    """Bounded CMA-ES with restarts (see the module docstring)."""
+    """Bounded CMA-ES with restarts (see the module docstring).
+
+    The first ``explore`` evaluations (default: a tenth of the budget, at most 300) are
+    uniform random candidates; CMA-ES then starts from the best of them, and each restart
+    from the next best explored point, so the restarts begin in different basins that are
+    already known to be good."""
 
     name = "cmaes"
 
-    def __init__(self, space: SearchSpace, *, seed: int = 0, budget: int = 3000,
-                 sigma0: float = 0.3, popsize: int | None = None):
+    def __init__(self, space: SearchSpace, *, seed: int = 0, budget: int = 8000,
+                 sigma0: float = 0.3, popsize: int | None = None, explore: int | None = None):
         super().__init__(space, seed=seed)
         self.budget, self.sigma0, self.popsize = budget, sigma0, popsize
+        self.explore = min(budget // 10, 300) if explore is None else explore
 
     def total(self) -> int:
         return self.budget
@@ -281,19 +289,27 @@ class CmaEs(Strategy):
         lo, hi = self.space.low, self.space.high
         span = hi - lo
         dim = len(lo)
-        start = np.array([(r.init - r.low) / (r.high - r.low) for r in self.space.ranges])
-        used, restart = 0, 0
+        rng = np.random.default_rng([self.seed, 7])
+        starts = [np.array([(r.init - r.low) / (r.high - r.low) for r in self.space.ranges])]
+        used = 0
+        if self.explore > 0:
+            us = rng.uniform(0.0, 1.0, size=(self.explore, dim))
+            told = yield "explore", [lo + u * span for u in us]
+            used += len(us)
+            order = sorted(range(len(us)), key=lambda i: (-told[i][1], i))
+            starts = [us[i] for i in order] + starts
+        restart = 0
         while used < self.budget:
-            opt = CMA(mean=start.copy(), sigma=self.sigma0, bounds=np.tile([0.0, 1.0], (dim, 1)),
-                      seed=self.seed * 1000 + restart, population_size=self.popsize)
+            start = starts[restart] if restart < len(starts) else rng.uniform(0.1, 0.9, dim)
+            opt = CMA(mean=np.clip(start, 0.0, 1.0), sigma=self.sigma0,
+                      bounds=np.tile([0.0, 1.0], (dim, 1)), seed=self.seed * 1000 + restart,
+                      population_size=self.popsize)
             while used < self.budget and not opt.should_stop():
                 us = [opt.ask() for _ in range(opt.population_size)]
                 told = yield f"cmaes-{restart + 1}", [lo + u * span for u in us]
                 used += len(us)
                 opt.tell([(u, -obj) for u, (_, obj) in zip(us, told)])
             restart += 1
-            # Restart from a random point (seeded) to look elsewhere.
-            start = np.random.default_rng([self.seed, restart]).uniform(0.1, 0.9, dim)
 
 
 STRATEGIES: dict[str, type[Strategy]] = {

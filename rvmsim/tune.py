@@ -91,7 +91,7 @@ class TuningConfig(BaseModel):
     #: Candidates evaluated (and stored in one transaction) at a time.
     batch: Annotated[int, Field(ge=1, le=100000)] = 512
     grid_random: _GridRandom = _GridRandom()
-    cmaes: _Budget = _Budget()
+    cmaes: _Budget = _Budget(budget=8000)
     random: _Budget = _Budget(budget=2000)
 
     def space(self, camera) -> SearchSpace:

@@ -117,6 +117,35 @@ def test_cmaes_beats_random_search_on_a_small_budget(tmp_path):
     assert wins == 2
 
 
+def test_cmaes_explores_first_and_starts_from_the_best_point():
+    """The first batch is the uniform exploration (a tenth of the budget); the first CMA-ES
+    generation is centred on the best explored point; the budget is kept exactly."""
+    space = default_space(small_render("a").camera)
+    target = (space.low + space.high) / 2 + 0.3 * (space.high - space.low)
+
+    def objective(x):  # a smooth bowl in the scaled space, best at `target`
+        return -float(np.sum(((x - target) / (space.high - space.low)) ** 2))
+
+    strat = CmaEs(space, seed=3, budget=1000, sigma0=0.05)
+    gen = strat.batches()
+    stage, xs = next(gen)
+    assert stage == "explore" and len(xs) == 100
+    objs = [objective(x) for x in xs]
+    best = xs[int(np.argmax(objs))]
+    stage, ys = gen.send([(0.0, o) for o in objs])
+    assert stage == "cmaes-1"
+    scaled = (np.mean(ys, axis=0) - best) / (space.high - space.low)
+    assert np.all(np.abs(scaled) < 0.1)  # σ0 = 0.05 around the best explored point
+    used = len(xs)
+    while True:
+        used += len(ys)
+        try:
+            stage, ys = gen.send([(0.0, objective(y)) for y in ys])
+        except StopIteration:
+            break
+    assert used >= 1000 and used - 1000 < 20  # stops at the first generation past the budget
+
+
 def test_resume_after_kill_gives_the_clean_result(tmp_path):
     """A real `rvmsim tune` subprocess is killed with SIGKILL mid-run, resumed, and ends with
     exactly the top-M of an uninterrupted run."""
