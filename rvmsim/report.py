@@ -59,7 +59,7 @@ body{font-family:sans-serif;margin:1.5em auto;max-width:1200px;color:#222;paddin
 h1{margin-bottom:.2em}h2{border-bottom:2px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
 table{border-collapse:collapse;margin:.5em 0}
 th,td{border:1px solid #bbb;padding:.25em .6em;text-align:left;vertical-align:top}
-th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums}
+th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
 tr.pass td{background:#d8f0d8}tr.fail td{background:#f6d0d0}tr.off td{background:#e4e4e4;color:#666}
 td.pass{background:#d8f0d8}td.fail{background:#f6d0d0}td.off{background:#e4e4e4;color:#666}
 tr.tuned td{font-weight:bold}
@@ -71,7 +71,7 @@ img{max-width:100%;border:1px solid #999}
 .gallery{display:flex;flex-wrap:wrap;gap:1em}
 .card{border:1px solid #bbb;border-radius:.4em;padding:.6em;width:340px;background:#fafafa}
 .card.rank1{border:2px solid #2a8a3a}
-code{background:#f0f0f0;padding:.1em .3em;word-break:break-all}
+code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
 .muted{color:#666;font-size:.9em}
 """
 
