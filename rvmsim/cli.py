@@ -393,6 +393,29 @@ def select(run: Path, rank: int, out: Path | None) -> None:
         click.echo(f"wrote {out}")
 
 
+@cli.command()
+@click.argument("path", type=click.Path(path_type=Path))
+@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+              help="HTML file to write (default: RUN/report.html, or RUNS_DIR/index.html).")
+def report(path: Path, out: Path | None) -> None:
+    """Write a self-contained HTML review report of a run (PATH = RUN), or of every run in a
+    folder plus an index page (PATH = RUNS_DIR)."""
+    from .report import find_runs, write_batch_report, write_report
+
+    try:
+        if (path / "run.json").is_file():
+            written = write_report(path, out)
+        elif find_runs(path):
+            written = write_batch_report(path, out)
+        else:
+            raise RvmsimError(f"{path}: not a run folder (no run.json) and no run folders in it")
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail_os(err, out or path)
+    click.echo(f"wrote {written}")
+
+
 def main() -> None:
     """Console-script entry point: usage errors exit 2, Ctrl-C exits 130 (a tuning run keeps
     every finished batch and can be resumed)."""

@@ -1,0 +1,578 @@
+"""Review reports: one self-contained HTML page per tuning run, and an index for a batch.
+
+A report shows what a tuning run found, for engineers reviewing it with colleagues and
+customers: the scene (vehicle, camera, lens, mount, criteria), the fisheye image with the
+ROI of the chosen parameters, the RVM image and the annotated EC image, the EC table, the
+parameter table, the convergence of the search, and the top-M candidates so the expert can
+make the final choice (``rvmsim select RUN --rank K`` exports any of them).
+
+Everything is embedded (PNG images as ``data:`` URIs, CSS in a ``<style>`` element); the page
+needs no network, fonts or scripts.  Every string that comes from a user's files (vehicle
+name, description, file names, criteria name) is HTML-escaped.
+
+Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``convergence``,
+``gallery``.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import math
+import os
+import shlex
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+from urllib.parse import quote
+
+import numpy as np
+
+from .errors import RvmsimError
+
+__all__ = ["write_report", "write_batch_report", "find_runs", "EC_GROUP_NAMES",
+           "SECTION_IDS"]
+
+#: The paper groups the ECs by their first digit.
+EC_GROUP_NAMES: dict[str, str] = {
+    "1": "FMVSS 111 visibility",
+    "2": "bumper / body",
+    "3": "guidelines",
+    "4": "calibration board",
+}
+
+#: The ids of a run report's sections, in page order.
+SECTION_IDS: tuple[str, ...] = ("scene", "images", "ec-table", "params", "convergence",
+                                "gallery")
+
+#: Longest side of the embedded fisheye image, gallery thumbnails and index thumbnails (px).
+FISHEYE_MAX_PX = 640
+GALLERY_MAX_PX = 320
+INDEX_THUMB_PX = 192
+#: Scores below this are drawn at this value on the log axes.
+SCORE_FLOOR = 1e-15
+
+_CSS = """
+body{font-family:sans-serif;margin:1.5em auto;max-width:1200px;color:#222;padding:0 1em}
+h1{margin-bottom:.2em}h2{border-bottom:2px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
+table{border-collapse:collapse;margin:.5em 0}
+th,td{border:1px solid #bbb;padding:.25em .6em;text-align:left;vertical-align:top}
+th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
+tr.pass td{background:#d8f0d8}tr.fail td{background:#f6d0d0}tr.off td{background:#e4e4e4;color:#666}
+td.pass{background:#d8f0d8}td.fail{background:#f6d0d0}td.off{background:#e4e4e4;color:#666}
+tr.tuned td{font-weight:bold}
+.badge{display:inline-block;padding:.1em .5em;border-radius:.3em;color:#fff;font-weight:bold}
+.badge.pass{background:#2a8a3a}.badge.fail{background:#c02828}
+figure{display:inline-block;margin:.5em 1em .5em 0;vertical-align:top}
+figcaption{font-size:.9em;color:#444;max-width:640px}
+img{max-width:100%;border:1px solid #999}
+.gallery{display:flex;flex-wrap:wrap;gap:1em}
+.card{border:1px solid #bbb;border-radius:.4em;padding:.6em;width:340px;background:#fafafa}
+.card.rank1{border:2px solid #2a8a3a}
+code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
+.muted{color:#666;font-size:.9em}
+"""
+
+
+def _e(value: Any) -> str:
+    """HTML-escape anything (quotes included)."""
+    return html.escape(str(value), quote=True)
+
+
+# ---------------------------------------------------------------------------- images
+def _png_bytes(image: np.ndarray) -> bytes:
+    import imageio.v3 as iio
+
+    return iio.imwrite("<bytes>", np.ascontiguousarray(image), extension=".png")
+
+
+def _shrink(image: np.ndarray, max_px: int) -> np.ndarray:
+    """Downscale so the longest side is at most ``max_px`` (never enlarges)."""
+    import cv2
+
+    h, w = image.shape[:2]
+    f = max_px / max(h, w)
+    if f >= 1.0:
+        return image
+    size = (max(1, round(w * f)), max(1, round(h * f)))
+    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+
+
+def _data_uri(png: bytes) -> str:
+    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+
+def _img(image: np.ndarray, alt: str, max_px: int | None = None) -> str:
+    if max_px is not None:
+        image = _shrink(image, max_px)
+    return f'<img src="{_data_uri(_png_bytes(image))}" alt="{_e(alt)}">'
+
+
+def _figure_png(fig) -> bytes:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    return buf.getvalue()
+
+
+# ---------------------------------------------------------------------------- plots
+def convergence_png(curve: list[tuple[int, float, str]]) -> bytes:
+    """Best EC score so far vs evaluation index, one colour per search stage (log y axis).
+
+    Parameters
+    ----------
+    curve : list of (idx, best so far, stage)
+        As :meth:`rvmsim.store.RunStore.best_curve` gives it.
+
+    Returns
+    -------
+    bytes
+        A PNG image.
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 3.6))
+    ax = fig.add_subplot()
+    stages: list[str] = []
+    for _, _, st in curve:
+        if st not in stages:
+            stages.append(st)
+    colours = [f"C{i % 10}" for i in range(len(stages))]
+    idx = np.array([c[0] for c in curve], dtype=float)
+    best = np.maximum(np.array([c[1] for c in curve], dtype=float), SCORE_FLOOR)
+    st_arr = np.array([c[2] for c in curve], dtype=object)
+    for st, col in zip(stages, colours):
+        mask = st_arr == st
+        ax.plot(idx[mask], best[mask], ".", ms=2.5, color=col, label=str(st))
+    if len(idx):
+        ax.plot(idx, best, "-", lw=0.8, color="#555", zorder=0)
+    ax.set_yscale("log")
+    ax.set_ylim(SCORE_FLOOR / 10, 2.0)
+    ax.set_xlabel("evaluation")
+    ax.set_ylabel("best EC score so far")
+    ax.set_title("Convergence")
+    ax.grid(True, which="major", alpha=0.3)
+    if stages:
+        ax.legend(title="stage", fontsize=8, loc="lower right",
+                  ncol=max(1, math.ceil(len(stages) / 6)))
+    fig.tight_layout()
+    return _figure_png(fig)
+
+
+def histogram_png(scores: np.ndarray) -> bytes:
+    """Histogram of all trials' EC scores on log-spaced bins; zero scores counted apart.
+
+    Returns
+    -------
+    bytes
+        A PNG image.
+    """
+    from matplotlib.figure import Figure
+
+    scores = np.asarray(scores, dtype=float)
+    zeros = int(np.sum(scores <= 0))
+    pos = scores[scores > 0]
+    fig = Figure(figsize=(6.4, 3.6))
+    ax = fig.add_subplot()
+    if pos.size:
+        lo = max(float(pos.min()), SCORE_FLOOR)
+        hi = max(float(pos.max()), lo * 10)
+        bins = np.logspace(math.log10(lo), math.log10(hi), 40)
+        ax.hist(np.clip(pos, lo, hi), bins=bins, color="C0")
+        ax.set_xscale("log")
+    else:
+        ax.text(0.5, 0.5, "no trial scored above 0", ha="center", va="center",
+                transform=ax.transAxes)
+    ax.set_xlabel("EC score")
+    ax.set_ylabel("trials")
+    ax.set_title(f"Score distribution ({scores.size} trials, {zeros} scored 0)")
+    fig.tight_layout()
+    return _figure_png(fig)
+
+
+# ---------------------------------------------------------------------------- run data
+@dataclass
+class _Run:
+    """Everything a report shows, read from a run folder."""
+
+    run_dir: Path
+    info: dict[str, Any]
+    meta: dict[str, Any]
+    scene_file: Path
+    scene: Any
+    images: Any
+    config: Any
+    criteria: Any
+    criteria_file: Path | None
+    output: Any
+    top: list[Any]
+    curve: list[tuple[int, float, str]]
+    scores: np.ndarray
+    count: int
+
+
+def _resolve(recorded: str, run_dir: Path) -> Path | None:
+    """A path as ``tune`` recorded it: absolute, relative to the current folder (where tune
+    usually ran), or relative to the run folder."""
+    p = Path(recorded).expanduser()
+    if p.is_absolute():
+        return p if p.is_file() else None
+    for cand in (p, run_dir / p, run_dir.parent / p):
+        if cand.is_file():
+            return cand
+    return None
+
+
+def _load_run(run_dir: Path) -> _Run:
+    from .cache import cached_render
+    from .criteria import load_criteria
+    from .scene import load_scene
+    from .store import RunStore
+    from .tune import TuningConfig
+
+    run_json = run_dir / "run.json"
+    if not run_json.is_file():
+        raise RvmsimError(f"{run_dir}: not a run folder (run.json missing)")
+    try:
+        info = json.loads(run_json.read_text(encoding="utf-8"))
+        recorded_scene = str(info["scene"])
+        config = TuningConfig.model_validate(info.get("config") or {})
+    except (ValueError, KeyError, TypeError) as err:
+        raise RvmsimError(f"{run_json}: not a readable run.json ({err})".splitlines()[0]) from None
+    if not (run_dir / "run.sqlite").is_file():
+        raise RvmsimError(f"{run_dir}: no run database (run.sqlite) here")
+    scene_file = _resolve(recorded_scene, run_dir)
+    if scene_file is None:
+        raise RvmsimError(f"{run_dir}: scene file {recorded_scene} not found")
+    crit_rec = info.get("criteria_file")
+    crit_file = None
+    if crit_rec:
+        crit_file = _resolve(str(crit_rec), run_dir)
+        if crit_file is None:
+            raise RvmsimError(f"{run_dir}: criteria file {crit_rec} not found")
+    criteria = load_criteria(crit_file)
+    scene = load_scene(scene_file)
+    store = RunStore(run_dir / "run.sqlite")
+    try:
+        meta = store.meta()
+        top = store.top(config.top_m)
+        curve = store.best_curve()
+        scores = np.array([r[0] for r in store.db.execute("SELECT score FROM trials")],
+                          dtype=float)
+        count = store.count()
+    finally:
+        store.close()
+    if not top:
+        raise RvmsimError(f"{run_dir}: no evaluated candidates to report yet")
+    images, _ = cached_render(scene, scene_file)
+    return _Run(run_dir, info, meta, scene_file, scene, images, config, criteria, crit_file,
+                config.output_spec(), top, curve, scores, count)
+
+
+# ---------------------------------------------------------------------------- sections
+def _fmt(x: float | None, digits: int = 4) -> str:
+    if x is None:
+        return "—"
+    return f"{x:.{digits}g}"
+
+
+def _status(item) -> str:
+    return "off" if not item.enabled else ("pass" if item.passed else "fail")
+
+
+def _scene_section(r: _Run) -> str:
+    sc = r.scene
+    cam = sc.fisheye_camera()
+    lens = sc.camera.lens
+    m = sc.camera.mount
+    k = ", ".join(f"{v:g}" for v in (lens.k or (0.0, 0.0, 0.0, 0.0)))
+    rows = [
+        ("Vehicle", sc.name),
+        ("Description", sc.description or "—"),
+        ("Scene file", str(r.scene_file)),
+        ("Image size", f"{cam.width} × {cam.height} px"),
+        ("Intrinsics", f"fx {cam.fx:.2f}, fy {cam.fy:.2f} px/rad; cx {cam.cx:.2f}, "
+                       f"cy {cam.cy:.2f} px; skew {cam.skew:g}"),
+        ("Lens model", f"{lens.model}, field of view {lens.fov_deg:g}°"
+                       + (f", k = [{k}]" if lens.model == "kannala_brandt" else "")),
+        ("Mount position", "({:g}, {:g}, {:g}) m".format(*m.position)),
+        ("Mount angles", f"yaw {m.yaw_deg:g}°, pitch {m.pitch_deg:g}°, roll {m.roll_deg:g}°"),
+        ("Criteria", f"{r.criteria.name} — "
+                     + (str(r.criteria_file) if r.criteria_file else "built-in (paper thresholds)")),
+        ("Search", f"{r.info.get('strategy', '?')}, seed {r.info.get('seed', '?')}, "
+                   f"{r.count} evaluations, status {r.meta.get('status', '?')}"),
+        ("Run folder", str(r.run_dir)),
+    ]
+    body = "".join(f"<tr><th>{_e(a)}</th><td>{_e(b)}</td></tr>" for a, b in rows)
+    return f'<section id="scene"><h2>Scene summary</h2><table>{body}</table></section>'
+
+
+def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
+    from .isp import draw_roi
+
+    roi = draw_roi(r.images.color, r.top[0].params, r.output, thickness=3)
+    figs = [
+        (_img(roi, "fisheye input with ROI", FISHEYE_MAX_PX),
+         "Fisheye input image; the green outline is the region the RVM image shows under "
+         "the chosen parameters (paper, Table 4)."),
+        (_img(color, "RVM colour image"),
+         f"RVM image ({r.output.width} × {r.output.height} px, "
+         f"{'mirrored' if r.output.mirror else 'not mirrored'})."),
+        (_img(annotated, "annotated EC image", 1200),
+         "The ECs measured on the RVM image (paper, Fig. 17–20)."),
+    ]
+    body = "".join(f"<figure>{img}<figcaption>{_e(cap)}</figcaption></figure>"
+                   for img, cap in figs)
+    return f'<section id="images"><h2>Images</h2>{body}</section>'
+
+
+def _ec_section(result) -> str:
+    head = ("<tr><th>EC</th><th>measurement</th><th>value</th><th>unit</th>"
+            "<th>acceptable range</th><th>score</th><th>result</th></tr>")
+    rows = []
+    for i in result.items:
+        st = _status(i)
+        rng = f"[{_fmt(i.low)}, {_fmt(i.high)}]" if (i.low is not None or i.high is not None) \
+            else "= 1"
+        rows.append(
+            f'<tr class="{st}"><td>{_e(i.id)}</td><td>{_e(i.name)}</td>'
+            f'<td class="num">{_e(_fmt(i.value))}</td><td>{_e(i.unit)}</td>'
+            f'<td class="num">{_e(rng)}</td><td class="num">{i.score:.4f}</td>'
+            f'<td>{_e(st)}</td></tr>')
+    badge = "pass" if result.passed else "fail"
+    summary = (f'<p>EC score <b>{result.score:.4g}</b> '
+               f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
+               f'</span> <span class="muted">criteria: {_e(result.criteria_name)}</span></p>')
+    return (f'<section id="ec-table"><h2>Evaluation criteria</h2>{summary}'
+            f'<table>{head}{"".join(rows)}</table></section>')
+
+
+def _params_section(r: _Run) -> str:
+    from .isp import PARAM_SPECS, IspParams
+
+    space = r.config.space(r.scene.fisheye_camera())
+    tuned = {pr.name: pr for pr in space.ranges}
+    chosen = r.top[0].params
+    default = IspParams()
+    head = ("<tr><th>parameter</th><th>paper name</th><th>chosen</th><th>default</th>"
+            "<th>range</th><th>unit</th><th>tuned</th></tr>")
+    rows = []
+    for spec in PARAM_SPECS:
+        pr = tuned.get(spec.name)
+        if pr is not None:
+            rng = f"[{pr.low:g}, {pr.high:g}] (search)"
+        else:
+            rng = f"[{spec.low:g}, {spec.high:g}] (Table 2)"
+        fixed = "" if pr is not None or spec.name not in r.config.fixed else " (fixed)"
+        rows.append(
+            f'<tr class="{"tuned" if pr is not None else ""}"><td>{_e(spec.name)}</td>'
+            f'<td>{_e(spec.paper_name)}</td>'
+            f'<td class="num">{getattr(chosen, spec.name):.6g}</td>'
+            f'<td class="num">{getattr(default, spec.name):g}</td>'
+            f'<td class="num">{_e(rng)}</td><td>{_e(spec.unit)}</td>'
+            f'<td>{"yes" if pr is not None else "no" + fixed}</td></tr>')
+    return (f'<section id="params"><h2>ISP parameters</h2>'
+            f'<p class="muted">{len(tuned)} of {len(PARAM_SPECS)} parameters tuned (bold); '
+            f'the chosen values are those of rank 1.</p>'
+            f'<table>{head}{"".join(rows)}</table></section>')
+
+
+def _convergence_section(r: _Run) -> str:
+    conv = _data_uri(convergence_png(r.curve))
+    hist = _data_uri(histogram_png(r.scores))
+    return ('<section id="convergence"><h2>Convergence</h2>'
+            f'<figure><img src="{conv}" alt="convergence plot"><figcaption>Best EC score so '
+            'far vs evaluations, coloured by search stage.</figcaption></figure>'
+            f'<figure><img src="{hist}" alt="score histogram"><figcaption>EC scores of all '
+            'trials (log-spaced bins).</figcaption></figure></section>')
+
+
+def _differences(rec, first, criteria) -> list[str]:
+    """ECs (enabled ones) whose pass/fail differs from rank 1, as 'EC: pass → fail'."""
+    out = []
+    for ec, item in first.ec.items():
+        crit = criteria.items.get(ec)
+        if crit is not None and not crit.enabled:
+            continue
+        mine = rec.ec.get(ec)
+        if mine is None:
+            continue
+        if bool(mine[2]) != bool(item[2]):
+            out.append(f"{ec}: {'pass' if mine[2] else 'fail'} "
+                       f"(#1 {'passes' if item[2] else 'fails'})")
+    return out
+
+
+def _gallery_section(r: _Run, run_arg: str) -> str:
+    from .isp import process
+
+    cards = []
+    first = r.top[0]
+    for k, rec in enumerate(r.top, start=1):
+        color, _ = process(r.images.color, None, rec.params, r.output)
+        diffs = _differences(rec, first, r.criteria)
+        if k == 1:
+            diff_html = "<p class='muted'>reference (rank 1)</p>"
+        elif diffs:
+            diff_html = "<ul>" + "".join(f"<li>{_e(d)}</li>" for d in diffs) + "</ul>"
+        else:
+            diff_html = "<p class='muted'>same pass/fail as #1 on every EC</p>"
+        badge = "pass" if rec.passed else "fail"
+        cmd = f"rvmsim select {shlex.quote(run_arg)} --rank {k}"
+        cards.append(
+            f'<div class="card{" rank1" if k == 1 else ""}" id="rank-{k}">'
+            f'<h3>#{k} <span class="badge {badge}">{badge}</span></h3>'
+            f'{_img(color, f"rank {k} RVM image", GALLERY_MAX_PX)}'
+            f'<p>EC score <b>{rec.score:.4g}</b> <span class="muted">trial {rec.idx} '
+            f'({_e(rec.stage)})</span></p>{diff_html}'
+            f'<p>Export: <code>{_e(cmd)}</code></p></div>')
+    return (f'<section id="gallery"><h2>Top-{len(r.top)} candidates</h2>'
+            '<p class="muted">Each candidate\'s RVM image and EC score, with the ECs whose '
+            'result differs from #1; choose one and export it with the command shown.</p>'
+            f'<div class="gallery">{"".join(cards)}</div></section>')
+
+
+def _page(title: str, body: str) -> str:
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            f"<title>{_e(title)}</title><style>{_CSS}</style></head>"
+            f"<body>{body}</body></html>\n")
+
+
+def _group_status(result) -> dict[str, str]:
+    """'pass', 'fail' or 'off' per EC group (the first digit of the EC id)."""
+    out = {}
+    for g in EC_GROUP_NAMES:
+        items = [i for i in result.items if i.id.split("-")[0] == g and i.enabled]
+        out[g] = "off" if not items else ("pass" if all(i.passed for i in items) else "fail")
+    return out
+
+
+def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
+    """The report page of one run, and the summary the batch index shows."""
+    from .annotate import annotate
+    from .criteria import evaluate
+    from .isp import process
+
+    r = _load_run(run_dir)
+    best = r.top[0]
+    color, labels = process(r.images.color, r.images.labels, best.params, r.output)
+    result = evaluate(labels, r.criteria)
+    annotated = annotate(color, labels, result)
+    badge = "pass" if result.passed else "fail"
+    header = (f"<h1>{_e(r.scene.name)}</h1>"
+              f'<p>RVM tuning review — EC score <b>{result.score:.4g}</b> '
+              f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
+              f"</span></p>"
+              "<nav><p>" + " · ".join(
+                  f'<a href="#{s}">{_e(s.replace("-", " "))}</a>' for s in SECTION_IDS)
+              + "</p></nav>")
+    body = (header + _scene_section(r) + _images_section(r, color, annotated)
+            + _ec_section(result) + _params_section(r) + _convergence_section(r)
+            + _gallery_section(r, str(run_dir)))
+    summary = {"vehicle": r.scene.name, "score": result.score, "passed": result.passed,
+               "groups": _group_status(result), "thumb": _shrink(color, INDEX_THUMB_PX)}
+    return _page(f"RVM tuning review: {r.scene.name}", body), summary
+
+
+def _write(path: Path, text: str) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    except OSError as err:
+        raise RvmsimError(f"{path}: cannot write report ({err.strerror or err})") from None
+
+
+# ---------------------------------------------------------------------------- public API
+def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
+    """Write the review report of one tuning run.
+
+    Parameters
+    ----------
+    run_dir : path
+        A run folder written by :func:`rvmsim.tune.tune` (``run.json``, ``run.sqlite``).
+    out : path, optional
+        The HTML file to write (default: ``run_dir/report.html``).
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    RvmsimError
+        One line: not a run folder, no candidates yet, scene or criteria file gone,
+        unwritable output.
+    """
+    run_dir = Path(run_dir)
+    page, _ = _build(run_dir)
+    path = Path(out) if out is not None else run_dir / "report.html"
+    _write(path, page)
+    return path
+
+
+def find_runs(runs_dir: str | Path) -> list[Path]:
+    """The run folders (those holding ``run.json``) directly inside ``runs_dir``, sorted."""
+    runs_dir = Path(runs_dir)
+    if not runs_dir.is_dir():
+        return []
+    return sorted(p for p in runs_dir.iterdir() if p.is_dir() and (p / "run.json").is_file())
+
+
+def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> Path:
+    """Write a report for every run folder in ``runs_dir`` and an index page linking them.
+
+    Parameters
+    ----------
+    runs_dir : path
+        A folder of run folders (as ``rvmsim batch`` writes them).
+    out : path, optional
+        The index file (default: ``runs_dir/index.html``); each run's report goes to its
+        own folder as ``report.html`` and is linked relative to the index.
+
+    Returns
+    -------
+    Path
+        The index file written.
+
+    Raises
+    ------
+    RvmsimError
+        No run folders in ``runs_dir``, or the index cannot be written.  A run whose
+        report cannot be made gets an error row in the index instead.
+    """
+    runs_dir = Path(runs_dir)
+    runs = find_runs(runs_dir)
+    if not runs:
+        raise RvmsimError(f"{runs_dir}: no run folders (with run.json) here")
+    index = Path(out) if out is not None else runs_dir / "index.html"
+    head = ("<tr><th>vehicle</th><th>RVM image</th><th>EC score</th>"
+            + "".join(f"<th>{_e(g)}-x {_e(n)}</th>" for g, n in EC_GROUP_NAMES.items())
+            + "<th>report</th></tr>")
+    rows = []
+    for run in runs:
+        try:
+            page, s = _build(run)
+            rep = run / "report.html"
+            _write(rep, page)
+        except RvmsimError as err:
+            rows.append(f'<tr class="fail"><td>{_e(run.name)}</td>'
+                        f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{_e(err)}</td></tr>')
+            continue
+        href = quote(Path(os.path.relpath(rep, index.parent)).as_posix())
+        cells = "".join(f'<td class="{st}">{_e(st)}</td>' for st in s["groups"].values())
+        rows.append(
+            f'<tr><td>{_e(s["vehicle"])}<br><span class="muted">{_e(run.name)}</span></td>'
+            f'<td>{_img(s["thumb"], s["vehicle"])}</td>'
+            f'<td class="num {"pass" if s["passed"] else "fail"}">{s["score"]:.4g}</td>'
+            f'{cells}<td><a href="{_e(href)}">report</a></td></tr>')
+    body = (f"<h1>RVM tuning review: {_e(runs_dir.name or str(runs_dir))}</h1>"
+            f'<p class="muted">{len(runs)} runs in {_e(runs_dir)}; EC groups pass when every '
+            'enabled EC of the group passes.</p>'
+            f'<section id="index"><table>{head}{"".join(rows)}</table></section>')
+    _write(index, _page(f"RVM tuning review: {runs_dir.name}", body))
+    return index

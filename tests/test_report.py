@@ -1,0 +1,274 @@
+"""Review reports (`rvmsim report`): real small tuning runs rendered into self-contained HTML."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from html.parser import HTMLParser
+from urllib.parse import unquote
+
+import numpy as np
+import pytest
+
+from rvmsim.errors import RvmsimError
+from rvmsim.report import EC_GROUP_NAMES, SECTION_IDS, write_batch_report, write_report
+
+from .conftest import SCENES
+
+EVIL_NAME = 'Evil <script>alert(1)</script> & "Co"'
+EVIL_DESC = "notes: <img src=x onerror=alert(2)> & 'quoted'"
+EVIL_CRITERIA = "OEM <b>bold</b> & co"
+TOP_M = 4
+
+
+class _Collector(HTMLParser):
+    """Every start tag with its attributes, the text, and the raw inline <svg> blocks."""
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.tags: list[tuple[str, dict[str, str | None]]] = []
+        self.text: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append((tag, dict(attrs)))
+
+    def handle_startendtag(self, tag, attrs):
+        self.tags.append((tag, dict(attrs)))
+
+    def handle_data(self, data):
+        self.text.append(data)
+
+    def all_text(self) -> str:
+        return " ".join(self.text)
+
+    def find(self, tag: str) -> list[dict[str, str | None]]:
+        return [a for t, a in self.tags if t == tag]
+
+
+def _parse(text: str) -> _Collector:
+    p = _Collector()
+    p.feed(text)
+    p.close()
+    return p
+
+
+def _decode_data_png(src: str) -> np.ndarray:
+    import cv2
+
+    prefix = "data:image/png;base64,"
+    assert src.startswith(prefix), src[:40]
+    raw = base64.b64decode(src[len(prefix):], validate=True)
+    img = cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED)
+    assert img is not None and img.size > 0 and min(img.shape[:2]) >= 8
+    return img
+
+
+def _assert_self_contained(text: str, doc: _Collector) -> None:
+    assert "<script" not in text.lower() and not doc.find("script")
+    assert "http://" not in text and "https://" not in text
+    assert "@import" not in text and "url(" not in text
+    assert not doc.find("link")  # no external stylesheets or fonts
+    for attrs in doc.find("img"):
+        _decode_data_png(attrs["src"] or "")
+    for tag in ("a", "link", "iframe", "object", "embed", "source"):
+        for attrs in doc.find(tag):
+            for key in ("href", "src", "data"):
+                v = attrs.get(key)
+                assert v is None or ":" not in v.split("/")[0] or v.startswith("data:"), v
+    # Inline SVGs (if any plot is embedded that way) are well-formed XML.
+    start = 0
+    while (i := text.find("<svg", start)) != -1:
+        j = text.index("</svg>", i) + len("</svg>")
+        ET.fromstring(text[i:j])
+        start = j
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """Two real tiny runs in one folder: an evil-named copy of vehicle A (custom criteria with
+    4-1 off, CMA-ES) and vehicle B (random search)."""
+    from rvmsim.tune import TuningConfig, tune
+
+    root = tmp_path_factory.mktemp("report")
+    old = os.environ.get("RVMSIM_CACHE")
+    os.environ["RVMSIM_CACHE"] = str(root / "cache")
+    try:
+        text = (SCENES / "vehicle_a.yaml").read_text()
+        lines = [ln for ln in text.splitlines()
+                 if not ln.startswith("name:") and not ln.startswith("description:")]
+        scene = root / 'scene <i>&"x".yaml'
+        scene.write_text(f"name: {json.dumps(EVIL_NAME)}\ndescription: {json.dumps(EVIL_DESC)}\n"
+                         + "\n".join(lines) + "\n")
+        crit = root / "crit <&>.yaml"
+        crit.write_text(f"name: {json.dumps(EVIL_CRITERIA)}\ncriteria:\n  4-1: {{enabled: false}}\n")
+        cfg = TuningConfig.model_validate({
+            "tuned": ["fov", "rad", "zoom", "adv_v_shift"], "output": {"size": [320, 180]},
+            "top_m": TOP_M, "batch": 20})
+        runs_dir = root / "runs"
+        evil_run = runs_dir / "a & <b>"
+        tune(scene, evil_run, strategy="cmaes", config=cfg, criteria_file=crit, budget=80,
+             workers=1)
+        tune(SCENES / "vehicle_b.yaml", runs_dir / "b", strategy="random", config=cfg,
+             budget=60, workers=1)
+        report = write_report(evil_run)
+        yield {"root": root, "runs_dir": runs_dir, "evil_run": evil_run, "report": report,
+               "scene": scene, "crit": crit}
+    finally:
+        if old is None:
+            os.environ.pop("RVMSIM_CACHE", None)
+        else:
+            os.environ["RVMSIM_CACHE"] = old
+
+
+def test_report_has_every_section_and_decodable_images(runs):
+    path = runs["report"]
+    assert path == runs["evil_run"] / "report.html"
+    text = path.read_text(encoding="utf-8")
+    doc = _parse(text)
+    ids = [a.get("id") for _, a in doc.tags if a.get("id")]
+    for sid in SECTION_IDS:
+        assert sid in ids, sid
+    words = doc.all_text()
+    for heading in ("Scene summary", "Images", "Evaluation criteria", "ISP parameters",
+                    "Convergence", f"Top-{TOP_M} candidates"):
+        assert heading in words
+    # Scene summary: camera intrinsics, lens, mount, criteria file.
+    for fact in ("fx 390.00", "equidistance", "pitch 32°", "1280 × 960 px", EVIL_CRITERIA,
+                 str(runs["crit"]), str(runs["scene"])):
+        assert fact in words, fact
+    _assert_self_contained(text, doc)
+    # fisheye+ROI, RVM, annotated, convergence, histogram, and one per top-M candidate
+    imgs = doc.find("img")
+    assert len(imgs) == 5 + TOP_M
+    fisheye = _decode_data_png(imgs[0]["src"])
+    assert fisheye.shape[1] <= 640 and fisheye.shape[0] > 100
+    assert _decode_data_png(imgs[1]["src"]).shape[:2] == (180, 320)
+
+
+def test_report_tables_gallery_and_escaping(runs):
+    text = runs["report"].read_text(encoding="utf-8")
+    doc = _parse(text)
+    # Every user string is escaped: never raw in the file, shown verbatim as text.
+    for s in (EVIL_NAME, EVIL_DESC, EVIL_CRITERIA, runs["evil_run"].name, runs["scene"].name,
+              runs["crit"].name):
+        assert s not in text, s
+        assert html.escape(s, quote=True) in text, s
+        assert s in doc.all_text(), s
+    assert "<img src=x" not in text and "<b>bold" not in text
+    # EC table: one row per EC, coloured by status; 4-1 is off under the custom criteria.
+    from rvmsim.criteria import EC_IDS
+
+    classes = [a.get("class") for t, a in doc.tags if t == "tr" and a.get("class") in
+               ("pass", "fail", "off")]
+    assert len(classes) == len(EC_IDS) and classes[EC_IDS.index("4-1")] == "off"
+    assert ".pass" in text and ".fail" in text and "background" in text
+    # Parameter table: all 14 parameters, the 4 tuned ones marked.
+    from rvmsim.isp import IspParams
+
+    words = doc.all_text()
+    for name in IspParams.names():
+        assert name in words
+    assert len([a for t, a in doc.tags if t == "tr" and a.get("class") == "tuned"]) == 4
+    assert "(search)" in words and "(Table 2)" in words
+    # Gallery: one card per candidate with its export command.
+    cards = [a for t, a in doc.tags if t == "div" and (a.get("id") or "").startswith("rank-")]
+    assert len(cards) == TOP_M
+    for k in range(1, TOP_M + 1):
+        assert f"--rank {k}" in words
+        assert "rvmsim select" in words
+    assert "EC score" in words
+
+
+def test_batch_index_links_and_groups(runs, tmp_path):
+    index = write_batch_report(runs["runs_dir"])
+    assert index == runs["runs_dir"] / "index.html"
+    text = index.read_text(encoding="utf-8")
+    doc = _parse(text)
+    _assert_self_contained(text, doc)
+    rows = [a for t, a in doc.tags if t == "tr"]
+    assert len(rows) == 1 + 2  # header + one row per vehicle
+    hrefs = [a["href"] for a in doc.find("a")]
+    assert len(hrefs) == 2
+    for h in hrefs:
+        target = index.parent / unquote(h)
+        assert target.is_file() and target.name == "report.html", h
+    assert len(doc.find("img")) == 2
+    words = doc.all_text()
+    assert EVIL_NAME in words and "Vehicle B" in words and EVIL_NAME not in text
+    for g, name in EC_GROUP_NAMES.items():
+        assert f"{g}-x {name}" in words
+    # pass/fail/off per group; group 4 is off for the evil run (4-1 disabled)
+    cells = [a.get("class") for t, a in doc.tags if t == "td" and a.get("class") in
+             ("pass", "fail", "off")]
+    assert len(cells) == 2 * len(EC_GROUP_NAMES) and "off" in cells
+    # --out elsewhere: links still resolve relative to the index.
+    other = write_batch_report(runs["runs_dir"], tmp_path / "elsewhere" / "idx.html")
+    for a in _parse(other.read_text()).find("a"):
+        assert (other.parent / unquote(a["href"])).is_file()
+
+
+def test_report_missing_scene_is_one_line_error(runs, tmp_path):
+    run = tmp_path / "copy"
+    shutil.copytree(runs["evil_run"], run)
+    info = json.loads((run / "run.json").read_text())
+    info["scene"] = str(tmp_path / "gone.yaml")
+    (run / "run.json").write_text(json.dumps(info))
+    with pytest.raises(RvmsimError) as err:
+        write_report(run)
+    assert "gone.yaml" in str(err.value) and "\n" not in str(err.value)
+
+
+def _chromium() -> str | None:
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        if path := shutil.which(name):
+            return path
+    return None
+
+
+def test_report_renders_in_headless_chromium(runs, tmp_path):
+    browser = _chromium()
+    if browser is None:
+        pytest.skip("Chromium is not installed (tools/setup.sh --test installs it)")
+    import cv2
+
+    shot = tmp_path / "shot.png"
+    res = subprocess.run(
+        [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+         f"--user-data-dir={tmp_path / 'profile'}", f"--screenshot={shot}",
+         "--window-size=1280,2000", runs["report"].resolve().as_uri()],
+        capture_output=True, text=True, timeout=120)
+    assert shot.is_file(), res.stderr[-2000:]
+    img = cv2.imread(str(shot), cv2.IMREAD_COLOR)
+    assert img is not None and img.shape[:2] == (2000, 1280)
+    assert float(img.std()) > 10
+    colours = np.unique(img.reshape(-1, 3)[::7], axis=0)
+    assert len(colours) > 100
+
+
+def _rvmsim(*args, env=None):
+    return subprocess.run([sys.executable, "-m", "rvmsim", *args], capture_output=True,
+                          text=True, timeout=600, env=env)
+
+
+def test_cli_report_run_batch_and_bad_path(runs, tmp_path):
+    env = {**os.environ, "RVMSIM_CACHE": str(runs["root"] / "cache")}
+    out = tmp_path / "r.html"
+    res = _rvmsim("report", str(runs["runs_dir"] / "b"), "--out", str(out), env=env)
+    assert res.returncode == 0, res.stderr
+    assert str(out) in res.stdout and out.is_file()
+    _assert_self_contained(out.read_text(), _parse(out.read_text()))
+    res = _rvmsim("report", str(runs["runs_dir"]), "--out", str(tmp_path / "i.html"), env=env)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "i.html").is_file() and "i.html" in res.stdout
+    for bad in (tmp_path / "nothing", tmp_path):
+        res = _rvmsim("report", str(bad), env=env)
+        assert res.returncode == 2
+        lines = res.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("rvmsim: error:") and str(bad) in lines[0]
+        assert "Traceback" not in res.stderr
