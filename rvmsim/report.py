@@ -65,6 +65,7 @@ td.pass{background:#d8f0d8}td.fail{background:#f6d0d0}td.off{background:#e4e4e4;
 tr.tuned td{font-weight:bold}
 .badge{display:inline-block;padding:.1em .5em;border-radius:.3em;color:#fff;font-weight:bold}
 .badge.pass{background:#2a8a3a}.badge.fail{background:#c02828}
+.warn{background:#fff3cd;border:1px solid #e0b84a;padding:.5em .8em}
 figure{display:inline-block;margin:.5em 1em .5em 0;vertical-align:top}
 figcaption{font-size:.9em;color:#444;max-width:640px}
 img{max-width:100%;border:1px solid #999}
@@ -213,6 +214,7 @@ class _Run:
     curve: list[tuple[int, float, str]]
     scores: np.ndarray
     count: int
+    scene_changed: bool = False
 
 
 def _resolve(recorded: str, run_dir: Path) -> Path | None:
@@ -228,7 +230,7 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from .cache import cached_render
+    from .cache import cached_render, scene_key
     from .criteria import load_criteria
     from .scene import load_scene
     from .store import RunStore
@@ -269,8 +271,10 @@ def _load_run(run_dir: Path) -> _Run:
     if not top:
         raise RvmsimError(f"{run_dir}: no evaluated candidates to report yet")
     images, _ = cached_render(scene, scene_file)
+    recorded_key = info.get("scene_key")
+    scene_changed = recorded_key is not None and recorded_key != scene_key(scene, scene_file)
     return _Run(run_dir, info, meta, scene_file, scene, images, config, criteria, crit_file,
-                config.output_spec(), top, curve, scores, count)
+                config.output_spec(), top, curve, scores, count, scene_changed)
 
 
 # ---------------------------------------------------------------------------- sections
@@ -470,6 +474,10 @@ def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
               "<nav><p>" + " · ".join(
                   f'<a href="#{s}">{_e(s.replace("-", " "))}</a>' for s in SECTION_IDS)
               + "</p></nav>")
+    if r.scene_changed:
+        header += ('<p class="warn"><b>The scene file changed after this run.</b> The images and '
+                   "EC values below are recomputed with the scene as it is now, so they can "
+                   "differ from the scores the run stored.</p>")
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
             + _gallery_section(r, str(run_dir)))

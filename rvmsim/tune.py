@@ -237,7 +237,7 @@ def tune(
     progress_position : int
         Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
-    from .cache import cached_render
+    from .cache import cached_render, scene_key
     from .scene import load_scene
 
     run_dir = Path(run_dir)
@@ -256,15 +256,20 @@ def tune(
     if criteria is None:
         criteria = load_criteria(criteria_file)
     scene = load_scene(scene_file)
+    key = scene_key(scene, scene_file)
+    if resume and saved.get("scene_key", key) != key:
+        raise RvmsimError(f"{scene_file}: the scene changed since this run started; "
+                          "resuming would mix two scenes (start a new run)")
     images, _ = cached_render(scene, scene_file, progress=progress)
     space = config.space(images.camera)
     strat = make_strategy(strategy, space, config, seed, budget)
     if not resume:
         run_dir.mkdir(parents=True, exist_ok=True)
         run_json.write_text(json.dumps({
-            "scene": str(Path(scene_file)), "vehicle": scene.name, "strategy": strategy,
+            "scene": str(Path(scene_file).resolve()), "scene_key": key,
+            "vehicle": scene.name, "strategy": strategy,
             "seed": seed, "budget": budget,
-            "criteria_file": None if criteria_file is None else str(criteria_file),
+            "criteria_file": None if criteria_file is None else str(Path(criteria_file).resolve()),
             "config": config.model_dump(mode="json"),
         }, indent=2))
     store = RunStore(run_dir / "run.sqlite")

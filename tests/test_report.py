@@ -224,6 +224,26 @@ def test_report_missing_scene_is_one_line_error(runs, tmp_path):
     assert "gone.yaml" in str(err.value) and "\n" not in str(err.value)
 
 
+def test_changed_scene_warns_in_the_report_and_blocks_resume(runs, tmp_path):
+    """run.json records the scene's fingerprint: a report of a run whose scene file has
+    changed since says so, and --resume refuses to mix two scenes."""
+    from rvmsim.tune import tune
+
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(runs["scene"].read_text())
+    run = tmp_path / "run"
+    shutil.copytree(runs["evil_run"], run)
+    info = json.loads((run / "run.json").read_text())
+    info["scene"] = str(scene)
+    (run / "run.json").write_text(json.dumps(info))
+    assert "scene file changed" not in write_report(run).read_text()
+    scene.write_text(scene.read_text().replace("pitch_deg: 32.0", "pitch_deg: 31.0"))
+    assert "scene file changed after this run" in write_report(run).read_text()
+    with pytest.raises(RvmsimError) as err:
+        tune(None, run, resume=True, workers=1)
+    assert "scene changed" in str(err.value) and "\n" not in str(err.value)
+
+
 def _chromium() -> str | None:
     for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
         if path := shutil.which(name):
