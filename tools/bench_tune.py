@@ -53,19 +53,23 @@ def main() -> None:
               f"evaluations/s -> {n / run.outcome.seconds / base_rate:.2f}x with "
               f"{args.workers} workers")
         print(f"  best EC score {run.outcome.best.score:.4g}")
-        # Storage: write the run's trials again, a batch (512) per transaction, as tuning does.
+        # Storage: what the main process does per batch, i.e. write the run's already
+        # serialised trials again, a batch (512) per transaction.
+        import sqlite3
+
         from rvmsim.store import RunStore
 
-        src = RunStore(tmp / "full" / "run.sqlite")
-        trials = src.trials()
+        src = sqlite3.connect(tmp / "full" / "run.sqlite")
+        rows = src.execute("SELECT idx, stage, params, score, objective, passed, ec FROM trials"
+                           " ORDER BY idx").fetchall()
         src.close()
         dst = RunStore(tmp / "copy.sqlite")
         t = time.perf_counter()
-        for i in range(0, len(trials), 512):
-            dst.add_trials(trials[i : i + 512])
+        for i in range(0, len(rows), 512):
+            dst.add_rows(rows[i : i + 512])
         store_s = time.perf_counter() - t
         dst.close()
-        print(f"  storage: {store_s:.2f} s for {len(trials)} trials "
+        print(f"  storage: {store_s:.2f} s for {len(rows)} trials "
               f"({store_s / run.outcome.seconds:.1%} of the search time)")
 
 
