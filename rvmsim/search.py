@@ -209,7 +209,7 @@ class GridToRandom(Strategy):
     name = "grid-random"
 
     def __init__(self, space: SearchSpace, *, seed: int = 0, top_n: int = 2, trials: int = 20000,
-                 batch: int = 512):
+                 batch: int = 1024):
         super().__init__(space, seed=seed)
         if top_n < 1 or trials < 0:
             raise ValueError("top_n must be >= 1 and trials >= 0")

@@ -89,7 +89,7 @@ class TuningConfig(BaseModel):
     output: _Output = _Output()
     top_m: Annotated[int, Field(ge=1, le=1000)] = 10
     #: Candidates evaluated (and stored in one transaction) at a time.
-    batch: Annotated[int, Field(ge=1, le=100000)] = 512
+    batch: Annotated[int, Field(ge=1, le=100000)] = 1024
     grid_random: _GridRandom = _GridRandom()
     cmaes: _Budget = _Budget(budget=8000)
     random: _Budget = _Budget(budget=2000)
@@ -185,7 +185,7 @@ class BatchEvaluator:
         if self.pool is None:
             return score_vectors(self.evaluator, self.space, xs)
         # small chunks: the batch ends when its slowest chunk does
-        n = max(1, math.ceil(len(xs) / (self.workers * 16)))
+        n = max(1, math.ceil(len(xs) / (self.workers * 4)))
         parts = self.pool.map(_work, [xs[i : i + n] for i in range(0, len(xs), n)])
         return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
                              for f in dataclasses.fields(ScoredBatch)))

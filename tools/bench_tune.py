@@ -54,7 +54,7 @@ def main() -> None:
               f"{args.workers} workers")
         print(f"  best EC score {run.outcome.best.score:.4g}")
         # Storage: what the main process does per batch, i.e. write the run's already
-        # serialised trials again, a batch (512) per transaction.
+        # serialised trials again, a batch (1024, the default) per transaction.
         import sqlite3
 
         from rvmsim.store import RunStore
@@ -65,8 +65,8 @@ def main() -> None:
         src.close()
         dst = RunStore(tmp / "copy.sqlite")
         t = time.perf_counter()
-        for i in range(0, len(rows), 512):
-            dst.add_rows(rows[i : i + 512])
+        for i in range(0, len(rows), 1024):
+            dst.add_rows(rows[i : i + 1024])
         store_s = time.perf_counter() - t
         dst.close()
         print(f"  storage: {store_s:.2f} s for {len(rows)} trials "
