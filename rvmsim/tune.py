@@ -162,6 +162,18 @@ def _work(xs: list[np.ndarray]) -> ScoredBatch:
     return score_vectors(_WORKER[0], _WORKER[1], xs)
 
 
+def _chunks(n: int, workers: int, smallest: int = 8) -> list[tuple[int, int]]:
+    """Guided self-scheduling: chunks of half the remaining work per worker, shrinking to
+    ``smallest``, so that few large chunks keep overheads low and the small last ones keep
+    the workers' finishing times close (a batch ends with its slowest chunk)."""
+    out, start = [], 0
+    while start < n:
+        size = max(smallest, math.ceil((n - start) / (2 * workers)))
+        out.append((start, min(n, start + size)))
+        start += size
+    return out
+
+
 class BatchEvaluator:
     """Evaluates batches of candidate vectors in order, in this process or in ``workers``
     worker processes, each holding its own copy of the evaluator (the fisheye label image is
@@ -184,9 +196,8 @@ class BatchEvaluator:
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
             return score_vectors(self.evaluator, self.space, xs)
-        # small chunks: the batch ends when its slowest chunk does
-        n = max(1, math.ceil(len(xs) / (self.workers * 4)))
-        parts = self.pool.map(_work, [xs[i : i + n] for i in range(0, len(xs), n)])
+        parts = self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)],
+                              chunksize=1)
         return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
                              for f in dataclasses.fields(ScoredBatch)))
 

@@ -240,3 +240,17 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     store = RunStore(db)
     assert store.count() == 81 + 12000 and store.meta()["status"] == "done"
     store.close()
+
+
+def test_batches_split_into_shrinking_chunks_that_cover_them():
+    """Worker chunks (guided self-scheduling) partition the batch in order and shrink, so
+    the last ones are small."""
+    from rvmsim.tune import _chunks
+
+    for n, workers in ((1024, 2), (1000, 3), (10, 2), (1, 4)):
+        c = _chunks(n, workers)
+        assert c[0][0] == 0 and c[-1][1] == n
+        assert all(a[1] == b[0] for a, b in zip(c, c[1:]))
+        sizes = [b - a for a, b in c]
+        assert sizes == sorted(sizes, reverse=True) and sizes[-1] <= 8
+    assert _chunks(0, 2) == []
