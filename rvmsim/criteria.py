@@ -713,14 +713,21 @@ def score_batch(values: np.ndarray, criteria: Criteria) -> EcBatch:
 
 
 def score(m: Measurements, criteria: Criteria) -> EcResult:
-    """Score measurements with a customer's criteria."""
-    b = score_batch(values_array(m)[None, :], criteria)
+    """Score measurements with a customer's criteria (one candidate; :func:`score_batch`
+    scores many at once, and the tests check that the two agree)."""
     items = []
-    for k, d in enumerate(EC_DEFINITIONS):
+    total = 1.0
+    passed = True
+    for d in EC_DEFINITIONS:
         c = criteria.items[d.id]
-        items.append(EcValue(d.id, d.name, m.values.get(d.id), d.unit, c.low, c.high,
-                             float(b.scores[0, k]), bool(b.passed[0, k]), c.enabled))
-    return EcResult(tuple(items), float(b.score[0]), bool(b.all_passed[0]), m, criteria.name)
+        value = m.values.get(d.id)
+        s = float(c.score(value))
+        ok = c.passes(value)
+        items.append(EcValue(d.id, d.name, value, d.unit, c.low, c.high, s, ok, c.enabled))
+        if c.enabled:
+            total *= s
+            passed &= ok
+    return EcResult(tuple(items), total, passed, m, criteria.name)
 
 
 def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None) -> EcResult:
