@@ -38,7 +38,7 @@ import numpy as np
 from . import labels as L
 from .criteria import GROUPS, Criteria, EcResult, LabelSource, Measurements, Window
 from .criteria import bumper_spans, default_criteria, measure_source, score, values_array
-from .isp import IspParams, MapNodes, OutputSpec, map_nodes
+from .isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
 
 __all__ = ["CandidateEvaluator"]
 
@@ -179,6 +179,7 @@ class CandidateEvaluator:
         self.output = output
         self.criteria = criteria or default_criteria()
         self.windowed = windowed
+        self._rays = RayCache()  # views recur in the coarse grid with other FOV/RAD/shifts
         dist = _group_distances(labels)
         self._dist, self._dist_width = dist.ravel(), dist.shape[1]
 
@@ -230,7 +231,7 @@ class CandidateEvaluator:
 
     def source(self, params: IspParams) -> LabelSource:
         """The label pixels of one candidate's RVM image, windowed or whole."""
-        nodes = map_nodes(params, self.input_size, self.output)
+        nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
         w, h = self.output.width, self.output.height
         if self.windowed:
             groups = self.windows(params, nodes)

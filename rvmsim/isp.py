@@ -67,6 +67,7 @@ __all__ = [
     "build_map_exact",
     "map_nodes",
     "MapNodes",
+    "RayCache",
     "apply_map",
     "process",
     "roi_outline",
@@ -325,20 +326,15 @@ MIN_CELL_PX = 2
 MAP_TOLERANCE_PX = 0.08
 
 
-def _nodes(
-    params: IspParams, input_size: tuple[int, int], output: OutputSpec, cell: int
-) -> tuple[int, int, np.ndarray]:
-    """Exact map on nodes every ``cell`` px with two rings beyond the image: (nx, ny, grid).
-
-    cv2.resize(…, ×cell, INTER_LINEAR) reads source node j at destination x' = (j + 0.5)·cell
-    − 0.5; node j is evaluated at output coordinate u = (j − 1.5)·cell − 0.5, so destination
-    x' is output x' − 2·cell, and the crop [2·cell, 2·cell + W) is the output image.
+def _ray_planes(params: IspParams, output: OutputSpec, cell: int) -> tuple[np.ndarray, np.ndarray]:
+    """θ·(P_x, P_y)/ρ at the nodes every ``cell`` px (see :func:`_nodes`): the map before the
+    ISP lens' scale f_isp and the image-circle centre, which depend on FOV, RAD and the
+    shifts only.  Two (rows, cols) float32 planes.
 
     Same formulas as :func:`_map_points`, arranged for speed (this runs once or twice per
     tuning candidate): the rays are outer sums of a row and a column term, and θ comes from
     OpenCV's fast ``phase`` (≈ 1e-4 rad) refined by one Newton step, θ += sin(θ_true − θ),
-    to ≈ 1e-7 rad (≈ 1e-4 px), a tenth of the time of ``np.arctan2``.  ``grid`` is
-    (rows, cols, 2) float32.
+    to ≈ 1e-7 rad (≈ 1e-4 px), a tenth of the time of ``np.arctan2``.
     """
     import cv2
 
@@ -356,13 +352,64 @@ def _nodes(
     theta = cv2.phase(az, rho)
     cos_t, sin_t = cv2.polarToCart(None, theta)
     theta += (rho * cos_t - az * sin_t) / cv2.magnitude(rho, az)
-    f_isp = params.rad / math.radians(params.fov / 2.0)
-    theta *= f_isp / np.maximum(rho, np.float32(1e-30))
+    theta /= np.maximum(rho, np.float32(1e-30))
+    return theta * ax, theta * ay
+
+
+def _nodes(
+    params: IspParams, input_size: tuple[int, int], output: OutputSpec, cell: int,
+    rays: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[int, int, np.ndarray]:
+    """Exact map on nodes every ``cell`` px with two rings beyond the image: (nx, ny, grid).
+
+    cv2.resize(…, ×cell, INTER_LINEAR) reads source node j at destination x' = (j + 0.5)·cell
+    − 0.5; node j is evaluated at output coordinate u = (j − 1.5)·cell − 0.5, so destination
+    x' is output x' − 2·cell, and the crop [2·cell, 2·cell + W) is the output image.
+    ``rays``: :func:`_ray_planes` of these parameters, when already known.  ``grid`` is
+    (rows, cols, 2) float32.
+    """
+    import cv2
+
+    nx, ny = -(-output.width // cell), -(-output.height // cell)
+    gx, gy = rays if rays is not None else _ray_planes(params, output, cell)
+    f_isp = np.float32(params.rad / math.radians(params.fov / 2.0))
     w_in, h_in = input_size
     # (numpy broadcasting over a trailing axis of 2 is slow: add the offsets per plane)
-    grid = cv2.merge([theta * ax + np.float32((w_in - 1) / 2.0 + params.h_shift),
-                      theta * ay + np.float32((h_in - 1) / 2.0 + params.v_shift)])
+    grid = cv2.merge([gx * f_isp + np.float32((w_in - 1) / 2.0 + params.h_shift),
+                      gy * f_isp + np.float32((h_in - 1) / 2.0 + params.v_shift)])
     return nx, ny, grid
+
+
+#: The parameters the ray planes depend on (all but FOV, RAD and the H/V shifts).
+_RAY_PARAMS = ("h_pan", "v_pan", "zoom", "tilt", "adv_h_shift", "adv_v_shift", "adv_h_scale",
+               "adv_v_scale", "theta", "phi")
+
+
+class RayCache:
+    """Ray planes of recently seen views (:func:`_ray_planes`), for :func:`map_nodes`.
+
+    Candidates that differ only in FOV, RAD and the H/V shifts share them: the paper's
+    coarse grid has 3⁴ such candidates per view.  Keyed by the other ten parameters, the
+    output and the cell; holds the ``size`` most recent entries.
+    """
+
+    def __init__(self, size: int = 256):
+        from collections import OrderedDict
+
+        self.size = size
+        self._entries: OrderedDict = OrderedDict()
+
+    def planes(self, params: IspParams, output: OutputSpec, cell: int):
+        key = (tuple(getattr(params, n) for n in _RAY_PARAMS), output, cell)
+        hit = self._entries.get(key)
+        if hit is not None:
+            self._entries.move_to_end(key)
+            return hit
+        planes = _ray_planes(params, output, cell)
+        self._entries[key] = planes
+        if len(self._entries) > self.size:
+            self._entries.popitem(last=False)
+        return planes
 
 
 _SECOND_DIFF = (np.array([[1.0, -2.0, 1.0]], np.float32), np.array([[1.0], [-2.0], [1.0]], np.float32))
@@ -478,14 +525,20 @@ def map_nodes(
     *,
     cell: int = DEFAULT_CELL_PX,
     tolerance_px: float = MAP_TOLERANCE_PX,
+    rays: RayCache | None = None,
 ) -> MapNodes:
     """The node grid :func:`build_map` interpolates (error-controlled, see there).
+
+    ``rays``: a :class:`RayCache` to reuse the ray planes of views seen before (tuning).
 
     The error is estimated on the grid at ``cell`` px; bilinear interpolation's error scales
     with the square of the spacing (the estimates at 4 and 2 px agree with this to 0.7 % on
     random views), so the finest grid needed is chosen from that one estimate, with 2 %
     to spare, and only that grid is evaluated besides."""
-    _, _, grid = _nodes(params, input_size, output, cell)
+    def planes(c: int):
+        return None if rays is None else rays.planes(params, output, c)
+
+    _, _, grid = _nodes(params, input_size, output, cell, planes(cell))
     error = _interpolation_error(grid, input_size)
     if error <= tolerance_px:
         return MapNodes(grid, cell, error_px=error)
@@ -496,7 +549,7 @@ def map_nodes(
     fine_error = error * (fine / cell) ** 2
     if fine_error * _SCALING_SAFETY > tolerance_px:  # no grid is fine enough (a jump in the map)
         return MapNodes(None, fine, build_map_exact(params, input_size, output).xy, first=first)
-    _, _, grid = _nodes(params, input_size, output, fine)
+    _, _, grid = _nodes(params, input_size, output, fine, planes(fine))
     return MapNodes(grid, fine, error_px=fine_error, first=first)
 
 

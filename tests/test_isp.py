@@ -336,3 +336,27 @@ def test_input_to_output_inverts_the_map(params):
     back, ok = input_to_output(params, pts, INPUT, out)
     assert ok.all()
     np.testing.assert_allclose(back, np.stack([u, v], 1), atol=1e-3)
+
+
+def test_ray_cache_reuses_views_and_changes_no_node():
+    """Candidates that differ only in FOV, RAD and the shifts share their ray planes: with a
+    RayCache, map_nodes computes them once and gives bit-identical node grids."""
+    from rvmsim.isp import RayCache, map_nodes
+
+    out = OutputSpec(320, 240)
+    cache = RayCache(size=4)
+    rng = np.random.default_rng(5)
+    views = [dict(zoom=z, adv_v_shift=s) for z, s in ((0.5, 0.2), (0.9, -0.1), (1.3, 0.0))]
+    for view in views:
+        for _ in range(4):
+            p = IspParams(fov=rng.uniform(160, 200), rad=rng.uniform(500, 800),
+                          h_shift=rng.uniform(-40, 40), v_shift=rng.uniform(-60, 60), **view)
+            a, b = map_nodes(p, INPUT, out), map_nodes(p, INPUT, out, rays=cache)
+            assert a.cell == b.cell and a.error_px == b.error_px
+            assert np.array_equal(a.grid, b.grid)
+    # the same view with other FOV/RAD/shifts is served from the cache, not recomputed
+    p1 = IspParams(fov=170, rad=600, **views[0])
+    p2 = IspParams(fov=190, rad=700, h_shift=12, v_shift=-30, **views[0])
+    assert cache.planes(p1, out, 8) is cache.planes(p2, out, 8)
+    assert cache.planes(p1, out, 8) is not cache.planes(IspParams(fov=170, rad=600, **views[1]), out, 8)
+    assert len(cache._entries) <= 4  # never more than its size
