@@ -348,10 +348,12 @@ def _ray_planes(params: IspParams, output: OutputSpec, cell: int) -> tuple[np.nd
     ax = row[0][:, None] + col[0][None, :]
     ay = row[1][:, None] + col[1][None, :]
     az = row[2][:, None] + col[2][None, :]
-    rho = cv2.magnitude(ax, ay)
+    # np.sqrt, not cv2.magnitude: the latter's last bit depends on the arrays' alignment, and
+    # the same view must give bit-identical nodes every time (windowed = whole image)
+    rho = np.sqrt(ax * ax + ay * ay)
     theta = cv2.phase(az, rho)
     cos_t, sin_t = cv2.polarToCart(None, theta)
-    theta += (rho * cos_t - az * sin_t) / cv2.magnitude(rho, az)
+    theta += (rho * cos_t - az * sin_t) / np.sqrt(rho * rho + az * az)
     theta /= np.maximum(rho, np.float32(1e-30))
     return theta * ax, theta * ay
 
