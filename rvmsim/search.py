@@ -24,7 +24,6 @@ so a run replayed from its stored results (``--resume``) continues exactly as an
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import time
 from abc import ABC, abstractmethod
@@ -34,10 +33,10 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from .camera import FisheyeCamera
-from .criteria import EC_IDS, EcResult, score_batch
+from .criteria import EC_IDS, score_batch
 from .isp import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
 from .errors import RvmsimError
-from .store import RunStore, TrialRecord, params_json
+from .store import RunStore, TrialRecord, ec_json, params_json
 
 __all__ = [
     "ParamRange",
@@ -48,7 +47,6 @@ __all__ = [
     "CmaEs",
     "RandomSearch",
     "STRATEGIES",
-    "objective",
     "run_search",
     "SearchOutcome",
     "ScoredBatch",
@@ -174,11 +172,6 @@ def default_space(camera: FisheyeCamera, names: Sequence[str] = TUNED_BY_DEFAULT
 
 # ---------------------------------------------------------------------------- objective
 OBJECTIVE_FLOOR = 1e-4
-
-
-def objective(result: EcResult) -> float:
-    """Σ log(max(score_i, 1e-4)) over the enabled ECs (what CMA-ES maximises)."""
-    return float(sum(math.log(max(i.score, OBJECTIVE_FLOOR)) for i in result.items if i.enabled))
 
 
 # ---------------------------------------------------------------------------- strategies
@@ -346,13 +339,10 @@ def score_vectors(evaluator, space: SearchSpace, xs: Sequence[np.ndarray]) -> Sc
     params = [space.params(x) for x in xs]
     values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(EC_IDS))
     b = score_batch(values, evaluator.criteria)
-    vals, scores, ok = b.values.tolist(), b.scores.tolist(), b.passed.tolist()
-    ec_json = [
-        json.dumps({e: [None if math.isnan(v[j]) else v[j], s[j], o[j]] for j, e in enumerate(EC_IDS)})
-        for v, s, o in zip(vals, scores, ok)
-    ]
+    ecs = [ec_json(v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
+                                                b.passed.tolist())]
     return ScoredBatch(b.score.tolist(), b.objective(OBJECTIVE_FLOOR).tolist(),
-                       b.all_passed.tolist(), [params_json(p) for p in params], ec_json)
+                       b.all_passed.tolist(), [params_json(p) for p in params], ecs)
 
 
 def run_search(

@@ -12,15 +12,17 @@ all 14 ISP parameters and ``ec`` maps each EC to ``[value, score, passed]``.
 from __future__ import annotations
 
 import json
+import math
 import sqlite3
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Sequence
 
+from .criteria import EC_IDS
 from .errors import RvmsimError
 from .isp import IspParams
 
-__all__ = ["RunStore", "TrialRecord", "params_json"]
+__all__ = ["RunStore", "TrialRecord", "params_json", "ec_json"]
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -55,6 +57,13 @@ def params_json(p: IspParams) -> str:
     return json.dumps({n: getattr(p, n) for n in IspParams.names()})
 
 
+def ec_json(values: Sequence[float], scores: Sequence[float], passed: Sequence[bool]) -> str:
+    """The ``ec`` column: each EC (``EC_IDS`` order in) as ``[value, score, passed]``, the
+    value ``null`` where it was not measured (NaN)."""
+    return json.dumps({e: [None if math.isnan(v) else v, s, ok]
+                       for e, v, s, ok in zip(EC_IDS, values, scores, passed)})
+
+
 class RunStore:
     """A tuning run's SQLite database (``run.sqlite`` in the run folder)."""
 
@@ -84,11 +93,6 @@ class RunStore:
         return {k: json.loads(v) for k, v in self.db.execute("SELECT key, value FROM meta")}
 
     # ------------------------------------------------------------------ trials
-    def add_trials(self, records: Iterable[TrialRecord]) -> None:
-        """Write a batch atomically."""
-        self.add_rows([(r.idx, r.stage, params_json(r.params), r.score, r.objective,
-                        int(r.passed), json.dumps(r.ec)) for r in records])
-
     def add_rows(self, rows: list[tuple[int, str, str, float, float, int, str]]) -> None:
         """Write a batch of already serialised trials atomically: (idx, stage, params JSON,
         score, objective, passed, EC JSON) each."""
