@@ -411,13 +411,14 @@ def _differences(rec, first, criteria) -> list[str]:
     return out
 
 
-def _gallery_section(r: _Run, run_arg: str) -> str:
+def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
+    """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
     from .isp import process
 
     cards = []
     first = r.top[0]
     for k, rec in enumerate(r.top, start=1):
-        color, _ = process(r.images.color, None, rec.params, r.output)
+        color = best_color if k == 1 else process(r.images.color, None, rec.params, r.output)[0]
         diffs = _differences(rec, first, r.criteria)
         if k == 1:
             diff_html = "<p class='muted'>reference (rank 1)</p>"
@@ -480,7 +481,7 @@ def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
                    "differ from the scores the run stored.</p>")
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
-            + _gallery_section(r, str(run_dir)))
+            + _gallery_section(r, str(run_dir), color))
     summary = {"vehicle": r.scene.name, "score": result.score, "passed": result.passed,
                "groups": _group_status(result), "thumb": _shrink(color, INDEX_THUMB_PX)}
     return _page(f"RVM tuning review: {r.scene.name}", body), summary
