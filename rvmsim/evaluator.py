@@ -189,7 +189,7 @@ class CandidateEvaluator:
         import cv2
 
         if nodes is None:
-            nodes = map_nodes(params, self.input_size, self.output)
+            nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
         w, h = self.output.width, self.output.height
         rows = int(round(self.criteria.upper_region_fraction * h))
         whole = {n: (0, 0, w, h) for n in GROUPS}
