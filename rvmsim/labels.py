@@ -18,6 +18,7 @@ __all__ = [
     "GARNISH",
     "TRUNK",
     "BOARD",
+    "GROUND_PATTERN",
     "OBJECT_LETTERS",
     "object_body",
     "object_stripe",
@@ -40,6 +41,7 @@ BUMPER = 3
 GARNISH = 4
 TRUNK = 5
 BOARD = 6
+GROUND_PATTERN = 7  # black/white patterns lying on the ground (calibration mats)
 
 OBJECT_LETTERS = ("A", "B", "C", "D", "E", "F", "G")
 _OBJECT_BODY_BASE = 10  # 10..16: cylinder bodies A..G (everything not striped)
@@ -90,6 +92,7 @@ def label_names() -> dict[int, str]:
         GARNISH: "garnish",
         TRUNK: "trunk",
         BOARD: "pattern_board",
+        GROUND_PATTERN: "ground_pattern",
         GUIDE_SIDE_NEG_X: "guide_side_neg_x",
         GUIDE_SIDE_POS_X: "guide_side_pos_x",
     }
@@ -126,6 +129,7 @@ def _palette() -> np.ndarray:
         GARNISH: (40, 170, 60),
         TRUNK: (80, 200, 220),
         BOARD: (250, 250, 250),
+        GROUND_PATTERN: (200, 200, 160),
         GUIDE_SIDE_NEG_X: (240, 200, 0),
         GUIDE_SIDE_POS_X: (240, 200, 0),
     }

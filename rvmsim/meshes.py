@@ -22,19 +22,24 @@ import trimesh
 from . import labels as L
 from .camera import rotation_from_ypr
 from .errors import SceneError
-from .scene import BlockPart, MeshPart, PatternBoard, Scene
+from .scene import BlockPart, GroundPattern, MeshPart, PatternBoard, Scene
 
 __all__ = [
     "Part",
     "Landmark",
+    "CheckerCorner",
     "build_parts",
     "site_landmarks",
+    "checker_corners",
+    "pattern_point",
+    "pattern_shade",
     "cylinder_side",
     "disk",
     "swept_block",
     "quad",
     "GUIDELINE_LIFT_M",
     "BOARD_LIFT_M",
+    "PATTERN_LIFT_M",
 ]
 
 #: Painted guidelines float this far above the ground (avoids depth fighting), metres.
@@ -42,6 +47,10 @@ GUIDELINE_LIFT_M = 0.003
 #: A board lying on the ground: plate thickness; its black squares float a further lift.
 BOARD_LIFT_M = 0.006
 _SQUARE_LIFT_M = 0.003
+#: Ground patterns: the checker lies this far above the ground; white rectangles and black
+#: discs lie on top of it, each a further lift up (no depth fighting at 10 m).
+PATTERN_LIFT_M = 0.004
+_PATTERN_LAYER_M = 0.003
 _CIRCLE_SECTIONS = 128
 
 BLACK = (0.03, 0.03, 0.03)
@@ -94,6 +103,36 @@ class Landmark:
     label: int
     kind: str
     normal: tuple[float, float, float] = (0.0, -1.0, 0.0)
+
+
+@dataclass(frozen=True)
+class CheckerCorner:
+    """An inner corner of a checker (four squares meet, two black on one diagonal).
+
+    Attributes
+    ----------
+    name : str
+        ``board_inner_i_j`` or ``pattern<k>_i_j``.
+    point : (3,) float
+        Scene point, metres.
+    axis_a, axis_b : (3,) float
+        Unit vectors along the checker's two square edges, scene frame: the square
+        ``point + [0, s]·axis_a + [0, s]·axis_b`` is black when ``black_ab`` is True.
+    square_size : float
+        Side of a square, metres.
+    label : int
+        Label of the surface (board or ground pattern).
+    black_ab : bool
+        Colour of the square in the ``+a, +b`` quadrant.
+    """
+
+    name: str
+    point: tuple[float, float, float]
+    axis_a: tuple[float, float, float]
+    axis_b: tuple[float, float, float]
+    square_size: float
+    label: int
+    black_ab: bool
 
 
 # ---------------------------------------------------------------------------- primitives
@@ -331,6 +370,158 @@ def _board(scene: Scene) -> list[Part]:
     ]
 
 
+def pattern_point(pattern: GroundPattern, u: float, v: float, lift: float = 0.0) -> np.ndarray:
+    """Scene point (metres) at pattern coordinates (u, v), ``lift`` above the ground."""
+    a = math.radians(pattern.yaw_deg)
+    x = pattern.origin[0] + u * math.cos(a) + v * math.sin(a)
+    z = pattern.origin[1] - u * math.sin(a) + v * math.cos(a)
+    return np.array([x, -lift, z])
+
+
+def _pattern_axes(pattern: GroundPattern) -> tuple[np.ndarray, np.ndarray]:
+    o = pattern_point(pattern, 0.0, 0.0)
+    return pattern_point(pattern, 1.0, 0.0) - o, pattern_point(pattern, 0.0, 1.0) - o
+
+
+def _pattern_cells(pattern: GroundPattern) -> dict[tuple[int, int], tuple[float, float, float, float]]:
+    """Checker squares (i, j) → their [u0, v0, u1, v1] after clipping to the checker
+    rectangles (a square covered by two rectangles is the union's bounding box)."""
+    s = pattern.square_size
+    cells: dict[tuple[int, int], tuple[float, float, float, float]] = {}
+    for u0, v0, u1, v1 in pattern.checker:
+        for i in range(math.floor(u0 / s + 1e-9), math.ceil(u1 / s - 1e-9)):
+            for j in range(math.floor(v0 / s + 1e-9), math.ceil(v1 / s - 1e-9)):
+                box = (max(u0, i * s), max(v0, j * s), min(u1, (i + 1) * s), min(v1, (j + 1) * s))
+                old = cells.get((i, j))
+                if old is not None:
+                    box = (min(old[0], box[0]), min(old[1], box[1]),
+                           max(old[2], box[2]), max(old[3], box[3]))
+                cells[(i, j)] = box
+    return cells
+
+
+def _pattern_quads(pattern: GroundPattern, boxes: list, lift: float) -> trimesh.Trimesh:
+    quads = [
+        quad(np.array([pattern_point(pattern, u, v, lift)
+                       for u, v in ((u0, v0), (u1, v0), (u1, v1), (u0, v1))]))
+        for u0, v0, u1, v1 in boxes
+    ]
+    return trimesh.util.concatenate(quads)
+
+
+def _ground_patterns(scene: Scene) -> list[Part]:
+    parts: list[Part] = []
+    for k, pattern in enumerate(scene.test_site.ground_patterns):
+        cells = _pattern_cells(pattern)
+        black = [b for (i, j), b in cells.items() if (i + j) % 2 == 0]
+        white = [b for (i, j), b in cells.items() if (i + j) % 2 == 1]
+        lift = PATTERN_LIFT_M
+        for colour, boxes, tag in ((pattern.black_color, black, "black"),
+                                   (pattern.white_color, white, "white")):
+            if boxes:
+                parts.append(Part(f"pattern{k}_{tag}", L.GROUND_PATTERN,
+                                  _pattern_quads(pattern, boxes, lift), tuple(colour)))
+        if pattern.white:
+            parts.append(Part(f"pattern{k}_white_rects", L.GROUND_PATTERN,
+                              _pattern_quads(pattern, list(pattern.white),
+                                             lift + _PATTERN_LAYER_M),
+                              tuple(pattern.white_color)))
+        if pattern.circles:
+            discs = []
+            for u, v, d in pattern.circles:
+                ang = np.linspace(0.0, 2 * np.pi, _CIRCLE_SECTIONS, endpoint=False)
+                ring = [pattern_point(pattern, u + d / 2 * np.cos(t), v + d / 2 * np.sin(t),
+                                      lift + 2 * _PATTERN_LAYER_M) for t in ang]
+                centre = pattern_point(pattern, u, v, lift + 2 * _PATTERN_LAYER_M)
+                verts = np.vstack([centre, ring])
+                n = len(ring)
+                faces = [[0, 1 + m, 1 + (m + 1) % n] for m in range(n)]
+                discs.append(trimesh.Trimesh(verts, faces, process=False))
+            parts.append(Part(f"pattern{k}_circles", L.GROUND_PATTERN,
+                              trimesh.util.concatenate(discs), tuple(pattern.black_color)))
+    return parts
+
+
+def pattern_shade(pattern: GroundPattern, x: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The pattern's colour at ground points (x, z) of the scene (metres): 0.0 black,
+    1.0 white, NaN off the pattern.  Same layout as the meshes (checker, white rectangles
+    over it, black discs over everything)."""
+    a = math.radians(pattern.yaw_deg)
+    dx, dz = np.asarray(x, dtype=np.float64) - pattern.origin[0], np.asarray(z) - pattern.origin[1]
+    u = dx * math.cos(a) - dz * math.sin(a)
+    v = dx * math.sin(a) + dz * math.cos(a)
+    s = pattern.square_size
+    out = np.full(u.shape, np.nan)
+    checker = np.where((np.floor(u / s) + np.floor(v / s)) % 2 == 0, 0.0, 1.0)
+    for u0, v0, u1, v1 in pattern.checker:
+        inside = (u >= u0) & (u < u1) & (v >= v0) & (v < v1)
+        out[inside] = checker[inside]
+    for u0, v0, u1, v1 in pattern.white:
+        out[(u >= u0) & (u < u1) & (v >= v0) & (v < v1)] = 1.0
+    for cu, cv, d in pattern.circles:
+        out[(u - cu) ** 2 + (v - cv) ** 2 < (d / 2) ** 2] = 0.0
+    return out
+
+
+def _pattern_corners(k: int, pattern: GroundPattern) -> list[CheckerCorner]:
+    """Inner checker corners of one ground pattern (four whole squares, nothing over them)."""
+    s = pattern.square_size
+    cells = _pattern_cells(pattern)
+    a, b = _pattern_axes(pattern)
+
+    def whole(i: int, j: int) -> bool:
+        box = cells.get((i, j))
+        if box is None:
+            return False
+        full = (i * s, j * s, (i + 1) * s, (j + 1) * s)
+        return all(abs(x - y) < 1e-9 for x, y in zip(box, full))
+
+    def covered(u0: float, v0: float, u1: float, v1: float) -> bool:
+        for w0, x0, w1, x1 in pattern.white:
+            if w0 < u1 - 1e-9 and w1 > u0 + 1e-9 and x0 < v1 - 1e-9 and x1 > v0 + 1e-9:
+                return True
+        for cu, cv, d in pattern.circles:
+            nu, nv = min(max(cu, u0), u1), min(max(cv, v0), v1)
+            if math.hypot(cu - nu, cv - nv) < d / 2 + 1e-9:
+                return True
+        return False
+
+    out = []
+    for i, j in sorted(cells):
+        # Corner (i, j) is the square (i, j)'s lower-left corner.
+        if not all(whole(i + di, j + dj) for di in (-1, 0) for dj in (-1, 0)):
+            continue
+        if covered((i - 1) * s, (j - 1) * s, (i + 1) * s, (j + 1) * s):
+            continue
+        p = pattern_point(pattern, i * s, j * s, PATTERN_LIFT_M)
+        out.append(CheckerCorner(f"pattern{k}_{i}_{j}", tuple(float(x) for x in p),
+                                 tuple(float(x) for x in a), tuple(float(x) for x in b), s,
+                                 L.GROUND_PATTERN, (i + j) % 2 == 0))
+    return out
+
+
+def checker_corners(scene: Scene) -> list[CheckerCorner]:
+    """Every inner checker corner of the scene: the pattern board's and the ground
+    patterns'.  These are the landmarks ``rvmsim validate`` finds in real captures
+    (saddle points refine to subpixel without bias).  Visibility is not checked here."""
+    out: list[CheckerCorner] = []
+    board = scene.test_site.board
+    if board.enabled:
+        _, a, b, _ = board_frame(board)
+        w, h = board.size
+        s = board.square_size
+        a0, b0 = -w / 2 + board.margin, -h / 2 + board.margin
+        for i in range(1, board.squares[0]):
+            for j in range(1, board.squares[1]):
+                p = board_point(board, a0 + i * s, b0 + j * s, _SQUARE_LIFT_M)
+                out.append(CheckerCorner(f"board_inner_{i}_{j}", tuple(float(x) for x in p),
+                                         tuple(float(x) for x in a), tuple(float(x) for x in b),
+                                         s, L.BOARD, (i + j) % 2 == 0))
+    for k, pattern in enumerate(scene.test_site.ground_patterns):
+        out += _pattern_corners(k, pattern)
+    return out
+
+
 def _ground(scene: Scene) -> Part:
     size = scene.test_site.ground_size
     z0 = -min(10.0, size / 4)
@@ -354,6 +545,7 @@ def build_parts(scene: Scene) -> list[Part]:
     parts += _test_objects(scene)
     parts += _guidelines(scene)
     parts += _board(scene)
+    parts += _ground_patterns(scene)
     parts += _body_part(scene, "bumper", L.BUMPER, tuple(v.paint))
     parts += _body_part(scene, "garnish", L.GARNISH, GARNISH_COLOR)
     parts += _body_part(scene, "trunk", L.TRUNK, tuple(v.paint))
@@ -370,7 +562,8 @@ def site_landmarks(scene: Scene) -> list[Landmark]:
 
     Returns cylinder top centres, stripe centres and corners (the corners of the F/G lower
     patches, the A–E band edges on the side facing the camera), the pattern board's outer
-    corners and inner checker corners, and the centres of the guidelines.  Whether a point
+    corners and inner checker corners, the ground patterns' inner checker corners, and the
+    centres of the guidelines.  Whether a point
     is visible from the camera is not checked here.
     """
     site = scene.test_site
@@ -441,6 +634,9 @@ def site_landmarks(scene: Scene) -> list[Landmark]:
                 p = board_point(board, a0 + i * s, b0 + j * s, _SQUARE_LIFT_M)
                 out.append(Landmark(f"board_inner_{i}_{j}", tuple(p), L.BOARD, "interior",
                                     board_normal))
+    for k, pattern in enumerate(site.ground_patterns):
+        for c in _pattern_corners(k, pattern):
+            out.append(Landmark(c.name, c.point, L.GROUND_PATTERN, "interior"))
     g = site.guidelines
     if g.enabled:
         xm = (g.side_x[0] + g.side_x[1]) / 2
