@@ -272,9 +272,8 @@ class Validation:
                 "ec_score_scene": self.rvm.ec_scene.score,
                 "ec_score_capture": self.rvm.ec_capture.score,
                 "ecs": {
-                    ec: {"scene": _ec_entry(self.rvm.ec_scene, ec),
-                         "capture": _ec_entry(self.rvm.ec_capture, ec)}
-                    for ec in self.rvm.ec_scene.values
+                    i.id: {"scene": i.as_dict(), "capture": self.rvm.ec_capture[i.id].as_dict()}
+                    for i in self.rvm.ec_scene.items
                 },
             }
         return d
@@ -303,9 +302,8 @@ class Validation:
                 f"RVM image: edge chamfer {self.rvm.edges.chamfer_px:.2f} px; EC score "
                 f"{self.rvm.ec_scene.score:.4g} (scene) vs {self.rvm.ec_capture.score:.4g} "
                 "(pose that explains the capture)")
-            changed = [ec for ec in self.rvm.ec_scene.values
-                       if self.rvm.ec_scene.values[ec].passed
-                       != self.rvm.ec_capture.values[ec].passed]
+            changed = [i.id for i in self.rvm.ec_scene.items
+                       if i.enabled and i.passed != self.rvm.ec_capture[i.id].passed]
             if changed:
                 lines.append("ECs whose pass/fail differs: " + ", ".join(changed))
         for chk in self.checks:
@@ -314,11 +312,6 @@ class Validation:
                          + ("" if chk.passed else f" — {chk.hint}"))
         lines.append("verdict: " + ("PASS" if self.passed else "FAIL"))
         return "\n".join(lines)
-
-
-def _ec_entry(result: Any, ec: str) -> dict:
-    v = result.values[ec]
-    return {"value": v.value, "score": v.score, "passed": v.passed}
 
 
 # ---------------------------------------------------------------------------- capture
@@ -763,6 +756,23 @@ class _ShadeScorer:
         return float(np.corrcoef(shade[ok], self.grey[ok])[0, 1])
 
 
+def _dense_align(shade: _ShadeScorer, cam: FisheyeCamera, ypr0: np.ndarray) -> np.ndarray:
+    """Nelder-Mead over the pose correction maximising the shade correlation, from zero
+    (steps of 30 mm and 1°); zero if that does not improve it."""
+    from scipy.optimize import minimize
+
+    def cost(x: np.ndarray) -> float:
+        return -shade(*_pose(cam, ypr0, x))
+
+    x0 = np.zeros(6)
+    steps = np.array([0.03, 0.03, 0.03, 1.0, 1.0, 1.0])
+    simplex = np.vstack([x0, x0 + np.diag(steps)])
+    res = minimize(cost, x0, method="Nelder-Mead",
+                   options={"initial_simplex": simplex, "xatol": 1e-4, "fatol": 1e-5,
+                            "maxfev": 800})
+    return res.x if res.fun < cost(x0) else x0
+
+
 # ---------------------------------------------------------------------------- main
 def validate(
     scene: Scene,
@@ -850,12 +860,16 @@ def validate(
                               search_px=search_px, need=need, capture_name=capture_name,
                               n_predicted=n_predicted)
 
-    fit = match_and_fit(np.zeros(6))
-    if scene.test_site.ground_patterns:
+    if not scene.test_site.ground_patterns:
+        fit = match_and_fit(np.zeros(6))
+    else:
+        # Dense pre-alignment: the pose whose ground-pattern shade best fits the capture
+        # brings the corners within a few px even when the scene's pose is tens of px off.
+        shade = _ShadeScorer(scene, cam, synthetic.labels, capture)
+        fit = match_and_fit(_dense_align(shade, cam, ypr0))
         # A checker is periodic: a pose one square off diagonally matches every corner with
         # the right polarity.  The patterns' non-periodic parts (borders, white squares,
         # discs) decide: try the shifts, keep the pose whose ground shade fits the capture.
-        shade = _ShadeScorer(scene, cam, synthetic.labels, capture)
         score = shade(*_pose(cam, ypr0, fit.x))
         for dx in shade.shifts():
             x_try = fit.x.copy()
@@ -1110,19 +1124,34 @@ def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,
         raise RvmsimError(f"{scene_file}: camera.mount.position: not found")
     indent = re.match(r"\s*", lines[pos_line - 1]).group(0)
     inserts = []
+    drop: set[int] = set()
     for key in _MOUNT_KEYS:
         ln = where.get(("camera", "mount", key))
         if ln is None:
             inserts.append(f"{indent}{key}: {values[key]}\n")
             continue
         line = lines[ln - 1]
-        mt = re.match(rf"^(\s*{key}\s*:\s*)([^#\n]*?)(\s*(#.*)?)(\r?\n)?$", line)
-        if mt is None or (key == "position" and "]" not in mt.group(2)):
+        mt = re.match(rf"^([ \t]*{key}[ \t]*:[ \t]*)([^#\r\n]*?)([ \t]*(#[^\r\n]*)?)(\r?\n)?$",
+                      line)
+        ok = mt is not None
+        if ok and key == "position" and "]" not in mt.group(2):
+            # A block list (one "- x" line per item) becomes one flow list.
+            items = [where.get(("camera", "mount", "position", i)) for i in range(3)]
+            ok = mt.group(2) == "" and all(items) and all(
+                re.match(r"^[ \t]*-[ \t]*[-+.\deE]+[ \t]*(#.*)?\r?\n?$", lines[i - 1])
+                for i in items)
+            if ok:
+                drop.update(i - 1 for i in items)
+        if not ok:
             raise RvmsimError(f"{scene_file}:{ln}: camera.mount.{key}: cannot rewrite this "
-                              "value in place (write the position as [x, y, z] on one line)")
-        lines[ln - 1] = mt.group(1) + values[key] + (mt.group(3) or "") + (mt.group(5) or "")
+                              "value in place (write it as a plain number, the position as "
+                              "[x, y, z])")
+        head = mt.group(1) if mt.group(1).endswith((" ", "\t")) else mt.group(1) + " "
+        lines[ln - 1] = head + values[key] + (mt.group(3) or "") + (mt.group(5) or "\n")
     if inserts:
         lines[pos_line:pos_line] = inserts
+        drop = {i + len(inserts) if i >= pos_line else i for i in drop}
+    lines = [ln for i, ln in enumerate(lines) if i not in drop]
     new_text = "".join(lines)
     try:
         out_file.parent.mkdir(parents=True, exist_ok=True)
