@@ -28,9 +28,19 @@ from rvmsim.scene import load_scene, scene_from_dict
 
 from .conftest import ROOT, SCENES
 
-REAL = Path(os.environ.get("RVMSIM_REAL_CAPTURES",
-                           ROOT.parent / "shared" / "reference" / "real-captures"))
-BAIC = REAL / "baic-eu5-rear" / "back.png"
+def _real_captures() -> Path:
+    """$RVMSIM_REAL_CAPTURES, else ../shared/reference/real-captures beside the checkout, else
+    the team's reference folder on our machines (CI clones elsewhere)."""
+    if os.environ.get("RVMSIM_REAL_CAPTURES"):
+        return Path(os.environ["RVMSIM_REAL_CAPTURES"])
+    for cand in (ROOT.parent / "shared" / "reference" / "real-captures",
+                 Path("/work/shared/reference/real-captures")):
+        if cand.is_dir():
+            return cand
+    return ROOT.parent / "shared" / "reference" / "real-captures"
+
+
+BAIC = _real_captures() / "baic-eu5-rear" / "back.png"
 
 MOUNT = {"position": [0.02, -0.97, -0.12], "yaw_deg": 0.5, "pitch_deg": 36.0, "roll_deg": -0.3}
 #: The pose error of the perturbed capture: mm and degrees.
