@@ -488,6 +488,45 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     sys.exit(0 if result.passed else 1)
 
 
+@cli.command()
+@click.argument("sweep_file", type=click.Path(path_type=Path))
+@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+              help="Output folder (default: sweeps/<sweep file name>).")
+@click.option("--workers", type=click.IntRange(1, 256), default=os.cpu_count() or 1,
+              show_default=True, help="Local processes (one design point each).")
+@click.option("--scheduler", default=None, metavar="tcp://HOST:PORT",
+              help="Run the design points on this Dask distributed cluster instead.")
+@click.option("--force", is_flag=True, help="Start over, dropping the finished points.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | None,
+          force: bool, progress: bool) -> None:
+    """Render and tune every design point of SWEEP_FILE (a base scene and axes to vary).
+
+    Writes sweep.csv/sweep.json (one row per point: best EC score, pass/fail per EC, the
+    limiting EC, the tuned parameters), feasibility.png, sensitivity.png and sweep.html.
+    Finished points are stored as they arrive: run the same command again to resume.
+    """
+    from .executors import make_executor
+    from .sweep import load_sweep, run_sweep, write_sweep_outputs
+
+    out = out or Path("sweeps") / sweep_file.stem
+    try:
+        spec = load_sweep(sweep_file)
+        with make_executor(scheduler, workers) as ex:
+            res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
+        written = write_sweep_outputs(res)
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail_os(err, out)
+    n_err = sum(1 for r in res.results.values() if "error" in r)
+    n_pass = sum(1 for r in res.results.values() if r.get("passed"))
+    click.echo(f"sweep {spec.name}: {len(res.points)} design points, {res.ran} run now, "
+               f"{len(res.points) - res.ran} already done; {n_pass} pass every EC"
+               + (f", {n_err} failed to run (see sweep.csv)" if n_err else ""))
+    click.echo(f"wrote {', '.join(p.name for p in written)} in {out}")
+
+
 def main() -> None:
     """Console-script entry point: usage errors exit 2, Ctrl-C exits 130 (a tuning run keeps
     every finished batch and can be resumed)."""

@@ -53,6 +53,7 @@ from .errors import SceneError
 
 __all__ = [
     "EC_IDS",
+    "criteria_from_text",
     "EcDefinition",
     "EC_DEFINITIONS",
     "Sigmoid",
@@ -321,6 +322,11 @@ def load_criteria(path: str | Path | None) -> Criteria:
         return default_criteria()
     path = Path(path)
     return _load(read_text(path), str(path), default_criteria())
+
+
+def criteria_from_text(text: str, source: str = "<criteria>") -> Criteria:
+    """A criteria file's text (as :func:`load_criteria` reads it) → :class:`Criteria`."""
+    return _load(text, source, default_criteria())
 
 
 # ---------------------------------------------------------------------------- measuring
