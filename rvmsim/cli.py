@@ -267,12 +267,17 @@ def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget
 @click.option("--workers", type=click.IntRange(1, 64), default=os.cpu_count() or 1,
               show_default=True)
 @click.option("--budget", type=click.IntRange(1), default=None)
+@click.option("--scheduler", default=None, metavar="tcp://HOST:PORT",
+              help="Tune the scenes as tasks on this Dask distributed cluster (one task per "
+                   "scene) instead of one after another here.")
 @click.option("--progress/--no-progress", default=True)
 def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budget,
-          progress) -> None:
+          scheduler, progress) -> None:
     """Tune every scene in SCENES; print and write a summary table (summary.json, .txt).
 
     A scene that cannot be loaded or tuned is reported and skipped; the others still run.
+    Locally the scenes run one after another, each on --workers processes; with --scheduler
+    each scene is one task on the cluster, and its run folder is written here as it finishes.
     """
     from .criteria import EC_IDS
     from .tune import load_tuning_config
@@ -295,30 +300,81 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
         else:
             click.echo(msg, err=err)
 
-    for k, scene in enumerate(scenes, start=1):
-        say(f"[{k}/{len(scenes)}] {scene}")
-        run_dir = out / scene.stem
-        try:
-            result = run_tune(scene, run_dir, strategy=strategy, config=cfg,
-                              criteria_file=criteria_file, seed=seed, workers=workers,
-                              budget=budget, progress=progress, progress_position=1)
-        except RvmsimError as err:
-            say(f"rvmsim: error: {err} (skipped)", err=True)
-            rows.append({"scene": str(scene), "error": str(err)})
-            failed += 1
+    def remote_runs():
+        """(scene, run_dir, evaluations, seconds) per finished task, or the error."""
+        from .cache import scene_key
+        from .executors import DaskExecutor
+        from .scene import load_scene
+        from .tune import portable_scene_doc, tune_task
+
+        tasks, by_key = {}, {}
+        for k, scene in enumerate(scenes):
+            try:
+                doc = portable_scene_doc(scene)
+                crit = Path(criteria_file).read_text() if criteria_file else None
+            except (RvmsimError, OSError) as err:
+                yield scene, None, err
+                continue
+            key = f"batch-{k}-{scene.stem}"
+            by_key[key] = scene
+            tasks[key] = {"scene": doc, "config": cfg.model_dump(mode="json"),
+                          "strategy": strategy, "seed": seed, "budget": budget,
+                          "criteria": crit, "workers": 1}
+        with DaskExecutor(scheduler) as ex:
+            for key, res in ex.run(tune_task, tasks):
+                scene = by_key[key]
+                if "error" in res:
+                    yield scene, None, RvmsimError(res["error"])
+                    continue
+                run_dir = out / scene.stem
+                for rel, data in res["files"].items():
+                    (run_dir / rel).parent.mkdir(parents=True, exist_ok=True)
+                    (run_dir / rel).write_bytes(data)
+                meta = json.loads((run_dir / "run.json").read_text())
+                meta["scene"] = str(scene.resolve())
+                meta["scene_key"] = scene_key(load_scene(scene), scene)
+                meta["criteria_file"] = (None if criteria_file is None
+                                         else str(Path(criteria_file).resolve()))
+                (run_dir / "run.json").write_text(json.dumps(meta, indent=2))
+                yield scene, run_dir, (res["evaluated"] + res["replayed"], res["seconds"])
+
+    def local_runs():
+        for k, scene in enumerate(scenes, start=1):
+            say(f"[{k}/{len(scenes)}] {scene}")
+            run_dir = out / scene.stem
+            try:
+                r = run_tune(scene, run_dir, strategy=strategy, config=cfg,
+                             criteria_file=criteria_file, seed=seed, workers=workers,
+                             budget=budget, progress=progress, progress_position=1)
+            except RvmsimError as err:
+                yield scene, None, err
+                continue
+            yield scene, run_dir, (r.outcome.evaluated + r.outcome.replayed, r.outcome.seconds)
+
+    try:
+        for scene, run_dir, info in (remote_runs() if scheduler else local_runs()):
+            if run_dir is None:
+                err = info
+                say(f"rvmsim: error: {err} (skipped)", err=True)
+                rows.append({"scene": str(scene), "error": str(err)})
+                failed += 1
+                if overall is not None:
+                    overall.update(1)
+                continue
+            evaluations, seconds = info
+            doc = json.loads((run_dir / "best" / "ec.json").read_text())
             if overall is not None:
                 overall.update(1)
-            continue
-        doc = json.loads((run_dir / "best" / "ec.json").read_text())
-        if overall is not None:
-            overall.update(1)
-            overall.set_postfix_str(f"{doc['vehicle'][:20]}: EC {doc['ec_score']:.3g}")
-        rows.append({
-            "scene": str(scene), "vehicle": doc["vehicle"], "ec_score": doc["ec_score"],
-            "passed": doc["passed"], "ecs": {e["id"]: e["passed"] for e in doc["ecs"]},
-            "evaluations": result.outcome.evaluated + result.outcome.replayed,
-            "seconds": round(result.outcome.seconds, 1), "run": str(run_dir),
-        })
+                overall.set_postfix_str(f"{doc['vehicle'][:20]}: EC {doc['ec_score']:.3g}")
+            rows.append({
+                "scene": str(scene), "vehicle": doc["vehicle"], "ec_score": doc["ec_score"],
+                "passed": doc["passed"], "ecs": {e["id"]: e["passed"] for e in doc["ecs"]},
+                "evaluations": evaluations, "seconds": round(seconds, 1), "run": str(run_dir),
+            })
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail_os(err, out)
     if overall is not None:
         overall.close()
     head = f"{'vehicle':28} {'EC score':>10} " + " ".join(f"{e:>3}" for e in EC_IDS)

@@ -83,6 +83,11 @@ class LocalExecutor(Executor):
                         yield key, result
                     if broken:
                         break
+            except BaseException:  # Ctrl-C, or the caller stopped: stop the workers now
+                for proc in list((getattr(pool, "_processes", None) or {}).values()):
+                    proc.terminate()
+                broken = True
+                raise
             finally:
                 pool.shutdown(wait=not broken, cancel_futures=True)
             if broken:

@@ -40,7 +40,8 @@ from .search import (
 )
 from .store import RunStore
 
-__all__ = ["TuningConfig", "load_tuning_config", "tune", "TuneResult", "write_results"]
+__all__ = ["TuningConfig", "load_tuning_config", "tune", "TuneResult", "write_results",
+           "tune_task", "portable_scene_doc"]
 
 #: Size of the RVM display image written for the best candidate (the ECs are measured at the
 #: tuning config's ``output`` size).
@@ -352,3 +353,52 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
     display = OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], out.mirror)
     write_png(run_dir / "best" / "rvm_display.png",
               process(images.color, None, best.params, display)[0])
+
+
+# ---------------------------------------------------------------------------- remote runs
+def portable_scene_doc(scene_file: str | Path) -> dict:
+    """The scene file's document with its mesh paths made absolute, so it loads from any
+    folder (a task on a cluster worker writes it to a temporary file)."""
+    from .scene import load_scene
+
+    scene_file = Path(scene_file)
+    load_scene(scene_file)  # one-line errors here, not on a worker
+    doc = parse_yaml(read_text(scene_file), str(scene_file))
+    veh = doc.get("vehicle", {})
+    parts = [veh.get(k) for k in ("bumper", "garnish", "trunk")] + list(veh.get("extra") or [])
+    for part in parts:
+        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
+            p = Path(part["mesh"]).expanduser()
+            part["mesh"] = str(p if p.is_absolute() else (scene_file.parent / p).resolve())
+    return doc
+
+
+def tune_task(task: dict) -> dict:
+    """One vehicle's tuning run as a task for :mod:`rvmsim.executors` (a cluster worker):
+    the run is made in a temporary folder and returned as ``{"files": {relative path:
+    bytes}}`` (or ``{"error": message}``), for the caller to write into its run folder."""
+    import os
+    import tempfile
+
+    import yaml
+
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    from .criteria import criteria_from_text
+
+    try:
+        with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp:
+            scene_file = Path(tmp) / "scene.yaml"
+            scene_file.write_text(yaml.safe_dump(task["scene"], sort_keys=False))
+            criteria = (criteria_from_text(task["criteria"], "criteria")
+                        if task.get("criteria") else None)
+            run_dir = Path(tmp) / "run"
+            res = tune(scene_file, run_dir, strategy=task["strategy"],
+                       config=TuningConfig.model_validate(task["config"]), criteria=criteria,
+                       seed=task["seed"], workers=task.get("workers", 1),
+                       budget=task.get("budget"))
+            files = {str(p.relative_to(run_dir)): p.read_bytes()
+                     for p in sorted(run_dir.rglob("*")) if p.is_file()}
+            return {"files": files, "evaluated": res.outcome.evaluated,
+                    "replayed": res.outcome.replayed, "seconds": res.outcome.seconds}
+    except RvmsimError as err:
+        return {"error": str(err)}
