@@ -170,6 +170,8 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise validation_error_to_scene_error(err, str(path), key_lines(text)) from None
     base = Path(f.base_scene)
     base = base if base.is_absolute() else (path.parent / base).resolve()
+    if not base.is_file():
+        raise RvmsimError(f"{path}: base_scene: scene file not found: {base}")
     base_text = read_text(base)
     base_doc = parse_yaml(base_text, str(base))
     scene_from_dict(base_doc, base_dir=base.parent, source=str(base), text=base_text)
