@@ -547,7 +547,7 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
 @cli.command()
 @click.argument("sweep_file", type=click.Path(path_type=Path))
 @click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
-              help="Output folder (default: sweeps/<sweep file name>).")
+              help="Output folder (default: runs/sweep_<sweep file name>).")
 @click.option("--workers", type=click.IntRange(1, 256), default=os.cpu_count() or 1,
               show_default=True, help="Local processes (one design point each).")
 @click.option("--scheduler", default=None, metavar="tcp://HOST:PORT",
@@ -565,11 +565,23 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
     from .executors import make_executor
     from .sweep import load_sweep, run_sweep, write_sweep_outputs
 
-    out = out or Path("sweeps") / sweep_file.stem
+    out = out or Path("runs") / f"sweep_{sweep_file.stem}"
     try:
         spec = load_sweep(sweep_file)
-        with make_executor(scheduler, workers) as ex:
-            res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
+        try:
+            with make_executor(scheduler, workers) as ex:
+                res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
+        except KeyboardInterrupt:
+            # Every finished point is in sweep.sqlite; write what there is, then stop.
+            from .sweep import SweepResult, SweepStore, design_points
+
+            store = SweepStore(out / "sweep.sqlite")
+            done = store.done()
+            store.close()
+            write_sweep_outputs(SweepResult(spec, design_points(spec), done, 0, out))
+            click.echo(f"rvmsim: interrupted: {len(done)} of {len(design_points(spec))} design "
+                       "points done; run the same command again to resume", err=True)
+            sys.exit(130)
         written = write_sweep_outputs(res)
     except RvmsimError as err:
         _fail(err)

@@ -129,8 +129,13 @@ class DaskExecutor(Executor):
                 key = futures[fut]
                 try:
                     result = fut.result()
-                except distributed.client.FutureCancelledError:
-                    raise RvmsimError(f"task {key} was cancelled on the cluster") from None
+                except RvmsimError:
+                    raise
+                except Exception as err:  # noqa: BLE001 - anything the cluster reports
+                    raise RvmsimError(
+                        f"{self.address}: task {key} failed on the cluster: "
+                        f"{type(err).__name__}: {_first_line(err)} (is rvmsim installed on the "
+                        "scheduler and every worker, in the same version?)") from None
                 fut.release()
                 yield key, result
         finally:
@@ -141,6 +146,11 @@ class DaskExecutor(Executor):
     def close(self) -> None:
         if self._own:
             self.client.close()
+
+
+def _first_line(err: BaseException) -> str:
+    text = str(err).strip()
+    return text.splitlines()[0] if text else ""
 
 
 def make_executor(scheduler: str | None, workers: int) -> Executor:

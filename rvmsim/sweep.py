@@ -39,6 +39,7 @@ import itertools
 import json
 import math
 import sqlite3
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -61,6 +62,7 @@ __all__ = [
     "run_point",
     "run_sweep",
     "SweepStore",
+    "SweepResult",
     "sweep_table",
     "write_sweep_outputs",
 ]
@@ -323,6 +325,9 @@ def _label(values: tuple[tuple[str, Any], ...]) -> str:
 
 
 # ---------------------------------------------------------------------------- one point
+_RENDER_LOCK = threading.Lock()
+
+
 def run_point(task: dict) -> dict:
     """Render, tune and probe one design point (runs in a worker; no files but the render
     cache).  Returns a JSON-ready dict; a problem with the point is returned as ``error``."""
@@ -344,9 +349,11 @@ def run_point(task: dict) -> dict:
         config = TuningConfig.model_validate(task["config"])
         criteria = (criteria_from_text(task["criteria"], "sweep criteria")
                     if task.get("criteria") else default_criteria())
-        with tempfile.TemporaryDirectory(prefix="rvmsim-point-") as tmp:
+        with tempfile.TemporaryDirectory(prefix="rvmsim-point-") as tmp, _RENDER_LOCK:
             import yaml
 
+            # One render at a time per process: a Dask worker with several threads would
+            # otherwise open several OpenGL contexts at once.
             scene_file = Path(tmp) / "scene.yaml"
             scene_file.write_text(yaml.safe_dump(task["scene"], sort_keys=False))
             images, _ = cached_render(scene, scene_file)

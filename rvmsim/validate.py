@@ -500,8 +500,8 @@ def _match_local(cap: np.ndarray, syn: np.ndarray, p_syn: np.ndarray, p_pred: np
     return pt, float(best)
 
 
-def _match_board(cap_u8: np.ndarray, scene: Scene, corners: list[CheckerCorner],
-                 idx: list[int], pred: np.ndarray, spacing: np.ndarray,
+def _match_board(cap_u8: np.ndarray, scene: Scene, idx: list[int], pred: np.ndarray,
+                 spacing: np.ndarray,
                  radius: float) -> dict[int, np.ndarray]:
     """The board's inner corners by cv2.findChessboardCornersSB on a crop around them."""
     import cv2
@@ -564,7 +564,7 @@ def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
     board_idx = [n for n, c in enumerate(corners)
                  if c.label == L.BOARD and c.name.startswith("board_inner")]
     if board_idx and all(usable[n] for n in board_idx):
-        for n, xy in _match_board(cap_g.astype(np.uint8), scene, corners, board_idx, pred,
+        for n, xy in _match_board(cap_g.astype(np.uint8), scene, board_idx, pred,
                                   spacing, radius_px).items():
             found[n], ncc[n], method[n] = xy, 1.0, "chessboard"
     for n in range(len(corners)):
