@@ -66,7 +66,7 @@ def local_run(sweep_file):
 @pytest.fixture(scope="module")
 def cluster():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  host="127.0.0.1", dashboard_address=None) as c, \
+                                  host="127.0.0.1", dashboard_address=":0") as c, \
             distributed.Client(c) as client:
         yield c, client
 
@@ -319,3 +319,29 @@ def test_batch_on_the_dask_cluster_writes_normal_run_folders(cluster, tmp_path):
                              capture_output=True, text=True, timeout=300)
         assert rep.returncode == 0, rep.stderr
         assert "changed since" not in (run / "report.html").read_text()
+
+
+def test_dask_sweep_interrupted_then_resumed(local_run, cluster, tmp_path):
+    """Stop a Dask sweep after two points (as Ctrl-C would), resume it: only the other four
+    run, and the table is the local one."""
+    spec, res_local = local_run
+    _, client = cluster
+    seen: list[str] = []
+
+    def stop_after_two(point, result):
+        seen.append(point.key)
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        S.run_sweep(spec, tmp_path / "d", executor=DaskExecutor(client=client),
+                    on_result=stop_after_two)
+    with sqlite3.connect(tmp_path / "d" / "sweep.sqlite") as db:
+        assert {k for (k,) in db.execute("SELECT key FROM points")} == set(seen)
+    res = S.run_sweep(spec, tmp_path / "d", executor=DaskExecutor(client=client))
+    assert res.ran == 4
+    with sqlite3.connect(tmp_path / "d" / "sweep.sqlite") as db:
+        sessions = dict(db.execute("SELECT key, session FROM points"))
+    assert all(sessions[k] == 1 for k in seen) and sum(v == 2 for v in sessions.values()) == 4
+    assert S.sweep_table(spec, res.points, res.results) == \
+        S.sweep_table(spec, res_local.points, res_local.results)
