@@ -331,6 +331,13 @@ _RENDER_LOCK = threading.Lock()
 def run_point(task: dict) -> dict:
     """Render, tune and probe one design point (runs in a worker; no files but the render
     cache).  Returns a JSON-ready dict; a problem with the point is returned as ``error``."""
+    from .executors import task_malloc
+
+    with task_malloc():
+        return _run_point(task)
+
+
+def _run_point(task: dict) -> dict:
     import os
     import tempfile
 

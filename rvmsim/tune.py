@@ -384,9 +384,10 @@ def tune_task(task: dict) -> dict:
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from .criteria import criteria_from_text
+    from .executors import task_malloc
 
     try:
-        with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp:
+        with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp, task_malloc():
             scene_file = Path(tmp) / "scene.yaml"
             scene_file.write_text(yaml.safe_dump(task["scene"], sort_keys=False))
             criteria = (criteria_from_text(task["criteria"], "criteria")

@@ -63,6 +63,7 @@ __all__ = [
     "validate",
     "write_outputs",
     "write_corrected_scene",
+    "scene_with_mount",
     "CHAMFER_TRUNCATE_PX",
 ]
 
@@ -668,6 +669,7 @@ def _blend(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return ((a.astype(np.uint16) + b.astype(np.uint16)) // 2).astype(np.uint8)
 
 
+# ---------------------------------------------------------------------------- pose search
 @dataclass
 class _Fit:
     x: np.ndarray

@@ -215,21 +215,6 @@ def test_worker_killed_mid_sweep_still_completes_every_point_once(local_run, clu
         S.sweep_table(spec, res_local.points, res_local.results)
 
 
-def _square_once(arg):
-    x, marker = arg
-    if x == 2 and not Path(marker).exists():
-        Path(marker).write_text("died once")
-        os.kill(os.getpid(), signal.SIGKILL)
-    return x * x
-
-
-def test_local_executor_reruns_tasks_of_a_dead_worker(tmp_path):
-    marker = str(tmp_path / "died")
-    got = dict(LocalExecutor(2).run(_square_once, {str(x): (x, marker) for x in range(6)}))
-    assert got == {str(x): x * x for x in range(6)}
-    assert Path(marker).exists()
-
-
 def test_cli_interrupt_and_resume_without_rerunning_finished_points(tmp_path):
     f = _write_sweep(tmp_path)
     out = tmp_path / "out"
