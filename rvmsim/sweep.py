@@ -726,7 +726,7 @@ def write_sweep_outputs(res: SweepResult) -> list[Path]:
         n_pass = sum(1 for r in res.results.values() if r.get("passed"))
         table = "".join(
             "<tr>" + "".join(
-                f'<td class="{("ok" if v == "pass" or v is True else "bad") if v in ("pass", "FAIL", True, False) else ""}">'
+                f'<td class="{_cell_class(v)}">'
                 f"{_e('' if v is None else (f'{v:.4g}' if isinstance(v, float) else v))}</td>"
                 for v in row[:len(res.spec.axes) + 4 + 11]) + "</tr>"
             for row in rows)
@@ -751,6 +751,15 @@ points pass every EC.</p>
     except OSError as err:
         raise RvmsimError(f"{out}: cannot write sweep outputs ({err.strerror or err})") from None
     return written
+
+
+def _cell_class(v: Any) -> str:
+    """Table cell colour: pass/True green, FAIL/False red, anything else plain."""
+    if v == "pass" or v is True:
+        return "ok"
+    if v == "FAIL" or v is False:
+        return "bad"
+    return ""
 
 
 def _nan_none(o: Any) -> Any:
