@@ -53,6 +53,7 @@ __all__ = [
     "RenderSettings",
     "load_scene",
     "scene_from_dict",
+    "absolute_mesh_paths",
 ]
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -499,6 +500,24 @@ def _mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
             out.append((f"vehicle.{name}.mesh", part))
     for i, part in enumerate(scene.vehicle.extra):
         out.append((f"vehicle.extra.{i}.mesh", part))
+    return out
+
+
+def absolute_mesh_paths(doc: Any, base_dir: str | Path) -> list[Path]:
+    """Make every mesh path in a scene *document* (as parsed from YAML) absolute, resolved
+    against ``base_dir``, in place, so the document loads from any folder; returns them."""
+    out: list[Path] = []
+    veh = doc.get("vehicle") if isinstance(doc, dict) else None
+    if not isinstance(veh, dict):
+        return out
+    parts = [veh.get(k) for k in ("bumper", "garnish", "trunk")]
+    parts += list(veh.get("extra") or []) if isinstance(veh.get("extra"), list) else []
+    for part in parts:
+        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
+            p = Path(part["mesh"]).expanduser()
+            p = p if p.is_absolute() else (Path(base_dir) / p).resolve()
+            part["mesh"] = str(p)
+            out.append(p)
     return out
 
 

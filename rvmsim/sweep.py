@@ -52,6 +52,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
 from .errors import RvmsimError
 from .executors import Executor, LocalExecutor
+from .scene import absolute_mesh_paths
 
 __all__ = [
     "AXES",
@@ -135,7 +136,7 @@ class SweepSpec:
         h.update(json.dumps([self.base_doc, self.strategy, self.budget, self.seed, self.config,
                              self.criteria_doc, self.sensitivity], sort_keys=True,
                             default=str).encode())
-        for path in _mesh_files(self.base_doc, self.base_scene.parent):
+        for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
             h.update(path.read_bytes() if path.is_file() else b"?")
         return h.hexdigest()[:20]
 
@@ -233,17 +234,6 @@ def design_points(spec: SweepSpec) -> list[DesignPoint]:
             for i, combo in enumerate(itertools.product(*(v for _, v in spec.axes)))]
 
 
-def _mesh_files(doc: dict, base_dir: Path) -> list[Path]:
-    out = []
-    veh = doc.get("vehicle", {}) if isinstance(doc, dict) else {}
-    parts = [veh.get(k) for k in ("bumper", "garnish", "trunk")] + list(veh.get("extra", []) or [])
-    for part in parts:
-        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
-            p = Path(part["mesh"]).expanduser()
-            out.append(p if p.is_absolute() else (base_dir / p).resolve())
-    return out
-
-
 def _set_path(doc: dict, path: str, value: Any, where: str) -> None:
     keys: list[Any] = [int(k) if k.isdigit() else k for k in path.split(".")]
     node: Any = doc
@@ -272,13 +262,7 @@ def point_scene_doc(spec: SweepSpec, values: tuple[tuple[str, Any], ...]) -> tup
     doc = copy.deepcopy(spec.base_doc)
     config = copy.deepcopy(spec.config)
     base_dir = spec.base_scene.parent
-    for part_key in ("bumper", "garnish", "trunk"):
-        part = doc.get("vehicle", {}).get(part_key)
-        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
-            part["mesh"] = str(_mesh_files({"vehicle": {part_key: part}}, base_dir)[0])
-    for extra in doc.get("vehicle", {}).get("extra", []) or []:
-        if isinstance(extra, dict) and isinstance(extra.get("mesh"), str):
-            extra["mesh"] = str(_mesh_files({"vehicle": {"extra": [extra]}}, base_dir)[0])
+    absolute_mesh_paths(doc, base_dir)
     where = spec.source
     base_scene = None
     for name, value in values:

@@ -359,17 +359,12 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
 def portable_scene_doc(scene_file: str | Path) -> dict:
     """The scene file's document with its mesh paths made absolute, so it loads from any
     folder (a task on a cluster worker writes it to a temporary file)."""
-    from .scene import load_scene
+    from .scene import absolute_mesh_paths, load_scene
 
     scene_file = Path(scene_file)
     load_scene(scene_file)  # one-line errors here, not on a worker
     doc = parse_yaml(read_text(scene_file), str(scene_file))
-    veh = doc.get("vehicle", {})
-    parts = [veh.get(k) for k in ("bumper", "garnish", "trunk")] + list(veh.get("extra") or [])
-    for part in parts:
-        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
-            p = Path(part["mesh"]).expanduser()
-            part["mesh"] = str(p if p.is_absolute() else (scene_file.parent / p).resolve())
+    absolute_mesh_paths(doc, scene_file.parent)
     return doc
 
 

@@ -198,3 +198,20 @@ def test_documented_example_is_a_valid_scene():
     assert scene.camera.intrinsics.fx == 390.0
     assert scene.test_site.object_centre("D") is None
     assert scene.vehicle.trunk.units == "mm"
+
+
+def test_absolute_mesh_paths_make_a_document_portable(tmp_path):
+    """Vehicle F's mesh-file bumper: after absolute_mesh_paths the document loads from
+    another folder (what sweep points and cluster tasks rely on)."""
+    import yaml
+
+    from rvmsim.scene import absolute_mesh_paths, scene_from_dict
+
+    doc = yaml.safe_load((SCENES / "vehicle_f.yaml").read_text())
+    paths = absolute_mesh_paths(doc, SCENES)
+    assert paths and all(p.is_absolute() and p.is_file() for p in paths)
+    assert doc["vehicle"]["bumper"]["mesh"] == str(paths[0])
+    moved = tmp_path / "elsewhere"
+    moved.mkdir()
+    scene = scene_from_dict(doc, base_dir=moved)
+    assert scene.resolve_path(scene.vehicle.bumper.mesh) == paths[0]
