@@ -151,8 +151,10 @@ class DaskExecutor(Executor):
             self.client.close()
 
 
-#: glibc's ``mallopt`` parameter number for the trim threshold.
+#: glibc's ``mallopt`` parameter numbers, and its default mmap threshold.
 _M_TRIM_THRESHOLD = -1
+_M_MMAP_THRESHOLD = -3
+_DEFAULT_MMAP_THRESHOLD = 128 * 1024
 
 
 @contextlib.contextmanager
@@ -161,10 +163,12 @@ def task_malloc(threshold_bytes: int = 256 * 1024 * 1024) -> Iterator[bool]:
     with a low one, and restore it afterwards.
 
     Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536`` so that freed memory
-    goes back to the OS at once.  A design point allocates and frees the same few MB for
-    every one of its thousands of candidates, and with that setting each reuse costs fresh
-    page faults: a point ran ~25 % slower (5.2 s → 6.0–6.6 s in one process).  Yields True
-    when the threshold was changed (Linux/glibc only; elsewhere nothing happens).
+    goes back to the OS at once; setting it also freezes glibc's mmap threshold at 128 KiB,
+    so every image-sized array is mmapped and munmapped.  A design point allocates and frees
+    the same few MB for every one of its thousands of candidates, and with that setting
+    each reuse costs fresh page faults: a point ran ~25 % slower (5.2 s → 6.0–6.6 s in one
+    process).  Both thresholds are raised while the task runs.  Yields True when they were
+    changed (Linux/glibc only; elsewhere nothing happens).
     """
     env = os.environ.get("MALLOC_TRIM_THRESHOLD_")
     libc = None
@@ -173,7 +177,8 @@ def task_malloc(threshold_bytes: int = 256 * 1024 * 1024) -> Iterator[bool]:
             import ctypes
 
             libc = ctypes.CDLL("libc.so.6")
-            if libc.mallopt(_M_TRIM_THRESHOLD, threshold_bytes) != 1:
+            if (libc.mallopt(_M_TRIM_THRESHOLD, threshold_bytes) != 1
+                    or libc.mallopt(_M_MMAP_THRESHOLD, min(threshold_bytes, 32 << 20)) != 1):
                 libc = None
         except (OSError, AttributeError):
             libc = None
@@ -182,6 +187,7 @@ def task_malloc(threshold_bytes: int = 256 * 1024 * 1024) -> Iterator[bool]:
     finally:
         if libc is not None:
             libc.mallopt(_M_TRIM_THRESHOLD, int(env))
+            libc.mallopt(_M_MMAP_THRESHOLD, _DEFAULT_MMAP_THRESHOLD)
             libc.malloc_trim(0)
 
 
