@@ -22,10 +22,9 @@ from .criteria import EC_IDS
 from .errors import RvmsimError
 from .isp import IspParams
 
-__all__ = ["RunStore", "TrialRecord", "params_json", "ec_json"]
+__all__ = ["SqliteStore", "RunStore", "TrialRecord", "params_json", "ec_json"]
 
 _SCHEMA = """
-CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS trials (
     idx INTEGER PRIMARY KEY,
     stage TEXT NOT NULL,
@@ -64,24 +63,25 @@ def ec_json(values: Sequence[float], scores: Sequence[float], passed: Sequence[b
                        for e, v, s, ok in zip(EC_IDS, values, scores, passed)})
 
 
-class RunStore:
-    """A tuning run's SQLite database (``run.sqlite`` in the run folder)."""
+class SqliteStore:
+    """An SQLite file in WAL mode with a ``meta(key, value)`` table of JSON values, plus the
+    tables of ``schema``; ``what`` names the kind of database in error messages."""
 
-    def __init__(self, path: str | Path):
+    def __init__(self, path: str | Path, schema: str, what: str):
         self.path = Path(path)
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.db = sqlite3.connect(self.path, timeout=30)
             self.db.execute("PRAGMA journal_mode=WAL")
-            self.db.execute("PRAGMA synchronous=NORMAL")
-            self.db.executescript(_SCHEMA)
+            self.db.executescript(
+                "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
+                + schema)
         except sqlite3.DatabaseError as err:
-            raise RvmsimError(f"{self.path}: not a readable run database ({err})") from None
+            raise RvmsimError(f"{self.path}: not a readable {what} database ({err})") from None
 
     def close(self) -> None:
         self.db.close()
 
-    # ------------------------------------------------------------------ meta
     def set_meta(self, **items: Any) -> None:
         with self.db:
             self.db.executemany(
@@ -91,6 +91,14 @@ class RunStore:
 
     def meta(self) -> dict[str, Any]:
         return {k: json.loads(v) for k, v in self.db.execute("SELECT key, value FROM meta")}
+
+
+class RunStore(SqliteStore):
+    """A tuning run's SQLite database (``run.sqlite`` in the run folder)."""
+
+    def __init__(self, path: str | Path):
+        super().__init__(path, _SCHEMA, "run")
+        self.db.execute("PRAGMA synchronous=NORMAL")
 
     # ------------------------------------------------------------------ trials
     def add_rows(self, rows: list[tuple[int, str, str, float, float, int, str]]) -> None:

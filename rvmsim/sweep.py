@@ -38,7 +38,6 @@ import io
 import itertools
 import json
 import math
-import sqlite3
 import threading
 import time
 from collections.abc import Callable
@@ -53,6 +52,7 @@ from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene
 from .errors import RvmsimError
 from .executors import Executor, LocalExecutor
 from .scene import absolute_mesh_paths
+from .store import SqliteStore
 
 __all__ = [
     "AXES",
@@ -410,30 +410,13 @@ def sensitivity(evaluator: Any, space: Any, best: Any) -> dict:
 
 
 # ---------------------------------------------------------------------------- the store
-class SweepStore:
-    """``sweep.sqlite``: the sweep's settings and every finished design point (JSON)."""
+class SweepStore(SqliteStore):
+    """``sweep.sqlite``: the sweep's settings (meta) and every finished design point (JSON)."""
 
     def __init__(self, path: str | Path):
-        self.path = Path(path)
-        try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.db = sqlite3.connect(self.path, timeout=30)
-            self.db.execute("PRAGMA journal_mode=WAL")
-            self.db.executescript(
-                "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
-                "CREATE TABLE IF NOT EXISTS points (key TEXT PRIMARY KEY, idx INTEGER, "
-                "values_json TEXT NOT NULL, result TEXT NOT NULL, session INTEGER NOT NULL, "
-                "finished REAL NOT NULL);")
-        except sqlite3.DatabaseError as err:
-            raise RvmsimError(f"{self.path}: not a readable sweep database ({err})") from None
-
-    def meta(self) -> dict:
-        return {k: json.loads(v) for k, v in self.db.execute("SELECT key, value FROM meta")}
-
-    def set_meta(self, **items: Any) -> None:
-        with self.db:
-            self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)",
-                                [(k, json.dumps(v)) for k, v in items.items()])
+        super().__init__(path, "CREATE TABLE IF NOT EXISTS points (key TEXT PRIMARY KEY, "
+                               "idx INTEGER, values_json TEXT NOT NULL, result TEXT NOT NULL, "
+                               "session INTEGER NOT NULL, finished REAL NOT NULL);", "sweep")
 
     def add(self, point: DesignPoint, result: dict, session: int) -> None:
         with self.db:
@@ -444,12 +427,6 @@ class SweepStore:
     def done(self) -> dict[str, dict]:
         """Finished points (errors included) by key."""
         return {k: json.loads(r) for k, r in self.db.execute("SELECT key, result FROM points")}
-
-    def sessions(self) -> dict[str, int]:
-        return dict(self.db.execute("SELECT key, session FROM points"))
-
-    def close(self) -> None:
-        self.db.close()
 
 
 # ---------------------------------------------------------------------------- the sweep
