@@ -134,6 +134,11 @@ class CheckerCorner:
     label: int
     black_ab: bool
 
+    @property
+    def normal(self) -> tuple[float, float, float]:
+        """Unit normal of the checker toward the viewer: ``axis_a × axis_b``."""
+        return tuple(float(x) for x in np.cross(self.axis_a, self.axis_b))
+
 
 # ---------------------------------------------------------------------------- primitives
 def cylinder_side(
@@ -627,16 +632,9 @@ def site_landmarks(scene: Scene) -> list[Landmark]:
                             ("left", -w / 2, 0.0)):
             out.append(Landmark(f"board_{tag}_edge", tuple(board_point(board, sa, sb)), L.BOARD,
                                 "edge", board_normal))
-        s = board.square_size
-        a0, b0 = -w / 2 + board.margin, -h / 2 + board.margin
-        for i in range(1, board.squares[0]):
-            for j in range(1, board.squares[1]):
-                p = board_point(board, a0 + i * s, b0 + j * s, _SQUARE_LIFT_M)
-                out.append(Landmark(f"board_inner_{i}_{j}", tuple(p), L.BOARD, "interior",
-                                    board_normal))
-    for k, pattern in enumerate(site.ground_patterns):
-        for c in _pattern_corners(k, pattern):
-            out.append(Landmark(c.name, c.point, L.GROUND_PATTERN, "interior"))
+    # Inner checker corners: the board's, then the ground patterns'.
+    out += [Landmark(c.name, c.point, c.label, "interior", c.normal)
+            for c in checker_corners(scene)]
     g = site.guidelines
     if g.enabled:
         xm = (g.side_x[0] + g.side_x[1]) / 2

@@ -52,6 +52,7 @@ __all__ = [
     "GroundPattern",
     "RenderSettings",
     "load_scene",
+    "read_scene_document",
     "scene_from_dict",
     "absolute_mesh_paths",
 ]
@@ -538,7 +539,13 @@ def load_scene(path: str | Path) -> Scene:
     SceneError
         Unreadable file, malformed YAML, or any invalid key (message names file, line, key).
     """
+    return read_scene_document(path)[0]
+
+
+def read_scene_document(path: str | Path) -> tuple[Scene, Any]:
+    """:func:`load_scene`, also returning the parsed YAML document (for tools that derive
+    other scenes from it: sweeps, cluster tasks).  Same errors."""
     path = Path(path)
     text = read_text(path)
     data = parse_yaml(text, str(path))
-    return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text)
+    return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text), data

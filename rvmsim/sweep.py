@@ -160,7 +160,7 @@ def _expand(name: str, v: Any, where: str) -> tuple[Any, ...]:
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file (one-line errors naming the file and key)."""
-    from .scene import scene_from_dict
+    from .scene import read_scene_document
 
     path = Path(path)
     text = read_text(path)
@@ -175,9 +175,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     base = base if base.is_absolute() else (path.parent / base).resolve()
     if not base.is_file():
         raise RvmsimError(f"{path}: base_scene: scene file not found: {base}")
-    base_text = read_text(base)
-    base_doc = parse_yaml(base_text, str(base))
-    scene_from_dict(base_doc, base_dir=base.parent, source=str(base), text=base_text)
+    _, base_doc = read_scene_document(base)
     axes = tuple((name, _expand(name, v, str(path))) for name, v in f.axes.items())
     from .search import STRATEGIES
 

@@ -359,12 +359,10 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
 def portable_scene_doc(scene_file: str | Path) -> dict:
     """The scene file's document with its mesh paths made absolute, so it loads from any
     folder (a task on a cluster worker writes it to a temporary file)."""
-    from .scene import absolute_mesh_paths, load_scene
+    from .scene import absolute_mesh_paths, read_scene_document
 
-    scene_file = Path(scene_file)
-    load_scene(scene_file)  # one-line errors here, not on a worker
-    doc = parse_yaml(read_text(scene_file), str(scene_file))
-    absolute_mesh_paths(doc, scene_file.parent)
+    _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
+    absolute_mesh_paths(doc, Path(scene_file).parent)
     return doc
 
 
