@@ -301,7 +301,8 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
             click.echo(msg, err=err)
 
     def remote_runs():
-        """(scene, run_dir, evaluations, seconds) per finished task, or the error."""
+        """(scene, run_dir, (evaluations, seconds)) per finished task, or (scene, None,
+        error)."""
         from .cache import scene_key
         from .executors import DaskExecutor
         from .scene import load_scene
@@ -309,7 +310,7 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
 
         tasks, by_key = {}, {}
         for k, scene in enumerate(scenes):
-            try:
+            try:  # a bad scene or criteria file skips the scene, as in local runs
                 doc = portable_scene_doc(scene)
                 crit = Path(criteria_file).read_text() if criteria_file else None
             except (RvmsimError, OSError) as err:
@@ -339,6 +340,7 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
                 yield scene, run_dir, (res["evaluated"] + res["replayed"], res["seconds"])
 
     def local_runs():
+        """The same, tuning here one scene after another."""
         for k, scene in enumerate(scenes, start=1):
             say(f"[{k}/{len(scenes)}] {scene}")
             run_dir = out / scene.stem

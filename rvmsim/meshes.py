@@ -434,14 +434,8 @@ def _ground_patterns(scene: Scene) -> list[Part]:
         if pattern.circles:
             discs = []
             for u, v, d in pattern.circles:
-                ang = np.linspace(0.0, 2 * np.pi, _CIRCLE_SECTIONS, endpoint=False)
-                ring = [pattern_point(pattern, u + d / 2 * np.cos(t), v + d / 2 * np.sin(t),
-                                      lift + 2 * _PATTERN_LAYER_M) for t in ang]
-                centre = pattern_point(pattern, u, v, lift + 2 * _PATTERN_LAYER_M)
-                verts = np.vstack([centre, ring])
-                n = len(ring)
-                faces = [[0, 1 + m, 1 + (m + 1) % n] for m in range(n)]
-                discs.append(trimesh.Trimesh(verts, faces, process=False))
+                x, _, z = pattern_point(pattern, u, v)
+                discs.append(disk(d / 2, lift + 2 * _PATTERN_LAYER_M, (x, z)))
             parts.append(Part(f"pattern{k}_circles", L.GROUND_PATTERN,
                               trimesh.util.concatenate(discs), tuple(pattern.black_color)))
     return parts
