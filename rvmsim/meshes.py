@@ -32,6 +32,7 @@ __all__ = [
     "site_landmarks",
     "checker_corners",
     "pattern_point",
+    "pattern_axes",
     "pattern_shade",
     "cylinder_side",
     "disk",
@@ -383,7 +384,8 @@ def pattern_point(pattern: GroundPattern, u: float, v: float, lift: float = 0.0)
     return np.array([x, -lift, z])
 
 
-def _pattern_axes(pattern: GroundPattern) -> tuple[np.ndarray, np.ndarray]:
+def pattern_axes(pattern: GroundPattern) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors of the pattern's u and v axes in the scene frame."""
     o = pattern_point(pattern, 0.0, 0.0)
     return pattern_point(pattern, 1.0, 0.0) - o, pattern_point(pattern, 0.0, 1.0) - o
 
@@ -466,7 +468,7 @@ def _pattern_corners(k: int, pattern: GroundPattern) -> list[CheckerCorner]:
     """Inner checker corners of one ground pattern (four whole squares, nothing over them)."""
     s = pattern.square_size
     cells = _pattern_cells(pattern)
-    a, b = _pattern_axes(pattern)
+    a, b = pattern_axes(pattern)
 
     def whole(i: int, j: int) -> bool:
         box = cells.get((i, j))

@@ -22,7 +22,7 @@ from .criteria import EC_IDS
 from .errors import RvmsimError
 from .isp import IspParams
 
-__all__ = ["SqliteStore", "RunStore", "TrialRecord", "params_json", "ec_json"]
+__all__ = ["SqliteStore", "RunStore", "TrialRecord", "params_json", "ec_json", "json_default"]
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS trials (
@@ -54,6 +54,16 @@ class TrialRecord:
 def params_json(p: IspParams) -> str:
     """The ``params`` column: all 14 ISP parameters as a JSON object."""
     return json.dumps({n: getattr(p, n) for n in IspParams.names()})
+
+
+def json_default(o: Any) -> Any:
+    """``json.dumps(..., default=json_default)``: numpy scalars (float32, integers) as Python
+    numbers.  (Python and float64 NaN never reach ``default``: json writes them itself.)"""
+    import numpy as np
+
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    raise TypeError(f"{type(o).__name__} is not JSON serializable")
 
 
 def ec_json(values: Sequence[float], scores: Sequence[float], passed: Sequence[bool]) -> str:

@@ -52,7 +52,7 @@ from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene
 from .errors import RvmsimError
 from .executors import Executor, LocalExecutor
 from .scene import absolute_mesh_paths
-from .store import SqliteStore
+from .store import SqliteStore, json_default
 
 __all__ = [
     "AXES",
@@ -673,7 +673,7 @@ def write_sweep_outputs(res: SweepResult) -> list[Path]:
                "points": [{"index": p.index, "values": dict(p.values),
                            **res.results.get(p.key, {"error": "not run"})}
                           for p in res.points]}
-        (out / "sweep.json").write_text(json.dumps(doc, indent=1, default=_nan_none))
+        (out / "sweep.json").write_text(json.dumps(doc, indent=1, default=json_default))
         written += [out / "sweep.csv", out / "sweep.json"]
         feas = feasibility_png(res.spec, res.points, res.results)
         (out / "feasibility.png").write_bytes(feas)
@@ -721,9 +721,3 @@ def _cell_class(v: Any) -> str:
     return ""
 
 
-def _nan_none(o: Any) -> Any:
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    raise TypeError(type(o).__name__)

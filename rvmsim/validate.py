@@ -44,7 +44,8 @@ import numpy as np
 from . import labels as L
 from .camera import FisheyeCamera, rotation_from_ypr
 from .errors import RvmsimError
-from .meshes import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_shade
+from .store import json_default
+from .meshes import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
 from .render import FisheyeImages
 from .scene import Scene
 
@@ -737,9 +738,7 @@ class _ShadeScorer:
         """Camera moves that map the first pattern's checker onto itself with the same
         polarity: (du, dv) squares, du + dv even, up to two squares each way."""
         p = self.patterns[0]
-        a = math.radians(p.yaw_deg)
-        ax = np.array([math.cos(a), 0.0, -math.sin(a)])
-        bx = np.array([math.sin(a), 0.0, math.cos(a)])
+        ax, bx = pattern_axes(p)
         return [p.square_size * (du * ax + dv * bx)
                 for du in range(-2, 3) for dv in range(-2, 3)
                 if (du + dv) % 2 == 0 and (du, dv) != (0, 0)]
@@ -1012,20 +1011,12 @@ def write_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
     paths = [write_png(out / f"{name}.png", img) for name, img in result.images.items()]
     js = out / "validation.json"
     try:
-        js.write_text(json.dumps(result.to_dict(), indent=2, default=_json_default) + "\n")
+        js.write_text(json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
         html_path = out / "validation.html"
         html_path.write_text(_html(result))
     except OSError as err:
         raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
     return [js, html_path, *paths]
-
-
-def _json_default(o: Any) -> Any:
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    raise TypeError(type(o).__name__)
 
 
 def _html(result: Validation) -> str:
