@@ -40,13 +40,18 @@ tune:
 """
 
 
-def _write_sweep(folder: Path, text: str = SWEEP) -> Path:
-    """Vehicle A at 320 × 240 (the lens scaled to match) as the base scene, and a sweep."""
-    d = yaml.safe_load((SCENES / "vehicle_a.yaml").read_text())
+def _small_scene_text(letter: str) -> str:
+    """Bundled vehicle ``letter`` at 320 × 240, its lens scaled to match."""
+    d = yaml.safe_load((SCENES / f"vehicle_{letter}.yaml").read_text())
     d["camera"]["image_size"] = [320, 240]
     d["camera"]["intrinsics"] = {"fx": 97.5, "fy": 97.5}
+    return yaml.safe_dump(d, sort_keys=False)
+
+
+def _write_sweep(folder: Path, text: str = SWEEP) -> Path:
+    """Vehicle A at 320 × 240 as the base scene, and a sweep."""
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "base.yaml").write_text(yaml.safe_dump(d, sort_keys=False))
+    (folder / "base.yaml").write_text(_small_scene_text("a"))
     (folder / "sweep.yaml").write_text(text)
     return folder / "sweep.yaml"
 
@@ -278,11 +283,8 @@ def test_batch_on_the_dask_cluster_writes_normal_run_folders(cluster, tmp_path):
     c, _ = cluster
     scenes = []
     for letter in "ab":
-        d = yaml.safe_load((SCENES / f"vehicle_{letter}.yaml").read_text())
-        d["camera"]["image_size"] = [320, 240]
-        d["camera"]["intrinsics"] = {"fx": 97.5, "fy": 97.5}
         p = tmp_path / f"small_{letter}.yaml"
-        p.write_text(yaml.safe_dump(d, sort_keys=False))
+        p.write_text(_small_scene_text(letter))
         scenes.append(p)
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text("output: {size: [320, 180]}\n")
