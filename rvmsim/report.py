@@ -74,6 +74,7 @@ img{max-width:100%;border:1px solid #999}
 .card.rank1{border:2px solid #2a8a3a}
 code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
 .muted{color:#666;font-size:.9em}
+pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
 """
 
 

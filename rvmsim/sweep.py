@@ -659,7 +659,7 @@ def sensitivity_png(points: list[DesignPoint], results: dict[str, dict]) -> byte
 
 def write_sweep_outputs(res: SweepResult) -> list[Path]:
     """sweep.csv, sweep.json, feasibility.png, sensitivity.png and sweep.html."""
-    from .report import _data_uri, _e
+    from .report import _data_uri, _e, _page
 
     out = res.out_dir
     header, rows = sweep_table(res.spec, res.points, res.results)
@@ -690,11 +690,7 @@ def write_sweep_outputs(res: SweepResult) -> list[Path]:
                 for v in row[:len(res.spec.axes) + 4 + 11]) + "</tr>"
             for row in rows)
         head = "".join(f"<th>{_e(h)}</th>" for h in header[:len(res.spec.axes) + 4 + 11])
-        html = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>Sweep: {_e(res.spec.name)}</title>
-<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse;font-size:12px}}
-td,th{{border:1px solid #ccc;padding:2px 6px}}td.ok{{background:#e3f4e3}}
-td.bad{{background:#fbe1e1}}img{{max-width:100%}}</style></head><body>
+        html = _page(f"Sweep: {res.spec.name}", f"""
 <h1>Feasibility sweep: {_e(res.spec.name)}</h1>
 <p>Base scene {_e(res.spec.base_scene)}; {len(res.points)} design points
 ({_e(' × '.join(f'{len(v)} {n}' for n, v in res.spec.axes))}); tuning: {_e(res.spec.strategy)},
@@ -703,8 +699,8 @@ points pass every EC.</p>
 <h2>Feasibility map</h2><img src="{_data_uri(feas)}" alt="feasibility map">
 {'' if sens is None else f'<h2>Sensitivity to the ISP parameters around the optimum</h2><img src="{_data_uri(sens)}" alt="sensitivity">'}
 <h2>Design points</h2><p>Tuned parameters per point: sweep.csv.</p>
-<table><tr>{head}</tr>{table}</table></body></html>
-"""
+<table><tr>{head}</tr>{table}</table>
+""")
         (out / "sweep.html").write_text(html)
         written.append(out / "sweep.html")
     except OSError as err:
@@ -713,11 +709,12 @@ points pass every EC.</p>
 
 
 def _cell_class(v: Any) -> str:
-    """Table cell colour: pass/True green, FAIL/False red, anything else plain."""
+    """Table cell colour class (the report's CSS): pass/True green, FAIL/False red, anything
+    else plain."""
     if v == "pass" or v is True:
-        return "ok"
+        return "pass"
     if v == "FAIL" or v is False:
-        return "bad"
+        return "fail"
     return ""
 
 

@@ -1021,11 +1021,11 @@ def write_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
 
 def _html(result: Validation) -> str:
     """One self-contained page: verdict, numbers, pictures (PNG data URIs)."""
-    from .report import _e, _img
+    from .report import _e, _img, _page
 
     c = result.correction
     rows = "".join(
-        f'<tr class="{"ok" if k.passed else "bad"}"><td>{_e(k.name)}</td>'
+        f'<tr class="{"pass" if k.passed else "fail"}"><td>{_e(k.name)}</td>'
         f"<td>{k.value:.3g}</td><td>≤ {k.limit:g}</td><td>{'pass' if k.passed else 'FAIL'}"
         f"</td><td>{'' if k.passed else _e(k.hint)}</td></tr>"
         for k in result.checks
@@ -1060,14 +1060,7 @@ def _html(result: Validation) -> str:
     )
     verdict = "PASS" if result.passed else "FAIL"
     summary = _e(result.summary())
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>Validation: {_e(result.scene_name)}</title>
-<style>body{{font-family:sans-serif;margin:2em;max-width:1000px}}
-table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:3px 8px}}
-tr.ok td{{background:#e8f6e8}}tr.bad td{{background:#fbe3e3}}
-img{{max-width:100%}}pre{{background:#f4f4f4;padding:1em;white-space:pre-wrap}}</style>
-</head><body>
+    return _page(f"Validation: {result.scene_name}", f"""
 <h1>Validation of {_e(result.scene_name)}: {verdict}</h1>
 <p>Capture: {_e(result.capture)}, {result.image_size[0]}×{result.image_size[1]} px.
 {result.n_inliers} landmarks matched ({result.n_found} found,
@@ -1078,8 +1071,7 @@ img{{max-width:100%}}pre{{background:#f4f4f4;padding:1em;white-space:pre-wrap}}<
 </table>
 <pre>{summary}</pre>
 <h2>Pictures</h2>{figs}
-</body></html>
-"""
+""")
 
 
 _MOUNT_KEYS = ("position", "yaw_deg", "pitch_deg", "roll_deg")

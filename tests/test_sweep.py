@@ -156,7 +156,7 @@ def test_local_sweep_table_map_and_sensitivity(local_run):
     assert html.count("data:image/png;base64,") >= 1 and "Feasibility map" in html
     # Point numbers 0 and 1 are not coloured as pass/fail (1 == True in Python).
     assert '<tr><td class="">0</td>' in html and '<tr><td class="">1</td>' in html
-    assert html.count('class="bad">FAIL</td>') + html.count('class="ok">pass</td>') == 6 * 11
+    assert html.count('class="fail">FAIL</td>') + html.count('class="pass">pass</td>') == 6 * 11
 
 
 def test_map_takes_the_best_over_other_axes_and_outlines_passing_cells():
