@@ -11,9 +11,9 @@ Public API::
 
 from __future__ import annotations
 
-from .camera import FisheyeCamera, rotation_from_ypr
+from .camera.fisheye import FisheyeCamera, rotation_from_ypr
 from .errors import RvmsimError, SceneError
-from .scene import Scene, load_scene, scene_from_dict
+from .scene.schema import Scene, load_scene, scene_from_dict
 
 __all__ = [
     "FisheyeCamera",
@@ -32,7 +32,7 @@ __version__ = "0.1.0"
 
 def __getattr__(name: str):  # lazy: importing rvmsim must not start OpenGL
     if name in ("render_fisheye", "FisheyeImages"):
-        from . import render
+        from .render import fisheye
 
-        return getattr(render, name)
+        return getattr(fisheye, name)
     raise AttributeError(f"module 'rvmsim' has no attribute {name!r}")

@@ -29,7 +29,7 @@ def _fail_os(err: OSError, where: Path | None) -> None:
 
 def _open_run(run: Path):
     """The run store in a run folder, or a one-line error."""
-    from .store import RunStore
+    from .tune.store import RunStore
 
     db = run / "run.sqlite"
     if not db.is_file():
@@ -38,7 +38,7 @@ def _open_run(run: Path):
 
 
 def _load_isp(params_file: Path | None):
-    from .isp import IspParams, OutputSpec, load_params
+    from .isp.core import IspParams, OutputSpec, load_params
 
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
@@ -73,9 +73,9 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     fisheye_labels_preview.png (labels in colour) and render.json into the output folder.
     """
     from . import labels as L
-    from .imageio_utils import write_png
-    from .render import render_fisheye
-    from .scene import load_scene
+    from ._io import write_png
+    from .render.fisheye import render_fisheye
+    from .scene.schema import load_scene
 
     try:
         sc = load_scene(scene)
@@ -129,10 +129,10 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     and isp.json (the parameters used).
     """
     from . import labels as L
-    from .imageio_utils import write_png
-    from .isp import draw_roi, params_to_dict
+    from ._io import write_png
+    from .isp.core import draw_roi, params_to_dict
     from .pipeline import render_rvm
-    from .scene import load_scene
+    from .scene.schema import load_scene
 
     try:
         params, output = _load_isp(params_file)
@@ -168,13 +168,13 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     Prints the EC table and writes ec.json, ec_annotated.png (the measurements drawn on the RVM
     image), rvm_color.png and rvm_labels.png.
     """
-    from .annotate import annotate
-    from .criteria import load_criteria
-    from .criteria import evaluate as evaluate_labels
-    from .imageio_utils import write_png
-    from .isp import params_to_dict
+    from .criteria.annotate import annotate
+    from .criteria.core import load_criteria
+    from .criteria.core import evaluate as evaluate_labels
+    from ._io import write_png
+    from .isp.core import params_to_dict
     from .pipeline import render_rvm
-    from .scene import load_scene
+    from .scene.schema import load_scene
 
     try:
         params, output = _load_isp(params_file)
@@ -225,8 +225,8 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget, max_time,
          target_score, resume_dir, force, progress) -> None:
     """Tune the ISP parameters of SCENE (or continue a run with --resume RUN)."""
-    from .tune import load_tuning_config
-    from .tune import tune as run_tune
+    from .tune.loop import load_tuning_config
+    from .tune.loop import tune as run_tune
 
     try:
         if resume_dir is not None:
@@ -279,9 +279,9 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
     Locally the scenes run one after another, each on --workers processes; with --scheduler
     each scene is one task on the cluster, and its run folder is written here as it finishes.
     """
-    from .criteria import EC_IDS
-    from .tune import load_tuning_config
-    from .tune import tune as run_tune
+    from .criteria.core import EC_IDS
+    from .tune.loop import load_tuning_config
+    from .tune.loop import tune as run_tune
 
     try:
         cfg = load_tuning_config(config_file)
@@ -303,10 +303,10 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
     def remote_runs():
         """(scene, run_dir, (evaluations, seconds)) per finished task, or (scene, None,
         error)."""
-        from .cache import scene_key
-        from .executors import DaskExecutor
-        from .scene import load_scene
-        from .tune import portable_scene_doc, tune_task
+        from .render.cache import scene_key
+        from .batch.executors import DaskExecutor
+        from .scene.schema import load_scene
+        from .tune.loop import portable_scene_doc, tune_task
 
         tasks, by_key = {}, {}
         for k, scene in enumerate(scenes):
@@ -427,7 +427,7 @@ def select(run: Path, rank: int, out: Path | None) -> None:
     """Export the rank-K parameter set of a run as a params file."""
     import yaml
 
-    from .isp import OutputSpec, params_to_dict
+    from .isp.core import OutputSpec, params_to_dict
 
     store = _open_run(run)
     top = store.top(rank)
@@ -458,7 +458,7 @@ def select(run: Path, rank: int, out: Path | None) -> None:
 def report(path: Path, out: Path | None) -> None:
     """Write a self-contained HTML review report of a run (PATH = RUN), or of every run in a
     folder plus an index page (PATH = RUNS_DIR)."""
-    from .report import find_runs, write_batch_report, write_report
+    from .report.run import find_runs, write_batch_report, write_report
 
     try:
         if (path / "run.json").is_file():
@@ -512,11 +512,11 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     tolerances.  Writes validation.json, validation.html and PNGs (landmarks, blended overlays,
     edge overlays).  Exit status: 0 pass, 1 the verdict failed, 2 an error.
     """
-    from .cache import cached_render
-    from .criteria import load_criteria
-    from .scene import load_scene
-    from .validate import Tolerances, load_capture, write_corrected_scene, write_outputs
-    from .validate import validate as run_validate
+    from .render.cache import cached_render
+    from .criteria.core import load_criteria
+    from .scene.schema import load_scene
+    from .validate.core import Tolerances, load_capture, write_corrected_scene, write_outputs
+    from .validate.core import validate as run_validate
 
     try:
         sc = load_scene(scene)
@@ -564,8 +564,8 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
     limiting EC, the tuned parameters), feasibility.png, sensitivity.png and sweep.html.
     Finished points are stored as they arrive: run the same command again to resume.
     """
-    from .executors import make_executor
-    from .sweep import load_sweep, run_sweep, write_sweep_outputs
+    from .batch.executors import make_executor
+    from .batch.sweep import load_sweep, run_sweep, write_sweep_outputs
 
     out = out or Path("runs") / f"sweep_{sweep_file.stem}"
     try:
@@ -575,7 +575,7 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
                 res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
         except KeyboardInterrupt:
             # Every finished point is in sweep.sqlite; write what there is, then stop.
-            from .sweep import SweepResult, SweepStore, design_points
+            from .batch.sweep import SweepResult, SweepStore, design_points
 
             store = SweepStore(out / "sweep.sqlite")
             done = store.done()

@@ -25,7 +25,7 @@ from rvmsim.criteria import (
 )
 from rvmsim.errors import SceneError
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map, build_map_exact, input_to_output
-from rvmsim.meshes import GUIDELINE_LIFT_M, board_point, build_parts
+from rvmsim.scene import GUIDELINE_LIFT_M, board_point, build_parts
 
 from .conftest import bundled_scene, small_render
 
@@ -95,7 +95,7 @@ def test_stripe_areas_match_projected_outlines(letter):
     m = measure(labels)
     site = scene.test_site
     r = site.object_diameter / 2
-    from rvmsim.meshes import stripe_azimuth_deg
+    from rvmsim.scene.meshes import stripe_azimuth_deg
 
     total, perimeter = 0.0, 0.0
     for c in "FG":

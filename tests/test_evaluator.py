@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rvmsim.criteria import EC_IDS, evaluate, load_criteria
-from rvmsim.evaluator import CandidateEvaluator
+from rvmsim.criteria import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map
 
 from .conftest import small_render

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from rvmsim.executors import DaskExecutor, LocalExecutor
+from rvmsim.batch import DaskExecutor, LocalExecutor
 
 
 def _square_once(arg):
@@ -37,7 +37,7 @@ def test_local_executor_in_process_keeps_order_and_results():
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc mallopt")
 @pytest.mark.parametrize("env, changed", [("65536", True), (None, False), ("999999999999", False)])
 def test_task_malloc_raises_a_low_trim_threshold_only(env, changed):
-    code = ("from rvmsim.executors import task_malloc\n"
+    code = ("from rvmsim.batch import task_malloc\n"
             "with task_malloc() as changed: print(changed)\n")
     environ = {k: v for k, v in os.environ.items() if k != "MALLOC_TRIM_THRESHOLD_"}
     if env is not None:

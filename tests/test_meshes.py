@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from rvmsim import labels as L
-from rvmsim.meshes import build_parts, cylinder_side, disk, site_landmarks, swept_block
+from rvmsim.scene import build_parts, cylinder_side, disk, site_landmarks, swept_block
 from rvmsim.scene import BlockPart, scene_from_dict
 
 from .conftest import bundled_scene
@@ -47,7 +47,7 @@ def test_test_object_dimensions(letter):
     assert lo[1] == pytest.approx(-0.80) and hi[1] == pytest.approx(0.0)
     assert hi[0] - lo[0] == pytest.approx(0.30, abs=1e-4)  # diameter
     centre = ((lo[0] + hi[0]) / 2, (lo[2] + hi[2]) / 2)
-    from rvmsim.fmvss111 import OBJECT_POSITIONS_M
+    from rvmsim.scene.fmvss111 import OBJECT_POSITIONS_M
 
     assert centre == pytest.approx(OBJECT_POSITIONS_M[letter], abs=1e-4)
 

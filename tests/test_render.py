@@ -14,7 +14,7 @@ import pytest
 import trimesh
 
 from rvmsim import labels as L
-from rvmsim.meshes import build_parts, site_landmarks
+from rvmsim.scene import build_parts, site_landmarks
 
 from .conftest import bundled_scene, small_render
 
@@ -147,7 +147,7 @@ def test_cube_seams_leave_no_gaps_or_doubles():
     assert diff.mean() < 0.003
     # And along the seams of the reference cube: each seam pixel's label matches the turned
     # cube (where it is not a label border), so no row or column is dropped or repeated.
-    from rvmsim.render import _face_coords
+    from rvmsim.render.fisheye import _face_coords
 
     rays, ok = ref.camera.image_rays()
     face, _ = _face_coords(rays, np.eye(3))

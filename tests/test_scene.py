@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import yaml
 
-from rvmsim import fmvss111
+from rvmsim.scene import fmvss111
 from rvmsim.errors import SceneError
 from rvmsim.scene import load_scene, scene_from_dict
 

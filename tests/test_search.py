@@ -16,9 +16,9 @@ import pytest
 import yaml
 
 from rvmsim.criteria import default_criteria
-from rvmsim.evaluator import CandidateEvaluator
+from rvmsim.criteria import CandidateEvaluator
 from rvmsim.isp import OutputSpec
-from rvmsim.search import (
+from rvmsim.tune import (
     CmaEs,
     GridToRandom,
     ParamRange,
@@ -28,7 +28,7 @@ from rvmsim.search import (
     run_search,
     score_vectors,
 )
-from rvmsim.store import RunStore
+from rvmsim.tune import RunStore
 
 from .conftest import SCENES, small_render
 
@@ -245,7 +245,7 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
 def test_batches_split_into_shrinking_chunks_that_cover_them():
     """Worker chunks (guided self-scheduling) partition the batch in order and shrink, so
     the last ones are small."""
-    from rvmsim.tune import _chunks
+    from rvmsim.tune.loop import _chunks
 
     for n, workers in ((1024, 2), (1000, 3), (10, 2), (1, 4)):
         c = _chunks(n, workers)

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 import yaml
 
-from rvmsim import sweep as S
+from rvmsim.batch import sweep as S
 from rvmsim.errors import RvmsimError
-from rvmsim.executors import DaskExecutor, LocalExecutor
+from rvmsim.batch import DaskExecutor, LocalExecutor
 
 from .conftest import SCENES
 

@@ -19,10 +19,10 @@ import pytest
 import yaml
 
 from rvmsim import labels as L
-from rvmsim import validate as V
+from rvmsim.validate import core as V
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.errors import RvmsimError
-from rvmsim.meshes import checker_corners, pattern_shade
+from rvmsim.scene import checker_corners, pattern_shade
 from rvmsim.render import render_fisheye
 from rvmsim.scene import load_scene, scene_from_dict
 

@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 from skimage.measure import regionprops  # noqa: E402
 
 from rvmsim.criteria import default_criteria, evaluate  # noqa: E402
-from rvmsim.evaluator import CandidateEvaluator  # noqa: E402
+from rvmsim.criteria import CandidateEvaluator  # noqa: E402
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map  # noqa: E402
 from rvmsim.render import render_fisheye  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402

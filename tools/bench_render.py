@@ -41,7 +41,7 @@ def pinhole_baseline(scene, width: int, height: int, repeats: int) -> float:
     """Median seconds for one lit pyrender pinhole frame (pyrender's PBR shader, MSAA)."""
     import pyrender
 
-    from rvmsim.meshes import build_parts
+    from rvmsim.scene import build_parts
 
     ps = pyrender.Scene(ambient_light=[0.4, 0.4, 0.4])
     for part in build_parts(scene):

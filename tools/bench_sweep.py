@@ -22,8 +22,8 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim import sweep as S  # noqa: E402
-from rvmsim.executors import DaskExecutor, LocalExecutor  # noqa: E402
+from rvmsim.batch import sweep as S  # noqa: E402
+from rvmsim.batch import DaskExecutor, LocalExecutor  # noqa: E402
 
 
 def main() -> None:

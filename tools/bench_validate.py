@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim import validate as V  # noqa: E402
+from rvmsim.validate import core as V  # noqa: E402
 from tests import test_validate as T  # noqa: E402
 
 

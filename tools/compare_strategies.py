@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from rvmsim.store import RunStore
+from rvmsim.tune import RunStore
 
 
 def main() -> None:

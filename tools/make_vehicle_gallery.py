@@ -13,7 +13,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 import numpy as np  # noqa: E402
 
 from rvmsim import labels as L  # noqa: E402
-from rvmsim.imageio_utils import write_png  # noqa: E402
+from rvmsim._io import write_png  # noqa: E402
 from rvmsim.render import render_fisheye  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
 

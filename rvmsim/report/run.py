@@ -16,9 +16,6 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 
 from __future__ import annotations
 
-import base64
-import html
-import io
 import json
 import math
 import os
@@ -30,7 +27,8 @@ from urllib.parse import quote
 
 import numpy as np
 
-from .errors import RvmsimError
+from ..errors import RvmsimError
+from .page import data_uri, escape, figure_png, img_tag, page, shrink
 
 __all__ = ["write_report", "write_batch_report", "find_runs", "EC_GROUP_NAMES",
            "SECTION_IDS"]
@@ -53,73 +51,6 @@ GALLERY_MAX_PX = 320
 INDEX_THUMB_PX = 192
 #: Scores below this are drawn at this value on the log axes.
 SCORE_FLOOR = 1e-15
-
-_CSS = """
-body{font-family:sans-serif;margin:1.5em auto;max-width:1200px;color:#222;padding:0 1em}
-h1{margin-bottom:.2em}h2{border-bottom:2px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
-table{border-collapse:collapse;margin:.5em 0}
-th,td{border:1px solid #bbb;padding:.25em .6em;text-align:left;vertical-align:top}
-th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
-tr.pass td{background:#d8f0d8}tr.fail td{background:#f6d0d0}tr.off td{background:#e4e4e4;color:#666}
-td.pass{background:#d8f0d8}td.fail{background:#f6d0d0}td.off{background:#e4e4e4;color:#666}
-tr.tuned td{font-weight:bold}
-.badge{display:inline-block;padding:.1em .5em;border-radius:.3em;color:#fff;font-weight:bold}
-.badge.pass{background:#2a8a3a}.badge.fail{background:#c02828}
-.warn{background:#fff3cd;border:1px solid #e0b84a;padding:.5em .8em}
-figure{display:inline-block;margin:.5em 1em .5em 0;vertical-align:top}
-figcaption{font-size:.9em;color:#444;max-width:640px}
-img{max-width:100%;border:1px solid #999}
-.gallery{display:flex;flex-wrap:wrap;gap:1em}
-.card{border:1px solid #bbb;border-radius:.4em;padding:.6em;width:340px;background:#fafafa}
-.card.rank1{border:2px solid #2a8a3a}
-code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
-.muted{color:#666;font-size:.9em}
-pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
-"""
-
-
-def _e(value: Any) -> str:
-    """HTML-escape anything (quotes included)."""
-    return html.escape(str(value), quote=True)
-
-
-# ---------------------------------------------------------------------------- images
-def _png_bytes(image: np.ndarray) -> bytes:
-    import imageio.v3 as iio
-
-    return iio.imwrite("<bytes>", np.ascontiguousarray(image), extension=".png")
-
-
-def _shrink(image: np.ndarray, max_px: int) -> np.ndarray:
-    """Downscale so the longest side is at most ``max_px`` (never enlarges)."""
-    import cv2
-
-    h, w = image.shape[:2]
-    f = max_px / max(h, w)
-    if f >= 1.0:
-        return image
-    size = (max(1, round(w * f)), max(1, round(h * f)))
-    return cv2.resize(image, size, interpolation=cv2.INTER_AREA)
-
-
-def _data_uri(png: bytes) -> str:
-    return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
-
-
-def _img(image: np.ndarray, alt: str, max_px: int | None = None) -> str:
-    if max_px is not None:
-        image = _shrink(image, max_px)
-    return f'<img src="{_data_uri(_png_bytes(image))}" alt="{_e(alt)}">'
-
-
-def _figure_png(fig) -> bytes:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    FigureCanvasAgg(fig)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return buf.getvalue()
-
 
 # ---------------------------------------------------------------------------- plots
 def convergence_png(curve: list[tuple[int, float, str]]) -> bytes:
@@ -162,7 +93,7 @@ def convergence_png(curve: list[tuple[int, float, str]]) -> bytes:
         ax.legend(title="stage", fontsize=8, loc="lower right",
                   ncol=max(1, math.ceil(len(stages) / 6)))
     fig.tight_layout()
-    return _figure_png(fig)
+    return figure_png(fig)
 
 
 def histogram_png(scores: np.ndarray) -> bytes:
@@ -193,7 +124,7 @@ def histogram_png(scores: np.ndarray) -> bytes:
     ax.set_ylabel("trials")
     ax.set_title(f"Score distribution ({scores.size} trials, {zeros} scored 0)")
     fig.tight_layout()
-    return _figure_png(fig)
+    return figure_png(fig)
 
 
 # ---------------------------------------------------------------------------- run data
@@ -231,11 +162,11 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from .cache import cached_render, scene_key
-    from .criteria import load_criteria
-    from .scene import load_scene
-    from .store import RunStore
-    from .tune import TuningConfig
+    from ..render.cache import cached_render, scene_key
+    from ..criteria.core import load_criteria
+    from ..scene.schema import load_scene
+    from ..tune.store import RunStore
+    from ..tune.loop import TuningConfig
 
     run_json = run_dir / "run.json"
     if not run_json.is_file():
@@ -312,25 +243,25 @@ def _scene_section(r: _Run) -> str:
                    f"{r.count} evaluations, status {r.meta.get('status', '?')}"),
         ("Run folder", str(r.run_dir)),
     ]
-    body = "".join(f"<tr><th>{_e(a)}</th><td>{_e(b)}</td></tr>" for a, b in rows)
+    body = "".join(f"<tr><th>{escape(a)}</th><td>{escape(b)}</td></tr>" for a, b in rows)
     return f'<section id="scene"><h2>Scene summary</h2><table>{body}</table></section>'
 
 
 def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
-    from .isp import draw_roi
+    from ..isp.core import draw_roi
 
     roi = draw_roi(r.images.color, r.top[0].params, r.output, thickness=3)
     figs = [
-        (_img(roi, "fisheye input with ROI", FISHEYE_MAX_PX),
+        (img_tag(roi, "fisheye input with ROI", FISHEYE_MAX_PX),
          "Fisheye input image; the green outline is the region the RVM image shows under "
          "the chosen parameters (paper, Table 4)."),
-        (_img(color, "RVM colour image"),
+        (img_tag(color, "RVM colour image"),
          f"RVM image ({r.output.width} × {r.output.height} px, "
          f"{'mirrored' if r.output.mirror else 'not mirrored'})."),
-        (_img(annotated, "annotated EC image", 1200),
+        (img_tag(annotated, "annotated EC image", 1200),
          "The ECs measured on the RVM image (paper, Fig. 17–20)."),
     ]
-    body = "".join(f"<figure>{img}<figcaption>{_e(cap)}</figcaption></figure>"
+    body = "".join(f"<figure>{img}<figcaption>{escape(cap)}</figcaption></figure>"
                    for img, cap in figs)
     return f'<section id="images"><h2>Images</h2>{body}</section>'
 
@@ -344,20 +275,20 @@ def _ec_section(result) -> str:
         rng = f"[{_fmt(i.low)}, {_fmt(i.high)}]" if (i.low is not None or i.high is not None) \
             else "= 1"
         rows.append(
-            f'<tr class="{st}"><td>{_e(i.id)}</td><td>{_e(i.name)}</td>'
-            f'<td class="num">{_e(_fmt(i.value))}</td><td>{_e(i.unit)}</td>'
-            f'<td class="num">{_e(rng)}</td><td class="num">{i.score:.4f}</td>'
-            f'<td>{_e(st)}</td></tr>')
+            f'<tr class="{st}"><td>{escape(i.id)}</td><td>{escape(i.name)}</td>'
+            f'<td class="num">{escape(_fmt(i.value))}</td><td>{escape(i.unit)}</td>'
+            f'<td class="num">{escape(rng)}</td><td class="num">{i.score:.4f}</td>'
+            f'<td>{escape(st)}</td></tr>')
     badge = "pass" if result.passed else "fail"
     summary = (f'<p>EC score <b>{result.score:.4g}</b> '
                f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
-               f'</span> <span class="muted">criteria: {_e(result.criteria_name)}</span></p>')
+               f'</span> <span class="muted">criteria: {escape(result.criteria_name)}</span></p>')
     return (f'<section id="ec-table"><h2>Evaluation criteria</h2>{summary}'
             f'<table>{head}{"".join(rows)}</table></section>')
 
 
 def _params_section(r: _Run) -> str:
-    from .isp import PARAM_SPECS, IspParams
+    from ..isp.core import PARAM_SPECS, IspParams
 
     space = r.config.space(r.scene.fisheye_camera())
     tuned = {pr.name: pr for pr in space.ranges}
@@ -374,11 +305,11 @@ def _params_section(r: _Run) -> str:
             rng = f"[{spec.low:g}, {spec.high:g}] (Table 2)"
         fixed = "" if pr is not None or spec.name not in r.config.fixed else " (fixed)"
         rows.append(
-            f'<tr class="{"tuned" if pr is not None else ""}"><td>{_e(spec.name)}</td>'
-            f'<td>{_e(spec.paper_name)}</td>'
+            f'<tr class="{"tuned" if pr is not None else ""}"><td>{escape(spec.name)}</td>'
+            f'<td>{escape(spec.paper_name)}</td>'
             f'<td class="num">{getattr(chosen, spec.name):.6g}</td>'
             f'<td class="num">{getattr(default, spec.name):g}</td>'
-            f'<td class="num">{_e(rng)}</td><td>{_e(spec.unit)}</td>'
+            f'<td class="num">{escape(rng)}</td><td>{escape(spec.unit)}</td>'
             f'<td>{"yes" if pr is not None else "no" + fixed}</td></tr>')
     return (f'<section id="params"><h2>ISP parameters</h2>'
             f'<p class="muted">{len(tuned)} of {len(PARAM_SPECS)} parameters tuned (bold); '
@@ -387,8 +318,8 @@ def _params_section(r: _Run) -> str:
 
 
 def _convergence_section(r: _Run) -> str:
-    conv = _data_uri(convergence_png(r.curve))
-    hist = _data_uri(histogram_png(r.scores))
+    conv = data_uri(convergence_png(r.curve))
+    hist = data_uri(histogram_png(r.scores))
     return ('<section id="convergence"><h2>Convergence</h2>'
             f'<figure><img src="{conv}" alt="convergence plot"><figcaption>Best EC score so '
             'far vs evaluations, coloured by search stage.</figcaption></figure>'
@@ -414,7 +345,7 @@ def _differences(rec, first, criteria) -> list[str]:
 
 def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
-    from .isp import process
+    from ..isp.core import process
 
     cards = []
     first = r.top[0]
@@ -424,7 +355,7 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
         if k == 1:
             diff_html = "<p class='muted'>reference (rank 1)</p>"
         elif diffs:
-            diff_html = "<ul>" + "".join(f"<li>{_e(d)}</li>" for d in diffs) + "</ul>"
+            diff_html = "<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
         else:
             diff_html = "<p class='muted'>same pass/fail as #1 on every EC</p>"
         badge = "pass" if rec.passed else "fail"
@@ -432,20 +363,14 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
         cards.append(
             f'<div class="card{" rank1" if k == 1 else ""}" id="rank-{k}">'
             f'<h3>#{k} <span class="badge {badge}">{badge}</span></h3>'
-            f'{_img(color, f"rank {k} RVM image", GALLERY_MAX_PX)}'
+            f'{img_tag(color, f"rank {k} RVM image", GALLERY_MAX_PX)}'
             f'<p>EC score <b>{rec.score:.4g}</b> <span class="muted">trial {rec.idx} '
-            f'({_e(rec.stage)})</span></p>{diff_html}'
-            f'<p>Export: <code>{_e(cmd)}</code></p></div>')
+            f'({escape(rec.stage)})</span></p>{diff_html}'
+            f'<p>Export: <code>{escape(cmd)}</code></p></div>')
     return (f'<section id="gallery"><h2>Top-{len(r.top)} candidates</h2>'
             '<p class="muted">Each candidate\'s RVM image and EC score, with the ECs whose '
             'result differs from #1; choose one and export it with the command shown.</p>'
             f'<div class="gallery">{"".join(cards)}</div></section>')
-
-
-def _page(title: str, body: str) -> str:
-    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{_e(title)}</title><style>{_CSS}</style></head>"
-            f"<body>{body}</body></html>\n")
 
 
 def _group_status(result) -> dict[str, str]:
@@ -459,9 +384,9 @@ def _group_status(result) -> dict[str, str]:
 
 def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
     """The report page of one run, and the summary the batch index shows."""
-    from .annotate import annotate
-    from .criteria import evaluate
-    from .isp import process
+    from ..criteria.annotate import annotate
+    from ..criteria.core import evaluate
+    from ..isp.core import process
 
     r = _load_run(run_dir)
     best = r.top[0]
@@ -469,12 +394,12 @@ def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
     result = evaluate(labels, r.criteria)
     annotated = annotate(color, labels, result)
     badge = "pass" if result.passed else "fail"
-    header = (f"<h1>{_e(r.scene.name)}</h1>"
+    header = (f"<h1>{escape(r.scene.name)}</h1>"
               f'<p>RVM tuning review — EC score <b>{result.score:.4g}</b> '
               f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
               f"</span></p>"
               "<nav><p>" + " · ".join(
-                  f'<a href="#{s}">{_e(s.replace("-", " "))}</a>' for s in SECTION_IDS)
+                  f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in SECTION_IDS)
               + "</p></nav>")
     if r.scene_changed:
         header += ('<p class="warn"><b>The scene file changed after this run.</b> The images and '
@@ -484,8 +409,8 @@ def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
             + _gallery_section(r, str(run_dir), color))
     summary = {"vehicle": r.scene.name, "score": result.score, "passed": result.passed,
-               "groups": _group_status(result), "thumb": _shrink(color, INDEX_THUMB_PX)}
-    return _page(f"RVM tuning review: {r.scene.name}", body), summary
+               "groups": _group_status(result), "thumb": shrink(color, INDEX_THUMB_PX)}
+    return page(f"RVM tuning review: {r.scene.name}", body), summary
 
 
 def _write(path: Path, text: str) -> None:
@@ -519,9 +444,9 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
         unwritable output.
     """
     run_dir = Path(run_dir)
-    page, _ = _build(run_dir)
+    text, _ = _build(run_dir)
     path = Path(out) if out is not None else run_dir / "report.html"
-    _write(path, page)
+    _write(path, text)
     return path
 
 
@@ -561,28 +486,28 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> P
         raise RvmsimError(f"{runs_dir}: no run folders (with run.json) here")
     index = Path(out) if out is not None else runs_dir / "index.html"
     head = ("<tr><th>vehicle</th><th>RVM image</th><th>EC score</th>"
-            + "".join(f"<th>{_e(g)}-x {_e(n)}</th>" for g, n in EC_GROUP_NAMES.items())
+            + "".join(f"<th>{escape(g)}-x {escape(n)}</th>" for g, n in EC_GROUP_NAMES.items())
             + "<th>report</th></tr>")
     rows = []
     for run in runs:
         try:
-            page, s = _build(run)
+            text, s = _build(run)
             rep = run / "report.html"
-            _write(rep, page)
+            _write(rep, text)
         except RvmsimError as err:
-            rows.append(f'<tr class="fail"><td>{_e(run.name)}</td>'
-                        f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{_e(err)}</td></tr>')
+            rows.append(f'<tr class="fail"><td>{escape(run.name)}</td>'
+                        f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{escape(err)}</td></tr>')
             continue
         href = quote(Path(os.path.relpath(rep, index.parent)).as_posix())
-        cells = "".join(f'<td class="{st}">{_e(st)}</td>' for st in s["groups"].values())
+        cells = "".join(f'<td class="{st}">{escape(st)}</td>' for st in s["groups"].values())
         rows.append(
-            f'<tr><td>{_e(s["vehicle"])}<br><span class="muted">{_e(run.name)}</span></td>'
-            f'<td>{_img(s["thumb"], s["vehicle"])}</td>'
+            f'<tr><td>{escape(s["vehicle"])}<br><span class="muted">{escape(run.name)}</span></td>'
+            f'<td>{img_tag(s["thumb"], s["vehicle"])}</td>'
             f'<td class="num {"pass" if s["passed"] else "fail"}">{s["score"]:.4g}</td>'
-            f'{cells}<td><a href="{_e(href)}">report</a></td></tr>')
-    body = (f"<h1>RVM tuning review: {_e(runs_dir.name or str(runs_dir))}</h1>"
-            f'<p class="muted">{len(runs)} runs in {_e(runs_dir)}; EC groups pass when every '
+            f'{cells}<td><a href="{escape(href)}">report</a></td></tr>')
+    body = (f"<h1>RVM tuning review: {escape(runs_dir.name or str(runs_dir))}</h1>"
+            f'<p class="muted">{len(runs)} runs in {escape(runs_dir)}; EC groups pass when every '
             'enabled EC of the group passes.</p>'
             f'<section id="index"><table>{head}{"".join(rows)}</table></section>')
-    _write(index, _page(f"RVM tuning review: {runs_dir.name}", body))
+    _write(index, page(f"RVM tuning review: {runs_dir.name}", body))
     return index

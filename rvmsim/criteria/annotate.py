@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import labels as L
-from .criteria import EcResult
+from .. import labels as L
+from .core import EcResult
 
 __all__ = ["annotate"]
 

@@ -35,10 +35,10 @@ import math
 
 import numpy as np
 
-from . import labels as L
-from .criteria import GROUPS, Criteria, EcResult, LabelSource, Measurements, Window
-from .criteria import bumper_spans, default_criteria, measure_source, score, values_array
-from .isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
+from .. import labels as L
+from .core import GROUPS, Criteria, EcResult, LabelSource, Measurements, Window
+from .core import bumper_spans, default_criteria, measure_source, score, values_array
+from ..isp.core import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
 
 __all__ = ["CandidateEvaluator"]
 

@@ -47,9 +47,9 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from . import labels as L
-from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from .errors import SceneError
+from .. import labels as L
+from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from ..errors import SceneError
 
 __all__ = [
     "EC_IDS",
@@ -306,7 +306,7 @@ def _load(text: str, source: str, base: Criteria | None) -> Criteria:
 def default_criteria() -> Criteria:
     """The shipped defaults: the paper's thresholds and sigmoid coefficients (see the file
     ``rvmsim/criteria_default.yaml`` for how each was derived from the paper's figures)."""
-    text = resources.files("rvmsim").joinpath("criteria_default.yaml").read_text("utf-8")
+    text = resources.files("rvmsim.criteria").joinpath("criteria_default.yaml").read_text("utf-8")
     return _load(text, "criteria_default.yaml", None)
 
 

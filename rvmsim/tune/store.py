@@ -18,9 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from .criteria import EC_IDS
-from .errors import RvmsimError
-from .isp import IspParams
+from ..criteria.core import EC_IDS
+from ..errors import RvmsimError
+from ..isp.core import IspParams
 
 __all__ = ["SqliteStore", "RunStore", "TrialRecord", "params_json", "ec_json", "json_default"]
 

@@ -1,16 +1,17 @@
-"""Reading user YAML files safely, and turning validation errors into one-line messages."""
+"""File helpers: user YAML read safely (validation errors as one-line messages), PNG writing."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 from pydantic import ValidationError
 
-from .errors import SceneError
+from .errors import RvmsimError, SceneError
 
-__all__ = ["read_text", "parse_yaml", "key_lines", "validation_error_to_scene_error"]
+__all__ = ["read_text", "parse_yaml", "key_lines", "validation_error_to_scene_error", "write_png"]
 
 
 def read_text(path: Path) -> str:
@@ -89,3 +90,16 @@ def validation_error_to_scene_error(
             line = lines[loc[:n]]
             break
     return SceneError(source, key, msg, line)
+
+
+def write_png(path: str | Path, image: np.ndarray) -> Path:
+    """Write ``image`` ((H, W) or (H, W, 3) uint8) as PNG, creating the folder."""
+    import imageio.v3 as iio
+
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        iio.imwrite(path, np.ascontiguousarray(image), extension=".png")
+    except OSError as err:
+        raise RvmsimError(f"{path}: cannot write image ({err.strerror or err})") from None
+    return path

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .render import FisheyeImages, render_fisheye
-from .scene import MeshPart, Scene
+from .fisheye import FisheyeImages, render_fisheye
+from ..scene.schema import MeshPart, Scene
 
 __all__ = ["cache_dir", "scene_key", "cached_render", "RENDER_VERSION"]
 
@@ -50,7 +50,7 @@ def cached_render(scene: Scene, scene_file: str | Path, *, scale: float = 1.0,
     """Render ``scene`` or read it from the cache: (images, True if it came from the cache)."""
     import imageio.v3 as iio
 
-    from .imageio_utils import write_png
+    from .._io import write_png
 
     cam = scene.fisheye_camera()
     if scale != 1.0:

@@ -32,9 +32,9 @@ from pydantic import (
 )
 
 from . import fmvss111
-from .camera import FisheyeCamera, rotation_from_ypr
-from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from .errors import SceneError
+from ..camera.fisheye import FisheyeCamera, rotation_from_ypr
+from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from ..errors import SceneError
 
 __all__ = [
     "Scene",

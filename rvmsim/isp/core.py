@@ -53,8 +53,8 @@ from typing import Any
 
 import numpy as np
 
-from . import labels as L
-from .errors import RvmsimError
+from .. import labels as L
+from ..errors import RvmsimError
 
 __all__ = [
     "IspParams",

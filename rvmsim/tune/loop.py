@@ -19,11 +19,11 @@ import numpy as np
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from .criteria import Criteria, load_criteria
-from .errors import RvmsimError
-from .evaluator import CandidateEvaluator
-from .isp import IspParams, OutputSpec, params_to_dict
+from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from ..criteria.core import Criteria, load_criteria
+from ..errors import RvmsimError
+from ..criteria.evaluator import CandidateEvaluator
+from ..isp.core import IspParams, OutputSpec, params_to_dict
 from .search import (
     STRATEGIES,
     CmaEs,
@@ -249,8 +249,8 @@ def tune(
     progress_position : int
         Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
-    from .cache import cached_render, scene_key
-    from .scene import load_scene
+    from ..render.cache import cached_render, scene_key
+    from ..scene.schema import load_scene
 
     run_dir = Path(run_dir)
     run_json = run_dir / "run.json"
@@ -323,10 +323,10 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
     annotated ECs, EC table."""
     import yaml
 
-    from .annotate import annotate
-    from .criteria import evaluate
-    from .imageio_utils import write_png
-    from .isp import process
+    from ..criteria.annotate import annotate
+    from ..criteria.core import evaluate
+    from .._io import write_png
+    from ..isp.core import process
 
     top = store.top(config.top_m)
     if not top:
@@ -359,7 +359,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
 def portable_scene_doc(scene_file: str | Path) -> dict:
     """The scene file's document with its mesh paths made absolute, so it loads from any
     folder (a task on a cluster worker writes it to a temporary file)."""
-    from .scene import absolute_mesh_paths, read_scene_document
+    from ..scene.schema import absolute_mesh_paths, read_scene_document
 
     _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
     absolute_mesh_paths(doc, Path(scene_file).parent)
@@ -376,8 +376,8 @@ def tune_task(task: dict) -> dict:
     import yaml
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from .criteria import criteria_from_text
-    from .executors import task_malloc
+    from ..criteria.core import criteria_from_text
+    from ..batch.executors import task_malloc
 
     try:
         with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp, task_malloc():

@@ -41,13 +41,13 @@ from typing import Any
 
 import numpy as np
 
-from . import labels as L
-from .camera import FisheyeCamera, rotation_from_ypr
-from .errors import RvmsimError
-from .store import json_default
-from .meshes import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
-from .render import FisheyeImages
-from .scene import Scene
+from .. import labels as L
+from ..camera.fisheye import FisheyeCamera, rotation_from_ypr
+from ..errors import RvmsimError
+from ..tune.store import json_default
+from ..scene.meshes import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
+from ..render.fisheye import FisheyeImages
+from ..scene.schema import Scene
 
 __all__ = [
     "Tolerances",
@@ -829,11 +829,11 @@ def validate(
     RvmsimError
         Capture of the wrong size, or fewer than ``tolerances.min_landmarks`` landmarks found.
     """
-    from .render import render_fisheye
+    from ..render.fisheye import render_fisheye
 
     if synthetic is None:
         if scene_file is not None:
-            from .cache import cached_render
+            from ..render.cache import cached_render
 
             synthetic = cached_render(scene, scene_file, progress=progress)[0]
         else:
@@ -978,8 +978,8 @@ def scene_with_mount(scene: Scene, correction: PoseCorrection) -> Scene:
 def _compare_rvm(capture: np.ndarray, synthetic: FisheyeImages,
                  corrected: FisheyeImages | None, params: Any, output: Any,
                  criteria: Any) -> tuple[RvmComparison, dict]:
-    from .criteria import evaluate
-    from .isp import OutputSpec, process
+    from ..criteria.core import evaluate
+    from ..isp.core import OutputSpec, process
 
     output = output or OutputSpec()
     rvm_cap, _ = process(capture, None, params, output)
@@ -1001,7 +1001,7 @@ def _compare_rvm(capture: np.ndarray, synthetic: FisheyeImages,
 # ---------------------------------------------------------------------------- files
 def write_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
     """Write ``validation.json``, the PNGs and ``validation.html`` into ``out_dir``."""
-    from .imageio_utils import write_png
+    from .._io import write_png
 
     out = Path(out_dir)
     try:
@@ -1021,17 +1021,17 @@ def write_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
 
 def _html(result: Validation) -> str:
     """One self-contained page: verdict, numbers, pictures (PNG data URIs)."""
-    from .report import _e, _img, _page
+    from ..report.page import escape, img_tag, page
 
     c = result.correction
     rows = "".join(
-        f'<tr class="{"pass" if k.passed else "fail"}"><td>{_e(k.name)}</td>'
+        f'<tr class="{"pass" if k.passed else "fail"}"><td>{escape(k.name)}</td>'
         f"<td>{k.value:.3g}</td><td>≤ {k.limit:g}</td><td>{'pass' if k.passed else 'FAIL'}"
-        f"</td><td>{'' if k.passed else _e(k.hint)}</td></tr>"
+        f"</td><td>{'' if k.passed else escape(k.hint)}</td></tr>"
         for k in result.checks
     )
     pose = "".join(
-        f"<tr><td>{_e(n)}</td><td>{v:+.2f}</td><td>± {s:.2f}</td><td>{_e(u)}</td></tr>"
+        f"<tr><td>{escape(n)}</td><td>{v:+.2f}</td><td>± {s:.2f}</td><td>{escape(u)}</td></tr>"
         for n, v, s, u in (
             ("Δx (driver side)", c.d_position_mm[0], c.sigma_position_mm[0], "mm"),
             ("Δy (down)", c.d_position_mm[1], c.sigma_position_mm[1], "mm"),
@@ -1054,15 +1054,15 @@ def _html(result: Validation) -> str:
         "rvm_edges": "RVM edges: capture green, synthetic magenta",
     }
     figs = "".join(
-        f"<figure>{_img(img, name, 960)}<figcaption>{_e(captions.get(name, name))}"
+        f"<figure>{img_tag(img, name, 960)}<figcaption>{escape(captions.get(name, name))}"
         "</figcaption></figure>"
         for name, img in result.images.items()
     )
     verdict = "PASS" if result.passed else "FAIL"
-    summary = _e(result.summary())
-    return _page(f"Validation: {result.scene_name}", f"""
-<h1>Validation of {_e(result.scene_name)}: {verdict}</h1>
-<p>Capture: {_e(result.capture)}, {result.image_size[0]}×{result.image_size[1]} px.
+    summary = escape(result.summary())
+    return page(f"Validation: {result.scene_name}", f"""
+<h1>Validation of {escape(result.scene_name)}: {verdict}</h1>
+<p>Capture: {escape(result.capture)}, {result.image_size[0]}×{result.image_size[1]} px.
 {result.n_inliers} landmarks matched ({result.n_found} found,
 {result.n_predicted} predicted visible).</p>
 <h2>Verdict</h2><table><tr><th>check</th><th>value</th><th>limit</th><th></th>
@@ -1090,8 +1090,8 @@ def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,
     RvmsimError
         When the mount cannot be rewritten in place or the result does not load.
     """
-    from ._yamlio import key_lines, read_text
-    from .scene import load_scene
+    from .._io import key_lines, read_text
+    from ..scene.schema import load_scene
 
     scene_file, out_file = Path(scene_file), Path(out_file)
     text = read_text(scene_file)

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from . import labels as L
-from .camera import rotation_from_ypr
-from .errors import SceneError
-from .scene import BlockPart, GroundPattern, MeshPart, PatternBoard, Scene
+from .. import labels as L
+from ..camera.fisheye import rotation_from_ypr
+from ..errors import SceneError
+from .schema import BlockPart, GroundPattern, MeshPart, PatternBoard, Scene
 
 __all__ = [
     "Part",
@@ -32,6 +32,8 @@ __all__ = [
     "site_landmarks",
     "checker_corners",
     "pattern_point",
+    "board_point",
+    "board_frame",
     "pattern_axes",
     "pattern_shade",
     "cylinder_side",

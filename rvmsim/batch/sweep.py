@@ -48,11 +48,11 @@ from typing import Any, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from ._yamlio import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from .errors import RvmsimError
+from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
-from .scene import absolute_mesh_paths
-from .store import SqliteStore, json_default
+from ..scene.schema import absolute_mesh_paths
+from ..tune.store import SqliteStore, json_default
 
 __all__ = [
     "AXES",
@@ -160,7 +160,7 @@ def _expand(name: str, v: Any, where: str) -> tuple[Any, ...]:
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file (one-line errors naming the file and key)."""
-    from .scene import read_scene_document
+    from ..scene.schema import read_scene_document
 
     path = Path(path)
     text = read_text(path)
@@ -177,12 +177,12 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise RvmsimError(f"{path}: base_scene: scene file not found: {base}")
     _, base_doc = read_scene_document(base)
     axes = tuple((name, _expand(name, v, str(path))) for name, v in f.axes.items())
-    from .search import STRATEGIES
+    from ..tune.search import STRATEGIES
 
     if f.tune.strategy not in STRATEGIES:
         raise RvmsimError(f"{path}: tune.strategy: {f.tune.strategy!r} is not one of "
                           f"{', '.join(STRATEGIES)}")
-    from .tune import TuningConfig
+    from ..tune.loop import TuningConfig
 
     try:
         TuningConfig.model_validate(f.tune.config)
@@ -255,7 +255,7 @@ def _set_path(doc: dict, path: str, value: Any, where: str) -> None:
 def point_scene_doc(spec: SweepSpec, values: tuple[tuple[str, Any], ...]) -> tuple[dict, dict]:
     """(scene document, tuning config document) of one design point.  Mesh paths become
     absolute, so the document loads from anywhere."""
-    from .scene import scene_from_dict
+    from ..scene.schema import scene_from_dict
 
     doc = copy.deepcopy(spec.base_doc)
     config = copy.deepcopy(spec.config)
@@ -324,13 +324,13 @@ def _run_point(task: dict) -> dict:
     import tempfile
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from .cache import cached_render
-    from .criteria import criteria_from_text, default_criteria
-    from .evaluator import CandidateEvaluator
-    from .scene import scene_from_dict
-    from .search import run_search, score_vectors
-    from .store import RunStore
-    from .tune import TuningConfig, make_strategy
+    from ..render.cache import cached_render
+    from ..criteria.core import criteria_from_text, default_criteria
+    from ..criteria.evaluator import CandidateEvaluator
+    from ..scene.schema import scene_from_dict
+    from ..tune.search import run_search, score_vectors
+    from ..tune.store import RunStore
+    from ..tune.loop import TuningConfig, make_strategy
 
     t0 = time.perf_counter()
     try:
@@ -383,7 +383,7 @@ def sensitivity(evaluator: Any, space: Any, best: Any) -> dict:
     """EC score with each tuned parameter moved off the optimum by ±2, 5, 10 % of its range
     (others at the optimum).  ``drop_5pct`` is 1 − (mean score at ±5 %) / optimum score: 0 if
     the parameter does not matter there, 1 if a small change loses everything."""
-    from .search import score_vectors
+    from ..tune.search import score_vectors
 
     x0 = space.vector(best)
     lo, hi = space.low, space.high
@@ -502,8 +502,8 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
                 ) -> tuple[list[str], list[list[Any]]]:
     """(header, rows): one row per design point, in point order.  Deterministic content
     only (no timings), so the same sweep gives the same table on any executor."""
-    from .criteria import EC_IDS
-    from .isp import IspParams
+    from ..criteria.core import EC_IDS
+    from ..isp.core import IspParams
 
     names = [n for n, _ in spec.axes]
     header = ["point", *names, "ec_score", "passed", "limiting_ec",
@@ -569,7 +569,7 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint], results: dict[st
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from .report import _figure_png
+    from ..report.page import figure_png
 
     xa, ya, xs, ys, score, passed, limiting, others = _map_grid(spec, points, results)
     fig = Figure(figsize=(1.6 + 1.1 * len(xs), 1.4 + 0.8 * len(ys)))
@@ -607,7 +607,7 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint], results: dict[st
         title += f"\n(best over {', '.join(others)})"
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
-    return _figure_png(fig)
+    return figure_png(fig)
 
 
 def sensitivity_png(points: list[DesignPoint], results: dict[str, dict]) -> bytes | None:
@@ -619,7 +619,7 @@ def sensitivity_png(points: list[DesignPoint], results: dict[str, dict]) -> byte
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from .report import _figure_png
+    from ..report.page import figure_png
 
     rs = [results[p.key] for p in points if p.key in results and "sensitivity" in results[p.key]
           and results[p.key]["score"] > 0]
@@ -654,12 +654,12 @@ def sensitivity_png(points: list[DesignPoint], results: dict[str, dict]) -> byte
     ax2.set_ylabel("EC score (best design point)")
     ax2.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    return _figure_png(fig)
+    return figure_png(fig)
 
 
 def write_sweep_outputs(res: SweepResult) -> list[Path]:
     """sweep.csv, sweep.json, feasibility.png, sensitivity.png and sweep.html."""
-    from .report import _data_uri, _e, _page
+    from ..report.page import data_uri, escape, page
 
     out = res.out_dir
     header, rows = sweep_table(res.spec, res.points, res.results)
@@ -686,18 +686,18 @@ def write_sweep_outputs(res: SweepResult) -> list[Path]:
         table = "".join(
             "<tr>" + "".join(
                 f'<td class="{_cell_class(v)}">'
-                f"{_e('' if v is None else (f'{v:.4g}' if isinstance(v, float) else v))}</td>"
+                f"{escape('' if v is None else (f'{v:.4g}' if isinstance(v, float) else v))}</td>"
                 for v in row[:len(res.spec.axes) + 4 + 11]) + "</tr>"
             for row in rows)
-        head = "".join(f"<th>{_e(h)}</th>" for h in header[:len(res.spec.axes) + 4 + 11])
-        html = _page(f"Sweep: {res.spec.name}", f"""
-<h1>Feasibility sweep: {_e(res.spec.name)}</h1>
-<p>Base scene {_e(res.spec.base_scene)}; {len(res.points)} design points
-({_e(' × '.join(f'{len(v)} {n}' for n, v in res.spec.axes))}); tuning: {_e(res.spec.strategy)},
-budget {_e(res.spec.budget)}, seed {_e(res.spec.seed)}. {n_pass} of {len(res.results)} finished
+        head = "".join(f"<th>{escape(h)}</th>" for h in header[:len(res.spec.axes) + 4 + 11])
+        html = page(f"Sweep: {res.spec.name}", f"""
+<h1>Feasibility sweep: {escape(res.spec.name)}</h1>
+<p>Base scene {escape(res.spec.base_scene)}; {len(res.points)} design points
+({escape(' × '.join(f'{len(v)} {n}' for n, v in res.spec.axes))}); tuning: {escape(res.spec.strategy)},
+budget {escape(res.spec.budget)}, seed {escape(res.spec.seed)}. {n_pass} of {len(res.results)} finished
 points pass every EC.</p>
-<h2>Feasibility map</h2><img src="{_data_uri(feas)}" alt="feasibility map">
-{'' if sens is None else f'<h2>Sensitivity to the ISP parameters around the optimum</h2><img src="{_data_uri(sens)}" alt="sensitivity">'}
+<h2>Feasibility map</h2><img src="{data_uri(feas)}" alt="feasibility map">
+{'' if sens is None else f'<h2>Sensitivity to the ISP parameters around the optimum</h2><img src="{data_uri(sens)}" alt="sensitivity">'}
 <h2>Design points</h2><p>Tuned parameters per point: sweep.csv.</p>
 <table><tr>{head}</tr>{table}</table>
 """)

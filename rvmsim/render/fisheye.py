@@ -31,10 +31,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import labels as L
-from .camera import FisheyeCamera
-from .meshes import Part, build_parts
-from .scene import Scene
+from .. import labels as L
+from ..camera.fisheye import FisheyeCamera
+from ..scene.meshes import Part, build_parts
+from ..scene.schema import Scene
 
 __all__ = ["FisheyeImages", "CubeLayout", "FaceCrop", "cube_layout", "render_fisheye", "FACE_NAMES"]
 

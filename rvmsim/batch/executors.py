@@ -22,7 +22,7 @@ import sys
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
-from .errors import RvmsimError
+from ..errors import RvmsimError
 
 __all__ = ["Executor", "LocalExecutor", "DaskExecutor", "make_executor", "task_malloc"]
 

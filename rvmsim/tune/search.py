@@ -32,10 +32,10 @@ from typing import Callable, Iterator, Sequence
 
 import numpy as np
 
-from .camera import FisheyeCamera
-from .criteria import EC_IDS, score_batch
-from .isp import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
-from .errors import RvmsimError
+from ..camera.fisheye import FisheyeCamera
+from ..criteria.core import EC_IDS, score_batch
+from ..isp.core import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
+from ..errors import RvmsimError
 from .store import RunStore, TrialRecord, ec_json, params_json
 
 __all__ = [

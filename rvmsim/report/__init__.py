@@ -1,0 +1,19 @@
+"""HTML review pages: the page kit and the run report."""
+
+from __future__ import annotations
+
+from .run import (
+    write_report,
+    write_batch_report,
+    find_runs,
+    EC_GROUP_NAMES,
+    SECTION_IDS,
+)
+
+__all__ = [
+    "write_report",
+    "write_batch_report",
+    "find_runs",
+    "EC_GROUP_NAMES",
+    "SECTION_IDS",
+]
