@@ -9,30 +9,31 @@ import numpy as np
 import yaml
 from pydantic import ValidationError
 
-from .errors import RvmsimError, SceneError
+from .errors import InputFileError, RvmsimError
 
-__all__ = ["read_text", "parse_yaml", "key_lines", "validation_error_to_scene_error", "write_png"]
+__all__ = ["read_text", "parse_yaml", "key_lines", "input_error_from_validation", "write_png"]
 
 
-def read_text(path: Path) -> str:
-    """The text of a user file; :class:`SceneError` naming the file when it cannot be read."""
+def read_text(path: Path, error: type[InputFileError] = InputFileError) -> str:
+    """The text of a user file; ``error`` (an :class:`InputFileError`) naming the file when it
+    cannot be read."""
     try:
         return path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise SceneError(str(path), "", "file not found") from None
+        raise error(str(path), "", "file not found") from None
     except (OSError, UnicodeDecodeError) as err:
-        raise SceneError(str(path), "", f"cannot read file ({err})") from None
+        raise error(str(path), "", f"cannot read file ({err})") from None
 
 
-def parse_yaml(text: str, source: str) -> Any:
-    """``yaml.safe_load`` with a one-line :class:`SceneError` (file and line) on bad YAML."""
+def parse_yaml(text: str, source: str, error: type[InputFileError] = InputFileError) -> Any:
+    """``yaml.safe_load`` with a one-line ``error`` (file and line) on bad YAML."""
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         line = mark.line + 1 if mark is not None else None
         problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-        raise SceneError(source, "", f"malformed YAML: {problem}", line) from None
+        raise error(source, "", f"malformed YAML: {problem}", line) from None
 
 
 def key_lines(text: str) -> dict[tuple[Any, ...], int]:
@@ -59,12 +60,13 @@ def key_lines(text: str) -> dict[tuple[Any, ...], int]:
     return lines
 
 
-def validation_error_to_scene_error(
+def input_error_from_validation(
     err: ValidationError,
     source: str,
     lines: dict[tuple[Any, ...], int],
-    tags: set[str] = frozenset(),  # type: ignore[assignment]
-) -> SceneError:
+    error: type[InputFileError],
+    tags: frozenset[str] = frozenset(),
+) -> InputFileError:
     """The first pydantic error as ``FILE:LINE: dotted.key: message``.
 
     ``tags`` are discriminator tags pydantic puts into error locations; they are dropped.
@@ -89,7 +91,7 @@ def validation_error_to_scene_error(
         if loc[:n] in lines:
             line = lines[loc[:n]]
             break
-    return SceneError(source, key, msg, line)
+    return error(source, key, msg, line)
 
 
 def write_png(path: str | Path, image: np.ndarray) -> Path:

@@ -333,7 +333,7 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
                     (run_dir / rel).write_bytes(data)
                 meta = json.loads((run_dir / "run.json").read_text())
                 meta["scene"] = str(scene.resolve())
-                meta["scene_key"] = scene_key(load_scene(scene), scene)
+                meta["scene_key"] = scene_key(load_scene(scene))
                 meta["criteria_file"] = (None if criteria_file is None
                                          else str(Path(criteria_file).resolve()))
                 (run_dir / "run.json").write_text(json.dumps(meta, indent=2))
@@ -523,7 +523,7 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
         params, output = _load_isp(params_file) if params_file else (None, None)
         criteria = load_criteria(criteria_file) if params_file else None
         capture = load_capture(capture_file, sc.fisheye_camera())
-        synthetic, _ = cached_render(sc, scene, progress=progress)
+        synthetic, _ = cached_render(sc, progress=progress)
         tol = Tolerances(max_rms_px=max_rms_px, max_position_mm=max_position_mm,
                          max_angle_deg=max_angle_deg, max_chamfer_px=max_chamfer_px,
                          min_landmarks=min_landmarks)

@@ -1,16 +1,30 @@
-"""Exceptions rvmsim raises for problems a user can fix (bad files, bad values)."""
+"""Exceptions rvmsim raises for problems a user can fix (bad files, bad values).
+
+Every file kind has its own class so that callers (and the CLI) can tell a bad scene from a
+bad criteria or tuning file; all of them are :class:`InputFileError`, which carries the file,
+the dotted key and the line, and all are :class:`RvmsimError`, which the CLI prints as one
+line before exiting with status 2.
+"""
 
 from __future__ import annotations
 
-__all__ = ["RvmsimError", "SceneError"]
+__all__ = [
+    "RvmsimError",
+    "InputFileError",
+    "SceneError",
+    "CriteriaError",
+    "TuningConfigError",
+    "SweepFileError",
+    "ParamsFileError",
+]
 
 
 class RvmsimError(Exception):
     """Base class: the CLI prints these as one line and exits with status 2."""
 
 
-class SceneError(RvmsimError):
-    """A scene file (or a file it names) is unusable.
+class InputFileError(RvmsimError):
+    """A user file (or a file it names) is unusable.
 
     Parameters
     ----------
@@ -32,3 +46,23 @@ class SceneError(RvmsimError):
         where = self.file if line is None else f"{self.file}:{line}"
         text = f"{where}: {key}: {message}" if key else f"{where}: {message}"
         super().__init__(text)
+
+
+class SceneError(InputFileError):
+    """A scene file, or a mesh file it names, is unusable."""
+
+
+class CriteriaError(InputFileError):
+    """A criteria file is unusable."""
+
+
+class TuningConfigError(InputFileError):
+    """A tuning config file (``--config``) is unusable."""
+
+
+class SweepFileError(InputFileError):
+    """A sweep file is unusable."""
+
+
+class ParamsFileError(InputFileError):
+    """An ISP params file is unusable."""

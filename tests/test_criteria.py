@@ -23,7 +23,7 @@ from rvmsim.criteria import (
     measure_source,
     score_batch,
 )
-from rvmsim.errors import SceneError
+from rvmsim.errors import CriteriaError
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map, build_map_exact, input_to_output
 from rvmsim.scene import GUIDELINE_LIFT_M, board_point, build_parts
 
@@ -341,7 +341,7 @@ def test_customer_file_overrides_and_switches_off(tmp_path):
 def test_bad_criteria_file(tmp_path, text, words):
     path = tmp_path / "c.yaml"
     path.write_text(text)
-    with pytest.raises(SceneError) as info:
+    with pytest.raises(CriteriaError) as info:
         load_criteria(path)
     assert words in str(info.value) and str(path) in str(info.value)
     assert "\n" not in str(info.value)

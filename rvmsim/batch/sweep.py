@@ -48,8 +48,8 @@ from typing import Any, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from ..errors import RvmsimError
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from ..errors import RvmsimError, SweepFileError
 from .executors import Executor, LocalExecutor
 from ..scene.schema import absolute_mesh_paths
 from ..tune.store import SqliteStore, json_default
@@ -163,14 +163,14 @@ def load_sweep(path: str | Path) -> SweepSpec:
     from ..scene.schema import read_scene_document
 
     path = Path(path)
-    text = read_text(path)
-    data = parse_yaml(text, str(path))
+    text = read_text(path, SweepFileError)
+    data = parse_yaml(text, str(path), SweepFileError)
     if not isinstance(data, dict):
-        raise RvmsimError(f"{path}: a sweep file must be a YAML mapping")
+        raise SweepFileError(str(path), "", "a sweep file must be a YAML mapping")
     try:
         f = _SweepFile.model_validate(data)
     except ValidationError as err:
-        raise validation_error_to_scene_error(err, str(path), key_lines(text)) from None
+        raise input_error_from_validation(err, str(path), key_lines(text), SweepFileError) from None
     base = Path(f.base_scene)
     base = base if base.is_absolute() else (path.parent / base).resolve()
     if not base.is_file():
@@ -321,7 +321,6 @@ def run_point(task: dict) -> dict:
 
 def _run_point(task: dict) -> dict:
     import os
-    import tempfile
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from ..render.cache import cached_render
@@ -338,14 +337,10 @@ def _run_point(task: dict) -> dict:
         config = TuningConfig.model_validate(task["config"])
         criteria = (criteria_from_text(task["criteria"], "sweep criteria")
                     if task.get("criteria") else default_criteria())
-        with tempfile.TemporaryDirectory(prefix="rvmsim-point-") as tmp, _RENDER_LOCK:
-            import yaml
-
-            # One render at a time per process: a Dask worker with several threads would
-            # otherwise open several OpenGL contexts at once.
-            scene_file = Path(tmp) / "scene.yaml"
-            scene_file.write_text(yaml.safe_dump(task["scene"], sort_keys=False))
-            images, _ = cached_render(scene, scene_file)
+        # One render at a time per process: a Dask worker with several threads would
+        # otherwise open several OpenGL contexts at once.
+        with _RENDER_LOCK:
+            images, _ = cached_render(scene)
         space = config.space(images.camera)
         strat = make_strategy(task["strategy"], space, config, task["seed"], task["budget"])
         evaluator = CandidateEvaluator(images.labels, config.output_spec(), criteria)

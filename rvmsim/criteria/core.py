@@ -48,8 +48,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .. import labels as L
-from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
-from ..errors import SceneError
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from ..errors import CriteriaError
 
 __all__ = [
     "EC_IDS",
@@ -289,17 +289,17 @@ def _build(model: _CriteriaModel, base: Criteria | None, source: str) -> Criteri
 
 
 def _load(text: str, source: str, base: Criteria | None) -> Criteria:
-    data = parse_yaml(text, source)
+    data = parse_yaml(text, source, CriteriaError)
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise SceneError(source, "", "a criteria file must be a YAML mapping")
+        raise CriteriaError(source, "", "a criteria file must be a YAML mapping")
     if isinstance(data.get("criteria"), dict):  # YAML may read 1-1 … as strings already
         data["criteria"] = {str(k): v for k, v in data["criteria"].items()}
     try:
         model = _CriteriaModel.model_validate(data)
     except ValidationError as err:
-        raise validation_error_to_scene_error(err, source, key_lines(text)) from None
+        raise input_error_from_validation(err, source, key_lines(text), CriteriaError) from None
     return _build(model, base, source)
 
 
@@ -315,13 +315,13 @@ def load_criteria(path: str | Path | None) -> Criteria:
 
     Raises
     ------
-    SceneError
+    CriteriaError
         One line naming the file, line and key for any problem.
     """
     if path is None:
         return default_criteria()
     path = Path(path)
-    return _load(read_text(path), str(path), default_criteria())
+    return _load(read_text(path, CriteriaError), str(path), default_criteria())
 
 
 def criteria_from_text(text: str, source: str = "<criteria>") -> Criteria:

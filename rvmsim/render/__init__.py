@@ -13,6 +13,8 @@ from .fisheye import (
 from .cache import (
     cache_dir,
     scene_key,
+    file_scene_key,
+    same_scene,
     cached_render,
     RENDER_VERSION,
 )
@@ -26,6 +28,8 @@ __all__ = [
     "FACE_NAMES",
     "cache_dir",
     "scene_key",
+    "file_scene_key",
+    "same_scene",
     "cached_render",
     "RENDER_VERSION",
 ]

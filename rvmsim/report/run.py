@@ -162,7 +162,7 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from ..render.cache import cached_render, scene_key
+    from ..render.cache import cached_render, same_scene
     from ..criteria.core import load_criteria
     from ..scene.schema import load_scene
     from ..tune.store import RunStore
@@ -202,9 +202,9 @@ def _load_run(run_dir: Path) -> _Run:
         store.close()
     if not top:
         raise RvmsimError(f"{run_dir}: no evaluated candidates to report yet")
-    images, _ = cached_render(scene, scene_file)
+    images, _ = cached_render(scene)
     recorded_key = info.get("scene_key")
-    scene_changed = recorded_key is not None and recorded_key != scene_key(scene, scene_file)
+    scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, info, meta, scene_file, scene, images, config, criteria, crit_file,
                 config.output_spec(), top, curve, scores, count, scene_changed)
 

@@ -21,6 +21,7 @@ from .schema import (
     read_scene_document,
     scene_from_dict,
     absolute_mesh_paths,
+    mesh_parts,
 )
 from .meshes import (
     Part,
@@ -62,6 +63,7 @@ __all__ = [
     "read_scene_document",
     "scene_from_dict",
     "absolute_mesh_paths",
+    "mesh_parts",
     "Part",
     "Landmark",
     "CheckerCorner",

@@ -33,7 +33,7 @@ from pydantic import (
 
 from . import fmvss111
 from ..camera.fisheye import FisheyeCamera, rotation_from_ypr
-from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..errors import SceneError
 
 __all__ = [
@@ -55,6 +55,7 @@ __all__ = [
     "read_scene_document",
     "scene_from_dict",
     "absolute_mesh_paths",
+    "mesh_parts",
 ]
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -477,13 +478,14 @@ def scene_from_dict(
             {**data, "base_dir": str(Path(base_dir).resolve()), "source": source}
         )
     except ValidationError as err:
-        raise validation_error_to_scene_error(err, source, key_lines(text or ""), _TAGS) from None
+        raise input_error_from_validation(err, source, key_lines(text or ""), SceneError,
+                                          _TAGS) from None
     lines = key_lines(text or "")
     try:
         scene.fisheye_camera()
     except ValueError as err:
         raise SceneError(source, "camera", str(err), lines.get(("camera",))) from None
-    for key, part in _mesh_parts(scene):
+    for key, part in mesh_parts(scene):
         path = scene.resolve_path(part.mesh)
         if not path.is_file():
             loc = tuple(int(p) if p.isdigit() else p for p in key.split("."))
@@ -493,7 +495,8 @@ def scene_from_dict(
     return scene
 
 
-def _mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
+def mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
+    """The scene's mesh-file parts with their dotted keys (``vehicle.bumper.mesh``, ...)."""
     out = []
     for name in ("bumper", "garnish", "trunk"):
         part = getattr(scene.vehicle, name)
@@ -546,6 +549,6 @@ def read_scene_document(path: str | Path) -> tuple[Scene, Any]:
     """:func:`load_scene`, also returning the parsed YAML document (for tools that derive
     other scenes from it: sweeps, cluster tasks).  Same errors."""
     path = Path(path)
-    text = read_text(path)
-    data = parse_yaml(text, str(path))
+    text = read_text(path, SceneError)
+    data = parse_yaml(text, str(path), SceneError)
     return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text), data

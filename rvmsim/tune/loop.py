@@ -19,9 +19,9 @@ import numpy as np
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import key_lines, parse_yaml, read_text, validation_error_to_scene_error
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..criteria.core import Criteria, load_criteria
-from ..errors import RvmsimError
+from ..errors import RvmsimError, TuningConfigError
 from ..criteria.evaluator import CandidateEvaluator
 from ..isp.core import IspParams, OutputSpec, params_to_dict
 from .search import (
@@ -118,18 +118,18 @@ def load_tuning_config(path: str | Path | None) -> TuningConfig:
     if path is None:
         return TuningConfig()
     path = Path(path)
-    text = read_text(path)
-    data = parse_yaml(text, str(path)) or {}
+    text = read_text(path, TuningConfigError)
+    data = parse_yaml(text, str(path), TuningConfigError) or {}
     if not isinstance(data, dict):
-        raise RvmsimError(f"{path}: a tuning config must be a YAML mapping")
+        raise TuningConfigError(str(path), "", "a tuning config must be a YAML mapping")
     try:
         cfg = TuningConfig.model_validate(data)
     except ValidationError as err:
-        raise validation_error_to_scene_error(err, str(path), key_lines(text)) from None
+        raise input_error_from_validation(err, str(path), key_lines(text), TuningConfigError) from None
     unknown = set(cfg.tuned or []) | set(cfg.parameters) | set(cfg.fixed)
     unknown -= set(IspParams.names())
     if unknown:
-        raise RvmsimError(f"{path}: {sorted(unknown)[0]}: not an ISP parameter")
+        raise TuningConfigError(str(path), sorted(unknown)[0], "not an ISP parameter")
     return cfg
 
 
@@ -249,7 +249,7 @@ def tune(
     progress_position : int
         Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
-    from ..render.cache import cached_render, scene_key
+    from ..render.cache import cached_render, same_scene, scene_key
     from ..scene.schema import load_scene
 
     run_dir = Path(run_dir)
@@ -268,11 +268,11 @@ def tune(
     if criteria is None:
         criteria = load_criteria(criteria_file)
     scene = load_scene(scene_file)
-    key = scene_key(scene, scene_file)
-    if resume and saved.get("scene_key", key) != key:
+    key = scene_key(scene)
+    if resume and not same_scene(saved.get("scene_key", key), scene, scene_file):
         raise RvmsimError(f"{scene_file}: the scene changed since this run started; "
                           "resuming would mix two scenes (start a new run)")
-    images, _ = cached_render(scene, scene_file, progress=progress)
+    images, _ = cached_render(scene, progress=progress)
     space = config.space(images.camera)
     strat = make_strategy(strategy, space, config, seed, budget)
     if not resume:

@@ -835,7 +835,7 @@ def validate(
         if scene_file is not None:
             from ..render.cache import cached_render
 
-            synthetic = cached_render(scene, scene_file, progress=progress)[0]
+            synthetic = cached_render(scene, progress=progress)[0]
         else:
             synthetic = render_fisheye(scene, progress=progress)
     cam = synthetic.camera
@@ -1091,10 +1091,11 @@ def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,
         When the mount cannot be rewritten in place or the result does not load.
     """
     from .._io import key_lines, read_text
+    from ..errors import SceneError
     from ..scene.schema import load_scene
 
     scene_file, out_file = Path(scene_file), Path(out_file)
-    text = read_text(scene_file)
+    text = read_text(scene_file, SceneError)
     lines = text.splitlines(keepends=True)
     where = key_lines(text)
     values = {
