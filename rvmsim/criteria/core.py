@@ -204,6 +204,12 @@ class Criteria:
         if set(self.items) != set(EC_IDS):
             raise ValueError(f"criteria must define every EC {EC_IDS}")
 
+    @property
+    def ids(self) -> tuple[str, ...]:
+        """The ids of the ECs these criteria hold, in evaluation order (the columns of
+        :class:`EcBatch` and of the run store's ``ec`` column)."""
+        return EC_IDS
+
     @functools.cached_property
     def arrays(self) -> tuple[np.ndarray, ...]:
         """Per EC in ``EC_IDS`` order, for :func:`score_batch`: low, high (±max float when

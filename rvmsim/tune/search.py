@@ -33,7 +33,7 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from ..camera.fisheye import FisheyeCamera
-from ..criteria.core import EC_IDS, score_batch
+from ..criteria.core import score_batch
 from ..isp.core import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
 from ..errors import RvmsimError
 from .store import RunStore, TrialRecord, ec_json, params_json
@@ -337,9 +337,10 @@ def score_vectors(evaluator, space: SearchSpace, xs: Sequence[np.ndarray]) -> Sc
     """Evaluate candidate vectors of ``space`` with a
     :class:`~rvmsim.evaluator.CandidateEvaluator`, scored and serialised for the store."""
     params = [space.params(x) for x in xs]
-    values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(EC_IDS))
+    ids = evaluator.criteria.ids
+    values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(ids))
     b = score_batch(values, evaluator.criteria)
-    ecs = [ec_json(v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
+    ecs = [ec_json(ids, v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
                                                 b.passed.tolist())]
     return ScoredBatch(b.score.tolist(), b.objective(OBJECTIVE_FLOOR).tolist(),
                        b.all_passed.tolist(), [params_json(p) for p in params], ecs)

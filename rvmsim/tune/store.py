@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from ..criteria.core import EC_IDS
 from ..errors import RvmsimError
 from ..isp.core import IspParams
 
@@ -66,11 +65,12 @@ def json_default(o: Any) -> Any:
     raise TypeError(f"{type(o).__name__} is not JSON serializable")
 
 
-def ec_json(values: Sequence[float], scores: Sequence[float], passed: Sequence[bool]) -> str:
-    """The ``ec`` column: each EC (``EC_IDS`` order in) as ``[value, score, passed]``, the
-    value ``null`` where it was not measured (NaN)."""
+def ec_json(ids: Sequence[str], values: Sequence[float], scores: Sequence[float],
+            passed: Sequence[bool]) -> str:
+    """The ``ec`` column: each EC (``ids``, the criteria's order) as ``[value, score,
+    passed]``, the value ``null`` where it was not measured (NaN)."""
     return json.dumps({e: [None if math.isnan(v) else v, s, ok]
-                       for e, v, s, ok in zip(EC_IDS, values, scores, passed)})
+                       for e, v, s, ok in zip(ids, values, scores, passed)})
 
 
 class SqliteStore:
