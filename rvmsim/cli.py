@@ -279,15 +279,15 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
     Locally the scenes run one after another, each on --workers processes; with --scheduler
     each scene is one task on the cluster, and its run folder is written here as it finishes.
     """
-    from .criteria.core import EC_IDS
-    from .tune.loop import load_tuning_config
-    from .tune.loop import tune as run_tune
+    from .batch import (BatchSettings, SceneRun, run_batch, summary_ec_ids, summary_table,
+                        write_summary)
+    from .tune import load_tuning_config
 
     try:
-        cfg = load_tuning_config(config_file)
+        settings = BatchSettings(strategy, load_tuning_config(config_file), criteria_file,
+                                 seed, budget, workers)
     except RvmsimError as err:
         _fail(err)
-    rows, failed = [], 0
     overall = None
     if progress:  # the overall bar on top, each vehicle's tuning bar below it
         from tqdm import tqdm
@@ -300,103 +300,30 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
         else:
             click.echo(msg, err=err)
 
-    def remote_runs():
-        """(scene, run_dir, (evaluations, seconds)) per finished task, or (scene, None,
-        error)."""
-        from .render.cache import scene_key
-        from .batch.executors import DaskExecutor
-        from .scene.schema import load_scene
-        from .tune.loop import portable_scene_doc, tune_task
-
-        tasks, by_key = {}, {}
-        for k, scene in enumerate(scenes):
-            try:  # a bad scene or criteria file skips the scene, as in local runs
-                doc = portable_scene_doc(scene)
-                crit = Path(criteria_file).read_text() if criteria_file else None
-            except (RvmsimError, OSError) as err:
-                yield scene, None, err
-                continue
-            key = f"batch-{k}-{scene.stem}"
-            by_key[key] = scene
-            tasks[key] = {"scene": doc, "config": cfg.model_dump(mode="json"),
-                          "strategy": strategy, "seed": seed, "budget": budget,
-                          "criteria": crit, "workers": 1}
-        with DaskExecutor(scheduler) as ex:
-            for key, res in ex.run(tune_task, tasks):
-                scene = by_key[key]
-                if "error" in res:
-                    yield scene, None, RvmsimError(res["error"])
-                    continue
-                run_dir = out / scene.stem
-                for rel, data in res["files"].items():
-                    (run_dir / rel).parent.mkdir(parents=True, exist_ok=True)
-                    (run_dir / rel).write_bytes(data)
-                meta = json.loads((run_dir / "run.json").read_text())
-                meta["scene"] = str(scene.resolve())
-                meta["scene_key"] = scene_key(load_scene(scene))
-                meta["criteria_file"] = (None if criteria_file is None
-                                         else str(Path(criteria_file).resolve()))
-                (run_dir / "run.json").write_text(json.dumps(meta, indent=2))
-                yield scene, run_dir, (res["evaluated"] + res["replayed"], res["seconds"])
-
-    def local_runs():
-        """The same, tuning here one scene after another."""
-        for k, scene in enumerate(scenes, start=1):
-            say(f"[{k}/{len(scenes)}] {scene}")
-            run_dir = out / scene.stem
-            try:
-                r = run_tune(scene, run_dir, strategy=strategy, config=cfg,
-                             criteria_file=criteria_file, seed=seed, workers=workers,
-                             budget=budget, progress=progress, progress_position=1)
-            except RvmsimError as err:
-                yield scene, None, err
-                continue
-            yield scene, run_dir, (r.outcome.evaluated + r.outcome.replayed, r.outcome.seconds)
-
+    runs: list[SceneRun] = []
     try:
-        for scene, run_dir, info in (remote_runs() if scheduler else local_runs()):
-            if run_dir is None:
-                err = info
-                say(f"rvmsim: error: {err} (skipped)", err=True)
-                rows.append({"scene": str(scene), "error": str(err)})
-                failed += 1
-                if overall is not None:
-                    overall.update(1)
-                continue
-            evaluations, seconds = info
-            doc = json.loads((run_dir / "best" / "ec.json").read_text())
+        for r in run_batch(scenes, out, settings, scheduler=scheduler, progress=progress,
+                           on_start=lambda k, scene: say(f"[{k}/{len(scenes)}] {scene}")):
+            runs.append(r)
+            if r.error is not None:
+                say(f"rvmsim: error: {r.error} (skipped)", err=True)
             if overall is not None:
                 overall.update(1)
-                overall.set_postfix_str(f"{doc['vehicle'][:20]}: EC {doc['ec_score']:.3g}")
-            rows.append({
-                "scene": str(scene), "vehicle": doc["vehicle"], "ec_score": doc["ec_score"],
-                "passed": doc["passed"], "ecs": {e["id"]: e["passed"] for e in doc["ecs"]},
-                "evaluations": evaluations, "seconds": round(seconds, 1), "run": str(run_dir),
-            })
+                if r.ok:
+                    overall.set_postfix_str(f"{r.vehicle[:20]}: EC {r.ec_score:.3g}")
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
         _fail_os(err, out)
     if overall is not None:
         overall.close()
-    head = f"{'vehicle':28} {'EC score':>10} " + " ".join(f"{e:>3}" for e in EC_IDS)
-    lines = [head + f" {'evals':>7} {'time':>7}"]
-    for r in rows:
-        if "error" in r:
-            lines.append(f"{r['scene']:28} {'error':>10}  {r['error']}")
-            continue
-        marks = " ".join(f"{'ok' if r['ecs'][e] else 'X':>3}" for e in EC_IDS)
-        lines.append(f"{r['vehicle'][:28]:28} {r['ec_score']:10.4g} {marks} "
-                     f"{r['evaluations']:7d} {r['seconds']:6.1f}s")
-    table = "\n".join(lines)
+    table = summary_table(runs, summary_ec_ids(runs, criteria_file))
     click.echo(table)
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "summary.json").write_text(json.dumps(rows, indent=2))
-        (out / "summary.txt").write_text(table + "\n")
-    except OSError as err:
-        _fail(RvmsimError(f"{out}: {err.strerror or err}"))
-    if failed:
+        write_summary(out, runs, table)
+    except RvmsimError as err:
+        _fail(err)
+    if any(not r.ok for r in runs):
         sys.exit(1)
 
 
@@ -564,8 +491,7 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
     limiting EC, the tuned parameters), feasibility.png, sensitivity.png and sweep.html.
     Finished points are stored as they arrive: run the same command again to resume.
     """
-    from .batch.executors import make_executor
-    from .batch.sweep import load_sweep, run_sweep, write_sweep_outputs
+    from .batch import load_sweep, make_executor, run_sweep, stored_sweep, write_sweep_outputs
 
     out = out or Path("runs") / f"sweep_{sweep_file.stem}"
     try:
@@ -575,13 +501,9 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
                 res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
         except KeyboardInterrupt:
             # Every finished point is in sweep.sqlite; write what there is, then stop.
-            from .batch.sweep import SweepResult, SweepStore, design_points
-
-            store = SweepStore(out / "sweep.sqlite")
-            done = store.done()
-            store.close()
-            write_sweep_outputs(SweepResult(spec, design_points(spec), done, 0, out))
-            click.echo(f"rvmsim: interrupted: {len(done)} of {len(design_points(spec))} design "
+            part = stored_sweep(spec, out)
+            write_sweep_outputs(part)
+            click.echo(f"rvmsim: interrupted: {len(part.results)} of {len(part.points)} design "
                        "points done; run the same command again to resume", err=True)
             sys.exit(130)
         written = write_sweep_outputs(res)

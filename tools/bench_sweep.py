@@ -22,7 +22,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim.batch import sweep as S  # noqa: E402
+from rvmsim import batch as S  # noqa: E402
 from rvmsim.batch import DaskExecutor, LocalExecutor  # noqa: E402
 
 

@@ -1,4 +1,14 @@
-"""Many tasks at once: executors (local processes, Dask) and design-stage sweeps."""
+"""Many tasks at once: executors (local processes, Dask), design-stage sweeps, and batches of
+tuning runs.
+
+- :mod:`.executors`: where tasks run (local processes or a Dask cluster).
+- :mod:`.spec`: the sweep file, its axes and design points.
+- :mod:`.point`: one design point as a task (render, tune, sensitivity).
+- :mod:`.store`: ``sweep.sqlite``.
+- :mod:`.run`: running or resuming a sweep.
+- :mod:`.outputs`: the sweep table, CSV/JSON and the files of a sweep.
+- :mod:`.tasks`: ``rvmsim batch``: one tuning run per scene, locally or on Dask.
+"""
 
 from __future__ import annotations
 
@@ -9,18 +19,41 @@ from .executors import (
     make_executor,
     task_malloc,
 )
-from .sweep import (
+from .spec import (
     AXES,
     SweepSpec,
     DesignPoint,
     load_sweep,
     design_points,
+    point_scene_doc,
+)
+from .point import (
     run_point,
-    run_sweep,
+    sensitivity,
+    SENSITIVITY_STEPS,
+)
+from .store import (
     SweepStore,
+)
+from .run import (
     SweepResult,
+    run_sweep,
+    stored_sweep,
+    point_task,
+)
+from .outputs import (
     sweep_table,
+    csv_text,
+    sweep_json,
     write_sweep_outputs,
+)
+from .tasks import (
+    BatchSettings,
+    SceneRun,
+    run_batch,
+    summary_ec_ids,
+    summary_table,
+    write_summary,
 )
 
 __all__ = [
@@ -34,10 +67,23 @@ __all__ = [
     "DesignPoint",
     "load_sweep",
     "design_points",
+    "point_scene_doc",
     "run_point",
-    "run_sweep",
+    "sensitivity",
+    "SENSITIVITY_STEPS",
     "SweepStore",
     "SweepResult",
+    "run_sweep",
+    "stored_sweep",
+    "point_task",
     "sweep_table",
+    "csv_text",
+    "sweep_json",
     "write_sweep_outputs",
+    "BatchSettings",
+    "SceneRun",
+    "run_batch",
+    "summary_ec_ids",
+    "summary_table",
+    "write_summary",
 ]

@@ -170,9 +170,9 @@ def task_malloc(threshold_bytes: int = 256 * 1024 * 1024) -> Iterator[bool]:
     process).  Both thresholds are raised while the task runs.  Yields True when they were
     changed (Linux/glibc only; elsewhere nothing happens).
     """
-    env = os.environ.get("MALLOC_TRIM_THRESHOLD_")
+    env = os.environ.get("MALLOC_TRIM_THRESHOLD_", "")
     libc = None
-    if env and env.isdigit() and int(env) < threshold_bytes and sys.platform.startswith("linux"):
+    if env.isdigit() and int(env) < threshold_bytes and sys.platform.startswith("linux"):
         try:
             import ctypes
 

@@ -1,4 +1,4 @@
-"""HTML review pages: the page kit and the run report."""
+"""HTML review pages: the page kit, the run report and the sweep page."""
 
 from __future__ import annotations
 
@@ -9,6 +9,13 @@ from .run import (
     EC_GROUP_NAMES,
     SECTION_IDS,
 )
+from .sweep import (
+    FeasibilityGrid,
+    feasibility_grid,
+    feasibility_png,
+    sensitivity_png,
+    sweep_html,
+)
 
 __all__ = [
     "write_report",
@@ -16,4 +23,9 @@ __all__ = [
     "find_runs",
     "EC_GROUP_NAMES",
     "SECTION_IDS",
+    "FeasibilityGrid",
+    "feasibility_grid",
+    "feasibility_png",
+    "sensitivity_png",
+    "sweep_html",
 ]

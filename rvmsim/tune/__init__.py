@@ -27,6 +27,7 @@ from .store import (
 from .loop import (
     TuningConfig,
     load_tuning_config,
+    make_strategy,
     tune,
     TuneResult,
     write_results,
@@ -55,6 +56,7 @@ __all__ = [
     "json_default",
     "TuningConfig",
     "load_tuning_config",
+    "make_strategy",
     "tune",
     "TuneResult",
     "write_results",

@@ -1,4 +1,4 @@
-"""Executors: the local process pool survives a dead worker; task_malloc undoes Dask's low
+"""batch.executors: the local process pool survives a dead worker; task_malloc undoes Dask's low
 malloc trim threshold for the duration of a task."""
 
 from __future__ import annotations

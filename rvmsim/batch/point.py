@@ -1,0 +1,129 @@
+"""One design point as a task: render its scene, tune the ISP, probe the sensitivity.
+
+:func:`run_point` is a pure function of its task dict (the point's scene document, tuning
+config, strategy, budget, seed, criteria text), so it runs the same on a local process or a
+Dask worker; it writes no files except into the worker's render cache.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any
+
+import numpy as np
+
+from ..errors import RvmsimError
+from .executors import task_malloc
+
+__all__ = ["run_point", "sensitivity", "SENSITIVITY_STEPS"]
+
+#: Parameter offsets (fractions of its search range) the sensitivity is probed at.
+SENSITIVITY_STEPS = (-0.1, -0.05, -0.02, 0.02, 0.05, 0.1)
+
+_RENDER_LOCK = threading.Lock()
+
+
+def run_point(task: dict[str, Any]) -> dict[str, Any]:
+    """Render, tune and probe one design point (runs in a worker; no files but the render
+    cache).
+
+    Returns a JSON-ready dict: ``score``, ``passed``, ``ecs`` (id → value, score, passed),
+    ``params``, ``tuned``, ``evaluations``, ``stopped``, ``limiting_ec`` (the failing enabled
+    EC with the lowest score, or None), ``sensitivity`` (see :func:`sensitivity`) and
+    ``seconds``; a problem with the point is returned as ``{"error": message, "seconds"}``.
+    """
+    with task_malloc():
+        return _run_point(task)
+
+
+def _run_point(task: dict[str, Any]) -> dict[str, Any]:
+    import os
+
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    from ..criteria import CandidateEvaluator, criteria_from_text, default_criteria
+    from ..render import cached_render
+    from ..scene import scene_from_dict
+    from ..tune import RunStore, TuningConfig, make_strategy, run_search, score_vectors
+
+    t0 = time.perf_counter()
+    try:
+        scene = scene_from_dict(task["scene"], source=task["label"])
+        config = TuningConfig.model_validate(task["config"])
+        criteria = (criteria_from_text(task["criteria"], "sweep criteria")
+                    if task.get("criteria") else default_criteria())
+        # One render at a time per process: a Dask worker with several threads would
+        # otherwise open several OpenGL contexts at once.
+        with _RENDER_LOCK:
+            images, _ = cached_render(scene)
+        space = config.space(images.camera)
+        strat = make_strategy(task["strategy"], space, config, task["seed"], task["budget"])
+        evaluator = CandidateEvaluator(images.labels, config.output_spec(), criteria)
+        store = RunStore(":memory:")
+        outcome = run_search(strat, lambda xs: score_vectors(evaluator, space, xs), store)
+        best = store.top(1)[0]
+        n_eval = store.count()
+        store.close()
+        result: dict[str, Any] = {
+            "score": best.score,
+            "passed": bool(best.passed),
+            "ecs": {ec: {"value": v[0], "score": v[1], "passed": bool(v[2])}
+                    for ec, v in best.ec.items()},
+            "params": {n: getattr(best.params, n) for n in best.params.names()},
+            "tuned": list(space.names),
+            "evaluations": n_eval,
+            "stopped": outcome.stopped,
+        }
+        failing = [(v["score"], ec) for ec, v in result["ecs"].items()
+                   if not v["passed"] and criteria.items[ec].enabled]
+        result["limiting_ec"] = min(failing)[1] if failing else None
+        if task.get("sensitivity", True):
+            result["sensitivity"] = sensitivity(evaluator, space, best.params)
+        result["seconds"] = time.perf_counter() - t0
+        return result
+    except RvmsimError as err:
+        return {"error": str(err), "seconds": time.perf_counter() - t0}
+
+
+def sensitivity(evaluator: Any, space: Any, best: Any) -> dict[str, Any]:
+    """EC score with each tuned parameter moved off the optimum by ±2, 5, 10 % of its range
+    (others at the optimum).
+
+    Parameters
+    ----------
+    evaluator : CandidateEvaluator
+        The point's evaluator.
+    space : SearchSpace
+        The tuned parameters and their ranges.
+    best : IspParams
+        The optimum.
+
+    Returns
+    -------
+    dict
+        ``optimum`` (the score there), ``steps`` (:data:`SENSITIVITY_STEPS`) and per tuned
+        parameter ``scores`` (one per step, None outside the range) and ``drop_5pct``:
+        1 − (mean score at ±5 %) / optimum score; 0 if the parameter does not matter there,
+        1 if a small change loses everything (None when the optimum scores 0).
+    """
+    from ..tune import score_vectors
+
+    x0 = space.vector(best)
+    lo, hi = space.low, space.high
+    xs, meta = [x0.copy()], []
+    for i, name in enumerate(space.names):
+        for f in SENSITIVITY_STEPS:
+            x = x0.copy()
+            x[i] = x0[i] + f * (hi[i] - lo[i])
+            if lo[i] - 1e-12 <= x[i] <= hi[i] + 1e-12:
+                xs.append(x)
+                meta.append((name, f))
+    scores = score_vectors(evaluator, space, xs).score
+    s0 = scores[0]
+    params: dict[str, Any] = {}
+    for name in space.names:
+        pts = {f: s for (n, f), s in zip(meta, scores[1:]) if n == name}
+        at5 = [pts[f] for f in (-0.05, 0.05) if f in pts]
+        drop = (1.0 - float(np.mean(at5)) / s0) if (at5 and s0 > 0) else None
+        params[name] = {"scores": [pts.get(f) for f in SENSITIVITY_STEPS], "drop_5pct": drop}
+    return {"optimum": s0, "steps": list(SENSITIVITY_STEPS), "params": params}

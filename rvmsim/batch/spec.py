@@ -1,0 +1,369 @@
+"""The sweep file: loading and checking it, its axes, and the design points they span.
+
+Sweep file (YAML)::
+
+    name: Vehicle A mount study
+    base_scene: ../scenes/vehicle_a.yaml      # relative to the sweep file
+    axes:                                      # in order; the table and maps follow it
+      camera_height_m: [0.9, 1.0, 1.1]         # a named axis (see AXES) ...
+      pitch_deg: {start: 25, stop: 40, num: 4} # ... lists or ranges (stop included) ...
+      vehicle.bumper.top: [0.7, 0.8]           # ... or any scene key by its dotted path
+    tune:
+      strategy: cmaes                          # any strategy of `rvmsim tune`
+      budget: 1500
+      seed: 0
+      config: {output: {size: [640, 360]}}     # a tuning config (as `rvmsim tune --config`)
+      criteria: my_criteria.yaml               # optional, relative to the sweep file
+    map: [camera_height_m, pitch_deg]          # the feasibility map's x and y axes
+    sensitivity: true
+
+Every combination of axis values is one :class:`DesignPoint`; :func:`point_scene_doc` builds
+its scene document and tuning config.  Problems with the file are
+:class:`~rvmsim.errors.SweepFileError` (one line naming the file, the key and its line).
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import itertools
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Union
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from ..criteria import Criteria, criteria_from_text, default_criteria
+from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
+from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
+
+__all__ = ["AXES", "SweepSpec", "DesignPoint", "load_sweep", "design_points",
+           "point_scene_doc"]
+
+#: Named axes: name → where a value is written.  Heights are positive up; the camera
+#: position's y is negative up.
+AXES: dict[str, str] = {
+    "camera_height_m": "camera.mount.position.1 = -value",
+    "lateral_offset_m": "camera.mount.position.0 = value",
+    "bumper_overhang_m": "camera.mount.position.2 = -value (camera this far ahead of the "
+                         "bumper's rearmost point)",
+    "pitch_deg": "camera.mount.pitch_deg",
+    "yaw_deg": "camera.mount.yaw_deg",
+    "roll_deg": "camera.mount.roll_deg",
+    "focal_length_px": "camera.intrinsics fx = value, fy keeping the base fy/fx, same centre",
+    "horizontal_fov_deg": "camera.intrinsics = {horizontal_fov_deg: value}",
+    "lens_fov_deg": "camera.lens.fov_deg",
+    "output_size": "the tuning config's output.size ([W, H]): the RVM image the ECs see",
+}
+
+#: Position axes: name → (index in camera.mount.position, sign of the value there).
+_POSITION_AXES = {"camera_height_m": (1, -1), "lateral_offset_m": (0, 1),
+                  "bumper_overhang_m": (2, -1)}
+
+
+# ---------------------------------------------------------------------------- the file
+class _Range(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    start: float
+    stop: float
+    num: int | None = Field(default=None, ge=1, le=1000)
+    step: float | None = Field(default=None, gt=0)
+
+
+class _Tune(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    strategy: str = "cmaes"
+    budget: int | None = Field(default=1500, ge=1)
+    seed: int = 0
+    config: dict[str, Any] = {}
+    criteria: str | None = None
+
+
+class _SweepFile(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    name: str = "sweep"
+    base_scene: str
+    axes: dict[str, Union[list[Any], _Range]] = Field(min_length=1)
+    tune: _Tune = _Tune()
+    map: tuple[str, str] | None = None
+    sensitivity: bool = True
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A loaded sweep file.  ``axes`` keeps the file's order; every value list is expanded.
+
+    ``criteria_doc`` is the criteria file's text (None: the default criteria);
+    ``lines`` maps the file's key paths to their lines, for error messages.
+    """
+
+    name: str
+    source: str
+    base_scene: Path
+    base_doc: dict
+    axes: tuple[tuple[str, tuple[Any, ...]], ...]
+    strategy: str
+    budget: int | None
+    seed: int
+    config: dict
+    criteria_doc: str | None
+    map_axes: tuple[str, str] | None
+    sensitivity: bool
+    criteria_source: str = "sweep criteria"
+    lines: Mapping[tuple[Any, ...], int] = field(default_factory=dict, compare=False,
+                                                 repr=False)
+
+    def fingerprint(self) -> str:
+        """Hash of what a design point's result depends on besides its axis values."""
+        h = hashlib.sha256()
+        h.update(json.dumps([self.base_doc, self.strategy, self.budget, self.seed, self.config,
+                             self.criteria_doc, self.sensitivity], sort_keys=True,
+                            default=str).encode())
+        for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
+            h.update(path.read_bytes() if path.is_file() else b"?")
+        return h.hexdigest()[:20]
+
+    def criteria(self) -> Criteria:
+        """The criteria every design point is judged by."""
+        if self.criteria_doc is None:
+            return default_criteria()
+        return criteria_from_text(self.criteria_doc, self.criteria_source)
+
+    def error(self, key: str, message: str, at: tuple[Any, ...] | None = None
+              ) -> SweepFileError:
+        """A :class:`SweepFileError` at ``key`` (dotted) of this sweep file; see
+        :func:`_error`."""
+        return _error(self.source, self.lines, key, message, at)
+
+
+def _error(source: str, lines: Mapping[tuple[Any, ...], int], key: str, message: str,
+           at: tuple[Any, ...] | None = None) -> SweepFileError:
+    """A :class:`SweepFileError` naming ``key``, on the line of the longest known prefix of
+    the key path ``at`` (default: ``key`` split at its dots)."""
+    parts = at if at is not None else (tuple(key.split(".")) if key else ())
+    line = None
+    for n in range(len(parts), 0, -1):
+        if parts[:n] in lines:
+            line = lines[parts[:n]]
+            break
+    return SweepFileError(source, key, message, line)
+
+
+def _expand(name: str, v: Any, source: str, lines: Mapping[tuple[Any, ...], int]
+            ) -> tuple[Any, ...]:
+    """An axis's values: a list as given, a range expanded (stop included)."""
+    key, at = f"axes.{name}", ("axes", name)
+    vals: np.ndarray
+    if isinstance(v, _Range):
+        if v.num is not None and v.step is None:
+            vals = np.linspace(v.start, v.stop, v.num)
+        elif v.step is not None and v.num is None:
+            n = int(math.floor((v.stop - v.start) / v.step + 1e-9)) + 1
+            if n < 1 or n > 1000:
+                raise _error(source, lines, key, f"the range gives {n} values", at)
+            vals = v.start + v.step * np.arange(n)
+        else:
+            raise _error(source, lines, key, "give a range either num or step", at)
+        return tuple(round(float(x), 10) for x in vals)
+    if not v:
+        raise _error(source, lines, key, "no values", at)
+    return tuple(v)
+
+
+def _check_tuning(f: _SweepFile, source: str, lines: Mapping[tuple[Any, ...], int]) -> None:
+    """The strategy is known and ``tune.config`` is a valid tuning config."""
+    from ..tune import STRATEGIES, TuningConfig
+
+    if f.tune.strategy not in STRATEGIES:
+        raise _error(source, lines, "tune.strategy",
+                     f"{f.tune.strategy!r} is not one of {', '.join(STRATEGIES)}")
+    try:
+        TuningConfig.model_validate(f.tune.config)
+    except ValidationError as err:
+        sub = {k[2:]: n for k, n in lines.items() if k[:2] == ("tune", "config")}
+        e = input_error_from_validation(err, source, sub, SweepFileError)
+        raise SweepFileError(source, f"tune.config.{e.key}", e.message, e.line) from None
+
+
+def _read_criteria(f: _SweepFile, folder: Path) -> tuple[str | None, str]:
+    """(text, file name) of the sweep's criteria file, checked; (None, "") for the
+    defaults."""
+    if f.tune.criteria is None:
+        return None, ""
+    cpath = Path(f.tune.criteria)
+    cpath = cpath if cpath.is_absolute() else (folder / cpath).resolve()
+    text = read_text(cpath, CriteriaError)
+    criteria_from_text(text, str(cpath))  # its errors now, not in every worker
+    return text, str(cpath)
+
+
+def load_sweep(path: str | Path) -> SweepSpec:
+    """Read and check a sweep file, and every design point's scene.
+
+    Raises
+    ------
+    SweepFileError
+        One line naming the sweep file, the key and its line; the base scene's and the
+        criteria file's own errors name those files.
+    """
+    path = Path(path)
+    text = read_text(path, SweepFileError)
+    data = parse_yaml(text, str(path), SweepFileError)
+    if not isinstance(data, dict):
+        raise SweepFileError(str(path), "", "a sweep file must be a YAML mapping")
+    lines = key_lines(text)
+    try:
+        f = _SweepFile.model_validate(data)
+    except ValidationError as err:
+        raise input_error_from_validation(err, str(path), lines, SweepFileError) from None
+    base = Path(f.base_scene)
+    base = base if base.is_absolute() else (path.parent / base).resolve()
+    if not base.is_file():
+        raise _error(str(path), lines, "base_scene", f"scene file not found: {base}")
+    _, base_doc = read_scene_document(base)
+    axes = tuple((name, _expand(name, v, str(path), lines)) for name, v in f.axes.items())
+    _check_tuning(f, str(path), lines)
+    criteria_doc, criteria_source = _read_criteria(f, path.parent)
+    names = [a for a, _ in axes]
+    if f.map is not None and not set(f.map) <= set(names):
+        raise _error(str(path), lines, "map",
+                     f"{list(f.map)} must name two of the axes {names}")
+    spec = SweepSpec(name=f.name, source=str(path), base_scene=base, base_doc=base_doc,
+                     axes=axes, strategy=f.tune.strategy, budget=f.tune.budget,
+                     seed=f.tune.seed, config=f.tune.config, criteria_doc=criteria_doc,
+                     map_axes=f.map, sensitivity=f.sensitivity,
+                     criteria_source=criteria_source or "sweep criteria", lines=lines)
+    # Every point's scene must load: check them all now, not in a worker an hour later.
+    for point in design_points(spec):
+        point_scene_doc(spec, point.values)
+    return spec
+
+
+# ---------------------------------------------------------------------------- points
+@dataclass(frozen=True)
+class DesignPoint:
+    """One combination of axis values; ``key`` identifies it across runs (its values)."""
+
+    index: int
+    values: tuple[tuple[str, Any], ...]
+
+    @property
+    def key(self) -> str:
+        return json.dumps([[n, v] for n, v in self.values], separators=(",", ":"))
+
+    @property
+    def task_key(self) -> str:
+        """A short name for the point's task (executors and Dask keys)."""
+        return hashlib.sha256(self.key.encode()).hexdigest()[:16]
+
+    @property
+    def label(self) -> str:
+        """``name=value, …`` for messages."""
+        return _label(self.values)
+
+
+def design_points(spec: SweepSpec) -> list[DesignPoint]:
+    """Every combination, the first axis varying slowest."""
+    names = [n for n, _ in spec.axes]
+    return [DesignPoint(i, tuple(zip(names, combo)))
+            for i, combo in enumerate(itertools.product(*(v for _, v in spec.axes)))]
+
+
+def _label(values: tuple[tuple[str, Any], ...]) -> str:
+    return ", ".join(f"{n}={v}" for n, v in values)
+
+
+def _set_path(spec: SweepSpec, doc: dict, path: str, value: Any) -> None:
+    """Set the scene key at dotted ``path`` (list indices as numbers) to ``value``."""
+    key, at = f"axes.{path}", ("axes", path)
+    keys: list[Any] = [int(k) if k.isdigit() else k for k in path.split(".")]
+    node: Any = doc
+    for k in keys[:-1]:
+        try:
+            node = node[k]
+        except (KeyError, IndexError, TypeError):
+            raise spec.error(key, f"the base scene has no key {path}", at) from None
+    last = keys[-1]
+    if isinstance(node, list):
+        if not isinstance(last, int) or last >= len(node):
+            raise spec.error(key, "index out of range", at)
+        node[last] = value
+    elif isinstance(node, dict):
+        node[last] = value
+    else:
+        raise spec.error(key, f"cannot set a key inside a {type(node).__name__}", at)
+
+
+def _set_intrinsics_fx(base_scene: Scene, doc: dict, fx: float) -> None:
+    """Intrinsics with focal length ``fx`` px, the base scene's fy/fx, centre and skew."""
+    w, h = base_scene.camera.image_size
+    base_fx, base_fy, cx, cy, skew = base_scene.camera.intrinsics.resolve(w, h)
+    doc["camera"]["intrinsics"] = {"fx": fx, "fy": fx * base_fy / base_fx,
+                                   "cx": cx, "cy": cy, "skew": skew}
+
+
+def _apply_axis(spec: SweepSpec, doc: dict, config: dict, name: str, value: Any,
+                base_scene: Scene | None) -> Scene | None:
+    """Write one axis value into the scene document or the tuning config; returns the base
+    scene when it had to be loaded (for ``focal_length_px``)."""
+    mount = doc.setdefault("camera", {}).setdefault("mount", {})
+    if name in _POSITION_AXES:
+        pos = list(mount.get("position", [0.0, 0.0, 0.0]))
+        i, sign = _POSITION_AXES[name]
+        pos[i] = sign * float(value)
+        mount["position"] = pos
+    elif name in ("pitch_deg", "yaw_deg", "roll_deg"):
+        mount[name] = float(value)
+    elif name == "lens_fov_deg":
+        doc["camera"].setdefault("lens", {})["fov_deg"] = float(value)
+    elif name == "horizontal_fov_deg":
+        doc["camera"]["intrinsics"] = {"horizontal_fov_deg": float(value)}
+    elif name == "focal_length_px":
+        if base_scene is None:
+            base_scene = scene_from_dict(spec.base_doc, base_dir=spec.base_scene.parent,
+                                         source=str(spec.base_scene))
+        _set_intrinsics_fx(base_scene, doc, float(value))
+    elif name == "output_size":
+        if not (isinstance(value, list) and len(value) == 2):
+            raise spec.error("axes.output_size", f"values are [W, H], got {value!r}",
+                             ("axes", name))
+        config.setdefault("output", {})["size"] = list(value)
+    elif "." in name:
+        _set_path(spec, doc, name, value)
+    else:
+        raise spec.error(f"axes.{name}", f"unknown axis (named axes: {', '.join(AXES)}; or "
+                                         "a scene key path like vehicle.bumper.top)",
+                         ("axes", name))
+    return base_scene
+
+
+def point_scene_doc(spec: SweepSpec, values: tuple[tuple[str, Any], ...]) -> tuple[dict, dict]:
+    """(scene document, tuning config document) of one design point.  Mesh paths become
+    absolute, so the document loads from anywhere.
+
+    Raises
+    ------
+    SweepFileError
+        An axis that cannot be applied, or a point whose scene is invalid (the message
+        names the point and the scene key).
+    """
+    doc = copy.deepcopy(spec.base_doc)
+    config = copy.deepcopy(spec.config)
+    absolute_mesh_paths(doc, spec.base_scene.parent)
+    base_scene = None
+    for name, value in values:
+        base_scene = _apply_axis(spec, doc, config, name, value, base_scene)
+    label = _label(values)
+    try:
+        scene_from_dict(doc, base_dir=spec.base_scene.parent, source=f"{spec.source} [{label}]")
+    except InputFileError as err:
+        where = f"{err.key}: " if err.key else ""
+        raise spec.error("axes", f"design point {label}: {where}{err.message}") from None
+    except RvmsimError as err:
+        raise spec.error("axes", f"design point {label}: {err}") from None
+    return doc, config

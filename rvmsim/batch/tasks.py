@@ -1,0 +1,225 @@
+"""``rvmsim batch``: one tuning run per scene, and the summary table over them.
+
+Locally the scenes are tuned one after another, each on ``workers`` processes
+(:func:`rvmsim.tune.tune`).  With a Dask scheduler each scene is one task on the cluster
+(:func:`rvmsim.tune.tune_task`); its run folder comes back as bytes and is written into
+``out/<scene name>/`` with this machine's scene path, scene key and criteria file in its
+``run.json``, so ``status``, ``select``, ``report`` and ``--resume`` work on it as on a local
+run.  A scene that cannot be loaded or tuned is reported as a failed :class:`SceneRun`; the
+others still run.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import RvmsimError
+
+if TYPE_CHECKING:
+    from ..tune import TuningConfig
+
+__all__ = ["BatchSettings", "SceneRun", "run_batch", "summary_ec_ids", "summary_table",
+           "write_summary"]
+
+
+@dataclass(frozen=True)
+class BatchSettings:
+    """How every scene of a batch is tuned (as ``rvmsim tune``'s options).
+
+    ``workers``: local processes per scene (a Dask task uses one).
+    """
+
+    strategy: str
+    config: TuningConfig
+    criteria_file: Path | None = None
+    seed: int = 0
+    budget: int | None = None
+    workers: int = 1
+
+
+@dataclass(frozen=True)
+class SceneRun:
+    """One scene's outcome: its run folder and best candidate, or the error that skipped it.
+
+    ``ecs`` maps EC id → passed, in the criteria's order; ``seconds`` is the tuning wall time
+    rounded to 0.1 s.
+    """
+
+    scene: Path
+    run_dir: Path | None = None
+    error: str | None = None
+    vehicle: str = ""
+    ec_score: float = 0.0
+    passed: bool = False
+    ecs: Mapping[str, bool] = field(default_factory=dict)
+    evaluations: int = 0
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+    @classmethod
+    def failed(cls, scene: Path, err: BaseException | str) -> SceneRun:
+        return cls(scene, error=str(err))
+
+    @classmethod
+    def finished(cls, scene: Path, run_dir: Path, evaluations: int, seconds: float) -> SceneRun:
+        """The run in ``run_dir``, read from its ``best/ec.json``."""
+        doc = json.loads((run_dir / "best" / "ec.json").read_text())
+        return cls(scene, run_dir, vehicle=doc["vehicle"], ec_score=doc["ec_score"],
+                   passed=doc["passed"], ecs={e["id"]: e["passed"] for e in doc["ecs"]},
+                   evaluations=evaluations, seconds=round(seconds, 1))
+
+    def summary_row(self) -> dict[str, Any]:
+        """This scene's entry of ``summary.json``."""
+        if self.error is not None:
+            return {"scene": str(self.scene), "error": self.error}
+        return {"scene": str(self.scene), "vehicle": self.vehicle, "ec_score": self.ec_score,
+                "passed": self.passed, "ecs": dict(self.ecs), "evaluations": self.evaluations,
+                "seconds": self.seconds, "run": str(self.run_dir)}
+
+
+def run_batch(scenes: Sequence[Path], out: Path, settings: BatchSettings, *,
+              scheduler: str | None = None, progress: bool = False,
+              on_start: Callable[[int, Path], None] | None = None) -> Iterator[SceneRun]:
+    """Tune every scene into ``out/<scene name>/``, yielding each :class:`SceneRun` as it
+    finishes (in order locally, in completion order on a cluster).
+
+    Parameters
+    ----------
+    scheduler : str, optional
+        ``tcp://HOST:PORT`` of a Dask cluster: one task per scene there.
+    progress : bool
+        Each local scene's tuning bar (on the second line, under the caller's own).
+    on_start : callable, optional
+        ``on_start(k, scene)`` before local scene ``k`` (1-based) starts.
+
+    Raises
+    ------
+    RvmsimError
+        The cluster cannot be reached or a task failed there (not a bad scene: that is a
+        failed SceneRun).
+    OSError
+        A run folder cannot be written.
+    """
+    if scheduler:
+        return _remote_runs(scenes, out, settings, scheduler)
+    return _local_runs(scenes, out, settings, progress, on_start)
+
+
+def _local_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings, progress: bool,
+                on_start: Callable[[int, Path], None] | None) -> Iterator[SceneRun]:
+    from ..tune import tune
+
+    for k, scene in enumerate(scenes, start=1):
+        if on_start is not None:
+            on_start(k, scene)
+        run_dir = out / scene.stem
+        try:
+            r = tune(scene, run_dir, strategy=settings.strategy, config=settings.config,
+                     criteria_file=settings.criteria_file, seed=settings.seed,
+                     workers=settings.workers, budget=settings.budget, progress=progress,
+                     progress_position=1)
+        except RvmsimError as err:
+            yield SceneRun.failed(scene, err)
+            continue
+        yield SceneRun.finished(scene, run_dir, r.outcome.evaluated + r.outcome.replayed,
+                                r.outcome.seconds)
+
+
+def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
+                 scheduler: str) -> Iterator[SceneRun]:
+    from ..tune import portable_scene_doc, tune_task
+    from .executors import DaskExecutor
+
+    tasks, by_key = {}, {}
+    for k, scene in enumerate(scenes):
+        try:  # a bad scene or criteria file skips the scene, as in local runs
+            doc = portable_scene_doc(scene)
+            crit = Path(settings.criteria_file).read_text() if settings.criteria_file else None
+        except (RvmsimError, OSError) as err:
+            yield SceneRun.failed(scene, err)
+            continue
+        key = f"batch-{k}-{scene.stem}"
+        by_key[key] = scene
+        tasks[key] = {"scene": doc, "config": settings.config.model_dump(mode="json"),
+                      "strategy": settings.strategy, "seed": settings.seed,
+                      "budget": settings.budget, "criteria": crit, "workers": 1}
+    with DaskExecutor(scheduler) as ex:
+        for key, res in ex.run(tune_task, tasks):
+            scene = by_key[key]
+            if "error" in res:
+                yield SceneRun.failed(scene, res["error"])
+                continue
+            run_dir = out / scene.stem
+            _write_run_folder(run_dir, res["files"], scene, settings.criteria_file)
+            yield SceneRun.finished(scene, run_dir, res["evaluated"] + res["replayed"],
+                                    res["seconds"])
+
+
+def _write_run_folder(run_dir: Path, files: Mapping[str, bytes], scene: Path,
+                      criteria_file: Path | None) -> None:
+    """Write a run made on a worker into ``run_dir``, its ``run.json`` naming this machine's
+    scene file (path and key) and criteria file, as a local run's does."""
+    from ..render import scene_key
+    from ..scene import load_scene
+
+    for rel, data in files.items():
+        (run_dir / rel).parent.mkdir(parents=True, exist_ok=True)
+        (run_dir / rel).write_bytes(data)
+    meta = json.loads((run_dir / "run.json").read_text())
+    meta["scene"] = str(scene.resolve())
+    meta["scene_key"] = scene_key(load_scene(scene))
+    meta["criteria_file"] = None if criteria_file is None else str(Path(criteria_file).resolve())
+    (run_dir / "run.json").write_text(json.dumps(meta, indent=2))
+
+
+def summary_ec_ids(runs: Sequence[SceneRun], criteria_file: Path | None) -> tuple[str, ...]:
+    """The summary table's EC columns: the ECs the finished runs were judged by (one
+    criteria file for all), else those of the criteria file."""
+    for r in runs:
+        if r.ok:
+            return tuple(r.ecs)
+    from ..criteria import load_criteria
+
+    try:
+        return load_criteria(criteria_file).ids
+    except RvmsimError:  # already reported as every scene's error: no EC columns then
+        return ()
+
+
+def summary_table(runs: Sequence[SceneRun], ec_ids: Sequence[str]) -> str:
+    """The batch summary as text: per scene the vehicle, EC score, ok/X per EC in
+    ``ec_ids``, evaluations and seconds, or its error."""
+    head = f"{'vehicle':28} {'EC score':>10} " + " ".join(f"{e:>3}" for e in ec_ids)
+    lines = [head + f" {'evals':>7} {'time':>7}"]
+    for r in runs:
+        if r.error is not None:
+            lines.append(f"{str(r.scene):28} {'error':>10}  {r.error}")
+            continue
+        marks = " ".join(f"{'ok' if r.ecs[e] else 'X':>3}" for e in ec_ids)
+        lines.append(f"{r.vehicle[:28]:28} {r.ec_score:10.4g} {marks} "
+                     f"{r.evaluations:7d} {r.seconds:6.1f}s")
+    return "\n".join(lines)
+
+
+def write_summary(out: Path, runs: Sequence[SceneRun], table: str) -> list[Path]:
+    """Write ``out/summary.json`` (one entry per scene) and ``out/summary.txt`` (``table``).
+
+    Raises
+    ------
+    RvmsimError
+        ``out`` cannot be written (one line).
+    """
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "summary.json").write_text(json.dumps([r.summary_row() for r in runs], indent=2))
+        (out / "summary.txt").write_text(table + "\n")
+    except OSError as err:
+        raise RvmsimError(f"{out}: {err.strerror or err}") from None
+    return [out / "summary.json", out / "summary.txt"]

@@ -1,0 +1,220 @@
+"""The sweep page: the feasibility map, the sensitivity chart and the design-point table of a
+design-stage sweep (:mod:`rvmsim.batch`), on one self-contained HTML page.
+
+Convention: the feasibility map's cell (i, j) is the j-th value of its x axis and the i-th
+of its y axis, drawn with the origin at the lower left; cells are 1 unit wide, centred on
+integers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .page import data_uri, escape, figure_png, page
+
+if TYPE_CHECKING:
+    from ..batch import DesignPoint, SweepResult, SweepSpec
+
+__all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "sensitivity_png",
+           "sweep_html"]
+
+
+@dataclass(frozen=True)
+class FeasibilityGrid:
+    """The feasibility map's cells: per (y, x) value, the best score over the other axes,
+    whether that best passes every EC, and its limiting EC ("" when it passes or has none).
+
+    ``y_axis`` is None for a one-axis map (one row, ``ys == [None]``); ``others`` are the
+    other axes with several values, which the map takes the best over.
+    """
+
+    x_axis: str
+    y_axis: str | None
+    xs: list[Any]
+    ys: list[Any]
+    score: np.ndarray  # (len(ys), len(xs)) float, NaN where no point finished
+    passed: np.ndarray  # (len(ys), len(xs)) bool
+    limiting: np.ndarray  # (len(ys), len(xs)) object (str)
+    others: list[str]
+
+
+def _map_axes(spec: SweepSpec) -> tuple[str, str | None]:
+    """The map's x and y axes: the sweep's ``map``, else its first two axes with several
+    values (or its first axis)."""
+    if spec.map_axes is not None:
+        return spec.map_axes
+    multi = [n for n, v in spec.axes if len(v) > 1] or [spec.axes[0][0]]
+    return multi[0], (multi[1] if len(multi) > 1 else None)
+
+
+def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
+                     results: dict[str, dict[str, Any]]) -> FeasibilityGrid:
+    """Best score, pass and limiting EC on the map's grid, best over the other axes (a
+    passing point beats a failing one with a higher score)."""
+    axes = dict(spec.axes)
+    xa, ya = _map_axes(spec)
+    xs = list(axes[xa])
+    ys = list(axes[ya]) if ya is not None else [None]
+    score = np.full((len(ys), len(xs)), np.nan)
+    passed = np.zeros((len(ys), len(xs)), bool)
+    limiting = np.full((len(ys), len(xs)), "", dtype=object)
+    for p in points:
+        r = results.get(p.key)
+        if r is None or "error" in r:
+            continue
+        v = dict(p.values)
+        i = ys.index(v[ya]) if ya is not None else 0
+        j = xs.index(v[xa])
+        if np.isnan(score[i, j]) or r["score"] > score[i, j] or (r["passed"] and not passed[i, j]):
+            score[i, j] = r["score"]
+            passed[i, j] = r["passed"]
+            limiting[i, j] = r["limiting_ec"] or ""
+    others = [n for n, v in spec.axes if n not in (xa, ya) and len(v) > 1]
+    return FeasibilityGrid(xa, ya, xs, ys, score, passed, limiting, others)
+
+
+def _outline_passing(ax: Any, passed: np.ndarray) -> None:
+    """Draw the border of the passing cells: every cell edge with a non-passing (or no)
+    neighbour."""
+    rows, cols = passed.shape
+    for i, j in zip(*np.nonzero(passed)):
+        for di, dj, seg in ((1, 0, ([j - .5, j + .5], [i + .5, i + .5])),
+                            (-1, 0, ([j - .5, j + .5], [i - .5, i - .5])),
+                            (0, 1, ([j + .5, j + .5], [i - .5, i + .5])),
+                            (0, -1, ([j - .5, j - .5], [i - .5, i + .5]))):
+            ni, nj = i + di, j + dj
+            if not (0 <= ni < rows and 0 <= nj < cols and passed[ni, nj]):
+                ax.plot(*seg, color="black", linewidth=2.5)
+
+
+def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
+                    results: dict[str, dict[str, Any]]) -> bytes:
+    """Heat map of the best EC score over the map's two axes, the pass region outlined in
+    black, and the limiting EC written in every failing cell (PNG bytes)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    g = feasibility_grid(spec, points, results)
+    fig = Figure(figsize=(1.6 + 1.1 * len(g.xs), 1.4 + 0.8 * len(g.ys)))
+    ax = fig.add_subplot(111)
+    im = ax.imshow(g.score, origin="lower", cmap="viridis", vmin=0.0, vmax=1.0, aspect="auto")
+    fig.colorbar(im, ax=ax, label="best EC score")
+    for i in range(len(g.ys)):
+        for j in range(len(g.xs)):
+            s = g.score[i, j]
+            if np.isnan(s):
+                txt = "—"
+            elif g.passed[i, j]:
+                txt = f"{s:.2f}\npass"
+            else:
+                txt = f"{s:.2g}\n{g.limiting[i, j]}"
+            ax.text(j, i, txt, ha="center", va="center", fontsize=8,
+                    color="white" if (np.isnan(s) or s < 0.5) else "black")
+    _outline_passing(ax, g.passed)
+    ax.set_xticks(range(len(g.xs)), [str(x) for x in g.xs])
+    ax.set_xlabel(g.x_axis)
+    if g.y_axis is not None:
+        ax.set_yticks(range(len(g.ys)), [str(y) for y in g.ys])
+        ax.set_ylabel(g.y_axis)
+    else:
+        ax.set_yticks([])
+    title = "feasibility: pass region outlined; failing cells name the limiting EC"
+    if g.others:
+        title += f"\n(best over {', '.join(g.others)})"
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return figure_png(fig)
+
+
+def sensitivity_png(points: list[DesignPoint], results: dict[str, dict[str, Any]]
+                    ) -> bytes | None:
+    """Per ISP parameter: the relative EC score drop at ±5 % of its range around each design
+    point's optimum (median and maximum over the passing points, or over all scoring points
+    when none passes), and the score curves of the best point (PNG bytes; None when no point
+    has a sensitivity probe and a score above 0)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    rs = [results[p.key] for p in points if p.key in results and "sensitivity" in results[p.key]
+          and results[p.key]["score"] > 0]
+    if not rs:
+        return None
+    if any(r["passed"] for r in rs):  # where the design works is where tuning matters
+        rs = [r for r in rs if r["passed"]]
+    names = list(rs[0]["sensitivity"]["params"])
+    drops = np.array([[r["sensitivity"]["params"][n]["drop_5pct"] or 0.0 for n in names]
+                      for r in rs])
+    best = max(rs, key=lambda r: r["score"])
+    fig = Figure(figsize=(10, 3.8))
+    ax = fig.add_subplot(121)
+    med = np.median(drops, axis=0)
+    order = np.argsort(-med)
+    ax.barh([names[k] for k in order][::-1], med[order][::-1], color="#4a7bb7", xerr=None)
+    ax.scatter(drops.max(axis=0)[order][::-1], range(len(names)), marker="|", color="black",
+               label="max over points")
+    ax.set_xlabel("EC score drop at ±5 % of range (median; < 0: a better point is near,\n"
+                  "the tuning budget was short)", fontsize=8)
+    ax.legend(fontsize=8)
+    ax2 = fig.add_subplot(122)
+    steps = best["sensitivity"]["steps"]
+    half = len(steps) // 2
+    xs = [*steps[:half], 0.0, *steps[half:]]
+    for n in names:
+        sc = best["sensitivity"]["params"][n]["scores"]
+        ys = [*sc[:half], best["sensitivity"]["optimum"], *sc[half:]]
+        ax2.plot([100 * x for x, y in zip(xs, ys) if y is not None],
+                 [y for y in ys if y is not None], marker=".", label=n)
+    ax2.set_xlabel("offset from the optimum, % of the parameter's range")
+    ax2.set_ylabel("EC score (best design point)")
+    ax2.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    return figure_png(fig)
+
+
+def _cell_class(v: Any) -> str:
+    """Table cell colour class (the page kit's CSS): pass/True green, FAIL/False red,
+    anything else plain (the point numbers 0 and 1 too)."""
+    if v == "pass" or v is True:
+        return "pass"
+    if v == "FAIL" or v is False:
+        return "fail"
+    return ""
+
+
+def _cell(v: Any) -> str:
+    text = "" if v is None else (f"{v:.4g}" if isinstance(v, float) else v)
+    return f'<td class="{_cell_class(v)}">{escape(text)}</td>'
+
+
+def sweep_html(res: SweepResult, header: list[str], rows: list[list[Any]], columns: int,
+               feasibility: bytes, sensitivity: bytes | None) -> str:
+    """The sweep page: settings, the feasibility map and sensitivity chart (PNG bytes), and
+    the first ``columns`` columns of the design-point table (``header``, ``rows`` as
+    :func:`rvmsim.batch.sweep_table` gives them)."""
+    spec = res.spec
+    n_pass = sum(1 for r in res.results.values() if r.get("passed"))
+    table = "".join("<tr>" + "".join(_cell(v) for v in row[:columns]) + "</tr>"
+                    for row in rows)
+    head = "".join(f"<th>{escape(h)}</th>" for h in header[:columns])
+    sizes = " × ".join(f"{len(v)} {n}" for n, v in spec.axes)
+    sens = ("" if sensitivity is None else
+            "<h2>Sensitivity to the ISP parameters around the optimum</h2>"
+            f'<img src="{data_uri(sensitivity)}" alt="sensitivity">')
+    return page(f"Sweep: {spec.name}", f"""
+<h1>Feasibility sweep: {escape(spec.name)}</h1>
+<p>Base scene {escape(spec.base_scene)}; {len(res.points)} design points
+({escape(sizes)}); tuning: {escape(spec.strategy)},
+budget {escape(spec.budget)}, seed {escape(spec.seed)}. {n_pass} of {len(res.results)} finished
+points pass every EC.</p>
+<h2>Feasibility map</h2><img src="{data_uri(feasibility)}" alt="feasibility map">
+{sens}
+<h2>Design points</h2><p>Tuned parameters per point: sweep.csv.</p>
+<table><tr>{head}</tr>{table}</table>
+""")

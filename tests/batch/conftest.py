@@ -1,0 +1,63 @@
+"""Shared sweep fixtures: vehicle A at 320 × 240 as a base scene, a six-point sweep run once
+on local processes, and a Dask LocalCluster on loopback (both for the whole package)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+from rvmsim.batch import LocalExecutor, load_sweep, run_sweep
+
+from ..conftest import SCENES
+
+SWEEP = """\
+name: tiny mount study
+base_scene: base.yaml
+axes:
+  camera_height_m: [0.9, 1.0, 1.1]
+  pitch_deg: [28, 34]
+tune:
+  strategy: cmaes
+  budget: 200
+  seed: 3
+  config: {output: {size: [320, 180]}}
+"""
+
+
+def small_scene_text(letter: str) -> str:
+    """Bundled vehicle ``letter`` at 320 × 240, its lens scaled to match."""
+    d = yaml.safe_load((SCENES / f"vehicle_{letter}.yaml").read_text())
+    d["camera"]["image_size"] = [320, 240]
+    d["camera"]["intrinsics"] = {"fx": 97.5, "fy": 97.5}
+    return yaml.safe_dump(d, sort_keys=False)
+
+
+def write_sweep(folder: Path, text: str = SWEEP) -> Path:
+    """Vehicle A at 320 × 240 as the base scene, and a sweep."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "base.yaml").write_text(small_scene_text("a"))
+    (folder / "sweep.yaml").write_text(text)
+    return folder / "sweep.yaml"
+
+
+@pytest.fixture(scope="package")
+def sweep_file(tmp_path_factory) -> Path:
+    return write_sweep(tmp_path_factory.mktemp("sweep"))
+
+
+@pytest.fixture(scope="package")
+def local_run(sweep_file):
+    spec = load_sweep(sweep_file)
+    res = run_sweep(spec, sweep_file.parent / "local", executor=LocalExecutor(2))
+    return spec, res
+
+
+@pytest.fixture(scope="package")
+def cluster():
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=":0") as c, \
+            distributed.Client(c) as client:
+        yield c, client
