@@ -1,4 +1,4 @@
-"""HTML review pages: the page kit and the run report."""
+"""HTML review pages: the page kit, the run report and the validation page."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from .run import (
     EC_GROUP_NAMES,
     SECTION_IDS,
 )
+from .validation import validation_page, PICTURE_CAPTIONS
 
 __all__ = [
     "write_report",
@@ -16,4 +17,6 @@ __all__ = [
     "find_runs",
     "EC_GROUP_NAMES",
     "SECTION_IDS",
+    "validation_page",
+    "PICTURE_CAPTIONS",
 ]
