@@ -7,6 +7,8 @@ corrected scene is the synthetic frame that explains it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..criteria import Criteria, EcResult, evaluate
@@ -45,25 +47,40 @@ def compare_rvm(capture: np.ndarray, synthetic: FisheyeImages,
     images : dict of str to (h, w, 3) uint8
         ``rvm_capture``, ``rvm_synthetic``, ``rvm_overlay``, ``rvm_edges``.
     """
-    output = output or OutputSpec()
+    rvm = _rvm_images_and_ecs(capture, synthetic, corrected, params, output or OutputSpec(),
+                              criteria)
+    edges, pictures = compare_with_pictures(rvm.capture, rvm.synthetic, rvm.labels,
+                                            "rvm_overlay", "rvm_edges")
+    images = {"rvm_capture": rvm.capture, "rvm_synthetic": rvm.synthetic, **pictures}
+    return RvmComparison(edges, rvm.ec_scene, rvm.ec_capture), images
+
+
+@dataclass(frozen=True)
+class _RvmImages:
+    """The RVM images (uint8 RGB / labels) and the ECs of :func:`_rvm_images_and_ecs`."""
+
+    capture: np.ndarray
+    synthetic: np.ndarray
+    labels: np.ndarray
+    ec_scene: EcResult
+    ec_capture: EcResult
+
+
+def _rvm_images_and_ecs(capture: np.ndarray, synthetic: FisheyeImages,
+                        corrected: FisheyeImages | None, params: IspParams, output: OutputSpec,
+                        criteria: Criteria | None) -> _RvmImages:
+    """params -> RVM images -> ECs, the one step of validation that evaluates ISP parameters.
+
+    The capture's colour, the synthetic frame's colour and labels, and the corrected frame's
+    labels (the scene's when None) go through the ISP; the ECs are evaluated on both label
+    images.
+    """
+    # TODO(#13 merge): this is what rvmsim.pipeline's single evaluation function does
+    # (params -> RVM colour + labels -> ECs); call it here instead.
     rvm_cap = process(capture, None, params, output)[0]
     rvm_syn, lab_syn = process(synthetic.color, synthetic.labels, params, output)
-    assert rvm_cap is not None and rvm_syn is not None and lab_syn is not None
-    # TODO(#13 merge): the process + evaluate pairs below are the single evaluation path of
-    # rvmsim.pipeline (params -> RVM colour + labels -> ECs); swap it in here.
-    ec_scene = evaluate(lab_syn, criteria)
-    ec_capture = _ecs_of_labels(corrected, lab_syn, params, output, criteria)
-    edges, pictures = compare_with_pictures(rvm_cap, rvm_syn, lab_syn, "rvm_overlay",
-                                            "rvm_edges")
-    images = {"rvm_capture": rvm_cap, "rvm_synthetic": rvm_syn, **pictures}
-    return RvmComparison(edges, ec_scene, ec_capture), images
-
-
-def _ecs_of_labels(corrected: FisheyeImages | None, lab_syn: np.ndarray, params: IspParams,
-                   output: OutputSpec, criteria: Criteria | None) -> EcResult:
-    """ECs "of the capture": the corrected frame's RVM labels, else the scene's."""
-    if corrected is None:
-        return evaluate(lab_syn, criteria)
-    lab_cap = process(None, corrected.labels, params, output)[1]
-    assert lab_cap is not None
-    return evaluate(lab_cap, criteria)
+    lab_cap = lab_syn if corrected is None else process(None, corrected.labels, params, output)[1]
+    if rvm_cap is None or rvm_syn is None or lab_syn is None or lab_cap is None:
+        raise TypeError("process() returned no image for an input it was given")
+    return _RvmImages(rvm_cap, rvm_syn, lab_syn, evaluate(lab_syn, criteria),
+                      evaluate(lab_cap, criteria))
