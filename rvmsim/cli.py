@@ -439,22 +439,20 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     tolerances.  Writes validation.json, validation.html and PNGs (landmarks, blended overlays,
     edge overlays).  Exit status: 0 pass, 1 the verdict failed, 2 an error.
     """
-    from .render.cache import cached_render
-    from .criteria.core import load_criteria
-    from .scene.schema import load_scene
-    from .validate.core import Tolerances, load_capture, write_corrected_scene, write_outputs
-    from .validate.core import validate as run_validate
+    from .criteria import load_criteria
+    from .scene import load_scene
+    from .validate import Tolerances, load_capture, write_corrected_scene, write_outputs
+    from .validate import validate as run_validate
 
     try:
         sc = load_scene(scene)
         params, output = _load_isp(params_file) if params_file else (None, None)
         criteria = load_criteria(criteria_file) if params_file else None
         capture = load_capture(capture_file, sc.fisheye_camera())
-        synthetic, _ = cached_render(sc, progress=progress)
         tol = Tolerances(max_rms_px=max_rms_px, max_position_mm=max_position_mm,
                          max_angle_deg=max_angle_deg, max_chamfer_px=max_chamfer_px,
                          min_landmarks=min_landmarks)
-        result = run_validate(sc, capture, synthetic=synthetic, capture_name=str(capture_file),
+        result = run_validate(sc, capture, use_cache=True, capture_name=str(capture_file),
                               params=params, output=output, criteria=criteria,
                               tolerances=tol, search_px=search_px, progress=progress)
         out = out or Path("out") / scene.stem / "validate"

@@ -2,10 +2,10 @@
 
     python tools/bench_validate.py
 
-Builds the same captures as ``tests/test_validate.py`` (its scene and degradations are
-imported from there): unperturbed, perturbed by a known pose error with other textures and
-sensor effects, a scene 60 mm / 3° off, and the real BAIC EU5 frame with the bundled scene
-and from its README's rough pose.  Prints the landmark errors, the recovered pose error
+Builds the same captures as the tests in ``tests/validate/`` (their scene and degradations
+are imported from ``tests/validate/captures.py``): unperturbed, perturbed by a known pose
+error with other textures and sensor effects, a scene 60 mm / 3° off, and the real BAIC EU5
+frame with the bundled scene and from its README's rough pose.  Prints the landmark errors, the recovered pose error
 against the truth, and the seconds per validation (render excluded, re-render included).
 """
 
@@ -22,8 +22,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim.validate import core as V  # noqa: E402
-from tests import test_validate as T  # noqa: E402
+import rvmsim.validate as V  # noqa: E402
+from rvmsim.render import render_fisheye  # noqa: E402
+from tests.validate import captures as T  # noqa: E402
 
 
 def show(name: str, res: V.Validation, seconds: float) -> None:
@@ -50,9 +51,8 @@ def main() -> None:
     err = [g - w for g, w in zip(got, (*T.D_POS_MM, *T.D_YPR_DEG))]
     print("  recovered minus truth: ({:+.1f}, {:+.1f}, {:+.1f}) mm, ({:+.3f}, {:+.3f}, "
           "{:+.3f})°".format(*err))
-    wrong = T._scene(T._scene_dict({**T.MOUNT, "position": [0.02, -0.91, -0.12],
-                                    "pitch_deg": 39.0}))
-    wrong_syn = T.render_fisheye(wrong)
+    wrong = T.wrong_scene()
+    wrong_syn = render_fisheye(wrong)
     t = time.perf_counter()
     show("scene 60 mm / 3° off", V.validate(wrong, cap, synthetic=wrong_syn),
          time.perf_counter() - t)
@@ -60,12 +60,8 @@ def main() -> None:
         sc, cap, syn = T.baic()
         t = time.perf_counter()
         show("BAIC EU5 real frame", V.validate(sc, cap, synthetic=syn), time.perf_counter() - t)
-        rough = sc.camera.mount.model_copy(update={"position": (0.0, -0.97, -0.10),
-                                                   "yaw_deg": 0.0, "pitch_deg": 38.0,
-                                                   "roll_deg": 0.0})
-        rough_scene = sc.model_copy(update={"camera": sc.camera.model_copy(
-            update={"mount": rough})})
-        rough_syn = T.render_fisheye(rough_scene)
+        rough_scene = T.baic_rough_scene(sc)
+        rough_syn = render_fisheye(rough_scene)
         t = time.perf_counter()
         show("BAIC from the rough pose", V.validate(rough_scene, cap, synthetic=rough_syn),
              time.perf_counter() - t)

@@ -1,4 +1,4 @@
-"""HTML review pages: the page kit, the run report and the sweep page."""
+"""HTML review pages: the page kit, the run report, the sweep page and the validation page."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from .sweep import (
     sensitivity_png,
     sweep_html,
 )
+from .validation import validation_page, PICTURE_CAPTIONS
 
 __all__ = [
     "write_report",
@@ -28,4 +29,6 @@ __all__ = [
     "feasibility_png",
     "sensitivity_png",
     "sweep_html",
+    "validation_page",
+    "PICTURE_CAPTIONS",
 ]

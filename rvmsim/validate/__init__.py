@@ -1,24 +1,39 @@
-"""Validation of a scene against a real capture from the physical camera."""
+"""Validation of a scene against a real capture from the physical camera.
+
+Modules, in the order :func:`validate` uses them:
+
+- :mod:`.capture`: reading a capture (:func:`load_capture`) and its checks.
+- :mod:`.landmarks`: the scene's checker corners the synthetic frame shows usably.
+- :mod:`.matching`: finding them in the capture (chessboard detector, NCC + cornerSubPix).
+- :mod:`.pose`: the mount pose fit (:func:`fit_pose`), the dense pre-alignment on the
+  ground patterns' shade and the checker-shift disambiguation.
+- :mod:`.edges`: Canny edges and their chamfer comparison (:func:`compare_edges`).
+- :mod:`.rvm`: the capture and the synthetic frame through the ISP, and their ECs.
+- :mod:`.verdict`: the result records (:class:`Validation`, ...) and the checks.
+- :mod:`.scene_edit`: the scene with the corrected mount (:func:`scene_with_mount`,
+  :func:`write_corrected_scene`).
+- :mod:`.outputs`: the pictures and the output folder (:func:`write_outputs`).
+- :mod:`.validation`: :func:`validate`, the steps in order.
+- :mod:`.projection`: scene points to pixels at a corrected pose (shared by the above).
+"""
 
 from __future__ import annotations
 
-from .core import (
-    Tolerances,
+from .capture import load_capture
+from .edges import CHAMFER_TRUNCATE_PX, compare_edges
+from .matching import find_landmarks
+from .outputs import write_outputs
+from .pose import fit_pose
+from .scene_edit import scene_with_mount, write_corrected_scene
+from .validation import validate
+from .verdict import (
+    Check,
+    EdgeComparison,
     LandmarkMatch,
     PoseCorrection,
-    EdgeComparison,
     RvmComparison,
-    Check,
+    Tolerances,
     Validation,
-    load_capture,
-    find_landmarks,
-    fit_pose,
-    compare_edges,
-    validate,
-    write_outputs,
-    write_corrected_scene,
-    scene_with_mount,
-    CHAMFER_TRUNCATE_PX,
 )
 
 __all__ = [

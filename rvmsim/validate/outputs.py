@@ -1,0 +1,101 @@
+"""What a validation leaves for people: the pictures, and the files in the output folder.
+
+Convention
+----------
+Pictures are (H, W, 3) uint8 RGB; marker positions are (u, v) px with pixel centres at
+integer coordinates, rounded to the nearest pixel for drawing.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .._io import write_png
+from ..errors import RvmsimError
+from .edges import compare_edges, edge_overlay, model_mask
+from .verdict import EdgeComparison, LandmarkMatch, Validation
+
+__all__ = ["blend", "compare_with_pictures", "landmark_picture", "write_outputs"]
+
+
+def blend(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The 50/50 mix of two uint8 images of one shape (rounded down)."""
+    return ((a.astype(np.uint16) + b.astype(np.uint16)) // 2).astype(np.uint8)
+
+
+def compare_with_pictures(capture: np.ndarray, synthetic: np.ndarray, labels: np.ndarray,
+                          overlay_key: str,
+                          edges_key: str) -> tuple[EdgeComparison, dict[str, np.ndarray]]:
+    """Edges of ``capture`` against ``synthetic`` over the modelled part of ``labels``
+    (:func:`~.edges.model_mask`), with the pictures: the blend (``overlay_key``) and the
+    edge overlay (``edges_key``).  Both images (H, W, 3) uint8 RGB, ``labels`` (H, W)."""
+    edges, e_cap, e_syn = compare_edges(capture, synthetic, model_mask(labels))
+    return edges, {overlay_key: blend(capture, synthetic),
+                   edges_key: edge_overlay(capture, e_cap, e_syn)}
+
+
+def _px(p: np.ndarray | tuple[float, float]) -> tuple[int, int]:
+    """A pixel position for cv2's drawing functions."""
+    return int(round(float(p[0]))), int(round(float(p[1])))
+
+
+def landmark_picture(capture: np.ndarray, matches: tuple[LandmarkMatch, ...]) -> np.ndarray:
+    """The capture with the landmarks drawn.
+
+    Predicted (red +; red line from the prediction to the find drawn 5× longer so small
+    errors show), found inliers (green o), outliers (orange x), corrected reprojection of
+    the inliers (cyan dot).
+    """
+    import cv2
+
+    out = capture.copy()
+    for m in matches:
+        p = np.array(m.predicted_px)
+        if m.found_px is None:
+            cv2.drawMarker(out, _px(p), (255, 60, 60), cv2.MARKER_CROSS, 6, 1)
+            continue
+        f = np.array(m.found_px)
+        tip = f + 4.0 * (f - p)
+        cv2.line(out, _px(p), _px(tip), (255, 60, 60), 1, cv2.LINE_AA)
+        if m.inlier:
+            cv2.circle(out, _px(f), 4, (40, 230, 40), 1, cv2.LINE_AA)
+            cv2.circle(out, _px(m.corrected_px), 1, (0, 220, 255), -1)
+        else:
+            cv2.drawMarker(out, _px(f), (255, 150, 0), cv2.MARKER_TILTED_CROSS, 9, 2)
+    return out
+
+
+def write_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
+    """Write ``validation.json``, ``validation.html`` and the PNGs into ``out_dir``.
+
+    Returns
+    -------
+    list of Path
+        ``validation.json``, ``validation.html``, then one PNG per picture (file stem =
+        key of ``result.images``).
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    from ..report import validation_page
+    from ..tune import json_default
+
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
+    paths = [write_png(out / f"{name}.png", img) for name, img in result.images.items()]
+    js = out / "validation.json"
+    try:
+        js.write_text(json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
+        html_path = out / "validation.html"
+        html_path.write_text(validation_page(result))
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+    return [js, html_path, *paths]

@@ -1,0 +1,344 @@
+"""The mount pose that explains a capture.
+
+* :func:`fit_pose` is fisheye PnP in the scene's own mount parameters: Levenberg-Marquardt
+  (trust-region) over Δposition (m) and Δyaw/pitch/roll (degrees) with our Kannala-Brandt
+  projection; standard errors come from the Jacobian.
+* :meth:`PoseSearch.match_and_fit` alternates landmark matching and fitting three times with
+  a shrinking search radius: robust (soft-L1) first, then least squares on the inliers
+  (residual ≤ max(1 px, 3 robust σ)).
+* :func:`find_pose` gets there from a rough pose: with ground patterns, a dense
+  pre-alignment (:class:`GroundShade`, :func:`dense_align`) first, then the checker-shift
+  disambiguation (a checker is periodic; its non-periodic parts decide).
+
+A *pose correction* ``x`` is (Δx, Δy, Δz m, Δyaw, Δpitch, Δroll degrees), see
+:mod:`.projection`.
+
+Convention
+----------
+Pixels are (u, v) = (column, row) with pixel centres at integer coordinates, as in
+:mod:`rvmsim.camera`.  Positions are in the scene frame (x driver side, y down, z rearward);
+the ground plane is y = 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .. import labels as L
+from ..camera import FisheyeCamera
+from ..errors import RvmsimError
+from ..render import FisheyeImages
+from ..scene import PATTERN_LIFT_M, GroundPattern, Scene, pattern_axes, pattern_shade
+from .capture import grey
+from .landmarks import VisibleLandmarks
+from .matching import find_landmarks
+from .projection import corrected_pose, project
+from .verdict import PoseCorrection
+
+__all__ = [
+    "fit_pose",
+    "PoseFit",
+    "PoseSearch",
+    "GroundShade",
+    "dense_align",
+    "find_pose",
+    "pose_correction",
+]
+
+
+def fit_pose(camera: FisheyeCamera, ypr_deg: ArrayLike, points: np.ndarray,
+             found_px: np.ndarray, *, robust: bool = True,
+             x0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fisheye PnP in the scene's mount parameters.
+
+    Parameters
+    ----------
+    camera : FisheyeCamera
+        The scene's camera (intrinsics and lens; its pose is the starting point).
+    ypr_deg : (3,) float
+        The scene's mount yaw, pitch, roll, degrees (``camera.rotation`` is made from them).
+    points : (N, 3) float
+        Scene points, metres.
+    found_px : (N, 2) float
+        Where they were found in the capture, px.
+    robust : bool
+        Soft-L1 loss with a 1 px scale (outliers weigh less); else plain least squares.
+    x0 : (6,) float, optional
+        Starting correction.
+
+    Returns
+    -------
+    x : (6,) float
+        Δx, Δy, Δz (m) and Δyaw, Δpitch, Δroll (degrees).
+    residuals_px : (N,) float
+        Reprojection error of each point after the correction.
+    sigma : (6,) float
+        One standard error of each component of ``x`` (same units).
+    """
+    from scipy.optimize import least_squares
+
+    points = np.asarray(points, dtype=np.float64)
+    found_px = np.asarray(found_px, dtype=np.float64)
+    ypr0 = np.asarray(ypr_deg, dtype=np.float64)
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        pos, rot = corrected_pose(camera, ypr0, x)
+        return (project(camera, pos, rot, points) - found_px).ravel()
+
+    res = least_squares(fun, np.zeros(6) if x0 is None else np.asarray(x0, dtype=np.float64),
+                        x_scale=np.array([0.01, 0.01, 0.01, 0.5, 0.5, 0.5]),
+                        loss="soft_l1" if robust else "linear", f_scale=1.0, method="trf",
+                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+    r = fun(res.x)
+    resid = np.hypot(r[0::2], r[1::2])
+    jac = res.jac
+    dof = max(1, len(r) - 6)
+    try:
+        cov = np.linalg.inv(jac.T @ jac) * float(r @ r) / dof
+        sigma = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    except np.linalg.LinAlgError:
+        # A singular normal matrix: the corners do not constrain every component.
+        sigma = np.full(6, np.inf)
+    return res.x, resid, sigma
+
+
+@dataclass(frozen=True)
+class PoseFit:
+    """One round of matching and fitting.
+
+    Attributes
+    ----------
+    x : (6,) float
+        The pose correction (m, degrees).
+    found : (N, 2) float
+        Capture pixels of the landmarks, px (NaN: not found).
+    ncc : (N,) float
+        Match correlations.
+    method : tuple of str
+        How each landmark was found (``"chessboard"``, ``"local"``, ``""``).
+    inliers : (N,) bool
+        Landmarks used by the final least-squares fit.
+    sigma : (6,) float
+        Standard errors of ``x``.
+    """
+
+    x: np.ndarray
+    found: np.ndarray
+    ncc: np.ndarray
+    method: tuple[str, ...]
+    inliers: np.ndarray
+    sigma: np.ndarray
+
+
+@dataclass(frozen=True)
+class PoseSearch:
+    """What matching and fitting need, fixed for one validation.
+
+    Attributes
+    ----------
+    capture : (H, W, 3) uint8
+    synthetic : FisheyeImages
+        The scene's rendered frame.
+    scene : Scene
+    landmarks : VisibleLandmarks
+    ypr0_deg : (3,) float
+        The scene's mount yaw, pitch, roll, degrees.
+    search_px : float
+        First search radius, px.
+    min_landmarks : int
+        Fewer found landmarks is an error.
+    capture_name : str
+        For messages.
+    """
+
+    capture: np.ndarray
+    synthetic: FisheyeImages
+    scene: Scene
+    landmarks: VisibleLandmarks
+    ypr0_deg: np.ndarray
+    search_px: float
+    min_landmarks: int
+    capture_name: str
+
+    def pose(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(position m, rotation) after the correction ``x``."""
+        return corrected_pose(self.synthetic.camera, self.ypr0_deg, x)
+
+    def match_and_fit(self, x: np.ndarray) -> PoseFit:
+        """Alternate landmark matching and pose fitting three times from ``x``, the search
+        radius shrinking to 3× the last RMS (clipped to 2 px .. ``search_px``).
+
+        Raises
+        ------
+        RvmsimError
+            Fewer than ``min_landmarks`` landmarks found.
+        """
+        cam = self.synthetic.camera
+        lm, need = self.landmarks, self.min_landmarks
+        pts = lm.points
+        radius = float(self.search_px)
+        for _ in range(3):
+            pos, rot = self.pose(x)
+            found, ncc, method, _pred = find_landmarks(
+                self.capture, self.synthetic, self.scene, lm.corners, position=pos,
+                rotation=rot, radius_px=radius, usable=lm.usable)
+            ok = np.isfinite(found[:, 0])
+            if ok.sum() < need:
+                raise RvmsimError(
+                    f"{self.capture_name}: too few landmarks found: {int(ok.sum())} of "
+                    f"{lm.n_usable} predicted checker corners (need {need}); is this a capture "
+                    f"of this scene, and is the pose within ~{self.search_px:g} px "
+                    "(--search-px)?")
+            idx = np.flatnonzero(ok)
+            x_r, res_r, _ = fit_pose(cam, self.ypr0_deg, pts[idx], found[idx], robust=True, x0=x)
+            mad = float(np.median(res_r)) * 1.4826
+            keep = res_r <= max(1.0, 3.0 * mad)
+            if keep.sum() < need:
+                keep = res_r <= np.sort(res_r)[need - 1]
+            x, res_i, sigma = fit_pose(cam, self.ypr0_deg, pts[idx[keep]], found[idx[keep]],
+                                       robust=False, x0=x_r)
+            inl = np.zeros(len(lm.corners), bool)
+            inl[idx[keep]] = True
+            rms = float(np.sqrt(np.mean(res_i ** 2)))
+            radius = float(np.clip(3.0 * rms, 2.0, self.search_px))
+        return PoseFit(x, found, ncc, tuple(method), inl, sigma)
+
+
+@dataclass(frozen=True)
+class GroundShade:
+    """How well the ground patterns' black and white, seen from a pose, explain the capture.
+
+    The score is the correlation of the pattern's shade (0 black, 1 white) with the
+    capture's grey level over every 2nd pixel (both ways) where the synthetic frame sees the
+    ground.  Build it with :meth:`sample`.
+
+    Attributes
+    ----------
+    rays : (M, 3) float
+        Camera-frame rays of the sampled pixels (inside the lens's field).
+    grey : (M,) float
+        The capture's grey level there (0..255).
+    patterns : tuple of GroundPattern
+        The scene's ground patterns (the first one wins where they overlap).
+    """
+
+    rays: np.ndarray
+    grey: np.ndarray
+    patterns: tuple[GroundPattern, ...]
+
+    @classmethod
+    def sample(cls, scene: Scene, cam: FisheyeCamera, labels: np.ndarray,
+               capture: np.ndarray) -> GroundShade:
+        """Sample the ground pixels of ``labels`` (the scene's label image) in ``capture``."""
+        vv, uu = np.mgrid[0:cam.height:2, 0:cam.width:2]
+        keep = np.isin(labels[vv, uu], (L.GROUND, L.GROUND_PATTERN))
+        uv = np.stack([uu[keep], vv[keep]], axis=1).astype(np.float64)
+        rays, in_fov = cam.pixel_rays(uv)
+        values = grey(capture)[vv[keep], uu[keep]][in_fov].astype(np.float64)
+        return cls(rays[in_fov], values, tuple(scene.test_site.ground_patterns))
+
+    def shifts(self) -> list[np.ndarray]:
+        """Camera moves (scene frame, m) that map the first pattern's checker onto itself
+        with the same polarity: (du, dv) squares, du + dv even, up to two squares each way."""
+        p = self.patterns[0]
+        ax, bx = pattern_axes(p)
+        return [p.square_size * (du * ax + dv * bx)
+                for du in range(-2, 3) for dv in range(-2, 3)
+                if (du + dv) % 2 == 0 and (du, dv) != (0, 0)]
+
+    def __call__(self, position: np.ndarray, rotation: np.ndarray) -> float:
+        """The correlation (-1..1) from the pose (position m, camera-to-scene rotation);
+        -1 where fewer than 100 samples hit a pattern or the shade is constant."""
+        d = self.rays @ rotation.T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (-PATTERN_LIFT_M - position[1]) / d[:, 1]
+        hit = (d[:, 1] > 1e-6) & (t > 0)
+        x = position[0] + t * d[:, 0]
+        z = position[2] + t * d[:, 2]
+        shade = np.full(len(d), np.nan)
+        for p in self.patterns:
+            sh = pattern_shade(p, x, z)
+            shade = np.where(np.isnan(shade), sh, shade)
+        ok = hit & np.isfinite(shade)
+        if ok.sum() < 100 or np.ptp(shade[ok]) == 0:
+            return -1.0
+        return float(np.corrcoef(shade[ok], self.grey[ok])[0, 1])
+
+
+def dense_align(shade: GroundShade, cam: FisheyeCamera, ypr0_deg: np.ndarray) -> np.ndarray:
+    """The pose correction maximising the ground-shade correlation.
+
+    Nelder-Mead from zero with initial steps of 30 mm and 1°; zero if that does not improve
+    the correlation.
+    """
+    from scipy.optimize import minimize
+
+    def cost(x: np.ndarray) -> float:
+        return -shade(*corrected_pose(cam, ypr0_deg, x))
+
+    x0 = np.zeros(6)
+    steps = np.array([0.03, 0.03, 0.03, 1.0, 1.0, 1.0])
+    simplex = np.vstack([x0, x0 + np.diag(steps)])
+    res = minimize(cost, x0, method="Nelder-Mead",
+                   options={"initial_simplex": simplex, "xatol": 1e-4, "fatol": 1e-5,
+                            "maxfev": 800})
+    return np.asarray(res.x) if res.fun < cost(x0) else x0
+
+
+def find_pose(search: PoseSearch) -> PoseFit:
+    """The matched landmarks and fitted pose, from the scene's pose or near it.
+
+    Without ground patterns: :meth:`PoseSearch.match_and_fit` from the scene's pose.  With
+    them, the pose whose ground-pattern shade best fits the capture (:func:`dense_align`)
+    brings the corners within a few px even when the scene's pose is tens of px off.  A
+    checker is periodic: a pose one square off diagonally matches every corner with the
+    right polarity.  The patterns' non-periodic parts (borders, white squares, discs)
+    decide: each same-polarity shift is tried, and the fit whose ground shade correlates
+    better by > 0.02 wins.
+
+    Raises
+    ------
+    RvmsimError
+        Too few landmarks found from the starting pose.
+    """
+    if not search.scene.test_site.ground_patterns:
+        return search.match_and_fit(np.zeros(6))
+    cam = search.synthetic.camera
+    shade = GroundShade.sample(search.scene, cam, search.synthetic.labels, search.capture)
+    fit = search.match_and_fit(dense_align(shade, cam, search.ypr0_deg))
+    score = shade(*search.pose(fit.x))
+    for dx in shade.shifts():
+        x_try = fit.x.copy()
+        x_try[:3] += dx
+        if shade(*search.pose(x_try)) <= score + 0.02:
+            continue
+        try:
+            alt = search.match_and_fit(x_try)
+        except RvmsimError:
+            continue  # too few landmarks from that shift: it is not the pose
+        alt_score = shade(*search.pose(alt.x))
+        if alt_score > score + 0.02:
+            fit, score = alt, alt_score
+    return fit
+
+
+def pose_correction(cam: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarray,
+                    sigma: np.ndarray) -> PoseCorrection:
+    """The record of the correction ``x`` (m, degrees) with standard errors ``sigma``."""
+    pos1, _ = corrected_pose(cam, ypr0_deg, x)
+    ypr1 = ypr0_deg + x[3:]
+    return PoseCorrection(
+        d_position_mm=_vec3(x[:3] * 1000),
+        d_yaw_deg=float(x[3]), d_pitch_deg=float(x[4]), d_roll_deg=float(x[5]),
+        sigma_position_mm=_vec3(sigma[:3] * 1000),
+        sigma_angles_deg=_vec3(sigma[3:]),
+        position_m=_vec3(pos1),
+        yaw_deg=float(ypr1[0]), pitch_deg=float(ypr1[1]), roll_deg=float(ypr1[2]),
+    )
+
+
+def _vec3(v: np.ndarray) -> tuple[float, float, float]:
+    return float(v[0]), float(v[1]), float(v[2])

@@ -1,0 +1,175 @@
+"""Validate a scene against a real capture from the vehicle's rear-view camera.
+
+A tuning is only worth as much as the synthetic frame it is tuned on.  :func:`validate`
+compares the scene's rendered fisheye frame with a capture of the physical camera at the
+test site and says what to fix in the scene, in these steps:
+
+1. **Landmarks** (:mod:`.landmarks`, :mod:`.matching`): the scene's checker corners that
+   the synthetic frame shows, found in the capture.
+2. **Pose** (:mod:`.pose`): the mount pose that best explains the found corners, by fisheye
+   PnP in the scene's mount parameters, alternating with the matching.
+3. **Edges** (:mod:`.edges`): symmetric chamfer distance of the Canny edges over the part of
+   the view the scene models, with the scene's pose and after a re-render at the corrected
+   pose.
+4. **RVM** (:mod:`.rvm`, with ISP parameters): both frames through our ISP, and the ECs.
+5. **Verdict** (:mod:`.verdict`) against :class:`~.verdict.Tolerances`.
+
+Convention
+----------
+Pixels are (u, v) = (column, row) with pixel centres at integer coordinates, as in
+:mod:`rvmsim.camera`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..criteria import Criteria
+from ..isp import IspParams, OutputSpec
+from ..render import FisheyeImages, cached_render, render_fisheye
+from ..scene import Scene
+from .capture import check_capture_size
+from .landmarks import VisibleLandmarks, visible_landmarks
+from .outputs import compare_with_pictures, landmark_picture
+from .pose import PoseFit, PoseSearch, find_pose, pose_correction
+from .projection import corrected_pose, project
+from .rvm import compare_rvm
+from .scene_edit import scene_with_mount
+from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
+
+__all__ = ["validate"]
+
+
+def validate(
+    scene: Scene,
+    capture: np.ndarray,
+    *,
+    synthetic: FisheyeImages | None = None,
+    use_cache: bool = False,
+    capture_name: str = "<array>",
+    params: IspParams | None = None,
+    output: OutputSpec | None = None,
+    criteria: Criteria | None = None,
+    tolerances: Tolerances = Tolerances(),
+    search_px: float = 30.0,
+    rerender: bool = True,
+    progress: bool = False,
+) -> Validation:
+    """Compare a real capture with the scene's synthetic frame.
+
+    Parameters
+    ----------
+    scene : Scene
+    capture : (H, W, 3) uint8
+        RGB capture of the physical camera (see :func:`~.capture.load_capture`).
+    synthetic : FisheyeImages, optional
+        The scene's rendered frame; rendered when missing, through the render cache
+        (:func:`rvmsim.render.cached_render`, keyed on the scene's content) with
+        ``use_cache``.
+    capture_name : str
+        For messages and the JSON summary.
+    params, output, criteria : IspParams, OutputSpec, Criteria, optional
+        With ISP parameters, the capture and the synthetic frame are also compared as RVM
+        images (of ``output``'s size), and the ECs (``criteria``, default the paper's)
+        evaluated on both.
+    tolerances : Tolerances
+        The verdict's limits.
+    search_px : float
+        How far from its prediction a landmark is searched for at first, px.
+    rerender : bool
+        Render the scene again at the corrected pose (for the corrected overlay, the
+        edge comparison after correction and the capture's ECs).
+    progress : bool
+        Progress bars while rendering.
+
+    Raises
+    ------
+    RvmsimError
+        Capture of the wrong size, a scene without enough visible checker corners, or
+        fewer than ``tolerances.min_landmarks`` landmarks found.
+    """
+    if synthetic is None:
+        synthetic = (cached_render(scene, progress=progress)[0] if use_cache
+                     else render_fisheye(scene, progress=progress))
+    cam = synthetic.camera
+    check_capture_size(capture, cam, capture_name)
+    ypr0 = _mount_ypr_deg(scene)
+    landmarks = visible_landmarks(scene, synthetic, tolerances.min_landmarks)
+    fit = find_pose(PoseSearch(capture, synthetic, scene, landmarks, ypr0, float(search_px),
+                               tolerances.min_landmarks, capture_name))
+    correction = pose_correction(cam, ypr0, fit.x, fit.sigma)
+    pos1, rot1 = corrected_pose(cam, ypr0, fit.x)
+    matches = _landmark_matches(landmarks, fit, project(cam, pos1, rot1, landmarks.points))
+    err_before, err_after = _inlier_errors(matches)
+
+    edges_before, images = compare_with_pictures(capture, synthetic.color, synthetic.labels,
+                                                 "overlay", "edges")
+    images["landmarks"] = landmark_picture(capture, matches)
+    corrected, edges_after = None, None
+    if rerender:
+        corrected = _render_corrected(scene, synthetic, correction, pos1, rot1, progress)
+        edges_after, corrected_images = compare_with_pictures(
+            capture, corrected.color, corrected.labels, "overlay_corrected", "edges_corrected")
+        images.update(corrected_images)
+    rvm = None
+    if params is not None:
+        rvm, rvm_images = compare_rvm(capture, synthetic, corrected, params, output, criteria)
+        images.update(rvm_images)
+
+    rms_after = _rms(err_after)
+    return Validation(
+        scene_name=scene.name, capture=capture_name, image_size=(cam.width, cam.height),
+        landmarks=matches, n_predicted=landmarks.n_usable,
+        rms_before_px=_rms(err_before), max_before_px=float(err_before.max()),
+        rms_after_px=rms_after, max_after_px=float(err_after.max()),
+        correction=correction, edges_before=edges_before, edges_after=edges_after, rvm=rvm,
+        checks=judge(rms_after, correction, edges_before, tolerances), images=images,
+    )
+
+
+def _landmark_matches(landmarks: VisibleLandmarks, fit: PoseFit,
+                      corrected_px: np.ndarray) -> tuple[LandmarkMatch, ...]:
+    """One record per usable landmark (predicted, found, corrected px)."""
+    syn_uv, found = landmarks.predicted_px, fit.found
+    return tuple(
+        LandmarkMatch(
+            name=c.name, point=c.point,
+            predicted_px=(float(syn_uv[n, 0]), float(syn_uv[n, 1])),
+            found_px=None if not np.isfinite(found[n, 0]) else (float(found[n, 0]),
+                                                                float(found[n, 1])),
+            corrected_px=(float(corrected_px[n, 0]), float(corrected_px[n, 1])),
+            method=fit.method[n], ncc=float(fit.ncc[n]), inlier=bool(fit.inliers[n]),
+        )
+        for n, c in enumerate(landmarks.corners) if landmarks.usable[n]
+    )
+
+
+def _inlier_errors(matches: tuple[LandmarkMatch, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Distances of the inliers' finds from their predictions and from their corrected
+    reprojections, px."""
+    inl = [m for m in matches if m.inlier]
+    found = np.array([m.found_px for m in inl], dtype=np.float64).reshape(-1, 2)
+    before = np.array([m.predicted_px for m in inl], dtype=np.float64).reshape(-1, 2)
+    after = np.array([m.corrected_px for m in inl], dtype=np.float64).reshape(-1, 2)
+    return np.linalg.norm(found - before, axis=1), np.linalg.norm(found - after, axis=1)
+
+
+def _rms(err: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(err ** 2)))
+
+
+def _render_corrected(scene: Scene, synthetic: FisheyeImages, correction: PoseCorrection,
+                      position: np.ndarray, rotation: np.ndarray,
+                      progress: bool) -> FisheyeImages:
+    """The scene rendered again at the corrected pose (position m, rotation)."""
+    return render_fisheye(scene_with_mount(scene, correction),
+                          camera=replace(synthetic.camera, position=position, rotation=rotation),
+                          progress=progress)
+
+
+def _mount_ypr_deg(scene: Scene) -> np.ndarray:
+    """The scene's mount yaw, pitch, roll, degrees."""
+    m = scene.camera.mount
+    return np.array([m.yaw_deg, m.pitch_deg, m.roll_deg], dtype=np.float64)

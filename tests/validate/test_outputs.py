@@ -1,0 +1,47 @@
+"""rvmsim.validate.outputs and the validation page (rvmsim.report.validation)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import cv2
+import numpy as np
+
+from rvmsim.tune import json_default
+from rvmsim.validate import write_outputs
+from rvmsim.validate.outputs import blend, landmark_picture
+
+from .captures import perturbed_validation
+
+
+def test_write_outputs_writes_json_page_and_pictures(tmp_path):
+    res, _ = perturbed_validation()
+    res = dataclasses.replace(res, scene_name="<b>mat & board</b>")
+    written = write_outputs(res, tmp_path / "out")
+    names = [p.name for p in written]
+    assert names == ["validation.json", "validation.html", "overlay.png", "edges.png",
+                     "landmarks.png", "overlay_corrected.png", "edges_corrected.png"]
+    doc = json.loads((tmp_path / "out" / "validation.json").read_text())
+    assert doc == json.loads(json.dumps(res.to_dict(), default=json_default))
+    assert doc["landmarks"]["found"] == res.n_found and doc["passed"] is res.passed
+    for name, img in res.images.items():
+        back = cv2.imread(str(tmp_path / "out" / f"{name}.png"))[..., ::-1]
+        assert np.array_equal(back, img)
+    html = (tmp_path / "out" / "validation.html").read_text()
+    assert "&lt;b&gt;mat &amp; board&lt;/b&gt;" in html and "<b>mat" not in html
+    assert html.count("data:image/png;base64,") == len(res.images)
+    assert "pose_angle_correction_deg" in html and ": FAIL</h1>" in html
+
+
+def test_pictures():
+    a = np.full((4, 4, 3), 10, np.uint8)
+    b = np.full((4, 4, 3), 251, np.uint8)
+    assert (blend(a, b) == 130).all()
+    res, _ = perturbed_validation()
+    cap = np.zeros((480, 640, 3), np.uint8)
+    pic = landmark_picture(cap, res.landmarks)
+    m = next(m for m in res.landmarks if m.inlier)
+    u, v = (int(round(x)) for x in m.corrected_px)
+    assert tuple(pic[v, u]) == (0, 220, 255)  # the corrected reprojection: a cyan dot
+    assert not cap.any()  # the capture is not drawn on
