@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import labels as L
-from ..camera.fisheye import FisheyeCamera
+from ..camera import FisheyeCamera
 from ..scene.meshes import Part, build_parts
 from ..scene.schema import Scene
 

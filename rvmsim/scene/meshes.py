@@ -20,7 +20,7 @@ import numpy as np
 import trimesh
 
 from .. import labels as L
-from ..camera.fisheye import rotation_from_ypr
+from ..camera import rotation_from_ypr
 from ..errors import SceneError
 from .schema import BlockPart, GroundPattern, MeshPart, PatternBoard, Scene
 

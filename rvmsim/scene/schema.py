@@ -32,7 +32,7 @@ from pydantic import (
 )
 
 from . import fmvss111
-from ..camera.fisheye import FisheyeCamera, rotation_from_ypr
+from ..camera import FisheyeCamera, rotation_from_ypr
 from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..errors import SceneError
 

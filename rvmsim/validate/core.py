@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from .. import labels as L
-from ..camera.fisheye import FisheyeCamera, rotation_from_ypr
+from ..camera import FisheyeCamera, rotation_from_ypr
 from ..errors import RvmsimError
 from ..tune.store import json_default
 from ..scene.meshes import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
