@@ -75,7 +75,7 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     from . import labels as L
     from ._io import write_png
     from .render.fisheye import render_fisheye
-    from .scene.schema import load_scene
+    from .scene import load_scene
 
     try:
         sc = load_scene(scene)
@@ -132,7 +132,7 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     from ._io import write_png
     from .isp.core import draw_roi, params_to_dict
     from .pipeline import render_rvm
-    from .scene.schema import load_scene
+    from .scene import load_scene
 
     try:
         params, output = _load_isp(params_file)
@@ -174,7 +174,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     from ._io import write_png
     from .isp.core import params_to_dict
     from .pipeline import render_rvm
-    from .scene.schema import load_scene
+    from .scene import load_scene
 
     try:
         params, output = _load_isp(params_file)
@@ -305,7 +305,7 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
         error)."""
         from .render.cache import scene_key
         from .batch.executors import DaskExecutor
-        from .scene.schema import load_scene
+        from .scene import load_scene
         from .tune.loop import portable_scene_doc, tune_task
 
         tasks, by_key = {}, {}
@@ -514,7 +514,7 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     """
     from .render.cache import cached_render
     from .criteria.core import load_criteria
-    from .scene.schema import load_scene
+    from .scene import load_scene
     from .validate.core import Tolerances, load_capture, write_corrected_scene, write_outputs
     from .validate.core import validate as run_validate
 

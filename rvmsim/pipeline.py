@@ -8,7 +8,7 @@ import numpy as np
 
 from .isp.core import IspParams, OutputSpec, process
 from .render.fisheye import FisheyeImages, render_fisheye
-from .scene.schema import Scene
+from .scene import Scene
 
 __all__ = ["RvmFrame", "render_rvm"]
 

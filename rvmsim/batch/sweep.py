@@ -51,7 +51,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..errors import RvmsimError, SweepFileError
 from .executors import Executor, LocalExecutor
-from ..scene.schema import absolute_mesh_paths
+from ..scene import absolute_mesh_paths
 from ..tune.store import SqliteStore, json_default
 
 __all__ = [
@@ -160,7 +160,7 @@ def _expand(name: str, v: Any, where: str) -> tuple[Any, ...]:
 
 def load_sweep(path: str | Path) -> SweepSpec:
     """Read and check a sweep file (one-line errors naming the file and key)."""
-    from ..scene.schema import read_scene_document
+    from ..scene import read_scene_document
 
     path = Path(path)
     text = read_text(path, SweepFileError)
@@ -255,7 +255,7 @@ def _set_path(doc: dict, path: str, value: Any, where: str) -> None:
 def point_scene_doc(spec: SweepSpec, values: tuple[tuple[str, Any], ...]) -> tuple[dict, dict]:
     """(scene document, tuning config document) of one design point.  Mesh paths become
     absolute, so the document loads from anywhere."""
-    from ..scene.schema import scene_from_dict
+    from ..scene import scene_from_dict
 
     doc = copy.deepcopy(spec.base_doc)
     config = copy.deepcopy(spec.config)
@@ -326,7 +326,7 @@ def _run_point(task: dict) -> dict:
     from ..render.cache import cached_render
     from ..criteria.core import criteria_from_text, default_criteria
     from ..criteria.evaluator import CandidateEvaluator
-    from ..scene.schema import scene_from_dict
+    from ..scene import scene_from_dict
     from ..tune.search import run_search, score_vectors
     from ..tune.store import RunStore
     from ..tune.loop import TuningConfig, make_strategy

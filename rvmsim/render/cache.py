@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene.schema import MeshPart, Scene, mesh_parts
+from ..scene import MeshPart, Scene, mesh_parts
 from .fisheye import FisheyeImages, render_fisheye
 
 __all__ = ["cache_dir", "scene_key", "file_scene_key", "same_scene", "cached_render",

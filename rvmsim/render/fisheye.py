@@ -33,8 +33,8 @@ import numpy as np
 
 from .. import labels as L
 from ..camera import FisheyeCamera
-from ..scene.meshes import Part, build_parts
-from ..scene.schema import Scene
+from ..scene import Part, build_parts
+from ..scene import Scene
 
 __all__ = ["FisheyeImages", "CubeLayout", "FaceCrop", "cube_layout", "render_fisheye", "FACE_NAMES"]
 

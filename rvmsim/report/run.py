@@ -164,7 +164,7 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 def _load_run(run_dir: Path) -> _Run:
     from ..render.cache import cached_render, same_scene
     from ..criteria.core import load_criteria
-    from ..scene.schema import load_scene
+    from ..scene import load_scene
     from ..tune.store import RunStore
     from ..tune.loop import TuningConfig
 

@@ -250,7 +250,7 @@ def tune(
         Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
     from ..render.cache import cached_render, same_scene, scene_key
-    from ..scene.schema import load_scene
+    from ..scene import load_scene
 
     run_dir = Path(run_dir)
     run_json = run_dir / "run.json"
@@ -359,7 +359,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
 def portable_scene_doc(scene_file: str | Path) -> dict:
     """The scene file's document with its mesh paths made absolute, so it loads from any
     folder (a task on a cluster worker writes it to a temporary file)."""
-    from ..scene.schema import absolute_mesh_paths, read_scene_document
+    from ..scene import absolute_mesh_paths, read_scene_document
 
     _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
     absolute_mesh_paths(doc, Path(scene_file).parent)

@@ -45,9 +45,9 @@ from .. import labels as L
 from ..camera import FisheyeCamera, rotation_from_ypr
 from ..errors import RvmsimError
 from ..tune.store import json_default
-from ..scene.meshes import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
+from ..scene import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
 from ..render.fisheye import FisheyeImages
-from ..scene.schema import Scene
+from ..scene import Scene
 
 __all__ = [
     "Tolerances",
@@ -1092,7 +1092,7 @@ def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,
     """
     from .._io import key_lines, read_text
     from ..errors import SceneError
-    from ..scene.schema import load_scene
+    from ..scene import load_scene
 
     scene_file, out_file = Path(scene_file), Path(out_file)
     text = read_text(scene_file, SceneError)
