@@ -12,8 +12,8 @@ import trimesh
 
 from .. import labels as L
 from ..errors import SceneError
-from .primitives import Part, Rgb, swept_block
-from .schema import BlockPart, MeshPart, Scene
+from .primitives import Part, swept_block
+from .schema import BlockPart, MeshPart, Rgb, Scene
 from .site import site_parts
 
 __all__ = ["build_parts"]

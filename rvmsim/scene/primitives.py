@@ -13,17 +13,13 @@ from typing import cast
 import numpy as np
 import trimesh
 
-from .schema import BlockPart
+from .schema import BlockPart, Rgb
 
-__all__ = ["Part", "Rgb", "cylinder_side", "disk", "quad", "ground_rect", "swept_block",
+__all__ = ["Part", "cylinder_side", "disk", "quad", "ground_rect", "swept_block",
            "concatenate", "CIRCLE_SECTIONS"]
 
 #: Segments of a full circle (cylinders, disks).
 CIRCLE_SECTIONS = 128
-
-#: A colour: linear red, green, blue in 0–1.
-Rgb = tuple[float, float, float]
-
 
 @dataclass(frozen=True)
 class Part:
@@ -49,7 +45,7 @@ class Part:
     name: str
     label: int
     mesh: trimesh.Trimesh
-    color: tuple[float, float, float]
+    color: Rgb
     texture: str | None = None
     smooth: bool = False
 

@@ -15,8 +15,8 @@ import trimesh
 
 from .. import labels as L
 from ..camera import rotation_from_ypr
-from .primitives import Part, Rgb, concatenate, cylinder_side, disk, ground_rect, quad
-from .schema import GroundPattern, PatternBoard, Rect, Scene
+from .primitives import Part, concatenate, cylinder_side, disk, ground_rect, quad
+from .schema import GroundPattern, PatternBoard, Rect, Rgb, Scene
 
 __all__ = [
     "site_parts",
