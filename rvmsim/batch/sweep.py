@@ -498,7 +498,7 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
     """(header, rows): one row per design point, in point order.  Deterministic content
     only (no timings), so the same sweep gives the same table on any executor."""
     from ..criteria.core import EC_IDS
-    from ..isp.core import IspParams
+    from ..isp import IspParams
 
     names = [n for n, _ in spec.axes]
     header = ["point", *names, "ec_score", "passed", "limiting_ec",

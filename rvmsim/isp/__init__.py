@@ -1,13 +1,22 @@
-"""The ISP model: fisheye correction and virtual pan-tilt-zoom (the paper's 14 parameters)."""
+"""The ISP model: fisheye correction and virtual pan-tilt-zoom (the paper's 14 parameters).
+
+Modules: :mod:`.params` (the parameters, the output image, params files), :mod:`.map` (the
+output → input map, exact and fast, and the remap), :mod:`.roi` (the region of interest and
+the inverse map).
+"""
 
 from __future__ import annotations
 
-from .core import (
+from .params import (
     IspParams,
     OutputSpec,
     ParamSpec,
     PARAM_SPECS,
     TUNED_BY_DEFAULT,
+    load_params,
+    params_to_dict,
+)
+from .map import (
     IspMap,
     build_map,
     build_map_exact,
@@ -16,12 +25,8 @@ from .core import (
     RayCache,
     apply_map,
     process,
-    roi_outline,
-    draw_roi,
-    input_to_output,
-    load_params,
-    params_to_dict,
 )
+from .roi import roi_outline, draw_roi, input_to_output
 
 __all__ = [
     "IspParams",

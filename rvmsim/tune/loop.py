@@ -23,7 +23,7 @@ from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..criteria.core import Criteria, load_criteria
 from ..errors import RvmsimError, TuningConfigError
 from ..criteria.evaluator import CandidateEvaluator
-from ..isp.core import IspParams, OutputSpec, params_to_dict
+from ..isp import IspParams, OutputSpec, params_to_dict
 from .search import (
     STRATEGIES,
     CmaEs,
@@ -326,7 +326,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
     from ..criteria.annotate import annotate
     from ..criteria.core import evaluate
     from .._io import write_png
-    from ..isp.core import process
+    from ..isp import process
 
     top = store.top(config.top_m)
     if not top:

@@ -46,7 +46,7 @@ from ..camera import FisheyeCamera, rotation_from_ypr
 from ..errors import RvmsimError
 from ..tune.store import json_default
 from ..scene import PATTERN_LIFT_M, CheckerCorner, checker_corners, pattern_axes, pattern_shade
-from ..render.fisheye import FisheyeImages
+from ..render import FisheyeImages
 from ..scene import Scene
 
 __all__ = [
@@ -829,7 +829,7 @@ def validate(
     RvmsimError
         Capture of the wrong size, or fewer than ``tolerances.min_landmarks`` landmarks found.
     """
-    from ..render.fisheye import render_fisheye
+    from ..render import render_fisheye
 
     if synthetic is None:
         if scene_file is not None:
@@ -979,7 +979,7 @@ def _compare_rvm(capture: np.ndarray, synthetic: FisheyeImages,
                  corrected: FisheyeImages | None, params: Any, output: Any,
                  criteria: Any) -> tuple[RvmComparison, dict]:
     from ..criteria.core import evaluate
-    from ..isp.core import OutputSpec, process
+    from ..isp import OutputSpec, process
 
     output = output or OutputSpec()
     rvm_cap, _ = process(capture, None, params, output)

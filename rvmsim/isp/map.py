@@ -1,4 +1,4 @@
-"""ISP model: fisheye correction + virtual pan-tilt-zoom (the paper's section IV, Table 2).
+"""The ISP map: fisheye correction + virtual pan-tilt-zoom (the paper's section IV, Table 2).
 
 The ISP turns the fisheye image of the actual camera (A camera) into the RVM image of a
 virtual camera (V camera).  One parameter set is one ``cv2.remap`` map; the colour image is
@@ -44,24 +44,17 @@ approximation error is measured by ``tools/bench_isp.py`` and bounded in the tes
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .. import labels as L
-from ..errors import RvmsimError
+from .params import IspParams, OutputSpec
 
 __all__ = [
-    "IspParams",
-    "OutputSpec",
-    "ParamSpec",
-    "PARAM_SPECS",
-    "TUNED_BY_DEFAULT",
     "IspMap",
     "build_map",
     "build_map_exact",
@@ -70,153 +63,12 @@ __all__ = [
     "RayCache",
     "apply_map",
     "process",
-    "roi_outline",
-    "draw_roi",
-    "input_to_output",
-    "load_params",
-    "params_to_dict",
+    "map_points",
+    "plane_and_view",
+    "DEFAULT_CELL_PX",
+    "MIN_CELL_PX",
+    "MAP_TOLERANCE_PX",
 ]
-
-
-@dataclass(frozen=True)
-class ParamSpec:
-    """One ISP parameter: its name here, the paper's name and symbol, default, range, unit."""
-
-    name: str
-    paper_name: str
-    symbol: str
-    default: float
-    low: float
-    high: float
-    unit: str
-    note: str = ""
-
-
-#: The 14 parameters of the paper's Table 2.  Where the paper gives no range (FOV, RAD,
-#: H/V shift) the range is ours, wide enough for any lens this tool models.
-PARAM_SPECS: tuple[ParamSpec, ...] = (
-    ParamSpec("fov", "FOV", "FOV", 180.0, 30.0, 240.0, "deg",
-              "field of view the ISP assumes for its image circle (range ours)"),
-    ParamSpec("rad", "RAD", "RAD", 640.0, 50.0, 2000.0, "px",
-              "radius of the ISP's image circle in the input image (range ours)"),
-    ParamSpec("h_shift", "H shift", "x_is", 0.0, -500.0, 500.0, "px",
-              "image-circle centre right of the input image centre (range ours)"),
-    ParamSpec("v_shift", "V shift", "y_is", 0.0, -500.0, 500.0, "px",
-              "image-circle centre below the input image centre (range ours)"),
-    ParamSpec("h_pan", "H Pan", "θ_cv", 0.0, 0.0, 180.0, "deg",
-              "polar angle between the V camera axis and the A camera axis"),
-    ParamSpec("v_pan", "V Pan", "φ_cv", 0.0, -180.0, 180.0, "deg",
-              "azimuth toward which the V axis turns (0 image right, 90 image down)"),
-    ParamSpec("zoom", "Zoom", "r_cv", 1.0, 0.01, 10.0, "",
-              "distance of the virtual image plane (output half-width = 1)"),
-    ParamSpec("tilt", "Tilt", "α_sz", 0.0, -180.0, 180.0, "deg",
-              "roll of the V camera about its axis"),
-    ParamSpec("adv_h_shift", "Advanced H shift", "x_os", 0.0, -1.0, 1.0, "",
-              "horizontal move of the view window, in output half-widths"),
-    ParamSpec("adv_v_shift", "Advanced V shift", "y_os", 0.0, -1.0, 1.0, "",
-              "vertical move of the view window, in output half-widths"),
-    ParamSpec("adv_h_scale", "Advanced H scale", "s_ox", 1.0, 0.5, 2.0, "",
-              "horizontal magnification (> 1 stretches the image horizontally)"),
-    ParamSpec("adv_v_scale", "Advanced V scale", "s_oy", 1.0, 0.5, 2.0, "",
-              "vertical magnification (> 1 stretches the image vertically)"),
-    ParamSpec("theta", "Theta", "θ_st", 0.0, 0.0, 180.0, "deg",
-              "tilt of the virtual image plane"),
-    ParamSpec("phi", "Phi", "φ_st", 0.0, -180.0, 180.0, "deg",
-              "azimuth of the image-plane tilt (0: about the vertical axis)"),
-)
-_SPEC = {s.name: s for s in PARAM_SPECS}
-
-#: The paper fixes the five angle parameters to 0 and tunes the other nine.
-TUNED_BY_DEFAULT: tuple[str, ...] = (
-    "fov", "rad", "h_shift", "v_shift", "zoom",
-    "adv_h_shift", "adv_v_shift", "adv_h_scale", "adv_v_scale",
-)
-
-
-@dataclass(frozen=True)
-class IspParams:
-    """The 14 ISP parameters of the paper's Table 2 (ranges in :data:`PARAM_SPECS`).
-
-    Attributes
-    ----------
-    fov : float
-        FOV, degrees: field of view of the ISP's assumed equidistance image circle.
-    rad : float
-        RAD, px: radius of that image circle in the input (fisheye) image.
-    h_shift, v_shift : float
-        H/V shift (x_is, y_is), px: image-circle centre relative to the input image centre.
-    h_pan, v_pan : float
-        H/V pan (θ_cv, φ_cv), degrees: polar angle and azimuth of the V camera axis.
-    zoom : float
-        Zoom (r_cv): distance of the virtual image plane; larger enlarges.
-    tilt : float
-        Tilt (α_sz), degrees: roll of the V camera.
-    adv_h_shift, adv_v_shift : float
-        Advanced H/V shift (x_os, y_os), in [-1, 1] output half-widths.
-    adv_h_scale, adv_v_scale : float
-        Advanced H/V scale (s_ox, s_oy), in [0.5, 2]; > 1 enlarges along that axis.
-    theta, phi : float
-        Theta/Phi (θ_st, φ_st), degrees: tilt of the virtual image plane and its azimuth.
-    """
-
-    fov: float = 180.0
-    rad: float = 640.0
-    h_shift: float = 0.0
-    v_shift: float = 0.0
-    h_pan: float = 0.0
-    v_pan: float = 0.0
-    zoom: float = 1.0
-    tilt: float = 0.0
-    adv_h_shift: float = 0.0
-    adv_v_shift: float = 0.0
-    adv_h_scale: float = 1.0
-    adv_v_scale: float = 1.0
-    theta: float = 0.0
-    phi: float = 0.0
-
-    def __post_init__(self) -> None:
-        for spec in PARAM_SPECS:
-            value = getattr(self, spec.name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-                raise ValueError(f"{spec.name}: must be a number, got {value!r}")
-            value = float(value)
-            if not math.isfinite(value) or not spec.low <= value <= spec.high:
-                raise ValueError(
-                    f"{spec.name}: {value:g} is outside [{spec.low:g}, {spec.high:g}] {spec.unit}"
-                    .rstrip()
-                )
-            object.__setattr__(self, spec.name, value)
-
-    @classmethod
-    def names(cls) -> tuple[str, ...]:
-        return tuple(s.name for s in PARAM_SPECS)
-
-    def replace(self, **changes: float) -> IspParams:
-        """A copy with some parameters changed (validated)."""
-        return dataclasses.replace(self, **changes)
-
-    def for_input_scale(self, factor: float) -> IspParams:
-        """The same view on a fisheye image resampled by ``factor`` (e.g. a 0.25 preview
-        render): RAD and the H/V shifts are in input px, so they scale with it."""
-        return self.replace(rad=self.rad * factor, h_shift=self.h_shift * factor,
-                            v_shift=self.v_shift * factor)
-
-    def as_array(self, names: tuple[str, ...] | None = None) -> np.ndarray:
-        """Parameter values in the order of ``names`` (default: all 14)."""
-        return np.array([getattr(self, n) for n in (names or self.names())], dtype=np.float64)
-
-
-@dataclass(frozen=True)
-class OutputSpec:
-    """The RVM image: size in px and whether it is mirrored (RVM displays usually are)."""
-
-    width: int = 1280
-    height: int = 720
-    mirror: bool = True
-
-    def __post_init__(self) -> None:
-        if not (16 <= self.width <= 8192 and 16 <= self.height <= 8192):
-            raise ValueError(f"output size must be 16..8192 px, got {self.width}x{self.height}")
 
 
 @dataclass(frozen=True)
@@ -240,21 +92,23 @@ class IspMap:
 
     @property
     def map_x(self) -> np.ndarray:
+        """(H_o, W_o) input u of each output pixel, px (a view of ``xy``)."""
         return self.xy[..., 0]
 
     @property
     def map_y(self) -> np.ndarray:
+        """(H_o, W_o) input v of each output pixel, px (a view of ``xy``)."""
         return self.xy[..., 1]
 
 
 # ---------------------------------------------------------------------------- the math
-def _plane_and_view(p: IspParams) -> tuple[np.ndarray, np.ndarray]:
+def plane_and_view(p: IspParams) -> tuple[np.ndarray, np.ndarray]:
     """(R_plane, R_view): image-plane tilt and V→A camera rotation."""
     return tuple(np.array(m) for m in _plane_and_view_lists(p))  # type: ignore[return-value]
 
 
 def _plane_and_view_lists(p: IspParams) -> tuple[list[list[float]], list[list[float]]]:
-    """:func:`_plane_and_view` as nested lists, written out in plain floats (Rodrigues about
+    """:func:`plane_and_view` as nested lists, written out in plain floats (Rodrigues about
     an in-plane axis; the ZYZ product Rz(φ_cv)·Ry(θ_cv)·Rz(α_sz − φ_cv)): this runs for
     every tuning candidate, where numpy's per-call overhead on 3×3 arrays would dominate."""
     phi_st = math.radians(p.phi)
@@ -290,7 +144,7 @@ def _pixel_to_ray_matrix(p: IspParams, out: OutputSpec) -> np.ndarray:
     return np.array(rows)
 
 
-def _map_points(
+def map_points(
     p: IspParams, u: np.ndarray, v: np.ndarray, input_size: tuple[int, int], out: OutputSpec
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact map for output pixel coordinates (u, v): (u_in, v_in, θ ≤ FOV/2)."""
@@ -315,7 +169,7 @@ def build_map_exact(
     """The map evaluated exactly at every output pixel (reference; ~5× slower)."""
     u, v = np.meshgrid(np.arange(output.width, dtype=np.float64),
                        np.arange(output.height, dtype=np.float64))
-    ux, vy, _ = _map_points(params, u, v, input_size, output)
+    ux, vy, _ = map_points(params, u, v, input_size, output)
     return IspMap(np.dstack([ux, vy]).astype(np.float32), input_size, output)
 
 
@@ -331,7 +185,7 @@ def _ray_planes(params: IspParams, output: OutputSpec, cell: int) -> tuple[np.nd
     ISP lens' scale f_isp and the image-circle centre, which depend on FOV, RAD and the
     shifts only.  Two (rows, cols) float32 planes.
 
-    Same formulas as :func:`_map_points`, arranged for speed (this runs once or twice per
+    Same formulas as :func:`map_points`, arranged for speed (this runs once or twice per
     tuning candidate): the rays are outer sums of a row and a column term, and θ comes from
     OpenCV's fast ``phase`` (≈ 1e-4 rad) refined by one Newton step, θ += sin(θ_true − θ),
     to ≈ 1e-7 rad (≈ 1e-4 px), a tenth of the time of ``np.arctan2``.
@@ -352,7 +206,7 @@ def _ray_planes(params: IspParams, output: OutputSpec, cell: int) -> tuple[np.nd
     # the same view must give bit-identical nodes every time (windowed = whole image)
     rho = np.sqrt(ax * ax + ay * ay)
     theta = cv2.phase(az, rho)
-    cos_t, sin_t = cv2.polarToCart(None, theta)
+    cos_t, sin_t = cv2.polarToCart(None, theta)  # type: ignore[call-overload]  # unit magnitude
     theta += (rho * cos_t - az * sin_t) / np.sqrt(rho * rho + az * az)
     theta /= np.maximum(rho, np.float32(1e-30))
     return theta * ax, theta * ay
@@ -395,13 +249,14 @@ class RayCache:
     output and the cell; holds the ``size`` most recent entries.
     """
 
-    def __init__(self, size: int = 256):
-        from collections import OrderedDict
-
+    def __init__(self, size: int = 256) -> None:
         self.size = size
-        self._entries: OrderedDict = OrderedDict()
+        self._entries: OrderedDict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = OrderedDict()
 
-    def planes(self, params: IspParams, output: OutputSpec, cell: int):
+    def planes(self, params: IspParams, output: OutputSpec,
+               cell: int) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`_ray_planes` of ``params`` at node spacing ``cell``, from the cache when a
+        view with the same ten ray parameters and output was seen recently."""
         key = (tuple(getattr(params, n) for n in _RAY_PARAMS), output, cell)
         hit = self._entries.get(key)
         if hit is not None:
@@ -513,6 +368,7 @@ class MapNodes:
         jb = int(math.ceil((x1 - 0.5) / c + 1.5))
         ia = int(math.floor((y0 + 0.5) / c - 0.5)) + 2
         ib = int(math.ceil((y1 - 0.5) / c + 1.5))
+        assert self.grid is not None  # no exact map: the grid is set
         sub = self.grid[ia : ib + 1, ja : jb + 1]
         full = cv2.resize(sub, (sub.shape[1] * c, sub.shape[0] * c),
                           interpolation=cv2.INTER_LINEAR)
@@ -537,7 +393,7 @@ def map_nodes(
     with the square of the spacing (the estimates at 4 and 2 px agree with this to 0.7 % on
     random views), so the finest grid needed is chosen from that one estimate, with 2 %
     to spare, and only that grid is evaluated besides."""
-    def planes(c: int):
+    def planes(c: int) -> tuple[np.ndarray, np.ndarray] | None:
         return None if rays is None else rays.planes(params, output, c)
 
     _, _, grid = _nodes(params, input_size, output, cell, planes(cell))
@@ -586,7 +442,8 @@ def apply_map(image: np.ndarray, isp_map: IspMap, *, labels: bool | None = None)
     if labels is None:
         labels = img.ndim == 2
     interp = cv2.INTER_NEAREST if labels else cv2.INTER_LINEAR
-    return cv2.remap(img, isp_map.xy, None, interp,
+    # map2 None: xy holds both coordinates (the stubs do not know that form)
+    return cv2.remap(img, isp_map.xy, None, interp,  # type: ignore[call-overload]
                      borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
 
 
@@ -605,153 +462,3 @@ def process(
         None if color is None else apply_map(color, m, labels=False),
         None if labels is None else apply_map(labels, m, labels=True),
     )
-
-
-def input_to_output(
-    params: IspParams,
-    points: np.ndarray,
-    input_size: tuple[int, int],
-    output: OutputSpec = OutputSpec(),
-) -> tuple[np.ndarray, np.ndarray]:
-    """Where fisheye pixels appear in the RVM image: the inverse of the map.
-
-    Parameters
-    ----------
-    points : (N, 2) float
-        Input (fisheye) pixel coordinates (u, v).
-
-    Returns
-    -------
-    uv : (N, 2) float64
-        Output (RVM) pixel coordinates, pixel-centre convention.
-    valid : (N,) bool
-        False where the ray misses the virtual image plane (behind it).
-    """
-    p = params
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    w_in, h_in = input_size
-    dx = pts[:, 0] - ((w_in - 1) / 2.0 + p.h_shift)
-    dy = pts[:, 1] - ((h_in - 1) / 2.0 + p.v_shift)
-    r = np.hypot(dx, dy)
-    theta = r / (p.rad / math.radians(p.fov / 2.0))
-    safe = np.where(r > 0, r, 1.0)
-    s = np.sin(theta)
-    ray = np.stack([np.where(r > 0, s * dx / safe, 0.0), np.where(r > 0, s * dy / safe, 0.0),
-                    np.cos(theta)], axis=1)
-    r_plane, r_view = _plane_and_view(p)
-    rv = ray @ r_view  # = (R_view^T · ray) per row
-    t = np.array([0.0, 0.0, p.zoom])
-    normal = r_plane[:, 2]
-    denom = rv @ normal
-    lam = (normal @ t) / np.where(np.abs(denom) > 1e-12, denom, 1e-12)
-    local = (lam[:, None] * rv - t) @ r_plane  # = R_plane^T (λ·r_v − t)
-    half = output.width / 2.0
-    xn = (local[:, 0] - p.adv_h_shift) * p.adv_h_scale
-    yn = (local[:, 1] - p.adv_v_shift) * p.adv_v_scale
-    if output.mirror:
-        xn = -xn
-    uv = np.stack([xn * half + (output.width - 1) / 2.0, yn * half + (output.height - 1) / 2.0], 1)
-    return uv, (lam > 0) & (np.abs(denom) > 1e-12)
-
-
-def roi_outline(
-    params: IspParams, input_size: tuple[int, int], output: OutputSpec = OutputSpec(),
-    *, samples_per_side: int = 64,
-) -> np.ndarray:
-    """The input-image region the RVM image uses, as a closed polygon.
-
-    Returns
-    -------
-    (N, 2) float64
-        Input (fisheye) px of the output image's border, walked clockwise (as displayed)
-        from the top-left corner of the output image.
-    """
-    w, h = output.width - 1, output.height - 1
-    s = np.linspace(0.0, 1.0, samples_per_side, endpoint=False)
-    u = np.concatenate([s * w, np.full_like(s, w), (1 - s) * w, np.zeros_like(s)])
-    v = np.concatenate([np.zeros_like(s), s * h, np.full_like(s, h), (1 - s) * h])
-    ux, vy, _ = _map_points(params, u, v, input_size, output)
-    return np.stack([ux, vy], axis=1)
-
-
-def draw_roi(fisheye: np.ndarray, params: IspParams, output: OutputSpec = OutputSpec(),
-             *, color: tuple[int, int, int] = (0, 255, 0), thickness: int = 2) -> np.ndarray:
-    """A copy of the fisheye colour image with the ROI outline drawn (green, as in the
-    paper's Table 3)."""
-    import cv2
-
-    img = np.ascontiguousarray(fisheye.copy())
-    poly = roi_outline(params, (img.shape[1], img.shape[0]), output)
-    if len(poly) >= 2:
-        pts = np.round(poly * 16).astype(np.int32).reshape(-1, 1, 2)
-        cv2.polylines(img, [pts], True, color, thickness, cv2.LINE_AA, shift=4)
-    return img
-
-
-# ---------------------------------------------------------------------------- files
-def params_to_dict(params: IspParams, output: OutputSpec | None = None) -> dict[str, Any]:
-    """Plain dict for a params file (the 14 parameters, then ``output``)."""
-    d: dict[str, Any] = {n: getattr(params, n) for n in IspParams.names()}
-    if output is not None:
-        d["output"] = {"size": [output.width, output.height], "mirror": output.mirror}
-    return d
-
-
-def load_params(path: str | Path) -> tuple[IspParams, OutputSpec]:
-    """Read a params file (YAML or JSON): any of the 14 parameter names (missing ones take
-    the paper's defaults) and an optional ``output: {size: [W, H], mirror: bool}``.
-
-    Raises
-    ------
-    RvmsimError
-        One line naming the file and the key for unreadable files, malformed YAML/JSON,
-        unknown keys, non-numbers and values out of range.
-    """
-    import yaml
-
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise RvmsimError(f"{path}: params file not found") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise RvmsimError(f"{path}: cannot read params file ({err})") from None
-    try:
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except (yaml.YAMLError, json.JSONDecodeError) as err:
-        first = str(err).splitlines()[0] if str(err) else type(err).__name__
-        raise RvmsimError(f"{path}: malformed params file: {first}") from None
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise RvmsimError(f"{path}: a params file must be a mapping (name: value)")
-    data = dict(data)
-    out_data = data.pop("output", None)
-    unknown = sorted(set(data) - set(IspParams.names()))
-    if unknown:
-        raise RvmsimError(f"{path}: {unknown[0]}: unknown ISP parameter "
-                          f"(known: {', '.join(IspParams.names())})")
-    for key, value in data.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise RvmsimError(f"{path}: {key}: must be a number, got {value!r}")
-        spec = _SPEC[key]
-        if not math.isfinite(value) or not spec.low <= value <= spec.high:
-            raise RvmsimError(f"{path}: {key}: {value:g} is outside [{spec.low:g}, "
-                              f"{spec.high:g}] {spec.unit}".rstrip())
-    params = IspParams(**{k: float(v) for k, v in data.items()})
-    output = OutputSpec()
-    if out_data is not None:
-        if not isinstance(out_data, dict) or set(out_data) - {"size", "mirror"}:
-            raise RvmsimError(f"{path}: output: expected {{size: [W, H], mirror: true|false}}")
-        size = out_data.get("size", [output.width, output.height])
-        mirror = out_data.get("mirror", output.mirror)
-        if (not isinstance(size, list) or len(size) != 2
-                or not all(isinstance(x, int) and not isinstance(x, bool) for x in size)):
-            raise RvmsimError(f"{path}: output.size: expected [width, height] in px")
-        if not isinstance(mirror, bool):
-            raise RvmsimError(f"{path}: output.mirror: expected true or false")
-        try:
-            output = OutputSpec(size[0], size[1], mirror)
-        except ValueError as err:
-            raise RvmsimError(f"{path}: output.size: {err}") from None
-    return params, output
