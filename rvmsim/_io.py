@@ -43,7 +43,7 @@ def key_lines(text: str) -> dict[tuple[Any, ...], int]:
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
-        return lines
+        return lines  # no line is known; the parse error itself is parse_yaml's to report
 
     def walk(node: Any, path: tuple[Any, ...]) -> None:
         if isinstance(node, yaml.MappingNode):

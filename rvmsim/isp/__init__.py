@@ -1,8 +1,8 @@
 """The ISP model: fisheye correction and virtual pan-tilt-zoom (the paper's 14 parameters).
 
-Modules: :mod:`.params` (the parameters, the output image, params files), :mod:`.map` (the
-output → input map, exact and fast, and the remap), :mod:`.roi` (the region of interest and
-the inverse map).
+Modules: :mod:`.params` (the parameters, the output image, params files), :mod:`.exact` (the
+output → input map's formulas, evaluated exactly), :mod:`.map` (the fast, error-controlled
+map and the remap), :mod:`.roi` (the region of interest and the inverse map).
 """
 
 from __future__ import annotations
@@ -16,10 +16,9 @@ from .params import (
     load_params,
     params_to_dict,
 )
+from .exact import IspMap, build_map_exact
 from .map import (
-    IspMap,
     build_map,
-    build_map_exact,
     map_nodes,
     MapNodes,
     RayCache,

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .map import map_points, plane_and_view
+from .exact import map_points, plane_and_view
 from .params import IspParams, OutputSpec
 
 __all__ = ["roi_outline", "draw_roi", "input_to_output"]
@@ -27,15 +27,24 @@ def input_to_output(
 
     Parameters
     ----------
+    params : IspParams
     points : (N, 2) float
-        Input (fisheye) pixel coordinates (u, v).
+        Input (fisheye) pixel coordinates (u, v), px.
+    input_size : (int, int)
+        (W_i, H_i) of the fisheye image, px.
+    output : OutputSpec
 
     Returns
     -------
     uv : (N, 2) float64
-        Output (RVM) pixel coordinates, pixel-centre convention.
+        Output (RVM) pixel coordinates, px.
     valid : (N,) bool
         False where the ray misses the virtual image plane (behind it).
+
+    Convention
+    ----------
+    Input → output (src → dst: the inverse of the map's direction); pixel centres at integer
+    coordinates in both images.
     """
     p = params
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
@@ -70,11 +79,25 @@ def roi_outline(
 ) -> np.ndarray:
     """The input-image region the RVM image uses, as a closed polygon.
 
+    Parameters
+    ----------
+    params : IspParams
+    input_size : (int, int)
+        (W_i, H_i) of the fisheye image, px.
+    output : OutputSpec
+    samples_per_side : int
+        Points per side of the output image.
+
     Returns
     -------
     (N, 2) float64
         Input (fisheye) px of the output image's border, walked clockwise (as displayed)
         from the top-left corner of the output image.
+
+    Convention
+    ----------
+    The border is that of the output pixel centres (0 … W_o − 1, 0 … H_o − 1), mapped
+    exactly (output → input); pixel centres at integer coordinates.
     """
     w, h = output.width - 1, output.height - 1
     s = np.linspace(0.0, 1.0, samples_per_side, endpoint=False)
@@ -87,7 +110,22 @@ def roi_outline(
 def draw_roi(fisheye: np.ndarray, params: IspParams, output: OutputSpec = OutputSpec(),
              *, color: tuple[int, int, int] = (0, 255, 0), thickness: int = 2) -> np.ndarray:
     """A copy of the fisheye colour image with the ROI outline drawn (green, as in the
-    paper's Table 3)."""
+    paper's Table 3).
+
+    Parameters
+    ----------
+    fisheye : (H_i, W_i, 3) uint8
+    params : IspParams
+    output : OutputSpec
+    color : (int, int, int)
+        Line colour, in the image's channel order.
+    thickness : int
+        Line width, px.
+
+    Convention
+    ----------
+    The outline of :func:`roi_outline`, drawn anti-aliased at 1/16 px precision.
+    """
     import cv2
 
     img = np.ascontiguousarray(fisheye.copy())
