@@ -105,7 +105,18 @@ class Intrinsics(_Model):
         return self
 
     def resolve(self, width: int, height: int) -> tuple[float, float, float, float, float]:
-        """(fx, fy, cx, cy, skew) in px for an image of ``width`` × ``height`` px."""
+        """(fx, fy, cx, cy, skew) for an image of ``width`` × ``height`` px.
+
+        Returns
+        -------
+        (float, float, float, float, float)
+            Focal lengths in px/rad, principal point in px, skew (cv2.fisheye's alpha).
+
+        Convention
+        ----------
+        Pixel centres at integer coordinates: the default principal point is the image centre
+        ((W − 1)/2, (H − 1)/2).
+        """
         cx = (width - 1) / 2.0 if self.cx is None else self.cx
         cy = (height - 1) / 2.0 if self.cy is None else self.cy
         if self.K is not None:
@@ -216,7 +227,13 @@ class MeshPart(_Model):
         return {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}[self.units]
 
     def transform(self) -> np.ndarray:
-        """(4, 4) file-to-scene transform (scale, then rotate, then translate)."""
+        """(4, 4) file-to-scene transform (scale, then rotate, then translate).
+
+        Convention
+        ----------
+        Maps homogeneous points of the mesh file (in ``units``) to the scene frame, metres;
+        ``rotation_deg`` = (yaw, pitch, roll) as :func:`~rvmsim.camera.rotation_from_ypr`.
+        """
         t = np.eye(4)
         t[:3, :3] = rotation_from_ypr(*self.rotation_deg) * self.scale
         t[:3, 3] = self.translation
@@ -354,7 +371,7 @@ class GroundPattern(_Model):
 
 
 class TestSite(_Model):
-    """The FMVSS 111 layout (defaults in :mod:`rvmsim.fmvss111`) plus customer fixtures."""
+    """The FMVSS 111 layout (defaults in :mod:`rvmsim.scene.fmvss111`) plus customer fixtures."""
 
     __test__ = False
     object_height: PositiveFloat = fmvss111.OBJECT_HEIGHT_M
@@ -381,7 +398,14 @@ class TestSite(_Model):
         return self
 
     def object_centre(self, letter: str) -> tuple[float, float] | None:
-        """(x, z) of the axis of object ``letter`` in metres, or None when it is disabled."""
+        """(x, z) of the axis of object ``letter`` in metres, or None when it is disabled.
+
+        Convention
+        ----------
+        Scene frame on the ground plane; with ``position_reference: surface`` the given
+        position is the object's surface nearest the car, so the axis lies a radius further
+        rearward (+Z).
+        """
         override = self.objects.get(letter)  # type: ignore[call-overload]
         if override is not None and not override.enabled:
             return None
