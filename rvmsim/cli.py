@@ -303,7 +303,7 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
     def remote_runs():
         """(scene, run_dir, (evaluations, seconds)) per finished task, or (scene, None,
         error)."""
-        from .render.cache import scene_key
+        from .render import scene_key
         from .batch.executors import DaskExecutor
         from .scene import load_scene
         from .tune.loop import portable_scene_doc, tune_task
@@ -512,7 +512,7 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     tolerances.  Writes validation.json, validation.html and PNGs (landmarks, blended overlays,
     edge overlays).  Exit status: 0 pass, 1 the verdict failed, 2 an error.
     """
-    from .render.cache import cached_render
+    from .render import cached_render
     from .criteria.core import load_criteria
     from .scene import load_scene
     from .validate.core import Tolerances, load_capture, write_corrected_scene, write_outputs

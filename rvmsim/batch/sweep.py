@@ -323,7 +323,7 @@ def _run_point(task: dict) -> dict:
     import os
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from ..render.cache import cached_render
+    from ..render import cached_render
     from ..criteria.core import criteria_from_text, default_criteria
     from ..criteria.evaluator import CandidateEvaluator
     from ..scene import scene_from_dict

@@ -3,7 +3,7 @@ into the fisheye image (:mod:`.fold`, :func:`render_fisheye`); cached on disk (:
 
 from __future__ import annotations
 
-from .cube import CubeLayout, FaceCrop, cube_layout, face_rotation, FACE_NAMES, GUARD_PX
+from .cube import CubeLayout, FaceCrop, cube_layout, face_coords, face_rotation, FACE_NAMES, GUARD_PX
 from .gl import FaceAtlas, render_faces
 from .fold import fold
 from .fisheye import FisheyeImages, render_fisheye
@@ -22,6 +22,7 @@ __all__ = [
     "FaceCrop",
     "FaceAtlas",
     "cube_layout",
+    "face_coords",
     "face_rotation",
     "render_faces",
     "fold",

@@ -24,7 +24,8 @@ import numpy as np
 
 from ..camera import FisheyeCamera
 
-__all__ = ["CubeLayout", "FaceCrop", "cube_layout", "face_rotation", "FACE_NAMES", "GUARD_PX"]
+__all__ = ["CubeLayout", "FaceCrop", "cube_layout", "face_coords", "face_rotation", "FACE_NAMES",
+           "GUARD_PX"]
 
 FACE_NAMES = ("+x", "-x", "+y", "-y", "+z", "-z")
 _FACE_AXES = (  # (axis index, sign) of each face's viewing direction in the cube frame
@@ -109,8 +110,28 @@ class CubeLayout:
         return GUARD_PX + (self.face_size - 1) / 2.0
 
 
-def _face_coords(rays: np.ndarray, cube_rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Face index and normalised face coords (x/z, y/z in [-1, 1]) for camera rays (..., 3)."""
+def face_coords(rays: np.ndarray, cube_rotation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cube face each ray hits, and where on it.
+
+    Parameters
+    ----------
+    rays : (..., 3) float
+        Directions in the camera frame.
+    cube_rotation : (3, 3) float
+        Cube frame relative to the camera frame.
+
+    Returns
+    -------
+    face : (...) int
+        Index into :data:`FACE_NAMES`: the face whose axis is the ray's dominant component.
+    t : (..., 2) float
+        Normalised coordinates on that face, (x/z, y/z) in [−1, 1] of its face camera.
+
+    Convention
+    ----------
+    Face cameras as :func:`face_rotation`; a face of N px puts ``t`` at
+    ``N/2 · t + GUARD_PX + (N − 1)/2`` px (pixel centres at integer coordinates).
+    """
     d = rays @ cube_rotation  # into the cube frame
     axis = np.argmax(np.abs(d), axis=-1)
     comp = np.take_along_axis(d, axis[..., None], axis=-1)[..., 0]
@@ -128,7 +149,7 @@ def _auto_face_size(face: np.ndarray, t: np.ndarray, in_fov: np.ndarray, width: 
     """The face size (px) at which every face is ``oversample`` × as dense as the fisheye
     image (``width`` px wide) where it is least dense, within [16, ``max_face_size``].
 
-    ``face`` (H, W) and ``t`` (H, W, 2) are :func:`_face_coords` of the fisheye pixels.
+    ``face`` (H, W) and ``t`` (H, W, 2) are :func:`face_coords` of the fisheye pixels.
     """
     # Displacement of the unit-focal face coordinate between neighbouring fisheye pixels:
     # a face of N px (focal N/2) has ≥ 1 px per fisheye px where N ≥ 2 / |d|.
@@ -185,7 +206,7 @@ def cube_layout(
     """
     rot = np.eye(3) if cube_rotation is None else np.asarray(cube_rotation, dtype=np.float64)
     rays, in_fov = camera.image_rays()
-    face, t = _face_coords(rays, rot)
+    face, t = face_coords(rays, rot)
     if not np.any(in_fov):
         raise ValueError("no pixel of the camera lies inside the lens's field of view")
     n = face_size if face_size is not None else _auto_face_size(

@@ -162,7 +162,7 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from ..render.cache import cached_render, same_scene
+    from ..render import cached_render, same_scene
     from ..criteria.core import load_criteria
     from ..scene import load_scene
     from ..tune.store import RunStore

@@ -249,7 +249,7 @@ def tune(
     progress_position : int
         Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
-    from ..render.cache import cached_render, same_scene, scene_key
+    from ..render import cached_render, same_scene, scene_key
     from ..scene import load_scene
 
     run_dir = Path(run_dir)

@@ -833,7 +833,7 @@ def validate(
 
     if synthetic is None:
         if scene_file is not None:
-            from ..render.cache import cached_render
+            from ..render import cached_render
 
             synthetic = cached_render(scene, progress=progress)[0]
         else:

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from rvmsim.camera import FisheyeCamera
-from rvmsim.render import FACE_NAMES, GUARD_PX, cube_layout, face_rotation
-from rvmsim.render.cube import _face_coords
+from rvmsim.render import FACE_NAMES, GUARD_PX, cube_layout, face_coords, face_rotation
 
 from ..conftest import small_render
 from .conftest import label_boundary
@@ -24,7 +23,7 @@ def test_cube_seams_leave_no_gaps_or_doubles():
     # And along the seams of the reference cube: each seam pixel's label matches the turned
     # cube (where it is not a label border), so no row or column is dropped or repeated.
     rays, ok = ref.camera.image_rays()
-    face, _ = _face_coords(rays, np.eye(3))
+    face, _ = face_coords(rays, np.eye(3))
     seam = np.zeros_like(ok)
     seam[:, 1:] |= face[:, 1:] != face[:, :-1]
     seam[1:, :] |= face[1:, :] != face[:-1, :]
@@ -60,7 +59,7 @@ def test_atlas_coordinates_reproject_to_the_pixel_rays():
     cam = _camera(190.0)
     layout = cube_layout(cam, face_size=96)
     rays, ok = cam.image_rays()
-    face, _ = _face_coords(rays, np.eye(3))
+    face, _ = face_coords(rays, np.eye(3))
     for crop in layout.crops:
         sel = ok & (face == crop.face)
         ax = layout.atlas_x[sel] - crop.atlas_x0 + crop.x0

@@ -7,8 +7,7 @@ import numpy as np
 
 from rvmsim import labels as L
 from rvmsim.camera import FisheyeCamera
-from rvmsim.render import cube_layout, fold
-from rvmsim.render.cube import _face_coords
+from rvmsim.render import cube_layout, face_coords, fold
 
 
 def _layout():
@@ -27,7 +26,7 @@ def test_labels_are_the_face_they_sample_and_colour_is_resampled():
         color_atlas[: crop.height, span] = 20 * (crop.face + 1)
     color, labels = fold(layout, color_atlas, label_atlas)
     rays, ok = cam.image_rays()
-    face, _ = _face_coords(rays, np.eye(3))
+    face, _ = face_coords(rays, np.eye(3))
     assert labels.shape == (cam.height, cam.width) and labels.dtype == np.uint8
     np.testing.assert_array_equal(labels[ok], 10 + face[ok])
     assert np.all(labels[~ok] == L.VOID) and np.all(color[~ok] == 0)
