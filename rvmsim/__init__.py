@@ -11,9 +11,9 @@ Public API::
 
 from __future__ import annotations
 
-from .camera.fisheye import FisheyeCamera, rotation_from_ypr
+from .camera import FisheyeCamera, rotation_from_ypr
 from .errors import RvmsimError, SceneError
-from .scene.schema import Scene, load_scene, scene_from_dict
+from .scene import Scene, load_scene, scene_from_dict
 
 __all__ = [
     "FisheyeCamera",

@@ -14,15 +14,16 @@ from .errors import InputFileError, RvmsimError
 __all__ = ["read_text", "parse_yaml", "key_lines", "input_error_from_validation", "write_png"]
 
 
-def read_text(path: Path, error: type[InputFileError] = InputFileError) -> str:
+def read_text(path: Path, error: type[InputFileError] = InputFileError, *,
+              what: str = "file") -> str:
     """The text of a user file; ``error`` (an :class:`InputFileError`) naming the file when it
-    cannot be read."""
+    cannot be read (``what`` names the kind of file in the message: "params file not found")."""
     try:
         return path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise error(str(path), "", "file not found") from None
+        raise error(str(path), "", f"{what} not found") from None
     except (OSError, UnicodeDecodeError) as err:
-        raise error(str(path), "", f"cannot read file ({err})") from None
+        raise error(str(path), "", f"cannot read {what} ({err})") from None
 
 
 def parse_yaml(text: str, source: str, error: type[InputFileError] = InputFileError) -> Any:
@@ -42,7 +43,7 @@ def key_lines(text: str) -> dict[tuple[Any, ...], int]:
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
-        return lines
+        return lines  # no line is known; the parse error itself is parse_yaml's to report
 
     def walk(node: Any, path: tuple[Any, ...]) -> None:
         if isinstance(node, yaml.MappingNode):

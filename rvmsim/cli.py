@@ -38,7 +38,7 @@ def _open_run(run: Path):
 
 
 def _load_isp(params_file: Path | None):
-    from .isp.core import IspParams, OutputSpec, load_params
+    from .isp import IspParams, OutputSpec, load_params
 
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
@@ -74,8 +74,8 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     """
     from . import labels as L
     from ._io import write_png
-    from .render.fisheye import render_fisheye
-    from .scene.schema import load_scene
+    from .render import render_fisheye
+    from .scene import load_scene
 
     try:
         sc = load_scene(scene)
@@ -130,9 +130,9 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     """
     from . import labels as L
     from ._io import write_png
-    from .isp.core import draw_roi, params_to_dict
+    from .isp import draw_roi, params_to_dict
     from .pipeline import render_rvm
-    from .scene.schema import load_scene
+    from .scene import load_scene
 
     try:
         params, output = _load_isp(params_file)
@@ -172,9 +172,9 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     from .criteria.core import load_criteria
     from .criteria.core import evaluate as evaluate_labels
     from ._io import write_png
-    from .isp.core import params_to_dict
+    from .isp import params_to_dict
     from .pipeline import render_rvm
-    from .scene.schema import load_scene
+    from .scene import load_scene
 
     try:
         params, output = _load_isp(params_file)
@@ -354,7 +354,7 @@ def select(run: Path, rank: int, out: Path | None) -> None:
     """Export the rank-K parameter set of a run as a params file."""
     import yaml
 
-    from .isp.core import OutputSpec, params_to_dict
+    from .isp import OutputSpec, params_to_dict
 
     store = _open_run(run)
     top = store.top(rank)

@@ -8,6 +8,8 @@ The palette is the only place IDs are defined; everything else refers to names h
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 __all__ = [
@@ -108,7 +110,7 @@ def label_names() -> dict[int, str]:
     return names
 
 
-def lut(ids) -> np.ndarray:
+def lut(ids: Iterable[int]) -> np.ndarray:
     """A 256-entry uint8 table, 255 at ``ids`` and 0 elsewhere: ``cv2.LUT(labels, lut(ids))``
     is the mask of those labels in one pass."""
     table = np.zeros(256, np.uint8)

@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .isp.core import IspParams, OutputSpec, process
-from .render.fisheye import FisheyeImages, render_fisheye
-from .scene.schema import Scene
+from .isp import IspParams, OutputSpec, process
+from .render import FisheyeImages, render_fisheye
+from .scene import Scene
 
 __all__ = ["RvmFrame", "render_rvm"]
 

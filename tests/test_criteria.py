@@ -95,7 +95,7 @@ def test_stripe_areas_match_projected_outlines(letter):
     m = measure(labels)
     site = scene.test_site
     r = site.object_diameter / 2
-    from rvmsim.scene.meshes import stripe_azimuth_deg
+    from rvmsim.scene import stripe_azimuth_deg
 
     total, perimeter = 0.0, 0.0
     for c in "FG":

@@ -1,17 +1,27 @@
-"""Camera models: the fisheye lens (equidistance, Kannala-Brandt) and the mount rotation."""
+"""Camera models: the fisheye camera, its lens models (equidistance, Kannala-Brandt; one
+module each, on the :class:`LensModel` interface) and the mount rotation."""
 
 from __future__ import annotations
 
-from .fisheye import (
-    FisheyeCamera,
-    rotation_from_ypr,
+from .lens import LensModel, newton_undistort
+from .equidistance import Equidistance
+from .kannala_brandt import (
+    KannalaBrandt,
     distort_theta,
+    distort_theta_derivative,
     undistort_theta,
 )
+from .mount import rotation_from_ypr
+from .fisheye import FisheyeCamera
 
 __all__ = [
     "FisheyeCamera",
     "rotation_from_ypr",
+    "LensModel",
+    "newton_undistort",
+    "Equidistance",
+    "KannalaBrandt",
     "distort_theta",
+    "distort_theta_derivative",
     "undistort_theta",
 ]

@@ -2,32 +2,20 @@
 
 Conventions
 -----------
-Scene frame (the paper's, section III-A): X toward the driver's side, Y toward the ground,
-Z toward the rear of the vehicle; origin on the ground, on the vehicle centre line, in the
-vertical plane through the rearmost point of the rear bumper.  Units: metres.  A point at
-height ``h`` above the ground has ``Y = -h``.
-
-Camera frame (OpenCV's): x to the right of the image, y down the image, z along the optical
-axis.  With yaw = pitch = roll = 0 the camera looks straight rearward and its axes coincide
-with the scene axes (x = X, y = Y, z = Z).
-
-Mount angles, in degrees, applied as ``R_cam_to_scene = Ry(yaw) @ Rx(-pitch) @ Rz(roll)``:
-
-* ``pitch`` > 0 turns the optical axis down toward the ground;
-* ``yaw`` > 0 turns the optical axis toward +X (the driver's side);
-* ``roll`` > 0 turns the camera's x axis toward its y axis about the optical axis.
+Frames (scene and camera) and the mount angles: see :mod:`rvmsim.camera.mount`.
 
 Pixels: OpenCV's convention, pixel centres at integer coordinates, (u, v) = (column, row),
 origin at the centre of the top-left pixel.
 
-Lens: Kannala-Brandt, exactly as ``cv2.fisheye`` defines it.  With the incidence angle
-θ (radians, from the optical axis) and the azimuth φ of a ray,
+Lens: a radial model (:mod:`rvmsim.camera.lens`) maps the incidence angle θ (radians, from
+the optical axis) of a ray with azimuth φ to the distorted angle θ_d, and
 
-    θ_d = θ · (1 + k1·θ² + k2·θ⁴ + k3·θ⁶ + k4·θ⁸)
     u   = fx · (θ_d·cos φ + skew · θ_d·sin φ) + cx
     v   = fy ·  θ_d·sin φ + cy
 
-``k = 0`` is the equidistance lens r = f·θ (the paper's equation (3)).  Unlike
+The camera's ``k`` = (k1..k4) selects the model: Kannala-Brandt exactly as ``cv2.fisheye``
+defines it (:mod:`rvmsim.camera.kannala_brandt`), or with ``k = 0`` the equidistance lens
+r = f·θ (:mod:`rvmsim.camera.equidistance`, the paper's equation (3)).  Unlike
 ``cv2.fisheye.projectPoints`` (which uses θ = atan(r/z) and so breaks down behind the
 camera's principal plane), θ = atan2(√(x²+y²), z) here, so rays beyond 90° — which a 190°
 lens sees — project correctly.
@@ -39,94 +27,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = [
-    "FisheyeCamera",
-    "rotation_from_ypr",
-    "distort_theta",
-    "undistort_theta",
-]
+from .equidistance import Equidistance
+from .kannala_brandt import KannalaBrandt
+from .lens import LensModel
 
-
-def _rot_x(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _rot_y(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
-def _rot_z(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def rotation_from_ypr(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
-    """Camera-to-scene rotation from mount angles.
-
-    Parameters
-    ----------
-    yaw_deg, pitch_deg, roll_deg : float
-        Mount angles in degrees (see the module docstring for the signs).
-
-    Returns
-    -------
-    R : (3, 3) float64
-        Rotation whose columns are the camera's x, y, z axes in scene coordinates.
-    """
-    return (
-        _rot_y(np.radians(yaw_deg)) @ _rot_x(-np.radians(pitch_deg)) @ _rot_z(np.radians(roll_deg))
-    )
-
-
-def distort_theta(theta: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Distorted angle θ_d = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ + k4θ⁸), radians in and out."""
-    t2 = theta * theta
-    return theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))))
-
-
-def _distort_theta_derivative(theta: np.ndarray, k: np.ndarray) -> np.ndarray:
-    t2 = theta * theta
-    return 1.0 + t2 * (3 * k[0] + t2 * (5 * k[1] + t2 * (7 * k[2] + t2 * 9 * k[3])))
-
-
-def undistort_theta(theta_d: np.ndarray, k: np.ndarray, *, theta_max: float) -> np.ndarray:
-    """Invert :func:`distort_theta` on [0, theta_max] by Newton's method.
-
-    Parameters
-    ----------
-    theta_d : ndarray
-        Distorted angles (radians, ≥ 0).
-    k : (4,) float
-        Kannala-Brandt coefficients k1..k4.
-    theta_max : float
-        Largest incidence angle of interest (radians); the polynomial must be increasing on
-        [0, theta_max] (checked when the camera is built).
-
-    Returns
-    -------
-    theta : ndarray
-        Incidence angles (radians).  Values of ``theta_d`` beyond the lens's range give
-        ``theta_max * 1.5`` (> ``theta_max``), so callers can mask them.
-    """
-    theta_d = np.asarray(theta_d, dtype=np.float64)
-    if not np.any(k):
-        return theta_d.copy()
-    theta = theta_d.copy()
-    limit = theta_max * 1.5
-    for _ in range(20):
-        f = distort_theta(theta, k) - theta_d
-        df = _distort_theta_derivative(theta, k)
-        df = np.where(np.abs(df) < 1e-6, 1e-6, df)
-        step = f / df
-        theta = np.clip(theta - step, 0.0, limit)
-        if np.max(np.abs(step), initial=0.0) < 1e-12:
-            break
-    # Where θ_d lies beyond what the polynomial reaches, Newton lands on a wrong root (or 0):
-    # report those as out of range.
-    bad = np.abs(distort_theta(theta, k) - theta_d) > 1e-9 * np.maximum(1.0, theta_d)
-    return np.where(bad, limit, theta)
+__all__ = ["FisheyeCamera"]
 
 
 @dataclass(frozen=True)
@@ -149,7 +54,7 @@ class FisheyeCamera:
         Full field of view of the lens in degrees; rays beyond fov_deg / 2 from the optical axis
         never reach the sensor (those pixels are dark and labelled void).
     rotation : (3, 3) float
-        Camera-to-scene rotation (see :func:`rotation_from_ypr`).
+        Camera-to-scene rotation (see :func:`~rvmsim.camera.rotation_from_ypr`).
     position : (3,) float
         Optical centre in scene coordinates, metres.
     """
@@ -185,13 +90,18 @@ class FisheyeCamera:
         object.__setattr__(self, "position", pos)
         object.__setattr__(self, "k", tuple(float(x) for x in self.k))
         # The distortion polynomial must be one-to-one over the lens's field.
-        theta = np.linspace(0.0, self.theta_max, 2048)
-        if np.any(_distort_theta_derivative(theta, np.asarray(self.k)) <= 0):
+        if not self.lens.is_monotonic(self.theta_max):
             raise ValueError(
                 "lens distortion k1..k4 is not monotonic up to fov_deg/2: the image would fold"
             )
 
     # ------------------------------------------------------------------ properties
+    @property
+    def lens(self) -> LensModel:
+        """The lens model ``k`` describes: :class:`~rvmsim.camera.Equidistance` when every
+        coefficient is 0, else :class:`~rvmsim.camera.KannalaBrandt`."""
+        return KannalaBrandt(self.k) if any(self.k) else Equidistance()
+
     @property
     def theta_max(self) -> float:
         """Half the lens's field of view, radians."""
@@ -244,7 +154,22 @@ class FisheyeCamera:
 
     # ------------------------------------------------------------------ projection
     def scene_to_camera(self, points: np.ndarray) -> np.ndarray:
-        """Scene points (N, 3) in metres → camera-frame points (N, 3) in metres."""
+        """Scene points → camera-frame points.
+
+        Parameters
+        ----------
+        points : (N, 3) float
+            Points in the scene frame, metres (any shape with a last axis of 3; flattened).
+
+        Returns
+        -------
+        (N, 3) float64
+            The points in the camera frame, metres, relative to the optical centre.
+
+        Convention
+        ----------
+        Frames as in :mod:`rvmsim.camera.mount`: ``p_cam = R_cam_to_sceneᵀ · (p − position)``.
+        """
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         return (pts - self.position) @ self.rotation
 
@@ -259,14 +184,20 @@ class FisheyeCamera:
         Returns
         -------
         uv : (N, 2) float64
-            Pixel coordinates (u = column, v = row), pixel-centre convention.
+            Pixel coordinates (u = column, v = row), px.
         in_fov : (N,) bool
-            True where the ray lies within the lens's field of view.
+            True where the ray lies within the lens's field of view (θ ≤ fov_deg / 2).
+
+        Convention
+        ----------
+        Camera frame as in :mod:`rvmsim.camera.mount`; pixel centres at integer coordinates,
+        (0, 0) the centre of the top-left pixel.  θ = atan2(√(x² + y²), z), so rays beyond
+        90° from the axis project too.
         """
         r = np.asarray(rays, dtype=np.float64).reshape(-1, 3)
         rho = np.hypot(r[:, 0], r[:, 1])
         theta = np.arctan2(rho, r[:, 2])
-        theta_d = distort_theta(theta, np.asarray(self.k))
+        theta_d = self.lens.distort(theta)
         safe = np.where(rho > 0, rho, 1.0)
         xd = np.where(rho > 0, theta_d * r[:, 0] / safe, 0.0)
         yd = np.where(rho > 0, theta_d * r[:, 1] / safe, 0.0)
@@ -275,7 +206,13 @@ class FisheyeCamera:
         return np.stack([u, v], axis=1), theta <= self.theta_max
 
     def project(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Project scene points (N, 3), metres, to pixels; see :meth:`project_rays`."""
+        """Project scene points (N, 3), metres, to pixels (u, v) px and the in-field mask.
+
+        Convention
+        ----------
+        Scene frame in, pixel centres at integer coordinates out; see
+        :meth:`scene_to_camera` and :meth:`project_rays`.
+        """
         return self.project_rays(self.scene_to_camera(points))
 
     def pixel_rays(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -284,7 +221,7 @@ class FisheyeCamera:
         Parameters
         ----------
         uv : (..., 2) float
-            Pixel coordinates (pixel-centre convention).
+            Pixel coordinates (u = column, v = row), px.
 
         Returns
         -------
@@ -292,12 +229,17 @@ class FisheyeCamera:
             Unit directions in the camera frame.
         in_fov : (...) bool
             True where the pixel lies inside the lens's image circle (θ ≤ fov/2).
+
+        Convention
+        ----------
+        Pixel centres at integer coordinates, (0, 0) the centre of the top-left pixel; camera
+        frame as in :mod:`rvmsim.camera.mount`.  The inverse of :meth:`project_rays`.
         """
         uv = np.asarray(uv, dtype=np.float64)
         yd = (uv[..., 1] - self.cy) / self.fy
         xd = (uv[..., 0] - self.cx) / self.fx - self.skew * yd
         theta_d = np.hypot(xd, yd)
-        theta = undistort_theta(theta_d, np.asarray(self.k), theta_max=self.theta_max)
+        theta = self.lens.undistort(theta_d, theta_max=self.theta_max)
         in_fov = theta <= self.theta_max
         safe = np.where(theta_d > 0, theta_d, 1.0)
         s = np.sin(theta)
@@ -307,6 +249,13 @@ class FisheyeCamera:
         return rays, in_fov
 
     def image_rays(self) -> tuple[np.ndarray, np.ndarray]:
-        """Unit rays (H, W, 3) for every pixel centre, and the (H, W) in-field mask."""
+        """Unit rays (H, W, 3), camera frame, for every pixel centre, and the (H, W) in-field
+        mask.
+
+        Convention
+        ----------
+        ``rays[v, u]`` is the ray of the pixel centre (u, v) (integer px); see
+        :meth:`pixel_rays`.
+        """
         u, v = np.meshgrid(np.arange(self.width), np.arange(self.height))
         return self.pixel_rays(np.stack([u, v], axis=-1).astype(np.float64))

@@ -38,7 +38,7 @@ import numpy as np
 from .. import labels as L
 from .core import GROUPS, Criteria, EcResult, LabelSource, Measurements, Window
 from .core import bumper_spans, default_criteria, measure_source, score, values_array
-from ..isp.core import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
+from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
 
 __all__ = ["CandidateEvaluator"]
 

@@ -1,27 +1,31 @@
-"""The ISP model: fisheye correction and virtual pan-tilt-zoom (the paper's 14 parameters)."""
+"""The ISP model: fisheye correction and virtual pan-tilt-zoom (the paper's 14 parameters).
+
+Modules: :mod:`.params` (the parameters, the output image, params files), :mod:`.exact` (the
+output → input map's formulas, evaluated exactly), :mod:`.map` (the fast, error-controlled
+map and the remap), :mod:`.roi` (the region of interest and the inverse map).
+"""
 
 from __future__ import annotations
 
-from .core import (
+from .params import (
     IspParams,
     OutputSpec,
     ParamSpec,
     PARAM_SPECS,
     TUNED_BY_DEFAULT,
-    IspMap,
+    load_params,
+    params_to_dict,
+)
+from .exact import IspMap, build_map_exact
+from .map import (
     build_map,
-    build_map_exact,
     map_nodes,
     MapNodes,
     RayCache,
     apply_map,
     process,
-    roi_outline,
-    draw_roi,
-    input_to_output,
-    load_params,
-    params_to_dict,
 )
+from .roi import roi_outline, draw_roi, input_to_output
 
 __all__ = [
     "IspParams",

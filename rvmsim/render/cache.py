@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene.schema import MeshPart, Scene, mesh_parts
+from ..scene import MeshPart, Scene, mesh_parts
 from .fisheye import FisheyeImages, render_fisheye
 
 __all__ = ["cache_dir", "scene_key", "file_scene_key", "same_scene", "cached_render",
@@ -97,8 +97,10 @@ def _read_entry(folder: Path, width: int, height: int) -> tuple[np.ndarray, np.n
     if not (color_p.is_file() and labels_p.is_file()):
         return None
     try:
-        color = np.asarray(iio.imread(color_p))
-        labels = np.asarray(iio.imread(labels_p))
+        # pillow only (imageio's first choice for PNG): its fallback plugins leave a damaged
+        # file open
+        color = np.asarray(iio.imread(color_p, plugin="pillow"))
+        labels = np.asarray(iio.imread(labels_p, plugin="pillow"))
     except (OSError, ValueError) as err:
         warnings.warn(f"{folder}: damaged render cache entry, rendering again ({err})",
                       RuntimeWarning, stacklevel=3)

@@ -162,9 +162,9 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from ..render.cache import cached_render, same_scene
+    from ..render import cached_render, same_scene
     from ..criteria.core import load_criteria
-    from ..scene.schema import load_scene
+    from ..scene import load_scene
     from ..tune.store import RunStore
     from ..tune.loop import TuningConfig
 
@@ -248,7 +248,7 @@ def _scene_section(r: _Run) -> str:
 
 
 def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
-    from ..isp.core import draw_roi
+    from ..isp import draw_roi
 
     roi = draw_roi(r.images.color, r.top[0].params, r.output, thickness=3)
     figs = [
@@ -288,7 +288,7 @@ def _ec_section(result) -> str:
 
 
 def _params_section(r: _Run) -> str:
-    from ..isp.core import PARAM_SPECS, IspParams
+    from ..isp import PARAM_SPECS, IspParams
 
     space = r.config.space(r.scene.fisheye_camera())
     tuned = {pr.name: pr for pr in space.ranges}
@@ -345,7 +345,7 @@ def _differences(rec, first, criteria) -> list[str]:
 
 def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
-    from ..isp.core import process
+    from ..isp import process
 
     cards = []
     first = r.top[0]
@@ -386,7 +386,7 @@ def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
     """The report page of one run, and the summary the batch index shows."""
     from ..criteria.annotate import annotate
     from ..criteria.core import evaluate
-    from ..isp.core import process
+    from ..isp import process
 
     r = _load_run(run_dir)
     best = r.top[0]

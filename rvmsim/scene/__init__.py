@@ -1,4 +1,11 @@
-"""The scene: YAML schema (camera, vehicle, FMVSS No. 111 test site), meshes and landmarks."""
+"""The scene: YAML schema (camera, vehicle, FMVSS No. 111 test site), loading, meshes and
+landmarks.
+
+Modules: :mod:`.schema` (pydantic models), :mod:`.loading` (scene files → Scene),
+:mod:`.primitives` (mesh primitives, :class:`Part`), :mod:`.site` (the test site's surfaces),
+:mod:`.meshes` (:func:`build_parts`: every labelled surface), :mod:`.landmarks` (known 3D
+points), :mod:`.fmvss111` (the standard's dimensions).
+"""
 
 from __future__ import annotations
 
@@ -17,32 +24,28 @@ from .schema import (
     PatternBoard,
     GroundPattern,
     RenderSettings,
+)
+from .loading import (
     load_scene,
     read_scene_document,
     scene_from_dict,
     absolute_mesh_paths,
     mesh_parts,
 )
-from .meshes import (
-    Part,
-    Landmark,
-    CheckerCorner,
-    build_parts,
-    site_landmarks,
-    checker_corners,
+from .primitives import Part, cylinder_side, disk, swept_block, quad
+from .site import (
+    stripe_azimuth_deg,
     pattern_point,
     board_point,
     board_frame,
     pattern_axes,
     pattern_shade,
-    cylinder_side,
-    disk,
-    swept_block,
-    quad,
     GUIDELINE_LIFT_M,
     BOARD_LIFT_M,
     PATTERN_LIFT_M,
 )
+from .meshes import build_parts
+from .landmarks import Landmark, CheckerCorner, site_landmarks, checker_corners
 
 __all__ = [
     "Scene",
@@ -70,6 +73,7 @@ __all__ = [
     "build_parts",
     "site_landmarks",
     "checker_corners",
+    "stripe_azimuth_deg",
     "pattern_point",
     "board_point",
     "board_frame",

@@ -1,8 +1,8 @@
-"""Scene files: one vehicle's rear-view camera, body parts and FMVSS 111 test site, in YAML.
+"""The scene schema: one vehicle's rear-view camera, body parts and FMVSS 111 test site.
 
-A scene file is read with ``yaml.safe_load`` and validated by the pydantic models below
-(unknown keys are errors).  Every problem becomes a :class:`~rvmsim.errors.SceneError` that
-names the file, the line and the dotted key.  Paths inside a scene file (mesh files) are
+These pydantic models validate a scene document (unknown keys are errors); reading a scene
+file, with one-line :class:`~rvmsim.errors.SceneError` messages naming the file, the line and
+the dotted key, is :mod:`rvmsim.scene.loading`.  Paths inside a scene file (mesh files) are
 resolved relative to the scene file.
 
 Units: metres and degrees; pixels for image sizes and intrinsics.  Frame: see
@@ -21,20 +21,10 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Discriminator,
-    Field,
-    Tag,
-    ValidationError,
-    model_validator,
-)
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 
 from . import fmvss111
-from ..camera.fisheye import FisheyeCamera, rotation_from_ypr
-from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
-from ..errors import SceneError
+from ..camera import FisheyeCamera, rotation_from_ypr
 
 __all__ = [
     "Scene",
@@ -51,11 +41,6 @@ __all__ = [
     "PatternBoard",
     "GroundPattern",
     "RenderSettings",
-    "load_scene",
-    "read_scene_document",
-    "scene_from_dict",
-    "absolute_mesh_paths",
-    "mesh_parts",
 ]
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -120,7 +105,18 @@ class Intrinsics(_Model):
         return self
 
     def resolve(self, width: int, height: int) -> tuple[float, float, float, float, float]:
-        """(fx, fy, cx, cy, skew) in px for an image of ``width`` × ``height`` px."""
+        """(fx, fy, cx, cy, skew) for an image of ``width`` × ``height`` px.
+
+        Returns
+        -------
+        (float, float, float, float, float)
+            Focal lengths in px/rad, principal point in px, skew (cv2.fisheye's alpha).
+
+        Convention
+        ----------
+        Pixel centres at integer coordinates: the default principal point is the image centre
+        ((W − 1)/2, (H − 1)/2).
+        """
         cx = (width - 1) / 2.0 if self.cx is None else self.cx
         cy = (height - 1) / 2.0 if self.cy is None else self.cy
         if self.K is not None:
@@ -231,7 +227,13 @@ class MeshPart(_Model):
         return {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}[self.units]
 
     def transform(self) -> np.ndarray:
-        """(4, 4) file-to-scene transform (scale, then rotate, then translate)."""
+        """(4, 4) file-to-scene transform (scale, then rotate, then translate).
+
+        Convention
+        ----------
+        Maps homogeneous points of the mesh file (in ``units``) to the scene frame, metres;
+        ``rotation_deg`` = (yaw, pitch, roll) as :func:`~rvmsim.camera.rotation_from_ypr`.
+        """
         t = np.eye(4)
         t[:3, :3] = rotation_from_ypr(*self.rotation_deg) * self.scale
         t[:3, 3] = self.translation
@@ -369,7 +371,7 @@ class GroundPattern(_Model):
 
 
 class TestSite(_Model):
-    """The FMVSS 111 layout (defaults in :mod:`rvmsim.fmvss111`) plus customer fixtures."""
+    """The FMVSS 111 layout (defaults in :mod:`rvmsim.scene.fmvss111`) plus customer fixtures."""
 
     __test__ = False
     object_height: PositiveFloat = fmvss111.OBJECT_HEIGHT_M
@@ -396,7 +398,14 @@ class TestSite(_Model):
         return self
 
     def object_centre(self, letter: str) -> tuple[float, float] | None:
-        """(x, z) of the axis of object ``letter`` in metres, or None when it is disabled."""
+        """(x, z) of the axis of object ``letter`` in metres, or None when it is disabled.
+
+        Convention
+        ----------
+        Scene frame on the ground plane; with ``position_reference: surface`` the given
+        position is the object's surface nearest the car, so the axis lies a radius further
+        rearward (+Z).
+        """
         override = self.objects.get(letter)  # type: ignore[call-overload]
         if override is not None and not override.enabled:
             return None
@@ -444,111 +453,3 @@ class Scene(_Model):
         """A path from the scene file, made absolute relative to the scene file's folder."""
         p = Path(path).expanduser()
         return p if p.is_absolute() else (Path(self.base_dir) / p).resolve()
-
-
-# ---------------------------------------------------------------------------- loading
-_TAGS = {"block", "mesh"}
-
-
-def scene_from_dict(
-    data: Any, *, base_dir: str | Path = ".", source: str = "<dict>", text: str | None = None
-) -> Scene:
-    """Validate a parsed scene document.
-
-    Parameters
-    ----------
-    data : dict
-        The document (as ``yaml.safe_load`` gives it).
-    base_dir : path
-        Folder that relative paths in the scene are resolved against.
-    source : str
-        Name used in error messages.
-    text : str, optional
-        The YAML text, to give line numbers in error messages.
-
-    Raises
-    ------
-    SceneError
-        For any invalid or missing key, or a missing mesh file.
-    """
-    if not isinstance(data, dict):
-        raise SceneError(source, "", "a scene file must be a YAML mapping (key: value)")
-    try:
-        scene = Scene.model_validate(
-            {**data, "base_dir": str(Path(base_dir).resolve()), "source": source}
-        )
-    except ValidationError as err:
-        raise input_error_from_validation(err, source, key_lines(text or ""), SceneError,
-                                          _TAGS) from None
-    lines = key_lines(text or "")
-    try:
-        scene.fisheye_camera()
-    except ValueError as err:
-        raise SceneError(source, "camera", str(err), lines.get(("camera",))) from None
-    for key, part in mesh_parts(scene):
-        path = scene.resolve_path(part.mesh)
-        if not path.is_file():
-            loc = tuple(int(p) if p.isdigit() else p for p in key.split("."))
-            raise SceneError(
-                source, key, f"mesh file not found: {path}", lines.get(loc)
-            )
-    return scene
-
-
-def mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
-    """The scene's mesh-file parts with their dotted keys (``vehicle.bumper.mesh``, ...)."""
-    out = []
-    for name in ("bumper", "garnish", "trunk"):
-        part = getattr(scene.vehicle, name)
-        if isinstance(part, MeshPart):
-            out.append((f"vehicle.{name}.mesh", part))
-    for i, part in enumerate(scene.vehicle.extra):
-        out.append((f"vehicle.extra.{i}.mesh", part))
-    return out
-
-
-def absolute_mesh_paths(doc: Any, base_dir: str | Path) -> list[Path]:
-    """Make every mesh path in a scene *document* (as parsed from YAML) absolute, resolved
-    against ``base_dir``, in place, so the document loads from any folder; returns them."""
-    out: list[Path] = []
-    veh = doc.get("vehicle") if isinstance(doc, dict) else None
-    if not isinstance(veh, dict):
-        return out
-    parts = [veh.get(k) for k in ("bumper", "garnish", "trunk")]
-    parts += list(veh.get("extra") or []) if isinstance(veh.get("extra"), list) else []
-    for part in parts:
-        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
-            p = Path(part["mesh"]).expanduser()
-            p = p if p.is_absolute() else (Path(base_dir) / p).resolve()
-            part["mesh"] = str(p)
-            out.append(p)
-    return out
-
-
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file.
-
-    Parameters
-    ----------
-    path : path
-        The YAML scene file.
-
-    Returns
-    -------
-    Scene
-
-    Raises
-    ------
-    SceneError
-        Unreadable file, malformed YAML, or any invalid key (message names file, line, key).
-    """
-    return read_scene_document(path)[0]
-
-
-def read_scene_document(path: str | Path) -> tuple[Scene, Any]:
-    """:func:`load_scene`, also returning the parsed YAML document (for tools that derive
-    other scenes from it: sweeps, cluster tasks).  Same errors."""
-    path = Path(path)
-    text = read_text(path, SceneError)
-    data = parse_yaml(text, str(path), SceneError)
-    return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text), data

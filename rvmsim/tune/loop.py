@@ -23,7 +23,7 @@ from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..criteria.core import Criteria, load_criteria
 from ..errors import RvmsimError, TuningConfigError
 from ..criteria.evaluator import CandidateEvaluator
-from ..isp.core import IspParams, OutputSpec, params_to_dict
+from ..isp import IspParams, OutputSpec, params_to_dict
 from .search import (
     STRATEGIES,
     CmaEs,
@@ -249,8 +249,8 @@ def tune(
     progress_position : int
         Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
-    from ..render.cache import cached_render, same_scene, scene_key
-    from ..scene.schema import load_scene
+    from ..render import cached_render, same_scene, scene_key
+    from ..scene import load_scene
 
     run_dir = Path(run_dir)
     run_json = run_dir / "run.json"
@@ -326,7 +326,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
     from ..criteria.annotate import annotate
     from ..criteria.core import evaluate
     from .._io import write_png
-    from ..isp.core import process
+    from ..isp import process
 
     top = store.top(config.top_m)
     if not top:
@@ -359,7 +359,7 @@ def write_results(run_dir: Path, store: RunStore, scene, images, config: TuningC
 def portable_scene_doc(scene_file: str | Path) -> dict:
     """The scene file's document with its mesh paths made absolute, so it loads from any
     folder (a task on a cluster worker writes it to a temporary file)."""
-    from ..scene.schema import absolute_mesh_paths, read_scene_document
+    from ..scene import absolute_mesh_paths, read_scene_document
 
     _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
     absolute_mesh_paths(doc, Path(scene_file).parent)

@@ -32,9 +32,9 @@ from typing import Callable, Iterator, Sequence
 
 import numpy as np
 
-from ..camera.fisheye import FisheyeCamera
+from ..camera import FisheyeCamera
 from ..criteria.core import score_batch
-from ..isp.core import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
+from ..isp import IspParams, PARAM_SPECS, TUNED_BY_DEFAULT
 from ..errors import RvmsimError
 from .store import RunStore, TrialRecord, ec_json, params_json
 

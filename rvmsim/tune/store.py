@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import RvmsimError
-from ..isp.core import IspParams
+from ..isp import IspParams
 
 __all__ = ["SqliteStore", "RunStore", "TrialRecord", "params_json", "ec_json", "json_default"]
 

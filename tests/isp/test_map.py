@@ -1,8 +1,8 @@
-"""ISP model: map exactness, the fast map's error bound, straight lines, Table 3 effects."""
+"""The fast ISP map: its error bound against the exact map, straight lines, the effect of each
+parameter on real renders (Table 3), mirroring, the ray cache."""
 
 from __future__ import annotations
 
-import json
 import math
 
 import cv2
@@ -10,70 +10,19 @@ import numpy as np
 import pytest
 
 from rvmsim import labels as L
-from rvmsim.errors import RvmsimError
 from rvmsim.isp import (
     PARAM_SPECS,
-    TUNED_BY_DEFAULT,
     IspParams,
     OutputSpec,
+    RayCache,
     apply_map,
     build_map,
     build_map_exact,
-    draw_roi,
-    load_params,
-    params_to_dict,
-    roi_outline,
+    map_nodes,
 )
 
-from .conftest import small_render
-
-INPUT = (1280, 960)
-
-
-def _reference_point(p: IspParams, u: float, v: float, inp, out: OutputSpec):
-    """Independent per-point evaluation of the documented formulas, built from OpenCV's
-    Rodrigues rotations and arccos instead of the module's matrices and atan2."""
-    half = out.width / 2
-    xn = (u - (out.width - 1) / 2) / half * (-1 if out.mirror else 1)
-    yn = (v - (out.height - 1) / 2) / half
-    xp, yp = xn / p.adv_h_scale + p.adv_h_shift, yn / p.adv_v_scale + p.adv_v_shift
-    phi_st = math.radians(p.phi)
-    axis = np.array([-math.sin(phi_st), math.cos(phi_st), 0.0]) * math.radians(p.theta)
-    r_plane, _ = cv2.Rodrigues(axis)
-    point = r_plane @ np.array([xp, yp, 0.0]) + np.array([0.0, 0.0, p.zoom])
-    r_tilt, _ = cv2.Rodrigues(np.array([0.0, 0.0, math.radians(p.tilt)]))
-    phi_cv = math.radians(p.v_pan)
-    pan_axis = np.array([-math.sin(phi_cv), math.cos(phi_cv), 0.0]) * math.radians(p.h_pan)
-    r_pan, _ = cv2.Rodrigues(pan_axis)
-    ray = r_pan @ r_tilt @ point
-    theta = math.acos(ray[2] / np.linalg.norm(ray))
-    phi = math.atan2(ray[1], ray[0])
-    f = p.rad / math.radians(p.fov / 2)
-    return ((inp[0] - 1) / 2 + p.h_shift + f * theta * math.cos(phi),
-            (inp[1] - 1) / 2 + p.v_shift + f * theta * math.sin(phi))
-
-
-PARAM_SETS = [
-    IspParams(),
-    IspParams(fov=190, rad=600, h_shift=12, v_shift=-30, zoom=0.8, adv_h_shift=0.1,
-              adv_v_shift=0.35, adv_h_scale=1.2, adv_v_scale=0.9),
-    IspParams(fov=170, rad=700, h_pan=25, v_pan=60, tilt=-12, zoom=1.4, theta=20, phi=-35),
-    IspParams(fov=200, rad=640, h_pan=40, v_pan=-120, tilt=170, zoom=2.5, theta=5, phi=150),
-]
-
-
-@pytest.mark.parametrize("params", PARAM_SETS)
-@pytest.mark.parametrize("mirror", [True, False])
-def test_map_matches_independent_per_point_formulas(params, mirror):
-    out = OutputSpec(320, 180, mirror)
-    fast = build_map(params, INPUT, out)
-    exact = build_map_exact(params, INPUT, out)
-    rng = np.random.default_rng(0)
-    for u, v in zip(rng.integers(0, out.width, 60), rng.integers(0, out.height, 60)):
-        ref = _reference_point(params, float(u), float(v), INPUT, out)
-        assert np.hypot(exact.map_x[v, u] - ref[0], exact.map_y[v, u] - ref[1]) < 1e-3
-        if 0 <= ref[0] < INPUT[0] and 0 <= ref[1] < INPUT[1]:
-            assert np.hypot(fast.map_x[v, u] - ref[0], fast.map_y[v, u] - ref[1]) <= 0.1
+from ..conftest import small_render
+from .conftest import INPUT
 
 
 def test_fast_map_error_bound_over_random_parameter_sets():
@@ -96,21 +45,7 @@ def test_fast_map_error_bound_over_random_parameter_sets():
     assert worst <= 0.1
 
 
-def test_params_validation_and_defaults():
-    p = IspParams()
-    assert (p.fov, p.rad, p.zoom, p.adv_h_scale) == (180, 640, 1, 1)
-    assert len(IspParams.names()) == 14 and len(TUNED_BY_DEFAULT) == 9
-    assert not {"h_pan", "v_pan", "tilt", "theta", "phi"} & set(TUNED_BY_DEFAULT)
-    with pytest.raises(ValueError, match="zoom"):
-        IspParams(zoom=0.0)
-    with pytest.raises(ValueError, match="adv_h_scale"):
-        IspParams(adv_h_scale=2.5)
-    with pytest.raises(ValueError, match="h_pan"):
-        IspParams(h_pan=-1)
-    with pytest.raises(Exception):
-        p.zoom = 2.0  # type: ignore[misc]
-
-
+# ---------------------------------------------------------------------------- real images
 # ---------------------------------------------------------------------------- real images
 def _pinhole_params(cam) -> IspParams:
     """FOV/RAD matching the (equidistance) lens, all angles 0: a pinhole V camera."""
@@ -253,96 +188,9 @@ def test_mirror_flips_horizontally_and_labels_stay_exact():
     assert col.shape == (300, 400, 3)
 
 
-def test_roi_outline_is_the_mapped_border_and_encloses_the_view():
-    p = PARAM_SETS[1]
-    out = OutputSpec(320, 180)
-    poly = roi_outline(p, INPUT, out, samples_per_side=32)
-    exact = build_map_exact(p, INPUT, out)
-    assert np.allclose(poly[0], [exact.map_x[0, 0], exact.map_y[0, 0]], atol=1e-3)
-    contour = poly.astype(np.float32).reshape(-1, 1, 2)
-    for v, u in [(90, 160), (20, 30), (150, 300)]:
-        assert cv2.pointPolygonTest(contour, (float(exact.map_x[v, u]),
-                                              float(exact.map_y[v, u])), False) > 0
-    img = np.zeros((INPUT[1], INPUT[0], 3), np.uint8)
-    drawn = draw_roi(img, p, out)
-    assert (drawn[..., 1] > 0).sum() > 500 and drawn[..., 0].max() == 0
-
-
-# ---------------------------------------------------------------------------- params files
-def test_params_file_round_trip(tmp_path):
-    p = PARAM_SETS[2]
-    out = OutputSpec(800, 480, False)
-    path = tmp_path / "p.json"
-    path.write_text(json.dumps(params_to_dict(p, out)))
-    assert load_params(path) == (p, out)
-    ypath = tmp_path / "p.yaml"
-    ypath.write_text("zoom: 1.3\nadv_v_shift: 0.2\n")
-    q, o = load_params(ypath)
-    assert q == IspParams(zoom=1.3, adv_v_shift=0.2) and o == OutputSpec()
-
-
-@pytest.mark.parametrize("text, words", [
-    ("zoom: 50\n", "zoom: 50 is outside [0.01, 10]"),
-    ("zooom: 1\n", "zooom: unknown ISP parameter"),
-    ("zoom: wide\n", "zoom: must be a number"),
-    ("zoom: [1\n", "malformed params file"),
-    ("- 1\n- 2\n", "must be a mapping"),
-    ("output: {size: [0, 480]}\n", "output.size"),
-    ("output: {mirror: maybe}\n", "output.mirror"),
-])
-def test_bad_params_file(tmp_path, text, words):
-    path = tmp_path / "p.yaml"
-    path.write_text(text)
-    with pytest.raises(RvmsimError) as info:
-        load_params(path)
-    assert words in str(info.value) and str(path) in str(info.value)
-    assert "\n" not in str(info.value)
-
-
-def test_params_follow_a_resampled_input():
-    p = PARAM_SETS[1]
-    out = OutputSpec(320, 180)
-    full = build_map_exact(p, INPUT, out)
-    quarter = build_map_exact(p.for_input_scale(0.25), (320, 240), out)
-    np.testing.assert_allclose(quarter.map_x, (full.map_x + 0.5) * 0.25 - 0.5, atol=1e-3)
-    np.testing.assert_allclose(quarter.map_y, (full.map_y + 0.5) * 0.25 - 0.5, atol=1e-3)
-
-
-def test_documented_worked_example():
-    """docs/isp-model.md's hand-checkable example gives what the code gives."""
-    p = IspParams(fov=190, rad=640, h_shift=10, v_shift=-20, zoom=0.8, adv_h_shift=0.1,
-                  adv_v_shift=0.25, adv_h_scale=1.2, adv_v_scale=0.9)
-    m = build_map_exact(p, (1280, 960), OutputSpec(1280, 720, True))
-    assert m.map_x[500, 1000] == pytest.approx(497.66, abs=0.01)
-    assert m.map_y[500, 1000] == pytest.approx(662.52, abs=0.01)
-
-
-def test_bundled_params_file_is_the_paper_defaults():
-    from .conftest import SCENES
-
-    assert load_params(SCENES.parent / "params" / "paper_defaults.yaml") == (IspParams(),
-                                                                            OutputSpec())
-
-
-@pytest.mark.parametrize("params", PARAM_SETS)
-def test_input_to_output_inverts_the_map(params):
-    from rvmsim.isp import input_to_output
-
-    out = OutputSpec(320, 180)
-    exact = build_map_exact(params, INPUT, out)
-    rng = np.random.default_rng(2)
-    v, u = rng.integers(0, 180, 50), rng.integers(0, 320, 50)
-    pts = np.stack([exact.map_x[v, u], exact.map_y[v, u]], 1)
-    back, ok = input_to_output(params, pts, INPUT, out)
-    assert ok.all()
-    np.testing.assert_allclose(back, np.stack([u, v], 1), atol=1e-3)
-
-
 def test_ray_cache_reuses_views_and_changes_no_node():
     """Candidates that differ only in FOV, RAD and the shifts share their ray planes: with a
     RayCache, map_nodes computes them once and gives bit-identical node grids."""
-    from rvmsim.isp import RayCache, map_nodes
-
     out = OutputSpec(320, 240)
     cache = RayCache(size=4)
     rng = np.random.default_rng(5)

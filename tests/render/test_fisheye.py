@@ -2,7 +2,6 @@
 
 * known 3D points projected with cv2.fisheye.projectPoints land on their label (≤ 1 px);
 * labels agree with trimesh ray casting from the camera, pixel by pixel;
-* moving the cube's seams changes nothing but sub-pixel boundary decisions;
 * colour and label images are aligned.
 """
 
@@ -16,7 +15,8 @@ import trimesh
 from rvmsim import labels as L
 from rvmsim.scene import build_parts, site_landmarks
 
-from .conftest import bundled_scene, small_render
+from ..conftest import bundled_scene, small_render
+from .conftest import label_boundary
 
 
 def _neighbourhood(labels: np.ndarray, u: float, v: float, radius: float = 1.0) -> set[int]:
@@ -131,34 +131,6 @@ def test_labels_agree_with_ray_casting(letter):
     assert len(set(got.tolist())) >= 8
 
 
-def _boundary(labels: np.ndarray) -> np.ndarray:
-    pad = np.pad(labels, 1, mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(pad, (3, 3))
-    return ~(windows == labels[..., None, None]).all(axis=(-1, -2))
-
-
-def test_cube_seams_leave_no_gaps_or_doubles():
-    """Turning the cube moves every seam; labels may only differ at label borders."""
-    ref = small_render("a")
-    turned = small_render("a", cube_yaw_deg=30.0)
-    diff = ref.labels != turned.labels
-    border = _boundary(ref.labels) | _boundary(turned.labels)
-    assert not np.any(diff & ~border), np.argwhere(diff & ~border)[:10]
-    assert diff.mean() < 0.003
-    # And along the seams of the reference cube: each seam pixel's label matches the turned
-    # cube (where it is not a label border), so no row or column is dropped or repeated.
-    from rvmsim.render.fisheye import _face_coords
-
-    rays, ok = ref.camera.image_rays()
-    face, _ = _face_coords(rays, np.eye(3))
-    seam = np.zeros_like(ok)
-    seam[:, 1:] |= face[:, 1:] != face[:, :-1]
-    seam[1:, :] |= face[1:, :] != face[:-1, :]
-    seam &= ok
-    assert seam.sum() > 500
-    assert not np.any(diff[seam] & ~border[seam])
-
-
 def test_void_outside_the_image_circle_only():
     img = small_render("a")
     _, in_fov = img.camera.image_rays()
@@ -181,7 +153,7 @@ def test_colour_and_labels_are_aligned(letter):
     labels, up to the one-pixel anti-aliased border."""
     img = small_render(letter)
     lum = cv2.cvtColor(img.color, cv2.COLOR_RGB2GRAY).astype(float)
-    border = _boundary(img.labels)
+    border = label_boundary(img.labels)
     checked = 0
     for letter_ in "ABCDEFG":
         stripe = np.isin(img.labels, [L.object_stripe(letter_)]
@@ -234,7 +206,7 @@ def test_label_borders_within_half_a_pixel_of_ray_casting():
     img = small_render("a")
     cam = img.camera
     mesh, face_label = _scene_mesh(scene)
-    border = _boundary(img.labels) & (img.labels != L.VOID)
+    border = label_boundary(img.labels) & (img.labels != L.VOID)
     cand = np.argwhere(border)
     rng = np.random.default_rng(5)
     pick = cand[rng.choice(len(cand), 250, replace=False)]

@@ -1,4 +1,4 @@
-"""Camera model against OpenCV's independent cv2.fisheye implementation."""
+"""FisheyeCamera against OpenCV's independent cv2.fisheye implementation."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from rvmsim.camera import FisheyeCamera, distort_theta, rotation_from_ypr, undistort_theta
+from rvmsim.camera import Equidistance, FisheyeCamera, KannalaBrandt, rotation_from_ypr
 
 KB = (-0.0185, 0.0041, -0.0029, 0.0003)
 
@@ -74,21 +74,6 @@ def test_image_circle_matches_fov():
     assert abs((cam.cx - cols.min()) - r_x) <= 1.0
 
 
-def test_mount_angle_conventions():
-    z = np.array([0.0, 0.0, 1.0])
-    down = rotation_from_ypr(0, 30, 0) @ z
-    assert down[1] > 0 and np.isclose(np.degrees(np.arcsin(down[1])), 30)
-    left = rotation_from_ypr(20, 0, 0) @ z
-    assert left[0] > 0 and np.isclose(np.degrees(np.arctan2(left[0], left[2])), 20)
-    roll = rotation_from_ypr(0, 0, 90) @ np.array([1.0, 0, 0])
-    np.testing.assert_allclose(roll, [0, 1, 0], atol=1e-12)
-    # A point straight behind and below the camera projects below the image centre.
-    cam = FisheyeCamera(640, 480, 200, 200, 319.5, 239.5, rotation=np.eye(3),
-                        position=np.array([0, -1.0, 0]))
-    (u, v), = cam.project(np.array([[0.0, 0.0, 5.0]]))[0]
-    assert np.isclose(u, 319.5) and v > 239.5
-
-
 def test_scaled_camera_keeps_content_in_place():
     cam = _camera(k=KB)
     small = cam.scaled(0.25)
@@ -96,15 +81,6 @@ def test_scaled_camera_keeps_content_in_place():
     uv, _ = cam.project(pts)
     uv_s, _ = small.project(pts)
     np.testing.assert_allclose(uv_s, (uv + 0.5) * 0.25 - 0.5, atol=1e-9)
-
-
-def test_undistort_theta_inverts_and_flags_out_of_range():
-    k = np.asarray(KB)
-    theta = np.linspace(0, np.radians(96), 200)
-    np.testing.assert_allclose(undistort_theta(distort_theta(theta, k), k, theta_max=1.68), theta,
-                               atol=1e-10)
-    beyond = undistort_theta(np.array([5.0]), k, theta_max=1.68)
-    assert beyond[0] > 1.68
 
 
 @pytest.mark.parametrize(
@@ -127,3 +103,8 @@ def test_camera_is_frozen():
         cam.fx = 1.0  # type: ignore[misc]
     with pytest.raises(ValueError):
         cam.rotation[0, 0] = 2.0
+
+
+def test_k_selects_the_lens_model():
+    assert _camera().lens == Equidistance()
+    assert _camera(k=KB).lens == KannalaBrandt(KB)

@@ -1,0 +1,259 @@
+"""The ISP's parameters: the paper's 14 (Table 2) with their ranges, the output image, and
+params files (YAML or JSON).
+
+Units: degrees for angles, px for RAD and the H/V shifts (input image px), output half-widths
+for the advanced shifts; zoom and the advanced scales are ratios.  The geometry each
+parameter controls is :mod:`rvmsim.isp.map` (and ``docs/isp-model.md``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from .._io import key_lines, read_text
+from ..errors import ParamsFileError
+
+__all__ = [
+    "ParamSpec",
+    "PARAM_SPECS",
+    "TUNED_BY_DEFAULT",
+    "IspParams",
+    "OutputSpec",
+    "params_to_dict",
+    "load_params",
+]
+
+
+_NUMBER = (int, float, np.floating)
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One ISP parameter: its name here, the paper's name and symbol, default, range, unit."""
+
+    name: str
+    paper_name: str
+    symbol: str
+    default: float
+    low: float
+    high: float
+    unit: str
+    note: str = ""
+
+    def problem(self, value: object) -> str | None:
+        """Why ``value`` cannot be this parameter's value (one line, without the name), or
+        None when it can: a finite number (int, float or numpy float) in [low, high]."""
+        if isinstance(value, bool) or not isinstance(value, _NUMBER):
+            return f"must be a number, got {value!r}"
+        number = float(value)
+        if not math.isfinite(number) or not self.low <= number <= self.high:
+            return f"{number:g} is outside [{self.low:g}, {self.high:g}] {self.unit}".rstrip()
+        return None
+
+
+#: The 14 parameters of the paper's Table 2.  Where the paper gives no range (FOV, RAD,
+#: H/V shift) the range is ours, wide enough for any lens this tool models.
+PARAM_SPECS: tuple[ParamSpec, ...] = (
+    ParamSpec("fov", "FOV", "FOV", 180.0, 30.0, 240.0, "deg",
+              "field of view the ISP assumes for its image circle (range ours)"),
+    ParamSpec("rad", "RAD", "RAD", 640.0, 50.0, 2000.0, "px",
+              "radius of the ISP's image circle in the input image (range ours)"),
+    ParamSpec("h_shift", "H shift", "x_is", 0.0, -500.0, 500.0, "px",
+              "image-circle centre right of the input image centre (range ours)"),
+    ParamSpec("v_shift", "V shift", "y_is", 0.0, -500.0, 500.0, "px",
+              "image-circle centre below the input image centre (range ours)"),
+    ParamSpec("h_pan", "H Pan", "θ_cv", 0.0, 0.0, 180.0, "deg",
+              "polar angle between the V camera axis and the A camera axis"),
+    ParamSpec("v_pan", "V Pan", "φ_cv", 0.0, -180.0, 180.0, "deg",
+              "azimuth toward which the V axis turns (0 image right, 90 image down)"),
+    ParamSpec("zoom", "Zoom", "r_cv", 1.0, 0.01, 10.0, "",
+              "distance of the virtual image plane (output half-width = 1)"),
+    ParamSpec("tilt", "Tilt", "α_sz", 0.0, -180.0, 180.0, "deg",
+              "roll of the V camera about its axis"),
+    ParamSpec("adv_h_shift", "Advanced H shift", "x_os", 0.0, -1.0, 1.0, "",
+              "horizontal move of the view window, in output half-widths"),
+    ParamSpec("adv_v_shift", "Advanced V shift", "y_os", 0.0, -1.0, 1.0, "",
+              "vertical move of the view window, in output half-widths"),
+    ParamSpec("adv_h_scale", "Advanced H scale", "s_ox", 1.0, 0.5, 2.0, "",
+              "horizontal magnification (> 1 stretches the image horizontally)"),
+    ParamSpec("adv_v_scale", "Advanced V scale", "s_oy", 1.0, 0.5, 2.0, "",
+              "vertical magnification (> 1 stretches the image vertically)"),
+    ParamSpec("theta", "Theta", "θ_st", 0.0, 0.0, 180.0, "deg",
+              "tilt of the virtual image plane"),
+    ParamSpec("phi", "Phi", "φ_st", 0.0, -180.0, 180.0, "deg",
+              "azimuth of the image-plane tilt (0: about the vertical axis)"),
+)
+_SPEC = {s.name: s for s in PARAM_SPECS}
+
+#: The paper fixes the five angle parameters to 0 and tunes the other nine.
+TUNED_BY_DEFAULT: tuple[str, ...] = (
+    "fov", "rad", "h_shift", "v_shift", "zoom",
+    "adv_h_shift", "adv_v_shift", "adv_h_scale", "adv_v_scale",
+)
+
+
+@dataclass(frozen=True)
+class IspParams:
+    """The 14 ISP parameters of the paper's Table 2 (ranges in :data:`PARAM_SPECS`).
+
+    Attributes
+    ----------
+    fov : float
+        FOV, degrees: field of view of the ISP's assumed equidistance image circle.
+    rad : float
+        RAD, px: radius of that image circle in the input (fisheye) image.
+    h_shift, v_shift : float
+        H/V shift (x_is, y_is), px: image-circle centre relative to the input image centre.
+    h_pan, v_pan : float
+        H/V pan (θ_cv, φ_cv), degrees: polar angle and azimuth of the V camera axis.
+    zoom : float
+        Zoom (r_cv): distance of the virtual image plane; larger enlarges.
+    tilt : float
+        Tilt (α_sz), degrees: roll of the V camera.
+    adv_h_shift, adv_v_shift : float
+        Advanced H/V shift (x_os, y_os), in [-1, 1] output half-widths.
+    adv_h_scale, adv_v_scale : float
+        Advanced H/V scale (s_ox, s_oy), in [0.5, 2]; > 1 enlarges along that axis.
+    theta, phi : float
+        Theta/Phi (θ_st, φ_st), degrees: tilt of the virtual image plane and its azimuth.
+    """
+
+    fov: float = 180.0
+    rad: float = 640.0
+    h_shift: float = 0.0
+    v_shift: float = 0.0
+    h_pan: float = 0.0
+    v_pan: float = 0.0
+    zoom: float = 1.0
+    tilt: float = 0.0
+    adv_h_shift: float = 0.0
+    adv_v_shift: float = 0.0
+    adv_h_scale: float = 1.0
+    adv_v_scale: float = 1.0
+    theta: float = 0.0
+    phi: float = 0.0
+
+    def __post_init__(self) -> None:
+        for spec in PARAM_SPECS:
+            value = getattr(self, spec.name)
+            problem = spec.problem(value)
+            if problem is not None:
+                raise ValueError(f"{spec.name}: {problem}")
+            object.__setattr__(self, spec.name, float(value))
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(s.name for s in PARAM_SPECS)
+
+    def replace(self, **changes: float) -> IspParams:
+        """A copy with some parameters changed (validated)."""
+        return dataclasses.replace(self, **changes)
+
+    def for_input_scale(self, factor: float) -> IspParams:
+        """The same view on a fisheye image resampled by ``factor`` (e.g. a 0.25 preview
+        render): RAD and the H/V shifts are in input px, so they scale with it."""
+        return self.replace(rad=self.rad * factor, h_shift=self.h_shift * factor,
+                            v_shift=self.v_shift * factor)
+
+    def as_array(self, names: tuple[str, ...] | None = None) -> np.ndarray:
+        """Parameter values in the order of ``names`` (default: all 14)."""
+        return np.array([getattr(self, n) for n in (names or self.names())], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """The RVM image: size in px and whether it is mirrored (RVM displays usually are)."""
+
+    width: int = 1280
+    height: int = 720
+    mirror: bool = True
+
+    def __post_init__(self) -> None:
+        if not (16 <= self.width <= 8192 and 16 <= self.height <= 8192):
+            raise ValueError(f"output size must be 16..8192 px, got {self.width}x{self.height}")
+
+
+# ---------------------------------------------------------------------------- files
+def params_to_dict(params: IspParams, output: OutputSpec | None = None) -> dict[str, Any]:
+    """Plain dict for a params file (the 14 parameters, then ``output``)."""
+    d: dict[str, Any] = {n: getattr(params, n) for n in IspParams.names()}
+    if output is not None:
+        d["output"] = {"size": [output.width, output.height], "mirror": output.mirror}
+    return d
+
+
+def _parse(text: str, path: Path) -> Any:
+    """The document of a params file: JSON for ``.json``, else YAML."""
+    try:
+        return json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
+    except json.JSONDecodeError as err:
+        raise ParamsFileError(str(path), "", f"malformed params file: {err}", err.lineno) from None
+    except yaml.YAMLError as err:
+        first = str(err).splitlines()[0] if str(err) else type(err).__name__
+        mark = getattr(err, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else None
+        raise ParamsFileError(str(path), "", f"malformed params file: {first}", line) from None
+
+
+def _output_spec(out_data: Any, path: Path, lines: dict[tuple[Any, ...], int]) -> OutputSpec:
+    """The ``output`` section of a params file as an :class:`OutputSpec`."""
+    def error(key: str, message: str) -> ParamsFileError:
+        loc = tuple(key.split("."))
+        return ParamsFileError(str(path), key, message, lines.get(loc, lines.get(("output",))))
+
+    output = OutputSpec()
+    if not isinstance(out_data, dict) or set(out_data) - {"size", "mirror"}:
+        raise error("output", "expected {size: [W, H], mirror: true|false}")
+    size = out_data.get("size", [output.width, output.height])
+    mirror = out_data.get("mirror", output.mirror)
+    if (not isinstance(size, list) or len(size) != 2
+            or not all(isinstance(x, int) and not isinstance(x, bool) for x in size)):
+        raise error("output.size", "expected [width, height] in px")
+    if not isinstance(mirror, bool):
+        raise error("output.mirror", "expected true or false")
+    try:
+        return OutputSpec(size[0], size[1], mirror)
+    except ValueError as err:
+        raise error("output.size", str(err)) from None
+
+
+def load_params(path: str | Path) -> tuple[IspParams, OutputSpec]:
+    """Read a params file (YAML or JSON): any of the 14 parameter names (missing ones take
+    the paper's defaults) and an optional ``output: {size: [W, H], mirror: bool}``.
+
+    Raises
+    ------
+    ParamsFileError
+        One line naming the file (and the line where known) and the key, for unreadable
+        files, malformed YAML/JSON, unknown keys, non-numbers and values out of range.
+    """
+    path = Path(path)
+    text = read_text(path, ParamsFileError, what="params file")
+    data = _parse(text, path)
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise ParamsFileError(str(path), "", "a params file must be a mapping (name: value)")
+    lines = key_lines(text)
+    data = dict(data)
+    out_data = data.pop("output", None)
+    unknown = sorted(set(data) - set(IspParams.names()), key=str)
+    if unknown:
+        key = str(unknown[0])
+        raise ParamsFileError(str(path), key, "unknown ISP parameter "
+                              f"(known: {', '.join(IspParams.names())})", lines.get((key,)))
+    for key, value in data.items():
+        problem = _SPEC[key].problem(value)
+        if problem is not None:
+            raise ParamsFileError(str(path), key, problem, lines.get((key,)))
+    params = IspParams(**{k: float(v) for k, v in data.items()})
+    output = OutputSpec() if out_data is None else _output_spec(out_data, path, lines)
+    return params, output

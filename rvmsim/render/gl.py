@@ -1,0 +1,237 @@
+"""Render the cube faces with pyrender off-screen: the GL scene, its lighting, the faces.
+
+Each needed face (:mod:`rvmsim.render.cube`) is rendered twice as a 90° pinhole view of its
+crop: a lit colour pass and a segmentation pass (flat label colours, no lighting, no
+multisampling).  Lighting is baked into vertex colours (an overcast daylight: a sun from
+above and behind the car, a weak fill and ambient light), so the colour pass is drawn FLAT.
+
+Conventions
+-----------
+Face cameras are placed at the camera's optical centre with the face's orientation
+(:func:`~rvmsim.render.cube.face_rotation`) in the scene frame; pyrender's principal point
+counts from pixel edges, so it is OpenCV's pixel-centre value + 0.5.  The headless GL
+platform is EGL unless ``PYOPENGL_PLATFORM`` says otherwise (``osmesa``).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..camera import FisheyeCamera
+from ..scene import Part
+from .cube import CubeLayout, FaceCrop, face_rotation
+
+__all__ = ["FaceAtlas", "render_faces", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
+
+Z_NEAR_M = 0.003
+Z_FAR_M = 400.0
+
+
+def _asphalt_texture(size: int = 256, seed: int = 7) -> np.ndarray:
+    """Procedural asphalt: grey speckle with soft blotches, tileable, uint8 RGB."""
+    rng = np.random.default_rng(seed)
+    fine = rng.normal(0.0, 1.0, (size, size))
+    blotches = rng.normal(0.0, 1.0, (size // 16, size // 16))
+    coarse: np.ndarray = np.kron(blotches, np.ones((16, 16)))
+    # Periodic Gaussian blur through the FFT keeps the texture tileable.
+    freq = np.fft.fftfreq(size)
+    gauss = np.exp(-2 * (np.pi * 6.0) ** 2 * (freq[:, None] ** 2 + freq[None, :] ** 2))
+    coarse = np.real(np.fft.ifft2(np.fft.fft2(coarse) * gauss))
+    img = 0.8 + 0.10 * fine + 0.12 * coarse / (coarse.std() + 1e-9)
+    img = np.clip(img, 0.4, 1.0)
+    return (np.repeat(img[..., None], 3, axis=2) * 255).astype(np.uint8)
+
+
+def _ensure_gl_platform() -> None:
+    """Headless GL through EGL unless ``PYOPENGL_PLATFORM`` says otherwise (before pyrender
+    is imported)."""
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+
+
+#: Lights baked into vertex colours: (direction the light travels, scene frame; intensity).
+#: An overcast-daylight set-up: a sun from above and behind the car and a weak fill.
+LIGHTS = (
+    (np.array([0.25, 1.0, 0.45]), 0.62),
+    (np.array([-0.3, 0.4, -1.0]), 0.18),
+)
+AMBIENT = 0.38
+
+
+def _lambert(normals: np.ndarray) -> np.ndarray:
+    """Irradiance factor (ambient + Lambertian) for unit normals (N, 3)."""
+    shade = np.full(len(normals), AMBIENT)
+    for direction, intensity in LIGHTS:
+        to_light = -direction / np.linalg.norm(direction)
+        shade += intensity * np.clip(normals @ to_light, 0.0, None)
+    return shade
+
+
+def _linear_to_srgb(x: np.ndarray) -> np.ndarray:
+    """sRGB encoding of linear colour values (clipped to 0–1)."""
+    x = np.clip(x, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def _primitive(part: Part, texture: Any | None) -> Any:
+    """A pyrender primitive with lighting baked into vertex colours (rendered FLAT: the GL
+    lighting shader is the slow part on llvmpipe, and the scene's lights never move)."""
+    import pyrender
+
+    m = part.mesh
+    positions: np.ndarray
+    indices: np.ndarray | None
+    uv: np.ndarray | None = None
+    if part.smooth:
+        positions, normals, indices = m.vertices, m.vertex_normals, m.faces
+    else:
+        positions = m.vertices[m.faces].reshape(-1, 3)
+        normals = np.repeat(m.face_normals, 3, axis=0)
+        indices = None
+    if texture is not None:
+        uv_src = np.asarray(m.visual.uv)  # type: ignore[union-attr]  # textured parts carry UVs
+        uv = uv_src if part.smooth else uv_src[m.faces].reshape(-1, 2)
+    linear = np.asarray(part.color)[None, :] * _lambert(np.asarray(normals))[:, None]
+    rgba = np.concatenate([_linear_to_srgb(linear), np.ones((len(linear), 1))], axis=1)
+    material = pyrender.MetallicRoughnessMaterial(
+        baseColorFactor=[1.0, 1.0, 1.0, 1.0],
+        baseColorTexture=texture,
+        doubleSided=True,
+    )
+    return pyrender.Primitive(
+        positions=np.asarray(positions, dtype=np.float32),
+        normals=np.asarray(normals, dtype=np.float32),
+        texcoord_0=None if uv is None else np.asarray(uv, dtype=np.float32),
+        color_0=rgba.astype(np.float32),
+        indices=None if indices is None else np.asarray(indices, dtype=np.uint32),
+        material=material,
+    )
+
+
+def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]) -> tuple[Any, dict[Any, np.ndarray]]:
+    """The pyrender scene of ``parts`` (lighting baked, see :func:`_primitive`) under a sky of
+    linear colour ``sky``, and the segmentation colour of each mesh node (its label: low
+    byte in red, high byte in green)."""
+    import pyrender
+
+    sky_srgb = _linear_to_srgb(np.asarray(sky, dtype=np.float64))
+    scene = pyrender.Scene(bg_color=[*sky_srgb, 1.0])
+    seg: dict[Any, np.ndarray] = {}
+    textures: dict[str, Any] = {}
+    for part in parts:
+        tex = None
+        if part.texture is not None:
+            if part.texture not in textures:
+                textures[part.texture] = pyrender.Texture(
+                    source=_asphalt_texture(), source_channels="RGB"
+                )
+            tex = textures[part.texture]
+        node = scene.add(pyrender.Mesh([_primitive(part, tex)]), name=part.name)
+        seg[node] = np.array([part.label & 0xFF, part.label >> 8, 0])
+    return scene, seg
+
+
+#: OpenCV camera axes (x right, y down, z forward) → GL camera axes (x right, y up, z back).
+_GL_FROM_CV = np.diag([1.0, -1.0, -1.0])
+
+
+@dataclass(frozen=True)
+class FaceAtlas:
+    """The rendered face crops side by side (the layout's atlas).
+
+    Attributes
+    ----------
+    color : (rows, cols, 3) uint8
+        Lit colour, sRGB.
+    labels : (rows, cols) uint8
+        Label IDs; 0 where no geometry is hit (the sky).
+    gl_setup_s, faces_s : float
+        Seconds spent building the GL scene and renderer, and rendering the faces.
+    """
+
+    color: np.ndarray
+    labels: np.ndarray
+    gl_setup_s: float
+    faces_s: float
+
+
+def _face_pose(camera: FisheyeCamera, layout: CubeLayout, crop: FaceCrop) -> np.ndarray:
+    """(4, 4) GL camera-to-scene pose of the face of ``crop``."""
+    pose = np.eye(4)
+    pose[:3, :3] = camera.rotation @ layout.cube_rotation @ face_rotation(crop.face) @ _GL_FROM_CV
+    pose[:3, 3] = camera.position
+    return pose
+
+
+def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *, sky: tuple[float, float, float],
+                 progress: bool = False) -> FaceAtlas:
+    """Render the crops of ``layout`` (colour and labels) for ``camera``.
+
+    Parameters
+    ----------
+    parts : list of Part
+        The scene's labelled surfaces (:func:`~rvmsim.scene.build_parts`).
+    layout : CubeLayout
+        Which faces, which crops, and the atlas they go into.
+    camera : FisheyeCamera
+        Its pose places the cube; its lens is not used here.
+    sky : (3,) float
+        Background colour, linear 0–1.
+    progress : bool
+        Show a progress bar over the faces.
+
+    Returns
+    -------
+    FaceAtlas
+
+    Convention
+    ----------
+    The atlas holds each crop at columns ``[atlas_x0, atlas_x0 + width)`` and rows
+    ``[0, height)``, in the face's pixel grid (pixel centres at integer coordinates).
+    """
+    t0 = time.perf_counter()
+    _ensure_gl_platform()
+    import pyrender
+
+    pscene, seg = _pyrender_scene(parts, sky)
+    half = layout.face_size / 2.0
+    first = layout.crops[0]
+    renderer = pyrender.OffscreenRenderer(first.width, first.height)
+    cam_node = None
+    t1 = time.perf_counter()
+    atlas_h, atlas_w = layout.atlas_shape
+    color_atlas = np.zeros((atlas_h, atlas_w, 3), np.uint8)
+    label_atlas = np.zeros((atlas_h, atlas_w), np.uint8)
+    crops: Any = layout.crops
+    if progress:
+        from tqdm import tqdm
+
+        crops = tqdm(crops, desc="render cube faces", unit="face", leave=False)
+    flags = pyrender.RenderFlags
+    try:
+        for crop in crops:
+            # pyrender's principal point counts from pixel edges: OpenCV centre + 0.5.
+            gl_cam = pyrender.IntrinsicsCamera(
+                fx=half, fy=half,
+                cx=layout.centre_px + 0.5 - crop.x0, cy=layout.centre_px + 0.5 - crop.y0,
+                znear=Z_NEAR_M, zfar=Z_FAR_M,
+            )
+            if cam_node is not None:
+                pscene.remove_node(cam_node)
+            cam_node = pscene.add(gl_cam, pose=_face_pose(camera, layout, crop))
+            renderer.viewport_width, renderer.viewport_height = crop.width, crop.height
+            color, _ = renderer.render(pscene, flags=flags.FLAT | flags.SKIP_CULL_FACES)
+            seg_img, _ = renderer.render(
+                pscene, flags=flags.SEG | flags.SKIP_CULL_FACES, seg_node_map=seg
+            )
+            cols = slice(crop.atlas_x0, crop.atlas_x0 + crop.width)
+            color_atlas[: crop.height, cols] = color[..., :3]
+            label_atlas[: crop.height, cols] = seg_img[..., 0]
+    finally:
+        renderer.delete()
+    t2 = time.perf_counter()
+    return FaceAtlas(color_atlas, label_atlas, gl_setup_s=t1 - t0, faces_s=t2 - t1)

@@ -1,0 +1,133 @@
+"""Reading scene files: YAML → validated :class:`~rvmsim.scene.Scene`.
+
+A scene file is read with ``yaml.safe_load`` and validated by the models of
+:mod:`rvmsim.scene.schema`.  Every problem becomes a :class:`~rvmsim.errors.SceneError` that
+names the file, the line and the dotted key.  Paths inside a scene file (mesh files) are
+resolved relative to the scene file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from ..errors import SceneError
+from .schema import MeshPart, Scene
+
+__all__ = [
+    "load_scene",
+    "read_scene_document",
+    "scene_from_dict",
+    "absolute_mesh_paths",
+    "mesh_parts",
+]
+
+#: Discriminator tags of the vehicle parts, which pydantic puts into error locations.
+_TAGS = frozenset({"block", "mesh"})
+
+
+def scene_from_dict(
+    data: Any, *, base_dir: str | Path = ".", source: str = "<dict>", text: str | None = None
+) -> Scene:
+    """Validate a parsed scene document.
+
+    Parameters
+    ----------
+    data : dict
+        The document (as ``yaml.safe_load`` gives it).
+    base_dir : path
+        Folder that relative paths in the scene are resolved against.
+    source : str
+        Name used in error messages.
+    text : str, optional
+        The YAML text, to give line numbers in error messages.
+
+    Raises
+    ------
+    SceneError
+        For any invalid or missing key, or a missing mesh file.
+    """
+    if not isinstance(data, dict):
+        raise SceneError(source, "", "a scene file must be a YAML mapping (key: value)")
+    try:
+        scene = Scene.model_validate(
+            {**data, "base_dir": str(Path(base_dir).resolve()), "source": source}
+        )
+    except ValidationError as err:
+        raise input_error_from_validation(err, source, key_lines(text or ""), SceneError,
+                                          _TAGS) from None
+    lines = key_lines(text or "")
+    try:
+        scene.fisheye_camera()
+    except ValueError as err:
+        raise SceneError(source, "camera", str(err), lines.get(("camera",))) from None
+    for key, part in mesh_parts(scene):
+        path = scene.resolve_path(part.mesh)
+        if not path.is_file():
+            loc = tuple(int(p) if p.isdigit() else p for p in key.split("."))
+            raise SceneError(
+                source, key, f"mesh file not found: {path}", lines.get(loc)
+            )
+    return scene
+
+
+def mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
+    """The scene's mesh-file parts with their dotted keys (``vehicle.bumper.mesh``, ...)."""
+    out = []
+    for name in ("bumper", "garnish", "trunk"):
+        part = getattr(scene.vehicle, name)
+        if isinstance(part, MeshPart):
+            out.append((f"vehicle.{name}.mesh", part))
+    for i, part in enumerate(scene.vehicle.extra):
+        out.append((f"vehicle.extra.{i}.mesh", part))
+    return out
+
+
+def absolute_mesh_paths(doc: Any, base_dir: str | Path) -> list[Path]:
+    """Make every mesh path in a scene *document* (as parsed from YAML) absolute, resolved
+    against ``base_dir``, in place, so the document loads from any folder; returns them."""
+    out: list[Path] = []
+    veh = doc.get("vehicle") if isinstance(doc, dict) else None
+    if not isinstance(veh, dict):
+        return out
+    parts = [veh.get(k) for k in ("bumper", "garnish", "trunk")]
+    parts += list(veh.get("extra") or []) if isinstance(veh.get("extra"), list) else []
+    for part in parts:
+        if isinstance(part, dict) and isinstance(part.get("mesh"), str):
+            p = Path(part["mesh"]).expanduser()
+            p = p if p.is_absolute() else (Path(base_dir) / p).resolve()
+            part["mesh"] = str(p)
+            out.append(p)
+    return out
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file.
+
+    Parameters
+    ----------
+    path : path
+        The YAML scene file.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Unreadable file, malformed YAML, or any invalid key (message names file, line, key).
+    """
+    return read_scene_document(path)[0]
+
+
+def read_scene_document(path: str | Path) -> tuple[Scene, Any]:
+    """:func:`load_scene`, also returning the parsed YAML document (for tools that derive
+    other scenes from it: sweeps, cluster tasks).  Same errors."""
+    path = Path(path)
+    text = read_text(path, SceneError)
+    data = parse_yaml(text, str(path), SceneError)
+    return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text), data
