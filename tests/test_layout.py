@@ -1,0 +1,113 @@
+"""The package's house rules (issue #13), checked on the source itself.
+
+- no module over 500 lines;
+- no function over 80 lines unless a comment ``# long: <reason>`` stands on its ``def`` line
+  or the line after it;
+- no import of a private name (``_x``) from another package of rvmsim;
+- no silent ``except``: a handler whose body is only ``pass`` / ``...`` / ``continue`` with no
+  comment saying why the error is expected there.
+
+Function length counts the lines from ``def`` to the end, less the docstring.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1] / "rvmsim"
+MODULES = sorted(ROOT.rglob("*.py"))
+MAX_MODULE_LINES = 500
+MAX_FUNCTION_LINES = 80
+
+
+def _package(path: Path) -> str:
+    rel = path.relative_to(ROOT)
+    return rel.parts[0] if len(rel.parts) > 1 else ""
+
+
+def _resolve(path: Path, node: ast.ImportFrom) -> str:
+    """The absolute dotted module an ``ImportFrom`` names."""
+    if node.level == 0:
+        return node.module or ""
+    parts = ["rvmsim", *path.relative_to(ROOT).with_suffix("").parts]
+    base = parts[: len(parts) - node.level]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _functions(tree: ast.AST) -> list[ast.FunctionDef | ast.AsyncFunctionDef]:
+    return [n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))]
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_module_size(path: Path) -> None:
+    n = len(path.read_text(encoding="utf-8").splitlines())
+    assert n <= MAX_MODULE_LINES, f"{path.name}: {n} lines (limit {MAX_MODULE_LINES})"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_function_length(path: Path) -> None:
+    lines = path.read_text(encoding="utf-8").splitlines()
+    long = []
+    for fn in _functions(ast.parse("\n".join(lines))):
+        n = (fn.end_lineno or fn.lineno) - fn.lineno + 1
+        first = fn.body[0]
+        if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(
+                first.value.value, str):
+            n -= (first.end_lineno or first.lineno) - first.lineno + 1
+        head = " ".join(lines[fn.lineno - 1: fn.lineno + 1])
+        if n > MAX_FUNCTION_LINES and "# long:" not in head:
+            long.append(f"{fn.name} ({n} lines)")
+    assert not long, f"{path.name}: functions over {MAX_FUNCTION_LINES} lines: {long}"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_private_import_across_packages(path: Path) -> None:
+    own = _package(path)
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.ImportFrom):
+            continue
+        target = _resolve(path, node)
+        if not target.startswith("rvmsim"):
+            continue
+        tparts = target.split(".")
+        target_pkg = tparts[1] if len(tparts) > 2 or (
+            len(tparts) == 2 and (ROOT / tparts[1]).is_dir()) else ""
+        if target_pkg == own:
+            continue
+        private_module = any(p.startswith("_") and p != "__init__" for p in tparts[1:])
+        for alias in node.names:
+            if (alias.name.startswith("_") or private_module) and target != "rvmsim._io":
+                bad.append(f"{target}.{alias.name} (line {node.lineno})")
+    assert not bad, f"{path.name}: private names imported from other packages: {bad}"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_no_silent_except(path: Path) -> None:
+    silent = []
+    text = path.read_text(encoding="utf-8")
+    lines = text.splitlines()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.ExceptHandler):
+            body = node.body
+            quiet = all(isinstance(s, (ast.Pass, ast.Continue)) or (
+                isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant)) for s in body)
+            said = any("#" in line for line in lines[node.lineno - 1: node.end_lineno])
+            if quiet and not said:
+                silent.append(f"line {node.lineno}")
+    assert not silent, f"{path.name}: except blocks that swallow the error silently: {silent}"
+
+
+def test_the_checks_see_violations(tmp_path: Path) -> None:
+    """The AST checks above do find what they look for (so they cannot pass vacuously)."""
+    src = "def f():\n" + "    x = 1\n" * 90 + "try:\n    f()\nexcept OSError:\n    pass\n"
+    tree = ast.parse(src)
+    assert max((f.end_lineno or 0) - f.lineno + 1 for f in _functions(tree)) > 80
+    handlers = [n for n in ast.walk(tree) if isinstance(n, ast.ExceptHandler)]
+    assert handlers and isinstance(handlers[0].body[0], ast.Pass)
+    node = ast.parse("from ..tune.loop import _chunks").body[0]
+    assert isinstance(node, ast.ImportFrom)
+    assert _resolve(ROOT / "batch" / "point.py", node) == "rvmsim.tune.loop"
