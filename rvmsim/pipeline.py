@@ -1,24 +1,36 @@
-"""Scene → RVM image in one call (render once, then the ISP), for the CLI and for scripts."""
+"""The evaluation path: ISP parameters → RVM colour and label images → ECs → annotated image.
+
+:func:`evaluate_params` is the one place this is done, for rendered fisheye images: tuning's
+results, the review report, ``rvmsim evaluate`` and ``process``, validation and the sweep
+all call it.  :func:`render_rvm` renders a scene first (at a fraction of its sensor, if
+asked).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from .isp.core import IspParams, OutputSpec, process
-from .render.fisheye import FisheyeImages, render_fisheye
-from .scene.schema import Scene
+from .criteria import Criteria, EcResult, default_criteria, evaluate
+from .criteria import annotate as annotate_ecs
+from .isp import IspParams, OutputSpec, process
+from .render import FisheyeImages, render_fisheye
+from .scene import Scene
 
-__all__ = ["RvmFrame", "render_rvm"]
+__all__ = ["RvmFrame", "evaluate_params", "rvm_color", "render_rvm", "write_frame"]
 
 
 @dataclass(frozen=True)
 class RvmFrame:
-    """A rendered fisheye frame and its RVM image under one ISP parameter set.
+    """A rendered fisheye frame, its RVM images under one ISP parameter set, and their ECs.
 
     ``params`` are the parameters as applied to ``fisheye`` (RAD and shifts scaled when the
-    fisheye was rendered at a fraction of the sensor).
+    fisheye was rendered at a fraction of the sensor).  ``color`` is (H, W, 3) uint8 and
+    ``labels`` (H, W) uint8 at ``output``'s size; ``ec`` the ECs measured on ``labels``;
+    ``annotated`` the measurements drawn on ``color`` with a results panel (None when not
+    asked for).
     """
 
     fisheye: FisheyeImages
@@ -26,11 +38,53 @@ class RvmFrame:
     output: OutputSpec
     color: np.ndarray
     labels: np.ndarray
+    ec: EcResult
+    annotated: np.ndarray | None = None
+
+
+def evaluate_params(images: FisheyeImages, params: IspParams, output: OutputSpec,
+                    criteria: Criteria | None = None, *, annotate: bool = True) -> RvmFrame:
+    """Run the ISP on rendered fisheye images and evaluate the RVM image.
+
+    Parameters
+    ----------
+    images : FisheyeImages
+        Rendered fisheye colour and label images.
+    params : IspParams
+        ISP parameters for ``images``' size.
+    output : OutputSpec
+        RVM image size (px) and mirroring.
+    criteria : Criteria, optional
+        Default: the paper's (:func:`rvmsim.criteria.default_criteria`).
+    annotate : bool
+        Also draw the ECs (:func:`rvmsim.criteria.annotate`).
+
+    Returns
+    -------
+    RvmFrame
+    """
+    criteria = criteria if criteria is not None else default_criteria()
+    color, labels = process(images.color, images.labels, params, output)
+    assert color is not None and labels is not None  # process returns what it is given
+    ec = evaluate(labels, criteria)
+    drawn = annotate_ecs(color, labels, ec) if annotate else None
+    return RvmFrame(fisheye=images, params=params, output=output, color=color, labels=labels,
+                    ec=ec, annotated=drawn)
+
+
+def rvm_color(images: FisheyeImages, params: IspParams, output: OutputSpec) -> np.ndarray:
+    """Only the RVM colour image (no labels, no ECs): (H, W, 3) uint8 at ``output``'s size,
+    e.g. the same view at a display's size or a thumbnail of another candidate."""
+    color, _ = process(images.color, None, params, output)
+    assert color is not None
+    return color
 
 
 def render_rvm(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(), *,
-               scale: float = 1.0, progress: bool = False) -> RvmFrame:
-    """Render ``scene`` (at ``scale`` of its sensor size) and run the ISP on it.
+               criteria: Criteria | None = None, scale: float = 1.0, annotate: bool = False,
+               progress: bool = False) -> RvmFrame:
+    """Render ``scene`` (at ``scale`` of its sensor size) and evaluate ``params`` on it
+    (:func:`evaluate_params`).
 
     Parameters
     ----------
@@ -39,8 +93,12 @@ def render_rvm(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         ISP parameters for the full-size sensor.
     output : OutputSpec
         RVM image size and mirroring.
+    criteria : Criteria, optional
+        Default: the paper's.
     scale : float
         Fraction of the sensor to render (RAD and the shifts follow, the view stays).
+    annotate : bool
+        Also draw the ECs.
     progress : bool
         Progress bar while rendering.
     """
@@ -49,5 +107,18 @@ def render_rvm(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         cam = cam.scaled(scale)
         params = params.for_input_scale(cam.width / scene.camera.image_size[0])
     images = render_fisheye(scene, camera=cam, progress=progress)
-    color, labels = process(images.color, images.labels, params, output)
-    return RvmFrame(fisheye=images, params=params, output=output, color=color, labels=labels)
+    return evaluate_params(images, params, output, criteria, annotate=annotate)
+
+
+def write_frame(frame: RvmFrame, folder: str | Path) -> list[Path]:
+    """Write ``rvm_color.png``, ``rvm_labels.png`` (uint8 label IDs) and, when drawn,
+    ``ec_annotated.png`` into ``folder``; returns the files written."""
+    from ._io import write_png
+
+    folder = Path(folder)
+    images = {"rvm_color.png": frame.color, "rvm_labels.png": frame.labels}
+    if frame.annotated is not None:
+        images["ec_annotated.png"] = frame.annotated
+    for name, img in images.items():
+        write_png(folder / name, img)
+    return [folder / name for name in images]

@@ -52,7 +52,7 @@ from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..errors import RvmsimError, SweepFileError
 from .executors import Executor, LocalExecutor
 from ..scene.schema import absolute_mesh_paths
-from ..tune.store import SqliteStore, json_default
+from ..tune import SqliteStore, json_default
 
 __all__ = [
     "AXES",
@@ -177,12 +177,12 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise RvmsimError(f"{path}: base_scene: scene file not found: {base}")
     _, base_doc = read_scene_document(base)
     axes = tuple((name, _expand(name, v, str(path))) for name, v in f.axes.items())
-    from ..tune.search import STRATEGIES
+    from ..tune import STRATEGIES
 
     if f.tune.strategy not in STRATEGIES:
         raise RvmsimError(f"{path}: tune.strategy: {f.tune.strategy!r} is not one of "
                           f"{', '.join(STRATEGIES)}")
-    from ..tune.loop import TuningConfig
+    from ..tune import TuningConfig
 
     try:
         TuningConfig.model_validate(f.tune.config)
@@ -327,9 +327,7 @@ def _run_point(task: dict) -> dict:
     from ..criteria.core import criteria_from_text, default_criteria
     from ..criteria.evaluator import CandidateEvaluator
     from ..scene.schema import scene_from_dict
-    from ..tune.search import run_search, score_vectors
-    from ..tune.store import RunStore
-    from ..tune.loop import TuningConfig, make_strategy
+    from ..tune import RunStore, TuningConfig, make_strategy, run_search, score_vectors
 
     t0 = time.perf_counter()
     try:
@@ -352,8 +350,7 @@ def _run_point(task: dict) -> dict:
         result = {
             "score": best.score,
             "passed": bool(best.passed),
-            "ecs": {ec: {"value": v[0], "score": v[1], "passed": bool(v[2])}
-                    for ec, v in best.ec.items()},
+            "ecs": {ec: o.as_dict() for ec, o in best.ecs.items()},
             "params": {n: getattr(best.params, n) for n in best.params.names()},
             "tuned": list(space.names),
             "evaluations": n_eval,
@@ -378,7 +375,7 @@ def sensitivity(evaluator: Any, space: Any, best: Any) -> dict:
     """EC score with each tuned parameter moved off the optimum by ±2, 5, 10 % of its range
     (others at the optimum).  ``drop_5pct`` is 1 − (mean score at ±5 %) / optimum score: 0 if
     the parameter does not matter there, 1 if a small change loses everything."""
-    from ..tune.search import score_vectors
+    from ..tune import score_vectors
 
     x0 = space.vector(best)
     lo, hi = space.low, space.high
