@@ -83,9 +83,16 @@ class TuningConfig(BaseModel):
         return OutputSpec(self.output.size[0], self.output.size[1], self.output.mirror)
 
     def strategy_settings(self, name: str) -> BaseModel:
-        """The section of registered strategy ``name``."""
-        settings = getattr(self, STRATEGIES[name].section)
-        assert isinstance(settings, BaseModel)
+        """The settings of registered strategy ``name``: its section of this config, or the
+        defaults of its ``Settings`` for a strategy without a section (``section = ""``: a
+        strategy registered by a user, which a config file cannot set up)."""
+        cls = STRATEGIES[name]
+        if not cls.section:
+            return cls.Settings()
+        settings = getattr(self, cls.section, None)
+        if not isinstance(settings, cls.Settings):
+            raise RvmsimError(f"strategy {name!r}: section {cls.section!r} is not a "
+                              f"{cls.Settings.__name__} of the tuning config")
         return settings
 
 

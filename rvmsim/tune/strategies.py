@@ -41,7 +41,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from .space import SearchSpace
 
 __all__ = ["Strategy", "GridToRandom", "RandomSearch", "CmaEs", "STRATEGIES",
-           "register_strategy", "GridRandomSettings", "CmaesSettings", "RandomSettings",
+           "register_strategy", "NoSettings", "GridRandomSettings", "CmaesSettings", "RandomSettings",
            "Batches", "Told"]
 
 #: What a strategy is told about a batch: (EC score, objective) per candidate, in order.
@@ -51,6 +51,12 @@ Batches = Generator[tuple[str, list[np.ndarray]], Told, None]
 
 
 # ---------------------------------------------------------------------------- settings
+class NoSettings(BaseModel):
+    """The settings of a strategy that has none."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
 class GridRandomSettings(BaseModel):
     """``grid_random:`` — seeds of the fine stage (N) and fine trials per seed (T)."""
 
@@ -95,9 +101,10 @@ class Strategy(ABC):
     name: ClassVar[str] = "strategy"
     #: One line for ``--help``.
     summary: ClassVar[str] = ""
-    #: The tuning config's key of this strategy's settings, and their model.
+    #: The tuning config's key of this strategy's settings ("": none, the defaults of
+    #: ``Settings`` are used), and their model.
     section: ClassVar[str] = ""
-    Settings: ClassVar[type[BaseModel]] = BaseModel
+    Settings: ClassVar[type[BaseModel]] = NoSettings
 
     def __init__(self, space: SearchSpace, *, seed: int = 0):
         self.space = space
@@ -128,7 +135,9 @@ _T = TypeVar("_T", bound=type[Strategy])
 
 def register_strategy(cls: _T) -> _T:
     """Class decorator: add a :class:`Strategy` subclass to :data:`STRATEGIES` under its
-    ``name`` (which must be new, and its ``section`` a key of the tuning config)."""
+    ``name`` (which must be new).  Its ``section`` is a key of
+    :class:`~rvmsim.tune.TuningConfig` holding a ``Settings`` (the built-ins), or "" (a
+    strategy without config-file settings)."""
     if not cls.name or cls.name in STRATEGIES:
         raise ValueError(f"strategy name {cls.name!r} is empty or taken")
     STRATEGIES[cls.name] = cls
