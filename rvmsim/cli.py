@@ -123,20 +123,14 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     fisheye_roi.png (the fisheye image with the region the RVM image uses outlined in green)
     and isp.json (the parameters used).
     """
-    from . import labels as L
-    from ._io import write_png
-    from .isp import draw_roi, params_to_dict
-    from .pipeline import render_rvm, write_frame
+    from .pipeline import render_rvm, write_processed
     from .scene import load_scene
 
     try:
         params, output = _load_isp(params_file)
         sc = load_scene(scene)
         frame = render_rvm(sc, params, output, scale=scale, progress=progress)
-        write_frame(frame, out)
-        write_png(out / "rvm_labels_preview.png", L.colorize(frame.labels))
-        write_png(out / "fisheye_roi.png", draw_roi(frame.fisheye.color, frame.params, output))
-        (out / "isp.json").write_text(json.dumps(params_to_dict(params, output), indent=2))
+        write_processed(frame, out, params)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
@@ -163,8 +157,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     image), rvm_color.png and rvm_labels.png.
     """
     from .criteria import load_criteria
-    from .isp import params_to_dict
-    from .pipeline import render_rvm, write_frame
+    from .pipeline import render_rvm, write_evaluation
     from .scene import load_scene
 
     out = out or Path("out") / scene.stem / "evaluate"
@@ -174,10 +167,8 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
         sc = load_scene(scene)
         frame = render_rvm(sc, params, output, criteria=criteria, scale=scale, annotate=True,
                            progress=progress)
-        write_frame(frame, out)
-        doc = {"scene": str(scene), "vehicle": sc.name, "criteria_file": str(criteria_file or ""),
-               "isp": params_to_dict(params, output), **frame.ec.as_dict()}
-        (out / "ec.json").write_text(json.dumps(doc, indent=2))
+        write_evaluation(frame, out, params, scene_file=scene, vehicle=sc.name,
+                         criteria_file=criteria_file)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:

@@ -8,6 +8,7 @@ asked).
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,11 +16,12 @@ import numpy as np
 
 from .criteria import Criteria, EcResult, default_criteria, evaluate
 from .criteria import annotate as annotate_ecs
-from .isp import IspParams, OutputSpec, process
+from .isp import IspParams, OutputSpec, draw_roi, params_to_dict, process
 from .render import FisheyeImages, render_fisheye
 from .scene import Scene
 
-__all__ = ["RvmFrame", "evaluate_params", "rvm_color", "render_rvm", "write_frame"]
+__all__ = ["RvmFrame", "evaluate_params", "rvm_color", "render_rvm", "write_frame",
+           "write_processed", "write_evaluation"]
 
 
 @dataclass(frozen=True)
@@ -122,3 +124,33 @@ def write_frame(frame: RvmFrame, folder: str | Path) -> list[Path]:
     for name, img in images.items():
         write_png(folder / name, img)
     return [folder / name for name in images]
+
+
+def write_processed(frame: RvmFrame, folder: str | Path, params: IspParams) -> list[Path]:
+    """What ``rvmsim process`` writes: :func:`write_frame`'s images, ``rvm_labels_preview.png``
+    (labels in colour), ``fisheye_roi.png`` (the fisheye image with the region the RVM image
+    shows outlined in green) and ``isp.json`` (``params``, as given for the full sensor)."""
+    from . import labels as L
+    from ._io import write_png
+
+    folder = Path(folder)
+    written = write_frame(frame, folder)
+    extra = {"rvm_labels_preview.png": L.colorize(frame.labels),
+             "fisheye_roi.png": draw_roi(frame.fisheye.color, frame.params, frame.output)}
+    for name, img in extra.items():
+        write_png(folder / name, img)
+    (folder / "isp.json").write_text(json.dumps(params_to_dict(params, frame.output), indent=2))
+    return written + [folder / name for name in extra] + [folder / "isp.json"]
+
+
+def write_evaluation(frame: RvmFrame, folder: str | Path, params: IspParams, *,
+                     scene_file: str | Path, vehicle: str,
+                     criteria_file: str | Path | None) -> list[Path]:
+    """What ``rvmsim evaluate`` writes: :func:`write_frame`'s images and ``ec.json`` (the
+    scene and criteria files, ``params`` as given for the full sensor, the ECs)."""
+    folder = Path(folder)
+    written = write_frame(frame, folder)
+    doc = {"scene": str(scene_file), "vehicle": vehicle, "criteria_file": str(criteria_file or ""),
+           "isp": params_to_dict(params, frame.output), **frame.ec.as_dict()}
+    (folder / "ec.json").write_text(json.dumps(doc, indent=2))
+    return written + [folder / "ec.json"]
