@@ -143,7 +143,7 @@ def run_search(
         Called with (trials done, best EC score, stage) after every batch (progress bars).
     """
     t0 = time.perf_counter()
-    stored = {r.idx: (r.score, r.objective, r.params) for r in store.trials()}
+    stored = store.replay()
     # best as (score, objective, -idx): highest score, then objective, then earliest
     best = max(((s, o, -i) for i, (s, o, _) in stored.items()), default=None)
     gen = strategy.batches()

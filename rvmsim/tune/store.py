@@ -120,6 +120,13 @@ class RunStore(SqliteStore):
             args.append(stop)
         return [self._record(r) for r in self.db.execute(q + " ORDER BY idx", args)]
 
+    def replay(self) -> dict[int, tuple[float, float, IspParams]]:
+        """(EC score, objective, parameters) of every trial by index: what a resumed search
+        tells its strategy (the ECs are not read)."""
+        return {idx: (score, objective, IspParams(**json.loads(params)))
+                for idx, params, score, objective in self.db.execute(
+                    "SELECT idx, params, score, objective FROM trials ORDER BY idx")}
+
     def top(self, m: int, stage: str | None = None) -> list[TrialRecord]:
         """The ``m`` best trials (highest EC score, then objective, then earliest)."""
         q = "SELECT idx, stage, params, score, objective, passed, ec FROM trials"
