@@ -69,8 +69,8 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     """
     from . import labels as L
     from ._io import write_png
-    from .render.fisheye import render_fisheye
-    from .scene.schema import load_scene
+    from .render import render_fisheye
+    from .scene import load_scene
 
     try:
         sc = load_scene(scene)

@@ -163,8 +163,9 @@ def tune(
     store = RunStore(run_dir / RUN_DB)  # makes the folder
     if not resume:
         (run_dir / RUN_JSON).write_text(json.dumps(settings.as_json(), indent=2))
-    store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
+    # state first: `rvmsim status` reads a store without settings as one of rvmsim 0.1
     store.set_state(RunStatus.RUNNING, strategy=settings.strategy, total=strat.total())
+    store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
     bar, on_batch = _progress_bar(progress, strat.total(), sc.name, progress_position)
     try:
         outcome = search_scene(images, config=cfg, criteria=crit, strategy=strat, store=store,
