@@ -16,7 +16,6 @@ import time
 import pytest
 import yaml
 
-from rvmsim.errors import RvmsimError
 from rvmsim.tune import (
     STRATEGIES,
     RunStatus,
@@ -25,7 +24,6 @@ from rvmsim.tune import (
     StopReason,
     TuningConfig,
     portable_scene_doc,
-    rank_params_text,
     register_strategy,
     run_settings,
     status_lines,
@@ -35,39 +33,7 @@ from rvmsim.tune import (
 
 from ..conftest import SCENES
 from .common import make_legacy_run
-
-CONFIG = {"tuned": ["zoom", "adv_v_shift", "adv_v_scale"], "output": {"size": [160, 90]},
-          "top_m": 3, "batch": 20}
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    """A render cache of this module's own (the runs below render vehicle A once)."""
-    old = os.environ.get("RVMSIM_CACHE")
-    os.environ["RVMSIM_CACHE"] = str(tmp_path_factory.mktemp("cache"))
-    yield os.environ["RVMSIM_CACHE"]
-    if old is None:
-        os.environ.pop("RVMSIM_CACHE", None)
-    else:
-        os.environ["RVMSIM_CACHE"] = old
-
-
-@pytest.fixture(scope="module")
-def clean(cache, tmp_path_factory):
-    """A finished random-search run of vehicle A (60 candidates, 3 batches)."""
-    run = tmp_path_factory.mktemp("clean") / "run"
-    tune(SCENES / "vehicle_a.yaml", run, strategy="random", budget=60, seed=2,
-         config=TuningConfig.model_validate(CONFIG))
-    return run
-
-
-def _top(run, m=3):
-    store = RunStore(run / "run.sqlite")
-    try:
-        return [(r.idx, r.params, r.score) for r in store.top(m)], store.count()
-    finally:
-        store.close()
-
+from .conftest import CONFIG, top_of
 
 def test_the_store_holds_the_settings_run_json_exports_them(clean):
     store = RunStore(clean / "run.sqlite")
@@ -90,7 +56,7 @@ def test_a_scene_object_and_a_task_record_the_paths_they_are_given(clean, tmp_pa
     run = tmp_path / "obj"
     tune(load_scene(path), run, scene_file=path, strategy="random", budget=60, seed=2,
          config=TuningConfig.model_validate(CONFIG))
-    assert _top(run) == _top(clean)
+    assert top_of(run) == top_of(clean)
     assert json.loads((run / "run.json").read_text()) == json.loads((clean / "run.json").read_text())
     res = tune_task({"scene": portable_scene_doc(path), "config": CONFIG, "strategy": "random",
                      "seed": 2, "budget": 60, "scene_file": str(path)})
@@ -99,7 +65,7 @@ def test_a_scene_object_and_a_task_record_the_paths_they_are_given(clean, tmp_pa
     for rel, data in res["files"].items():
         (task_run / rel).parent.mkdir(parents=True, exist_ok=True)
         (task_run / rel).write_bytes(data)
-    assert _top(task_run) == _top(clean)
+    assert top_of(task_run) == top_of(clean)
     store = RunStore(task_run / "run.sqlite")
     assert store.settings() == run_settings(clean, RunStore(clean / "run.sqlite"))
     store.close()
@@ -133,62 +99,18 @@ def test_a_failing_search_is_recorded_as_failed(cache, tmp_path):
                                                     "5 evaluations")
 
 
-def test_old_run_folders_are_read_by_status_select_and_report(clean, tmp_path):
-    from rvmsim.report import write_report
-
-    old = make_legacy_run(clean, tmp_path / "old")
-    assert status_lines(old) == [ln.replace(str(clean), str(old)) for ln in status_lines(clean)]
-    assert "done, strategy random, 60 / 60 evaluations" in status_lines(old)[0]
-    assert rank_params_text(old, 2) == rank_params_text(clean, 2)
-    assert "Vehicle A" in write_report(old).read_text(encoding="utf-8")
-    # the CLI reads it too
-    st = subprocess.run([sys.executable, "-m", "rvmsim", "status", str(old), "--top", "2"],
-                        capture_output=True, text=True, timeout=300)
-    assert st.returncode == 0 and st.stdout.splitlines() == status_lines(old, 2)
-    # the report follows the scene path run.json records (as it always did)
-    info = json.loads((old / "run.json").read_text())
-    info["scene"] = str(tmp_path / "gone.yaml")
-    (old / "run.json").write_text(json.dumps(info))
-    with pytest.raises(RvmsimError, match="gone.yaml"):
-        write_report(old)
-
-
 def test_an_interrupted_old_run_resumes_to_the_unbroken_result(clean, tmp_path):
     old = make_legacy_run(clean, tmp_path / "old", keep=20,
                           status="interrupted (continue with --resume)")
     assert "interrupted (continue with --resume), strategy random, 20 / 60" in status_lines(old)[0]
     res = tune(None, old, resume=True)
     assert (res.outcome.replayed, res.outcome.evaluated) == (20, 40)
-    assert _top(old) == _top(clean)
+    assert top_of(old) == top_of(clean)
     store = RunStore(old / "run.sqlite")
     # resumed, it is a run of this version: settings and state in its store
     assert store.settings() == run_settings(clean, RunStore(clean / "run.sqlite"))
     assert store.state().status is RunStatus.DONE
     store.close()
-
-
-def test_old_runs_that_cannot_be_read_are_refused_with_what_to_do(clean, tmp_path):
-    from rvmsim.report import write_report
-
-    bare = make_legacy_run(clean, tmp_path / "bare", run_json=False)
-    assert "done, strategy random, 60 / 60" in status_lines(bare)[0]  # the store suffices
-    for call in (lambda: rank_params_text(bare), lambda: tune(None, bare, resume=True),
-                 lambda: write_report(bare)):
-        with pytest.raises(RvmsimError) as err:
-            call()
-        msg = str(err.value)
-        assert "\n" not in msg and str(bare) in msg
-        assert "restore run.json, or start a new run" in msg
-    broken = make_legacy_run(clean, tmp_path / "broken")
-    (broken / "run.json").write_text("{not json")
-    with pytest.raises(RvmsimError, match=r"run\.json: not a readable run\.json .*start a new "
-                                          "run") as err:
-        tune(None, broken, resume=True)
-    assert "\n" not in str(err.value)
-    sel = subprocess.run([sys.executable, "-m", "rvmsim", "select", str(bare)],
-                         capture_output=True, text=True, timeout=300)
-    assert sel.returncode == 2 and len(sel.stderr.strip().splitlines()) == 1
-    assert "start a new run" in sel.stderr and "Traceback" not in sel.stderr
 
 
 def test_resume_after_kill_gives_the_clean_result(tmp_path):

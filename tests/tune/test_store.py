@@ -4,7 +4,6 @@ text status of rvmsim 0.1's stores."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 
 import pytest
@@ -109,12 +108,3 @@ def test_unknown_status_or_format_is_a_one_line_error(tmp_path):
         store.settings()
     assert "\n" not in str(err.value) and "start a new run" in str(err.value)
     store.close()
-
-
-def test_run_settings_round_trip_through_json():
-    s = _settings(budget=None, criteria_file="/data/crit.yaml")
-    doc = json.loads(json.dumps(s.as_json()))
-    assert RunSettings.from_json(doc) == s
-    assert doc["config"]["random"] == {"budget": 2000}
-    with pytest.raises(KeyError):
-        RunSettings.from_json({k: v for k, v in doc.items() if k != "strategy"})
