@@ -67,8 +67,7 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     Writes fisheye_color.png, fisheye_labels.png (one uint8 label ID per pixel),
     fisheye_labels_preview.png (labels in colour) and render.json into the output folder.
     """
-    from . import labels as L
-    from ._io import write_png
+    from .pipeline import write_fisheye
     from .render import render_fisheye
     from .scene import load_scene
 
@@ -78,24 +77,7 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
         if scale != 1.0:
             cam = cam.scaled(scale)
         images = render_fisheye(sc, camera=cam, face_size=face_size, progress=progress)
-        write_png(out / "fisheye_color.png", images.color)
-        write_png(out / "fisheye_labels.png", images.labels)
-        write_png(out / "fisheye_labels_preview.png", L.colorize(images.labels))
-        present = sorted(int(i) for i in set(images.labels.ravel().tolist()))
-        names = L.label_names()
-        meta = {
-            "scene": str(scene),
-            "name": sc.name,
-            "image_size": [cam.width, cam.height],
-            "K": cam.K.tolist(),
-            "D": cam.D.ravel().tolist(),
-            "fov_deg": cam.fov_deg,
-            "face_size_px": images.face_size,
-            "faces": list(images.faces),
-            "timings_s": {k: round(v, 4) for k, v in images.timings.items()},
-            "labels_present": {str(i): names.get(i, "?") for i in present},
-        }
-        (out / "render.json").write_text(json.dumps(meta, indent=2))
+        write_fisheye(images, out, scene_file=scene, vehicle=sc.name)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:

@@ -21,7 +21,7 @@ from .render import FisheyeImages, render_fisheye
 from .scene import Scene
 
 __all__ = ["RvmFrame", "evaluate_params", "rvm_color", "render_rvm", "write_frame",
-           "write_processed", "write_evaluation"]
+           "write_processed", "write_evaluation", "write_fisheye"]
 
 
 @dataclass(frozen=True)
@@ -154,3 +154,35 @@ def write_evaluation(frame: RvmFrame, folder: str | Path, params: IspParams, *,
            "isp": params_to_dict(params, frame.output), **frame.ec.as_dict()}
     (folder / "ec.json").write_text(json.dumps(doc, indent=2))
     return written + [folder / "ec.json"]
+
+
+def write_fisheye(images: FisheyeImages, folder: str | Path, *, scene_file: str | Path,
+                  vehicle: str) -> list[Path]:
+    """What ``rvmsim render`` writes: ``fisheye_color.png``, ``fisheye_labels.png`` (uint8
+    label IDs), ``fisheye_labels_preview.png`` (labels in colour) and ``render.json`` (the
+    camera, the cube faces, the timings and the labels present)."""
+    from . import labels as L
+    from ._io import write_png
+
+    folder = Path(folder)
+    pngs = {"fisheye_color.png": images.color, "fisheye_labels.png": images.labels,
+            "fisheye_labels_preview.png": L.colorize(images.labels)}
+    for name, img in pngs.items():
+        write_png(folder / name, img)
+    cam = images.camera
+    present = sorted(int(i) for i in set(images.labels.ravel().tolist()))
+    names = L.label_names()
+    meta = {
+        "scene": str(scene_file),
+        "name": vehicle,
+        "image_size": [cam.width, cam.height],
+        "K": cam.K.tolist(),
+        "D": cam.D.ravel().tolist(),
+        "fov_deg": cam.fov_deg,
+        "face_size_px": images.face_size,
+        "faces": list(images.faces),
+        "timings_s": {k: round(v, 4) for k, v in images.timings.items()},
+        "labels_present": {str(i): names.get(i, "?") for i in present},
+    }
+    (folder / "render.json").write_text(json.dumps(meta, indent=2))
+    return [folder / name for name in pngs] + [folder / "render.json"]
