@@ -109,8 +109,8 @@ class SearchOutcome:
     stopped: StopReason
     best: TrialRecord | None
     seconds: float
-    space: SearchSpace | None = None
-    total: int | None = None
+    space: SearchSpace
+    total: int | None
 
 
 def run_search(
