@@ -6,7 +6,6 @@ stderr and exits with status 2; it never prints a traceback for them.
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 from pathlib import Path
@@ -14,8 +13,13 @@ from pathlib import Path
 import click
 
 from .errors import RvmsimError
+from .isp import IspParams, OutputSpec
+from .tune import STRATEGIES
 
 __all__ = ["cli", "main"]
+
+#: ``--strategy`` choices and help: the strategy registry.
+_STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.items()) + "."
 
 
 def _fail(err: Exception) -> None:
@@ -27,18 +31,8 @@ def _fail_os(err: OSError, where: Path | None) -> None:
     _fail(RvmsimError(f"{getattr(err, 'filename', None) or where}: {err.strerror or err}"))
 
 
-def _open_run(run: Path):
-    """The run store in a run folder, or a one-line error."""
-    from .tune.store import RunStore
-
-    db = run / "run.sqlite"
-    if not db.is_file():
-        _fail(RvmsimError(f"{run}: no run database (run.sqlite) here"))
-    return RunStore(db)
-
-
-def _load_isp(params_file: Path | None):
-    from .isp import IspParams, OutputSpec, load_params
+def _load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
+    from .isp import load_params
 
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
@@ -72,8 +66,7 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     Writes fisheye_color.png, fisheye_labels.png (one uint8 label ID per pixel),
     fisheye_labels_preview.png (labels in colour) and render.json into the output folder.
     """
-    from . import labels as L
-    from ._io import write_png
+    from .pipeline import write_fisheye
     from .render import render_fisheye
     from .scene import load_scene
 
@@ -83,24 +76,7 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
         if scale != 1.0:
             cam = cam.scaled(scale)
         images = render_fisheye(sc, camera=cam, face_size=face_size, progress=progress)
-        write_png(out / "fisheye_color.png", images.color)
-        write_png(out / "fisheye_labels.png", images.labels)
-        write_png(out / "fisheye_labels_preview.png", L.colorize(images.labels))
-        present = sorted(int(i) for i in set(images.labels.ravel().tolist()))
-        names = L.label_names()
-        meta = {
-            "scene": str(scene),
-            "name": sc.name,
-            "image_size": [cam.width, cam.height],
-            "K": cam.K.tolist(),
-            "D": cam.D.ravel().tolist(),
-            "fov_deg": cam.fov_deg,
-            "face_size_px": images.face_size,
-            "faces": list(images.faces),
-            "timings_s": {k: round(v, 4) for k, v in images.timings.items()},
-            "labels_present": {str(i): names.get(i, "?") for i in present},
-        }
-        (out / "render.json").write_text(json.dumps(meta, indent=2))
+        write_fisheye(images, out, scene_file=scene, vehicle=sc.name)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
@@ -128,21 +104,14 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     fisheye_roi.png (the fisheye image with the region the RVM image uses outlined in green)
     and isp.json (the parameters used).
     """
-    from . import labels as L
-    from ._io import write_png
-    from .isp import draw_roi, params_to_dict
-    from .pipeline import render_rvm
+    from .pipeline import render_rvm, write_processed
     from .scene import load_scene
 
     try:
         params, output = _load_isp(params_file)
         sc = load_scene(scene)
         frame = render_rvm(sc, params, output, scale=scale, progress=progress)
-        write_png(out / "rvm_color.png", frame.color)
-        write_png(out / "rvm_labels.png", frame.labels)
-        write_png(out / "rvm_labels_preview.png", L.colorize(frame.labels))
-        write_png(out / "fisheye_roi.png", draw_roi(frame.fisheye.color, frame.params, output))
-        (out / "isp.json").write_text(json.dumps(params_to_dict(params, output), indent=2))
+        write_processed(frame, out, params)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
@@ -168,33 +137,25 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     Prints the EC table and writes ec.json, ec_annotated.png (the measurements drawn on the RVM
     image), rvm_color.png and rvm_labels.png.
     """
-    from .criteria.annotate import annotate
-    from .criteria.core import load_criteria
-    from .criteria.core import evaluate as evaluate_labels
-    from ._io import write_png
-    from .isp import params_to_dict
-    from .pipeline import render_rvm
+    from .criteria import load_criteria
+    from .pipeline import render_rvm, write_evaluation
     from .scene import load_scene
 
+    out = out or Path("out") / scene.stem / "evaluate"
     try:
         params, output = _load_isp(params_file)
         criteria = load_criteria(criteria_file)
         sc = load_scene(scene)
-        out = out or Path("out") / scene.stem / "evaluate"
-        frame = render_rvm(sc, params, output, scale=scale, progress=progress)
-        result = evaluate_labels(frame.labels, criteria)
-        write_png(out / "rvm_color.png", frame.color)
-        write_png(out / "rvm_labels.png", frame.labels)
-        write_png(out / "ec_annotated.png", annotate(frame.color, frame.labels, result))
-        doc = {"scene": str(scene), "vehicle": sc.name, "criteria_file": str(criteria_file or ""),
-               "isp": params_to_dict(params, output), **result.as_dict()}
-        (out / "ec.json").write_text(json.dumps(doc, indent=2))
+        frame = render_rvm(sc, params, output, criteria=criteria, scale=scale, annotate=True,
+                           progress=progress)
+        write_evaluation(frame, out, params, scene_file=scene, vehicle=sc.name,
+                         criteria_file=criteria_file)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
         _fail_os(err, out)
     click.echo(f"{sc.name} — criteria: {criteria.name}")
-    click.echo(result.table())
+    click.echo(frame.ec.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
 
 
@@ -202,9 +163,8 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 @click.argument("scene", type=click.Path(path_type=Path), required=False)
 @click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
               help="Run folder (default: runs/<scene name>).")
-@click.option("--strategy", type=click.Choice(["grid-random", "cmaes", "random"]),
-              default="grid-random", show_default=True,
-              help="grid-random: the paper's grid-to-random search; cmaes: CMA-ES.")
+@click.option("--strategy", type=click.Choice(list(STRATEGIES)),
+              default="grid-random", show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
               help="Tuning config (YAML): tuned parameters, ranges, steps, N, T, budgets.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
@@ -222,15 +182,17 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
               help="Continue the run in this folder (same settings, same final result).")
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
-def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget, max_time,
-         target_score, resume_dir, force, progress) -> None:
+def tune(scene: Path | None, out: Path | None, strategy: str, config_file: Path | None,
+         criteria_file: Path | None, seed: int, workers: int, budget: int | None,
+         max_time: float | None, target_score: float | None, resume_dir: Path | None,
+         force: bool, progress: bool) -> None:
     """Tune the ISP parameters of SCENE (or continue a run with --resume RUN)."""
-    from .tune.loop import load_tuning_config
-    from .tune.loop import tune as run_tune
+    from .tune import load_tuning_config, remove_run, summary_lines
+    from .tune import tune as run_tune
 
     try:
         if resume_dir is not None:
-            result = run_tune("", resume_dir, resume=True, workers=workers, max_time=max_time,
+            result = run_tune(None, resume_dir, resume=True, workers=workers, max_time=max_time,
                               target_score=target_score, progress=progress)
         else:
             if scene is None:
@@ -238,29 +200,25 @@ def tune(scene, out, strategy, config_file, criteria_file, seed, workers, budget
             cfg = load_tuning_config(config_file)
             run_dir = out or Path("runs") / scene.stem
             if force:
-                for name in ("run.sqlite", "run.sqlite-wal", "run.sqlite-shm", "run.json"):
-                    (run_dir / name).unlink(missing_ok=True)
+                remove_run(run_dir)
             result = run_tune(scene, run_dir, strategy=strategy,
                               config=cfg, criteria_file=criteria_file, seed=seed,
                               workers=workers, budget=budget, max_time=max_time,
                               target_score=target_score, progress=progress)
+        lines = summary_lines(result)
     except RvmsimError as err:
         _fail(err)
-    o = result.outcome
-    best = o.best
-    click.echo(f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
-               f"{o.seconds:.1f} s ({o.stopped}); best EC score "
-               f"{best.score:.4g} (trial {best.idx})" if best else "no trials")
-    if best is not None:
-        click.echo((result.run_dir / "best" / "ec_table.txt").read_text().rstrip())
+    except OSError as err:
+        _fail_os(err, out)
+    click.echo("\n".join(lines))
 
 
 @cli.command()
 @click.argument("scenes", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--out", "-o", type=click.Path(path_type=Path), default=Path("runs"),
               show_default=True, help="Folder for the runs (one sub-folder per scene).")
-@click.option("--strategy", type=click.Choice(["grid-random", "cmaes", "random"]),
-              default="grid-random", show_default=True)
+@click.option("--strategy", type=click.Choice(list(STRATEGIES)),
+              default="grid-random", show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None)
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None)
 @click.option("--seed", type=int, default=0, show_default=True)
@@ -332,17 +290,13 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
 @click.option("--top", "top_m", type=click.IntRange(1, 100), default=5, show_default=True)
 def status(run: Path, top_m: int) -> None:
     """Show a run's progress and its current top candidates (works while it runs)."""
-    store = _open_run(run)
-    meta = store.meta()
-    n = store.count()
-    total = meta.get("total")
-    click.echo(f"{run}: {meta.get('status', '?')}, strategy {meta.get('strategy', '?')}, "
-               f"{n}{'' if total is None else f' / {total}'} evaluations")
-    for k, rec in enumerate(store.top(top_m), start=1):
-        fails = [ec for ec, (_, _, ok) in rec.ec.items() if not ok]
-        click.echo(f"  #{k}  EC score {rec.score:.4g}  trial {rec.idx:>6} ({rec.stage})  "
-                   f"{'all pass' if not fails else 'fails ' + ','.join(fails)}")
-    store.close()
+    from .tune import status_lines
+
+    try:
+        lines = status_lines(run, top_m)
+    except RvmsimError as err:
+        _fail(err)
+    click.echo("\n".join(lines))
 
 
 @cli.command()
@@ -352,22 +306,12 @@ def status(run: Path, top_m: int) -> None:
               help="Params file to write (default: print it).")
 def select(run: Path, rank: int, out: Path | None) -> None:
     """Export the rank-K parameter set of a run as a params file."""
-    import yaml
+    from .tune import rank_params_text
 
-    from .isp import OutputSpec, params_to_dict
-
-    store = _open_run(run)
-    top = store.top(rank)
-    store.close()
-    if len(top) < rank:
-        _fail(RvmsimError(f"{run}: only {len(top)} candidates, no rank {rank}"))
-    rec = top[rank - 1]
-    cfg = json.loads((run / "run.json").read_text()).get("config", {}) if (run / "run.json").is_file() else {}
-    size = cfg.get("output", {}).get("size", [1280, 720])
-    mirror = cfg.get("output", {}).get("mirror", True)
-    text = (f"# rank {rank}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
-            + yaml.safe_dump(params_to_dict(rec.params, OutputSpec(size[0], size[1], mirror)),
-                             sort_keys=False))
+    try:
+        text = rank_params_text(run, rank)
+    except RvmsimError as err:
+        _fail(err)
     if out is None:
         click.echo(text, nl=False)
     else:
@@ -385,15 +329,10 @@ def select(run: Path, rank: int, out: Path | None) -> None:
 def report(path: Path, out: Path | None) -> None:
     """Write a self-contained HTML review report of a run (PATH = RUN), or of every run in a
     folder plus an index page (PATH = RUNS_DIR)."""
-    from .report.run import find_runs, write_batch_report, write_report
+    from .report import write_any_report
 
     try:
-        if (path / "run.json").is_file():
-            written = write_report(path, out)
-        elif find_runs(path):
-            written = write_batch_report(path, out)
-        else:
-            raise RvmsimError(f"{path}: not a run folder (no run.json) and no run folders in it")
+        written = write_any_report(path, out)
     except RvmsimError as err:
         _fail(err)
     except OSError as err:

@@ -199,3 +199,21 @@ def test_tune_errors_are_one_line(tmp_path):
     assert res.returncode == 2 and "no run to resume" in res.stderr
     res = _rvmsim("status", str(tmp_path / "nothing"))
     assert res.returncode == 2 and "no run database" in res.stderr
+
+
+def test_strategy_choices_come_from_the_registry():
+    from click.testing import CliRunner
+
+    from rvmsim.cli import cli
+    from rvmsim.tune import STRATEGIES
+
+    runner = CliRunner()
+    for command in ("tune", "batch"):
+        res = runner.invoke(cli, [command, "--help"])
+        assert res.exit_code == 0
+        words = " ".join(res.output.split())
+        for name, cls in STRATEGIES.items():
+            assert f"{name}: {cls.summary}" in words, (command, name)
+    res = runner.invoke(cli, ["tune", str(SCENES / "vehicle_a.yaml"), "--strategy", "annealing"])
+    assert res.exit_code == 2
+    assert "'grid-random', 'cmaes', 'random'" in " ".join(res.output.split())

@@ -54,6 +54,8 @@ from .tasks import (
     summary_ec_ids,
     summary_table,
     write_summary,
+    tune_task,
+    portable_scene_doc,
 )
 
 __all__ = [
@@ -86,4 +88,6 @@ __all__ = [
     "summary_ec_ids",
     "summary_table",
     "write_summary",
+    "tune_task",
+    "portable_scene_doc",
 ]

@@ -41,10 +41,10 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     import os
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from ..criteria import CandidateEvaluator, criteria_from_text, default_criteria
+    from ..criteria import criteria_from_text, default_criteria
     from ..render import cached_render
     from ..scene import scene_from_dict
-    from ..tune import RunStore, TuningConfig, make_strategy, run_search, score_vectors
+    from ..tune import RunStore, TuningConfig, candidate_evaluator, search_scene
 
     t0 = time.perf_counter()
     try:
@@ -56,19 +56,22 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         # otherwise open several OpenGL contexts at once.
         with _RENDER_LOCK:
             images, _ = cached_render(scene)
-        space = config.space(images.camera)
-        strat = make_strategy(task["strategy"], space, config, task["seed"], task["budget"])
-        evaluator = CandidateEvaluator(images.labels, config.output_spec(), criteria)
+        evaluator = candidate_evaluator(images, config, criteria)
         store = RunStore(":memory:")
-        outcome = run_search(strat, lambda xs: score_vectors(evaluator, space, xs), store)
-        best = store.top(1)[0]
-        n_eval = store.count()
-        store.close()
+        try:
+            outcome = search_scene(images, config=config, criteria=criteria,
+                                   strategy=task["strategy"], store=store, seed=task["seed"],
+                                   budget=task["budget"], evaluator=evaluator)
+            n_eval = store.count()
+        finally:
+            store.close()
+        best, space = outcome.best, outcome.space
+        if best is None:
+            raise RvmsimError(f"{task['label']}: the search evaluated no candidate")
         result: dict[str, Any] = {
             "score": best.score,
             "passed": bool(best.passed),
-            "ecs": {ec: {"value": v[0], "score": v[1], "passed": bool(v[2])}
-                    for ec, v in best.ec.items()},
+            "ecs": {ec: o.as_dict() for ec, o in best.ecs.items()},
             "params": {n: getattr(best.params, n) for n in best.params.names()},
             "tuned": list(space.names),
             "evaluations": n_eval,

@@ -2,9 +2,8 @@
 
 Locally the scenes are tuned one after another, each on ``workers`` processes
 (:func:`rvmsim.tune.tune`).  With a Dask scheduler each scene is one task on the cluster
-(:func:`rvmsim.tune.tune_task`); its run folder comes back as bytes and is written into
-``out/<scene name>/`` with this machine's scene path, scene key and criteria file in its
-``run.json``, so ``status``, ``select``, ``report`` and ``--resume`` work on it as on a local
+(:func:`tune_task`); its run folder comes back as bytes and is written into
+``out/<scene name>/``; the run records this machine's scene and criteria paths, so ``status``, ``select``, ``report`` and ``--resume`` work on it as on a local
 run.  A scene that cannot be loaded or tuned is reported as a failed :class:`SceneRun`; the
 others still run.
 """
@@ -23,7 +22,7 @@ if TYPE_CHECKING:
     from ..tune import TuningConfig
 
 __all__ = ["BatchSettings", "SceneRun", "run_batch", "summary_ec_ids", "summary_table",
-           "write_summary"]
+           "write_summary", "tune_task", "portable_scene_doc"]
 
 
 @dataclass(frozen=True)
@@ -134,7 +133,6 @@ def _local_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings, prog
 
 def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
                  scheduler: str) -> Iterator[SceneRun]:
-    from ..tune import portable_scene_doc, tune_task
     from .executors import DaskExecutor
 
     tasks, by_key = {}, {}
@@ -149,7 +147,10 @@ def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
         by_key[key] = scene
         tasks[key] = {"scene": doc, "config": settings.config.model_dump(mode="json"),
                       "strategy": settings.strategy, "seed": settings.seed,
-                      "budget": settings.budget, "criteria": crit, "workers": 1}
+                      "budget": settings.budget, "criteria": crit, "workers": 1,
+                      "scene_file": str(scene.resolve()),
+                      "criteria_file": (None if settings.criteria_file is None
+                                        else str(Path(settings.criteria_file).resolve()))}
     with DaskExecutor(scheduler) as ex:
         for key, res in ex.run(tune_task, tasks):
             scene = by_key[key]
@@ -157,26 +158,17 @@ def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
                 yield SceneRun.failed(scene, res["error"])
                 continue
             run_dir = out / scene.stem
-            _write_run_folder(run_dir, res["files"], scene, settings.criteria_file)
+            _write_run_folder(run_dir, res["files"])
             yield SceneRun.finished(scene, run_dir, res["evaluated"] + res["replayed"],
                                     res["seconds"])
 
 
-def _write_run_folder(run_dir: Path, files: Mapping[str, bytes], scene: Path,
-                      criteria_file: Path | None) -> None:
-    """Write a run made on a worker into ``run_dir``, its ``run.json`` naming this machine's
-    scene file (path and key) and criteria file, as a local run's does."""
-    from ..render import scene_key
-    from ..scene import load_scene
-
+def _write_run_folder(run_dir: Path, files: Mapping[str, bytes]) -> None:
+    """Write a run made on a worker into ``run_dir`` (it already records this machine's
+    scene and criteria paths: :func:`tune_task`'s ``scene_file`` and ``criteria_file``)."""
     for rel, data in files.items():
         (run_dir / rel).parent.mkdir(parents=True, exist_ok=True)
         (run_dir / rel).write_bytes(data)
-    meta = json.loads((run_dir / "run.json").read_text())
-    meta["scene"] = str(scene.resolve())
-    meta["scene_key"] = scene_key(load_scene(scene))
-    meta["criteria_file"] = None if criteria_file is None else str(Path(criteria_file).resolve())
-    (run_dir / "run.json").write_text(json.dumps(meta, indent=2))
 
 
 def summary_ec_ids(runs: Sequence[SceneRun], criteria_file: Path | None) -> tuple[str, ...]:
@@ -223,3 +215,52 @@ def write_summary(out: Path, runs: Sequence[SceneRun], table: str) -> list[Path]
     except OSError as err:
         raise RvmsimError(f"{out}: {err.strerror or err}") from None
     return [out / "summary.json", out / "summary.txt"]
+
+
+# ---------------------------------------------------------------------------- cluster tasks
+def portable_scene_doc(scene_file: str | Path) -> dict[str, Any]:
+    """The scene file's document with its mesh paths made absolute, so it loads from any
+    folder (a task on a cluster worker builds its scene from it)."""
+    from ..scene import absolute_mesh_paths, read_scene_document
+
+    _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
+    absolute_mesh_paths(doc, Path(scene_file).parent)
+    return doc
+
+
+def tune_task(task: dict[str, Any]) -> dict[str, Any]:
+    """One vehicle's tuning run (:func:`rvmsim.tune.tune`) as a task for a cluster worker.
+
+    ``task``: ``scene`` (a :func:`portable_scene_doc`), ``config`` (a tuning config
+    document), ``strategy``, ``seed``, ``budget``, optionally ``criteria`` (a criteria
+    file's text), ``workers``, and ``scene_file`` / ``criteria_file``: the paths to record
+    in the run (the files on the submitting machine).  The run is made in a temporary folder
+    and returned as ``{"files": {relative path: bytes}, "evaluated", "replayed",
+    "seconds"}`` (or ``{"error": message}``), for the caller to write into its run folder.
+    """
+    import os
+    import tempfile
+
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    from ..criteria import criteria_from_text
+    from ..scene import scene_from_dict
+    from ..tune import TuningConfig, tune
+    from .executors import task_malloc
+
+    try:
+        with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp, task_malloc():
+            recorded = task.get("scene_file") or "scene.yaml"
+            scene = scene_from_dict(task["scene"], source=str(recorded))
+            criteria = (criteria_from_text(task["criteria"], "criteria")
+                        if task.get("criteria") else None)
+            run_dir = Path(tmp) / "run"
+            res = tune(scene, run_dir, scene_file=recorded, strategy=task["strategy"],
+                       config=TuningConfig.model_validate(task["config"]), criteria=criteria,
+                       criteria_file=task.get("criteria_file"), seed=task["seed"],
+                       workers=task.get("workers", 1), budget=task.get("budget"))
+            files = {str(p.relative_to(run_dir)): p.read_bytes()
+                     for p in sorted(run_dir.rglob("*")) if p.is_file()}
+            return {"files": files, "evaluated": res.outcome.evaluated,
+                    "replayed": res.outcome.replayed, "seconds": res.outcome.seconds}
+    except RvmsimError as err:
+        return {"error": str(err)}

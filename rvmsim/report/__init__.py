@@ -5,6 +5,7 @@ from __future__ import annotations
 from .run import (
     write_report,
     write_batch_report,
+    write_any_report,
     find_runs,
     EC_GROUP_NAMES,
     SECTION_IDS,
@@ -17,10 +18,15 @@ from .sweep import (
     sweep_html,
 )
 from .validation import validation_page, PICTURE_CAPTIONS
+from .plots import (
+    convergence_png,
+    histogram_png,
+)
 
 __all__ = [
     "write_report",
     "write_batch_report",
+    "write_any_report",
     "find_runs",
     "EC_GROUP_NAMES",
     "SECTION_IDS",
@@ -31,4 +37,6 @@ __all__ = [
     "sweep_html",
     "validation_page",
     "PICTURE_CAPTIONS",
+    "convergence_png",
+    "histogram_png",
 ]

@@ -16,22 +16,29 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 
 from __future__ import annotations
 
-import json
-import math
 import os
 import shlex
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 from urllib.parse import quote
 
 import numpy as np
 
 from ..errors import RvmsimError
-from .page import data_uri, escape, figure_png, img_tag, page, shrink
+from ..tune import find_runs, is_run_folder
+from .page import data_uri, escape, img_tag, page, shrink
+from .plots import convergence_png, histogram_png
 
-__all__ = ["write_report", "write_batch_report", "find_runs", "EC_GROUP_NAMES",
-           "SECTION_IDS"]
+if TYPE_CHECKING:
+    from ..criteria import Criteria, EcResult, EcValue
+    from ..isp import OutputSpec
+    from ..render import FisheyeImages
+    from ..scene import Scene
+    from ..tune import RunSettings, RunState, TrialRecord, TuningConfig
+
+__all__ = ["write_report", "write_batch_report", "write_any_report", "find_runs",
+           "EC_GROUP_NAMES", "SECTION_IDS"]
 
 #: The paper groups the ECs by their first digit.
 EC_GROUP_NAMES: dict[str, str] = {
@@ -49,82 +56,6 @@ SECTION_IDS: tuple[str, ...] = ("scene", "images", "ec-table", "params", "conver
 FISHEYE_MAX_PX = 640
 GALLERY_MAX_PX = 320
 INDEX_THUMB_PX = 192
-#: Scores below this are drawn at this value on the log axes.
-SCORE_FLOOR = 1e-15
-
-# ---------------------------------------------------------------------------- plots
-def convergence_png(curve: list[tuple[int, float, str]]) -> bytes:
-    """Best EC score so far vs evaluation index, one colour per search stage (log y axis).
-
-    Parameters
-    ----------
-    curve : list of (idx, best so far, stage)
-        As :meth:`rvmsim.store.RunStore.best_curve` gives it.
-
-    Returns
-    -------
-    bytes
-        A PNG image.
-    """
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(6.4, 3.6))
-    ax = fig.add_subplot()
-    stages: list[str] = []
-    for _, _, st in curve:
-        if st not in stages:
-            stages.append(st)
-    colours = [f"C{i % 10}" for i in range(len(stages))]
-    idx = np.array([c[0] for c in curve], dtype=float)
-    best = np.maximum(np.array([c[1] for c in curve], dtype=float), SCORE_FLOOR)
-    st_arr = np.array([c[2] for c in curve], dtype=object)
-    for st, col in zip(stages, colours):
-        mask = st_arr == st
-        ax.plot(idx[mask], best[mask], ".", ms=2.5, color=col, label=str(st))
-    if len(idx):
-        ax.plot(idx, best, "-", lw=0.8, color="#555", zorder=0)
-    ax.set_yscale("log")
-    ax.set_ylim(SCORE_FLOOR / 10, 2.0)
-    ax.set_xlabel("evaluation")
-    ax.set_ylabel("best EC score so far")
-    ax.set_title("Convergence")
-    ax.grid(True, which="major", alpha=0.3)
-    if stages:
-        ax.legend(title="stage", fontsize=8, loc="lower right",
-                  ncol=max(1, math.ceil(len(stages) / 6)))
-    fig.tight_layout()
-    return figure_png(fig)
-
-
-def histogram_png(scores: np.ndarray) -> bytes:
-    """Histogram of all trials' EC scores on log-spaced bins; zero scores counted apart.
-
-    Returns
-    -------
-    bytes
-        A PNG image.
-    """
-    from matplotlib.figure import Figure
-
-    scores = np.asarray(scores, dtype=float)
-    zeros = int(np.sum(scores <= 0))
-    pos = scores[scores > 0]
-    fig = Figure(figsize=(6.4, 3.6))
-    ax = fig.add_subplot()
-    if pos.size:
-        lo = max(float(pos.min()), SCORE_FLOOR)
-        hi = max(float(pos.max()), lo * 10)
-        bins = np.logspace(math.log10(lo), math.log10(hi), 40)
-        ax.hist(np.clip(pos, lo, hi), bins=bins, color="C0")
-        ax.set_xscale("log")
-    else:
-        ax.text(0.5, 0.5, "no trial scored above 0", ha="center", va="center",
-                transform=ax.transAxes)
-    ax.set_xlabel("EC score")
-    ax.set_ylabel("trials")
-    ax.set_title(f"Score distribution ({scores.size} trials, {zeros} scored 0)")
-    fig.tight_layout()
-    return figure_png(fig)
 
 
 # ---------------------------------------------------------------------------- run data
@@ -133,16 +64,16 @@ class _Run:
     """Everything a report shows, read from a run folder."""
 
     run_dir: Path
-    info: dict[str, Any]
-    meta: dict[str, Any]
+    settings: RunSettings
+    state: RunState
     scene_file: Path
-    scene: Any
-    images: Any
-    config: Any
-    criteria: Any
+    scene: Scene
+    images: FisheyeImages
+    config: TuningConfig
+    criteria: Criteria
     criteria_file: Path | None
-    output: Any
-    top: list[Any]
+    output: OutputSpec
+    top: list[TrialRecord]
     curve: list[tuple[int, float, str]]
     scores: np.ndarray
     count: int
@@ -162,51 +93,39 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
+    from ..criteria import load_criteria
     from ..render import cached_render, same_scene
-    from ..criteria.core import load_criteria
     from ..scene import load_scene
-    from ..tune.store import RunStore
-    from ..tune.loop import TuningConfig
+    from ..tune import open_run, run_settings
 
-    run_json = run_dir / "run.json"
-    if not run_json.is_file():
-        raise RvmsimError(f"{run_dir}: not a run folder (run.json missing)")
+    store = open_run(run_dir)
     try:
-        info = json.loads(run_json.read_text(encoding="utf-8"))
-        recorded_scene = str(info["scene"])
-        config = TuningConfig.model_validate(info.get("config") or {})
-    except (ValueError, KeyError, TypeError) as err:
-        raise RvmsimError(f"{run_json}: not a readable run.json ({err})".splitlines()[0]) from None
-    if not (run_dir / "run.sqlite").is_file():
-        raise RvmsimError(f"{run_dir}: no run database (run.sqlite) here")
-    scene_file = _resolve(recorded_scene, run_dir)
-    if scene_file is None:
-        raise RvmsimError(f"{run_dir}: scene file {recorded_scene} not found")
-    crit_rec = info.get("criteria_file")
-    crit_file = None
-    if crit_rec:
-        crit_file = _resolve(str(crit_rec), run_dir)
-        if crit_file is None:
-            raise RvmsimError(f"{run_dir}: criteria file {crit_rec} not found")
-    criteria = load_criteria(crit_file)
-    scene = load_scene(scene_file)
-    store = RunStore(run_dir / "run.sqlite")
-    try:
-        meta = store.meta()
-        top = store.top(config.top_m)
+        settings = run_settings(run_dir, store)
+        state = store.state()
+        top = store.top(settings.config.top_m)
         curve = store.best_curve()
-        scores = np.array([r[0] for r in store.db.execute("SELECT score FROM trials")],
-                          dtype=float)
+        scores = np.array(store.scores(), dtype=float)
         count = store.count()
     finally:
         store.close()
+    scene_file = _resolve(settings.scene, run_dir)
+    if scene_file is None:
+        raise RvmsimError(f"{run_dir}: scene file {settings.scene} not found")
+    crit_file = None
+    if settings.criteria_file:
+        crit_file = _resolve(settings.criteria_file, run_dir)
+        if crit_file is None:
+            raise RvmsimError(f"{run_dir}: criteria file {settings.criteria_file} not found")
+    criteria = load_criteria(crit_file)
+    scene = load_scene(scene_file)
     if not top:
         raise RvmsimError(f"{run_dir}: no evaluated candidates to report yet")
     images, _ = cached_render(scene)
-    recorded_key = info.get("scene_key")
+    recorded_key = settings.scene_key
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
-    return _Run(run_dir, info, meta, scene_file, scene, images, config, criteria, crit_file,
-                config.output_spec(), top, curve, scores, count, scene_changed)
+    return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
+                crit_file, settings.config.output_spec(), top, curve, scores, count,
+                scene_changed)
 
 
 # ---------------------------------------------------------------------------- sections
@@ -216,7 +135,7 @@ def _fmt(x: float | None, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
-def _status(item) -> str:
+def _status(item: EcValue) -> str:
     return "off" if not item.enabled else ("pass" if item.passed else "fail")
 
 
@@ -239,8 +158,8 @@ def _scene_section(r: _Run) -> str:
         ("Mount angles", f"yaw {m.yaw_deg:g}°, pitch {m.pitch_deg:g}°, roll {m.roll_deg:g}°"),
         ("Criteria", f"{r.criteria.name} — "
                      + (str(r.criteria_file) if r.criteria_file else "built-in (paper thresholds)")),
-        ("Search", f"{r.info.get('strategy', '?')}, seed {r.info.get('seed', '?')}, "
-                   f"{r.count} evaluations, status {r.meta.get('status', '?')}"),
+        ("Search", f"{r.settings.strategy}, seed {r.settings.seed}, "
+                   f"{r.count} evaluations, status {r.state.text}"),
         ("Run folder", str(r.run_dir)),
     ]
     body = "".join(f"<tr><th>{escape(a)}</th><td>{escape(b)}</td></tr>" for a, b in rows)
@@ -266,7 +185,7 @@ def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
     return f'<section id="images"><h2>Images</h2>{body}</section>'
 
 
-def _ec_section(result) -> str:
+def _ec_section(result: EcResult) -> str:
     head = ("<tr><th>EC</th><th>measurement</th><th>value</th><th>unit</th>"
             "<th>acceptable range</th><th>score</th><th>result</th></tr>")
     rows = []
@@ -327,30 +246,30 @@ def _convergence_section(r: _Run) -> str:
             'trials (log-spaced bins).</figcaption></figure></section>')
 
 
-def _differences(rec, first, criteria) -> list[str]:
+def _differences(rec: TrialRecord, first: TrialRecord, criteria: Criteria) -> list[str]:
     """ECs (enabled ones) whose pass/fail differs from rank 1, as 'EC: pass → fail'."""
     out = []
-    for ec, item in first.ec.items():
+    for ec, item in first.ecs.items():
         crit = criteria.items.get(ec)
         if crit is not None and not crit.enabled:
             continue
-        mine = rec.ec.get(ec)
+        mine = rec.ecs.get(ec)
         if mine is None:
             continue
-        if bool(mine[2]) != bool(item[2]):
-            out.append(f"{ec}: {'pass' if mine[2] else 'fail'} "
-                       f"(#1 {'passes' if item[2] else 'fails'})")
+        if mine.passed != item.passed:
+            out.append(f"{ec}: {'pass' if mine.passed else 'fail'} "
+                       f"(#1 {'passes' if item.passed else 'fails'})")
     return out
 
 
 def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
-    from ..isp import process
+    from ..pipeline import rvm_color
 
     cards = []
     first = r.top[0]
     for k, rec in enumerate(r.top, start=1):
-        color = best_color if k == 1 else process(r.images.color, None, rec.params, r.output)[0]
+        color = best_color if k == 1 else rvm_color(r.images, rec.params, r.output)
         diffs = _differences(rec, first, r.criteria)
         if k == 1:
             diff_html = "<p class='muted'>reference (rank 1)</p>"
@@ -373,7 +292,7 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             f'<div class="gallery">{"".join(cards)}</div></section>')
 
 
-def _group_status(result) -> dict[str, str]:
+def _group_status(result: EcResult) -> dict[str, str]:
     """'pass', 'fail' or 'off' per EC group (the first digit of the EC id)."""
     out = {}
     for g in EC_GROUP_NAMES:
@@ -382,17 +301,25 @@ def _group_status(result) -> dict[str, str]:
     return out
 
 
-def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
+@dataclass(frozen=True)
+class _Summary:
+    """What the batch index shows of one run."""
+
+    vehicle: str
+    score: float
+    passed: bool
+    groups: dict[str, str]
+    thumb: np.ndarray
+
+
+def _build(run_dir: Path) -> tuple[str, _Summary]:
     """The report page of one run, and the summary the batch index shows."""
-    from ..criteria.annotate import annotate
-    from ..criteria.core import evaluate
-    from ..isp import process
+    from ..pipeline import evaluate_params
 
     r = _load_run(run_dir)
-    best = r.top[0]
-    color, labels = process(r.images.color, r.images.labels, best.params, r.output)
-    result = evaluate(labels, r.criteria)
-    annotated = annotate(color, labels, result)
+    frame = evaluate_params(r.images, r.top[0].params, r.output, r.criteria)
+    result, color, annotated = frame.ec, frame.color, frame.annotated
+    assert annotated is not None
     badge = "pass" if result.passed else "fail"
     header = (f"<h1>{escape(r.scene.name)}</h1>"
               f'<p>RVM tuning review — EC score <b>{result.score:.4g}</b> '
@@ -408,8 +335,8 @@ def _build(run_dir: Path) -> tuple[str, dict[str, Any]]:
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
             + _gallery_section(r, str(run_dir), color))
-    summary = {"vehicle": r.scene.name, "score": result.score, "passed": result.passed,
-               "groups": _group_status(result), "thumb": shrink(color, INDEX_THUMB_PX)}
+    summary = _Summary(r.scene.name, result.score, result.passed, _group_status(result),
+                       shrink(color, INDEX_THUMB_PX))
     return page(f"RVM tuning review: {r.scene.name}", body), summary
 
 
@@ -450,14 +377,6 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
     return path
 
 
-def find_runs(runs_dir: str | Path) -> list[Path]:
-    """The run folders (those holding ``run.json``) directly inside ``runs_dir``, sorted."""
-    runs_dir = Path(runs_dir)
-    if not runs_dir.is_dir():
-        return []
-    return sorted(p for p in runs_dir.iterdir() if p.is_dir() and (p / "run.json").is_file())
-
-
 def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> Path:
     """Write a report for every run folder in ``runs_dir`` and an index page linking them.
 
@@ -483,7 +402,7 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> P
     runs_dir = Path(runs_dir)
     runs = find_runs(runs_dir)
     if not runs:
-        raise RvmsimError(f"{runs_dir}: no run folders (with run.json) here")
+        raise RvmsimError(f"{runs_dir}: no run folders (with run.sqlite) here")
     index = Path(out) if out is not None else runs_dir / "index.html"
     head = ("<tr><th>vehicle</th><th>RVM image</th><th>EC score</th>"
             + "".join(f"<th>{escape(g)}-x {escape(n)}</th>" for g, n in EC_GROUP_NAMES.items())
@@ -499,11 +418,11 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> P
                         f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{escape(err)}</td></tr>')
             continue
         href = quote(Path(os.path.relpath(rep, index.parent)).as_posix())
-        cells = "".join(f'<td class="{st}">{escape(st)}</td>' for st in s["groups"].values())
+        cells = "".join(f'<td class="{st}">{escape(st)}</td>' for st in s.groups.values())
         rows.append(
-            f'<tr><td>{escape(s["vehicle"])}<br><span class="muted">{escape(run.name)}</span></td>'
-            f'<td>{img_tag(s["thumb"], s["vehicle"])}</td>'
-            f'<td class="num {"pass" if s["passed"] else "fail"}">{s["score"]:.4g}</td>'
+            f'<tr><td>{escape(s.vehicle)}<br><span class="muted">{escape(run.name)}</span></td>'
+            f'<td>{img_tag(s.thumb, s.vehicle)}</td>'
+            f'<td class="num {"pass" if s.passed else "fail"}">{s.score:.4g}</td>'
             f'{cells}<td><a href="{escape(href)}">report</a></td></tr>')
     body = (f"<h1>RVM tuning review: {escape(runs_dir.name or str(runs_dir))}</h1>"
             f'<p class="muted">{len(runs)} runs in {escape(runs_dir)}; EC groups pass when every '
@@ -511,3 +430,20 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> P
             f'<section id="index"><table>{head}{"".join(rows)}</table></section>')
     _write(index, page(f"RVM tuning review: {runs_dir.name}", body))
     return index
+
+
+def write_any_report(path: str | Path, out: str | Path | None = None) -> Path:
+    """``rvmsim report PATH``: :func:`write_report` if ``path`` is a run folder, else
+    :func:`write_batch_report` if it holds run folders.
+
+    Raises
+    ------
+    RvmsimError
+        One line: neither.
+    """
+    path = Path(path)
+    if is_run_folder(path):
+        return write_report(path, out)
+    if find_runs(path):
+        return write_batch_report(path, out)
+    raise RvmsimError(f"{path}: not a run folder (no run.sqlite) and no run folders in it")

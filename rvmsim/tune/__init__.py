@@ -1,38 +1,82 @@
-"""Tuning: search space, strategies, the run loop and the run store."""
+"""Tuning: search space, strategies (one registry), objective, the search loop, the run model
+and store, and tuning runs in run folders.
+
+Modules: :mod:`~rvmsim.tune.space` (ParamRange, SearchSpace, default_space),
+:mod:`~rvmsim.tune.strategies` (Strategy, the built-ins, STRATEGIES),
+:mod:`~rvmsim.tune.objective` (score_vectors), :mod:`~rvmsim.tune.records` (the run model),
+:mod:`~rvmsim.tune.store` (RunStore), :mod:`~rvmsim.tune.config` (TuningConfig),
+:mod:`~rvmsim.tune.loop` (run_search, search_scene, the worker pool),
+:mod:`~rvmsim.tune.folder` (reading run folders), :mod:`~rvmsim.tune.run` (tune).
+"""
 
 from __future__ import annotations
 
-from .search import (
+from .space import (
     ParamRange,
     SearchSpace,
     default_space,
+)
+from .strategies import (
     Strategy,
     GridToRandom,
     CmaEs,
     RandomSearch,
     STRATEGIES,
-    run_search,
-    SearchOutcome,
+    register_strategy,
+    GridRandomSettings,
+    CmaesSettings,
+    RandomSettings,
+)
+from .config import (
+    TuningConfig,
+    load_tuning_config,
+    make_strategy,
+)
+from .records import (
+    RunStatus,
+    StopReason,
+    EcOutcome,
+    TrialRecord,
+    RunSettings,
+    RunState,
+    params_json,
+    ec_json,
+    ecs_from_json,
+    json_default,
+)
+from .objective import (
+    OBJECTIVE_FLOOR,
     ScoredBatch,
     score_vectors,
 )
 from .store import (
     SqliteStore,
     RunStore,
-    TrialRecord,
-    params_json,
-    ec_json,
-    json_default,
+    RUN_FORMAT,
 )
 from .loop import (
-    TuningConfig,
-    load_tuning_config,
-    make_strategy,
+    SearchOutcome,
+    run_search,
+    BatchEvaluator,
+    search_scene,
+    candidate_evaluator,
+)
+from .folder import (
+    open_run,
+    run_settings,
+    find_runs,
+    is_run_folder,
+    status_lines,
+    rank_text,
+    rank_params_text,
+)
+from .run import (
     tune,
     TuneResult,
     write_results,
-    tune_task,
-    portable_scene_doc,
+    DISPLAY_SIZE,
+    summary_lines,
+    remove_run,
 )
 
 __all__ = [
@@ -44,22 +88,45 @@ __all__ = [
     "CmaEs",
     "RandomSearch",
     "STRATEGIES",
-    "run_search",
-    "SearchOutcome",
+    "register_strategy",
+    "GridRandomSettings",
+    "CmaesSettings",
+    "RandomSettings",
+    "TuningConfig",
+    "load_tuning_config",
+    "make_strategy",
+    "RunStatus",
+    "StopReason",
+    "EcOutcome",
+    "TrialRecord",
+    "RunSettings",
+    "RunState",
+    "params_json",
+    "ec_json",
+    "ecs_from_json",
+    "json_default",
+    "OBJECTIVE_FLOOR",
     "ScoredBatch",
     "score_vectors",
     "SqliteStore",
     "RunStore",
-    "TrialRecord",
-    "params_json",
-    "ec_json",
-    "json_default",
-    "TuningConfig",
-    "load_tuning_config",
-    "make_strategy",
+    "RUN_FORMAT",
+    "SearchOutcome",
+    "run_search",
+    "BatchEvaluator",
+    "search_scene",
+    "candidate_evaluator",
+    "open_run",
+    "run_settings",
+    "find_runs",
+    "is_run_folder",
+    "status_lines",
+    "rank_text",
+    "rank_params_text",
     "tune",
     "TuneResult",
     "write_results",
-    "tune_task",
-    "portable_scene_doc",
+    "DISPLAY_SIZE",
+    "summary_lines",
+    "remove_run",
 ]

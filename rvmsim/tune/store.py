@@ -1,27 +1,45 @@
-"""Run store: every evaluated candidate of a tuning run, in one SQLite file.
+"""Run store: a tuning run's settings, state and every evaluated candidate, in one SQLite file.
 
 Trials are written a batch at a time in one transaction (WAL journal), so a run killed at
 any moment keeps every completed batch and nothing half-written; a resumed run reads them
 back.  Values are JSON text, never pickles.
 
-Tables: ``meta(key, value)`` (scene, config, strategy, seed, status, …) and
-``trials(idx, stage, params, score, objective, passed, ec)`` where ``params`` is the JSON of
-all 14 ISP parameters and ``ec`` maps each EC to ``[value, score, passed]``.
+Tables: ``meta(key, value)`` — the run's :class:`~rvmsim.tune.RunSettings` (``scene``,
+``scene_key``, ``vehicle``, ``strategy``, ``seed``, ``budget``, ``criteria_file``,
+``config``), its state (``status``, ``stopped``, ``total``) and ``format`` (2; runs of
+rvmsim 0.1 have no ``format`` and their settings in ``run.json`` only, see
+:mod:`rvmsim.tune.folder`) — and ``trials(idx, stage, params, score, objective, passed,
+ec)`` where ``params`` is the JSON of all 14 ISP parameters and ``ec`` maps each EC to
+``[value, score, passed]``.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import sqlite3
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from ..errors import RvmsimError
 from ..isp import IspParams
+from .records import (
+    RunSettings,
+    RunState,
+    RunStatus,
+    StopReason,
+    TrialRecord,
+    ec_json,
+    ecs_from_json,
+    json_default,
+    params_json,
+)
 
-__all__ = ["SqliteStore", "RunStore", "TrialRecord", "params_json", "ec_json", "json_default"]
+# params_json, ec_json and json_default live in .records (the stored forms of the run model);
+# they stay importable from here, where they were first.
+__all__ = ["SqliteStore", "RunStore", "RUN_FORMAT", "params_json", "ec_json", "json_default"]
+
+#: ``meta.format`` of the run stores this version writes.
+RUN_FORMAT = 2
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS trials (
@@ -35,42 +53,6 @@ CREATE TABLE IF NOT EXISTS trials (
 );
 CREATE INDEX IF NOT EXISTS trials_score ON trials (score DESC, idx);
 """
-
-
-@dataclass(frozen=True)
-class TrialRecord:
-    """One evaluated candidate."""
-
-    idx: int
-    stage: str
-    params: IspParams
-    score: float
-    objective: float
-    passed: bool
-    ec: dict[str, list[Any]]
-
-
-def params_json(p: IspParams) -> str:
-    """The ``params`` column: all 14 ISP parameters as a JSON object."""
-    return json.dumps({n: getattr(p, n) for n in IspParams.names()})
-
-
-def json_default(o: Any) -> Any:
-    """``json.dumps(..., default=json_default)``: numpy scalars (float32, integers) as Python
-    numbers.  (Python and float64 NaN never reach ``default``: json writes them itself.)"""
-    import numpy as np
-
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    raise TypeError(f"{type(o).__name__} is not JSON serializable")
-
-
-def ec_json(ids: Sequence[str], values: Sequence[float], scores: Sequence[float],
-            passed: Sequence[bool]) -> str:
-    """The ``ec`` column: each EC (``ids``, the criteria's order) as ``[value, score,
-    passed]``, the value ``null`` where it was not measured (NaN)."""
-    return json.dumps({e: [None if math.isnan(v) else v, s, ok]
-                       for e, v, s, ok in zip(ids, values, scores, passed)})
 
 
 class SqliteStore:
@@ -124,10 +106,10 @@ class RunStore(SqliteStore):
     def count(self) -> int:
         return int(self.db.execute("SELECT COUNT(*) FROM trials").fetchone()[0])
 
-    def _record(self, row: tuple) -> TrialRecord:
+    def _record(self, row: tuple[Any, ...]) -> TrialRecord:
         idx, stage, params, score, objective, passed, ec = row
         return TrialRecord(idx, stage, IspParams(**json.loads(params)), score, objective,
-                           bool(passed), json.loads(ec))
+                           bool(passed), ecs_from_json(ec))
 
     def trials(self, start: int = 0, stop: int | None = None) -> list[TrialRecord]:
         """Trials with ``start <= idx < stop``, in index order."""
@@ -137,6 +119,13 @@ class RunStore(SqliteStore):
             q += " AND idx < ?"
             args.append(stop)
         return [self._record(r) for r in self.db.execute(q + " ORDER BY idx", args)]
+
+    def replay(self) -> dict[int, tuple[float, float, IspParams]]:
+        """(EC score, objective, parameters) of every trial by index: what a resumed search
+        tells its strategy (the ECs are not read)."""
+        return {idx: (score, objective, IspParams(**json.loads(params)))
+                for idx, params, score, objective in self.db.execute(
+                    "SELECT idx, params, score, objective FROM trials ORDER BY idx")}
 
     def top(self, m: int, stage: str | None = None) -> list[TrialRecord]:
         """The ``m`` best trials (highest EC score, then objective, then earliest)."""
@@ -156,3 +145,75 @@ class RunStore(SqliteStore):
             best = max(best, score)
             out.append((idx, best, stage))
         return out
+
+    def scores(self) -> list[float]:
+        """Every trial's EC score, in index order."""
+        return [float(s) for (s,) in self.db.execute("SELECT score FROM trials ORDER BY idx")]
+
+    # ------------------------------------------------------------------ settings and state
+    def write_settings(self, settings: RunSettings) -> None:
+        """Record what the run is (once, when it starts, or when an old run is resumed)."""
+        self.set_meta(format=RUN_FORMAT, **settings.as_json())
+
+    def settings(self) -> RunSettings | None:
+        """The run's settings, or None for a run of rvmsim 0.1 (settings in run.json only).
+
+        Raises
+        ------
+        RvmsimError
+            One line: a store of a newer rvmsim, or unreadable settings.
+        """
+        meta = self.meta()
+        fmt = meta.get("format")
+        if fmt is None:
+            return None
+        if fmt != RUN_FORMAT:
+            raise RvmsimError(f"{self.path}: run format {fmt!r} is not {RUN_FORMAT}: written by "
+                              "another rvmsim version; use that version to read it")
+        try:
+            return RunSettings.from_json(meta)
+        except (KeyError, TypeError, ValueError) as err:
+            msg = f"{self.path}: unreadable run settings ({err}); start a new run"
+            raise RvmsimError(" ".join(msg.split())) from None
+
+    def set_state(self, status: RunStatus, stopped: StopReason | None = None,
+                  **extra: Any) -> None:
+        """Record the run's status (and why it stopped); ``extra``: ``strategy``, ``total``."""
+        self.set_meta(status=str(status), stopped=None if stopped is None else str(stopped),
+                      **extra)
+
+    def state(self) -> RunState:
+        """The run's state; also of a run of rvmsim 0.1, whose status was free text.
+
+        Raises
+        ------
+        RvmsimError
+            One line: no status recorded, or one this version does not know.
+        """
+        meta = self.meta()
+        text = meta.get("status")
+        total = meta.get("total")
+        strategy = str(meta.get("strategy", "?"))
+        total = None if total is None else int(total)
+        stopped = meta.get("stopped")
+        try:
+            if "format" in meta:
+                return RunState(RunStatus(str(text)), None if stopped is None else StopReason(stopped),
+                                strategy, total)
+            return _legacy_state(str(text), strategy, total)
+        except ValueError:
+            raise RvmsimError(f"{self.path}: unknown run status {text!r} (written by another "
+                              "rvmsim version?)") from None
+
+
+def _legacy_state(text: str, strategy: str, total: int | None) -> RunState:
+    """The state of a run of rvmsim 0.1 from its status text: ``running``, ``done``,
+    ``stopped (max-time)``, ``stopped (target-score)``,
+    ``interrupted (continue with --resume)``; ValueError for anything else."""
+    if text.startswith("interrupted"):
+        return RunState(RunStatus.INTERRUPTED, None, strategy, total)
+    if text.startswith("stopped (") and text.endswith(")"):
+        return RunState(RunStatus.DONE, StopReason(text[len("stopped ("):-1]), strategy, total)
+    status = RunStatus(text)
+    return RunState(status, StopReason.DONE if status is RunStatus.DONE else None, strategy,
+                    total)

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import Criteria, EcResult, evaluate
+from ..criteria import Criteria, EcResult
 from ..isp import IspParams, OutputSpec, process
 from ..render import FisheyeImages
 from .outputs import compare_with_pictures
@@ -75,12 +75,12 @@ def _rvm_images_and_ecs(capture: np.ndarray, synthetic: FisheyeImages,
     labels (the scene's when None) go through the ISP; the ECs are evaluated on both label
     images.
     """
-    # TODO(#13 merge): this is what rvmsim.pipeline's single evaluation function does
-    # (params -> RVM colour + labels -> ECs); call it here instead.
+    from ..pipeline import evaluate_params
+
     rvm_cap = process(capture, None, params, output)[0]
-    rvm_syn, lab_syn = process(synthetic.color, synthetic.labels, params, output)
-    lab_cap = lab_syn if corrected is None else process(None, corrected.labels, params, output)[1]
-    if rvm_cap is None or rvm_syn is None or lab_syn is None or lab_cap is None:
+    if rvm_cap is None:
         raise TypeError("process() returned no image for an input it was given")
-    return _RvmImages(rvm_cap, rvm_syn, lab_syn, evaluate(lab_syn, criteria),
-                      evaluate(lab_cap, criteria))
+    syn = evaluate_params(synthetic, params, output, criteria, annotate=False)
+    cap = syn if corrected is None else evaluate_params(corrected, params, output, criteria,
+                                                        annotate=False)
+    return _RvmImages(rvm_cap, syn.color, syn.labels, syn.ec, cap.ec)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import dataclasses
 import html
 import json
 import os
@@ -19,7 +20,7 @@ import pytest
 from rvmsim.errors import RvmsimError
 from rvmsim.report import EC_GROUP_NAMES, SECTION_IDS, write_batch_report, write_report
 
-from .conftest import SCENES
+from ..conftest import SCENES
 
 EVIL_NAME = 'Evil <script>alert(1)</script> & "Co"'
 EVIL_DESC = "notes: <img src=x onerror=alert(2)> & 'quoted'"
@@ -213,19 +214,26 @@ def test_batch_index_links_and_groups(runs, tmp_path):
         assert (other.parent / unquote(a["href"])).is_file()
 
 
+def _record_scene(run, scene) -> None:
+    """Point the run's recorded scene (in run.sqlite, the run's truth) at ``scene``."""
+    from rvmsim.tune import RunStore
+
+    store = RunStore(run / "run.sqlite")
+    store.write_settings(dataclasses.replace(store.settings(), scene=str(scene)))
+    store.close()
+
+
 def test_report_missing_scene_is_one_line_error(runs, tmp_path):
     run = tmp_path / "copy"
     shutil.copytree(runs["evil_run"], run)
-    info = json.loads((run / "run.json").read_text())
-    info["scene"] = str(tmp_path / "gone.yaml")
-    (run / "run.json").write_text(json.dumps(info))
+    _record_scene(run, tmp_path / "gone.yaml")
     with pytest.raises(RvmsimError) as err:
         write_report(run)
     assert "gone.yaml" in str(err.value) and "\n" not in str(err.value)
 
 
 def test_changed_scene_warns_in_the_report_and_blocks_resume(runs, tmp_path):
-    """run.json records the scene's fingerprint: a report of a run whose scene file has
+    """The run records the scene's fingerprint: a report of a run whose scene file has
     changed since says so, and --resume refuses to mix two scenes."""
     from rvmsim.tune import tune
 
@@ -233,9 +241,7 @@ def test_changed_scene_warns_in_the_report_and_blocks_resume(runs, tmp_path):
     scene.write_text(runs["scene"].read_text())
     run = tmp_path / "run"
     shutil.copytree(runs["evil_run"], run)
-    info = json.loads((run / "run.json").read_text())
-    info["scene"] = str(scene)
-    (run / "run.json").write_text(json.dumps(info))
+    _record_scene(run, scene)
     assert "scene file changed" not in write_report(run).read_text()
     scene.write_text(scene.read_text().replace("pitch_deg: 32.0", "pitch_deg: 31.0"))
     assert "scene file changed after this run" in write_report(run).read_text()

@@ -1,0 +1,154 @@
+"""The tuning config file (``rvmsim tune --config``): tuned parameters, ranges, strategy
+settings; and the strategy it describes (:func:`make_strategy`, through the registry)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from ..camera import FisheyeCamera
+from ..errors import InputFileError, RvmsimError, TuningConfigError
+from ..isp import IspParams, OutputSpec
+from .space import ParamRange, SearchSpace, default_space
+from .strategies import (
+    STRATEGIES,
+    CmaesSettings,
+    GridRandomSettings,
+    RandomSettings,
+    Strategy,
+)
+
+__all__ = ["TuningConfig", "load_tuning_config", "make_strategy"]
+
+
+class _Range(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    init: float | None = None
+    range: tuple[float, float] | None = None
+    step: Annotated[float, Field(gt=0)] | None = None
+    points: Annotated[int, Field(ge=1, le=99)] | None = None
+
+
+class _Output(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    size: tuple[Annotated[int, Field(ge=16, le=8192)], Annotated[int, Field(ge=16, le=8192)]] = (640, 360)
+    mirror: bool = True
+
+
+class TuningConfig(BaseModel):
+    """A tuning config file (YAML); every key optional.
+
+    ``tuned``: the parameters to search (default: the paper's nine); ``parameters``: per
+    parameter ``init``, ``range`` and coarse ``step`` (default: fitted to the camera, see
+    :func:`rvmsim.tune.default_space`); ``fixed``: values of untuned parameters;
+    ``output``: the RVM image the ECs are measured on during tuning; one section per
+    registered strategy (``grid_random``, ``cmaes``, ``random``: each strategy's
+    ``section`` and ``Settings``, which reject keys the strategy does not use).
+    """
+
+    model_config = ConfigDict(extra="forbid")
+    tuned: list[str] | None = None
+    parameters: dict[str, _Range] = {}
+    fixed: dict[str, float] = {}
+    output: _Output = _Output()
+    top_m: Annotated[int, Field(ge=1, le=1000)] = 10
+    #: Candidates evaluated (and stored in one transaction) at a time.
+    batch: Annotated[int, Field(ge=1, le=100000)] = 1024
+    # The registered strategies' sections (a test checks they match the registry).
+    grid_random: GridRandomSettings = GridRandomSettings()
+    cmaes: CmaesSettings = CmaesSettings()
+    random: RandomSettings = RandomSettings()
+
+    def space(self, camera: FisheyeCamera) -> SearchSpace:
+        """The search space on ``camera``: the default one with this config's changes."""
+        names = tuple(self.tuned) if self.tuned is not None else None
+        base_space = default_space(camera) if names is None else default_space(camera, names)
+        ranges = []
+        for r in base_space.ranges:
+            o = self.parameters.get(r.name)
+            if o is None:
+                ranges.append(r)
+                continue
+            lo, hi = o.range if o.range is not None else (r.low, r.high)
+            init = o.init if o.init is not None else min(max(r.init, lo), hi)
+            ranges.append(ParamRange(r.name, init, lo, hi, o.step or r.step, o.points or r.points))
+        base = IspParams().replace(**self.fixed) if self.fixed else IspParams()
+        return SearchSpace(tuple(ranges), base)
+
+    def output_spec(self) -> OutputSpec:
+        """The RVM image the ECs are measured on while tuning."""
+        return OutputSpec(self.output.size[0], self.output.size[1], self.output.mirror)
+
+    def strategy_settings(self, name: str) -> BaseModel:
+        """The settings of registered strategy ``name``: its section of this config, or the
+        defaults of its ``Settings`` for a strategy without a section (``section = ""``: a
+        strategy registered by a user, which a config file cannot set up)."""
+        cls = STRATEGIES[name]
+        if not cls.section:
+            return cls.Settings()
+        settings = getattr(self, cls.section, None)
+        if not isinstance(settings, cls.Settings):
+            raise RvmsimError(f"strategy {name!r}: section {cls.section!r} is not a "
+                              f"{cls.Settings.__name__} of the tuning config")
+        return settings
+
+
+def load_tuning_config(path: str | Path | None) -> TuningConfig:
+    """Read and validate a tuning config file (None: the defaults).
+
+    Raises
+    ------
+    TuningConfigError
+        One line naming the file and the key: a YAML error, an unknown or out-of-range key
+        (also a strategy setting the strategy does not use, such as ``random.sigma0``), or
+        a name that is not an ISP parameter.
+    """
+    if path is None:
+        return TuningConfig()
+    path = Path(path)
+    text = read_text(path, TuningConfigError)
+    data = parse_yaml(text, str(path), TuningConfigError) or {}
+    if not isinstance(data, dict):
+        raise TuningConfigError(str(path), "", "a tuning config must be a YAML mapping")
+    try:
+        cfg = TuningConfig.model_validate(data)
+    except ValidationError as err:
+        bad = input_error_from_validation(err, str(path), key_lines(text), TuningConfigError)
+        raise _unused_setting(bad) from None
+    unknown = set(cfg.tuned or []) | set(cfg.parameters) | set(cfg.fixed)
+    unknown -= set(IspParams.names())
+    if unknown:
+        raise TuningConfigError(str(path), sorted(unknown)[0], "not an ISP parameter")
+    return cfg
+
+
+def _unused_setting(err: InputFileError) -> InputFileError:
+    """An unknown key inside a strategy's section, said as such (``random.sigma0``: the
+    random strategy has no step size); any other error as it is."""
+    section, _, setting = err.key.partition(".")
+    by_section = {cls.section: cls for cls in STRATEGIES.values()}
+    cls = by_section.get(section)
+    if cls is None or not setting or "." in setting or err.message != "unknown key":
+        return err
+    return TuningConfigError(err.file, err.key, f"not a setting of the {cls.name} strategy "
+                             f"(its settings: {', '.join(cls.Settings.model_fields)})", err.line)
+
+
+def make_strategy(name: str, space: SearchSpace, cfg: TuningConfig, seed: int,
+                  budget: int | None = None) -> Strategy:
+    """The registered strategy ``name`` on ``space``, set up by the config's section.
+
+    Parameters
+    ----------
+    budget : int, optional
+        ``--budget``: evaluations for ``cmaes``/``random``, fine trials per seed (T) for
+        ``grid-random``; replaces the config's value.
+    """
+    cls = STRATEGIES.get(name)
+    if cls is None:
+        raise RvmsimError(f"unknown strategy {name!r} (known: {', '.join(STRATEGIES)})")
+    return cls.from_settings(space, cfg.strategy_settings(name), seed=seed, budget=budget,
+                             batch=cfg.batch)

@@ -1,0 +1,160 @@
+"""The run model: typed, frozen records of a tuning run and their stored (JSON) forms.
+
+A run is its settings (:class:`RunSettings`: what was run), its state (:class:`RunState`:
+:class:`RunStatus` and, once it has stopped, a :class:`StopReason`) and its trials
+(:class:`TrialRecord`, one per evaluated candidate, each EC's outcome an :class:`EcOutcome`).
+:class:`~rvmsim.tune.RunStore` keeps all three in ``run.sqlite``, the single source of truth;
+``run.json`` is a human-readable export of the settings.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any, Mapping, Sequence
+
+from ..isp import IspParams
+from .config import TuningConfig
+
+__all__ = ["RunStatus", "StopReason", "EcOutcome", "TrialRecord", "RunSettings", "RunState",
+           "params_json", "ec_json", "ecs_from_json", "json_default"]
+
+
+class RunStatus(StrEnum):
+    """Where a run is: still running, interrupted (Ctrl-C; resumable), done (the strategy
+    finished or a stop condition was met), or failed (an error ended it)."""
+
+    RUNNING = "running"
+    INTERRUPTED = "interrupted"
+    DONE = "done"
+    FAILED = "failed"
+
+
+class StopReason(StrEnum):
+    """Why a finished search stopped: the strategy ran out of candidates (``done``), the
+    ``max_time`` passed (resumable), or the ``target_score`` was reached."""
+
+    DONE = "done"
+    MAX_TIME = "max-time"
+    TARGET_SCORE = "target-score"
+
+
+@dataclass(frozen=True)
+class EcOutcome:
+    """One EC of one candidate: the measured value (None where the measured object is not
+    in the image), its sigmoid score in [0, 1] and whether it is in the acceptable range."""
+
+    value: float | None
+    score: float
+    passed: bool
+
+    def as_dict(self) -> dict[str, Any]:
+        """``{"value", "score", "passed"}`` (JSON-ready)."""
+        return {"value": self.value, "score": self.score, "passed": self.passed}
+
+
+@dataclass(frozen=True)
+class TrialRecord:
+    """One evaluated candidate: its index in the run, the search stage that proposed it,
+    all 14 ISP parameters, the EC score, the objective the strategy maximised, whether every
+    enabled EC passes, and each EC's outcome (keyed by EC id, in the criteria's order)."""
+
+    idx: int
+    stage: str
+    params: IspParams
+    score: float
+    objective: float
+    passed: bool
+    ecs: Mapping[str, EcOutcome]
+
+    def failing(self) -> list[str]:
+        """Ids of the ECs that do not pass, in order."""
+        return [ec for ec, o in self.ecs.items() if not o.passed]
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """What a run is: everything ``--resume`` needs to continue it exactly.
+
+    ``scene`` and ``criteria_file`` are the files as recorded (absolute paths);
+    ``scene_key`` is the scene's fingerprint when the run started
+    (:func:`rvmsim.render.scene_key`); ``budget`` the ``--budget`` given (None: the
+    config's)."""
+
+    scene: str
+    scene_key: str | None
+    vehicle: str
+    strategy: str
+    seed: int
+    budget: int | None
+    criteria_file: str | None
+    config: TuningConfig
+
+    def as_json(self) -> dict[str, Any]:
+        """The settings as ``run.json`` holds them (and ``run.sqlite``'s meta table)."""
+        return {"scene": self.scene, "scene_key": self.scene_key, "vehicle": self.vehicle,
+                "strategy": self.strategy, "seed": self.seed, "budget": self.budget,
+                "criteria_file": self.criteria_file,
+                "config": self.config.model_dump(mode="json")}
+
+    @classmethod
+    def from_json(cls, doc: Mapping[str, Any]) -> RunSettings:
+        """Inverse of :meth:`as_json`; raises KeyError, TypeError or ValueError (pydantic's
+        ValidationError) for a document that is not one."""
+        return cls(str(doc["scene"]), doc.get("scene_key"), str(doc.get("vehicle", "")),
+                   str(doc["strategy"]), int(doc["seed"]),
+                   None if doc.get("budget") is None else int(doc["budget"]),
+                   doc.get("criteria_file"), TuningConfig.model_validate(doc["config"]))
+
+
+@dataclass(frozen=True)
+class RunState:
+    """A run's status, why it stopped (once it has), its strategy and the evaluations it
+    will make (None when the strategy does not know in advance)."""
+
+    status: RunStatus
+    stopped: StopReason | None
+    strategy: str
+    total: int | None
+
+    @property
+    def text(self) -> str:
+        """The status as ``rvmsim status`` shows it: ``running``, ``done``,
+        ``stopped (max-time)``, ``interrupted (continue with --resume)``, ``failed``."""
+        if self.status is RunStatus.INTERRUPTED:
+            return "interrupted (continue with --resume)"
+        if self.status is RunStatus.DONE and self.stopped not in (None, StopReason.DONE):
+            return f"stopped ({self.stopped})"
+        return str(self.status)
+
+
+# ---------------------------------------------------------------------------- stored forms
+def params_json(p: IspParams) -> str:
+    """The ``params`` column: all 14 ISP parameters as a JSON object."""
+    return json.dumps({n: getattr(p, n) for n in IspParams.names()})
+
+
+def json_default(o: Any) -> Any:
+    """``json.dumps(..., default=json_default)``: numpy scalars (float32, integers) as Python
+    numbers.  (Python and float64 NaN never reach ``default``: json writes them itself.)"""
+    import numpy as np
+
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    raise TypeError(f"{type(o).__name__} is not JSON serializable")
+
+
+def ec_json(ids: Sequence[str], values: Sequence[float], scores: Sequence[float],
+            passed: Sequence[bool]) -> str:
+    """The ``ec`` column: each EC (``ids``, the criteria's order) as ``[value, score,
+    passed]``, the value ``null`` where it was not measured (NaN)."""
+    return json.dumps({e: [None if math.isnan(v) else v, s, ok]
+                       for e, v, s, ok in zip(ids, values, scores, passed)})
+
+
+def ecs_from_json(text: str) -> dict[str, EcOutcome]:
+    """Inverse of :func:`ec_json`."""
+    return {ec: EcOutcome(None if v is None else float(v), float(s), bool(ok))
+            for ec, (v, s, ok) in json.loads(text).items()}

@@ -1,0 +1,234 @@
+"""Tune one vehicle: render once (cached), search, store every candidate, write the results.
+
+A run lives in a folder: ``run.sqlite`` (settings, state and every candidate, see
+:mod:`rvmsim.tune.store`), ``run.json`` (the settings, for people), and at the end
+``top/rank_K.yaml`` (the top-M parameter sets) and ``best/`` (the best candidate's RVM
+image, annotated EC image and EC table).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable
+
+from ..errors import RvmsimError
+from ..isp import OutputSpec, params_to_dict
+from .config import TuningConfig, make_strategy
+from .folder import RUN_DB, RUN_JSON, rank_text, run_settings
+from .loop import SearchOutcome, search_scene
+from .records import RunSettings, RunStatus
+from .store import RunStore
+from .strategies import GridToRandom
+
+if TYPE_CHECKING:
+    from ..criteria import Criteria
+    from ..render import FisheyeImages
+    from ..scene import Scene
+
+__all__ = ["tune", "TuneResult", "write_results",
+           "DISPLAY_SIZE", "summary_lines", "remove_run"]
+
+#: Size of the RVM display image written for the best candidate (the ECs are measured at the
+#: tuning config's ``output`` size).
+DISPLAY_SIZE = (1280, 720)
+
+
+@dataclass(frozen=True)
+class TuneResult:
+    """A finished (or stopped) tuning run: its folder, what the search did, and the
+    evaluations the strategy planned (None: unknown in advance)."""
+
+    run_dir: Path
+    outcome: SearchOutcome
+    total: int | None
+
+
+def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | Path | None,
+             strategy: str, config: TuningConfig | None, criteria: Criteria | None,
+             criteria_file: str | Path | None, seed: int,
+             budget: int | None) -> tuple[RunSettings, Scene, Criteria]:
+    """The settings, scene and criteria of a new run in ``run_dir`` (nothing written yet)."""
+    from ..criteria import load_criteria
+    from ..render import scene_key
+    from ..scene import Scene, load_scene
+
+    if (run_dir / RUN_DB).exists():
+        raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it")
+    recorded: str | Path | None
+    if isinstance(scene, Scene):
+        sc, recorded = scene, scene_file or scene.source
+    else:
+        recorded = scene if scene is not None else scene_file
+        if recorded is None:
+            raise RvmsimError("tune: give a scene file, or resume a run")
+        sc = load_scene(recorded)
+    crit = criteria if criteria is not None else load_criteria(criteria_file)
+    settings = RunSettings(
+        scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
+        strategy=strategy, seed=seed, budget=budget,
+        criteria_file=None if criteria_file is None else str(Path(criteria_file).resolve()),
+        config=config or TuningConfig())
+    return settings, sc, crit
+
+
+def _resumed_run(run_dir: Path) -> tuple[RunSettings, Scene, Criteria]:
+    """The settings, scene and criteria of the run to resume in ``run_dir``, checking that
+    its scene has not changed since."""
+    from ..criteria import load_criteria
+    from ..render import same_scene
+    from ..scene import load_scene
+
+    if not (run_dir / RUN_DB).is_file():
+        raise RvmsimError(f"{run_dir}: no run to resume ({RUN_DB} missing)")
+    store = RunStore(run_dir / RUN_DB)
+    try:
+        settings = run_settings(run_dir, store)
+    finally:
+        store.close()
+    sc = load_scene(settings.scene)
+    if settings.scene_key is not None and not same_scene(settings.scene_key, sc, settings.scene):
+        raise RvmsimError(f"{settings.scene}: the scene changed since this run started; "
+                          "resuming would mix two scenes (start a new run)")
+    return settings, sc, load_criteria(settings.criteria_file)
+
+
+def _progress_bar(on: bool, total: int | None, vehicle: str,
+                  position: int) -> tuple[Any, Callable[[int, float, str], None]]:
+    """A tqdm bar (or None when ``on`` is false) and the search's ``on_batch`` updating it."""
+    bar = None
+    if on:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, unit="eval", desc=f"tune {vehicle}", smoothing=0.1,
+                   position=position, leave=position == 0)
+
+    def on_batch(done: int, best: float, stage: str) -> None:
+        if bar is not None:
+            bar.update(done - bar.n)
+            bar.set_postfix_str(f"best {best:.4g} [{stage}]")
+
+    return bar, on_batch
+
+
+def tune(
+    scene: str | Path | Scene | None,
+    run_dir: str | Path,
+    *,
+    scene_file: str | Path | None = None,
+    strategy: str = GridToRandom.name,
+    config: TuningConfig | None = None,
+    criteria: Criteria | None = None,
+    criteria_file: str | Path | None = None,
+    seed: int = 0,
+    workers: int = 1,
+    budget: int | None = None,
+    max_time: float | None = None,
+    target_score: float | None = None,
+    resume: bool = False,
+    progress: bool = False,
+    progress_position: int = 0,
+) -> TuneResult:
+    """Tune the ISP for one scene; see the module docstring for what is written.
+
+    Parameters
+    ----------
+    scene : path or Scene
+        The scene file, or a loaded :class:`~rvmsim.scene.Scene` (then ``scene_file`` is the
+        path recorded for it, by default its ``source``).  Ignored with ``resume``.
+    criteria, criteria_file
+        The criteria (default: loaded from ``criteria_file``, default the paper's); the file
+        is recorded, for ``--resume`` and the report.
+    budget : int, optional
+        Evaluations for ``cmaes``/``random``; for ``grid-random`` the fine trials per seed
+        (T), replacing the config's value (a shortened protocol).
+    resume : bool
+        Continue the run in ``run_dir`` with its own settings (the other arguments that
+        define the run are taken from its store).
+    progress : bool
+        Show a progress bar (evaluations/s, best EC score, ETA).
+    progress_position : int
+        Line of that bar (``rvmsim batch`` puts its overall bar above it).
+    """
+    from ..render import cached_render
+
+    run_dir = Path(run_dir)
+    settings, sc, crit = (_resumed_run(run_dir) if resume else _new_run(
+        run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget))
+    images, _ = cached_render(sc, progress=progress)
+    cfg = settings.config
+    strat = make_strategy(settings.strategy, cfg.space(images.camera), cfg, settings.seed,
+                          settings.budget)
+    store = RunStore(run_dir / RUN_DB)  # makes the folder
+    if not resume:
+        (run_dir / RUN_JSON).write_text(json.dumps(settings.as_json(), indent=2))
+    # state first: `rvmsim status` reads a store without settings as one of rvmsim 0.1
+    store.set_state(RunStatus.RUNNING, strategy=settings.strategy, total=strat.total())
+    store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
+    bar, on_batch = _progress_bar(progress, strat.total(), sc.name, progress_position)
+    try:
+        outcome = search_scene(images, config=cfg, criteria=crit, strategy=strat, store=store,
+                               workers=workers, max_time=max_time, target_score=target_score,
+                               on_batch=on_batch)
+    except KeyboardInterrupt:
+        store.set_state(RunStatus.INTERRUPTED)
+        store.close()
+        raise
+    except Exception:  # recorded, then passed on as it is
+        store.set_state(RunStatus.FAILED)
+        store.close()
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    store.set_state(RunStatus.DONE, outcome.stopped)
+    write_results(run_dir, store, sc, images, cfg, crit)
+    store.close()
+    return TuneResult(run_dir, outcome, strat.total())
+
+
+def summary_lines(result: TuneResult) -> list[str]:
+    """What ``rvmsim tune`` prints at the end: the search's counts and stop reason, and the
+    best candidate's EC table (as ``best/ec_table.txt`` holds it)."""
+    o, best = result.outcome, result.outcome.best
+    if best is None:
+        return ["no trials"]
+    return [f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
+            f"{o.seconds:.1f} s ({o.stopped}); best EC score {best.score:.4g} (trial {best.idx})",
+            (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
+
+
+def remove_run(run_dir: str | Path) -> None:
+    """Delete the run in ``run_dir`` (its store and run.json; ``--force``), so that a new
+    one can start there; ``top/`` and ``best/`` are overwritten by the new run."""
+    run_dir = Path(run_dir)
+    for name in (RUN_DB, f"{RUN_DB}-wal", f"{RUN_DB}-shm", RUN_JSON):
+        (run_dir / name).unlink(missing_ok=True)
+
+
+def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeImages,
+                  config: TuningConfig, criteria: Criteria) -> None:
+    """top/rank_K.yaml for the top-M, and best/: RVM image (tuning size and display size),
+    annotated ECs, EC table."""
+    from .._io import write_png
+    from ..pipeline import evaluate_params, rvm_color, write_frame
+
+    top = store.top(config.top_m)
+    if not top:
+        return
+    out = config.output_spec()
+    (run_dir / "top").mkdir(parents=True, exist_ok=True)
+    for k, rec in enumerate(top, start=1):
+        (run_dir / "top" / f"rank_{k}.yaml").write_text(rank_text(rec, k, out, scene.name))
+    best = top[0]
+    frame = evaluate_params(images, best.params, out, criteria)
+    write_frame(frame, run_dir / "best")
+    (run_dir / "best" / "ec.json").write_text(json.dumps(
+        {"vehicle": scene.name, "trial": best.idx, **frame.ec.as_dict(),
+         "isp": params_to_dict(best.params, out)}, indent=2))
+    (run_dir / "best" / "ec_table.txt").write_text(frame.ec.table() + "\n")
+    # The same view at the display's size (the view is defined in normalised coordinates, so
+    # only the pixel count changes; aspect ratios differing from 16:9 crop or extend it).
+    display = OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], out.mirror)
+    write_png(run_dir / "best" / "rvm_display.png", rvm_color(images, best.params, display))

@@ -1,0 +1,75 @@
+"""The tuning config: validation with one-line errors naming the key, the strategy sections
+the registry names, and the strategies it sets up."""
+
+from __future__ import annotations
+
+import pytest
+
+from rvmsim.errors import RvmsimError, TuningConfigError
+from rvmsim.tune import (
+    STRATEGIES,
+    CmaEs,
+    GridToRandom,
+    RandomSearch,
+    TuningConfig,
+    load_tuning_config,
+    make_strategy,
+)
+
+from ..conftest import small_render
+
+
+def _space():
+    return TuningConfig(tuned=["zoom", "adv_v_shift"]).space(small_render("a").camera)
+
+
+def test_every_registered_strategy_has_its_config_section():
+    assert list(STRATEGIES) == ["grid-random", "cmaes", "random"]
+    for name, cls in STRATEGIES.items():
+        assert cls.name == name and cls.summary
+        field = TuningConfig.model_fields[cls.section]
+        assert field.annotation is cls.Settings
+        assert isinstance(TuningConfig().strategy_settings(name), cls.Settings)
+        assert isinstance(make_strategy(name, _space(), TuningConfig(), 0), cls)
+
+
+def test_a_setting_the_strategy_does_not_use_is_rejected(tmp_path):
+    """`random.sigma0` was accepted and ignored: the random strategy has no step size."""
+    path = tmp_path / "t.yaml"
+    path.write_text("batch: 64\nrandom:\n  budget: 500\n  sigma0: 0.2\n")
+    with pytest.raises(TuningConfigError) as err:
+        load_tuning_config(path)
+    e = err.value
+    assert (e.file, e.key, e.line) == (str(path), "random.sigma0", 4)
+    assert "not a setting of the random strategy (its settings: budget)" in str(e)
+    assert "\n" not in str(e)
+    path.write_text("cmaes: {sigma0: 0.2, popsize: 8}\n")
+    with pytest.raises(TuningConfigError, match=r"cmaes\.popsize: not a setting of the cmaes "
+                                                r"strategy \(its settings: budget, sigma0\)"):
+        load_tuning_config(path)
+    # Other errors keep their messages.
+    path.write_text("random: {budget: 0}\n")
+    with pytest.raises(TuningConfigError, match=r"random\.budget: .*greater than or equal"):
+        load_tuning_config(path)
+    path.write_text("bogus: 1\n")
+    with pytest.raises(TuningConfigError, match="bogus: unknown key"):
+        load_tuning_config(path)
+
+
+def test_sections_set_up_their_strategies(tmp_path):
+    path = tmp_path / "t.yaml"
+    path.write_text("batch: 32\ngrid_random: {top_n: 3, trials: 50}\ncmaes: {budget: 90, "
+                    "sigma0: 0.15}\nrandom: {budget: 70}\n")
+    cfg = load_tuning_config(path)
+    space = _space()
+    g = make_strategy("grid-random", space, cfg, 4)
+    assert isinstance(g, GridToRandom) and (g.top_n, g.trials, g.batch, g.seed) == (3, 50, 32, 4)
+    assert make_strategy("grid-random", space, cfg, 4, budget=7).trials == 7  # --budget is T
+    c = make_strategy("cmaes", space, cfg, 1)
+    assert isinstance(c, CmaEs) and (c.budget, c.sigma0) == (90, 0.15)
+    assert make_strategy("cmaes", space, cfg, 1, budget=40).budget == 40
+    r = make_strategy("random", space, cfg, 2)
+    assert isinstance(r, RandomSearch) and (r.budget, r.batch) == (70, 32)
+    with pytest.raises(RvmsimError, match=r"unknown strategy 'annealing' \(known: grid-random, "
+                                          r"cmaes, random\)"):
+        make_strategy("annealing", space, cfg, 0)

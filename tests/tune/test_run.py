@@ -1,0 +1,209 @@
+"""Tuning runs in run folders: resume after kill -9 and Ctrl-C gives the unbroken result; a
+scene object or a cluster task records the paths it is given; failures are recorded; run
+folders of rvmsim 0.1 are read by status, select, report and --resume, or refused with what
+to do."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import pytest
+import yaml
+
+from rvmsim.batch import portable_scene_doc, tune_task
+from rvmsim.tune import (
+    STRATEGIES,
+    RunStatus,
+    RunStore,
+    Strategy,
+    StopReason,
+    TuningConfig,
+    register_strategy,
+    run_settings,
+    status_lines,
+    tune,
+)
+
+from ..conftest import SCENES
+from .common import make_legacy_run
+from .conftest import CONFIG, top_of
+
+def test_the_store_holds_the_settings_run_json_exports_them(clean):
+    store = RunStore(clean / "run.sqlite")
+    settings = store.settings()
+    state = store.state()
+    store.close()
+    assert settings is not None and settings.scene == str((SCENES / "vehicle_a.yaml").resolve())
+    assert (settings.strategy, settings.seed, settings.budget) == ("random", 2, 60)
+    assert settings.config == TuningConfig.model_validate(CONFIG)
+    assert (state.status, state.stopped, state.total) == (RunStatus.DONE, StopReason.DONE, 60)
+    assert json.loads((clean / "run.json").read_text()) == settings.as_json()
+
+
+def test_a_scene_object_and_a_task_record_the_paths_they_are_given(clean, tmp_path):
+    """tune() takes a loaded Scene with the path to record; tune_task builds its scene
+    from the portable document (no temporary scene file) and records the submitter's path."""
+    from rvmsim.scene import load_scene
+
+    path = SCENES / "vehicle_a.yaml"
+    run = tmp_path / "obj"
+    tune(load_scene(path), run, scene_file=path, strategy="random", budget=60, seed=2,
+         config=TuningConfig.model_validate(CONFIG))
+    assert top_of(run) == top_of(clean)
+    assert json.loads((run / "run.json").read_text()) == json.loads((clean / "run.json").read_text())
+    res = tune_task({"scene": portable_scene_doc(path), "config": CONFIG, "strategy": "random",
+                     "seed": 2, "budget": 60, "scene_file": str(path)})
+    assert "error" not in res and res["evaluated"] == 60
+    task_run = tmp_path / "task"
+    for rel, data in res["files"].items():
+        (task_run / rel).parent.mkdir(parents=True, exist_ok=True)
+        (task_run / rel).write_bytes(data)
+    assert top_of(task_run) == top_of(clean)
+    store = RunStore(task_run / "run.sqlite")
+    assert store.settings() == run_settings(clean, RunStore(clean / "run.sqlite"))
+    store.close()
+    assert (task_run / "best" / "ec_annotated.png").is_file()
+
+
+class _FailsAfterOneBatch(Strategy):
+    name = "fails-after-one-batch"
+
+    @classmethod
+    def from_settings(cls, space, settings, *, seed, budget, batch):
+        return cls(space, seed=seed)
+
+    def batches(self):
+        yield "first", [(self.space.low + self.space.high) / 2] * 5
+        raise ValueError("this strategy gives up")
+
+
+def test_a_failing_search_is_recorded_as_failed(cache, tmp_path):
+    register_strategy(_FailsAfterOneBatch)
+    try:
+        with pytest.raises(ValueError, match="gives up"):
+            tune(SCENES / "vehicle_a.yaml", tmp_path / "r", strategy="fails-after-one-batch",
+                 config=TuningConfig.model_validate(CONFIG))
+    finally:
+        del STRATEGIES["fails-after-one-batch"]
+    store = RunStore(tmp_path / "r" / "run.sqlite")
+    assert store.state().status is RunStatus.FAILED and store.count() == 5
+    store.close()
+    assert status_lines(tmp_path / "r")[0].endswith(": failed, strategy fails-after-one-batch, "
+                                                    "5 evaluations")
+
+
+def test_an_interrupted_old_run_resumes_to_the_unbroken_result(clean, tmp_path):
+    old = make_legacy_run(clean, tmp_path / "old", keep=20,
+                          status="interrupted (continue with --resume)")
+    assert "interrupted (continue with --resume), strategy random, 20 / 60" in status_lines(old)[0]
+    res = tune(None, old, resume=True)
+    assert (res.outcome.replayed, res.outcome.evaluated) == (20, 40)
+    assert top_of(old) == top_of(clean)
+    store = RunStore(old / "run.sqlite")
+    # resumed, it is a run of this version: settings and state in its store
+    assert store.settings() == run_settings(clean, RunStore(clean / "run.sqlite"))
+    assert store.state().status is RunStatus.DONE
+    store.close()
+
+
+def test_resume_after_kill_gives_the_clean_result(tmp_path):
+    """A real `rvmsim tune` subprocess is killed with SIGKILL mid-run, resumed, and ends with
+    exactly the top-M of an uninterrupted run."""
+    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    cfg = tmp_path / "tune.yaml"
+    cfg.write_text(yaml.safe_dump({
+        "tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,
+        "output": {"size": [320, 180]}, "grid_random": {"top_n": 2, "trials": 3000},
+    }))
+    scene = str(SCENES / "vehicle_d.yaml")
+
+    def tune(out, *extra):
+        return [sys.executable, "-m", "rvmsim", "tune", *extra, "--no-progress",
+                "--workers", "1", *( [scene, "--out", str(out), "--config", str(cfg)]
+                                     if "--resume" not in extra else [])]
+
+    clean = subprocess.run(tune(tmp_path / "clean"), env=env, capture_output=True, text=True,
+                           timeout=600)
+    assert clean.returncode == 0, clean.stderr
+    run = tmp_path / "killed"
+    proc = subprocess.Popen(tune(run), env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    db = run / "run.sqlite"
+    deadline = time.time() + 300
+    count = 0
+    while time.time() < deadline:
+        if db.exists():
+            try:
+                count = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
+            except sqlite3.Error:
+                count = 0
+            if count >= 200:
+                break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    stored = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
+    assert 200 <= stored < 81 + 6000, stored  # killed mid-run, completed batches kept
+    assert stored % 40 in (0, 81 % 40)  # whole batches only
+    resumed = subprocess.run(tune(None, "--resume", str(run)), env=env, capture_output=True,
+                             text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "replayed" in resumed.stdout
+
+    def top(path):
+        s = RunStore(path / "run.sqlite")
+        t = [(r.idx, r.params, r.score) for r in s.top(5)]
+        n = s.count()
+        s.close()
+        return t, n
+
+    assert top(run) == top(tmp_path / "clean")
+    for k in range(1, 6):
+        assert (run / "top" / f"rank_{k}.yaml").is_file()
+    doc = json.loads((run / "best" / "ec.json").read_text())
+    assert doc["ec_score"] == pytest.approx(top(run)[0][0][2])
+
+
+def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
+    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    cfg = tmp_path / "tune.yaml"
+    cfg.write_text(yaml.safe_dump({"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40,
+                                   "output": {"size": [320, 180]},
+                                   "grid_random": {"top_n": 2, "trials": 6000}}))
+    run = tmp_path / "run"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rvmsim", "tune", str(SCENES / "vehicle_a.yaml"), "--out",
+         str(run), "--config", str(cfg), "--workers", "1", "--no-progress"],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        # a shell's background job ignores SIGINT, and children inherit that: restore it
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    db = run / "run.sqlite"
+    deadline = time.time() + 300
+    while time.time() < deadline:
+        if db.exists():
+            try:
+                if sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0] >= 120:
+                    break
+            except sqlite3.Error:
+                pass
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err
+    store = RunStore(db)
+    assert store.state().status is RunStatus.INTERRUPTED and 120 <= store.count() < 12081
+    assert store.state().text == "interrupted (continue with --resume)"
+    store.close()
+    res = subprocess.run([sys.executable, "-m", "rvmsim", "tune", "--resume", str(run),
+                          "--workers", "1", "--no-progress"], env=env, capture_output=True,
+                         text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    store = RunStore(db)
+    assert store.count() == 81 + 12000 and store.state().status is RunStatus.DONE
+    store.close()
