@@ -61,14 +61,15 @@ class LocalExecutor(Executor):
             for key, arg in items.items():
                 yield key, fn(arg)
             return
-        import multiprocessing as mp
-        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+        from concurrent.futures import FIRST_COMPLETED, wait
         from concurrent.futures.process import BrokenProcessPool
+
+        from .._procs import spawn_pool, stop_pool
 
         todo = dict(items)
         rebuilds = 0
         while todo:
-            pool = ProcessPoolExecutor(self.workers, mp_context=mp.get_context("spawn"))
+            pool = spawn_pool(self.workers)
             futures = {pool.submit(fn, arg): key for key, arg in todo.items()}
             broken = False
             try:
@@ -87,12 +88,10 @@ class LocalExecutor(Executor):
                     if broken:
                         break
             except BaseException:  # Ctrl-C, or the caller stopped: stop the workers now
-                for proc in list((getattr(pool, "_processes", None) or {}).values()):
-                    proc.terminate()
                 broken = True
                 raise
             finally:
-                pool.shutdown(wait=not broken, cancel_futures=True)
+                stop_pool(pool, now=broken)
             if broken:
                 rebuilds += 1
                 if rebuilds > MAX_POOL_REBUILDS:

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import multiprocessing as mp
 import time
 from dataclasses import dataclass
-from multiprocessing.pool import Pool
+from concurrent.futures import ProcessPoolExecutor
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
+from .._procs import spawn_pool, stop_pool
 from ..criteria import CandidateEvaluator, Criteria
 from ..errors import RvmsimError
 from .config import TuningConfig, make_strategy
@@ -69,31 +69,27 @@ class BatchEvaluator:
     1.2 MB).  Workers also score and serialise their candidates (:func:`score_vectors`), so
     the main process only stores them and steers the search.
 
-    Workers are spawned, not forked: a process that has run OpenCV's thread pool or an
-    OpenGL context cannot be forked safely."""
+    Workers are spawned (:func:`rvmsim._procs.spawn_pool`, the pool batches use too)."""
 
     def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace, workers: int = 1):
         self.evaluator = evaluator
         self.space = space
         self.workers = max(1, workers)
-        self.pool: Pool | None = None
+        self.pool: ProcessPoolExecutor | None = None
         if self.workers > 1:
-            ctx = mp.get_context("spawn")
-            self.pool = ctx.Pool(self.workers, initializer=_init_worker,
-                                 initargs=(evaluator, space))
+            self.pool = spawn_pool(self.workers, initializer=_init_worker,
+                                   initargs=(evaluator, space))
 
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
             return score_vectors(self.evaluator, self.space, xs)
-        parts = self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)],
-                              chunksize=1)
+        parts = list(self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)]))
         return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
                              for f in dataclasses.fields(ScoredBatch)))
 
     def close(self) -> None:
         if self.pool is not None:
-            self.pool.terminate()
-            self.pool.join()
+            stop_pool(self.pool, now=True)
             self.pool = None
 
 
@@ -186,7 +182,7 @@ def run_search(
             if evaluated and max_time is not None and time.perf_counter() - t0 >= max_time:
                 stopped = StopReason.MAX_TIME
                 break
-    except StopIteration:
+    except StopIteration:  # the strategy has nothing more to propose: the search is done
         pass
     best_record = store.trials(-best[2], -best[2] + 1)[0] if best is not None else None
     return SearchOutcome(evaluated, replayed, stopped, best_record, time.perf_counter() - t0,
