@@ -1,38 +1,139 @@
 """rvmsim: tune a rear-view-monitoring camera's ISP from the vehicle's design data.
 
-Pipeline: scene (YAML) → meshes → fisheye images (rendered once) → ISP → evaluation → tuning.
+Data flows one way: scene (YAML) → meshes → fisheye images (rendered once) → [ISP map →
+RVM image → ECs] per candidate → run store → report.  One subpackage per stage:
+:mod:`rvmsim.camera`, :mod:`rvmsim.scene`, :mod:`rvmsim.render`, :mod:`rvmsim.isp`,
+:mod:`rvmsim.criteria`, :mod:`rvmsim.tune`, :mod:`rvmsim.batch`, :mod:`rvmsim.validate`,
+:mod:`rvmsim.report`; :mod:`rvmsim.pipeline` joins render, ISP and ECs.  The main entry
+points are importable from here (lazily: ``import rvmsim`` starts no OpenGL).
 
-Public API::
+Examples
+--------
+A scene, its fisheye frame (rendered once; here at a quarter of the sensor) and the RVM
+image and ECs under the paper's default ISP parameters:
 
-    from rvmsim import load_scene, render_fisheye
-    scene = load_scene("scenes/vehicle_a.yaml")
-    images = render_fisheye(scene)          # images.color (H, W, 3) uint8, images.labels (H, W)
+>>> import rvmsim
+>>> scene = rvmsim.load_scene("scenes/vehicle_a.yaml")
+>>> scene.name
+'Vehicle A (sedan)'
+>>> camera = scene.fisheye_camera().scaled(0.25)
+>>> images = rvmsim.render_fisheye(scene, camera=camera)
+>>> images.color.shape, images.labels.shape
+((240, 320, 3), (240, 320))
+>>> params = rvmsim.IspParams().for_input_scale(0.25)      # Table 2's defaults, RAD scaled
+>>> frame = rvmsim.evaluate_params(images, params, rvmsim.OutputSpec(320, 180))
+>>> frame.color.shape, frame.labels.shape      # the RVM image and its exact labels
+((180, 320, 3), (180, 320))
+>>> frame.annotated.ndim                         # the ECs drawn on it, with a legend panel
+3
+>>> frame.ec.items[0].id, len(frame.ec.items)
+('1-1', 11)
+
+A short tuning run (every trial goes into ``run/run.sqlite``; ``best/`` and ``top/`` hold the
+results) and its review report:
+
+>>> result = rvmsim.tune_scene("scenes/vehicle_a.yaml", run_dir, strategy="random",
+...                            budget=40, seed=0)
+>>> result.outcome.evaluated
+40
+>>> 0.0 <= result.outcome.best.score <= 1.0
+True
+>>> rvmsim.write_report(run_dir).name
+'report.html'
+
+Errors in user files are :class:`InputFileError` s naming the file, the key and the line:
+
+>>> try:
+...     rvmsim.scene_from_dict({"name": "x"}, source="bad.yaml")
+... except rvmsim.SceneError as err:
+...     print(err)
+bad.yaml: camera: missing required key
 """
 
 from __future__ import annotations
 
-from .camera import FisheyeCamera, rotation_from_ypr
-from .errors import RvmsimError, SceneError
-from .scene import Scene, load_scene, scene_from_dict
+import importlib
+from typing import Any
 
-__all__ = [
-    "FisheyeCamera",
-    "rotation_from_ypr",
-    "RvmsimError",
-    "SceneError",
-    "Scene",
-    "load_scene",
-    "scene_from_dict",
-    "render_fisheye",
-    "FisheyeImages",
-]
+from .errors import (
+    CriteriaError,
+    InputFileError,
+    ParamsFileError,
+    RvmsimError,
+    SceneError,
+    SweepFileError,
+    TuningConfigError,
+)
 
 __version__ = "0.1.0"
 
+#: Public name → (module, name there).  Resolved on first use, so importing rvmsim stays
+#: cheap and never starts OpenGL.  Some names differ from the function's own: the
+#: subpackages ``rvmsim.tune`` and ``rvmsim.validate`` keep their names, so their main
+#: functions are ``tune_scene`` and ``validate_capture`` here.
+_LAZY: dict[str, tuple[str, str]] = {
+    # scene and camera
+    "Scene": ("rvmsim.scene", "Scene"),
+    "load_scene": ("rvmsim.scene", "load_scene"),
+    "scene_from_dict": ("rvmsim.scene", "scene_from_dict"),
+    "FisheyeCamera": ("rvmsim.camera", "FisheyeCamera"),
+    "rotation_from_ypr": ("rvmsim.camera", "rotation_from_ypr"),
+    # render
+    "FisheyeImages": ("rvmsim.render", "FisheyeImages"),
+    "render_fisheye": ("rvmsim.render", "render_fisheye"),
+    "cached_render": ("rvmsim.render", "cached_render"),
+    # ISP
+    "IspParams": ("rvmsim.isp", "IspParams"),
+    "OutputSpec": ("rvmsim.isp", "OutputSpec"),
+    "process": ("rvmsim.isp", "process"),
+    "load_params": ("rvmsim.isp", "load_params"),
+    # criteria
+    "Criteria": ("rvmsim.criteria", "Criteria"),
+    "EcResult": ("rvmsim.criteria", "EcResult"),
+    "evaluate": ("rvmsim.criteria", "evaluate"),
+    "load_criteria": ("rvmsim.criteria", "load_criteria"),
+    "default_criteria": ("rvmsim.criteria", "default_criteria"),
+    # scene → RVM frame → ECs
+    "RvmFrame": ("rvmsim.pipeline", "RvmFrame"),
+    "evaluate_params": ("rvmsim.pipeline", "evaluate_params"),
+    "render_rvm": ("rvmsim.pipeline", "render_rvm"),
+    # tuning
+    "tune_scene": ("rvmsim.tune", "tune"),
+    "TuningConfig": ("rvmsim.tune", "TuningConfig"),
+    "load_tuning_config": ("rvmsim.tune", "load_tuning_config"),
+    "STRATEGIES": ("rvmsim.tune", "STRATEGIES"),
+    "RunStore": ("rvmsim.tune", "RunStore"),
+    # batch and design sweeps
+    "load_sweep": ("rvmsim.batch", "load_sweep"),
+    "run_sweep": ("rvmsim.batch", "run_sweep"),
+    # validation against real captures
+    "validate_capture": ("rvmsim.validate", "validate"),
+    "load_capture": ("rvmsim.validate", "load_capture"),
+    # reports
+    "write_report": ("rvmsim.report", "write_report"),
+}
 
-def __getattr__(name: str):  # lazy: importing rvmsim must not start OpenGL
-    if name in ("render_fisheye", "FisheyeImages"):
-        from .render import fisheye
+__all__ = [
+    "RvmsimError",
+    "InputFileError",
+    "SceneError",
+    "CriteriaError",
+    "TuningConfigError",
+    "SweepFileError",
+    "ParamsFileError",
+    *_LAZY,
+]
 
-        return getattr(fisheye, name)
-    raise AttributeError(f"module 'rvmsim' has no attribute {name!r}")
+
+def __getattr__(name: str) -> Any:
+    try:
+        module, attr = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'rvmsim' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), attr)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
