@@ -113,3 +113,54 @@ def test_the_checks_see_violations(tmp_path: Path) -> None:
     node = ast.parse("from ..tune.loop import _chunks").body[0]
     assert isinstance(node, ast.ImportFrom)
     assert _resolve(ROOT / "batch" / "point.py", node) == "rvmsim.tune.loop"
+
+
+#: The stages from the bottom up: a module may import from its own stage and those below it
+#: (imports under ``if TYPE_CHECKING:`` are for annotations only and do not count).
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("errors", "labels", "_io", "_procs"),
+    ("camera",),
+    ("scene",),
+    ("render", "isp"),
+    ("criteria",),
+    ("pipeline",),
+    ("tune",),
+    ("report",),
+    ("batch", "validate"),
+    ("cli", "__main__", "__init__"),
+)
+_LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
+
+
+def _runtime_imports(tree: ast.AST) -> list[ast.ImportFrom]:
+    """``from … import`` statements outside ``if TYPE_CHECKING:`` blocks."""
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skip |= {id(n) for stmt in node.body for n in ast.walk(stmt)}
+    return [n for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and id(n) not in skip]
+
+
+@pytest.mark.parametrize("path", MODULES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_data_flows_one_way(path: Path) -> None:
+    rel = path.relative_to(ROOT)
+    own = rel.parts[0] if len(rel.parts) > 1 else rel.stem
+    upward = []
+    for node in _runtime_imports(ast.parse(path.read_text(encoding="utf-8"))):
+        target = _resolve(path, node).split(".")
+        if target[0] != "rvmsim" or len(target) < 2:
+            names = [a.name for a in node.names] if target == ["rvmsim"] else []
+            stages = [n for n in names if n in _LAYER]
+        else:
+            stages = [target[1]]
+        for stage in stages:
+            if _LAYER[stage] > _LAYER[own]:
+                upward.append(f"{stage} (line {node.lineno})")
+    assert not upward, f"{rel}: imports from stages above {own}: {upward}"
+
+
+def test_the_layer_check_sees_an_upward_import() -> None:
+    tree = ast.parse("from ..batch import task_malloc\nif TYPE_CHECKING:\n    from ..cli import x\n")
+    found = _runtime_imports(tree)
+    assert [_resolve(ROOT / "tune" / "run.py", n) for n in found] == ["rvmsim.batch"]
+    assert _LAYER["batch"] > _LAYER["tune"]
