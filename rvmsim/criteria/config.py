@@ -12,8 +12,8 @@ plugins it names explicitly under ``plugins:``.  Format (every key optional)::
       2-1: {range: [5, 9], tolerance: 1.0}
       4-1: {enabled: false}
 
-Without ``ecs``, a file selects the ECs of the criteria it extends (the paper's eleven)
-plus any other EC it configures under ``criteria:``.  See docs/criteria.md.
+Without ``ecs``, a file selects the ECs of the criteria it extends (the paper's eleven),
+then every EC of its plugins, in the order listed.  See docs/criteria.md.
 """
 
 from __future__ import annotations
@@ -129,8 +129,10 @@ def _selection(model: _CriteriaModel, base: Criteria | None, available: dict[str
         for ec in model.criteria:
             if ec not in available:
                 raise f.error(("criteria", ec), unknown(ec))
-        selected = list(base.ids) if base is not None else []
-        selected += [ec for ec in model.criteria if ec not in selected]
+        builtin = {ec.id for ec in builtin_ecs()}
+        plugged = [ec.id for ec in available.values() if ec.plugin and ec.id not in builtin]
+        selected = list(dict.fromkeys([*(base.ids if base is not None else ()), *plugged,
+                                       *model.criteria]))
     if not selected:
         raise f.error(("ecs",), "no EC selected")
     return selected

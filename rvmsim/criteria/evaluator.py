@@ -140,7 +140,7 @@ class _RemapSource(LabelSource):
     def _remap(self, win: Window) -> np.ndarray:
         import cv2
 
-        return cv2.remap(self.fisheye, self.nodes.window(win), None,  # type: ignore[no-any-return]
+        return cv2.remap(self.fisheye, self.nodes.window(win), None,  # type: ignore[call-overload]
                          cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
 
     def window(self, group: LabelGroup | str) -> Window:
@@ -226,7 +226,7 @@ class CandidateEvaluator:
         if use.grid is None or not self._chunks:
             return self._whole()
         iw, ih = self.input_size
-        grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),
+        grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),  # type: ignore[call-overload]
                        (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0))
         reach = np.minimum(_node_reach(grid) + margin, _FAR_PX).astype(np.uint64)
         # block of each node (floor: positions are ≥ 0 here)
