@@ -125,19 +125,25 @@ def annotate(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult) ->
 
 
 def _with_panel(img: np.ndarray, result: EcResult, s: float) -> np.ndarray:
+    import cv2
+
     h, w = img.shape[:2]
     ts = max(0.45, 0.75 * s)
     row_h = int(32 * ts / 0.45)
-    panel_w = int(300 * ts / 0.45)
+    rows = []
+    for item in result.items:
+        val = "n/a" if item.value is None else f"{item.value:.3f}{item.unit}"
+        rows.append(f"{item.id}  {val:<12} {item.score:.3f}")
+    widest = max((cv2.getTextSize(r.replace("‰", " o/oo"), cv2.FONT_HERSHEY_SIMPLEX, ts, 1)[0][0]
+                  for r in rows), default=0)
+    panel_w = max(int(300 * ts / 0.45), widest + 20)  # long plugin EC ids widen the panel
     rows_needed = len(result.items) + 3
     ph = max(h, rows_needed * row_h + 10)
     out = np.full((ph, w + panel_w, 3), 30, np.uint8)
     out[:h, :w] = img
     draw_text(out, "EC   value        score", (w + 10, row_h), ts)
-    for i, item in enumerate(result.items, start=1):
-        val = "n/a" if item.value is None else f"{item.value:.3f}{item.unit}"
-        draw_text(out, f"{item.id}  {val:<12} {item.score:.3f}", (w + 10, (i + 1) * row_h), ts,
-                  Canvas.status(item))
+    for i, (item, text) in enumerate(zip(result.items, rows), start=1):
+        draw_text(out, text, (w + 10, (i + 1) * row_h), ts, Canvas.status(item))
     total_colour = PASS if result.passed else FAIL
     draw_text(out, f"EC score {result.score:.4g}", (w + 10, (len(result.items) + 2) * row_h + 4),
               ts * 1.1, total_colour, 2)

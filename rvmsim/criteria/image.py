@@ -1,7 +1,7 @@
 """Measure and evaluate whole RVM label images (one ISP parameter set's EC score).
 
-The hot path uses OpenCV primitives (``calcHist``, ``LUT``, ``boundingRect``); the paper's
-eleven ECs on a 640×480 label image take well under a millisecond
+The measure functions use OpenCV primitives (``LUT``, ``compare``, ``boundingRect``) on small
+windows of the image; the paper's eleven ECs on a 640×480 label image take well under a millisecond
 (``tools/bench_criteria.py``).
 """
 

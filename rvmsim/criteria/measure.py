@@ -150,12 +150,12 @@ def measure_ecs(src: LabelSource, ecs: Sequence[EcDefinition],
     details: dict[str, Any] = {}
     for ec in ecs:
         m = ec.measure(src, options)
-        if not isinstance(m, Measurement):
-            m = Measurement(_checked_value(ec, m))
-        elif m.value is not None:
-            m = Measurement(_checked_value(ec, m.value), m.detail)
-        values[ec.id] = m.value
-        details[ec.id] = m.detail
+        if isinstance(m, Measurement):
+            values[ec.id] = _checked_value(ec, m.value)
+            details[ec.id] = m.detail
+        else:
+            values[ec.id] = _checked_value(ec, m)
+            details[ec.id] = None
     return Measurements(values, (w, h), details)
 
 

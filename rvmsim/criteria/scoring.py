@@ -144,13 +144,15 @@ class EcResult:
 
     def table(self) -> str:
         """A plain-text table for terminals."""
-        lines = [f"{'EC':4} {'measurement':26} {'value':>10} {'unit':4} {'range':>15} "
+        k = max([4, *(len(i.id) for i in self.items)])
+        n = max([26, *(len(i.name) for i in self.items)])
+        lines = [f"{'EC':{k}} {'measurement':{n}} {'value':>10} {'unit':4} {'range':>15} "
                  f"{'score':>7}  result"]
         for i in self.items:
             val = "—" if i.value is None else f"{i.value:10.3f}"
             rng = f"[{_fmt(i.low)}, {_fmt(i.high)}]"
             res = "off" if not i.enabled else ("pass" if i.passed else "FAIL")
-            lines.append(f"{i.id:4} {i.name:26} {val:>10} {i.unit:4} {rng:>15} "
+            lines.append(f"{i.id:{k}} {i.name:{n}} {val:>10} {i.unit:4} {rng:>15} "
                          f"{i.score:7.3f}  {res}")
         lines.append(f"EC score {self.score:.4g}  ({'all pass' if self.passed else 'not all pass'})")
         return "\n".join(lines)

@@ -74,6 +74,8 @@ class Criterion:
     enabled: bool = True
 
     def passes(self, value: float | None) -> bool:
+        """Whether ``value`` lies in the acceptable range (a binary EC without a range: is
+        1); ``None`` (not measured) fails."""
         if value is None:
             return False
         if self.sigmoid is None and self.low is None and self.high is None:
@@ -81,6 +83,7 @@ class Criterion:
         return (self.low is None or value >= self.low) and (self.high is None or value <= self.high)
 
     def score(self, value: float | None) -> float:
+        """The sigmoid score in [0, 1] (a binary EC: its 0/1 value); ``None`` scores 0."""
         if value is None:
             return 0.0
         if self.sigmoid is None:

@@ -163,3 +163,9 @@ def test_definitions_check_their_fields():
         LabelGroup("g", (300,))
     ec = EcDefinition("a", "a", "", [g], lambda s, o: None)  # type: ignore[arg-type]
     assert ec.groups == (g,) and ec.default_criterion().sigmoid is None
+
+
+def test_the_documented_worked_example_is_the_tested_plugin():
+    doc = (ROOT / "docs" / "criteria.md").read_text()
+    block = doc.split("```python\n", 1)[1].split("```", 1)[0]
+    assert block == EXAMPLE.read_text()
