@@ -173,3 +173,18 @@ def test_an_undeclared_group_fails_in_both_paths():
         CandidateEvaluator(img.labels, out, crit).values(p)
     with pytest.raises(KeyError, match="not declared"):
         evaluate(apply_map(img.labels, build_map(p, (img.camera.width, img.camera.height), out)), crit)
+
+
+def test_a_selection_without_label_groups(tmp_path):
+    """Criteria whose ECs read only fixed regions (the bumper columns): no distance image."""
+    img = small_render("b")
+    size = (img.camera.width, img.camera.height)
+    f = tmp_path / "c.yaml"
+    f.write_text("ecs: [2-3, 2-1]\nedge_columns: 6\n")
+    crit = load_criteria(f)
+    out = OutputSpec(200, 150)
+    ev = CandidateEvaluator(img.labels, out, crit)
+    assert crit.groups == () and ev.windows(_candidates(1, 3)[0]) == {}
+    for p in _candidates(15, seed=3):
+        ref = evaluate(apply_map(img.labels, build_map(p, size, out)), crit)
+        assert ev.values(p).tolist() == [ref["2-3"].value, ref["2-1"].value]
