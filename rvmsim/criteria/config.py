@@ -175,8 +175,13 @@ def _load(text: str, source: str, base: Criteria | None, base_dir: Path) -> Crit
         ec = available[ec_id]
         prev = base.items.get(ec_id) if base is not None else None
         items[ec_id] = _criterion(ec, prev or ec.default_criterion(), model.criteria.get(ec_id))
-    return Criteria(model.name, items, model.upper_region_fraction, model.edge_columns, source,
-                    tuple(available[i] for i in items))
+    criteria = Criteria(model.name, items, model.upper_region_fraction, model.edge_columns,
+                        source, tuple(available[i] for i in items))
+    try:
+        criteria.groups  # noqa: B018 - two ECs may not give one group name different labels
+    except ValueError as err:
+        raise f.error(("plugins",), f"the selected ECs disagree: {err}") from None
+    return criteria
 
 
 def default_criteria() -> Criteria:

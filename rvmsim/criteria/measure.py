@@ -150,12 +150,11 @@ def measure_ecs(src: LabelSource, ecs: Sequence[EcDefinition],
     details: dict[str, Any] = {}
     for ec in ecs:
         m = ec.measure(src, options)
-        if isinstance(m, Measurement):
-            values[ec.id] = _checked_value(ec, m.value)
-            details[ec.id] = m.detail
-        else:
-            values[ec.id] = _checked_value(ec, m)
-            details[ec.id] = None
+        value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)
+        if type(value) is not float or value != value:  # not a plain float, or NaN
+            value = _checked_value(ec, value)
+        values[ec.id] = value
+        details[ec.id] = detail
     return Measurements(values, (w, h), details)
 
 

@@ -36,3 +36,24 @@ def test_group_windows_change_no_measurement(letter):
         assert fast.details == ref.details
 
 
+
+
+def test_ecs_sharing_a_group_name_must_mean_the_same_labels(tmp_path):
+    from rvmsim import labels as L
+    from rvmsim.criteria import LabelGroup, load_criteria
+    from rvmsim.criteria.groups import unique_groups
+    from rvmsim.errors import CriteriaError
+
+    board = LabelGroup("board", (L.BOARD,))
+    assert unique_groups([board, LabelGroup("board", (L.BOARD,)), board]) == (board,)
+    with pytest.raises(ValueError, match="two different label groups are named 'board'"):
+        unique_groups([board, LabelGroup("board", (L.BOARD, L.SKY))])
+    (tmp_path / "p.py").write_text(
+        "from rvmsim.criteria import EcDefinition, LabelGroup\n"
+        "G = LabelGroup('board', (1, 2))\n"
+        "ECS = [EcDefinition('sky-board', 'x', '', (G,), lambda s, o: float(s.window(G)[0]))]\n")
+    crit = tmp_path / "c.yaml"
+    crit.write_text("plugins: [p.py]\n")
+    with pytest.raises(CriteriaError, match=r"c.yaml:1: plugins: the selected ECs disagree: "
+                                            r"two different label groups are named 'board'"):
+        load_criteria(crit)
