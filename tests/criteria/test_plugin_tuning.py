@@ -32,7 +32,7 @@ def _board_centre_offset(labels: np.ndarray) -> float | None:
     return 100.0 * abs((cols.min() + cols.max()) / 2.0 - (w - 1) / 2.0) / w
 
 
-def test_tune_stores_and_optimises_a_plugin_ec(tmp_path, monkeypatch):
+def test_tune_with_workers_stores_a_plugin_ec(tmp_path, monkeypatch):
     # The plugin lives next to the criteria file, as a customer keeps it.
     crit_dir = tmp_path / "acme"
     crit_dir.mkdir()
