@@ -18,12 +18,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
 
 import numpy as np
 
 from ..errors import CriteriaError
-from .groups import LabelGroup, Window, group_windows, unique_groups
+from .groups import LabelGroup, Window, group_windows
 
 if TYPE_CHECKING:
     from .registry import EcDefinition
@@ -55,9 +55,9 @@ class MeasureOptions:
         return int(round(self.upper_region_fraction * height))
 
 
-@dataclass(frozen=True)
-class Measurement:
-    """What an EC's measure function returns.
+class Measurement(NamedTuple):
+    """What an EC's measure function returns (an immutable record; a named tuple because one
+    is made per EC per candidate).
 
     Parameters
     ----------
@@ -90,7 +90,8 @@ class LabelSource:
     labels : (H, W) uint8
         RVM label image (ids from :mod:`rvmsim.labels`).
     groups : sequence of LabelGroup, optional
-        The groups measurements will ask windows of, found at once in one pass
+        The groups measurements will ask windows of (distinct names,
+        :func:`rvmsim.criteria.groups.unique_groups`), found at once in one pass
         (:func:`rvmsim.criteria.group_windows`); asking for another group is an error, so an
         EC that reads a group it does not declare fails here as it would in the fast
         evaluator.  Default: any group, each found when first asked for.
@@ -103,7 +104,7 @@ class LabelSource:
         self.labels = np.ascontiguousarray(labels)
         self.shape: tuple[int, int] = (int(labels.shape[0]), int(labels.shape[1]))
         self._declared = groups is not None
-        self._windows = {} if groups is None else group_windows(self.labels, unique_groups(groups))
+        self._windows = {} if groups is None else group_windows(self.labels, groups)
         self._shared: dict[Any, Any] = {}
 
     def window(self, group: LabelGroup | str) -> Window:
