@@ -1,31 +1,71 @@
-"""Evaluation criteria (ECs): measurements of the RVM label image, sigmoid scores, drawings."""
+"""Evaluation criteria (ECs): a registry of ECs, the paper's eleven, their measurement on the
+RVM label image, sigmoid scores, drawings and the fast tuning evaluator.
+
+Modules: :mod:`.registry` (what an EC is, plugins), :mod:`.groups` (label groups, windows),
+:mod:`.measure` (label sources and helpers for measure functions), :mod:`.builtin` (the
+paper's eleven, a plugin like any other), :mod:`.sigmoid` and :mod:`.scoring` (scores,
+criteria, results), :mod:`.config` (criteria files), :mod:`.image` (whole-image measure and
+evaluate), :mod:`.annotate`, :mod:`.evaluator`.  See docs/criteria.md.
+"""
 
 from __future__ import annotations
 
-from .core import (
-    EC_IDS,
-    criteria_from_text,
-    EcDefinition,
-    EC_DEFINITIONS,
-    Sigmoid,
-    Criterion,
-    Criteria,
+from typing import Any
+
+from .groups import (
+    EMPTY_WINDOW,
+    LabelGroup,
+    Window,
+    group_windows,
+)
+from .measure import (
+    LabelSource,
+    Measurement,
     Measurements,
-    EcValue,
-    EcResult,
+    MeasureOptions,
+    bounding_box,
+    count_label,
+    label_mask,
+    offset,
+)
+from .sigmoid import (
+    Criterion,
+    Sigmoid,
+)
+from .registry import (
+    BUILTIN_PLUGIN,
+    EC_IDS,
+    ENTRY_POINT_GROUP,
+    EcDefinition,
+    builtin_ecs,
+    load_plugin,
+    resolve_plugin,
+)
+from .scoring import (
+    Criteria,
     EcBatch,
+    EcResult,
+    EcValue,
+    score,
     score_batch,
     values_array,
+)
+from .config import (
+    criteria_from_text,
+    default_criteria,
+    load_criteria,
+)
+from .image import (
+    evaluate,
     measure,
     measure_source,
-    LabelSource,
-    GROUPS,
-    score,
-    evaluate,
-    load_criteria,
-    default_criteria,
 )
 from .annotate import (
+    FAIL,
+    INK,
+    OFF,
+    PASS,
+    Canvas,
     annotate,
 )
 from .evaluator import (
@@ -34,26 +74,56 @@ from .evaluator import (
 
 __all__ = [
     "EC_IDS",
-    "criteria_from_text",
-    "EcDefinition",
     "EC_DEFINITIONS",
+    "GROUPS",
+    "BUILTIN_PLUGIN",
+    "ENTRY_POINT_GROUP",
+    "EcDefinition",
+    "builtin_ecs",
+    "load_plugin",
+    "resolve_plugin",
+    "LabelGroup",
+    "Window",
+    "EMPTY_WINDOW",
+    "group_windows",
+    "LabelSource",
+    "Measurement",
+    "Measurements",
+    "MeasureOptions",
+    "bounding_box",
+    "count_label",
+    "label_mask",
+    "offset",
     "Sigmoid",
     "Criterion",
     "Criteria",
-    "Measurements",
     "EcValue",
     "EcResult",
     "EcBatch",
     "score_batch",
-    "values_array",
-    "measure",
-    "measure_source",
-    "LabelSource",
-    "GROUPS",
     "score",
-    "evaluate",
+    "values_array",
+    "criteria_from_text",
     "load_criteria",
     "default_criteria",
+    "measure",
+    "measure_source",
+    "evaluate",
     "annotate",
+    "Canvas",
+    "PASS",
+    "FAIL",
+    "OFF",
+    "INK",
     "CandidateEvaluator",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    # The paper's ECs are a plugin (.builtin), loaded on first use, so that it can import
+    # this package's public API like any customer's plugin.
+    if name == "EC_DEFINITIONS":
+        return builtin_ecs()
+    if name == "GROUPS":
+        return {g.name: g.labels for ec in builtin_ecs() for g in ec.groups}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

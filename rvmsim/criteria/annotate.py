@@ -1,52 +1,101 @@
 """Draw the EC measurements on the RVM image, the way the paper's Fig. 17–20 show them.
 
-Stripe areas (EC 1-1, 1-2, 1-4) are filled, d (1-3), t_c / t_l / t_r (2-1 … 2-3), the upper
-region (2-4), the guideline centres with the image centre line and the 45–55 % band (3-1,
-3-2) and the board's box (4-1) are drawn with their values; a panel beside the image lists
-every EC with its value, range, score and pass/fail.
+Each EC draws its own measurement (:attr:`rvmsim.criteria.EcDefinition.annotate`) on a
+:class:`Canvas`, in evaluation order; a panel beside the image then lists every EC with its
+value, score and pass/fail, and the EC score.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import dataclass
+
 import numpy as np
 
-from .. import labels as L
-from .core import EcResult
+from .registry import EcDefinition, builtin_ecs
+from .scoring import EcResult, EcValue
 
-__all__ = ["annotate"]
+__all__ = ["annotate", "Canvas", "Colour", "PASS", "FAIL", "OFF", "INK"]
 
-PASS = (40, 170, 60)
-FAIL = (220, 40, 40)
-OFF = (140, 140, 140)
-INK = (255, 255, 255)
+#: RGB colour.
+Colour = tuple[int, int, int]
+PASS: Colour = (40, 170, 60)
+FAIL: Colour = (220, 40, 40)
+OFF: Colour = (140, 140, 140)
+INK: Colour = (255, 255, 255)
 
 
-def _text(img, text, org, scale, color=INK, thick=1):
+@dataclass(frozen=True)
+class Canvas:
+    """What an EC's annotate function draws on.
+
+    Parameters
+    ----------
+    image : (H, W, 3) uint8
+        The RVM colour image, drawn on in place (RGB).
+    labels : (H, W) uint8
+        The RVM label image the measurements were made on.
+    text_scale : float
+        OpenCV font scale that suits the image size.
+    line_width : int
+        Line width (px) that suits the image size.
+
+    Convention: pixel centres at integer (column, row), as in the measurements.
+    """
+
+    image: np.ndarray
+    labels: np.ndarray
+    text_scale: float
+    line_width: int
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W) px."""
+        return (int(self.labels.shape[0]), int(self.labels.shape[1]))
+
+    def text(self, text: str, org: tuple[float, float], colour: Colour = INK,
+             scale: float | None = None, thick: int = 1) -> None:
+        """Outlined text with its baseline starting at ``org`` (px)."""
+        draw_text(self.image, text, org, self.text_scale if scale is None else scale, colour,
+                  thick)
+
+    def fill(self, mask: np.ndarray, colour: Colour, alpha: float = 0.55) -> None:
+        """Blend ``colour`` into the pixels where ``mask`` (H, W) is true."""
+        if np.any(mask):
+            img = self.image
+            img[mask] = (img[mask] * (1 - alpha) + np.asarray(colour) * alpha).astype(np.uint8)
+
+    @staticmethod
+    def status(item: EcValue) -> Colour:
+        """:data:`OFF` for a switched-off EC, else :data:`PASS` or :data:`FAIL`."""
+        if not item.enabled:
+            return OFF
+        return PASS if item.passed else FAIL
+
+    @staticmethod
+    def value_text(item: EcValue, fmt: str = "{:.2f}") -> str:
+        """The value with its unit, ``n/a`` when it was not measured."""
+        return "n/a" if item.value is None else fmt.format(item.value) + item.unit
+
+
+def draw_text(img: np.ndarray, text: str, org: tuple[float, float], scale: float,
+              colour: Colour = INK, thick: int = 1) -> None:
+    """Outlined text on an RGB image (the Hershey fonts have no per-mille sign: o/oo)."""
     import cv2
 
     x, y = int(org[0]), int(org[1])
-    text = text.replace("‰", " o/oo")  # the Hershey fonts have no per-mille sign
+    text = text.replace("‰", " o/oo")
     for dx, dy in ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (1, 1)):  # dark outline
         cv2.putText(img, text, (x + dx, y + dy), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0),
                     thick, cv2.LINE_AA)
-    cv2.putText(img, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, scale, color, thick, cv2.LINE_AA)
+    cv2.putText(img, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, scale, colour, thick, cv2.LINE_AA)
 
 
-def _fill(img, mask, color, alpha=0.55):
-    if np.any(mask):
-        img[mask] = (img[mask] * (1 - alpha) + np.asarray(color) * alpha).astype(np.uint8)
-
-
-def _status(result: EcResult, ec: str) -> tuple[int, int, int]:
-    item = result[ec]
-    if not item.enabled:
-        return OFF
-    return PASS if item.passed else FAIL
-
-
-def _val(result: EcResult, ec: str, fmt: str = "{:.2f}") -> str:
-    v = result[ec].value
-    return "n/a" if v is None else fmt.format(v) + result[ec].unit
+def _definitions(result: EcResult) -> Sequence[EcDefinition | None]:
+    if result.definitions:
+        return result.definitions
+    known = {ec.id: ec for ec in builtin_ecs()}
+    return [known.get(i.id) for i in result.items]
 
 
 def annotate(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult) -> np.ndarray:
@@ -64,86 +113,38 @@ def annotate(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult) ->
     (H', W + panel, 3) uint8
         H' ≥ H (the panel may need more rows than a small image has).
     """
+    h, w = rvm_labels.shape
+    s = max(0.35, min(w, h) / 900.0)  # text scale
+    canvas = Canvas(np.ascontiguousarray(rvm_color.copy()), rvm_labels, s,
+                    max(1, int(round(min(w, h) / 400))))
+    details = result.measurements.details
+    for item, ec in zip(result.items, _definitions(result)):
+        if ec is not None and ec.annotate is not None:
+            ec.annotate(canvas, item, details.get(item.id))
+    return _with_panel(canvas.image, result, s)
+
+
+def _with_panel(img: np.ndarray, result: EcResult, s: float) -> np.ndarray:
     import cv2
 
-    img = np.ascontiguousarray(rvm_color.copy())
-    h, w = rvm_labels.shape
-    m = result.measurements
-    s = max(0.35, min(w, h) / 900.0)  # text scale
-    lw = max(1, int(round(min(w, h) / 400)))
-
-    # 1-1 / 1-2: F and G stripes; the lower patches outlined by their visibility
-    for c in "FG":
-        _fill(img, rvm_labels == L.object_stripe(c), (255, 0, 255))
-        patch = (rvm_labels == L.object_patch(c)).astype(np.uint8)
-        _fill(img, patch > 0, (0, 255, 255))
-        contours, _ = cv2.findContours(patch, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        colour = PASS if m.patch_visible.get(c) else FAIL
-        cv2.drawContours(img, contours, -1, colour, lw)
-    # 1-4: B's stripe
-    _fill(img, rvm_labels == L.object_stripe("B"), (255, 120, 0))
-    # 1-3: d from the top of the image to the highest point of A, B, C
-    if m.abc_top_row is not None:
-        x = int(np.nonzero(np.isin(rvm_labels[m.abc_top_row],
-                                   [L.object_body(c) for c in "ABC"]
-                                   + [L.object_stripe(c) for c in "ABC"]))[0].mean())
-        cv2.arrowedLine(img, (x, 0), (x, m.abc_top_row), _status(result, "1-3"), lw,
-                        tipLength=0.15)
-        _text(img, f"d {_val(result, '1-3')}", (x + 6, max(14, m.abc_top_row // 2)), s,
-              _status(result, "1-3"))
-    # 2-1 … 2-3: bumper heights
-    for name, ec in (("t_l", "2-2"), ("t_c", "2-1"), ("t_r", "2-2")):
-        xc, top, t = m.bumper_columns[name]
-        x = int(round(xc))
-        cv2.line(img, (x, h - 1), (x, int(round(top))), _status(result, ec), lw * 2)
-        label = f"{name} {t:.1f}px"
-        tx = min(max(2, x - int(40 * s)), w - int(120 * s))
-        _text(img, label, (tx, max(12, int(top) - 6)), s, _status(result, ec))
-    # 2-4: the upper region
-    y = m.upper_region_rows
-    cv2.line(img, (0, y), (w - 1, y), _status(result, "2-4"), lw)
-    _text(img, "2-4 upper region", (4, max(12, y - 4)), s, _status(result, "2-4"))
-    # 3-1 / 3-2: guideline centres, image centre, 45–55 % band
-    cx = (w - 1) / 2.0
-    for yy in range(0, h, max(6, h // 60)):
-        cv2.line(img, (int(cx), yy), (int(cx), min(h - 1, yy + max(3, h // 120))), INK, 1)
-    for frac in (0.45, 0.55):
-        yy = int(round(frac * h))
-        for xx in range(0, w, max(6, w // 80)):
-            cv2.line(img, (xx, yy), (min(w - 1, xx + max(3, w // 160)), yy), (200, 200, 0), 1)
-    if m.guide2_center is not None:
-        gx, gy = m.guide2_center
-        cv2.drawMarker(img, (int(round(gx)), int(round(gy))), _status(result, "3-1"),
-                       cv2.MARKER_CROSS, int(20 * s) + 6, lw)
-        _text(img, f"3-1 dx {_val(result, '3-1')}", (int(gx) + 8, int(gy) - 6), s,
-              _status(result, "3-1"))
-    if m.guide3_center is not None:
-        gx, gy = m.guide3_center
-        cv2.drawMarker(img, (int(round(gx)), int(round(gy))), _status(result, "3-2"),
-                       cv2.MARKER_TILTED_CROSS, int(20 * s) + 6, lw)
-        _text(img, f"3-2 y {_val(result, '3-2')}", (int(gx) + 8, int(gy) + int(18 * s)), s,
-              _status(result, "3-2"))
-    # 4-1: the board's box
-    if m.board_box is not None:
-        bx, by, bw, bh = m.board_box
-        cv2.rectangle(img, (bx, by), (bx + bw - 1, by + bh - 1), _status(result, "4-1"), lw)
-        _text(img, f"4-1 w/h {_val(result, '4-1', '{:.3f}')}", (bx, max(12, by - 6)), s,
-              _status(result, "4-1"))
-
-    # Results panel
+    h, w = img.shape[:2]
     ts = max(0.45, 0.75 * s)
     row_h = int(32 * ts / 0.45)
-    panel_w = int(300 * ts / 0.45)
+    rows = []
+    for item in result.items:
+        val = "n/a" if item.value is None else f"{item.value:.3f}{item.unit}"
+        rows.append(f"{item.id}  {val:<12} {item.score:.3f}")
+    widest = max((cv2.getTextSize(r.replace("‰", " o/oo"), cv2.FONT_HERSHEY_SIMPLEX, ts, 1)[0][0]
+                  for r in rows), default=0)
+    panel_w = max(int(300 * ts / 0.45), widest + 20)  # long plugin EC ids widen the panel
     rows_needed = len(result.items) + 3
     ph = max(h, rows_needed * row_h + 10)
     out = np.full((ph, w + panel_w, 3), 30, np.uint8)
     out[:h, :w] = img
-    _text(out, "EC   value        score", (w + 10, row_h), ts)
-    for i, item in enumerate(result.items, start=1):
-        colour = OFF if not item.enabled else (PASS if item.passed else FAIL)
-        val = "n/a" if item.value is None else f"{item.value:.3f}{item.unit}"
-        _text(out, f"{item.id}  {val:<12} {item.score:.3f}", (w + 10, (i + 1) * row_h), ts, colour)
+    draw_text(out, "EC   value        score", (w + 10, row_h), ts)
+    for i, (item, text) in enumerate(zip(result.items, rows), start=1):
+        draw_text(out, text, (w + 10, (i + 1) * row_h), ts, Canvas.status(item))
     total_colour = PASS if result.passed else FAIL
-    _text(out, f"EC score {result.score:.4g}", (w + 10, (len(result.items) + 2) * row_h + 4),
-          ts * 1.1, total_colour, 2)
+    draw_text(out, f"EC score {result.score:.4g}", (w + 10, (len(result.items) + 2) * row_h + 4),
+              ts * 1.1, total_colour, 2)
     return out

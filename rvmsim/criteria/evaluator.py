@@ -1,18 +1,20 @@
 """Fast per-candidate evaluation for tuning: ISP map → label windows → ECs → EC score.
 
 :func:`rvmsim.criteria.evaluate` needs the whole RVM label image.  Tuning only needs the
-eleven measurements, and each looks at one group of labels (F's stripe, the board, …) that
+measurements, and each looks at groups of labels (F's stripe, the board, …) that
 covers a small part of the image.  :class:`CandidateEvaluator` therefore
 
-1. computes, once per scene, each label group's distance image over the fisheye image: the
+1. computes, once per scene, the distance image of each label group the selected ECs declare
+   (:attr:`EcDefinition.groups`) over the fisheye image: the
    Chebyshev distance (px) from every pixel to the group's nearest pixel, kept as the
    minimum per 4×4 block;
 2. per candidate, reads those distances under every node of the ISP map's node grid
    (:func:`isp.map_nodes`, which the remap needs anyway) and flags a node for a group when
    the group is within reach of it; the group's window is the box of its flagged nodes;
-3. remaps only those windows (plus the bumper's columns; merged where one remap of a union
-   is cheaper than two) and measures them with exactly the code that measures whole images
-   (:func:`criteria.measure_source`).
+3. remaps only those windows (plus the fixed regions ECs declare, such as the bumper's
+   columns; merged where one remap of a union is cheaper than two) and measures them with
+   exactly the code that measures whole images (each EC's measure function).  Groups read
+   only in the upper region (:attr:`LabelGroup.upper_region`) are remapped there only.
 
 Why step 2 is exact: the fast map *is* the bilinear interpolation of the nodes, so an output
 pixel of a cell reads the fisheye label nearest to a point inside the box of the cell's four
@@ -32,13 +34,16 @@ tests check this on random candidates.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from .. import labels as L
-from .core import GROUPS, Criteria, EcResult, LabelSource, Measurements, Window
-from .core import bumper_spans, default_criteria, measure_source, score, values_array
 from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
+from .config import default_criteria
+from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
+from .measure import LabelSource, Measurements, measure_ecs
+from .scoring import Criteria, EcResult, score, values_array
 
 __all__ = ["CandidateEvaluator"]
 
@@ -55,22 +60,22 @@ _HIGH_BITS = np.uint64(0x8080808080808080)
 _COARSE_ERROR_LIMIT_PX = 4.0
 
 
-def _group_distances(labels: np.ndarray) -> np.ndarray:
+def _group_distances(labels: np.ndarray, groups: tuple[LabelGroup, ...]) -> np.ndarray:
     """Per ``_DIST_BLOCK_PX``-square block of the fisheye image padded by ``_PAD_PX``: a uint64
     whose byte k is the smallest Chebyshev distance (px, capped at ``_FAR_PX``) from a pixel
-    of the block to the nearest pixel of group k (``GROUPS`` order).  (rows, cols) uint64;
-    small enough (~0.6 MB) to stay in the cache."""
+    of the block to the nearest pixel of ``groups[k]`` (at most eight groups).  (rows, cols)
+    uint64; small enough (~0.6 MB) to stay in the cache."""
     import cv2
 
-    if len(GROUPS) > 8:
-        raise ValueError("at most 8 label groups")
+    if len(groups) > 8:
+        raise ValueError("at most 8 label groups per distance image")
     h, w = labels.shape
     b = _DIST_BLOCK_PX
     gh, gw = -(-(h + 2 * _PAD_PX) // b), -(-(w + 2 * _PAD_PX) // b)
     out = np.full((gh, gw, 8), _FAR_PX, np.uint8)
-    for k, ids in enumerate(GROUPS.values()):
+    for k, group in enumerate(groups):
         far = np.full((gh * b, gw * b), 255, np.uint8)
-        far[_PAD_PX : _PAD_PX + h, _PAD_PX : _PAD_PX + w] = 255 - cv2.LUT(labels, L.lut(ids))
+        far[_PAD_PX : _PAD_PX + h, _PAD_PX : _PAD_PX + w] = 255 - cv2.LUT(labels, group.lut)
         if far.min() == 0:
             dist = np.minimum(cv2.distanceTransform(far, cv2.DIST_C, 3), _FAR_PX)
             out[..., k] = dist.reshape(gh, b, gw, b).min(axis=(1, 3)).astype(np.uint8)
@@ -130,15 +135,20 @@ class _RemapSource(LabelSource):
         self.shape = shape
         self.boxes = _merge_windows(windows)
         self.images: dict[int, np.ndarray] = {}
+        self._shared: dict[Any, Any] = {}
 
     def _remap(self, win: Window) -> np.ndarray:
         import cv2
 
-        return cv2.remap(self.fisheye, self.nodes.window(win), None, cv2.INTER_NEAREST,
-                         borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+        return cv2.remap(self.fisheye, self.nodes.window(win), None,  # type: ignore[call-overload]
+                         cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
 
-    def window(self, group: str) -> Window:
-        return self.groups[group]
+    def window(self, group: LabelGroup | str) -> Window:
+        name = group if isinstance(group, str) else group.name
+        try:
+            return self.groups[name]
+        except KeyError:
+            raise KeyError(f"label group {name!r} is not declared by the ECs measured") from None
 
     def pixels(self, win: Window) -> np.ndarray:
         x0, y0, x1, y1 = win
@@ -163,10 +173,14 @@ class CandidateEvaluator:
     output : OutputSpec
         RVM image size and mirroring during tuning.
     criteria : Criteria, optional
-        Default: :func:`rvmsim.criteria.default_criteria`.
+        Default: :func:`rvmsim.criteria.default_criteria`.  Any registered ECs: the windows
+        come from the label groups and regions they declare.
     windowed : bool
         Remap only the windows the ECs need (default); False remaps the whole image for every
         measurement (the slow reference the windowed path is tested against).
+
+    Pickles (to tuning's worker processes) with its criteria, whose ECs pickle by reference
+    to their plugin.
     """
 
     def __init__(self, fisheye_labels: np.ndarray, output: OutputSpec = OutputSpec(),
@@ -180,8 +194,21 @@ class CandidateEvaluator:
         self.criteria = criteria or default_criteria()
         self.windowed = windowed
         self._rays = RayCache()  # views recur in the coarse grid with other FOV/RAD/shifts
-        dist = _group_distances(labels)
-        self._dist, self._dist_width = dist.ravel(), dist.shape[1]
+        # one distance image per eight groups
+        self._chunks = group_chunks(self.criteria.groups)
+        dists = [_group_distances(labels, chunk) for chunk in self._chunks]
+        self._dists = [d.ravel() for d in dists]
+        self._dist_width = dists[0].shape[1] if dists else 0
+        # fixed regions the ECs read (e.g. the bumper's columns), each once
+        shape, options = (output.height, output.width), self.criteria.options
+        self._regions: list[Window] = list(dict.fromkeys(
+            (int(x0), int(y0), int(x1), int(y1)) for ec in self.criteria.ecs if ec.regions
+            for x0, y0, x1, y1 in ec.regions(shape, options)))
+
+    def _whole(self) -> dict[str, Window]:
+        w, h = self.output.width, self.output.height
+        rows = self.criteria.options.upper_rows(h)
+        return {g.name: (0, 0, w, rows if g.upper_region else h) for g in self.criteria.groups}
 
     def windows(self, params: IspParams, nodes: MapNodes | None = None) -> dict[str, Window]:
         """The RVM window each label group can appear in, for one parameter set (``nodes``:
@@ -190,66 +217,66 @@ class CandidateEvaluator:
 
         if nodes is None:
             nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
-        w, h = self.output.width, self.output.height
-        rows = int(round(self.criteria.upper_region_fraction * h))
-        whole = {n: (0, 0, w, h) for n in GROUPS}
-        whole["upper_body"] = (0, 0, w, rows)
         # nearest rounding (1 px) + distances are block minima: a node's own distance is at
         # least its block's minimum − the block size
         use, margin = nodes, 1.0 + _DIST_BLOCK_PX
         first = nodes.first
         if first is not None and first.grid is not None and first.error_px <= _COARSE_ERROR_LIMIT_PX:
             use, margin = first, margin + 2.0 * (first.error_px + nodes.error_px)
-        if use.grid is None:
-            return whole
+        if use.grid is None or not self._chunks:
+            return self._whole()
         iw, ih = self.input_size
-        grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),
+        grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),  # type: ignore[call-overload]
                        (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0))
         reach = np.minimum(_node_reach(grid) + margin, _FAR_PX).astype(np.uint64)
         # block of each node (floor: positions are ≥ 0 here)
         idx = ((grid + _PAD_PX) * (1.0 / _DIST_BLOCK_PX)).astype(np.intp)
-        dist = np.take(self._dist, idx[..., 1] * self._dist_width + idx[..., 0])
-        # bytewise "distance ≤ reach" for all groups at once: each byte of
-        # (reach | 0x80) − distance is 128 + reach − distance ≥ 1 (both ≤ 127, no borrow)
-        flags = ((reach * _BYTES | _HIGH_BITS) - dist) & _HIGH_BITS
-        flags = np.ascontiguousarray(flags[..., None].view(np.uint8).transpose(2, 0, 1))
-        c = use.cell
+        flat = idx[..., 1] * self._dist_width + idx[..., 0]
+        reach_bytes = reach * _BYTES | _HIGH_BITS
         out: dict[str, Window] = {}
-        for k, name in enumerate(GROUPS):
-            jx, jy, nw, nh = cv2.boundingRect(flags[k])
-            if nw == 0:
-                out[name] = (0, 0, 0, 0)
-                continue
-            # node j sits at output (j − 1.5)·c − 0.5; cells between flagged nodes only
-            # (grown by 1 px: the ring around a patch that _patch_visible inspects)
-            x0 = max(0, math.floor((jx - 1.5) * c - 0.5) - 1)
-            y0 = max(0, math.floor((jy - 1.5) * c - 0.5) - 1)
-            x1 = min(w, math.ceil((jx + nw - 2.5) * c - 0.5) + 2)
-            y1 = min(rows if name == "upper_body" else h, math.ceil((jy + nh - 2.5) * c - 0.5) + 2)
-            out[name] = (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else (0, 0, 0, 0)
+        for chunk, dists in zip(self._chunks, self._dists):
+            # bytewise "distance ≤ reach" for all groups at once: each byte of
+            # (reach | 0x80) − distance is 128 + reach − distance ≥ 1 (both ≤ 127, no borrow)
+            flags = (reach_bytes - np.take(dists, flat)) & _HIGH_BITS
+            flags = np.ascontiguousarray(flags[..., None].view(np.uint8).transpose(2, 0, 1))
+            for k, group in enumerate(chunk):
+                out[group.name] = self._window(flags[k], use.cell, group)
         return out
+
+    def _window(self, flags: np.ndarray, c: float, group: LabelGroup) -> Window:
+        """The output window of the cells between a group's flagged nodes."""
+        import cv2
+
+        w, h = self.output.width, self.output.height
+        jx, jy, nw, nh = cv2.boundingRect(flags)
+        if nw == 0:
+            return EMPTY_WINDOW
+        # node j sits at output (j − 1.5)·c − 0.5; cells between flagged nodes only
+        # (grown by 1 px: the ring around a patch that a visibility check inspects)
+        y_end = self.criteria.options.upper_rows(h) if group.upper_region else h
+        x0 = max(0, math.floor((jx - 1.5) * c - 0.5) - 1)
+        y0 = max(0, math.floor((jy - 1.5) * c - 0.5) - 1)
+        x1 = min(w, math.ceil((jx + nw - 2.5) * c - 0.5) + 2)
+        y1 = min(y_end, math.ceil((jy + nh - 2.5) * c - 0.5) + 2)
+        return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else EMPTY_WINDOW
 
     def source(self, params: IspParams) -> LabelSource:
         """The label pixels of one candidate's RVM image, windowed or whole."""
         nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
         w, h = self.output.width, self.output.height
-        if self.windowed:
-            groups = self.windows(params, nodes)
-        else:
-            groups = {n: (0, 0, w, h) for n in GROUPS}
-        columns = [(a, 0, b, h) for a, b in bumper_spans(w, self.criteria.edge_columns).values()]
-        return _RemapSource(self.fisheye, nodes, list(groups.values()) + columns, (h, w), groups)
+        groups = self.windows(params, nodes) if self.windowed else self._whole()
+        return _RemapSource(self.fisheye, nodes, list(groups.values()) + self._regions, (h, w),
+                            groups)
 
     def measure(self, params: IspParams) -> Measurements:
         """The raw measurements of one parameter set."""
         c = self.criteria
-        return measure_source(self.source(params), upper_region_fraction=c.upper_region_fraction,
-                              edge_columns=c.edge_columns)
+        return measure_ecs(self.source(params), c.ecs, c.options)
 
     def values(self, params: IspParams) -> np.ndarray:
-        """The eleven measured values of one parameter set, (11,) in ``EC_IDS`` order, NaN
+        """The measured values of one parameter set, (k,) in ``criteria.ids`` order, NaN
         where not measured (what tuning ships between processes; see ``score_batch``)."""
-        return values_array(self.measure(params))
+        return values_array(self.measure(params), self.criteria.ids)
 
     def __call__(self, params: IspParams) -> EcResult:
         """The EC result of one parameter set."""

@@ -1,0 +1,203 @@
+"""Reading label pixels for the ECs: label sources, options, measurement results, helpers.
+
+An EC's measure function receives a :class:`LabelSource` and the criteria's
+:class:`MeasureOptions` and returns a :class:`Measurement` (its value, and whatever geometry
+its annotate function draws).  A source gives the window of each declared label group and the
+label pixels of any window; :class:`LabelSource` reads them from a whole RVM label image, the
+fast tuning evaluator remaps only the windows it is asked for.  Both give the same pixels, so
+a measure function written against this interface gives the same value either way.
+
+Conventions: pixel centres at integer (column, row); windows ``(x0, y0, x1, y1)`` in output
+px with ``x1``/``y1`` exclusive.  A measurement that cannot be made (its object is not in the
+image) has value ``None``; a measure function never raises or returns NaN for a degenerate
+image (an empty, tiny or single-label one).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
+
+import numpy as np
+
+from ..errors import CriteriaError
+from .groups import LabelGroup, Window, group_windows
+
+if TYPE_CHECKING:
+    from .registry import EcDefinition
+
+__all__ = ["MeasureOptions", "Measurement", "Measurements", "LabelSource", "measure_ecs",
+           "label_mask", "count_label", "bounding_box", "offset"]
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class MeasureOptions:
+    """Measurement options of a criteria file (the same for every EC that uses them).
+
+    Parameters
+    ----------
+    upper_region_fraction : float
+        Top fraction of the image that counts as its upper region (EC 2-4 keeps it free of
+        body parts; groups with ``upper_region=True`` are read there only).
+    edge_columns : int
+        Columns averaged for each bumper height (t_l, t_r at the edges, t_c centred).
+    """
+
+    upper_region_fraction: float = 0.5
+    edge_columns: int = 4
+
+    def upper_rows(self, height: int) -> int:
+        """Rows of the upper region of an image ``height`` px high."""
+        return int(round(self.upper_region_fraction * height))
+
+
+class Measurement(NamedTuple):
+    """What an EC's measure function returns (an immutable record; a named tuple because one
+    is made per EC per candidate).
+
+    Parameters
+    ----------
+    value : float or None
+        The measured value in the EC's unit; ``None`` when it cannot be measured (scores 0,
+        fails).
+    detail : object, optional
+        Anything the EC's annotate function needs to draw the measurement (output px).
+    """
+
+    value: float | None
+    detail: Any = None
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """Raw measurements of one RVM label image: per EC id (evaluation order) its value and
+    detail (:attr:`Measurement.detail`, for the annotation); geometry in output px."""
+
+    values: dict[str, float | None]
+    image_size: tuple[int, int]  # (W, H) px
+    details: dict[str, Any] = field(default_factory=dict)
+
+
+class LabelSource:
+    """The label pixels measurements read: here a whole RVM label image.
+
+    Parameters
+    ----------
+    labels : (H, W) uint8
+        RVM label image (ids from :mod:`rvmsim.labels`).
+    groups : sequence of LabelGroup, optional
+        The groups measurements will ask windows of (distinct names,
+        :func:`rvmsim.criteria.groups.unique_groups`), found at once in one pass
+        (:func:`rvmsim.criteria.group_windows`); asking for another group is an error, so an
+        EC that reads a group it does not declare fails here as it would in the fast
+        evaluator.  Default: any group, each found when first asked for.
+    """
+
+    def __init__(self, labels: np.ndarray, groups: Sequence[LabelGroup] | None = None):
+        labels = np.asarray(labels)
+        if labels.ndim != 2 or labels.dtype != np.uint8:
+            raise TypeError(f"labels must be a 2-D uint8 image, got {labels.dtype} {labels.shape}")
+        self.labels = np.ascontiguousarray(labels)
+        self.shape: tuple[int, int] = (int(labels.shape[0]), int(labels.shape[1]))
+        self._declared = groups is not None
+        self._windows = {} if groups is None else group_windows(self.labels, groups)
+        self._shared: dict[Any, Any] = {}
+
+    def window(self, group: LabelGroup | str) -> Window:
+        """A window that holds every pixel of ``group`` and the pixels next to them."""
+        name = group if isinstance(group, str) else group.name
+        win = self._windows.get(name)
+        if win is None:
+            if self._declared or isinstance(group, str):
+                raise KeyError(f"label group {name!r} is not declared by the ECs measured")
+            win = self._windows[name] = group_windows(self.labels, [group])[name]
+        return win
+
+    def pixels(self, win: Window) -> np.ndarray:
+        """The label pixels of a window, (y1 − y0, x1 − x0) uint8."""
+        x0, y0, x1, y1 = win
+        return self.labels[y0:y1, x0:x1]
+
+    def columns(self, x0: int, x1: int) -> np.ndarray:
+        """Every row of columns [x0, x1): (H, x1 − x0) uint8."""
+        return self.pixels((x0, 0, x1, self.shape[0]))
+
+    def shared(self, key: Any, compute: Callable[[], T]) -> T:
+        """``compute()``, once per source: for work several ECs share (e.g. the bumper
+        heights of ECs 2-1 … 2-3).  ``key`` must name the work and its options."""
+        try:
+            return self._shared[key]
+        except KeyError:
+            out = self._shared[key] = compute()
+            return out
+
+
+def measure_ecs(src: LabelSource, ecs: Sequence[EcDefinition],
+                options: MeasureOptions) -> Measurements:
+    """Run each EC's measure function on one source.
+
+    Raises
+    ------
+    CriteriaError
+        An EC's measure function returned something else than a :class:`Measurement`, a
+        number or ``None`` (a plugin that breaks the API).
+    """
+    h, w = src.shape
+    values: dict[str, float | None] = {}
+    details: dict[str, Any] = {}
+    for ec in ecs:
+        m = ec.measure(src, options)
+        value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)
+        if type(value) is not float or value != value:  # not a plain float, or NaN
+            value = _checked_value(ec, value)
+        values[ec.id] = value
+        details[ec.id] = detail
+    return Measurements(values, (w, h), details)
+
+
+def _checked_value(ec: EcDefinition, value: object) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, (bool, int, float, np.integer, np.floating)):
+        x = float(value)
+        return None if math.isnan(x) else x
+    raise CriteriaError(ec.plugin or "<ec>", ec.id,
+                        f"measure returned {type(value).__name__} (expected a Measurement, "
+                        "a number or None)")
+
+
+# ---------------------------------------------------------------------------- helpers
+def label_mask(sub: np.ndarray, label: int) -> np.ndarray:
+    """255 where ``sub == label``, else 0 (uint8, same shape)."""
+    import cv2
+
+    if sub.size <= 1:  # OpenCV takes a 1×1 image for a scalar
+        return (sub == label).astype(np.uint8) * 255
+    return cv2.compare(sub, label, cv2.CMP_EQ)  # type: ignore[call-overload]  # scalar operand
+
+
+def count_label(sub: np.ndarray, label: int) -> int:
+    """Pixels of ``sub`` equal to ``label``."""
+    import cv2
+
+    return 0 if sub.size == 0 else int(cv2.countNonZero(label_mask(sub, label)))
+
+
+def bounding_box(mask: np.ndarray) -> tuple[int, int, int, int] | None:
+    """``(x, y, w, h)`` px of the non-zero pixels of a uint8 mask, ``None`` if there are none."""
+    import cv2
+
+    if mask.size == 0:
+        return None
+    x, y, w, h = cv2.boundingRect(mask)
+    return None if w == 0 else (int(x), int(y), int(w), int(h))
+
+
+def offset(box: tuple[int, int, int, int], win: Window) -> tuple[int, int, int, int]:
+    """A box found in a window's pixels, in image px."""
+    return (box[0] + win[0], box[1] + win[1], box[2], box[3])
+
