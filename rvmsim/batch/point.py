@@ -50,7 +50,9 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     try:
         scene = scene_from_dict(task["scene"], source=task["label"])
         config = TuningConfig.model_validate(task["config"])
-        criteria = (criteria_from_text(task["criteria"], "sweep criteria")
+        # The criteria file's path names it in messages and resolves its plugin paths.
+        criteria = (criteria_from_text(task["criteria"],
+                                       task.get("criteria_source") or "sweep criteria")
                     if task.get("criteria") else default_criteria())
         # One render at a time per process: a Dask worker with several threads would
         # otherwise open several OpenGL contexts at once.

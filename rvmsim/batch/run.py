@@ -57,7 +57,7 @@ def point_task(spec: SweepSpec, point: DesignPoint) -> dict[str, Any]:
     doc, config = point_scene_doc(spec, point.values)
     return {"scene": doc, "config": config, "label": point.label, "strategy": spec.strategy,
             "budget": spec.budget, "seed": spec.seed, "criteria": spec.criteria_doc,
-            "sensitivity": spec.sensitivity}
+            "criteria_source": spec.criteria_source, "sensitivity": spec.sensitivity}
 
 
 def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None = None,

@@ -251,7 +251,8 @@ def tune_task(task: dict[str, Any]) -> dict[str, Any]:
         with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp, task_malloc():
             recorded = task.get("scene_file") or "scene.yaml"
             scene = scene_from_dict(task["scene"], source=str(recorded))
-            criteria = (criteria_from_text(task["criteria"], "criteria")
+            crit_source = task.get("criteria_file") or "criteria"  # resolves plugin paths
+            criteria = (criteria_from_text(task["criteria"], crit_source)
                         if task.get("criteria") else None)
             run_dir = Path(tmp) / "run"
             res = tune(scene, run_dir, scene_file=recorded, strategy=task["strategy"],

@@ -13,6 +13,7 @@ import math
 import time
 from dataclasses import dataclass
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
@@ -83,7 +84,12 @@ class BatchEvaluator:
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
             return score_vectors(self.evaluator, self.space, xs)
-        parts = list(self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)]))
+        try:
+            parts = list(self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)]))
+        except BrokenProcessPool as err:  # a worker died, or could not start (its state did
+            # not unpickle: e.g. a criteria plugin it cannot import)
+            raise RvmsimError(f"tuning worker processes failed ({err}); run with workers=1 "
+                              "to see the error in this process") from None
         return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
                              for f in dataclasses.fields(ScoredBatch)))
 
