@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -11,7 +12,8 @@ from pydantic import ValidationError
 
 from .errors import InputFileError, RvmsimError
 
-__all__ = ["read_text", "parse_yaml", "key_lines", "input_error_from_validation", "write_png"]
+__all__ = ["read_text", "parse_yaml", "key_lines", "input_error_from_validation", "line_of",
+           "write_png"]
 
 
 def read_text(path: Path, error: type[InputFileError] = InputFileError, *,
@@ -87,12 +89,16 @@ def input_error_from_validation(
         e["input"], dict
     ):
         msg = f"{msg} (got {e['input']!r})"
-    line = None
-    for n in range(len(loc), 0, -1):
-        if loc[:n] in lines:
-            line = lines[loc[:n]]
-            break
-    return error(source, key, msg, line)
+    return error(source, key, msg, line_of(lines, loc))
+
+
+def line_of(lines: Mapping[tuple[Any, ...], int], path: tuple[Any, ...]) -> int | None:
+    """The line (from :func:`key_lines`) of the longest prefix of the key ``path`` that the
+    document has: the key itself, else the nearest enclosing key; None if none is known."""
+    for n in range(len(path), 0, -1):
+        if path[:n] in lines:
+            return lines[path[:n]]
+    return None
 
 
 def write_png(path: str | Path, image: np.ndarray) -> Path:

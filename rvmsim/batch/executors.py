@@ -122,9 +122,15 @@ class DaskExecutor(Executor):
         self.address = address or client.scheduler.address
 
     def run(self, fn: Callable[[Any], Any], items: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+        import uuid
+
         import distributed
 
-        futures = {self.client.submit(fn, arg, key=f"rvmsim-{key}", pure=False): key
+        # A fresh token per run: a key cancelled by an interrupted run may still be being
+        # forgotten by the scheduler, and a new task under the same key would be cancelled
+        # with it ("cancelled for reason: unknown") when the sweep is resumed at once.
+        token = uuid.uuid4().hex[:8]
+        futures = {self.client.submit(fn, arg, key=f"rvmsim-{key}-{token}", pure=False): key
                    for key, arg in items.items()}
         try:
             for fut in distributed.as_completed(list(futures)):

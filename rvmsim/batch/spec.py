@@ -37,7 +37,7 @@ from typing import Any, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from .._io import input_error_from_validation, key_lines, line_of, parse_yaml, read_text
 from ..criteria import Criteria, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
@@ -146,12 +146,7 @@ def _error(source: str, lines: Mapping[tuple[Any, ...], int], key: str, message:
     """A :class:`SweepFileError` naming ``key``, on the line of the longest known prefix of
     the key path ``at`` (default: ``key`` split at its dots)."""
     parts = at if at is not None else (tuple(key.split(".")) if key else ())
-    line = None
-    for n in range(len(parts), 0, -1):
-        if parts[:n] in lines:
-            line = lines[parts[:n]]
-            break
-    return SweepFileError(source, key, message, line)
+    return SweepFileError(source, key, message, line_of(lines, parts))
 
 
 def _expand(name: str, v: Any, source: str, lines: Mapping[tuple[Any, ...], int]

@@ -25,7 +25,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from .._io import input_error_from_validation, key_lines, line_of, parse_yaml, read_text
 from ..errors import CriteriaError
 from .registry import EcDefinition, builtin_ecs, load_plugin, resolve_plugin
 from .scoring import Criteria
@@ -83,12 +83,8 @@ class _File:
         self.base_dir = base_dir
 
     def error(self, path: tuple[Any, ...], message: str) -> CriteriaError:
-        line = None
-        for n in range(len(path), 0, -1):
-            if path[:n] in self.lines:
-                line = self.lines[path[:n]]
-                break
-        return CriteriaError(self.source, ".".join(str(p) for p in path), message, line)
+        return CriteriaError(self.source, ".".join(str(p) for p in path), message,
+                             line_of(self.lines, path))
 
 
 def _available(model: _CriteriaModel, base: Criteria | None, f: _File) -> dict[str, EcDefinition]:

@@ -66,8 +66,8 @@ def test_tune_with_workers_stores_a_plugin_ec(tmp_path, monkeypatch):
     # Every candidate carries the plugin EC after the paper's eleven, in the criteria's order.
     assert len(trials) == 48
     for t in trials:
-        assert tuple(t.ec) == EC_IDS + (EC,)
-    measured = [t.ec[EC][0] for t in trials if t.ec[EC][0] is not None]
+        assert tuple(t.ecs) == EC_IDS + (EC,)
+    measured = [t.ecs[EC].value for t in trials if t.ecs[EC].value is not None]
     assert len(measured) >= 10 and len(set(measured)) > 5
     # The stored value of the best candidate is the EC of its RVM labels, computed here
     # independently of the plugin.
@@ -76,11 +76,11 @@ def test_tune_with_workers_stores_a_plugin_ec(tmp_path, monkeypatch):
     _, labels = process(None, images.labels, best.params, OutputSpec(320, 180))
     assert labels is not None
     expected = _board_centre_offset(labels)
-    assert expected is not None and best.ec[EC][0] == pytest.approx(expected, abs=1e-9)
+    assert expected is not None and best.ecs[EC].value == pytest.approx(expected, abs=1e-9)
     # Its stored score is the sigmoid the criteria file gives it.
     sig = load_criteria(crit).items[EC].sigmoid
-    assert sig is not None and best.ec[EC][1] == pytest.approx(sig(expected), rel=1e-12)
-    assert best.ec[EC][2] == (expected <= 4)
+    assert sig is not None and best.ecs[EC].score == pytest.approx(sig(expected), rel=1e-12)
+    assert best.ecs[EC].passed == (expected <= 4)
     # The best candidate's written results name the EC too.
     doc = json.loads((run / "best" / "ec.json").read_text())
     item = next(e for e in doc["ecs"] if e["id"] == EC)
