@@ -380,7 +380,8 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     """
     from .criteria import load_criteria
     from .scene import load_scene
-    from .validate import Tolerances, load_capture, write_corrected_scene, write_outputs
+    from .report import write_validation_outputs
+    from .validate import Tolerances, load_capture, write_corrected_scene
     from .validate import validate as run_validate
 
     try:
@@ -395,7 +396,7 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
                               params=params, output=output, criteria=criteria,
                               tolerances=tol, search_px=search_px, progress=progress)
         out = out or Path("out") / scene.stem / "validate"
-        written = write_outputs(result, out)
+        written = write_validation_outputs(result, out)
         if write_scene is not None:
             write_corrected_scene(scene, result.correction, write_scene)
     except RvmsimError as err:
@@ -428,7 +429,8 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
     limiting EC, the tuned parameters), feasibility.png, sensitivity.png and sweep.html.
     Finished points are stored as they arrive: run the same command again to resume.
     """
-    from .batch import load_sweep, make_executor, run_sweep, stored_sweep, write_sweep_outputs
+    from .batch import load_sweep, make_executor, run_sweep, stored_sweep
+    from .report import write_sweep_outputs
 
     out = out or Path("runs") / f"sweep_{sweep_file.stem}"
     try:

@@ -125,8 +125,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("criteria",),
     ("pipeline",),
     ("tune",),
-    ("report",),
     ("batch", "validate"),
+    ("report",),
     ("cli", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}

@@ -45,7 +45,7 @@ from .outputs import (
     sweep_table,
     csv_text,
     sweep_json,
-    write_sweep_outputs,
+    page_columns,
 )
 from .tasks import (
     BatchSettings,
@@ -81,7 +81,7 @@ __all__ = [
     "sweep_table",
     "csv_text",
     "sweep_json",
-    "write_sweep_outputs",
+    "page_columns",
     "BatchSettings",
     "SceneRun",
     "run_batch",

@@ -1,5 +1,5 @@
-"""A sweep's outputs: the design-point table (``sweep.csv``), ``sweep.json``, and the
-feasibility and sensitivity pictures and page (drawn by :mod:`rvmsim.report`).
+"""A sweep's results as data: the design-point table (``sweep.csv``) and ``sweep.json``
+(:func:`rvmsim.report.write_sweep_outputs` writes them with the pictures and the page).
 
 The table's EC columns are the ECs of the sweep's criteria, in their order.
 """
@@ -9,14 +9,12 @@ from __future__ import annotations
 import csv
 import io
 import json
-from pathlib import Path
 from typing import Any
 
-from ..errors import RvmsimError
 from .run import SweepResult
 from .spec import DesignPoint, SweepSpec
 
-__all__ = ["sweep_table", "csv_text", "sweep_json", "write_sweep_outputs"]
+__all__ = ["sweep_table", "csv_text", "sweep_json", "page_columns"]
 
 #: Table columns between the axes and the EC columns.
 _SCORE_COLUMNS = ("ec_score", "passed", "limiting_ec")
@@ -52,7 +50,7 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
     return header, rows
 
 
-def _page_columns(spec: SweepSpec) -> int:
+def page_columns(spec: SweepSpec) -> int:
     """How many leading table columns the page shows: the point, the axes, the scores and
     the ECs (the tuned parameters are in sweep.csv)."""
     return 1 + len(spec.axes) + len(_SCORE_COLUMNS) + len(spec.criteria().ids)
@@ -77,33 +75,3 @@ def sweep_json(res: SweepResult) -> dict[str, Any]:
             "points": [{"index": p.index, "values": dict(p.values),
                         **res.results.get(p.key, {"error": "not run"})}
                        for p in res.points]}
-
-
-def write_sweep_outputs(res: SweepResult) -> list[Path]:
-    """Write sweep.csv, sweep.json, feasibility.png, sensitivity.png (when the sweep probed
-    the sensitivity and some point scored) and sweep.html into ``res.out_dir``; returns the
-    files written."""
-    from ..report import feasibility_png, sensitivity_png, sweep_html
-    from ..tune import json_default
-
-    out = res.out_dir
-    header, rows = sweep_table(res.spec, res.points, res.results)
-    written = []
-    try:
-        (out / "sweep.csv").write_text(csv_text(header, rows))
-        (out / "sweep.json").write_text(json.dumps(sweep_json(res), indent=1,
-                                                   default=json_default))
-        written += [out / "sweep.csv", out / "sweep.json"]
-        feas = feasibility_png(res.spec, res.points, res.results)
-        (out / "feasibility.png").write_bytes(feas)
-        written.append(out / "feasibility.png")
-        sens = sensitivity_png(res.points, res.results) if res.spec.sensitivity else None
-        if sens is not None:
-            (out / "sensitivity.png").write_bytes(sens)
-            written.append(out / "sensitivity.png")
-        html = sweep_html(res, header, rows, _page_columns(res.spec), feas, sens)
-        (out / "sweep.html").write_text(html)
-        written.append(out / "sweep.html")
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot write sweep outputs ({err.strerror or err})") from None
-    return written

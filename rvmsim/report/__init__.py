@@ -16,8 +16,9 @@ from .sweep import (
     feasibility_png,
     sensitivity_png,
     sweep_html,
+    write_sweep_outputs,
 )
-from .validation import validation_page, PICTURE_CAPTIONS
+from .validation import validation_page, write_validation_outputs, PICTURE_CAPTIONS
 from .plots import (
     convergence_png,
     histogram_png,
@@ -35,7 +36,9 @@ __all__ = [
     "feasibility_png",
     "sensitivity_png",
     "sweep_html",
+    "write_sweep_outputs",
     "validation_page",
+    "write_validation_outputs",
     "PICTURE_CAPTIONS",
     "convergence_png",
     "histogram_png",

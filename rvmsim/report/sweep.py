@@ -8,18 +8,21 @@ integers.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from ..batch import (DesignPoint, SweepResult, SweepSpec, csv_text, page_columns, sweep_json,
+                     sweep_table)
+from ..errors import RvmsimError
+from ..tune import json_default
 from .page import data_uri, escape, figure_png, page
 
-if TYPE_CHECKING:
-    from ..batch import DesignPoint, SweepResult, SweepSpec
-
 __all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "sensitivity_png",
-           "sweep_html"]
+           "sweep_html", "write_sweep_outputs"]
 
 
 @dataclass(frozen=True)
@@ -218,3 +221,36 @@ points pass every EC.</p>
 <h2>Design points</h2><p>Tuned parameters per point: sweep.csv.</p>
 <table><tr>{head}</tr>{table}</table>
 """)
+
+
+def write_sweep_outputs(res: SweepResult) -> list[Path]:
+    """Write sweep.csv, sweep.json, feasibility.png, sensitivity.png (when the sweep probed
+    the sensitivity and some point scored) and sweep.html into ``res.out_dir``; returns the
+    files written.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder when a file cannot be written.
+    """
+    out = res.out_dir
+    header, rows = sweep_table(res.spec, res.points, res.results)
+    written = []
+    try:
+        (out / "sweep.csv").write_text(csv_text(header, rows))
+        (out / "sweep.json").write_text(json.dumps(sweep_json(res), indent=1,
+                                                   default=json_default))
+        written += [out / "sweep.csv", out / "sweep.json"]
+        feas = feasibility_png(res.spec, res.points, res.results)
+        (out / "feasibility.png").write_bytes(feas)
+        written.append(out / "feasibility.png")
+        sens = sensitivity_png(res.points, res.results) if res.spec.sensitivity else None
+        if sens is not None:
+            (out / "sensitivity.png").write_bytes(sens)
+            written.append(out / "sensitivity.png")
+        html = sweep_html(res, header, rows, page_columns(res.spec), feas, sens)
+        (out / "sweep.html").write_text(html)
+        written.append(out / "sweep.html")
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot write sweep outputs ({err.strerror or err})") from None
+    return written

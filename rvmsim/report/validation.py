@@ -7,14 +7,16 @@ name, capture path) is HTML-escaped.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import json
+from pathlib import Path
 
+from .._io import write_png
+from ..errors import RvmsimError
+from ..tune import json_default
+from ..validate import Validation
 from .page import escape, img_tag, page
 
-if TYPE_CHECKING:
-    from ..validate import Validation
-
-__all__ = ["validation_page", "PICTURE_CAPTIONS"]
+__all__ = ["validation_page", "write_validation_outputs", "PICTURE_CAPTIONS"]
 
 #: Caption of each validation picture, by file stem.
 PICTURE_CAPTIONS: dict[str, str] = {
@@ -81,3 +83,33 @@ def _figures(result: Validation) -> str:
         f"{escape(PICTURE_CAPTIONS.get(name, name))}</figcaption></figure>"
         for name, img in result.images.items()
     )
+
+
+def write_validation_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
+    """Write ``validation.json``, ``validation.html`` and the PNGs into ``out_dir``.
+
+    Returns
+    -------
+    list of Path
+        ``validation.json``, ``validation.html``, then one PNG per picture (file stem =
+        key of ``result.images``).
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
+    paths = [write_png(out / f"{name}.png", img) for name, img in result.images.items()]
+    js = out / "validation.json"
+    try:
+        js.write_text(json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
+        html_path = out / "validation.html"
+        html_path.write_text(validation_page(result))
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+    return [js, html_path, *paths]

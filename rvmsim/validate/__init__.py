@@ -12,7 +12,7 @@ Modules, in the order :func:`validate` uses them:
 - :mod:`.verdict`: the result records (:class:`Validation`, ...) and the checks.
 - :mod:`.scene_edit`: the scene with the corrected mount (:func:`scene_with_mount`,
   :func:`write_corrected_scene`).
-- :mod:`.outputs`: the pictures and the output folder (:func:`write_outputs`).
+- :mod:`.outputs`: the pictures (the output folder: :func:`rvmsim.report.write_validation_outputs`).
 - :mod:`.validation`: :func:`validate`, the steps in order.
 - :mod:`.projection`: scene points to pixels at a corrected pose (shared by the above).
 """
@@ -22,7 +22,6 @@ from __future__ import annotations
 from .capture import load_capture
 from .edges import CHAMFER_TRUNCATE_PX, compare_edges
 from .matching import find_landmarks
-from .outputs import write_outputs
 from .pose import fit_pose
 from .scene_edit import scene_with_mount, write_corrected_scene
 from .validation import validate
@@ -49,7 +48,6 @@ __all__ = [
     "fit_pose",
     "compare_edges",
     "validate",
-    "write_outputs",
     "write_corrected_scene",
     "scene_with_mount",
     "CHAMFER_TRUNCATE_PX",

@@ -8,17 +8,13 @@ integer coordinates, rounded to the nearest pixel for drawing.
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
 
 import numpy as np
 
-from .._io import write_png
-from ..errors import RvmsimError
 from .edges import compare_edges, edge_overlay, model_mask
-from .verdict import EdgeComparison, LandmarkMatch, Validation
+from .verdict import EdgeComparison, LandmarkMatch
 
-__all__ = ["blend", "compare_with_pictures", "landmark_picture", "write_outputs"]
+__all__ = ["blend", "compare_with_pictures", "landmark_picture"]
 
 
 def blend(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -66,36 +62,3 @@ def landmark_picture(capture: np.ndarray, matches: tuple[LandmarkMatch, ...]) ->
         else:
             cv2.drawMarker(out, _px(f), (255, 150, 0), cv2.MARKER_TILTED_CROSS, 9, 2)
     return out
-
-
-def write_outputs(result: Validation, out_dir: str | Path) -> list[Path]:
-    """Write ``validation.json``, ``validation.html`` and the PNGs into ``out_dir``.
-
-    Returns
-    -------
-    list of Path
-        ``validation.json``, ``validation.html``, then one PNG per picture (file stem =
-        key of ``result.images``).
-
-    Raises
-    ------
-    RvmsimError
-        One line naming the folder or file that cannot be created or written.
-    """
-    from ..report import validation_page
-    from ..tune import json_default
-
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
-    paths = [write_png(out / f"{name}.png", img) for name, img in result.images.items()]
-    js = out / "validation.json"
-    try:
-        js.write_text(json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
-        html_path = out / "validation.html"
-        html_path.write_text(validation_page(result))
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
-    return [js, html_path, *paths]

@@ -7,7 +7,8 @@ import json
 
 import cv2
 
-from rvmsim.batch import csv_text, sweep_table, write_sweep_outputs
+from rvmsim.batch import csv_text, sweep_table
+from rvmsim.report import write_sweep_outputs
 from rvmsim.isp import IspParams
 
 

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from rvmsim.tune import json_default
-from rvmsim.validate import write_outputs
+from rvmsim.report import write_validation_outputs as write_outputs
 from rvmsim.validate.outputs import blend, landmark_picture
 
 from .captures import perturbed_validation
