@@ -112,17 +112,23 @@ class RunSettings:
 @dataclass(frozen=True)
 class RunState:
     """A run's status, why it stopped (once it has), its strategy and the evaluations it
-    will make (None when the strategy does not know in advance)."""
+    will make (None when the strategy does not know in advance); ``killed``: the run was
+    recorded as running but its writer has gone without a word (killed: SIGKILL, a power
+    cut), so it is interrupted, and resumable (:func:`rvmsim.tune.run_state` tells)."""
 
     status: RunStatus
     stopped: StopReason | None
     strategy: str
     total: int | None
+    killed: bool = False
 
     @property
     def text(self) -> str:
         """The status as ``rvmsim status`` shows it: ``running``, ``done``,
-        ``stopped (max-time)``, ``interrupted (continue with --resume)``, ``failed``."""
+        ``stopped (max-time)``, ``interrupted (continue with --resume)`` (Ctrl-C),
+        ``interrupted (resumable)`` (its writer was killed), ``failed``."""
+        if self.killed:
+            return "interrupted (resumable)"
         if self.status is RunStatus.INTERRUPTED:
             return "interrupted (continue with --resume)"
         if self.status is RunStatus.DONE and self.stopped not in (None, StopReason.DONE):
