@@ -45,6 +45,7 @@ def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
     store = SweepStore(db, readonly=True)
     try:
         fingerprint = store.meta().get("fingerprint")
+        store.sessions()
         store.done()
     finally:
         store.close()
@@ -67,7 +68,7 @@ def _open_store(spec: SweepSpec, out_dir: Path, force: bool) -> tuple[SweepStore
         store.close()
         raise RvmsimError(f"{out_dir}: this sweep's settings or base scene changed since it "
                           "started (results would mix); use --force to start over")
-    session = int(meta.get("sessions", 0)) + 1
+    session = store.sessions() + 1
     store.set_meta(fingerprint=fp, name=spec.name, source=spec.source, sessions=session,
                    axes=[[n, list(v)] for n, v in spec.axes])
     return store, session

@@ -27,6 +27,39 @@ def sweep_lock(out_dir: str | Path) -> FolderLock:
     return FolderLock(out_dir, "sweep", "sweep")
 
 
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _result_problem(r: Any) -> str | None:
+    """What is wrong with a stored point result (None: it is one
+    :func:`~rvmsim.batch.point.run_point` returns, as far as the outputs read it)."""
+    if not isinstance(r, dict):
+        return "not a JSON object"
+    if "error" in r:
+        return None if isinstance(r["error"], str) else "error: not a text"
+    kinds: dict[str, Any] = {"score": _is_number, "passed": lambda v: isinstance(v, bool),
+                             "limiting_ec": lambda v: v is None or isinstance(v, str),
+                             "evaluations": lambda v: isinstance(v, int),
+                             "ecs": lambda v: isinstance(v, dict) and all(
+                                 isinstance(o, dict) and isinstance(o.get("passed"), bool)
+                                 for o in v.values()),
+                             "params": lambda v: isinstance(v, dict) and all(
+                                 _is_number(x) for x in v.values())}
+    for key, ok in kinds.items():
+        if key not in r:
+            return f"no {key}"
+        if not ok(r[key]):
+            return f"{key}: not what a sweep stores ({str(r[key])[:40]!r})"
+    sens = r.get("sensitivity")
+    if sens is not None and not (isinstance(sens, dict) and isinstance(sens.get("params"), dict)
+                                 and all(isinstance(p, dict) and (p.get("drop_5pct") is None
+                                                                   or _is_number(p["drop_5pct"]))
+                                         for p in sens["params"].values())):
+        return "sensitivity: not what a sweep stores"
+    return None
+
+
 class SweepStore(SqliteStore):
     """``sweep.sqlite``: the sweep's settings (meta) and every finished design point (JSON);
     ``readonly`` for reading what a sweep has finished (it changes nothing).
@@ -44,6 +77,19 @@ class SweepStore(SqliteStore):
                    [(point.key, point.index, json.dumps(point.values), json.dumps(result),
                      session, time.time())])
 
+    def sessions(self) -> int:
+        """How many sessions have run the sweep so far (0 for a new store).
+
+        Raises
+        ------
+        RvmsimError
+            One line: the stored count is not a whole number.
+        """
+        n = self.meta().get("sessions", 0)
+        if not isinstance(n, int) or isinstance(n, bool) or n < 0:
+            raise RvmsimError(f"{self.path}: meta: sessions: {n!r} is not a number of sessions")
+        return n
+
     def done(self) -> dict[str, dict[str, Any]]:
         """Finished points (errors included) by key.
 
@@ -59,7 +105,8 @@ class SweepStore(SqliteStore):
             except (TypeError, ValueError) as err:
                 raise RvmsimError(f"{self.path}: points: {key}: result: unreadable "
                                   f"({err})") from None
-            if not isinstance(result, dict):
-                raise RvmsimError(f"{self.path}: points: {key}: result: not a JSON object")
+            problem = _result_problem(result)
+            if problem is not None:
+                raise RvmsimError(f"{self.path}: points: {key}: result: {problem}")
             out[str(key)] = result
         return out

@@ -98,7 +98,9 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, Scene, Criteria]:
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
-        store.state()  # a status this version cannot read is refused before anything runs
+        # a status or a trial this version cannot read is refused before anything changes
+        store.state()
+        store.replay()
     finally:
         store.close()
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
