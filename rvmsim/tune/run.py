@@ -208,6 +208,8 @@ def tune(
 
     run_dir = Path(run_dir)
     _check_out(run_dir)
+    lock = run_lock(run_dir)
+    lock.check_free()  # another writer: say so at once (its lock, taken below, decides)
     settings, sc, crit = (_resumed_run(run_dir) if resume else _new_run(
         run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget,
         force))
@@ -215,8 +217,6 @@ def tune(
     # the strategy before the render: a bad config, strategy or seed fails in a moment
     strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
                           settings.seed, settings.budget)
-    lock = run_lock(run_dir)
-    lock.check_free()  # another writer: say so now, not after the render
     images, _ = cached_render(sc, progress=progress)
     with lock:
         store = _writable_store(run_dir, settings, resume, force)
