@@ -150,11 +150,13 @@ def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Exec
 
 def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:
     """The points finished so far in ``out_dir/sweep.sqlite`` (after an interruption), with
-    ``ran`` 0."""
+    ``ran`` 0; none before the store was made).  Reads only."""
     out_dir = Path(out_dir)
-    store = SweepStore(out_dir / SWEEP_DB, readonly=True)
-    try:
-        done = store.done()
-    finally:
-        store.close()
+    done: dict[str, dict[str, Any]] = {}
+    if (out_dir / SWEEP_DB).is_file():
+        store = SweepStore(out_dir / SWEEP_DB, readonly=True)
+        try:
+            done = store.done()
+        finally:
+            store.close()
     return SweepResult(spec, design_points(spec), done, 0, out_dir)

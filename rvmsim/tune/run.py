@@ -49,7 +49,7 @@ class TuneResult:
 def _check_out(run_dir: Path) -> None:
     """Refuse a run folder that is a file."""
     if run_dir.exists() and not run_dir.is_dir():
-        raise RvmsimError(f"{run_dir}: not a folder (a file is there); give --out a folder")
+        raise RvmsimError(f"{run_dir}: not a folder (a file is there); give a run folder")
 
 
 def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | Path | None,
