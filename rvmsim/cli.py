@@ -187,7 +187,7 @@ def tune(scene: Path | None, out: Path | None, strategy: str, config_file: Path 
          max_time: float | None, target_score: float | None, resume_dir: Path | None,
          force: bool, progress: bool) -> None:
     """Tune the ISP parameters of SCENE (or continue a run with --resume RUN)."""
-    from .tune import load_tuning_config, remove_run, summary_lines
+    from .tune import load_tuning_config, summary_lines
     from .tune import tune as run_tune
 
     try:
@@ -199,9 +199,7 @@ def tune(scene: Path | None, out: Path | None, strategy: str, config_file: Path 
                 raise RvmsimError("tune: give a SCENE file, or --resume RUN")
             cfg = load_tuning_config(config_file)
             run_dir = out or Path("runs") / scene.stem
-            if force:
-                remove_run(run_dir)
-            result = run_tune(scene, run_dir, strategy=strategy,
+            result = run_tune(scene, run_dir, strategy=strategy, force=force,
                               config=cfg, criteria_file=criteria_file, seed=seed,
                               workers=workers, budget=budget, max_time=max_time,
                               target_score=target_score, progress=progress)

@@ -15,7 +15,7 @@ from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
 from .point import run_point
 from .spec import DesignPoint, SweepSpec, design_points, point_scene_doc
-from .store import SweepStore
+from .store import SWEEP_DB, SweepStore, sweep_lock
 
 __all__ = ["SweepResult", "point_task", "run_sweep", "stored_sweep"]
 
@@ -32,21 +32,43 @@ class SweepResult:
     out_dir: Path
 
 
+def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
+    """Refuse, before anything is written: an output folder that is a file, one that
+    another sweep is writing, or (without ``force``) a stored sweep that is not readable or
+    whose settings differ."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise RvmsimError(f"{out_dir}: not a folder (a file is there); give --out a folder")
+    sweep_lock(out_dir).check_free()
+    db = out_dir / SWEEP_DB
+    if force or not db.exists():
+        return
+    store = SweepStore(db, readonly=True)
+    try:
+        fingerprint = store.meta().get("fingerprint")
+        store.sessions()
+        store.done()
+    finally:
+        store.close()
+    if fingerprint != spec.fingerprint():
+        raise RvmsimError(f"{out_dir}: this sweep's settings or base scene changed since it "
+                          "started (results would mix); use --force to start over")
+
+
 def _open_store(spec: SweepSpec, out_dir: Path, force: bool) -> tuple[SweepStore, int]:
-    """The sweep's store (emptied first with ``force``) and this session's number; refuses a
-    store whose sweep settings differ."""
-    db = out_dir / "sweep.sqlite"
+    """The sweep's store (emptied first with ``force``) and this session's number, once
+    this process holds the folder's lock (:func:`_check_out` has checked the rest)."""
+    db = out_dir / SWEEP_DB
     if force and db.exists():
         for suffix in ("", "-wal", "-shm"):
             Path(str(db) + suffix).unlink(missing_ok=True)
     store = SweepStore(db)
     meta = store.meta()
     fp = spec.fingerprint()
-    if meta and meta.get("fingerprint") != fp:
+    if meta and meta.get("fingerprint") != fp:  # another sweep stored between check and lock
         store.close()
         raise RvmsimError(f"{out_dir}: this sweep's settings or base scene changed since it "
                           "started (results would mix); use --force to start over")
-    session = int(meta.get("sessions", 0)) + 1
+    session = store.sessions() + 1
     store.set_meta(fingerprint=fp, name=spec.name, source=spec.source, sessions=session,
                    axes=[[n, list(v)] for n, v in spec.axes])
     return store, session
@@ -69,11 +91,35 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
     Finished points in ``out_dir/sweep.sqlite`` are kept; the rest run on ``executor``
     (default: this process), each stored as it arrives, then passed to ``on_result``.  A
     sweep whose settings changed (base scene, tuning, mesh files) refuses to resume unless
-    ``force`` (which starts over).  An interruption (Ctrl-C) propagates; everything finished
-    is in the store (:func:`stored_sweep` reads it).
+    ``force`` (which starts over, deleting the stored points only once this process holds
+    the folder's lock).  An interruption (Ctrl-C) propagates; everything finished is in the
+    store (:func:`stored_sweep` reads it).
+
+    Raises
+    ------
+    RvmsimError
+        One line, before anything is written: ``out_dir`` is a file, another sweep is
+        writing it (``DIR is in use by process N``), or its store is unreadable or of
+        another sweep.
     """
     out_dir = Path(out_dir)
-    store, session = _open_store(spec, out_dir, force)
+    _check_out(spec, out_dir, force)
+    with sweep_lock(out_dir):
+        store, session = _open_store(spec, out_dir, force)
+        try:
+            points, ran, done = _run_points(spec, store, session,
+                                            executor or LocalExecutor(1), progress, on_result)
+        finally:
+            store.close()
+    return SweepResult(spec, points, done, ran, out_dir)
+
+
+def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Executor,
+                progress: bool,
+                on_result: Callable[[DesignPoint, dict[str, Any]], None] | None
+                ) -> tuple[list[DesignPoint], int, dict[str, dict[str, Any]]]:
+    """Run the points not in ``store`` yet, storing each as it arrives; (the sweep's
+    points, how many ran now, every finished point by key)."""
     points = design_points(spec)
     done = store.done()
     todo = {p.task_key: p for p in points if p.key not in done}
@@ -84,7 +130,6 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
 
         bar = tqdm(total=len(points), initial=len(points) - len(tasks), unit="point",
                    desc=f"sweep {spec.name}")
-    executor = executor or LocalExecutor(1)
     ran = 0
     try:
         for task_key, result in executor.run(run_point, tasks):
@@ -100,17 +145,18 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
     finally:
         if bar is not None:
             bar.close()
-        store.close()
-    return SweepResult(spec, points, done, ran, out_dir)
+    return points, ran, done
 
 
 def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:
     """The points finished so far in ``out_dir/sweep.sqlite`` (after an interruption), with
-    ``ran`` 0."""
+    ``ran`` 0; none before the store was made).  Reads only."""
     out_dir = Path(out_dir)
-    store = SweepStore(out_dir / "sweep.sqlite")
-    try:
-        done = store.done()
-    finally:
-        store.close()
+    done: dict[str, dict[str, Any]] = {}
+    if (out_dir / SWEEP_DB).is_file():
+        store = SweepStore(out_dir / SWEEP_DB, readonly=True)
+        try:
+            done = store.done()
+        finally:
+            store.close()
     return SweepResult(spec, design_points(spec), done, 0, out_dir)

@@ -7,31 +7,106 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..tune import SqliteStore
+from ..errors import RvmsimError
+from ..tune import FolderLock, SqliteStore
 from .spec import DesignPoint
 
-__all__ = ["SweepStore"]
+__all__ = ["SweepStore", "sweep_lock", "SWEEP_DB"]
+
+#: The sweep's store in its output folder.
+SWEEP_DB = "sweep.sqlite"
+
+_SCHEMA = ("CREATE TABLE IF NOT EXISTS points (key TEXT PRIMARY KEY, idx INTEGER, "
+           "values_json TEXT NOT NULL, result TEXT NOT NULL, session INTEGER NOT NULL, "
+           "finished REAL NOT NULL);")
+
+
+def sweep_lock(out_dir: str | Path) -> FolderLock:
+    """The writer lock of the sweep folder ``out_dir`` (``sweep.lock``, its writer in
+    ``sweep.pid``; see :mod:`rvmsim.tune.lock`)."""
+    return FolderLock(out_dir, "sweep", "sweep")
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _result_problem(r: Any) -> str | None:
+    """What is wrong with a stored point result (None: it is one
+    :func:`~rvmsim.batch.point.run_point` returns, as far as the outputs read it)."""
+    if not isinstance(r, dict):
+        return "not a JSON object"
+    if "error" in r:
+        return None if isinstance(r["error"], str) else "error: not a text"
+    kinds: dict[str, Any] = {"score": _is_number, "passed": lambda v: isinstance(v, bool),
+                             "limiting_ec": lambda v: v is None or isinstance(v, str),
+                             "evaluations": lambda v: isinstance(v, int),
+                             "ecs": lambda v: isinstance(v, dict) and all(
+                                 isinstance(o, dict) and isinstance(o.get("passed"), bool)
+                                 for o in v.values()),
+                             "params": lambda v: isinstance(v, dict) and all(
+                                 _is_number(x) for x in v.values())}
+    for key, ok in kinds.items():
+        if key not in r:
+            return f"no {key}"
+        if not ok(r[key]):
+            return f"{key}: not what a sweep stores ({str(r[key])[:40]!r})"
+    sens = r.get("sensitivity")
+    if sens is not None and not (isinstance(sens, dict) and isinstance(sens.get("params"), dict)
+                                 and all(isinstance(p, dict) and (p.get("drop_5pct") is None
+                                                                   or _is_number(p["drop_5pct"]))
+                                         for p in sens["params"].values())):
+        return "sensitivity: not what a sweep stores"
+    return None
 
 
 class SweepStore(SqliteStore):
-    """``sweep.sqlite``: the sweep's settings (meta) and every finished design point (JSON).
+    """``sweep.sqlite``: the sweep's settings (meta) and every finished design point (JSON);
+    ``readonly`` for reading what a sweep has finished (it changes nothing).
 
     A point's row keeps the session (1, 2, … for each run of the sweep) that computed it and
     when it finished, so a resumed sweep shows what it did not run again.
     """
 
-    def __init__(self, path: str | Path):
-        super().__init__(path, "CREATE TABLE IF NOT EXISTS points (key TEXT PRIMARY KEY, "
-                               "idx INTEGER, values_json TEXT NOT NULL, result TEXT NOT NULL, "
-                               "session INTEGER NOT NULL, finished REAL NOT NULL);", "sweep")
+    def __init__(self, path: str | Path, *, readonly: bool = False):
+        super().__init__(path, _SCHEMA, "sweep", readonly=readonly, tables=("points",))
 
     def add(self, point: DesignPoint, result: dict[str, Any], session: int) -> None:
         """Store one finished point's result (a JSON-ready dict)."""
-        with self.db:
-            self.db.execute("INSERT OR REPLACE INTO points VALUES (?, ?, ?, ?, ?, ?)",
-                            (point.key, point.index, json.dumps(point.values),
-                             json.dumps(result), session, time.time()))
+        self.write("INSERT OR REPLACE INTO points VALUES (?, ?, ?, ?, ?, ?)",
+                   [(point.key, point.index, json.dumps(point.values), json.dumps(result),
+                     session, time.time())])
+
+    def sessions(self) -> int:
+        """How many sessions have run the sweep so far (0 for a new store).
+
+        Raises
+        ------
+        RvmsimError
+            One line: the stored count is not a whole number.
+        """
+        n = self.meta().get("sessions", 0)
+        if not isinstance(n, int) or isinstance(n, bool) or n < 0:
+            raise RvmsimError(f"{self.path}: meta: sessions: {n!r} is not a number of sessions")
+        return n
 
     def done(self) -> dict[str, dict[str, Any]]:
-        """Finished points (errors included) by key."""
-        return {k: json.loads(r) for k, r in self.db.execute("SELECT key, result FROM points")}
+        """Finished points (errors included) by key.
+
+        Raises
+        ------
+        RvmsimError
+            One line naming the point whose stored result is not a JSON object.
+        """
+        out = {}
+        for key, text in self.rows("SELECT key, result FROM points"):
+            try:
+                result = json.loads(text)
+            except (TypeError, ValueError) as err:
+                raise RvmsimError(f"{self.path}: points: {key}: result: unreadable "
+                                  f"({err})") from None
+            problem = _result_problem(result)
+            if problem is not None:
+                raise RvmsimError(f"{self.path}: points: {key}: result: {problem}")
+            out[str(key)] = result
+        return out

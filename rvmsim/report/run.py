@@ -96,12 +96,12 @@ def _load_run(run_dir: Path) -> _Run:
     from ..criteria import load_criteria
     from ..render import cached_render, same_scene
     from ..scene import load_scene
-    from ..tune import open_run, run_settings
+    from ..tune import open_run, run_settings, run_state
 
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
-        state = store.state()
+        state = run_state(run_dir, store)
         top = store.top(settings.config.top_m)
         curve = store.best_curve()
         scores = np.array(store.scores(), dtype=float)

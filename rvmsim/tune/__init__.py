@@ -6,7 +6,8 @@ Modules: :mod:`~rvmsim.tune.space` (ParamRange, SearchSpace, default_space),
 :mod:`~rvmsim.tune.objective` (score_vectors), :mod:`~rvmsim.tune.records` (the run model),
 :mod:`~rvmsim.tune.store` (RunStore), :mod:`~rvmsim.tune.config` (TuningConfig),
 :mod:`~rvmsim.tune.loop` (run_search, search_scene, the worker pool),
-:mod:`~rvmsim.tune.folder` (reading run folders), :mod:`~rvmsim.tune.run` (tune).
+:mod:`~rvmsim.tune.folder` (reading run folders), :mod:`~rvmsim.tune.lock` (the writer
+lock of run and sweep folders), :mod:`~rvmsim.tune.run` (tune).
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from .strategies import (
     GridRandomSettings,
     CmaesSettings,
     RandomSettings,
+    SEED_MAX,
+    check_seed,
 )
 from .config import (
     TuningConfig,
@@ -61,9 +64,15 @@ from .loop import (
     search_scene,
     candidate_evaluator,
 )
+from .lock import (
+    FolderLock,
+    Writer,
+)
 from .folder import (
     open_run,
     run_settings,
+    run_state,
+    run_lock,
     find_runs,
     is_run_folder,
     status_lines,
@@ -92,6 +101,8 @@ __all__ = [
     "GridRandomSettings",
     "CmaesSettings",
     "RandomSettings",
+    "SEED_MAX",
+    "check_seed",
     "TuningConfig",
     "load_tuning_config",
     "make_strategy",
@@ -116,8 +127,12 @@ __all__ = [
     "BatchEvaluator",
     "search_scene",
     "candidate_evaluator",
+    "FolderLock",
+    "Writer",
     "open_run",
     "run_settings",
+    "run_state",
+    "run_lock",
     "find_runs",
     "is_run_folder",
     "status_lines",

@@ -9,20 +9,28 @@ are (:func:`run_settings`), and a resumed one is brought to the current format.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
-from .records import RunSettings, TrialRecord
+from .lock import FolderLock
+from .records import RunSettings, RunState, RunStatus, TrialRecord
 from .store import RunStore
 
-__all__ = ["open_run", "run_settings", "find_runs", "is_run_folder", "status_lines",
-           "rank_text", "rank_params_text"]
+__all__ = ["open_run", "run_settings", "run_state", "run_lock", "find_runs", "is_run_folder",
+           "status_lines", "rank_text", "rank_params_text"]
 
 RUN_DB = "run.sqlite"
 RUN_JSON = "run.json"
+
+
+def run_lock(run_dir: str | Path) -> FolderLock:
+    """The writer lock of the run folder ``run_dir`` (``run.lock``, its writer in
+    ``run.pid``; see :mod:`rvmsim.tune.lock`)."""
+    return FolderLock(run_dir, "run", "run")
 
 
 def is_run_folder(path: str | Path) -> bool:
@@ -39,7 +47,8 @@ def find_runs(runs_dir: str | Path) -> list[Path]:
 
 
 def open_run(run_dir: str | Path) -> RunStore:
-    """The store of the run in ``run_dir``.
+    """The store of the run in ``run_dir``, opened read-only (a reader changes nothing in
+    the folder, and never waits for its writer).
 
     Raises
     ------
@@ -49,7 +58,17 @@ def open_run(run_dir: str | Path) -> RunStore:
     run_dir = Path(run_dir)
     if not is_run_folder(run_dir):
         raise RvmsimError(f"{run_dir}: no run database ({RUN_DB}) here")
-    return RunStore(run_dir / RUN_DB)
+    return RunStore(run_dir / RUN_DB, readonly=True)
+
+
+def run_state(run_dir: str | Path, store: RunStore) -> RunState:
+    """The state of the run in ``run_dir`` as it is now: the stored one, except that a run
+    stored as running whose writer holds no lock any more (it was killed) is interrupted
+    and resumable (``killed``).  Takes no lock."""
+    state = store.state()
+    if state.status is RunStatus.RUNNING and run_lock(run_dir).writer() is None:
+        return dataclasses.replace(state, status=RunStatus.INTERRUPTED, killed=True)
+    return state
 
 
 def _legacy_config(doc: Any) -> Any:
@@ -88,7 +107,7 @@ def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
     """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too)."""
     store = open_run(run_dir)
     try:
-        state = store.state()
+        state = run_state(run_dir, store)
         n = store.count()
         top = store.top(top_m)
     finally:

@@ -101,28 +101,59 @@ class RunSettings:
 
     @classmethod
     def from_json(cls, doc: Mapping[str, Any]) -> RunSettings:
-        """Inverse of :meth:`as_json`; raises KeyError, TypeError or ValueError (pydantic's
-        ValidationError) for a document that is not one."""
-        return cls(str(doc["scene"]), doc.get("scene_key"), str(doc.get("vehicle", "")),
-                   str(doc["strategy"]), int(doc["seed"]),
-                   None if doc.get("budget") is None else int(doc["budget"]),
-                   doc.get("criteria_file"), TuningConfig.model_validate(doc["config"]))
+        """Inverse of :meth:`as_json`; for a document that is not one raises KeyError (the
+        key missing), ValueError naming the key (``KEY: problem``; pydantic's
+        ValidationError for ``config``) or TypeError (not a mapping)."""
+        if not isinstance(doc, Mapping):
+            raise TypeError(f"not an object of run settings but {type(doc).__name__}")
+
+        def need(key: str) -> Any:
+            if doc.get(key) is None:
+                raise KeyError(key)
+            return doc[key]
+
+        def whole(key: str, value: Any) -> int:
+            if not isinstance(value, int) or isinstance(value, bool):
+                raise ValueError(f"{key}: {value!r} is not a whole number")
+            return value
+
+        def text(key: str, value: Any) -> str | None:
+            if value is not None and not isinstance(value, str):
+                raise ValueError(f"{key}: {value!r} is not a text")
+            return value
+
+        try:
+            config = TuningConfig.model_validate(need("config"))
+        except ValueError as err:  # pydantic's ValidationError
+            raise ValueError(f"config: {err}") from None
+        budget = doc.get("budget")
+        return cls(str(text("scene", need("scene"))), text("scene_key", doc.get("scene_key")),
+                   str(text("vehicle", doc.get("vehicle", "")) or ""),
+                   str(text("strategy", need("strategy"))), whole("seed", need("seed")),
+                   None if budget is None else whole("budget", budget),
+                   text("criteria_file", doc.get("criteria_file")), config)
 
 
 @dataclass(frozen=True)
 class RunState:
     """A run's status, why it stopped (once it has), its strategy and the evaluations it
-    will make (None when the strategy does not know in advance)."""
+    will make (None when the strategy does not know in advance); ``killed``: the run was
+    recorded as running but its writer has gone without a word (killed: SIGKILL, a power
+    cut), so it is interrupted, and resumable (:func:`rvmsim.tune.run_state` tells)."""
 
     status: RunStatus
     stopped: StopReason | None
     strategy: str
     total: int | None
+    killed: bool = False
 
     @property
     def text(self) -> str:
         """The status as ``rvmsim status`` shows it: ``running``, ``done``,
-        ``stopped (max-time)``, ``interrupted (continue with --resume)``, ``failed``."""
+        ``stopped (max-time)``, ``interrupted (continue with --resume)`` (Ctrl-C),
+        ``interrupted (resumable)`` (its writer was killed), ``failed``."""
+        if self.killed:
+            return "interrupted (resumable)"
         if self.status is RunStatus.INTERRUPTED:
             return "interrupted (continue with --resume)"
         if self.status is RunStatus.DONE and self.stopped not in (None, StopReason.DONE):

@@ -9,6 +9,7 @@ image, annotated EC image and EC table).
 from __future__ import annotations
 
 import json
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
@@ -16,11 +17,11 @@ from typing import TYPE_CHECKING, Any, Callable
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from .config import TuningConfig, make_strategy
-from .folder import RUN_DB, RUN_JSON, rank_text, run_settings
+from .folder import RUN_DB, RUN_JSON, open_run, rank_text, run_lock, run_settings
 from .loop import SearchOutcome, search_scene
 from .records import RunSettings, RunStatus
 from .store import RunStore
-from .strategies import GridToRandom
+from .strategies import GridToRandom, Strategy, check_seed
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -45,17 +46,29 @@ class TuneResult:
     total: int | None
 
 
+def _check_out(run_dir: Path) -> None:
+    """Refuse a run folder that is a file."""
+    if run_dir.exists() and not run_dir.is_dir():
+        raise RvmsimError(f"{run_dir}: not a folder (a file is there); give a run folder")
+
+
 def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | Path | None,
              strategy: str, config: TuningConfig | None, criteria: Criteria | None,
-             criteria_file: str | Path | None, seed: int,
-             budget: int | None) -> tuple[RunSettings, Scene, Criteria]:
-    """The settings, scene and criteria of a new run in ``run_dir`` (nothing written yet)."""
+             criteria_file: str | Path | None, seed: int, budget: int | None,
+             force: bool) -> tuple[RunSettings, Scene, Criteria]:
+    """The settings, scene and criteria of a new run in ``run_dir`` (nothing written yet:
+    every input is checked here, before anything in ``run_dir`` changes)."""
     from ..criteria import load_criteria
     from ..render import scene_key
     from ..scene import Scene, load_scene
 
-    if (run_dir / RUN_DB).exists():
-        raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it")
+    check_seed(seed)
+    if budget is not None and (not isinstance(budget, int) or isinstance(budget, bool)
+                               or budget < 1):
+        raise RvmsimError(f"--budget {budget!r}: give a whole number of at least 1")
+    if not force and (run_dir / RUN_DB).exists():
+        raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it, "
+                          "or --force to replace it")
     recorded: str | Path | None
     if isinstance(scene, Scene):
         sc, recorded = scene, scene_file or scene.source
@@ -74,24 +87,52 @@ def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | 
 
 
 def _resumed_run(run_dir: Path) -> tuple[RunSettings, Scene, Criteria]:
-    """The settings, scene and criteria of the run to resume in ``run_dir``, checking that
-    its scene has not changed since."""
+    """The settings, scene and criteria of the run to resume in ``run_dir`` (read, not
+    written), checking that its scene has not changed since."""
     from ..criteria import load_criteria
     from ..render import same_scene
     from ..scene import load_scene
 
     if not (run_dir / RUN_DB).is_file():
         raise RvmsimError(f"{run_dir}: no run to resume ({RUN_DB} missing)")
-    store = RunStore(run_dir / RUN_DB)
+    store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
+        # a status or a trial this version cannot read is refused before anything changes
+        store.state()
+        store.replay()
     finally:
         store.close()
+    check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
     sc = load_scene(settings.scene)
     if settings.scene_key is not None and not same_scene(settings.scene_key, sc, settings.scene):
         raise RvmsimError(f"{settings.scene}: the scene changed since this run started; "
                           "resuming would mix two scenes (start a new run)")
     return settings, sc, load_criteria(settings.criteria_file)
+
+
+def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: bool) -> RunStore:
+    """The run's store, opened for writing once this process holds the run's lock: a
+    resumed run's (still the run that was read), or a new one (replacing the old run only
+    with ``force``, and only now that everything it needs has loaded)."""
+    db = run_dir / RUN_DB
+    if resume:
+        store = RunStore(db)
+        stored = store.settings()
+        if stored is not None and stored != settings:
+            store.close()
+            raise RvmsimError(f"{db}: the run was replaced while this resume started; "
+                              "resume it again")
+    else:
+        if force:
+            remove_run(run_dir)
+        elif db.exists():  # made by a writer that finished between our check and our lock
+            raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to "
+                              "continue it, or --force to replace it")
+        store = RunStore(db)
+    # run.json exports the settings (a resumed run's too: the store is the truth)
+    (run_dir / RUN_JSON).write_text(json.dumps(settings.as_json(), indent=2))
+    return store
 
 
 def _progress_bar(on: bool, total: int | None, vehicle: str,
@@ -127,6 +168,7 @@ def tune(
     max_time: float | None = None,
     target_score: float | None = None,
     resume: bool = False,
+    force: bool = False,
     progress: bool = False,
     progress_position: int = 0,
 ) -> TuneResult:
@@ -146,6 +188,17 @@ def tune(
     resume : bool
         Continue the run in ``run_dir`` with its own settings (the other arguments that
         define the run are taken from its store).
+    force : bool
+        Replace a run in ``run_dir`` (``--force``).  The old run is deleted only once every
+        input of the new one has loaded, the scene has rendered and this process holds the
+        run's lock; an error before that leaves it as it was.
+
+    Raises
+    ------
+    RvmsimError
+        One line: a bad input (scene, criteria, config, strategy, seed, budget), a run
+        folder that is a file or holds a run already (without ``force``), or one in use
+        by another writer (``RUN is in use by process N``).
     progress : bool
         Show a progress bar (evaluations/s, best EC score, ETA).
     progress_position : int
@@ -154,38 +207,55 @@ def tune(
     from ..render import cached_render
 
     run_dir = Path(run_dir)
+    _check_out(run_dir)
+    lock = run_lock(run_dir)
+    lock.check_free()  # another writer: say so at once (its lock, taken below, decides)
     settings, sc, crit = (_resumed_run(run_dir) if resume else _new_run(
-        run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget))
-    images, _ = cached_render(sc, progress=progress)
+        run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget,
+        force))
     cfg = settings.config
-    strat = make_strategy(settings.strategy, cfg.space(images.camera), cfg, settings.seed,
-                          settings.budget)
-    store = RunStore(run_dir / RUN_DB)  # makes the folder
-    if not resume:
-        (run_dir / RUN_JSON).write_text(json.dumps(settings.as_json(), indent=2))
+    # the strategy before the render: a bad config, strategy or seed fails in a moment
+    strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
+                          settings.seed, settings.budget)
+    images, _ = cached_render(sc, progress=progress)
+    with lock:
+        store = _writable_store(run_dir, settings, resume, force)
+        try:
+            outcome = _search(store, images, settings, strat, crit, workers=workers,
+                              max_time=max_time, target_score=target_score,
+                              bar=_progress_bar(progress, strat.total(), sc.name,
+                                                progress_position))
+            write_results(run_dir, store, sc, images, cfg, crit)
+        finally:
+            store.close()
+    return TuneResult(run_dir, outcome, strat.total())
+
+
+def _search(store: RunStore, images: FisheyeImages, settings: RunSettings, strat: Strategy,
+            crit: Criteria, *, workers: int, max_time: float | None,
+            target_score: float | None,
+            bar: tuple[Any, Callable[[int, float, str], None]]) -> SearchOutcome:
+    """Search into ``store``, recording the run's state: running, then done, interrupted
+    (Ctrl-C) or failed (an error, passed on as it is)."""
     # state first: `rvmsim status` reads a store without settings as one of rvmsim 0.1
     store.set_state(RunStatus.RUNNING, strategy=settings.strategy, total=strat.total())
     store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
-    bar, on_batch = _progress_bar(progress, strat.total(), sc.name, progress_position)
+    progress, on_batch = bar
     try:
-        outcome = search_scene(images, config=cfg, criteria=crit, strategy=strat, store=store,
-                               workers=workers, max_time=max_time, target_score=target_score,
-                               on_batch=on_batch)
+        outcome = search_scene(images, config=settings.config, criteria=crit, strategy=strat,
+                               store=store, workers=workers, max_time=max_time,
+                               target_score=target_score, on_batch=on_batch)
     except KeyboardInterrupt:
         store.set_state(RunStatus.INTERRUPTED)
-        store.close()
         raise
     except Exception:  # recorded, then passed on as it is
         store.set_state(RunStatus.FAILED)
-        store.close()
         raise
     finally:
-        if bar is not None:
-            bar.close()
+        if progress is not None:
+            progress.close()
     store.set_state(RunStatus.DONE, outcome.stopped)
-    write_results(run_dir, store, sc, images, cfg, crit)
-    store.close()
-    return TuneResult(run_dir, outcome, strat.total())
+    return outcome
 
 
 def summary_lines(result: TuneResult) -> list[str]:
@@ -200,11 +270,15 @@ def summary_lines(result: TuneResult) -> list[str]:
 
 
 def remove_run(run_dir: str | Path) -> None:
-    """Delete the run in ``run_dir`` (its store and run.json; ``--force``), so that a new
-    one can start there; ``top/`` and ``best/`` are overwritten by the new run."""
+    """Delete the run in ``run_dir``: its store, run.json, ``top/``, ``best/`` and its
+    report (what ``tune --force`` does, holding the run's lock, once the new run's inputs
+    have all loaded), so that nothing of it mixes with a new run there."""
     run_dir = Path(run_dir)
-    for name in (RUN_DB, f"{RUN_DB}-wal", f"{RUN_DB}-shm", RUN_JSON):
+    for name in (RUN_DB, f"{RUN_DB}-wal", f"{RUN_DB}-shm", RUN_JSON, "report.html"):
         (run_dir / name).unlink(missing_ok=True)
+    for name in ("top", "best"):
+        if (run_dir / name).is_dir():
+            shutil.rmtree(run_dir / name)
 
 
 def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeImages,

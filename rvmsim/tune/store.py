@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import sqlite3
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from ..errors import RvmsimError
 from ..isp import IspParams
@@ -57,59 +57,142 @@ CREATE INDEX IF NOT EXISTS trials_score ON trials (score DESC, idx);
 
 class SqliteStore:
     """An SQLite file in WAL mode with a ``meta(key, value)`` table of JSON values, plus the
-    tables of ``schema``; ``what`` names the kind of database in error messages."""
+    tables of ``schema``; ``what`` names the kind of database in error messages.
 
-    def __init__(self, path: str | Path, schema: str, what: str):
+    ``readonly`` opens an existing file for reading only (``status``, ``select``,
+    ``report``): nothing is created or written, not even a schema into an empty file, and
+    the ``tables`` it must hold are checked.  A file without a ``-wal`` beside it has no
+    writer (a writer keeps one while it writes, and a killed one leaves it), so it is opened
+    immutable, which makes SQLite leave no ``-wal``/``-shm`` files behind either.
+
+    Every query raises :class:`~rvmsim.errors.RvmsimError` (one line naming the file) for a
+    file that is not such a database: junk, truncated, missing tables, unreadable rows.
+    """
+
+    def __init__(self, path: str | Path, schema: str, what: str, *, readonly: bool = False,
+                 tables: tuple[str, ...] = ()):
         self.path = Path(path)
+        self.what = what
         try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.db = sqlite3.connect(self.path, timeout=30)
-            self.db.execute("PRAGMA journal_mode=WAL")
-            self.db.executescript(
-                "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
-                + schema)
+            if readonly:
+                self.db = sqlite3.connect(_readonly_uri(self.path), uri=True, timeout=30)
+            else:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self.db = sqlite3.connect(self.path, timeout=30)
+                self.db.execute("PRAGMA journal_mode=WAL")
+                self.db.executescript(
+                    "CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
+                    + schema)
         except sqlite3.DatabaseError as err:
-            raise RvmsimError(f"{self.path}: not a readable {what} database ({err})") from None
+            raise self._unreadable(err) from None
+        if readonly:
+            have = {name for (name,) in self.rows("SELECT name FROM sqlite_master WHERE "
+                                                  "type = 'table'")}
+            missing = [t for t in ("meta", *tables) if t not in have]
+            if missing:
+                self.db.close()
+                raise RvmsimError(f"{self.path}: not a {what} database (no table "
+                                  f"{', '.join(missing)})")
+
+    def _unreadable(self, err: Exception) -> RvmsimError:
+        return RvmsimError(" ".join(
+            f"{self.path}: not a readable {self.what} database ({err})".split()))
+
+    def rows(self, sql: str, args: Sequence[Any] = ()) -> list[tuple[Any, ...]]:
+        """The rows of one query; RvmsimError for a file that is not a readable database."""
+        try:
+            return self.db.execute(sql, args).fetchall()
+        except sqlite3.DatabaseError as err:
+            raise self._unreadable(err) from None
+
+    def write(self, sql: str, rows: Sequence[Sequence[Any]]) -> None:
+        """Run one statement for every row in one transaction; RvmsimError (one line) where
+        the database cannot be written (full disk, read-only file, junk)."""
+        try:
+            with self.db:
+                self.db.executemany(sql, rows)
+        except sqlite3.DatabaseError as err:
+            raise RvmsimError(f"{self.path}: cannot write the {self.what} database "
+                              f"({err})") from None
 
     def close(self) -> None:
         self.db.close()
 
     def set_meta(self, **items: Any) -> None:
-        with self.db:
-            self.db.executemany(
-                "INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
-                [(k, json.dumps(v)) for k, v in items.items()],
-            )
+        self.write("INSERT OR REPLACE INTO meta (key, value) VALUES (?, ?)",
+                   [(k, json.dumps(v)) for k, v in items.items()])
 
     def meta(self) -> dict[str, Any]:
-        return {k: json.loads(v) for k, v in self.db.execute("SELECT key, value FROM meta")}
+        out = {}
+        for key, value in self.rows("SELECT key, value FROM meta"):
+            try:
+                out[str(key)] = json.loads(value)
+            except (TypeError, ValueError):
+                raise RvmsimError(f"{self.path}: meta: {key}: not a JSON value "
+                                  f"({str(value)[:40]!r})") from None
+        return out
+
+
+def _readonly_uri(path: Path) -> str:
+    """The URI SQLite opens ``path`` read-only with (immutable when no ``-wal`` is beside
+    it: see :class:`SqliteStore`)."""
+    if not path.is_file():
+        raise sqlite3.OperationalError("no such file")
+    wal = path.with_name(path.name + "-wal")
+    return path.resolve().as_uri() + ("?mode=ro" if wal.exists() else "?mode=ro&immutable=1")
 
 
 class RunStore(SqliteStore):
-    """A tuning run's SQLite database (``run.sqlite`` in the run folder)."""
+    """A tuning run's SQLite database (``run.sqlite`` in the run folder); ``readonly`` for
+    the readers (see :class:`SqliteStore`)."""
 
-    def __init__(self, path: str | Path):
-        super().__init__(path, _SCHEMA, "run")
-        self.db.execute("PRAGMA synchronous=NORMAL")
+    def __init__(self, path: str | Path, *, readonly: bool = False):
+        super().__init__(path, _SCHEMA, "run", readonly=readonly, tables=("trials",))
+        if not readonly:
+            self.db.execute("PRAGMA synchronous=NORMAL")
 
     # ------------------------------------------------------------------ trials
     def add_rows(self, rows: list[tuple[int, str, str, float, float, int, str]]) -> None:
         """Write a batch of already serialised trials atomically: (idx, stage, params JSON,
         score, objective, passed, EC JSON) each."""
-        with self.db:
-            self.db.executemany(
-                "INSERT OR REPLACE INTO trials (idx, stage, params, score, objective, passed, ec)"
-                " VALUES (?, ?, ?, ?, ?, ?, ?)",
-                rows,
-            )
+        self.write("INSERT OR REPLACE INTO trials (idx, stage, params, score, objective, "
+                   "passed, ec) VALUES (?, ?, ?, ?, ?, ?, ?)", rows)
 
     def count(self) -> int:
-        return int(self.db.execute("SELECT COUNT(*) FROM trials").fetchone()[0])
+        return int(self.rows("SELECT COUNT(*) FROM trials")[0][0])
+
+    def _params(self, idx: Any, text: Any) -> IspParams:
+        """A ``params`` cell as parameters; RvmsimError naming the trial if it is not the
+        JSON of all 14 valid parameters."""
+        try:
+            doc = json.loads(text)
+            if not isinstance(doc, dict) or set(doc) != set(IspParams.names()):
+                raise ValueError("not an object of the 14 ISP parameters")
+            if not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       for v in doc.values()):
+                raise ValueError("a value is not a number")
+            return IspParams(**doc)
+        except (TypeError, ValueError) as err:
+            raise self._bad_cell(idx, "params", err) from None
+
+    def _bad_cell(self, idx: Any, column: str, err: Exception) -> RvmsimError:
+        return RvmsimError(" ".join(f"{self.path}: trials: trial {idx}: {column}: unreadable "
+                                    f"({err})".split()))
+
+    def _number(self, idx: Any, column: str, value: Any) -> float:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        raise self._bad_cell(idx, column, ValueError(f"{str(value)[:40]!r} is not a number"))
 
     def _record(self, row: tuple[Any, ...]) -> TrialRecord:
         idx, stage, params, score, objective, passed, ec = row
-        return TrialRecord(idx, stage, IspParams(**json.loads(params)), score, objective,
-                           bool(passed), ecs_from_json(ec))
+        try:
+            ecs = ecs_from_json(ec)
+        except (TypeError, ValueError, AttributeError) as err:
+            raise self._bad_cell(idx, "ec", err) from None
+        return TrialRecord(int(idx), str(stage), self._params(idx, params),
+                           self._number(idx, "score", score),
+                           self._number(idx, "objective", objective), bool(passed), ecs)
 
     def trials(self, start: int = 0, stop: int | None = None) -> list[TrialRecord]:
         """Trials with ``start <= idx < stop``, in index order."""
@@ -118,13 +201,14 @@ class RunStore(SqliteStore):
         if stop is not None:
             q += " AND idx < ?"
             args.append(stop)
-        return [self._record(r) for r in self.db.execute(q + " ORDER BY idx", args)]
+        return [self._record(r) for r in self.rows(q + " ORDER BY idx", args)]
 
     def replay(self) -> dict[int, tuple[float, float, IspParams]]:
         """(EC score, objective, parameters) of every trial by index: what a resumed search
         tells its strategy (the ECs are not read)."""
-        return {idx: (score, objective, IspParams(**json.loads(params)))
-                for idx, params, score, objective in self.db.execute(
+        return {int(idx): (self._number(idx, "score", score),
+                           self._number(idx, "objective", objective), self._params(idx, params))
+                for idx, params, score, objective in self.rows(
                     "SELECT idx, params, score, objective FROM trials ORDER BY idx")}
 
     def top(self, m: int, stage: str | None = None) -> list[TrialRecord]:
@@ -136,19 +220,20 @@ class RunStore(SqliteStore):
             args.append(stage)
         q += " ORDER BY score DESC, objective DESC, idx ASC LIMIT ?"
         args.append(m)
-        return [self._record(r) for r in self.db.execute(q, args)]
+        return [self._record(r) for r in self.rows(q, args)]
 
     def best_curve(self) -> list[tuple[int, float, str]]:
         """(idx, best EC score so far, stage) after every trial, for convergence plots."""
         out, best = [], 0.0
-        for idx, score, stage in self.db.execute("SELECT idx, score, stage FROM trials ORDER BY idx"):
-            best = max(best, score)
+        for idx, score, stage in self.rows("SELECT idx, score, stage FROM trials ORDER BY idx"):
+            best = max(best, self._number(idx, "score", score))
             out.append((idx, best, stage))
         return out
 
     def scores(self) -> list[float]:
         """Every trial's EC score, in index order."""
-        return [float(s) for (s,) in self.db.execute("SELECT score FROM trials ORDER BY idx")]
+        return [self._number(idx, "score", s)
+                for idx, s in self.rows("SELECT idx, score FROM trials ORDER BY idx")]
 
     # ------------------------------------------------------------------ settings and state
     def write_settings(self, settings: RunSettings) -> None:
@@ -194,7 +279,10 @@ class RunStore(SqliteStore):
         text = meta.get("status")
         total = meta.get("total")
         strategy = str(meta.get("strategy", "?"))
-        total = None if total is None else int(total)
+        if total is not None and (not isinstance(total, int) or isinstance(total, bool)
+                                  or total < 0):
+            raise RvmsimError(f"{self.path}: meta: total: {total!r} is not a number of "
+                              "evaluations")
         stopped = meta.get("stopped")
         try:
             if "format" in meta:
@@ -202,8 +290,8 @@ class RunStore(SqliteStore):
                                 strategy, total)
             return _legacy_state(str(text), strategy, total)
         except ValueError:
-            raise RvmsimError(f"{self.path}: unknown run status {text!r} (written by another "
-                              "rvmsim version?)") from None
+            raise RvmsimError(f"{self.path}: meta: status: unknown run status {text!r} (stopped "
+                              f"{stopped!r}; written by another rvmsim version?)") from None
 
 
 def _legacy_state(text: str, strategy: str, total: int | None) -> RunState:

@@ -19,6 +19,10 @@ floor per EC, so that a criterion stuck at ~0 still leaves a slope to climb.
 
 Every strategy is a deterministic function of its seed and of the results it has been told,
 so a run replayed from its stored results (``--resume``) continues exactly as an unbroken run.
+A seed is an integer from 0 to :data:`SEED_MAX` (:func:`check_seed`); the random streams of a
+strategy's stages are numpy ``SeedSequence`` children of it (``[seed, n]``), and a CMA-ES
+restart's seed is ``seed·1000 + restart`` where that fits numpy's 32-bit seeds (every seed
+up to 4,294,967, as before) and a ``SeedSequence([seed, restart])`` draw above.
 
 Registry
 --------
@@ -38,11 +42,38 @@ from typing import Annotated, ClassVar, Generator, TypeVar
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..errors import RvmsimError
 from .space import SearchSpace
 
 __all__ = ["Strategy", "GridToRandom", "RandomSearch", "CmaEs", "STRATEGIES",
            "register_strategy", "NoSettings", "GridRandomSettings", "CmaesSettings", "RandomSettings",
-           "Batches", "Told"]
+           "Batches", "Told", "SEED_MAX", "check_seed"]
+
+#: The largest seed: numpy's 32-bit seed range, so a seed means the same to every generator.
+SEED_MAX = 2**32 - 1
+
+
+def check_seed(seed: object, name: str = "--seed") -> int:
+    """``seed`` if it is a seed (an integer from 0 to :data:`SEED_MAX`).
+
+    Raises
+    ------
+    RvmsimError
+        One line naming ``name`` (the option, or the file and key it came from) and the range.
+    """
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) \
+            and 0 <= seed <= SEED_MAX:
+        return int(seed)
+    raise RvmsimError(f"{name} {seed!r}: not a seed; give an integer from 0 to {SEED_MAX}")
+
+
+def _cma_seed(seed: int, restart: int) -> int:
+    """The seed of CMA-ES restart ``restart`` (see the module docstring): within numpy's
+    32-bit range for every seed and restart."""
+    old = seed * 1000 + restart
+    if old <= SEED_MAX:
+        return old
+    return int(np.random.SeedSequence([seed, restart]).generate_state(1)[0])
 
 #: What a strategy is told about a batch: (EC score, objective) per candidate, in order.
 Told = list[tuple[float, float]]
@@ -108,7 +139,7 @@ class Strategy(ABC):
 
     def __init__(self, space: SearchSpace, *, seed: int = 0):
         self.space = space
-        self.seed = seed
+        self.seed = check_seed(seed, "seed")
 
     @classmethod
     @abstractmethod
@@ -242,7 +273,7 @@ class CmaEs(Strategy):
         while used < self.budget:
             start = starts[restart] if restart < len(starts) else rng.uniform(0.1, 0.9, dim)
             opt = CMA(mean=np.clip(start, 0.0, 1.0), sigma=self.sigma0,
-                      bounds=np.tile([0.0, 1.0], (dim, 1)), seed=self.seed * 1000 + restart,
+                      bounds=np.tile([0.0, 1.0], (dim, 1)), seed=_cma_seed(self.seed, restart),
                       population_size=self.popsize)
             while used < self.budget and not opt.should_stop():
                 pop = [opt.ask() for _ in range(opt.population_size)]

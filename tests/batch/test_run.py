@@ -130,6 +130,69 @@ def test_cli_interrupt_and_resume_without_rerunning_finished_points(tmp_path):
     assert len(doc["points"]) == 6 and all("error" not in p for p in doc["points"])
 
 
+def _sweep_cmd(f, out):
+    return [sys.executable, "-m", "rvmsim", "sweep", str(f), "--out", str(out), "--workers", "1",
+            "--no-progress"]
+
+
+def _wait_for_points(db, n, proc):
+    deadline = time.time() + 300
+    while time.time() < deadline and proc.poll() is None:
+        if db.exists():
+            try:
+                with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as con:
+                    if con.execute("SELECT COUNT(*) FROM points").fetchone()[0] >= n:
+                        return
+            except sqlite3.OperationalError:
+                pass
+        time.sleep(0.1)
+    raise AssertionError(f"fewer than {n} points stored (exit {proc.poll()})")
+
+
+def test_a_second_sweep_on_the_same_folder_is_refused(tmp_path):
+    """Two `rvmsim sweep` processes on one folder: the second (and a --force one) exits 2
+    naming the first's PID and writes nothing: the first stores every point once, in its
+    own session, as an undisturbed sweep does."""
+    f = write_sweep(tmp_path, SWEEP.replace("budget: 200", "budget: 1500"))
+    out = tmp_path / "out"
+    first = subprocess.Popen(_sweep_cmd(f, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True)
+    try:
+        _wait_for_points(out / "sweep.sqlite", 1, first)
+        others = [subprocess.run(_sweep_cmd(f, out) + extra, capture_output=True, text=True,
+                                 timeout=300) for extra in ([], ["--force"])]
+        assert first.poll() is None, "the first sweep ended before the others were tried"
+    finally:
+        stdout, err = first.communicate(timeout=600)
+    assert first.returncode == 0, err
+    assert "6 design points, 6 run now, 0 already done" in stdout
+    for res in others:
+        lines = res.stderr.strip().splitlines()
+        assert res.returncode == 2 and len(lines) == 1, res.stderr
+        assert f"out is in use by process {first.pid}" in lines[0]
+    with sqlite3.connect(out / "sweep.sqlite") as con:
+        sessions = [s for (s,) in con.execute("SELECT session FROM points")]
+        meta = dict(con.execute("SELECT key, value FROM meta"))
+    assert sessions == [1] * 6 and json.loads(meta["sessions"]) == 1
+    assert not (out / "sweep.pid").exists()
+
+
+def test_a_killed_sweep_leaves_its_lock_to_the_next_run(tmp_path):
+    f = write_sweep(tmp_path, SWEEP.replace("camera_height_m: [0.9, 1.0, 1.1]",
+                                            "camera_height_m: [0.9, 1.0]"))
+    out = tmp_path / "out"
+    proc = subprocess.Popen(_sweep_cmd(f, out), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    _wait_for_points(out / "sweep.sqlite", 1, proc)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert (out / "sweep.pid").read_text().split()[0] == str(proc.pid)  # stale, still there
+    res = subprocess.run(_sweep_cmd(f, out), capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "already done" in res.stdout and " 0 already done" not in res.stdout
+    assert not (out / "sweep.pid").exists()
+
+
 def test_changed_sweep_refuses_to_resume(tmp_path):
     f = write_sweep(tmp_path, SWEEP.replace("camera_height_m: [0.9, 1.0, 1.1]",
                                             "camera_height_m: [1.0]"))

@@ -6,7 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from rvmsim.errors import RvmsimError
 from rvmsim.tune import (
+    SEED_MAX,
     STRATEGIES,
     CmaEs,
     GridToRandom,
@@ -14,6 +16,7 @@ from rvmsim.tune import (
     SearchSpace,
     Strategy,
     TuningConfig,
+    check_seed,
     default_space,
     make_strategy,
     register_strategy,
@@ -121,3 +124,69 @@ def test_a_registered_strategy_runs_through_the_registry(tmp_path):
     assert [t.stage for t in trials] == ["centre", "init"] and out.evaluated == 2
     np.testing.assert_allclose(space.vector(trials[0].params), (space.low + space.high) / 2)
     assert "centre-first" not in STRATEGIES
+
+
+# ---------------------------------------------------------------------------- seeds
+def _drive(strategy: Strategy, limit: int = 4000) -> list[tuple[str, np.ndarray]]:
+    """Every batch a strategy proposes, told a smooth objective (a bowl in the scaled space
+    that CMA-ES converges on, so that it restarts)."""
+    space = strategy.space
+    centre = (space.low + space.high) / 2
+
+    def objective(x):
+        return -float(np.sum(((x - centre) / (space.high - space.low)) ** 2))
+
+    out, gen, told = [], strategy.batches(), None
+    while sum(len(xs) for _, xs in out) < limit:
+        try:
+            stage, xs = gen.send(told) if told is not None else next(gen)
+        except StopIteration:
+            break
+        out.append((stage, np.array(xs)))
+        told = [(0.5, objective(x)) for x in xs]
+    return out
+
+
+def _same(a, b) -> bool:
+    return len(a) == len(b) and all(sa == sb and np.array_equal(xa, xb)
+                                    for (sa, xa), (sb, xb) in zip(a, b))
+
+
+def test_seeds_up_to_the_top_of_the_range_run_and_repeat():
+    """CMA-ES seeds whose seed·1000 overflowed numpy's 32-bit seeds (>= 4,294,968) crashed
+    after the exploration; every seed up to SEED_MAX now runs, restarts included, repeats
+    itself and differs from its neighbour."""
+    space = default_space(small_render("a").camera, ("zoom", "adv_v_shift"))
+    for seed in (4_294_968, SEED_MAX):
+        runs = [_drive(CmaEs(space, seed=s, budget=3000, sigma0=0.3))
+                for s in (seed, seed, seed - 1)]
+        assert any(stage == "cmaes-2" for stage, _ in runs[0])  # a restart happened
+        assert _same(runs[0], runs[1]) and not _same(runs[0], runs[2])
+    for cls in (GridToRandom, RandomSearch):
+        assert _same(_drive(cls(space, seed=SEED_MAX), 600), _drive(cls(space, seed=SEED_MAX), 600))
+
+
+def test_small_seeds_keep_their_cmaes_streams():
+    """A restart's seed is still seed·1000 + restart where that fits (every run made before
+    the overflow was fixed repeats exactly): the first generation is CMA's with that seed."""
+    from cmaes import CMA
+
+    space = default_space(small_render("a").camera, ("zoom", "adv_v_shift"))
+    for seed in (0, 7, 4_294_967):
+        stage, xs = _drive(CmaEs(space, seed=seed, budget=200, explore=0), 1)[0]
+        start = np.array([(r.init - r.low) / (r.high - r.low) for r in space.ranges])
+        opt = CMA(mean=start, sigma=0.3, bounds=np.tile([0.0, 1.0], (2, 1)), seed=seed * 1000)
+        expected = [space.low + opt.ask() * (space.high - space.low)
+                    for _ in range(opt.population_size)]
+        assert stage == "cmaes-1" and np.array_equal(xs, np.array(expected))
+
+
+@pytest.mark.parametrize("seed", [-1, SEED_MAX + 1, 2**64, True, 1.5, "3"])
+def test_a_seed_out_of_range_is_refused_naming_the_range(seed):
+    space = default_space(small_render("a").camera, ("zoom",))
+    for cls in (CmaEs, GridToRandom, RandomSearch):
+        with pytest.raises(RvmsimError, match=f"not a seed; give an integer from 0 to {SEED_MAX}"):
+            cls(space, seed=seed)
+    with pytest.raises(RvmsimError, match="^--seed "):
+        check_seed(seed)
+    assert check_seed(SEED_MAX) == SEED_MAX and check_seed(np.int64(3)) == 3
