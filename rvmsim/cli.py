@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from .cli_params import (SEED, FiniteFloat, Group, Integer, OutputFile, OutputFolder,
-                         SchedulerAddress, usage_error_line)
+                         SchedulerAddress, check_scale, usage_error_line)
 from .errors import RvmsimError
 from .isp import IspParams, OutputSpec
 from .tune import STRATEGIES
@@ -42,6 +42,7 @@ def _load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
 
+
 @click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},
              invoke_without_command=True, no_args_is_help=False)
 @click.version_option(package_name="rvmsim")
@@ -56,20 +57,10 @@ def cli(ctx: click.Context) -> None:
 @cli.command()
 @click.argument("scene", type=click.Path(path_type=Path))
 @click.option("--out", "-o", type=OutputFolder(), required=True, help="Output folder.")
-@click.option(
-    "--scale",
-    type=FiniteFloat(0.05, 4.0),
-    default=1.0,
-    show_default=True,
-    help="Resample the sensor by this factor (0.25 for a quick preview).",
-)
-@click.option(
-    "--face-size",
-    type=Integer(16, 4096),
-    default=None,
-    help="Cube face size in px, at most 4096 (default: automatic, as dense as the fisheye "
-         "image).",
-)
+@click.option("--scale", type=FiniteFloat(0.05, 4.0), default=1.0, show_default=True,
+              help="Resample the sensor by this factor (0.25 for a quick preview).")
+@click.option("--face-size", type=Integer(16, 4096), default=None,
+              help="Cube face size in px (default: automatic, as dense as the fisheye image).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def render(scene: Path, out: Path, scale: float, face_size: int | None, progress: bool) -> None:
     """Render the fisheye (P camera) colour and label images of SCENE.
@@ -121,6 +112,7 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     try:
         params, output = _load_isp(params_file)
         sc = load_scene(scene)
+        check_scale(sc, params, scale)
         frame = render_rvm(sc, params, output, scale=scale, progress=progress)
         write_processed(frame, out, params)
     except RvmsimError as err:
@@ -157,6 +149,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
         params, output = _load_isp(params_file)
         criteria = load_criteria(criteria_file)
         sc = load_scene(scene)
+        check_scale(sc, params, scale)
         frame = render_rvm(sc, params, output, criteria=criteria, scale=scale, annotate=True,
                            progress=progress)
         write_evaluation(frame, out, params, scene_file=scene, vehicle=sc.name,
@@ -257,15 +250,18 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
                                  seed, budget, workers)
     except RvmsimError as err:
         _fail(err)
-    overall = None
-    if progress:  # the overall bar on top, each vehicle's tuning bar below it
-        from tqdm import tqdm
+    bars: list = []  # the overall bar on top, each vehicle's tuning bar below it
 
-        overall = tqdm(total=len(scenes), unit="vehicle", desc="batch", position=0)
+    def overall():  # made once a scene starts: no bar above an error before that (one line)
+        if progress and not bars:
+            from tqdm import tqdm
+
+            bars.append(tqdm(total=len(scenes), unit="vehicle", desc="batch", position=0))
+        return bars[0] if bars else None
 
     def say(msg: str, err: bool = False) -> None:
-        if overall is not None:
-            overall.write(msg, file=sys.stderr if err else sys.stdout)
+        if (bar := overall()) is not None:
+            bar.write(msg, file=sys.stderr if err else sys.stdout)
         else:
             click.echo(msg, err=err)
 
@@ -276,22 +272,24 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
             runs.append(r)
             if r.error is not None:
                 say(f"rvmsim: error: {r.error} (skipped)", err=True)
-            if overall is not None:
-                overall.update(1)
+            if (bar := overall()) is not None:
+                bar.update(1)
                 if r.ok:
-                    overall.set_postfix_str(f"{r.vehicle[:20]}: EC {r.ec_score:.3g}")
+                    bar.set_postfix_str(f"{r.vehicle[:20]}: EC {r.ec_score:.3g}")
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
         _fail_os(err, out)
-    if overall is not None:
-        overall.close()
+    if bars:
+        bars[0].close()
     table = summary_table(runs, summary_ec_ids(runs, criteria_file))
     click.echo(table)
     try:
         write_summary(out, runs, table)
     except RvmsimError as err:
         _fail(err)
+    except OSError as err:
+        _fail_os(err, out)
     if any(not r.ok for r in runs):
         sys.exit(1)
 

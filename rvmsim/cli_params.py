@@ -18,12 +18,16 @@ import math
 import os
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
-__all__ = ["Command", "FiniteFloat", "Group", "Integer", "OutputFile", "OutputFolder", "SchedulerAddress", "SEED",
-           "usage_error_line"]
+if TYPE_CHECKING:
+    from .isp import IspParams
+    from .scene import Scene
+
+__all__ = ["Command", "FiniteFloat", "Group", "Integer", "OutputFile", "OutputFolder",
+           "SchedulerAddress", "SEED", "check_scale", "usage_error_line"]
 
 
 class Integer(click.IntRange):
@@ -147,6 +151,19 @@ class Group(click.Group):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         return _parse_in(ctx, super().parse_args, args)
+
+
+def check_scale(scene: Scene, params: IspParams, scale: float) -> None:
+    """``--scale`` of process and evaluate must keep the ISP parameters in range (RAD and the
+    shifts follow it, as in :func:`rvmsim.pipeline.render_rvm`), else a usage error of
+    ``--scale``."""
+    if scale != 1.0:
+        try:
+            params.for_input_scale(scene.fisheye_camera().scaled(scale).width
+                                   / scene.camera.image_size[0])
+        except ValueError as err:  # IspParams' own range check
+            raise click.BadParameter(f"{scale:g} scales the ISP parameters out of range ({err})",
+                                     click.get_current_context(), param_hint="--scale") from err
 
 
 def _param_name(param: click.Parameter) -> str:

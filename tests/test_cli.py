@@ -257,10 +257,12 @@ def test_top_level_help_and_version_still_work(monkeypatch, capsys):
     (("tune", "--budget", "x"), "rvmsim tune: --budget: 'x' is not a valid integer"),
     (("render", "s.yaml", "--out"), "rvmsim render: option '--out' requires an argument"),
     (("status",), "rvmsim status: RUN: required argument not given"),
-    (("select", "r", "--rnak", "2"), "rvmsim select: --rnak: no such option (did you mean --rank?)"),
+    (("select", "r", "--rnak", "2"),
+     "rvmsim select: --rnak: no such option (did you mean --rank?)"),
     (("validate", "s.yaml"), "rvmsim validate: --capture: required option not given"),
     (("report", "a", "b"), "rvmsim report: got unexpected extra argument (b)"),
-    (("tune", "s.yaml", "--max-time", "nan"), "rvmsim tune: --max-time: 'nan' is not a finite number"),
+    (("tune", "s.yaml", "--max-time", "nan"),
+     "rvmsim tune: --max-time: 'nan' is not a finite number"),
 ])
 def test_usage_errors_are_one_line_naming_the_option(monkeypatch, capsys, args, line):
     code, out, err = _main(monkeypatch, capsys, *args)

@@ -97,6 +97,8 @@ CASES = [
     Case("process-scale-inf", ("process", S, "--out", "p", "--scale", "inf"), ("--scale",)),
     Case("process-scale-negative", ("process", S, "--out", "p", "--scale", "-0.5"),
          ("--scale",)),
+    Case("process-scale-shrinks-rad", ("process", S, "--out", "p", "--scale", "0.05"),
+         ("--scale",)),  # RAD follows the scale: 640 px x 0.05 is below its 50 px
     Case("process-params-missing", ("process", S, "--out", "p", "--params", "nope.yaml"),
          ("nope.yaml",)),
     Case("process-params-folder", ("process", S, "--out", "p", "--params", "run"), ("run",),
@@ -112,6 +114,7 @@ CASES = [
          ("--out", "blocker"), setup=NOT_A_FOLDER),
     Case("evaluate-scale-nan", ("evaluate", S, "--scale", "NaN"), ("--scale",)),
     Case("evaluate-params-folder", ("evaluate", S, "--params", "run"), ("run",), keep=RUN),
+    Case("evaluate-scale-grows-rad", ("evaluate", S, "--scale", "4"), ("--scale",)),
     Case("evaluate-criteria-missing", ("evaluate", S, "--criteria", "nope.yaml"),
          ("nope.yaml",)),
     # ---- tune
@@ -172,6 +175,8 @@ CASES = [
          ("nope.yaml",)),
     Case("batch-out-under-file", ("batch", S, "--out", "blocker/runs"), ("--out", "blocker"),
          setup=NOT_A_FOLDER),
+    Case("batch-scheduler-unreachable",  # progress bars on: no bar above the error (10 s)
+         ("batch", S, "--out", "b", "--scheduler", "tcp://127.0.0.1:1"), ("tcp://127.0.0.1:1",)),
     Case("batch-strategy-unknown", ("batch", S, "--strategy", "grid"), ("--strategy",)),
     # ---- status
     Case("status-top-zero", ("status", "run", "--top", "0"), ("status", "--top"), keep=RUN),
@@ -197,6 +202,7 @@ CASES = [
     # ---- validate
     Case("validate-missing-capture", ("validate", S), ("validate", "--capture")),
     Case("validate-capture-missing", ("validate", S, "--capture", "nope.png"), ("nope.png",)),
+    Case("validate-capture-folder", ("validate", S, "--capture", "run"), ("run",), keep=RUN),
     Case("validate-max-angle-nan", ("validate", S, "--capture", CAP, "--max-angle-deg", "nan"),
          ("--max-angle-deg",), setup=_capture),
     Case("validate-search-px-nan", ("validate", S, "--capture", CAP, "--search-px", "nan"),
