@@ -12,6 +12,8 @@ from pathlib import Path
 
 import click
 
+from .cli_params import (SEED, FiniteFloat, Group, Integer, OutputFile, OutputFolder,
+                         SchedulerAddress, check_scale, usage_error_line)
 from .errors import RvmsimError
 from .isp import IspParams, OutputSpec
 from .tune import STRATEGIES
@@ -20,6 +22,8 @@ __all__ = ["cli", "main"]
 
 #: ``--strategy`` choices and help: the strategy registry.
 _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.items()) + "."
+#: ``--workers`` of tune and batch: one per core, at most their limit of 64.
+_DEFAULT_WORKERS = min(os.cpu_count() or 1, 64)
 
 
 def _fail(err: Exception) -> None:
@@ -28,7 +32,8 @@ def _fail(err: Exception) -> None:
 
 
 def _fail_os(err: OSError, where: Path | None) -> None:
-    _fail(RvmsimError(f"{getattr(err, 'filename', None) or where}: {err.strerror or err}"))
+    name = getattr(err, "filename", None) or where
+    _fail(RvmsimError(f"{name}: {err.strerror or err}" if name else str(err.strerror or err)))
 
 
 def _load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
@@ -37,28 +42,25 @@ def _load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+
+@click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},
+             invoke_without_command=True, no_args_is_help=False)
 @click.version_option(package_name="rvmsim")
-def cli() -> None:
+@click.pass_context
+def cli(ctx: click.Context) -> None:
     """rvmsim: automatic ISP tuning for rear-view-monitoring fisheye cameras."""
+    if ctx.invoked_subcommand is None:  # a usage error of one line, not the help page
+        names = ", ".join(cli.list_commands(ctx))
+        raise click.UsageError(f"missing command (one of {names}; see rvmsim --help)", ctx)
 
 
 @cli.command()
 @click.argument("scene", type=click.Path(path_type=Path))
-@click.option("--out", "-o", type=click.Path(path_type=Path), required=True, help="Output folder.")
-@click.option(
-    "--scale",
-    type=click.FloatRange(0.05, 4.0),
-    default=1.0,
-    show_default=True,
-    help="Resample the sensor by this factor (0.25 for a quick preview).",
-)
-@click.option(
-    "--face-size",
-    type=click.IntRange(16, 8192),
-    default=None,
-    help="Cube face size in px (default: automatic, as dense as the fisheye image).",
-)
+@click.option("--out", "-o", type=OutputFolder(), required=True, help="Output folder.")
+@click.option("--scale", type=FiniteFloat(0.05, 4.0), default=1.0, show_default=True,
+              help="Resample the sensor by this factor (0.25 for a quick preview).")
+@click.option("--face-size", type=Integer(16, 4096), default=None,
+              help="Cube face size in px (default: automatic, as dense as the fisheye image).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def render(scene: Path, out: Path, scale: float, face_size: int | None, progress: bool) -> None:
     """Render the fisheye (P camera) colour and label images of SCENE.
@@ -92,8 +94,8 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
 @click.argument("scene", type=click.Path(path_type=Path))
 @click.option("--params", "params_file", type=click.Path(path_type=Path), default=None,
               help="ISP params file (YAML/JSON); default: the paper's Table 2 defaults.")
-@click.option("--out", "-o", type=click.Path(path_type=Path), required=True, help="Output folder.")
-@click.option("--scale", type=click.FloatRange(0.05, 4.0), default=1.0, show_default=True,
+@click.option("--out", "-o", type=OutputFolder(), required=True, help="Output folder.")
+@click.option("--scale", type=FiniteFloat(0.05, 4.0), default=1.0, show_default=True,
               help="Render the fisheye at this fraction of the sensor (RAD and shifts follow).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def process(scene: Path, params_file: Path | None, out: Path, scale: float,
@@ -110,6 +112,7 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
     try:
         params, output = _load_isp(params_file)
         sc = load_scene(scene)
+        check_scale(sc, params, scale)
         frame = render_rvm(sc, params, output, scale=scale, progress=progress)
         write_processed(frame, out, params)
     except RvmsimError as err:
@@ -125,9 +128,9 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
               help="ISP params file (YAML/JSON); default: the paper's Table 2 defaults.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
               help="Criteria file (YAML); default: the paper's thresholds.")
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+@click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Output folder (default: out/<scene name>/evaluate).")
-@click.option("--scale", type=click.FloatRange(0.05, 4.0), default=1.0, show_default=True,
+@click.option("--scale", type=FiniteFloat(0.05, 4.0), default=1.0, show_default=True,
               help="Render the fisheye at this fraction of the sensor (RAD and shifts follow).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
@@ -146,6 +149,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
         params, output = _load_isp(params_file)
         criteria = load_criteria(criteria_file)
         sc = load_scene(scene)
+        check_scale(sc, params, scale)
         frame = render_rvm(sc, params, output, criteria=criteria, scale=scale, annotate=True,
                            progress=progress)
         write_evaluation(frame, out, params, scene_file=scene, vehicle=sc.name,
@@ -161,7 +165,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 
 @cli.command()
 @click.argument("scene", type=click.Path(path_type=Path), required=False)
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+@click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Run folder (default: runs/<scene name>).")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
               default="grid-random", show_default=True, help=_STRATEGY_HELP)
@@ -169,14 +173,14 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
               help="Tuning config (YAML): tuned parameters, ranges, steps, N, T, budgets.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
               help="Criteria file (YAML); default: the paper's thresholds.")
-@click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--workers", type=click.IntRange(1, 64), default=os.cpu_count() or 1,
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
+@click.option("--workers", type=Integer(1, 64), default=_DEFAULT_WORKERS,
               show_default=True, help="Worker processes.")
-@click.option("--budget", type=click.IntRange(1), default=None,
+@click.option("--budget", type=Integer(1), default=None,
               help="Evaluations (cmaes, random) or fine trials T per seed (grid-random).")
-@click.option("--max-time", type=click.FloatRange(0), default=None,
+@click.option("--max-time", type=FiniteFloat(0), default=None,
               help="Stop after this many seconds (the run can be resumed).")
-@click.option("--target-score", type=click.FloatRange(0, 1), default=None,
+@click.option("--target-score", type=FiniteFloat(0, 1), default=None,
               help="Stop once the EC score reaches this.")
 @click.option("--resume", "resume_dir", type=click.Path(path_type=Path), default=None,
               help="Continue the run in this folder (same settings, same final result).")
@@ -213,17 +217,17 @@ def tune(scene: Path | None, out: Path | None, strategy: str, config_file: Path 
 
 @cli.command()
 @click.argument("scenes", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=Path("runs"),
+@click.option("--out", "-o", type=OutputFolder(), default=Path("runs"),
               show_default=True, help="Folder for the runs (one sub-folder per scene).")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
               default="grid-random", show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None)
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None)
-@click.option("--seed", type=int, default=0, show_default=True)
-@click.option("--workers", type=click.IntRange(1, 64), default=os.cpu_count() or 1,
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
+@click.option("--workers", type=Integer(1, 64), default=_DEFAULT_WORKERS,
               show_default=True)
-@click.option("--budget", type=click.IntRange(1), default=None)
-@click.option("--scheduler", default=None, metavar="tcp://HOST:PORT",
+@click.option("--budget", type=Integer(1), default=None)
+@click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
               help="Tune the scenes as tasks on this Dask distributed cluster (one task per "
                    "scene) instead of one after another here.")
 @click.option("--progress/--no-progress", default=True)
@@ -244,15 +248,18 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
                                  seed, budget, workers)
     except RvmsimError as err:
         _fail(err)
-    overall = None
-    if progress:  # the overall bar on top, each vehicle's tuning bar below it
-        from tqdm import tqdm
+    bars: list = []  # the overall bar on top, each vehicle's tuning bar below it
 
-        overall = tqdm(total=len(scenes), unit="vehicle", desc="batch", position=0)
+    def overall():  # made once a scene starts: no bar above an error before that (one line)
+        if progress and not bars:
+            from tqdm import tqdm
+
+            bars.append(tqdm(total=len(scenes), unit="vehicle", desc="batch", position=0))
+        return bars[0] if bars else None
 
     def say(msg: str, err: bool = False) -> None:
-        if overall is not None:
-            overall.write(msg, file=sys.stderr if err else sys.stdout)
+        if (bar := overall()) is not None:
+            bar.write(msg, file=sys.stderr if err else sys.stdout)
         else:
             click.echo(msg, err=err)
 
@@ -263,29 +270,31 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
             runs.append(r)
             if r.error is not None:
                 say(f"rvmsim: error: {r.error} (skipped)", err=True)
-            if overall is not None:
-                overall.update(1)
+            if (bar := overall()) is not None:
+                bar.update(1)
                 if r.ok:
-                    overall.set_postfix_str(f"{r.vehicle[:20]}: EC {r.ec_score:.3g}")
+                    bar.set_postfix_str(f"{r.vehicle[:20]}: EC {r.ec_score:.3g}")
     except RvmsimError as err:
         _fail(err)
     except OSError as err:
         _fail_os(err, out)
-    if overall is not None:
-        overall.close()
+    if bars:
+        bars[0].close()
     table = summary_table(runs, summary_ec_ids(runs, criteria_file))
     click.echo(table)
     try:
         write_summary(out, runs, table)
     except RvmsimError as err:
         _fail(err)
+    except OSError as err:
+        _fail_os(err, out)
     if any(not r.ok for r in runs):
         sys.exit(1)
 
 
 @cli.command()
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--top", "top_m", type=click.IntRange(1, 100), default=5, show_default=True)
+@click.option("--top", "top_m", type=Integer(1, 100), default=5, show_default=True)
 def status(run: Path, top_m: int) -> None:
     """Show a run's progress and its current top candidates (works while it runs)."""
     from .tune import status_lines
@@ -299,8 +308,8 @@ def status(run: Path, top_m: int) -> None:
 
 @cli.command()
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--rank", type=click.IntRange(1), default=1, show_default=True)
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+@click.option("--rank", type=Integer(1), default=1, show_default=True)
+@click.option("--out", "-o", type=OutputFile(), default=None,
               help="Params file to write (default: print it).")
 def select(run: Path, rank: int, out: Path | None) -> None:
     """Export the rank-K parameter set of a run as a params file."""
@@ -322,7 +331,7 @@ def select(run: Path, rank: int, out: Path | None) -> None:
 
 @cli.command()
 @click.argument("path", type=click.Path(path_type=Path))
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+@click.option("--out", "-o", type=OutputFile(), default=None,
               help="HTML file to write (default: RUN/report.html, or RUNS_DIR/index.html).")
 def report(path: Path, out: Path | None) -> None:
     """Write a self-contained HTML review report of a run (PATH = RUN), or of every run in a
@@ -347,21 +356,21 @@ def report(path: Path, out: Path | None) -> None:
               help="ISP params file: also compare the RVM images and the ECs.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
               help="Criteria file for the ECs (with --params).")
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+@click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Output folder (default: out/<scene name>/validate).")
-@click.option("--write-scene", "write_scene", type=click.Path(path_type=Path), default=None,
+@click.option("--write-scene", "write_scene", type=OutputFile(), default=None,
               help="Write a copy of SCENE with the corrected mount pose here.")
-@click.option("--max-rms-px", type=click.FloatRange(0, min_open=True), default=2.0,
+@click.option("--max-rms-px", type=FiniteFloat(0, min_open=True), default=2.0,
               show_default=True, help="Landmark RMS after the pose correction, px.")
-@click.option("--max-position-mm", type=click.FloatRange(0), default=30.0, show_default=True,
+@click.option("--max-position-mm", type=FiniteFloat(0), default=30.0, show_default=True,
               help="Largest mount position correction, mm.")
-@click.option("--max-angle-deg", type=click.FloatRange(0), default=0.5, show_default=True,
+@click.option("--max-angle-deg", type=FiniteFloat(0), default=0.5, show_default=True,
               help="Largest mount angle correction (yaw, pitch or roll), degrees.")
-@click.option("--max-chamfer-px", type=click.FloatRange(0), default=None,
+@click.option("--max-chamfer-px", type=FiniteFloat(0), default=None,
               help="Largest edge chamfer distance with the scene's pose, px (default: not judged).")
-@click.option("--min-landmarks", type=click.IntRange(6), default=8, show_default=True,
+@click.option("--min-landmarks", type=Integer(6), default=8, show_default=True,
               help="Fewer matched landmarks is an error (exit 2).")
-@click.option("--search-px", type=click.FloatRange(2.0, 200.0), default=30.0, show_default=True,
+@click.option("--search-px", type=FiniteFloat(2.0, 200.0), default=30.0, show_default=True,
               help="How far from its predicted place a landmark is first searched for, px.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def validate(scene: Path, capture_file: Path, params_file: Path | None,
@@ -411,16 +420,19 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
 
 @cli.command()
 @click.argument("sweep_file", type=click.Path(path_type=Path))
-@click.option("--out", "-o", type=click.Path(path_type=Path), default=None,
+@click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Output folder (default: runs/sweep_<sweep file name>).")
-@click.option("--workers", type=click.IntRange(1, 256), default=os.cpu_count() or 1,
+@click.option("--workers", type=Integer(1, 256), default=os.cpu_count() or 1,
               show_default=True, help="Local processes (one design point each).")
-@click.option("--scheduler", default=None, metavar="tcp://HOST:PORT",
+@click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
               help="Run the design points on this Dask distributed cluster instead.")
 @click.option("--force", is_flag=True, help="Start over, dropping the finished points.")
+@click.option("--allow-large", is_flag=True,
+              help="Run sweeps of more than the documented number of design points (the "
+                   "limit on the sweep's points, see docs/sweep.md).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | None,
-          force: bool, progress: bool) -> None:
+          force: bool, allow_large: bool, progress: bool) -> None:
     """Render and tune every design point of SWEEP_FILE (a base scene and axes to vary).
 
     Writes sweep.csv/sweep.json (one row per point: best EC score, pass/fail per EC, the
@@ -432,7 +444,7 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
 
     out = out or Path("runs") / f"sweep_{sweep_file.stem}"
     try:
-        spec = load_sweep(sweep_file)
+        spec = load_sweep(sweep_file, allow_large=allow_large)
         try:
             with make_executor(scheduler, workers) as ex:
                 res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
@@ -457,16 +469,24 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
 
 
 def main() -> None:
-    """Console-script entry point: usage errors exit 2, Ctrl-C exits 130 (a tuning run keeps
-    every finished batch and can be resumed)."""
+    """Console-script entry point: a usage error is one line naming the option, exit 2
+    (:func:`~rvmsim.cli_params.usage_error_line`); so is any error a command did not report
+    itself; Ctrl-C exits 130 (a tuning run keeps every finished batch and can be resumed)."""
     try:
         code = cli.main(standalone_mode=False)
     except (KeyboardInterrupt, click.exceptions.Abort):
         click.echo("rvmsim: interrupted", err=True)
         sys.exit(130)
-    except click.ClickException as err:
-        err.show()
+    except click.UsageError as err:
+        click.echo(usage_error_line(err), err=True)
         sys.exit(err.exit_code)
+    except click.ClickException as err:
+        click.echo(f"rvmsim: error: {err.format_message()}", err=True)
+        sys.exit(err.exit_code)
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail_os(err, None)
     sys.exit(code if isinstance(code, int) else 0)
 
 

@@ -217,3 +217,85 @@ def test_strategy_choices_come_from_the_registry():
     res = runner.invoke(cli, ["tune", str(SCENES / "vehicle_a.yaml"), "--strategy", "annealing"])
     assert res.exit_code == 2
     assert "'grid-random', 'cmaes', 'random'" in " ".join(res.output.split())
+
+
+COMMANDS = ("render", "process", "evaluate", "tune", "batch", "status", "select", "report",
+            "validate", "sweep")
+
+
+def _main(monkeypatch, capsys, *args):
+    """``rvmsim ARGS`` through the console-script entry point, in this process: (exit status,
+    stdout, stderr)."""
+    from rvmsim.cli import main
+
+    monkeypatch.setattr(sys, "argv", ["rvmsim", *args])
+    with pytest.raises(SystemExit) as stop:
+        main()
+    out = capsys.readouterr()
+    return stop.value.code, out.out, out.err
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_help_of_every_command_still_works(monkeypatch, capsys, command):
+    code, out, err = _main(monkeypatch, capsys, command, "--help")
+    assert code == 0 and err == ""
+    assert f"{command} [OPTIONS]" in out and "--help" in out and "Options:" in out
+
+
+def test_top_level_help_and_version_still_work(monkeypatch, capsys):
+    from importlib.metadata import version
+
+    code, out, err = _main(monkeypatch, capsys, "--help")
+    assert code == 0 and err == "" and all(c in out for c in COMMANDS)
+    code, out, err = _main(monkeypatch, capsys, "-h")
+    assert code == 0 and "Commands:" in out
+    code, out, err = _main(monkeypatch, capsys, "--version")
+    assert code == 0 and version("rvmsim") in out
+
+
+@pytest.mark.parametrize("args, line", [
+    (("tune", "--budget", "x"), "rvmsim tune: --budget: 'x' is not a valid integer"),
+    (("render", "s.yaml", "--out"), "rvmsim render: option '--out' requires an argument"),
+    (("status",), "rvmsim status: RUN: required argument not given"),
+    (("select", "r", "--rnak", "2"),
+     "rvmsim select: --rnak: no such option (did you mean --rank?)"),
+    (("validate", "s.yaml"), "rvmsim validate: --capture: required option not given"),
+    (("report", "a", "b"), "rvmsim report: got unexpected extra argument (b)"),
+    (("tune", "s.yaml", "--max-time", "nan"),
+     "rvmsim tune: --max-time: 'nan' is not a finite number"),
+])
+def test_usage_errors_are_one_line_naming_the_option(monkeypatch, capsys, args, line):
+    code, out, err = _main(monkeypatch, capsys, *args)
+    assert code == 2 and out == "" and err == line + "\n"
+
+
+def test_no_command_is_one_line_listing_the_commands(monkeypatch, capsys):
+    code, out, err = _main(monkeypatch, capsys)
+    assert code == 2 and len(err.splitlines()) == 1
+    assert err.startswith("rvmsim: missing command") and all(c in err for c in COMMANDS)
+
+
+def test_sweep_accepts_allow_large(monkeypatch, capsys):
+    code, out, err = _main(monkeypatch, capsys, "sweep", "--help")
+    assert code == 0 and "--allow-large" in out
+    assert "design points" in " ".join(out.split())
+
+
+def test_good_invocations_use_existing_outputs(tmp_path, monkeypatch, capsys):
+    """An existing output folder and an existing params file are still fine: the option types
+    only refuse a file where a folder goes (and the reverse)."""
+    out = tmp_path / "already"
+    out.mkdir()
+    res = subprocess.run([sys.executable, "-m", "rvmsim", "render",
+                          str(SCENES / "vehicle_a.yaml"), "--out", str(out), "--scale", "0.1",
+                          "--no-progress"], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert (out / "fisheye_labels.png").is_file() and "rendered Vehicle A" in res.stdout
+    from click.testing import CliRunner
+
+    from rvmsim.cli import cli
+
+    params = tmp_path / "p.yaml"
+    params.write_text("old\n")
+    res2 = CliRunner().invoke(cli, ["select", str(tmp_path / "nothing"), "--out", str(params)])
+    assert res2.exit_code == 2 and "--out" not in res2.output  # the run is at fault, not --out

@@ -127,7 +127,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tune",),
     ("batch", "validate"),
     ("report",),
-    ("cli", "__main__", "__init__"),
+    ("cli", "cli_params", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
 
