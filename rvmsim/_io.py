@@ -25,7 +25,7 @@ from .errors import InputFileError, RvmsimError
 __all__ = ["read_text", "parse_yaml", "key_lines", "input_error_from_validation", "line_of",
            "write_png", "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
            "DEFAULT_MAX_IMAGE_PIXELS", "MAX_IMAGE_SIDE_PX", "max_image_pixels",
-           "image_size_problem", "env_limit"]
+           "image_size_problem", "env_limit", "safe_load_limited", "yaml_problem"]
 
 #: Longest YAML file read (bytes): a scene, criteria, params, tuning or sweep file is a few KiB.
 MAX_YAML_BYTES = 4 * 1024**2
@@ -155,17 +155,35 @@ class _LimitedLoader(yaml.SafeLoader):
         return n
 
 
+def safe_load_limited(text: str) -> Any:
+    """``yaml.safe_load`` within the YAML limits (depth, aliases; see the module docstring).
+
+    Raises
+    ------
+    yaml.YAMLError
+        Bad YAML, or a document over a limit (see :func:`yaml_problem`).
+    """
+    return yaml.load(text, Loader=_LimitedLoader)  # noqa: S506 - a SafeLoader subclass
+
+
+def yaml_problem(err: yaml.YAMLError) -> tuple[str, int | None]:
+    """(one-line message, 1-based line or None) of a YAML error from
+    :func:`safe_load_limited`: "malformed YAML: …" or "over the YAML limits: …"."""
+    mark = getattr(err, "problem_mark", None)
+    line = mark.line + 1 if mark is not None else None
+    problem = getattr(err, "problem", None) or (str(err).splitlines() or [type(err).__name__])[0]
+    what = "over the YAML limits" if isinstance(err, _YamlLimitError) else "malformed YAML"
+    return f"{what}: {problem}", line
+
+
 def parse_yaml(text: str, source: str, error: type[InputFileError] = InputFileError) -> Any:
     """``yaml.safe_load`` within the YAML limits, with a one-line ``error`` (file and line) on
     bad YAML or a document over a limit."""
     try:
-        return yaml.load(text, Loader=_LimitedLoader)  # noqa: S506 - a SafeLoader subclass
+        return safe_load_limited(text)
     except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else None
-        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-        what = "over the YAML limits" if isinstance(err, _YamlLimitError) else "malformed YAML"
-        raise error(source, "", f"{what}: {problem}", line) from None
+        message, line = yaml_problem(err)
+        raise error(source, "", message, line) from None
 
 
 def key_lines(text: str) -> dict[tuple[Any, ...], int]:
@@ -218,7 +236,8 @@ def input_error_from_validation(
     if kind not in ("extra_forbidden", "missing") and "input" in e and not isinstance(
         e["input"], dict
     ):
-        msg = f"{msg} (got {e['input']!r})"
+        got = repr(e["input"])
+        msg = f"{msg} (got {got if len(got) <= 60 else got[:40] + f'…, {len(got)} characters'})"
     return error(source, key, msg, line_of(lines, loc))
 
 
