@@ -210,7 +210,7 @@ def _value_problem(axis: str, value: Any) -> str | None:
     if axis in AXES:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             return "must be a number"
-        if not math.isfinite(value) or abs(value) > 1e7:
+        if abs(value) > 1e7 or not math.isfinite(value):  # abs first: a 400-digit int
             return "must be a finite number within ±1e7"
     return None
 
