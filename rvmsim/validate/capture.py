@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import struct
 import warnings
 import zlib
@@ -71,8 +72,10 @@ def capture_header_size(path: Path) -> tuple[int, int]:
     """
     from PIL import Image, UnidentifiedImageError
 
-    if not path.is_file():
+    if not path.exists():
         raise InputFileError(str(path), "", "capture not found")
+    if not path.is_file():
+        raise InputFileError(str(path), "", "capture is not a file")
     try:
         if path.stat().st_size == 0:
             raise InputFileError(str(path), "", "capture is an empty file")
@@ -80,9 +83,10 @@ def capture_header_size(path: Path) -> tuple[int, int]:
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # our own limit
             with Image.open(path) as im:
                 return int(im.width), int(im.height)
-    except Image.DecompressionBombError:
-        raise InputFileError(str(path), "", "capture's header gives more than "
-                             f"{2 * (Image.MAX_IMAGE_PIXELS or 0)} px, over the limit of "
+    except Image.DecompressionBombError as err:  # "Image size (N pixels) exceeds limit …"
+        pixels = re.search(r"\((\d+) pixels\)", str(err))
+        said = f"{pixels.group(1)} px" if pixels else "more pixels than PIL opens"
+        raise InputFileError(str(path), "", f"capture's header says {said}, over the limit of "
                              f"{max_image_pixels()} px") from None
     except UnidentifiedImageError:
         raise InputFileError(str(path), "", "cannot read capture (not a PNG, JPEG, TIFF or "
