@@ -132,7 +132,10 @@ class SweepSpec:
                              self.criteria_doc, self.sensitivity], sort_keys=True,
                             default=str).encode())
         for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
-            h.update(path.read_bytes() if path.is_file() else b"?")
+            if path.is_file():
+                _hash_file(h, path)
+            else:
+                h.update(b"?")
         return h.hexdigest()[:20]
 
     def criteria(self) -> Criteria:
@@ -146,6 +149,13 @@ class SweepSpec:
         """A :class:`SweepFileError` at ``key`` (dotted) of this sweep file; see
         :func:`_error`."""
         return _error(self.source, self.lines, key, message, at)
+
+
+def _hash_file(h: Any, path: Path) -> None:
+    """Feed the bytes of ``path`` to the hash ``h`` in 1 MiB pieces (a mesh file may be large)."""
+    with path.open("rb") as f:
+        for piece in iter(lambda: f.read(1 << 20), b""):
+            h.update(piece)
 
 
 def _error(source: str, lines: Mapping[tuple[Any, ...], int], key: str, message: str,

@@ -119,6 +119,9 @@ CASES = (
                                  "--no-progress"),
              (SMALL_SCENE, "camera.intrinsics.cx"), _edit("camera.intrinsics.cx", 1.0e6),
              keep=("run",)),
+        Case("render-scaled-over-the-limit", RENDER + ("--scale", "4"),
+             (SMALL_SCENE, "camera.image_size", "RVMSIM_MAX_IMAGE_PIXELS"),
+             _edit("name", "scaled"), keep=("run",), env={"RVMSIM_MAX_IMAGE_PIXELS": "1000000"}),
     ]
 )
 
