@@ -32,18 +32,25 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import input_error_from_validation, key_lines, line_of, parse_yaml, read_text
+from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
+                   parse_yaml, read_text)
 from ..criteria import Criteria, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
 
 __all__ = ["AXES", "SweepSpec", "DesignPoint", "load_sweep", "design_points",
-           "point_scene_doc"]
+           "point_scene_doc", "MAX_AXIS_VALUES", "MAX_SWEEP_POINTS"]
+
+#: Most values of one axis (a list or a range).
+MAX_AXIS_VALUES = 1000
+#: Most design points of a sweep (each one is a tuning run) unless ``allow_large``
+#: (``rvmsim sweep --allow-large``).
+MAX_SWEEP_POINTS = 1000
 
 #: Named axes: name → where a value is written.  Heights are positive up; the camera
 #: position's y is negative up.
@@ -68,10 +75,10 @@ _POSITION_AXES = {"camera_height_m": (1, -1), "lateral_offset_m": (0, 1),
 
 # ---------------------------------------------------------------------------- the file
 class _Range(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     start: float
     stop: float
-    num: int | None = Field(default=None, ge=1, le=1000)
+    num: int | None = Field(default=None, ge=1, le=MAX_AXIS_VALUES)
     step: float | None = Field(default=None, gt=0)
 
 
@@ -88,7 +95,7 @@ class _SweepFile(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str = "sweep"
     base_scene: str
-    axes: dict[str, Union[list[Any], _Range]] = Field(min_length=1)
+    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see _axis_values
     tune: _Tune = _Tune()
     map: tuple[str, str] | None = None
     sensitivity: bool = True
@@ -125,7 +132,10 @@ class SweepSpec:
                              self.criteria_doc, self.sensitivity], sort_keys=True,
                             default=str).encode())
         for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
-            h.update(path.read_bytes() if path.is_file() else b"?")
+            if path.is_file():
+                _hash_file(h, path)
+            else:
+                h.update(b"?")
         return h.hexdigest()[:20]
 
     def criteria(self) -> Criteria:
@@ -141,6 +151,13 @@ class SweepSpec:
         return _error(self.source, self.lines, key, message, at)
 
 
+def _hash_file(h: Any, path: Path) -> None:
+    """Feed the bytes of ``path`` to the hash ``h`` in 1 MiB pieces (a mesh file may be large)."""
+    with path.open("rb") as f:
+        for piece in iter(lambda: f.read(1 << 20), b""):
+            h.update(piece)
+
+
 def _error(source: str, lines: Mapping[tuple[Any, ...], int], key: str, message: str,
            at: tuple[Any, ...] | None = None) -> SweepFileError:
     """A :class:`SweepFileError` naming ``key``, on the line of the longest known prefix of
@@ -154,20 +171,76 @@ def _expand(name: str, v: Any, source: str, lines: Mapping[tuple[Any, ...], int]
     """An axis's values: a list as given, a range expanded (stop included)."""
     key, at = f"axes.{name}", ("axes", name)
     vals: np.ndarray
+    if isinstance(v, dict):
+        try:
+            v = _Range.model_validate(v)
+        except ValidationError as err:
+            sub = {k[2:]: n for k, n in lines.items() if k[:2] == at}
+            e = input_error_from_validation(err, source, sub, SweepFileError)
+            raise SweepFileError(source, f"{key}.{e.key}", e.message,
+                                 e.line or line_of(lines, at)) from None
+    elif not isinstance(v, list):
+        raise _error(source, lines, key, "an axis is a list of values or a range "
+                     "{start, stop, num or step}", at)
     if isinstance(v, _Range):
         if v.num is not None and v.step is None:
             vals = np.linspace(v.start, v.stop, v.num)
         elif v.step is not None and v.num is None:
-            n = int(math.floor((v.stop - v.start) / v.step + 1e-9)) + 1
-            if n < 1 or n > 1000:
-                raise _error(source, lines, key, f"the range gives {n} values", at)
+            count = (v.stop - v.start) / v.step + 1e-9
+            if not 0 <= count < MAX_AXIS_VALUES:  # also a count too large to be an int
+                raise _error(source, lines, key, f"the range gives {count + 1:.6g} values "
+                             f"(1..{MAX_AXIS_VALUES})", at)
+            n = int(math.floor(count)) + 1
             vals = v.start + v.step * np.arange(n)
         else:
             raise _error(source, lines, key, "give a range either num or step", at)
         return tuple(round(float(x), 10) for x in vals)
     if not v:
         raise _error(source, lines, key, "no values", at)
+    if len(v) > MAX_AXIS_VALUES:
+        raise _error(source, lines, key, f"{len(v)} values (at most {MAX_AXIS_VALUES})", at)
+    for i, value in enumerate(v):
+        problem = _value_problem(name, value)
+        if problem is not None:
+            raise _error(source, lines, key, f"value {i + 1} ({_short_repr(value)}): {problem}",
+                         at + (i,))
     return tuple(v)
+
+
+def _value_problem(axis: str, value: Any) -> str | None:
+    """Why ``value`` cannot be a value of the named ``axis`` (one line), or None; values of
+    scene-key axes are checked with each point's scene."""
+    if axis == "output_size":
+        if (not isinstance(value, list) or len(value) != 2
+                or not all(isinstance(x, int) and not isinstance(x, bool) for x in value)):
+            return "values are [W, H] in px"
+        if not all(16 <= x <= 8192 for x in value):
+            return "output sizes are 16..8192 px"
+        return image_size_problem(value[0], value[1], min_side=16)
+    if axis in AXES:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return "must be a number"
+        if abs(value) > 1e7 or not math.isfinite(value):  # abs first: a 400-digit int
+            return "must be a finite number within ±1e7"
+    return None
+
+
+def _short_repr(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:30] + "…"
+
+
+def _point_count(axes: tuple[tuple[str, tuple[Any, ...]], ...], allow_large: bool,
+                 source: str, lines: Mapping[tuple[Any, ...], int]) -> int:
+    """The number of design points the axes span, refused over :data:`MAX_SWEEP_POINTS`
+    unless ``allow_large`` (counted before any point is built)."""
+    count = math.prod(len(v) for _, v in axes)
+    if count > MAX_SWEEP_POINTS and not allow_large:
+        sizes = " × ".join(str(len(v)) for _, v in axes)
+        raise _error(source, lines, "axes", f"the axes span {sizes} = {count} design points, "
+                     f"over the limit of {MAX_SWEEP_POINTS} (each is a tuning run; "
+                     "rvmsim sweep --allow-large lifts the limit)")
+    return count
 
 
 def _check_tuning(f: _SweepFile, source: str, lines: Mapping[tuple[Any, ...], int]) -> None:
@@ -197,8 +270,13 @@ def _read_criteria(f: _SweepFile, folder: Path) -> tuple[str | None, str]:
     return text, str(cpath)
 
 
-def load_sweep(path: str | Path) -> SweepSpec:
+def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
     """Read and check a sweep file, and every design point's scene.
+
+    Parameters
+    ----------
+    allow_large : bool
+        Accept more than :data:`MAX_SWEEP_POINTS` design points (``--allow-large``).
 
     Raises
     ------
@@ -222,6 +300,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
         raise _error(str(path), lines, "base_scene", f"scene file not found: {base}")
     _, base_doc = read_scene_document(base)
     axes = tuple((name, _expand(name, v, str(path), lines)) for name, v in f.axes.items())
+    _point_count(axes, allow_large, str(path), lines)
     _check_tuning(f, str(path), lines)
     criteria_doc, criteria_source = _read_criteria(f, path.parent)
     names = [a for a, _ in axes]

@@ -23,7 +23,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .._io import input_error_from_validation, key_lines, line_of, parse_yaml, read_text
 from ..errors import CriteriaError
@@ -34,20 +34,30 @@ from .sigmoid import Criterion, Sigmoid
 __all__ = ["load_criteria", "default_criteria", "criteria_from_text"]
 
 
+def _not_nan(value: float) -> float:
+    if math.isnan(value):
+        raise ValueError("must be a number, not NaN")
+    return value
+
+
+#: A float that may be ±infinity (an open threshold) but not NaN.
+_Number = Annotated[float, AfterValidator(_not_nan)]
+
+
 class _SigmoidModel(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    c1: Annotated[float, Field(ge=0)] = 1.0
-    c2: float = -math.inf
-    c3: Annotated[float, Field(ge=0)] = 1.0
-    c4: float = math.inf
+    c1: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+    c2: _Number = -math.inf
+    c3: Annotated[float, Field(ge=0, allow_inf_nan=False)] = 1.0
+    c4: _Number = math.inf
 
 
 class _CriterionModel(BaseModel):
     model_config = ConfigDict(extra="forbid")
     enabled: bool = True
-    range: tuple[float | None, float | None] | None = None
+    range: tuple[_Number | None, _Number | None] | None = None
     sigmoid: _SigmoidModel | None = None
-    tolerance: Annotated[float, Field(gt=0)] | None = None
+    tolerance: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None
 
     @model_validator(mode="after")
     def _check(self) -> _CriterionModel:

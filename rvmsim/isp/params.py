@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .._io import key_lines, read_text
+from .._io import image_size_problem, key_lines, read_text, safe_load_limited, yaml_problem
 from ..errors import ParamsFileError
 
 __all__ = [
@@ -53,7 +53,11 @@ class ParamSpec:
         None when it can: a finite number (int, float or numpy float) in [low, high]."""
         if isinstance(value, bool) or not isinstance(value, _NUMBER):
             return f"must be a number, got {value!r}"
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:  # an integer of hundreds of digits
+            return f"a {len(str(abs(int(value))))}-digit number is outside [{self.low:g}, " \
+                   f"{self.high:g}] {self.unit}".rstrip()
         if not math.isfinite(number) or not self.low <= number <= self.high:
             return f"{number:g} is outside [{self.low:g}, {self.high:g}] {self.unit}".rstrip()
         return None
@@ -193,14 +197,15 @@ def params_to_dict(params: IspParams, output: OutputSpec | None = None) -> dict[
 def _parse(text: str, path: Path) -> Any:
     """The document of a params file: JSON for ``.json``, else YAML."""
     try:
-        return json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
+        return json.loads(text) if path.suffix.lower() == ".json" else safe_load_limited(text)
     except json.JSONDecodeError as err:
         raise ParamsFileError(str(path), "", f"malformed params file: {err}", err.lineno) from None
+    except RecursionError:  # JSON nested thousands of levels deep
+        raise ParamsFileError(str(path), "", "malformed params file: nested too deeply") from None
     except yaml.YAMLError as err:
-        first = str(err).splitlines()[0] if str(err) else type(err).__name__
-        mark = getattr(err, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else None
-        raise ParamsFileError(str(path), "", f"malformed params file: {first}", line) from None
+        message, line = yaml_problem(err)
+        message = message.replace("malformed YAML", "malformed params file", 1)
+        raise ParamsFileError(str(path), "", message, line) from None
 
 
 def _output_spec(out_data: Any, path: Path, lines: dict[tuple[Any, ...], int]) -> OutputSpec:
@@ -219,6 +224,9 @@ def _output_spec(out_data: Any, path: Path, lines: dict[tuple[Any, ...], int]) -
         raise error("output.size", "expected [width, height] in px")
     if not isinstance(mirror, bool):
         raise error("output.mirror", "expected true or false")
+    problem = image_size_problem(size[0], size[1], min_side=16)
+    if problem is not None:
+        raise error("output.size", problem)
     try:
         return OutputSpec(size[0], size[1], mirror)
     except ValueError as err:

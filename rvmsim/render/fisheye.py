@@ -25,7 +25,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._io import image_size_problem
 from ..camera import FisheyeCamera
+from ..errors import SceneError
 from ..scene import Scene, build_parts
 from .cube import FACE_NAMES, cube_layout
 from .fold import fold
@@ -93,7 +95,8 @@ def render_fisheye(
     Raises
     ------
     SceneError
-        When a mesh file of the scene cannot be loaded.
+        When a mesh file of the scene cannot be loaded, or the camera's image is over the
+        image size limit (:func:`rvmsim._io.image_size_problem`).
 
     Convention
     ----------
@@ -101,6 +104,9 @@ def render_fisheye(
     """
     t0 = time.perf_counter()
     cam = scene.fisheye_camera() if camera is None else camera
+    too_big = image_size_problem(cam.width, cam.height)  # a camera scaled up, or from the API
+    if too_big is not None:
+        raise SceneError(scene.source, "camera.image_size", f"cannot render: {too_big}")
     parts = build_parts(scene)
     layout = cube_layout(
         cam,

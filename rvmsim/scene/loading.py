@@ -13,9 +13,10 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
+                   parse_yaml, read_text)
 from ..errors import SceneError
-from .schema import MeshPart, Scene
+from .schema import CameraSpec, MeshPart, Scene
 
 __all__ = [
     "load_scene",
@@ -23,6 +24,8 @@ __all__ = [
     "scene_from_dict",
     "absolute_mesh_paths",
     "mesh_parts",
+    "camera_problem",
+    "FOCAL_FACTORS",
 ]
 
 #: Discriminator tags of the vehicle parts, which pydantic puts into error locations.
@@ -60,6 +63,10 @@ def scene_from_dict(
         raise input_error_from_validation(err, source, key_lines(text or ""), SceneError,
                                           _TAGS) from None
     lines = key_lines(text or "")
+    bad = camera_problem(scene.camera)
+    if bad is not None:
+        key, message = bad
+        raise SceneError(source, key, message, line_of(lines, tuple(key.split("."))))
     try:
         scene.fisheye_camera()
     except ValueError as err:
@@ -72,6 +79,40 @@ def scene_from_dict(
                 source, key, f"mesh file not found: {path}", lines.get(loc)
             )
     return scene
+
+
+#: Focal lengths lie within these factors of the longest image side (a fisheye has about
+#: 1/π, a narrow lens a few; outside, the render's cube faces degenerate).
+FOCAL_FACTORS = (0.01, 100.0)
+
+
+def camera_problem(camera: CameraSpec) -> tuple[str, str] | None:
+    """(dotted key, one-line message) of a camera whose values the renderer cannot use, or
+    None: an image size over the limits (:func:`rvmsim._io.image_size_problem`, at least
+    16 px a side), focal lengths outside :data:`FOCAL_FACTORS` of the longest image side, or
+    a principal point more than an image width (height) outside the image."""
+    w, h = camera.image_size
+    problem = image_size_problem(w, h, min_side=16)
+    if problem is not None:
+        return "camera.image_size", problem
+    intr = camera.intrinsics
+    fx, fy, cx, cy, _ = intr.resolve(w, h)
+    given = ("K" if intr.K is not None else "horizontal_fov_deg"
+             if intr.horizontal_fov_deg is not None else "focal_length_mm"
+             if intr.focal_length_mm is not None else None)
+    side = max(w, h)
+    lo, hi = FOCAL_FACTORS[0] * side, FOCAL_FACTORS[1] * side
+    for name, f in (("fx", fx), ("fy", fy)):
+        if not lo <= f <= hi:
+            return (f"camera.intrinsics.{given or name}",
+                    f"gives {name} = {f:.6g} px/rad, outside [{lo:g}, {hi:g}] "
+                    f"({FOCAL_FACTORS[0]:g} to {FOCAL_FACTORS[1]:g} times the longest image side)")
+    for name, c, n in (("cx", cx, w), ("cy", cy, h)):
+        if not -n <= c <= 2 * n:
+            return (f"camera.intrinsics.{'K' if intr.K is not None else name}",
+                    f"{name} = {c:.6g} px is outside [{-n}, {2 * n}] (the principal point lies "
+                    "at most an image size outside the image)")
+    return None
 
 
 def mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:

@@ -43,19 +43,26 @@ __all__ = [
     "RenderSettings",
 ]
 
-PositiveFloat = Annotated[float, Field(gt=0)]
-NonNegFloat = Annotated[float, Field(ge=0)]
+#: Largest distance in a scene (metres): every length and coordinate lies within it.
+MAX_METRES = 1000.0
+Metres = Annotated[float, Field(ge=-MAX_METRES, le=MAX_METRES)]
+PositiveFloat = Annotated[float, Field(gt=0, le=MAX_METRES)]
+NonNegFloat = Annotated[float, Field(ge=0, le=MAX_METRES)]
+#: Intrinsics in px (focal lengths px/rad), checked against the image size when loaded.
+PositivePx = Annotated[float, Field(gt=0, le=1e7)]
+Px = Annotated[float, Field(ge=-1e7, le=1e7)]
 Angle180 = Annotated[float, Field(ge=-180, le=180)]
 Rgb = tuple[
     Annotated[float, Field(ge=0, le=1)],
     Annotated[float, Field(ge=0, le=1)],
     Annotated[float, Field(ge=0, le=1)],
 ]
-Vec3 = tuple[float, float, float]
+Vec3 = tuple[Metres, Metres, Metres]
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # Every float finite: a NaN or an infinity anywhere is an error naming its key.
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 # ---------------------------------------------------------------------------- camera
@@ -70,15 +77,15 @@ class Intrinsics(_Model):
     The principal point defaults to the image centre ((W − 1)/2, (H − 1)/2).
     """
 
-    fx: PositiveFloat | None = None
-    fy: PositiveFloat | None = None
-    cx: float | None = None
-    cy: float | None = None
-    skew: float = 0.0
-    K: tuple[Vec3, Vec3, Vec3] | None = None
+    fx: PositivePx | None = None
+    fy: PositivePx | None = None
+    cx: Px | None = None
+    cy: Px | None = None
+    skew: Annotated[float, Field(gt=-1, lt=1)] = 0.0
+    K: tuple[tuple[Px, Px, Px], tuple[Px, Px, Px], tuple[Px, Px, Px]] | None = None
     horizontal_fov_deg: Annotated[float, Field(gt=0, le=360)] | None = None
-    focal_length_mm: PositiveFloat | None = None
-    pixel_pitch_um: PositiveFloat | None = None
+    focal_length_mm: Annotated[float, Field(gt=0, le=1000)] | None = None
+    pixel_pitch_um: Annotated[float, Field(gt=0, le=1000)] | None = None
 
     @model_validator(mode="after")
     def _one_way(self) -> Intrinsics:
@@ -265,7 +272,7 @@ class TestObject(_Model):
     """Override for one FMVSS test object: its position and whether it is placed."""
 
     __test__ = False  # not a pytest class
-    position: tuple[float, float] | None = None  # (x, z) metres
+    position: tuple[Metres, Metres] | None = None  # (x, z) metres
     enabled: bool = True
 
 
@@ -281,7 +288,7 @@ class Guidelines(_Model):
     """
 
     enabled: bool = True
-    side_x: tuple[float, float] = (-0.9, 0.9)
+    side_x: tuple[Metres, Metres] = (-0.9, 0.9)
     side_z: tuple[NonNegFloat, PositiveFloat] = (0.2, 3.0)
     cross_z: list[PositiveFloat] = [0.5, 1.0, 2.0, 3.0]
     line_width: PositiveFloat = 0.05
@@ -327,7 +334,7 @@ class PatternBoard(_Model):
         )
 
 
-Rect = tuple[float, float, float, float]
+Rect = tuple[Metres, Metres, Metres, Metres]
 
 
 class GroundPattern(_Model):
@@ -344,12 +351,12 @@ class GroundPattern(_Model):
     """
 
     name: str = "ground pattern"
-    origin: tuple[float, float] = (0.0, 0.0)
+    origin: tuple[Metres, Metres] = (0.0, 0.0)
     yaw_deg: Angle180 = 0.0
     square_size: PositiveFloat
     checker: Annotated[list[Rect], Field(min_length=1)]
     white: list[Rect] = []
-    circles: list[tuple[float, float, PositiveFloat]] = []
+    circles: list[tuple[Metres, Metres, PositiveFloat]] = []
     black_color: Rgb = (0.03, 0.03, 0.03)
     white_color: Rgb = (0.92, 0.92, 0.92)
 

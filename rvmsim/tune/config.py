@@ -3,15 +3,18 @@ settings; and the strategy it describes (:func:`make_strategy`, through the regi
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
+                      model_validator)
 
-from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
+from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
+                   parse_yaml, read_text)
 from ..camera import FisheyeCamera
 from ..errors import InputFileError, RvmsimError, TuningConfigError
-from ..isp import IspParams, OutputSpec
+from ..isp import PARAM_SPECS, IspParams, OutputSpec
 from .space import ParamRange, SearchSpace, default_space
 from .strategies import (
     STRATEGIES,
@@ -24,18 +27,35 @@ from .strategies import (
 __all__ = ["TuningConfig", "load_tuning_config", "make_strategy"]
 
 
+_SPEC = {s.name: s for s in PARAM_SPECS}
+
+
 class _Range(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     init: float | None = None
     range: tuple[float, float] | None = None
     step: Annotated[float, Field(gt=0)] | None = None
     points: Annotated[int, Field(ge=1, le=99)] | None = None
+
+    @model_validator(mode="after")
+    def _ordered(self) -> _Range:
+        if self.range is not None and self.range[0] > self.range[1]:
+            raise ValueError(f"range must be [low, high] with low <= high, got {list(self.range)}")
+        return self
 
 
 class _Output(BaseModel):
     model_config = ConfigDict(extra="forbid")
     size: tuple[Annotated[int, Field(ge=16, le=8192)], Annotated[int, Field(ge=16, le=8192)]] = (640, 360)
     mirror: bool = True
+
+    @field_validator("size")
+    @classmethod
+    def _pixels(cls, size: tuple[int, int]) -> tuple[int, int]:
+        problem = image_size_problem(*size, min_side=16)
+        if problem is not None:
+            raise ValueError(problem)
+        return size
 
 
 class TuningConfig(BaseModel):
@@ -49,7 +69,7 @@ class TuningConfig(BaseModel):
     ``section`` and ``Settings``, which reject keys the strategy does not use).
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     tuned: list[str] | None = None
     parameters: dict[str, _Range] = {}
     fixed: dict[str, float] = {}
@@ -61,9 +81,24 @@ class TuningConfig(BaseModel):
     grid_random: GridRandomSettings = GridRandomSettings()
     cmaes: CmaesSettings = CmaesSettings()
     random: RandomSettings = RandomSettings()
+    #: The file it was read from and its key lines, for errors (not keys of the file).
+    _source: str = PrivateAttr(default="<tuning config>")
+    _lines: Mapping[tuple[Any, ...], int] = PrivateAttr(default_factory=dict)
+
+    def error(self, path: tuple[Any, ...], message: str) -> TuningConfigError:
+        """A :class:`TuningConfigError` at the key path ``path`` of this config's file."""
+        return TuningConfigError(self._source, ".".join(str(p) for p in path), message,
+                                 line_of(self._lines, path))
 
     def space(self, camera: FisheyeCamera) -> SearchSpace:
-        """The search space on ``camera``: the default one with this config's changes."""
+        """The search space on ``camera``: the default one with this config's changes.
+
+        Raises
+        ------
+        TuningConfigError
+            An ``init`` outside the range it ends up with on this camera (a config without
+            ``range`` keeps the camera's default range).
+        """
         names = tuple(self.tuned) if self.tuned is not None else None
         base_space = default_space(camera) if names is None else default_space(camera, names)
         ranges = []
@@ -73,10 +108,39 @@ class TuningConfig(BaseModel):
                 ranges.append(r)
                 continue
             lo, hi = o.range if o.range is not None else (r.low, r.high)
+            if o.init is not None and not lo <= o.init <= hi:
+                raise self.error(("parameters", r.name, "init"), f"{o.init:g} is outside the "
+                                 f"range [{lo:g}, {hi:g}] it is searched in on this camera")
             init = o.init if o.init is not None else min(max(r.init, lo), hi)
             ranges.append(ParamRange(r.name, init, lo, hi, o.step or r.step, o.points or r.points))
         base = IspParams().replace(**self.fixed) if self.fixed else IspParams()
         return SearchSpace(tuple(ranges), base)
+
+    def check_values(self) -> None:
+        """Every parameter's ``range``, ``init`` and ``fixed`` value within the parameter's
+        own range (:data:`rvmsim.isp.PARAM_SPECS`), so the run cannot fail on them later.
+
+        Raises
+        ------
+        TuningConfigError
+            Naming the key (``parameters.rad.range``, ``fixed.tilt``) and the limits.
+        """
+        for name, o in self.parameters.items():
+            spec = _SPEC.get(name)
+            if spec is None:
+                continue
+            for k, v in (("range", o.range[0] if o.range else None),
+                         ("range", o.range[1] if o.range else None), ("init", o.init)):
+                problem = None if v is None else spec.problem(v)
+                if problem is not None:
+                    raise self.error(("parameters", name, k), problem)
+            if o.range is not None and o.init is not None and not o.range[0] <= o.init <= o.range[1]:
+                raise self.error(("parameters", name, "init"),
+                                 f"{o.init:g} is outside its range {list(o.range)}")
+        for name, value in self.fixed.items():
+            problem = _SPEC[name].problem(value) if name in _SPEC else None
+            if problem is not None:
+                raise self.error(("fixed", name), problem)
 
     def output_spec(self) -> OutputSpec:
         """The RVM image the ECs are measured on while tuning."""
@@ -113,15 +177,18 @@ def load_tuning_config(path: str | Path | None) -> TuningConfig:
     data = parse_yaml(text, str(path), TuningConfigError) or {}
     if not isinstance(data, dict):
         raise TuningConfigError(str(path), "", "a tuning config must be a YAML mapping")
+    lines = key_lines(text)
     try:
         cfg = TuningConfig.model_validate(data)
     except ValidationError as err:
-        bad = input_error_from_validation(err, str(path), key_lines(text), TuningConfigError)
+        bad = input_error_from_validation(err, str(path), lines, TuningConfigError)
         raise _unused_setting(bad) from None
+    cfg._source, cfg._lines = str(path), lines
     unknown = set(cfg.tuned or []) | set(cfg.parameters) | set(cfg.fixed)
     unknown -= set(IspParams.names())
     if unknown:
         raise TuningConfigError(str(path), sorted(unknown)[0], "not an ISP parameter")
+    cfg.check_values()
     return cfg
 
 

@@ -2,77 +2,132 @@
 
 from __future__ import annotations
 
+import re
+import struct
+import warnings
+import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from .._io import max_image_pixels
 from ..camera import FisheyeCamera
-from ..errors import RvmsimError
+from ..errors import InputFileError, RvmsimError
 
-__all__ = ["load_capture", "check_capture_size", "grey"]
+__all__ = ["load_capture", "check_capture_size", "grey", "capture_header_size"]
 
 
 def load_capture(path: str | Path, camera: FisheyeCamera | None = None) -> np.ndarray:
     """Read a capture as (H, W, 3) uint8 RGB.
 
     Grey images are expanded to three channels, an alpha channel is dropped, 16-bit images
-    are scaled to 8 bits.
+    are scaled to 8 bits (the high byte).
 
     Parameters
     ----------
     path : path
-        PNG, JPEG, TIFF or anything else OpenCV decodes.
+        PNG, JPEG, TIFF, BMP or any other format PIL reads.
     camera : FisheyeCamera, optional
         When given, the capture must be ``camera.width`` × ``camera.height`` px.
 
     Raises
     ------
     RvmsimError
-        One line naming the file: missing, unreadable, empty or blank, or (with
-        ``camera``) a size other than the camera's.
+        One line naming the file: missing, unreadable, empty or blank, over the image pixel
+        limit (``RVMSIM_MAX_IMAGE_PIXELS``), or (with ``camera``) a size other than the
+        camera's; the size is checked from the file's header, before the pixels are decoded.
     """
     path = Path(path)
-    img = _to_rgb8(_decode(path), path)
+    w, h = capture_header_size(path)
+    if camera is not None and (w, h) != (camera.width, camera.height):
+        raise _size_error(path, w, h, camera)
+    limit = max_image_pixels()
+    if w * h > limit:
+        raise InputFileError(str(path), "", f"capture is {w}×{h} = {w * h} px, over the limit "
+                             f"of {limit} px (raise it with RVMSIM_MAX_IMAGE_PIXELS)")
+    img = _decode(path)
     h, w = img.shape[:2]
     if camera is not None and (w, h) != (camera.width, camera.height):
-        raise RvmsimError(f"{path}: capture is {w}×{h} px but the scene's camera.image_size is "
-                          f"{camera.width}×{camera.height} px")
+        raise _size_error(path, w, h, camera)
     if float(img.std()) < 1.0:
         raise RvmsimError(f"{path}: capture is blank (every pixel ≈ {int(img.mean())})")
     return img
 
 
-def _decode(path: Path) -> np.ndarray:
-    """The file's pixels as OpenCV decodes them (any depth, BGR(A) or grey)."""
-    import cv2
+def _size_error(path: Path, w: int, h: int, camera: FisheyeCamera) -> InputFileError:
+    return InputFileError(str(path), "", f"capture is {w}×{h} px but the scene's "
+                          f"camera.image_size is {camera.width}×{camera.height} px")
 
+
+def capture_header_size(path: Path) -> tuple[int, int]:
+    """(width, height) in px of the image file at ``path``, from its header alone (PIL's
+    lazy open: no pixel is decoded).
+
+    Raises
+    ------
+    InputFileError
+        One line naming the file: missing, empty, unreadable or not an image, or a header
+        so large that PIL refuses it as a decompression bomb.
+    """
+    from PIL import Image, UnidentifiedImageError
+
+    if not path.exists():
+        raise InputFileError(str(path), "", "capture not found")
     if not path.is_file():
-        raise RvmsimError(f"{path}: capture not found")
+        raise InputFileError(str(path), "", "capture is not a file")
     try:
-        data = np.fromfile(path, dtype=np.uint8)
+        if path.stat().st_size == 0:
+            raise InputFileError(str(path), "", "capture is an empty file")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # our own limit
+            with Image.open(path) as im:
+                return int(im.width), int(im.height)
+    except Image.DecompressionBombError as err:  # "Image size (N pixels) exceeds limit …"
+        pixels = re.search(r"\((\d+) pixels\)", str(err))
+        said = f"{pixels.group(1)} px" if pixels else "more pixels than PIL opens"
+        raise InputFileError(str(path), "", f"capture's header says {said}, over the limit of "
+                             f"{max_image_pixels()} px") from None
+    except UnidentifiedImageError:
+        raise InputFileError(str(path), "", "cannot read capture (not a PNG, JPEG, TIFF or "
+                             "other image file)") from None
     except OSError as err:
-        raise RvmsimError(f"{path}: cannot read capture ({err.strerror or err})") from None
-    if data.size == 0:
-        raise RvmsimError(f"{path}: capture is an empty file")
-    img = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
-    if img is None or img.size == 0:
-        raise RvmsimError(f"{path}: cannot read capture (not an image OpenCV can decode)")
-    return np.asarray(img)
+        raise InputFileError(str(path), "", f"cannot read capture ({err.strerror or err})"
+                             ) from None
 
 
-def _to_rgb8(img: np.ndarray, path: Path) -> np.ndarray:
-    """8-bit RGB from OpenCV's decoded 8/16-bit grey, BGR or BGRA."""
-    import cv2
+def _decode(path: Path) -> np.ndarray:
+    """The file's pixels as 8-bit RGB (PIL decodes them: unlike OpenCV's, its decoders
+    report a truncated or corrupt file as an exception, not as lines on stderr)."""
+    from PIL import Image
 
-    if img.dtype == np.uint16:
-        img = (img.astype(np.uint16) >> 8).astype(np.uint8)
-    elif img.dtype != np.uint8:
-        raise RvmsimError(f"{path}: capture has {img.dtype} pixels (need 8- or 16-bit)")
-    if img.ndim == 2:
-        return np.asarray(cv2.cvtColor(img, cv2.COLOR_GRAY2RGB))
-    if img.shape[2] == 4:
-        return np.asarray(cv2.cvtColor(img, cv2.COLOR_BGRA2RGB))
-    return np.asarray(cv2.cvtColor(img, cv2.COLOR_BGR2RGB))
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # checked already
+            with Image.open(path) as im:
+                im.load()
+                return _to_rgb8(im, path)
+    except (OSError, SyntaxError, ValueError, EOFError, struct.error, zlib.error) as err:
+        # PIL says "broken PNG file" with a SyntaxError, "image file is truncated" with OSError
+        first = (str(err).strip().splitlines() or [type(err).__name__])[0][:160]
+        raise InputFileError(str(path), "", f"cannot read capture ({first})") from None
+
+
+def _to_rgb8(im: Any, path: Path) -> np.ndarray:
+    """(H, W, 3) uint8 RGB from a loaded PIL image: 16-bit grey scaled to 8 bits (its high
+    byte, as PIL keeps of 16-bit colour), grey expanded to three channels, alpha dropped."""
+    if im.mode in ("I;16", "I;16B", "I;16L", "I"):
+        arr = np.asarray(im)
+        if arr.min(initial=0) < 0 or arr.max(initial=0) > 65535:
+            raise InputFileError(str(path), "", "capture has 32-bit pixels (need 8- or 16-bit)")
+        grey8 = (arr.astype(np.uint16) >> 8).astype(np.uint8)
+        return np.repeat(grey8[:, :, None], 3, axis=2)
+    if im.mode == "F":
+        raise InputFileError(str(path), "", "capture has float32 pixels (need 8- or 16-bit)")
+    if im.mode in ("L", "LA", "1"):
+        grey8 = np.asarray(im.convert("L"), dtype=np.uint8)
+        return np.repeat(grey8[:, :, None], 3, axis=2)
+    return np.ascontiguousarray(np.asarray(im.convert("RGB"), dtype=np.uint8))
 
 
 def check_capture_size(capture: np.ndarray, camera: FisheyeCamera, capture_name: str) -> None:

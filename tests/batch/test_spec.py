@@ -100,3 +100,37 @@ def test_a_bad_criteria_file_fails_when_the_sweep_is_loaded(tmp_path):
     with pytest.raises(CriteriaError, match="nope.yaml: file not found"):
         load_sweep(write_sweep(tmp_path / "n", SWEEP.replace("seed: 3",
                                                              "seed: 3\n  criteria: nope.yaml")))
+
+
+@pytest.mark.parametrize("axes, key, words", [
+    ("  pitch_deg: [28, abc]\n", "axes.pitch_deg", "value 2 ('abc'): must be a number"),
+    ("  pitch_deg: {start: 1, stop: .nan, num: 3}\n", "axes.pitch_deg.stop", "finite"),
+    ("  output_size: [[100000, 100000]]\n", "axes.output_size", "16..8192"),
+    ("  output_size: [[8192, 8192]]\n", "axes.output_size", "RVMSIM_MAX_IMAGE_PIXELS"),
+    ("  pitch_deg: {start: 0, stop: 1.0e300, step: 1.0e-300}\n", "axes.pitch_deg", "values"),
+])
+def test_axis_values_are_checked_at_load(tmp_path, axes, key, words):
+    f = write_sweep(tmp_path, SWEEP.replace("  pitch_deg: [28, 34]\n", axes))
+    with pytest.raises(SweepFileError) as err:
+        load_sweep(f)
+    assert err.value.key == key and words in str(err.value), str(err.value)
+
+
+def test_the_point_count_is_refused_before_points_are_built_unless_allowed(tmp_path):
+    import time
+
+    from rvmsim.batch.spec import MAX_SWEEP_POINTS
+
+    big = ("  pitch_deg: {start: 0, stop: 45, num: 1000}\n"
+           "  yaw_deg: {start: -45, stop: 45, num: 1000}\n")
+    f = write_sweep(tmp_path / "big", SWEEP.replace("  pitch_deg: [28, 34]\n", big))
+    start = time.perf_counter()
+    with pytest.raises(SweepFileError, match="3000000 design points.*--allow-large") as err:
+        load_sweep(f)
+    assert err.value.key == "axes" and time.perf_counter() - start < 5
+    over = "  pitch_deg: {start: 28, stop: 34, num: %d}\n" % (MAX_SWEEP_POINTS // 3 + 1)
+    f = write_sweep(tmp_path / "over", SWEEP.replace("  pitch_deg: [28, 34]\n", over))
+    with pytest.raises(SweepFileError, match="over the limit"):
+        load_sweep(f)
+    spec = load_sweep(f, allow_large=True)
+    assert len(design_points(spec)) == 3 * (MAX_SWEEP_POINTS // 3 + 1)

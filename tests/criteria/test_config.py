@@ -142,3 +142,16 @@ def test_bad_selection_is_one_line(tmp_path, text, key, line, words):
         load_criteria(path)
     assert info.value.key == key and words in info.value.message, str(info.value)
     assert info.value.line == line and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("text, key", [
+    ("criteria: {2-1: {range: [.nan, 9]}}\n", "criteria.2-1.range.0"),
+    ("criteria: {2-1: {sigmoid: {c2: .nan}}}\n", "criteria.2-1.sigmoid.c2"),
+    ("criteria: {2-1: {range: [5, 9], tolerance: .inf}}\n", "criteria.2-1.tolerance"),
+])
+def test_nan_thresholds_are_refused_but_open_ends_stay(text, key):
+    with pytest.raises(CriteriaError) as err:
+        criteria_from_text(text, "c.yaml")
+    assert err.value.key == key
+    open_end = criteria_from_text("criteria: {2-1: {range: [5, .inf]}}\n", "c.yaml")
+    assert open_end.items["2-1"].high == float("inf")

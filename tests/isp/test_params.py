@@ -108,3 +108,25 @@ def test_params_follow_a_resampled_input():
 def test_bundled_params_file_is_the_paper_defaults():
     assert load_params(SCENES.parent / "params" / "paper_defaults.yaml") == (IspParams(),
                                                                             OutputSpec())
+
+
+@pytest.mark.parametrize("text, key, words", [
+    ("rad: " + "9" * 400 + "\n", "rad", "400-digit number is outside [50, 2000]"),
+    ("zoom: .nan\n", "zoom", "outside"),
+    ("output: {size: [8192, 8192]}\n", "output.size", "RVMSIM_MAX_IMAGE_PIXELS"),
+    ("output: {size: [100000, 100000]}\n", "output.size", "16..16384"),
+    ("rad: 600\ndeep: " + "[" * 5000 + "]" * 5000 + "\n", "", "over the YAML limits"),
+])
+def test_params_values_and_yaml_over_the_limits(tmp_path, text, key, words):
+    path = tmp_path / "p.yaml"
+    path.write_text(text)
+    with pytest.raises(ParamsFileError) as err:
+        load_params(path)
+    assert err.value.key == key and words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_json_params_nested_too_deeply(tmp_path):
+    path = tmp_path / "p.json"
+    path.write_text("[" * 100000 + "]" * 100000)
+    with pytest.raises(ParamsFileError, match="nested too deeply"):
+        load_params(path)

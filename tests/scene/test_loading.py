@@ -126,3 +126,37 @@ def test_mesh_parts_name_every_mesh_file_part():
     parts = mesh_parts(scene_from_dict(data))
     assert [k for k, _ in parts] == ["vehicle.extra.0.mesh"]
     assert isinstance(parts[0][1], MeshPart)
+
+
+@pytest.mark.parametrize("key, value, named", [
+    (["camera", "image_size"], [100000, 100000], "camera.image_size"),
+    (["camera", "image_size"], [8000, 8000], "camera.image_size"),
+    (["camera", "intrinsics", "fx"], 1e308, "camera.intrinsics.fx"),
+    (["camera", "intrinsics", "fx"], 1e-3, "camera.intrinsics.fx"),
+    (["camera", "intrinsics", "cx"], 1.0e6, "camera.intrinsics.cx"),
+    (["camera", "intrinsics"], {"horizontal_fov_deg": 1e-9},
+     "camera.intrinsics.horizontal_fov_deg"),
+    (["camera", "mount", "position"], [0.0, float("nan"), 0.0], "camera.mount.position.1"),
+    (["vehicle", "bumper", "width"], float("inf"), "vehicle.bumper.width"),
+    (["vehicle", "bumper", "width"], 1e30, "vehicle.bumper.width"),
+])
+def test_values_the_pipeline_cannot_use_are_refused_at_load(key, value, named):
+    with pytest.raises(SceneError) as err:
+        scene_from_dict(_mutate(key, value), source="s.yaml")
+    assert err.value.key == named and "\n" not in str(err.value)
+
+
+def test_the_image_pixel_limit_can_be_raised(monkeypatch):
+    data = _mutate(["camera", "image_size"], [8000, 8000])
+    data["camera"]["intrinsics"] = {"fx": 2500.0, "fy": 2500.0}
+    with pytest.raises(SceneError, match="RVMSIM_MAX_IMAGE_PIXELS"):
+        scene_from_dict(data)
+    monkeypatch.setenv("RVMSIM_MAX_IMAGE_PIXELS", "64000000")
+    assert scene_from_dict(data).camera.image_size == (8000, 8000)
+
+
+def test_every_bundled_scene_passes_the_value_checks():
+    from rvmsim.scene.loading import camera_problem
+
+    for path in sorted(SCENES.glob("**/*.yaml")):
+        assert camera_problem(load_scene(path).camera) is None, path

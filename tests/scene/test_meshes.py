@@ -55,3 +55,48 @@ def test_site_first_then_the_vehicle():
     body = [names.index(n) for n in ("bumper", "garnish", "trunk")]
     assert body == sorted(body) and min(body) > max(i for i, n in enumerate(names)
                                                     if n.startswith(("object_", "guide_", "pattern")))
+
+
+def _scene_with_mesh(tmp_path, name: str, data: bytes, **part):
+    (tmp_path / name).write_bytes(data)
+    doc = bundled_scene("a").model_dump()
+    doc["vehicle"]["bumper"] = {"mesh": name, **part}
+    return scene_from_dict(doc, base_dir=tmp_path, source="s.yaml")
+
+
+@pytest.mark.parametrize("data, words", [
+    (b"", "is empty"),
+    (b"v 1e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "coordinates up to"),
+    (b"v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "non-finite"),
+    (b"v 0 0 0\nv 1 0 0\n", "no triangles"),
+])
+def test_unusable_mesh_files_are_one_line_errors(tmp_path, data, words):
+    from rvmsim.errors import SceneError
+
+    scene = _scene_with_mesh(tmp_path, "b.obj", data)
+    with pytest.raises(SceneError, match=words) as err:
+        build_parts(scene)
+    assert err.value.key == "vehicle.bumper.mesh" and "b.obj" in str(err.value)
+
+
+def test_mesh_vertex_limit_is_raisable(tmp_path, monkeypatch):
+    from rvmsim.errors import SceneError
+
+    box = trimesh.creation.box((0.4, 0.2, 0.1))
+    scene = _scene_with_mesh(tmp_path, "b.obj", box.export(file_type="obj").encode())
+    monkeypatch.setenv("RVMSIM_MAX_MESH_VERTICES", "4")
+    with pytest.raises(SceneError, match="over the limit of 4"):
+        build_parts(scene)
+    monkeypatch.setenv("RVMSIM_MAX_MESH_VERTICES", "1000")
+    bumper = {p.name: p for p in build_parts(scene)}["bumper"].mesh
+    assert len(bumper.vertices) == len(box.vertices)
+
+
+def test_a_mesh_in_mm_far_from_the_origin_suggests_the_units(tmp_path):
+    from rvmsim.errors import SceneError
+
+    far = b"v 2e6 0 0\nv 2e6 100 0\nv 2e6 0 100\nf 1 2 3\n"
+    with pytest.raises(SceneError, match="units: mm.*are its units right"):
+        build_parts(_scene_with_mesh(tmp_path, "b.obj", far, units="mm"))
+    near = _scene_with_mesh(tmp_path, "c.obj", far.replace(b"2e6", b"2e5"), units="mm")
+    assert {p.name for p in build_parts(near)} >= {"bumper"}

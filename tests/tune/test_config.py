@@ -73,3 +73,31 @@ def test_sections_set_up_their_strategies(tmp_path):
     with pytest.raises(RvmsimError, match=r"unknown strategy 'annealing' \(known: grid-random, "
                                           r"cmaes, random\)"):
         make_strategy("annealing", space, cfg, 0)
+
+
+@pytest.mark.parametrize("text, key, words", [
+    ("parameters: {rad: {range: [500, 100]}}\n", "parameters.rad", "low <= high"),
+    ("parameters: {rad: {range: [10, 100]}}\n", "parameters.rad.range", "outside [50, 2000]"),
+    ("parameters: {rad: {init: 300, range: [400, 500]}}\n", "parameters.rad.init",
+     "outside its range"),
+    ("fixed: {tilt: .nan}\n", "fixed.tilt", "finite"),
+    ("fixed: {tilt: 400}\n", "fixed.tilt", "outside [-180, 180]"),
+    ("fixed: {tilt: " + "9" * 400 + "}\n", "fixed.tilt", "number"),
+    ("output: {size: [8192, 8192]}\n", "output.size", "RVMSIM_MAX_IMAGE_PIXELS"),
+])
+def test_values_that_crashed_a_started_run_are_refused_at_load(tmp_path, text, key, words):
+    path = tmp_path / "t.yaml"
+    path.write_text(text)
+    with pytest.raises(TuningConfigError) as err:
+        load_tuning_config(path)
+    assert err.value.key == key and words in str(err.value), str(err.value)
+    assert err.value.line == 1
+
+
+def test_an_init_outside_the_cameras_default_range_names_its_key(tmp_path):
+    path = tmp_path / "t.yaml"
+    path.write_text("tuned: [rad, zoom]\nparameters:\n  rad: {init: 1999}\n")
+    cfg = load_tuning_config(path)
+    with pytest.raises(TuningConfigError) as err:
+        cfg.space(small_render("a").camera)
+    assert (err.value.file, err.value.key, err.value.line) == (str(path), "parameters.rad.init", 3)
