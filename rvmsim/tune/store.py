@@ -28,15 +28,10 @@ from .records import (
     RunStatus,
     StopReason,
     TrialRecord,
-    ec_json,
     ecs_from_json,
-    json_default,
-    params_json,
 )
 
-# params_json, ec_json and json_default live in .records (the stored forms of the run model);
-# they stay importable from here, where they were first.
-__all__ = ["SqliteStore", "RunStore", "RUN_FORMAT", "params_json", "ec_json", "json_default"]
+__all__ = ["SqliteStore", "RunStore", "RUN_FORMAT"]
 
 #: ``meta.format`` of the run stores this version writes.
 RUN_FORMAT = 2
