@@ -22,8 +22,8 @@ from pydantic import ValidationError
 
 from .errors import InputFileError, RvmsimError
 
-__all__ = ["read_text", "parse_yaml", "key_lines", "input_error_from_validation", "line_of",
-           "write_png", "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
+__all__ = ["read_text", "parse_yaml", "parse_yaml_mapping", "key_lines",
+           "input_error_from_validation", "line_of", "write_png", "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
            "DEFAULT_MAX_IMAGE_PIXELS", "MAX_IMAGE_SIDE_PX", "max_image_pixels",
            "image_size_problem", "env_limit", "safe_load_limited", "yaml_problem"]
 
@@ -184,6 +184,18 @@ def parse_yaml(text: str, source: str, error: type[InputFileError] = InputFileEr
     except yaml.YAMLError as err:
         message, line = yaml_problem(err)
         raise error(source, "", message, line) from None
+
+
+def parse_yaml_mapping(text: str, source: str, error: type[InputFileError], what: str, *,
+                       empty_ok: bool = False) -> dict[Any, Any]:
+    """:func:`parse_yaml` for a file that must hold a mapping: ``error`` saying "``what``
+    must be a YAML mapping" otherwise (an empty document is ``{}`` with ``empty_ok``)."""
+    data = parse_yaml(text, source, error)
+    if data is None and empty_ok:
+        return {}
+    if not isinstance(data, dict):
+        raise error(source, "", f"{what} must be a YAML mapping")
+    return data
 
 
 def key_lines(text: str) -> dict[tuple[Any, ...], int]:

@@ -38,7 +38,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
-                   parse_yaml, read_text)
+                   parse_yaml_mapping, read_text)
 from ..criteria import Criteria, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
@@ -286,9 +286,7 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
     """
     path = Path(path)
     text = read_text(path, SweepFileError)
-    data = parse_yaml(text, str(path), SweepFileError)
-    if not isinstance(data, dict):
-        raise SweepFileError(str(path), "", "a sweep file must be a YAML mapping")
+    data = parse_yaml_mapping(text, str(path), SweepFileError, "a sweep file")
     lines = key_lines(text)
     try:
         f = _SweepFile.model_validate(data)

@@ -25,7 +25,7 @@ from typing import Annotated, Any
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from .._io import input_error_from_validation, key_lines, line_of, parse_yaml, read_text
+from .._io import input_error_from_validation, key_lines, line_of, parse_yaml_mapping, read_text
 from ..errors import CriteriaError
 from .registry import EcDefinition, builtin_ecs, load_plugin, resolve_plugin
 from .scoring import Criteria
@@ -161,11 +161,7 @@ def _criterion(ec: EcDefinition, prev: Criterion, m: _CriterionModel | None) -> 
 
 
 def _load(text: str, source: str, base: Criteria | None, base_dir: Path) -> Criteria:
-    data = parse_yaml(text, source, CriteriaError)
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise CriteriaError(source, "", "a criteria file must be a YAML mapping")
+    data = parse_yaml_mapping(text, source, CriteriaError, "a criteria file", empty_ok=True)
     if isinstance(data.get("criteria"), dict):  # YAML may read 1-1 … as strings already
         data["criteria"] = {str(k): v for k, v in data["criteria"].items()}
     if isinstance(data.get("ecs"), list):  # an id such as 5 reads as a number

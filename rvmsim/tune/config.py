@@ -11,7 +11,7 @@ from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError
                       model_validator)
 
 from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
-                   parse_yaml, read_text)
+                   parse_yaml_mapping, read_text)
 from ..camera import FisheyeCamera
 from ..errors import InputFileError, RvmsimError, TuningConfigError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec
@@ -174,9 +174,8 @@ def load_tuning_config(path: str | Path | None) -> TuningConfig:
         return TuningConfig()
     path = Path(path)
     text = read_text(path, TuningConfigError)
-    data = parse_yaml(text, str(path), TuningConfigError) or {}
-    if not isinstance(data, dict):
-        raise TuningConfigError(str(path), "", "a tuning config must be a YAML mapping")
+    data = parse_yaml_mapping(text, str(path), TuningConfigError, "a tuning config",
+                              empty_ok=True)
     lines = key_lines(text)
     try:
         cfg = TuningConfig.model_validate(data)
