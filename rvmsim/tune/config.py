@@ -3,10 +3,11 @@ settings; and the strategy it describes (:func:`make_strategy`, through the regi
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any
 
+import numpy as np
 from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
                       model_validator)
 
@@ -204,7 +205,7 @@ def _unused_setting(err: InputFileError) -> InputFileError:
 
 
 def make_strategy(name: str, space: SearchSpace, cfg: TuningConfig, seed: int,
-                  budget: int | None = None) -> Strategy:
+                  budget: int | None = None, starts: Sequence[np.ndarray] = ()) -> Strategy:
     """The registered strategy ``name`` on ``space``, set up by the config's section.
 
     Parameters
@@ -212,9 +213,15 @@ def make_strategy(name: str, space: SearchSpace, cfg: TuningConfig, seed: int,
     budget : int, optional
         ``--budget``: evaluations for ``cmaes``/``random``, fine trials per seed (T) for
         ``grid-random``; replaces the config's value.
+    starts : sequence of ndarray
+        Candidates (vectors of ``space``) to start from, e.g. a neighbouring design point's
+        optimum (:attr:`Strategy.starts`); strategies that cannot use them ignore them.
     """
     cls = STRATEGIES.get(name)
     if cls is None:
         raise RvmsimError(f"unknown strategy {name!r} (known: {', '.join(STRATEGIES)})")
-    return cls.from_settings(space, cfg.strategy_settings(name), seed=seed, budget=budget,
-                             batch=cfg.batch)
+    strategy = cls.from_settings(space, cfg.strategy_settings(name), seed=seed, budget=budget,
+                                 batch=cfg.batch)
+    strategy.starts = tuple(np.clip(np.asarray(x, np.float64), space.low, space.high)
+                            for x in starts)
+    return strategy

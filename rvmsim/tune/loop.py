@@ -14,13 +14,14 @@ import time
 from dataclasses import dataclass
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
 from .._procs import spawn_pool, stop_pool
 from ..criteria import CandidateEvaluator, Criteria
 from ..errors import RvmsimError
+from ..isp import IspParams
 from .config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
 from .records import StopReason, TrialRecord
@@ -216,6 +217,7 @@ def search_scene(
     target_score: float | None = None,
     on_batch: Callable[[int, float, str], None] | None = None,
     evaluator: CandidateEvaluator | None = None,
+    starts: Sequence[IspParams] = (),
 ) -> SearchOutcome:
     """Search one scene's ISP parameters: the core of a tuning run, a sweep point or a task.
 
@@ -238,13 +240,19 @@ def search_scene(
     evaluator : CandidateEvaluator, optional
         Made with :func:`candidate_evaluator` when not given (pass one to reuse it after the
         search, e.g. for a sensitivity analysis).
+    starts : sequence of IspParams
+        Parameter sets to start from (e.g. neighbouring design points' optima), evaluated
+        first by the strategies that use them (:attr:`Strategy.starts`); ignored when
+        ``strategy`` is a strategy already made.
     max_time, target_score, on_batch
         As in :func:`run_search`.
     """
     if isinstance(strategy, Strategy):
         strat = strategy
     else:
-        strat = make_strategy(strategy, config.space(images.camera), config, seed, budget)
+        space = config.space(images.camera)
+        strat = make_strategy(strategy, space, config, seed, budget,
+                              [space.vector(p) for p in starts])
     space = strat.space
     if evaluator is None:
         evaluator = candidate_evaluator(images, config, criteria)

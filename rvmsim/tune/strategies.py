@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import itertools
 from abc import ABC, abstractmethod
-from typing import Annotated, ClassVar, Generator, TypeVar
+from typing import Annotated, ClassVar, Generator, Sequence, TypeVar
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -137,9 +137,15 @@ class Strategy(ABC):
     section: ClassVar[str] = ""
     Settings: ClassVar[type[BaseModel]] = NoSettings
 
-    def __init__(self, space: SearchSpace, *, seed: int = 0):
+    def __init__(self, space: SearchSpace, *, seed: int = 0,
+                 starts: Sequence[np.ndarray] = ()):
         self.space = space
         self.seed = check_seed(seed, "seed")
+        #: Known good candidates (vectors of ``space``, clipped to it) the search should
+        #: start from, e.g. a neighbouring design point's optimum; a strategy that cannot
+        #: use them ignores them.
+        self.starts = tuple(np.clip(np.asarray(x, np.float64), space.low, space.high)
+                            for x in starts)
 
     @classmethod
     @abstractmethod
@@ -147,7 +153,8 @@ class Strategy(ABC):
                       budget: int | None, batch: int) -> Strategy:
         """The strategy as the tuning config's section ``settings`` (an instance of
         ``Settings``) describes it; ``budget`` (``--budget``) overrides the section's size
-        where given, ``batch`` is the config's batch size."""
+        where given, ``batch`` is the config's batch size.  (:func:`make_strategy` sets
+        :attr:`starts` afterwards.)"""
 
     @abstractmethod
     def batches(self) -> Batches: ...
@@ -261,14 +268,19 @@ class CmaEs(Strategy):
         span = hi - lo
         dim = len(lo)
         rng = np.random.default_rng([self.seed, 7])
-        starts = [np.array([(r.init - r.low) / (r.high - r.low) for r in self.space.ranges])]
+        init = np.array([(r.init - r.low) / (r.high - r.low) for r in self.space.ranges])
+        pool: list[tuple[float, int, np.ndarray]] = []  # (−objective, order, point in [0, 1])
         used = 0
-        if self.explore > 0:
-            us = rng.uniform(0.0, 1.0, size=(self.explore, dim))
-            told = yield "explore", [lo + u * span for u in us]
-            used += len(us)
-            order = sorted(range(len(us)), key=lambda i: (-told[i][1], i))
-            starts = [us[i] for i in order] + starts
+        # Given starts are evaluated first, then the explored points; CMA-ES starts from the
+        # best of all of them and restarts from the next best.
+        for stage, us in (("starts", np.array([(x - lo) / np.where(span > 0, span, 1.0)
+                                               for x in self.starts]).reshape(-1, dim)),
+                          ("explore", rng.uniform(0.0, 1.0, size=(self.explore, dim)))):
+            if len(us):
+                told = yield stage, [lo + u * span for u in us]
+                pool += [(-t[1], used + i, u) for i, (u, t) in enumerate(zip(us, told))]
+                used += len(us)
+        starts = [u for _, _, u in sorted(pool, key=lambda t: t[:2])] + [init]
         restart = 0
         while used < self.budget:
             start = starts[restart] if restart < len(starts) else rng.uniform(0.1, 0.9, dim)
