@@ -39,10 +39,11 @@ def _setup(scene_path: str) -> Any:
         from rvmsim.criteria import default_criteria
         from rvmsim.render import cached_render
         from rvmsim.scene import load_scene
-        from rvmsim.tune import TuningConfig, candidate_evaluator
+        from rvmsim.tune import TuningConfig, candidate_evaluator, load_tuning_config
 
         cv2.setNumThreads(1)
-        cfg = TuningConfig()
+        cfg = (TuningConfig() if not os.environ.get("BENCH_TUNE_CONFIG") else
+               load_tuning_config(os.environ["BENCH_TUNE_CONFIG"]))
         images, _ = cached_render(load_scene(scene_path))
         criteria = default_criteria()
         _CACHE[scene_path] = (cfg, images, criteria, candidate_evaluator(images, cfg, criteria))
@@ -87,7 +88,7 @@ def summarise(rows: list[dict[str, Any]], scenes: list[str], strategies: list[st
               seeds: int) -> str:
     import numpy as np
 
-    lines = [f"{'scene':28} {'strategy':10} {'all-pass':>8} {'median':>7} {'p90':>7} "
+    lines = [f"{'scene':28} {'strategy':13} {'all-pass':>8} {'median':>7} {'p90':>7} "
              f"{'wall/run':>9}  runs that did not pass (seed: best EC score)"]
     for scene in scenes:
         for strat in strategies:
@@ -96,7 +97,7 @@ def summarise(rows: list[dict[str, Any]], scenes: list[str], strategies: list[st
             misses = ", ".join(f"{r['seed']}: {r['best']:.2g}" for r in rs
                                if r["first_pass"] is None)
             wall = float(np.median([r["seconds"] for r in rs]))
-            lines.append(f"{Path(scene).stem:28} {strat:10} {len(firsts):>3}/{seeds:<4} "
+            lines.append(f"{Path(scene).stem:28} {strat:13} {len(firsts):>3}/{seeds:<4} "
                          f"{_pct(firsts, 50):7.0f} {_pct(firsts, 90):7.0f} {wall:8.1f}s  "
                          f"{misses}")
     return "\n".join(lines)
@@ -108,12 +109,16 @@ def main() -> None:
         "vehicle_*.yaml")))
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first-seed", type=int, default=0)
-    ap.add_argument("--strategies", default="cmaes,reliable")
+    ap.add_argument("--strategies", default="cmaes,cmaes-solved")
     ap.add_argument("--budget", type=int, default=None, help="default: each strategy's own")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 2)
+    ap.add_argument("--config", default=None,
+                    help="a tuning config (default: the defaults, as `rvmsim tune`)")
     ap.add_argument("--json", type=Path, default=None, help="also write every run's row here")
     args = ap.parse_args()
     strategies = args.strategies.split(",")
+    if args.config:  # read by every process
+        os.environ["BENCH_TUNE_CONFIG"] = str(Path(args.config).resolve())
     print(f"machine: {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}")
     for scene in args.scenes:  # warm the render cache before the timed runs
         _setup(scene)

@@ -25,7 +25,7 @@ from .map import (
     apply_map,
     process,
 )
-from .roi import roi_outline, draw_roi, input_to_output
+from .roi import roi_outline, draw_roi, input_to_output, input_to_plane
 
 __all__ = [
     "IspParams",
@@ -44,6 +44,7 @@ __all__ = [
     "roi_outline",
     "draw_roi",
     "input_to_output",
+    "input_to_plane",
     "load_params",
     "params_to_dict",
 ]

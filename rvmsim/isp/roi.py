@@ -14,7 +14,56 @@ import numpy as np
 from .exact import map_points, plane_and_view
 from .params import IspParams, OutputSpec
 
-__all__ = ["roi_outline", "draw_roi", "input_to_output"]
+__all__ = ["roi_outline", "draw_roi", "input_to_output", "input_to_plane"]
+
+
+def input_to_plane(
+    params: IspParams, points: np.ndarray, input_size: tuple[int, int]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where fisheye pixels land on the virtual image plane, before the advanced shifts and
+    scales (the (x_p, y_p) of :mod:`rvmsim.isp.exact`'s step 2).
+
+    Parameters
+    ----------
+    params : IspParams
+        Only FOV, RAD, the H/V shifts, the pans, zoom, tilt, Theta and Phi matter.
+    points : (N, 2) float
+        Input (fisheye) pixel coordinates (u, v), px.
+    input_size : (int, int)
+        (W_i, H_i) of the fisheye image, px.
+
+    Returns
+    -------
+    xy : (N, 2) float64
+        Plane coordinates (x_p, y_p) in output half-widths, not mirrored: an output pixel
+        shows plane point ``(x_n / adv_h_scale + adv_h_shift, y_n / adv_v_scale +
+        adv_v_shift)``.
+    valid : (N,) bool
+        False where the ray misses the virtual image plane (behind it).
+
+    Convention
+    ----------
+    Input → output (src → dst); pixel centres at integer coordinates.
+    """
+    p = params
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    w_in, h_in = input_size
+    dx = pts[:, 0] - ((w_in - 1) / 2.0 + p.h_shift)
+    dy = pts[:, 1] - ((h_in - 1) / 2.0 + p.v_shift)
+    r = np.hypot(dx, dy)
+    theta = r / (p.rad / math.radians(p.fov / 2.0))
+    safe = np.where(r > 0, r, 1.0)
+    s = np.sin(theta)
+    ray = np.stack([np.where(r > 0, s * dx / safe, 0.0), np.where(r > 0, s * dy / safe, 0.0),
+                    np.cos(theta)], axis=1)
+    r_plane, r_view = plane_and_view(p)
+    rv = ray @ r_view  # = (R_view^T · ray) per row
+    t = np.array([0.0, 0.0, p.zoom])
+    normal = r_plane[:, 2]
+    denom = rv @ normal
+    lam = (normal @ t) / np.where(np.abs(denom) > 1e-12, denom, 1e-12)
+    local = (lam[:, None] * rv - t) @ r_plane  # = R_plane^T (λ·r_v − t)
+    return local[:, :2], (lam > 0) & (np.abs(denom) > 1e-12)
 
 
 def input_to_output(
@@ -47,30 +96,14 @@ def input_to_output(
     coordinates in both images.
     """
     p = params
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    w_in, h_in = input_size
-    dx = pts[:, 0] - ((w_in - 1) / 2.0 + p.h_shift)
-    dy = pts[:, 1] - ((h_in - 1) / 2.0 + p.v_shift)
-    r = np.hypot(dx, dy)
-    theta = r / (p.rad / math.radians(p.fov / 2.0))
-    safe = np.where(r > 0, r, 1.0)
-    s = np.sin(theta)
-    ray = np.stack([np.where(r > 0, s * dx / safe, 0.0), np.where(r > 0, s * dy / safe, 0.0),
-                    np.cos(theta)], axis=1)
-    r_plane, r_view = plane_and_view(p)
-    rv = ray @ r_view  # = (R_view^T · ray) per row
-    t = np.array([0.0, 0.0, p.zoom])
-    normal = r_plane[:, 2]
-    denom = rv @ normal
-    lam = (normal @ t) / np.where(np.abs(denom) > 1e-12, denom, 1e-12)
-    local = (lam[:, None] * rv - t) @ r_plane  # = R_plane^T (λ·r_v − t)
+    local, valid = input_to_plane(p, points, input_size)
     half = output.width / 2.0
     xn = (local[:, 0] - p.adv_h_shift) * p.adv_h_scale
     yn = (local[:, 1] - p.adv_v_shift) * p.adv_v_scale
     if output.mirror:
         xn = -xn
     uv = np.stack([xn * half + (output.width - 1) / 2.0, yn * half + (output.height - 1) / 2.0], 1)
-    return uv, (lam > 0) & (np.abs(denom) > 1e-12)
+    return uv, valid
 
 
 def roi_outline(

@@ -18,6 +18,7 @@ from ..errors import InputFileError, RvmsimError, TuningConfigError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec
 from .space import ParamRange, SearchSpace, default_space
 from .strategies import (
+    CmaesSolvedSettings,
     STRATEGIES,
     CmaesSettings,
     GridRandomSettings,
@@ -81,6 +82,7 @@ class TuningConfig(BaseModel):
     # The registered strategies' sections (a test checks they match the registry).
     grid_random: GridRandomSettings = GridRandomSettings()
     cmaes: CmaesSettings = CmaesSettings()
+    cmaes_solved: CmaesSolvedSettings = CmaesSolvedSettings()
     random: RandomSettings = RandomSettings()
     #: The file it was read from and its key lines, for errors (not keys of the file).
     _source: str = PrivateAttr(default="<tuning config>")

@@ -25,6 +25,7 @@ from ..isp import IspParams
 from .config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
 from .records import StopReason, TrialRecord
+from .solve import EcSolver
 from .space import SearchSpace
 from .store import RunStore
 from .strategies import Strategy
@@ -33,24 +34,26 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
 
 __all__ = ["SearchOutcome", "run_search", "BatchEvaluator", "search_scene",
-           "candidate_evaluator"]
+           "candidate_evaluator", "solver_for", "strategy_scorer"]
 
 
 # ---------------------------------------------------------------------------- worker pool
-_WORKER: tuple[CandidateEvaluator, SearchSpace] | None = None
+_WORKER: tuple[CandidateEvaluator, SearchSpace, EcSolver | None, str] | None = None
 
 
-def _init_worker(evaluator: CandidateEvaluator, space: SearchSpace) -> None:
+def _init_worker(evaluator: CandidateEvaluator, space: SearchSpace,
+                 solver: EcSolver | None = None, objective: str = "log-score") -> None:
     global _WORKER
     import cv2
 
     cv2.setNumThreads(1)
-    _WORKER = (evaluator, space)
+    _WORKER = (evaluator, space, solver, objective)
 
 
 def _work(xs: list[np.ndarray]) -> ScoredBatch:
     assert _WORKER is not None
-    return score_vectors(_WORKER[0], _WORKER[1], xs)
+    evaluator, space, solver, objective = _WORKER
+    return score_vectors(evaluator, space, xs, solver, objective)
 
 
 def _chunks(n: int, workers: int, smallest: int = 8) -> list[tuple[int, int]]:
@@ -71,20 +74,25 @@ class BatchEvaluator:
     1.2 MB).  Workers also score and serialise their candidates (:func:`score_vectors`), so
     the main process only stores them and steers the search.
 
-    Workers are spawned (:func:`rvmsim._procs.spawn_pool`, the pool batches use too)."""
+    Workers are spawned (:func:`rvmsim._procs.spawn_pool`, the pool batches use too).
+    ``solver`` (:func:`solver_for`) sets the solved parameters of every candidate first;
+    ``objective`` is the one the strategy maximises (:data:`rvmsim.tune.OBJECTIVES`)."""
 
-    def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace, workers: int = 1):
+    def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace, workers: int = 1,
+                 solver: EcSolver | None = None, objective: str = "log-score"):
         self.evaluator = evaluator
         self.space = space
+        self.solver = solver
+        self.objective = objective
         self.workers = max(1, workers)
         self.pool: ProcessPoolExecutor | None = None
         if self.workers > 1:
             self.pool = spawn_pool(self.workers, initializer=_init_worker,
-                                   initargs=(evaluator, space))
+                                   initargs=(evaluator, space, solver, objective))
 
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
-            return score_vectors(self.evaluator, self.space, xs)
+            return score_vectors(self.evaluator, self.space, xs, self.solver, self.objective)
         try:
             parts = list(self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)]))
         except BrokenProcessPool as err:  # a worker died, or could not start (its state did
@@ -147,6 +155,8 @@ def run_search(
     """
     t0 = time.perf_counter()
     stored = store.replay()
+    # the solved parameters are set at evaluation, so the stored ones differ from the proposed
+    compared = np.array([n not in strategy.solved for n in strategy.space.names])
     # best as (score, objective, -idx): highest score, then objective, then earliest
     best = max(((s, o, -i) for i, (s, o, _) in stored.items()), default=None)
     gen = strategy.batches()
@@ -160,7 +170,8 @@ def run_search(
             indices = range(idx, idx + len(xs))
             if all(i in stored for i in indices):
                 for i, x in zip(indices, xs):
-                    if not np.allclose(space.vector(stored[i][2]), np.clip(x, space.low, space.high),
+                    if not np.allclose(space.vector(stored[i][2])[compared],
+                                       np.clip(x, space.low, space.high)[compared],
                                        rtol=0, atol=1e-9):
                         raise RvmsimError(
                             f"{store.path}: trial {i} differs from what this strategy, seed and "
@@ -197,6 +208,25 @@ def run_search(
 
 
 # ---------------------------------------------------------------------------- the core
+def solver_for(strategy: Strategy, evaluator: CandidateEvaluator) -> EcSolver | None:
+    """The :class:`EcSolver` a strategy that solves (``strategy.solves``) evaluates its
+    candidates with, on ``evaluator``'s scene, output and criteria; it also tells the
+    strategy which parameters are solved (``strategy.solved``).  None for other strategies."""
+    if not strategy.solves:
+        return None
+    solver = EcSolver(evaluator.fisheye, evaluator.output, evaluator.criteria, strategy.space)
+    strategy.solved = solver.names
+    return solver
+
+
+def strategy_scorer(strategy: Strategy, evaluator: CandidateEvaluator
+                    ) -> Callable[[list[np.ndarray]], ScoredBatch]:
+    """``xs → ScoredBatch`` for ``strategy``'s candidates in this process, solved when the
+    strategy solves (for benchmarks and custom loops; :func:`search_scene` is the full run)."""
+    return BatchEvaluator(evaluator, strategy.space, 1, solver_for(strategy, evaluator),
+                          strategy.objective)
+
+
 def candidate_evaluator(images: FisheyeImages, config: TuningConfig,
                         criteria: Criteria) -> CandidateEvaluator:
     """The evaluator tuning uses: ``images``' labels, the config's RVM output, ``criteria``."""
@@ -256,7 +286,8 @@ def search_scene(
     space = strat.space
     if evaluator is None:
         evaluator = candidate_evaluator(images, config, criteria)
-    batch_eval = BatchEvaluator(evaluator, space, workers)
+    batch_eval = BatchEvaluator(evaluator, space, workers, solver_for(strat, evaluator),
+                                strat.objective)
     try:
         return run_search(strat, batch_eval, store, max_time=max_time,
                           target_score=target_score, on_batch=on_batch)

@@ -1,26 +1,70 @@
 """What the search maximises, and the scoring of a batch of candidates for the run store.
 
 The EC score of a candidate is the product of its enabled ECs' sigmoid scores; the
-strategies that need a slope (CMA-ES) maximise the objective ``Σ log(max(score_i,
-OBJECTIVE_FLOOR))`` over the enabled ECs instead, so that a criterion stuck at ~0 still
-leaves something to climb.  Every strategy is told both.
+strategies that need a slope (CMA-ES) maximise an objective instead (every strategy is told
+both), one of :data:`OBJECTIVES`:
+
+``log-score``
+    ``Σ log(max(score_i, OBJECTIVE_FLOOR))`` over the enabled ECs, so that a criterion stuck
+    at ~0 still leaves something to climb.
+``pass-first``
+    ``log-score − PASS_WEIGHT · Σ violation_i``: the violation of an EC is how far its value
+    lies outside its acceptable range, in units of its sigmoid's width there (the slope c1
+    below the range, c3 above it), capped at :data:`MAX_VIOLATION`, which is also the
+    violation of an EC not measured (the object out of the image).  Getting every EC into
+    its range therefore comes first, and the EC score only then; outside the range the
+    violation keeps a slope where the floored log-score has none.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
-from ..criteria import CandidateEvaluator, score_batch
+from ..criteria import CandidateEvaluator, Criteria, score_batch
+from ..isp import IspParams
 from .records import ec_json, params_json
 from .space import SearchSpace
 
-__all__ = ["OBJECTIVE_FLOOR", "ScoredBatch", "score_vectors"]
+__all__ = ["OBJECTIVE_FLOOR", "OBJECTIVES", "PASS_WEIGHT", "MAX_VIOLATION", "ScoredBatch",
+           "score_vectors", "violations"]
 
 #: Floor of each EC score inside the objective's logarithm.
 OBJECTIVE_FLOOR = 1e-4
+#: The objectives a strategy can ask for (:attr:`rvmsim.tune.Strategy.objective`).
+OBJECTIVES = ("log-score", "pass-first")
+#: Weight of the summed range violations in the ``pass-first`` objective.
+PASS_WEIGHT = 10.0
+#: The largest violation one EC counts with (and that of an EC not measured).
+MAX_VIOLATION = 20.0
+
+
+def violations(values: np.ndarray, criteria: Criteria) -> np.ndarray:
+    """How far each EC's value lies outside its acceptable range, in sigmoid widths:
+    ``c1·(low − x)`` below, ``c3·(x − high)`` above, 0 inside (and for a binary EC), capped
+    at :data:`MAX_VIOLATION`, which is also the violation of a value not measured (NaN);
+    disabled ECs count 0.
+
+    Parameters
+    ----------
+    values : (n, k) float
+        Measured values in ``criteria.ids`` order.
+
+    Returns
+    -------
+    (n, k) float64
+    """
+    x = np.atleast_2d(np.asarray(values, np.float64))
+    low, high, binary, _, c1, _, c3, _, enabled = criteria.arrays
+    # an open side has no slope to measure in: count one unit per unit of value there
+    w_low = np.where(c1 > 0, c1, 1.0)
+    w_high = np.where(c3 > 0, c3, 1.0)
+    with np.errstate(invalid="ignore", over="ignore"):
+        v = np.maximum(w_low * (low - x), 0.0) + np.maximum(w_high * (x - high), 0.0)
+    v = np.where(np.isnan(x), MAX_VIOLATION, np.minimum(v, MAX_VIOLATION))
+    return np.where(enabled & ~binary, v, 0.0)
 
 
 @dataclass(frozen=True)
@@ -37,15 +81,26 @@ class ScoredBatch:
 
 
 def score_vectors(evaluator: CandidateEvaluator, space: SearchSpace,
-                  xs: Sequence[np.ndarray]) -> ScoredBatch:
+                  xs: Sequence[np.ndarray],
+                  solver: Callable[[IspParams], IspParams] | None = None,
+                  objective: str = "log-score") -> ScoredBatch:
     """Evaluate candidate vectors of ``space`` with a
     :class:`~rvmsim.criteria.CandidateEvaluator`, scored and serialised for the store
-    (EC columns in ``evaluator.criteria.ids`` order)."""
+    (EC columns in ``evaluator.criteria.ids`` order).  ``solver`` (an
+    :class:`~rvmsim.tune.EcSolver`) first sets the parameters it solves; the stored
+    parameters are the solved ones.  ``objective`` is one of :data:`OBJECTIVES`."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"unknown objective {objective!r} (known: {', '.join(OBJECTIVES)})")
     params = [space.params(x) for x in xs]
+    if solver is not None:
+        params = [solver(p) for p in params]
     ids = evaluator.criteria.ids
     values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(ids))
     b = score_batch(values, evaluator.criteria)
     ecs = [ec_json(ids, v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
                                                 b.passed.tolist())]
-    return ScoredBatch(b.score.tolist(), b.objective(OBJECTIVE_FLOOR).tolist(),
+    obj = b.objective(OBJECTIVE_FLOOR)
+    if objective == "pass-first":
+        obj = obj - PASS_WEIGHT * violations(values, evaluator.criteria).sum(axis=1)
+    return ScoredBatch(b.score.tolist(), obj.tolist(),
                        b.all_passed.tolist(), [params_json(p) for p in params], ecs)

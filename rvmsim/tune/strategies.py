@@ -36,6 +36,7 @@ the sweep file all read the registry.
 from __future__ import annotations
 
 import itertools
+import math
 from abc import ABC, abstractmethod
 from typing import Annotated, ClassVar, Generator, Sequence, TypeVar
 
@@ -45,9 +46,9 @@ from pydantic import BaseModel, ConfigDict, Field
 from ..errors import RvmsimError
 from .space import SearchSpace
 
-__all__ = ["Strategy", "GridToRandom", "RandomSearch", "CmaEs", "STRATEGIES",
+__all__ = ["Strategy", "GridToRandom", "RandomSearch", "CmaEs", "CmaEsSolved", "STRATEGIES",
            "register_strategy", "NoSettings", "GridRandomSettings", "CmaesSettings", "RandomSettings",
-           "Batches", "Told", "SEED_MAX", "check_seed"]
+           "CmaesSolvedSettings", "Batches", "Told", "SEED_MAX", "check_seed"]
 
 #: The largest seed: numpy's 32-bit seed range, so a seed means the same to every generator.
 SEED_MAX = 2**32 - 1
@@ -104,6 +105,17 @@ class CmaesSettings(BaseModel):
     sigma0: Annotated[float, Field(gt=0, le=1)] = 0.3
 
 
+class CmaesSolvedSettings(BaseModel):
+    """``cmaes_solved:`` — evaluations, the initial step size, the random explore points
+    before CMA-ES starts, and the population's growth at each restart (IPOP; 1: none)."""
+
+    model_config = ConfigDict(extra="forbid")
+    budget: Annotated[int, Field(ge=1)] = 8000
+    sigma0: Annotated[float, Field(gt=0, le=1)] = 0.3
+    explore: Annotated[int, Field(ge=0)] = 100
+    restart_growth: Annotated[float, Field(ge=1, le=4)] = 2.0
+
+
 class RandomSettings(BaseModel):
     """``random:`` — evaluations."""
 
@@ -136,6 +148,11 @@ class Strategy(ABC):
     #: ``Settings`` are used), and their model.
     section: ClassVar[str] = ""
     Settings: ClassVar[type[BaseModel]] = NoSettings
+    #: Whether its candidates are evaluated with the closed-form sub-solves
+    #: (:class:`rvmsim.tune.EcSolver`); the search then sets :attr:`solved`.
+    solves: ClassVar[bool] = False
+    #: The objective its candidates are told (:data:`rvmsim.tune.OBJECTIVES`).
+    objective: ClassVar[str] = "log-score"
 
     def __init__(self, space: SearchSpace, *, seed: int = 0,
                  starts: Sequence[np.ndarray] = ()):
@@ -146,6 +163,9 @@ class Strategy(ABC):
         #: use them ignores them.
         self.starts = tuple(np.clip(np.asarray(x, np.float64), space.low, space.high)
                             for x in starts)
+        #: The parameters set by the sub-solves at evaluation (those proposed are ignored):
+        #: set by :func:`rvmsim.tune.solver_for` before the search starts.
+        self.solved: tuple[str, ...] = ()
 
     @classmethod
     @abstractmethod
@@ -244,7 +264,7 @@ class CmaEs(Strategy):
     name = "cmaes"
     summary = "CMA-ES"
     section = "cmaes"
-    Settings = CmaesSettings
+    Settings: ClassVar[type[BaseModel]] = CmaesSettings
 
     def __init__(self, space: SearchSpace, *, seed: int = 0, budget: int = 8000,
                  sigma0: float = 0.3, popsize: int | None = None, explore: int | None = None):
@@ -262,37 +282,93 @@ class CmaEs(Strategy):
         return self.budget
 
     def batches(self) -> Batches:
+        return self._cma_batches()
+
+    def _cma_batches(self, grow: float = 1.0, stagnation: bool = False) -> Batches:
+        """The explore stage and the CMA-ES restarts over the parameters not in
+        :attr:`solved` (those stay at their initial values); each restart's population is
+        ``grow`` times the previous one's (1: the default size every time).  With
+        ``stagnation``, a restart also ends when its best objective has not improved for
+        ``10 + ⌈30·dim/popsize⌉`` generations (Hansen's stagnation rule)."""
         from cmaes import CMA
 
-        lo, hi = self.space.low, self.space.high
+        names = self.space.names
+        free = np.array([i for i, n in enumerate(names) if n not in self.solved], dtype=int)
+        lo, hi = self.space.low[free], self.space.high[free]
         span = hi - lo
-        dim = len(lo)
+        dim = len(free)
+        full = np.array([r.init for r in self.space.ranges])
+
+        def vector(u: np.ndarray) -> np.ndarray:
+            x = full.copy()
+            x[free] = lo + u * span
+            return x
+
         rng = np.random.default_rng([self.seed, 7])
-        init = np.array([(r.init - r.low) / (r.high - r.low) for r in self.space.ranges])
+        init = (full[free] - lo) / span
         pool: list[tuple[float, int, np.ndarray]] = []  # (−objective, order, point in [0, 1])
         used = 0
         # Given starts are evaluated first, then the explored points; CMA-ES starts from the
         # best of all of them and restarts from the next best.
-        for stage, us in (("starts", np.array([(x - lo) / np.where(span > 0, span, 1.0)
-                                               for x in self.starts]).reshape(-1, dim)),
+        given = np.array([(x[free] - lo) / span for x in self.starts]).reshape(-1, dim)
+        for stage, us in (("starts", given),
                           ("explore", rng.uniform(0.0, 1.0, size=(self.explore, dim)))):
             if len(us):
-                told = yield stage, [lo + u * span for u in us]
+                told = yield stage, [vector(u) for u in us]
                 pool += [(-t[1], used + i, u) for i, (u, t) in enumerate(zip(us, told))]
                 used += len(us)
         starts = [u for _, _, u in sorted(pool, key=lambda t: t[:2])] + [init]
         restart = 0
+        popsize = self.popsize
         while used < self.budget:
             start = starts[restart] if restart < len(starts) else rng.uniform(0.1, 0.9, dim)
             opt = CMA(mean=np.clip(start, 0.0, 1.0), sigma=self.sigma0,
                       bounds=np.tile([0.0, 1.0], (dim, 1)), seed=_cma_seed(self.seed, restart),
-                      population_size=self.popsize)
+                      population_size=popsize)
+            patience = 10 + math.ceil(30 * dim / opt.population_size)
+            best, since = -math.inf, 0
             while used < self.budget and not opt.should_stop():
                 pop = [opt.ask() for _ in range(opt.population_size)]
-                told = yield f"cmaes-{restart + 1}", [lo + u * span for u in pop]
+                told = yield f"cmaes-{restart + 1}", [vector(u) for u in pop]
                 used += len(pop)
                 opt.tell([(u, -obj) for u, (_, obj) in zip(pop, told)])
+                top = max(obj for _, obj in told)
+                best, since = (top, 0) if top > best + 1e-9 else (best, since + 1)
+                if stagnation and since >= patience:
+                    break
             restart += 1
+            if grow != 1.0:
+                popsize = int(round(opt.population_size * grow))
+
+
+@register_strategy
+class CmaEsSolved(CmaEs):
+    """CMA-ES on the parameters the closed-form sub-solves leave (see the module
+    docstring): the board aspect and the guideline ECs are solved per candidate
+    (:class:`rvmsim.tune.EcSolver`), CMA-ES searches the rest."""
+
+    name = "cmaes-solved"
+    summary = "CMA-ES with the guideline and board ECs solved per candidate"
+    section = "cmaes_solved"
+    Settings = CmaesSolvedSettings
+    solves = True
+    objective = "pass-first"
+
+    def __init__(self, space: SearchSpace, *, seed: int = 0, budget: int = 8000,
+                 sigma0: float = 0.3, explore: int = 100, restart_growth: float = 2.0):
+        super().__init__(space, seed=seed, budget=budget, sigma0=sigma0,
+                         explore=min(explore, budget))
+        self.restart_growth = restart_growth
+
+    @classmethod
+    def from_settings(cls, space: SearchSpace, settings: BaseModel, *, seed: int,
+                      budget: int | None, batch: int) -> CmaEsSolved:
+        s = _settings(settings, CmaesSolvedSettings)
+        return cls(space, seed=seed, budget=budget or s.budget, sigma0=s.sigma0,
+                   explore=s.explore, restart_growth=s.restart_growth)
+
+    def batches(self) -> Batches:
+        return self._cma_batches(self.restart_growth, stagnation=True)
 
 
 @register_strategy

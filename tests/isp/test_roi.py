@@ -36,3 +36,26 @@ def test_input_to_output_inverts_the_map(params):
     back, ok = input_to_output(params, pts, INPUT, out)
     assert ok.all()
     np.testing.assert_allclose(back, np.stack([u, v], 1), atol=1e-3)
+
+
+@pytest.mark.parametrize("params", PARAM_SETS)
+def test_input_to_plane_is_the_plane_point_each_output_pixel_shows(params):
+    """Output pixels mapped into the fisheye image (exactly) come back from
+    ``input_to_plane`` at the plane point step 2 of the model gives them, computed here from
+    the output pixel alone: x_p = x_n / s_ox + x_os, y_p = y_n / s_oy + y_os."""
+    from rvmsim.isp import input_to_plane
+    from rvmsim.isp.exact import map_points
+
+    out = OutputSpec(320, 180, mirror=True)
+    u, v = np.meshgrid(np.linspace(0, 319, 23), np.linspace(0, 179, 13))
+    u, v = u.ravel(), v.ravel()
+    ui, vi, _ = map_points(params, u, v, INPUT, out)
+    xy, ok = input_to_plane(params, np.stack([ui, vi], 1), INPUT)
+    half = out.width / 2
+    x_n = -(u - (out.width - 1) / 2) / half  # mirrored
+    y_n = (v - (out.height - 1) / 2) / half
+    expect = np.stack([x_n / params.adv_h_scale + params.adv_h_shift,
+                       y_n / params.adv_v_scale + params.adv_v_shift], 1)
+    assert ok.all()
+    # every output pixel's plane point, to a millionth of a half-width (~1e-4 px)
+    np.testing.assert_allclose(xy, expect, atol=1e-6)
