@@ -53,6 +53,13 @@ def input_to_plane(
     r = np.hypot(dx, dy)
     theta = r / (p.rad / math.radians(p.fov / 2.0))
     safe = np.where(r > 0, r, 1.0)
+    if p.h_pan == p.tilt == p.theta == 0.0:  # both rotations are the identity (the
+        # paper's setting; any v_pan and phi then rotate nothing): the plane point is
+        # zoom·tan θ along the ray's azimuth, as the general case below gives
+        cos = np.cos(theta)
+        valid = cos > 1e-12
+        scale = p.zoom * np.sin(theta) / np.where(valid, cos, 1e-12) / safe
+        return np.stack([scale * dx, scale * dy], axis=1), valid
     s = np.sin(theta)
     ray = np.stack([np.where(r > 0, s * dx / safe, 0.0), np.where(r > 0, s * dy / safe, 0.0),
                     np.cos(theta)], axis=1)

@@ -117,6 +117,11 @@ class EcSolver:
                 r = ranges[param]
                 solves.append(_Solve(ec, param, target, pts, r.low, r.high))
         self._solves = {s.ec: s for s in solves}
+        # every solve's points in one array, mapped in one call per candidate
+        self._points = (np.concatenate([s.points for s in solves]) if solves
+                        else np.zeros((0, 2)))
+        ends = np.cumsum([0] + [len(s.points) for s in solves])
+        self._slices = {s.ec: slice(int(a), int(b)) for s, a, b in zip(solves, ends, ends[1:])}
         self.names = tuple(s.param for s in solves)
         self.targets = {s.ec: s.target for s in solves}
 
@@ -125,9 +130,10 @@ class EcSolver:
         if not self._solves:
             return params
         planes: dict[str, np.ndarray] = {}
-        for ec, s in self._solves.items():
-            xy, ok = input_to_plane(params, s.points, self.input_size)
-            if ok.sum() >= 3:
+        xy_all, ok_all = input_to_plane(params, self._points, self.input_size)
+        for ec, part in self._slices.items():
+            xy, ok = xy_all[part], ok_all[part]
+            if np.count_nonzero(ok) >= 3:
                 planes[ec] = xy[ok]
         half = self.output.width / 2.0
         w, h = self.output.width, self.output.height
