@@ -16,7 +16,7 @@ from .cli_params import (SEED, FiniteFloat, Group, Integer, OutputFile, OutputFo
                          SchedulerAddress, check_scale, usage_error_line)
 from .errors import RvmsimError
 from .isp import IspParams, OutputSpec
-from .tune import STRATEGIES
+from .tune import DEFAULT_STRATEGY, STRATEGIES
 
 __all__ = ["cli", "main"]
 
@@ -168,7 +168,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 @click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Run folder (default: runs/<scene name>).")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
-              default="grid-random", show_default=True, help=_STRATEGY_HELP)
+              default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
               help="Tuning config (YAML): tuned parameters, ranges, steps, N, T, budgets.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
@@ -220,7 +220,7 @@ def tune(scene: Path | None, out: Path | None, strategy: str, config_file: Path 
 @click.option("--out", "-o", type=OutputFolder(), default=Path("runs"),
               show_default=True, help="Folder for the runs (one sub-folder per scene).")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
-              default="grid-random", show_default=True, help=_STRATEGY_HELP)
+              default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None)
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None)
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")

@@ -216,7 +216,7 @@ def test_strategy_choices_come_from_the_registry():
             assert f"{name}: {cls.summary}" in words, (command, name)
     res = runner.invoke(cli, ["tune", str(SCENES / "vehicle_a.yaml"), "--strategy", "annealing"])
     assert res.exit_code == 2
-    assert "'grid-random', 'cmaes', 'random'" in " ".join(res.output.split())
+    assert "'grid-random', 'cmaes', 'cmaes-solved', 'random'" in " ".join(res.output.split())
 
 
 COMMANDS = ("render", "process", "evaluate", "tune", "batch", "status", "select", "report",

@@ -30,6 +30,7 @@ from .strategies import (
     CmaesSolvedSettings,
     RandomSettings,
     SEED_MAX,
+    DEFAULT_STRATEGY,
     check_seed,
 )
 from .config import (
@@ -112,6 +113,7 @@ __all__ = [
     "CmaesSolvedSettings",
     "RandomSettings",
     "SEED_MAX",
+    "DEFAULT_STRATEGY",
     "check_seed",
     "TuningConfig",
     "load_tuning_config",

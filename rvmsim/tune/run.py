@@ -21,7 +21,7 @@ from .folder import RUN_DB, RUN_JSON, open_run, rank_text, run_lock, run_setting
 from .loop import SearchOutcome, search_scene
 from .records import RunSettings, RunStatus
 from .store import RunStore
-from .strategies import GridToRandom, Strategy, check_seed
+from .strategies import DEFAULT_STRATEGY, Strategy, check_seed
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -158,7 +158,7 @@ def tune(
     run_dir: str | Path,
     *,
     scene_file: str | Path | None = None,
-    strategy: str = GridToRandom.name,
+    strategy: str = DEFAULT_STRATEGY,
     config: TuningConfig | None = None,
     criteria: Criteria | None = None,
     criteria_file: str | Path | None = None,

@@ -48,7 +48,11 @@ from .space import SearchSpace
 
 __all__ = ["Strategy", "GridToRandom", "RandomSearch", "CmaEs", "CmaEsSolved", "STRATEGIES",
            "register_strategy", "NoSettings", "GridRandomSettings", "CmaesSettings", "RandomSettings",
-           "CmaesSolvedSettings", "Batches", "Told", "SEED_MAX", "check_seed"]
+           "CmaesSolvedSettings", "Batches", "Told", "SEED_MAX", "check_seed", "DEFAULT_STRATEGY"]
+
+#: The strategy ``rvmsim tune``, ``batch`` and ``sweep`` use when none is named: the most
+#: reliable one by ``tools/bench_reliability.py`` (README, "Reliability").
+DEFAULT_STRATEGY = "cmaes-solved"
 
 #: The largest seed: numpy's 32-bit seed range, so a seed means the same to every generator.
 SEED_MAX = 2**32 - 1

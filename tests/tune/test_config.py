@@ -9,6 +9,7 @@ from rvmsim.errors import RvmsimError, TuningConfigError
 from rvmsim.tune import (
     STRATEGIES,
     CmaEs,
+    CmaEsSolved,
     GridToRandom,
     RandomSearch,
     TuningConfig,
@@ -24,7 +25,7 @@ def _space():
 
 
 def test_every_registered_strategy_has_its_config_section():
-    assert list(STRATEGIES) == ["grid-random", "cmaes", "random"]
+    assert list(STRATEGIES) == ["grid-random", "cmaes", "cmaes-solved", "random"]
     for name, cls in STRATEGIES.items():
         assert cls.name == name and cls.summary
         field = TuningConfig.model_fields[cls.section]
@@ -59,7 +60,8 @@ def test_a_setting_the_strategy_does_not_use_is_rejected(tmp_path):
 def test_sections_set_up_their_strategies(tmp_path):
     path = tmp_path / "t.yaml"
     path.write_text("batch: 32\ngrid_random: {top_n: 3, trials: 50}\ncmaes: {budget: 90, "
-                    "sigma0: 0.15}\nrandom: {budget: 70}\n")
+                    "sigma0: 0.15}\nrandom: {budget: 70}\ncmaes_solved: {budget: 120, "
+                    "explore: 12, restart_growth: 1.5}\n")
     cfg = load_tuning_config(path)
     space = _space()
     g = make_strategy("grid-random", space, cfg, 4)
@@ -68,10 +70,14 @@ def test_sections_set_up_their_strategies(tmp_path):
     c = make_strategy("cmaes", space, cfg, 1)
     assert isinstance(c, CmaEs) and (c.budget, c.sigma0) == (90, 0.15)
     assert make_strategy("cmaes", space, cfg, 1, budget=40).budget == 40
+    s = make_strategy("cmaes-solved", space, cfg, 3)
+    assert isinstance(s, CmaEsSolved) and (s.budget, s.explore, s.restart_growth, s.sigma0) \
+        == (120, 12, 1.5, 0.3)
+    assert make_strategy("cmaes-solved", space, cfg, 3, budget=10).explore == 10  # ≤ budget
     r = make_strategy("random", space, cfg, 2)
     assert isinstance(r, RandomSearch) and (r.budget, r.batch) == (70, 32)
     with pytest.raises(RvmsimError, match=r"unknown strategy 'annealing' \(known: grid-random, "
-                                          r"cmaes, random\)"):
+                                          r"cmaes, cmaes-solved, random\)"):
         make_strategy("annealing", space, cfg, 0)
 
 

@@ -112,21 +112,25 @@ def test_an_interrupted_old_run_resumes_to_the_unbroken_result(clean, tmp_path):
     store.close()
 
 
-def test_resume_after_kill_gives_the_clean_result(tmp_path):
+@pytest.mark.parametrize("strategy", ["grid-random", "cmaes-solved"])
+def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
     """A real `rvmsim tune` subprocess is killed with SIGKILL mid-run, resumed, and ends with
-    exactly the top-M of an uninterrupted run."""
+    exactly the top-M of an uninterrupted run (the paper's search, and the default one,
+    whose stored trials hold solved parameters)."""
     env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({
         "tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,
         "output": {"size": [320, 180]}, "grid_random": {"top_n": 2, "trials": 3000},
+        "cmaes_solved": {"budget": 3000},
     }))
     scene = str(SCENES / "vehicle_d.yaml")
 
     def tune(out, *extra):
         return [sys.executable, "-m", "rvmsim", "tune", *extra, "--no-progress",
-                "--workers", "1", *( [scene, "--out", str(out), "--config", str(cfg)]
-                                     if "--resume" not in extra else [])]
+                "--workers", "1", *([scene, "--out", str(out), "--config", str(cfg),
+                                     "--strategy", strategy]
+                                    if "--resume" not in extra else [])]
 
     clean = subprocess.run(tune(tmp_path / "clean"), env=env, capture_output=True, text=True,
                            timeout=600)
@@ -149,8 +153,10 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     stored = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-    assert 200 <= stored < 81 + 6000, stored  # killed mid-run, completed batches kept
-    assert stored % 40 in (0, 81 % 40)  # whole batches only
+    total = 81 + 6000 if strategy == "grid-random" else 3000
+    assert 200 <= stored < total, stored  # killed mid-run, completed batches kept
+    if strategy == "grid-random":
+        assert stored % 40 in (0, 81 % 40)  # whole batches only
     resumed = subprocess.run(tune(None, "--resume", str(run)), env=env, capture_output=True,
                              text=True, timeout=600)
     assert resumed.returncode == 0, resumed.stderr
@@ -179,7 +185,8 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     run = tmp_path / "run"
     proc = subprocess.Popen(
         [sys.executable, "-m", "rvmsim", "tune", str(SCENES / "vehicle_a.yaml"), "--out",
-         str(run), "--config", str(cfg), "--workers", "1", "--no-progress"],
+         str(run), "--config", str(cfg), "--workers", "1", "--no-progress",
+         "--strategy", "grid-random"],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         # a shell's background job ignores SIGINT, and children inherit that: restore it
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
