@@ -53,15 +53,16 @@ _MARGIN_PX = 1.0
 
 @dataclass(frozen=True)
 class Infeasibility:
-    """An EC no ISP setting can pass at a design point, and why (``reason``: one line
-    starting with the EC id, e.g. ``1-1: object F's lower patch is hidden behind the
-    bumper``)."""
+    """An EC no ISP setting can pass at a design point, and why: ``reason`` is one line
+    starting with the EC id (``1-1: object F's lower patch is hidden behind the bumper``),
+    ``short`` a few words for a map cell (``1-1: F behind bumper``)."""
 
     ec: str
     reason: str
+    short: str
 
     def as_dict(self) -> dict[str, str]:
-        return {"ec": self.ec, "reason": self.reason}
+        return {"ec": self.ec, "reason": self.reason, "short": self.short}
 
 
 @dataclass(frozen=True)
@@ -96,24 +97,25 @@ class PatchView:
         """Facing samples inside the field of view and on the sensor."""
         return self.facing - self.outside_circle - self.outside_sensor
 
-    def problem(self) -> str | None:
-        """Why the patch cannot be wholly visible (a phrase after "object F's lower patch"),
-        or None when nothing shows it cannot."""
+    def problem(self) -> tuple[str, str] | None:
+        """Why the patch cannot be wholly visible: (a phrase after "object F's lower
+        patch", a few words for a map cell), or None when nothing shows it cannot."""
         if self.samples == 0:
-            return "is not in the scene (the object is disabled)"
+            return "is not in the scene (the object is disabled)", "not in scene"
         if self.facing == 0:
-            return "faces away from the camera"
+            return "faces away from the camera", "faces away"
         if self.in_view == 0:
-            return "is outside the lens's field of view at this mount"
+            return "is outside the lens's field of view at this mount", "out of view"
         if self.outside_circle:
-            return "is cut by the edge of the lens's image circle at this mount"
+            return ("is cut by the edge of the lens's image circle at this mount",
+                    "cut by image circle")
         if self.outside_sensor:
-            return "is cut by the sensor border at this mount"
+            return "is cut by the sensor border at this mount", "cut by sensor border"
         if self.hidden:
             names = L.label_names()
             body = " and ".join(names[k] for k in sorted(self.hidden))
             whole = sum(self.hidden.values()) == self.in_view
-            return f"is {'' if whole else 'partly '}hidden behind the {body}"
+            return f"is {'' if whole else 'partly '}hidden behind the {body}", f"behind {body}"
         return None
 
 
@@ -127,9 +129,9 @@ def _patch_samples(scene: Scene, letter: str, n: int) -> tuple[np.ndarray, np.nd
     r = site.object_diameter / 2
     az = math.radians(stripe_azimuth_deg(scene, letter, c))
     half = site.stripe_width / r / 2
-    a, h = np.meshgrid(np.linspace(az - half, az + half, n),
-                       np.linspace(0.0, site.lower_patch_height, n))
-    a, h = a.ravel(), h.ravel()
+    a_grid, h_grid = np.meshgrid(np.linspace(az - half, az + half, n),
+                                 np.linspace(0.0, site.lower_patch_height, n))
+    a, h = a_grid.ravel(), h_grid.ravel()
     normals = np.stack([np.sin(a), np.zeros_like(a), np.cos(a)], axis=1)
     points = np.stack([c[0] + r * np.sin(a), -h, c[1] + r * np.cos(a)], axis=1)
     return points, normals
@@ -191,17 +193,17 @@ def _hidden_by_body(labels: np.ndarray, uv: np.ndarray, patch: int) -> dict[int,
     return out
 
 
-#: ECs that fail when every one of their labels is absent from the fisheye image, and what
-#: the message calls those labels.
-_ABSENT: dict[str, tuple[tuple[int, ...], str]] = {
+#: ECs that fail when every one of their labels is absent from the fisheye image, what the
+#: message calls those labels, and a short name for them.
+_ABSENT: dict[str, tuple[tuple[int, ...], str, str]] = {
     "1-2": ((L.object_stripe("F"), L.object_patch("F"), L.object_stripe("G"),
-             L.object_patch("G")), "the F and G stripes are"),
-    "1-4": ((L.object_stripe("B"),), "object B's stripe is"),
-    "2-1": ((L.BUMPER,), "the bumper is"),
-    "2-2": ((L.BUMPER,), "the bumper is"),
-    "3-1": ((L.guide_cross(2),), "cross guideline 2 is"),
-    "3-2": ((L.guide_cross(3),), "cross guideline 3 is"),
-    "4-1": ((L.BOARD,), "the pattern board is"),
+             L.object_patch("G")), "the F and G stripes are", "F, G stripes"),
+    "1-4": ((L.object_stripe("B"),), "object B's stripe is", "B stripe"),
+    "2-1": ((L.BUMPER,), "the bumper is", "bumper"),
+    "2-2": ((L.BUMPER,), "the bumper is", "bumper"),
+    "3-1": ((L.guide_cross(2),), "cross guideline 2 is", "guideline 2"),
+    "3-2": ((L.guide_cross(3),), "cross guideline 3 is", "guideline 3"),
+    "4-1": ((L.BOARD,), "the pattern board is", "board"),
 }
 
 
@@ -239,11 +241,12 @@ def infeasible_ecs(scene: Scene, camera: FisheyeCamera, labels: np.ndarray,
             problem = patch_view(scene, camera, labels, letter).problem()
             if problem is not None:
                 out.append(Infeasibility("1-1", f"1-1: object {letter}'s lower patch "
-                                                f"{problem}"))
+                                                f"{problem[0]}", f"1-1: {letter} {problem[1]}"))
                 break
     counts = np.bincount(labels.ravel(), minlength=256)
-    for ec, (ids, what) in _ABSENT.items():
+    for ec, (ids, what, short) in _ABSENT.items():
         if _enabled(criteria, ec) and _absent(counts, ids):
-            out.append(Infeasibility(ec, f"{ec}: {what} not in the fisheye image at all"))
+            out.append(Infeasibility(ec, f"{ec}: {what} not in the fisheye image at all",
+                                     f"{ec}: no {short} in view"))
     order = {ec: i for i, ec in enumerate(criteria.ids)}
     return sorted(out, key=lambda x: order.get(x.ec, len(order)))
