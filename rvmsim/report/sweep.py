@@ -135,7 +135,7 @@ def _cell_text(g: FeasibilityGrid, i: int, j: int) -> str:
         return f"{s:.2f}\npass"
     if kind == "infeasible":
         return "infeasible\n" + "\n".join(str(g.reason[i, j]).split(": ", 1))
-    return f"not found\n{s:.2g} {g.limiting[i, j]}\n{g.evaluations[i, j]} ev"
+    return f"not found\n{s:.2g} {g.limiting[i, j]}\n{g.evaluations[i, j]} evals"
 
 
 def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
