@@ -68,6 +68,8 @@ def test_a_point_a_neighbours_optimum_solves_is_not_reported_failing(grid_run):
         r = res.results[p.key]
         assert r["verdict"] in ("pass", "not found", "infeasible")
         assert (r["verdict"] == "pass") == r["passed"]
+        if r["passed"]:  # the search-free check never contradicts a search
+            assert r["infeasible"] == []
         passing = [q for q in near[p.key] if res.results[q.key]["verdict"] == "pass"]
         helps = [q for q in passing if _passes_at(spec, p, res.results[q.key]["params"])]
         if r["verdict"] != "pass":
@@ -79,6 +81,17 @@ def test_a_point_a_neighbours_optimum_solves_is_not_reported_failing(grid_run):
             assert r["evaluations"] > r["first_pass"]["evaluations"]
     assert solved_by_neighbour >= 1, "the cold pass missed no point a neighbour solves"
     assert res.rechecked >= solved_by_neighbour
+
+
+def test_rechecks_on_dask_give_the_local_results(grid_run, cluster, tmp_path):
+    from rvmsim.batch import DaskExecutor
+
+    _, spec, local = grid_run
+    _, client = cluster
+    res = run_sweep(spec, tmp_path / "dask", executor=DaskExecutor(client=client))
+    assert res.rechecked == local.rechecked >= 1
+    assert sweep_table(spec, res.points, res.results) == \
+        sweep_table(spec, local.points, local.results)
 
 
 def test_infeasible_points_are_not_rechecked_and_say_why(grid_run):
