@@ -8,7 +8,8 @@ without re-running finished tasks.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Generator, Mapping
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -108,10 +109,9 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
 
     Finished points and re-checks in ``out_dir/sweep.sqlite`` are kept; the rest run on
     ``executor`` (default: this process), each stored as it arrives; first-pass results are
-    then passed to ``on_result``.  A
-    sweep whose settings changed (base scene, tuning, mesh files) refuses to resume unless
-    ``force`` (which starts over, deleting the stored points only once this process holds
-    the folder's lock).  An interruption (Ctrl-C) propagates; everything finished is in the
+    then passed to ``on_result``.  A sweep whose settings changed (base scene, tuning,
+    re-check settings, mesh files) refuses to resume unless ``force`` (which starts over,
+    deleting the stored points only once this process holds the folder's lock).  An interruption (Ctrl-C) propagates; everything finished is in the
     store (:func:`stored_sweep` reads it).
 
     Raises
@@ -147,28 +147,41 @@ def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Exec
     done = store.done()
     todo = {p.task_key: p for p in points if p.key not in done}
     tasks = {key: point_task(spec, p) for key, p in todo.items()}
-    bar = None
-    if progress and tasks:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(points), initial=len(points) - len(tasks), unit="point",
-                   desc=f"sweep {spec.name}")
     ran = 0
-    try:
-        for task_key, result in executor.run(run_point, tasks):
+    # closing: an exception in on_result stops the executor's tasks at once.
+    with closing(_stream(executor, tasks, progress, len(points), f"sweep {spec.name}",
+                         {k: p.label for k, p in todo.items()})) as arrivals:
+        for task_key, result in arrivals:
             point = todo[task_key]
             store.add(point, result, session)
             done[point.key] = result
             ran += 1
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix_str(point.label)
             if on_result is not None:
                 on_result(point, result)
+    return points, ran, done
+
+
+def _stream(executor: Executor, tasks: dict[str, dict[str, Any]], progress: bool,
+            total: int, desc: str, labels: Mapping[str, str]
+            ) -> Generator[tuple[str, dict[str, Any]], None, None]:
+    """``run_point`` over ``tasks`` on ``executor``, yielding (task key, result) as each
+    arrives, with a progress bar (``total`` points, those not in ``tasks`` already done;
+    the last point's label from ``labels``) when ``progress``."""
+    bar = None
+    if progress and tasks:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, initial=total - len(tasks), unit="point", desc=desc)
+    try:
+        for task_key, result in executor.run(run_point, tasks):
+            yield task_key, result
+            if bar is not None:
+                bar.update(1)
+                if task_key in labels:
+                    bar.set_postfix_str(labels[task_key])
     finally:
         if bar is not None:
             bar.close()
-    return points, ran, done
 
 
 def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Executor,
@@ -190,23 +203,13 @@ def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Ex
                                  recheck_starts(p, neighbours[p.key], merged,
                                                 spec.recheck.neighbours))
                  for k, p in todo.items()}
-        bar = None
-        if progress and tasks:
-            from tqdm import tqdm
-
-            bar = tqdm(total=len(chosen), initial=len(chosen) - len(tasks), unit="point",
-                       desc=f"re-check {rnd}")
-        try:
-            for task_key, result in executor.run(run_point, tasks):
+        with closing(_stream(executor, tasks, progress, len(chosen), f"re-check {rnd}",
+                             {k: p.label for k, p in todo.items()})) as arrivals:
+            for task_key, result in arrivals:
                 point = todo[task_key]
                 store.add_recheck(point, rnd, result, session)
                 rechecks[(point.key, rnd)] = result
                 ran += 1
-                if bar is not None:
-                    bar.update(1)
-        finally:
-            if bar is not None:
-                bar.close()
         before, merged = merged, merged_results(points, done, rechecks, upto_round=rnd)
         turned = {k for k, r in merged.items() if r.get("verdict") == "pass"
                   and before[k].get("verdict") != "pass"}
