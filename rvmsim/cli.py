@@ -435,9 +435,11 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
           force: bool, allow_large: bool, progress: bool) -> None:
     """Render and tune every design point of SWEEP_FILE (a base scene and axes to vary).
 
-    Writes sweep.csv/sweep.json (one row per point: best EC score, pass/fail per EC, the
-    limiting EC, the tuned parameters), feasibility.png, sensitivity.png and sweep.html.
-    Finished points are stored as they arrive: run the same command again to resume.
+    Writes sweep.csv/sweep.json (one row per point: its verdict (pass, not found,
+    infeasible), best EC score, pass/fail per EC, the limiting EC, the tuned parameters),
+    feasibility.png, sensitivity.png and sweep.html.  Points not passing are re-checked from
+    their neighbours' optima (tune.recheck in the sweep file).  Finished points and
+    re-checks are stored as they arrive: run the same command again to resume.
     """
     from .batch import load_sweep, make_executor, run_sweep, stored_sweep
     from .report import write_sweep_outputs
@@ -461,9 +463,11 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
     except OSError as err:
         _fail_os(err, out)
     n_err = sum(1 for r in res.results.values() if "error" in r)
-    n_pass = sum(1 for r in res.results.values() if r.get("passed"))
+    kinds = [r.get("verdict") for r in res.results.values() if "error" not in r]
     click.echo(f"sweep {spec.name}: {len(res.points)} design points, {res.ran} run now, "
-               f"{len(res.points) - res.ran} already done; {n_pass} pass every EC"
+               f"{len(res.points) - res.ran} already done, {res.rechecked} re-checks run now; "
+               f"{kinds.count('pass')} pass every EC, {kinds.count('not found')} not found, "
+               f"{kinds.count('infeasible')} infeasible"
                + (f", {n_err} failed to run (see sweep.csv)" if n_err else ""))
     click.echo(f"wrote {', '.join(p.name for p in written)} in {out}")
 

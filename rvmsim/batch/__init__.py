@@ -3,7 +3,9 @@ tuning runs.
 
 - :mod:`.executors`: where tasks run (local processes or a Dask cluster).
 - :mod:`.spec`: the sweep file, its axes and design points.
-- :mod:`.point`: one design point as a task (render, tune, sensitivity).
+- :mod:`.point`: one design point as a task (render, infeasibility, tune, sensitivity).
+- :mod:`.feasibility`: the ECs no ISP setting can pass at a point (no search needed).
+- :mod:`.recheck`: continuation over the grid, re-checks, and each point's verdict.
 - :mod:`.store`: ``sweep.sqlite``.
 - :mod:`.run`: running or resuming a sweep.
 - :mod:`.outputs`: the sweep table, CSV/JSON and the files of a sweep.
@@ -22,6 +24,7 @@ from .executors import (
 from .spec import (
     AXES,
     SweepSpec,
+    RecheckSettings,
     DesignPoint,
     load_sweep,
     design_points,
@@ -31,6 +34,20 @@ from .point import (
     run_point,
     sensitivity,
     SENSITIVITY_STEPS,
+)
+from .feasibility import (
+    Infeasibility,
+    PatchView,
+    patch_view,
+    infeasible_ecs,
+)
+from .recheck import (
+    VERDICTS,
+    grid_index,
+    grid_neighbours,
+    recheck_seed,
+    merge_point,
+    merged_results,
 )
 from .store import (
     SweepStore,
@@ -46,6 +63,7 @@ from .outputs import (
     csv_text,
     sweep_json,
     page_columns,
+    point_verdict,
 )
 from .tasks import (
     BatchSettings,
@@ -66,6 +84,7 @@ __all__ = [
     "task_malloc",
     "AXES",
     "SweepSpec",
+    "RecheckSettings",
     "DesignPoint",
     "load_sweep",
     "design_points",
@@ -73,6 +92,16 @@ __all__ = [
     "run_point",
     "sensitivity",
     "SENSITIVITY_STEPS",
+    "Infeasibility",
+    "PatchView",
+    "patch_view",
+    "infeasible_ecs",
+    "VERDICTS",
+    "grid_index",
+    "grid_neighbours",
+    "recheck_seed",
+    "merge_point",
+    "merged_results",
     "SweepStore",
     "SweepResult",
     "run_sweep",
@@ -82,6 +111,7 @@ __all__ = [
     "csv_text",
     "sweep_json",
     "page_columns",
+    "point_verdict",
     "BatchSettings",
     "SceneRun",
     "run_batch",

@@ -14,19 +14,20 @@ from typing import Any
 from .run import SweepResult
 from .spec import DesignPoint, SweepSpec
 
-__all__ = ["sweep_table", "csv_text", "sweep_json", "page_columns"]
+__all__ = ["sweep_table", "csv_text", "sweep_json", "page_columns", "point_verdict"]
 
 #: Table columns between the axes and the EC columns.
-_SCORE_COLUMNS = ("ec_score", "passed", "limiting_ec")
+_SCORE_COLUMNS = ("verdict", "ec_score", "passed", "limiting_ec", "reason")
 
 
 def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, dict[str, Any]]
                 ) -> tuple[list[str], list[list[Any]]]:
     """(header, rows): one row per design point, in point order.
 
-    Columns: ``point``, the axes, ``ec_score``, ``passed``, ``limiting_ec``, ``ec_<id>``
-    (pass/FAIL) per EC of the sweep's criteria, the ISP parameters, ``evaluations`` and
-    ``error``.  Deterministic content only (no timings), so the same sweep gives the same
+    Columns: ``point``, the axes, ``verdict`` (pass, not found, infeasible), ``ec_score``,
+    ``passed``, ``limiting_ec``, ``reason`` (why infeasible), ``ec_<id>`` (pass/FAIL) per EC
+    of the sweep's criteria, the ISP parameters, ``evaluations`` (first pass and re-checks
+    summed) and ``error``.  Deterministic content only (no timings), so the same sweep gives the same
     table on any executor.
     """
     from ..isp import IspParams
@@ -44,10 +45,19 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
                          *[None] * len(param_names), None,
                          "not run" if r is None else r["error"]])
             continue
-        rows.append([p.index, *vals, r["score"], r["passed"], r["limiting_ec"],
+        rows.append([p.index, *vals, point_verdict(r), r["score"], r["passed"],
+                     r["limiting_ec"], r.get("reason"),
                      *["pass" if r["ecs"][e]["passed"] else "FAIL" for e in ec_ids],
                      *[r["params"][n] for n in param_names], r["evaluations"], ""])
     return header, rows
+
+
+def point_verdict(result: dict[str, Any]) -> str | None:
+    """A finished point's verdict (:data:`~rvmsim.batch.recheck.VERDICTS`); one merged
+    without re-check bookkeeping passes or is ``not found``; None for an error."""
+    if "error" in result:
+        return None
+    return result.get("verdict") or ("pass" if result["passed"] else "not found")
 
 
 def page_columns(spec: SweepSpec) -> int:
@@ -72,6 +82,9 @@ def sweep_json(res: SweepResult) -> dict[str, Any]:
     return {"name": spec.name, "sweep_file": spec.source, "base_scene": str(spec.base_scene),
             "axes": [[n, list(v)] for n, v in spec.axes], "strategy": spec.strategy,
             "budget": spec.budget, "seed": spec.seed,
+            "recheck": {"rounds": spec.recheck.rounds,
+                        "budget_factor": spec.recheck.budget_factor,
+                        "neighbours": spec.recheck.neighbours},
             "points": [{"index": p.index, "values": dict(p.values),
                         **res.results.get(p.key, {"error": "not run"})}
                        for p in res.points]}

@@ -1,8 +1,10 @@
-"""One design point as a task: render its scene, tune the ISP, probe the sensitivity.
+"""One design point as a task: render its scene, check what is infeasible without search,
+tune the ISP, probe the sensitivity.
 
 :func:`run_point` is a pure function of its task dict (the point's scene document, tuning
-config, strategy, budget, seed, criteria text), so it runs the same on a local process or a
-Dask worker; it writes no files except into the worker's render cache.
+config, strategy, budget, seed, criteria text, and for a re-check the parameter sets to
+start from and the budget factor), so it runs the same on a local process or a Dask
+worker; it writes no files except into the worker's render cache.
 """
 
 from __future__ import annotations
@@ -28,10 +30,19 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
     """Render, tune and probe one design point (runs in a worker; no files but the render
     cache).
 
+    ``task`` holds ``scene`` (document), ``config`` (tuning config document), ``label``,
+    ``strategy``, ``budget``, ``seed``, ``criteria`` (text or None), ``criteria_source``,
+    ``sensitivity``; a re-check adds ``starts`` (parameter dicts, name → value, evaluated
+    first) and ``budget_factor`` (the budget, or the strategy's default size when the
+    budget is None, times this).
+
     Returns a JSON-ready dict: ``score``, ``passed``, ``ecs`` (id → value, score, passed),
-    ``params``, ``tuned``, ``evaluations``, ``stopped``, ``limiting_ec`` (the failing enabled
-    EC with the lowest score, or None), ``sensitivity`` (see :func:`sensitivity`) and
-    ``seconds``; a problem with the point is returned as ``{"error": message, "seconds"}``.
+    ``params``, ``tuned``, ``evaluations``, ``budget`` (the budget searched with, None for
+    the strategy's default), ``stopped``, ``limiting_ec`` (the failing enabled EC with the
+    lowest score, or None), ``infeasible`` (the enabled ECs no ISP setting can pass here, as
+    ``{"ec", "reason"}``: :func:`~rvmsim.batch.feasibility.infeasible_ecs`),
+    ``sensitivity`` (see :func:`sensitivity`) and ``seconds``; a problem with the point is
+    returned as ``{"error": message, "seconds"}``.
     """
     with task_malloc():
         return _run_point(task)
@@ -44,7 +55,9 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     from ..criteria import criteria_from_text, default_criteria
     from ..render import cached_render
     from ..scene import scene_from_dict
+    from ..isp import IspParams
     from ..tune import RunStore, TuningConfig, candidate_evaluator, search_scene
+    from .feasibility import infeasible_ecs
 
     t0 = time.perf_counter()
     try:
@@ -58,12 +71,15 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         # otherwise open several OpenGL contexts at once.
         with _RENDER_LOCK:
             images, _ = cached_render(scene)
+        infeasible = infeasible_ecs(scene, images.camera, images.labels, criteria)
         evaluator = candidate_evaluator(images, config, criteria)
+        budget = _task_budget(task, images, config)
+        starts = [IspParams(**p) for p in task.get("starts", ())]
         store = RunStore(":memory:")
         try:
             outcome = search_scene(images, config=config, criteria=criteria,
                                    strategy=task["strategy"], store=store, seed=task["seed"],
-                                   budget=task["budget"], evaluator=evaluator)
+                                   budget=budget, evaluator=evaluator, starts=starts)
             n_eval = store.count()
         finally:
             store.close()
@@ -77,7 +93,9 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
             "params": {n: getattr(best.params, n) for n in best.params.names()},
             "tuned": list(space.names),
             "evaluations": n_eval,
+            "budget": budget,
             "stopped": outcome.stopped,
+            "infeasible": [x.as_dict() for x in infeasible],
         }
         failing = [(v["score"], ec) for ec, v in result["ecs"].items()
                    if not v["passed"] and criteria.items[ec].enabled]
@@ -88,6 +106,23 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         return result
     except RvmsimError as err:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
+
+
+def _task_budget(task: dict[str, Any], images: Any, config: Any) -> int | None:
+    """The budget to search with: the task's, times its ``budget_factor`` (a re-check); a
+    budget of None (the strategy's default) is the strategy's planned size times the factor
+    (kept None when the strategy does not know its size in advance)."""
+    budget, factor = task["budget"], float(task.get("budget_factor", 1.0))
+    if factor == 1.0:
+        return budget
+    if budget is None:
+        from ..tune import make_strategy
+
+        budget = make_strategy(task["strategy"], config.space(images.camera), config,
+                               task["seed"]).total()
+        if budget is None:
+            return None
+    return max(1, int(round(budget * factor)))
 
 
 def sensitivity(evaluator: Any, space: Any, best: Any) -> dict[str, Any]:

@@ -1,12 +1,15 @@
-"""Running a sweep: every design point not yet in ``sweep.sqlite`` as a task on an executor.
+"""Running a sweep: every design point not yet in ``sweep.sqlite`` as a task on an executor,
+then the re-check rounds (:mod:`rvmsim.batch.recheck`) on the same executor.
 
-Results stream into ``DIR/sweep.sqlite`` as they arrive, so an interrupted sweep resumes where
-it stopped, on either executor, without re-running finished points.
+Results (first-pass points and re-checks) stream into ``DIR/sweep.sqlite`` as they arrive,
+so an interrupted sweep resumes where it stopped, in either phase, on either executor,
+without re-running finished tasks.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Generator, Mapping
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -14,6 +17,8 @@ from typing import Any
 from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
 from .point import run_point
+from .recheck import (grid_neighbours, merged_results, recheck_points, recheck_starts,
+                      recheck_task, recheck_task_key)
 from .spec import DesignPoint, SweepSpec, design_points, point_scene_doc
 from .store import SWEEP_DB, SweepStore, sweep_lock
 
@@ -22,14 +27,17 @@ __all__ = ["SweepResult", "point_task", "run_sweep", "stored_sweep"]
 
 @dataclass(frozen=True)
 class SweepResult:
-    """A sweep's points and the results there are (by point key; a point not run yet has
-    none); ``ran``: points computed in this session."""
+    """A sweep's points and their final results (by point key, as
+    :func:`~rvmsim.batch.recheck.merge_point` gives them, with a ``verdict``; a point not run
+    yet has none); ``ran``: first-pass points computed in this session, ``rechecked``:
+    re-checks computed in this session."""
 
     spec: SweepSpec
     points: list[DesignPoint]
     results: dict[str, dict[str, Any]]
     ran: int
     out_dir: Path
+    rechecked: int = 0
 
 
 def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
@@ -44,12 +52,21 @@ def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
         return
     store = SweepStore(db, readonly=True)
     try:
-        fingerprint = store.meta().get("fingerprint")
+        meta = store.meta()
         store.sessions()
         store.done()
+        store.rechecks()
     finally:
         store.close()
-    if fingerprint != spec.fingerprint():
+    _check_fingerprints(spec, meta, out_dir)
+
+
+def _check_fingerprints(spec: SweepSpec, meta: dict[str, Any], out_dir: Path) -> None:
+    """Refuse a stored sweep of other settings (a store from before re-checks existed has
+    no re-check fingerprint, and resumes)."""
+    rf = meta.get("recheck_fingerprint")
+    if meta.get("fingerprint") != spec.fingerprint() or (
+            rf is not None and rf != spec.recheck_fingerprint()):
         raise RvmsimError(f"{out_dir}: this sweep's settings or base scene changed since it "
                           "started (results would mix); use --force to start over")
 
@@ -63,14 +80,16 @@ def _open_store(spec: SweepSpec, out_dir: Path, force: bool) -> tuple[SweepStore
             Path(str(db) + suffix).unlink(missing_ok=True)
     store = SweepStore(db)
     meta = store.meta()
-    fp = spec.fingerprint()
-    if meta and meta.get("fingerprint") != fp:  # another sweep stored between check and lock
-        store.close()
-        raise RvmsimError(f"{out_dir}: this sweep's settings or base scene changed since it "
-                          "started (results would mix); use --force to start over")
+    if meta:  # another sweep may have stored between check and lock
+        try:
+            _check_fingerprints(spec, meta, out_dir)
+        except RvmsimError:
+            store.close()
+            raise
     session = store.sessions() + 1
-    store.set_meta(fingerprint=fp, name=spec.name, source=spec.source, sessions=session,
-                   axes=[[n, list(v)] for n, v in spec.axes])
+    store.set_meta(fingerprint=spec.fingerprint(), name=spec.name, source=spec.source,
+                   sessions=session, axes=[[n, list(v)] for n, v in spec.axes],
+                   recheck_fingerprint=spec.recheck_fingerprint())
     return store, session
 
 
@@ -86,13 +105,13 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
               force: bool = False, progress: bool = False,
               on_result: Callable[[DesignPoint, dict[str, Any]], None] | None = None
               ) -> SweepResult:
-    """Run (or resume) a sweep into ``out_dir``.
+    """Run (or resume) a sweep into ``out_dir``: the first pass, then the re-check rounds.
 
-    Finished points in ``out_dir/sweep.sqlite`` are kept; the rest run on ``executor``
-    (default: this process), each stored as it arrives, then passed to ``on_result``.  A
-    sweep whose settings changed (base scene, tuning, mesh files) refuses to resume unless
-    ``force`` (which starts over, deleting the stored points only once this process holds
-    the folder's lock).  An interruption (Ctrl-C) propagates; everything finished is in the
+    Finished points and re-checks in ``out_dir/sweep.sqlite`` are kept; the rest run on
+    ``executor`` (default: this process), each stored as it arrives; first-pass results are
+    then passed to ``on_result``.  A sweep whose settings changed (base scene, tuning,
+    re-check settings, mesh files) refuses to resume unless ``force`` (which starts over,
+    deleting the stored points only once this process holds the folder's lock).  An interruption (Ctrl-C) propagates; everything finished is in the
     store (:func:`stored_sweep` reads it).
 
     Raises
@@ -106,12 +125,16 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
     _check_out(spec, out_dir, force)
     with sweep_lock(out_dir):
         store, session = _open_store(spec, out_dir, force)
+        executor = executor or LocalExecutor(1)
         try:
-            points, ran, done = _run_points(spec, store, session,
-                                            executor or LocalExecutor(1), progress, on_result)
+            points, ran, done = _run_points(spec, store, session, executor, progress,
+                                            on_result)
+            rechecks, rechecked = _run_rechecks(spec, store, session, executor, points, done,
+                                                progress)
         finally:
             store.close()
-    return SweepResult(spec, points, done, ran, out_dir)
+    return SweepResult(spec, points, merged_results(points, done, rechecks), ran, out_dir,
+                       rechecked)
 
 
 def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Executor,
@@ -124,39 +147,88 @@ def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Exec
     done = store.done()
     todo = {p.task_key: p for p in points if p.key not in done}
     tasks = {key: point_task(spec, p) for key, p in todo.items()}
-    bar = None
-    if progress and tasks:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(points), initial=len(points) - len(tasks), unit="point",
-                   desc=f"sweep {spec.name}")
     ran = 0
-    try:
-        for task_key, result in executor.run(run_point, tasks):
+    # closing: an exception in on_result stops the executor's tasks at once.
+    with closing(_stream(executor, tasks, progress, len(points), f"sweep {spec.name}",
+                         {k: p.label for k, p in todo.items()})) as arrivals:
+        for task_key, result in arrivals:
             point = todo[task_key]
             store.add(point, result, session)
             done[point.key] = result
             ran += 1
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix_str(point.label)
             if on_result is not None:
                 on_result(point, result)
+    return points, ran, done
+
+
+def _stream(executor: Executor, tasks: dict[str, dict[str, Any]], progress: bool,
+            total: int, desc: str, labels: Mapping[str, str]
+            ) -> Generator[tuple[str, dict[str, Any]], None, None]:
+    """``run_point`` over ``tasks`` on ``executor``, yielding (task key, result) as each
+    arrives, with a progress bar (``total`` points, those not in ``tasks`` already done;
+    the last point's label from ``labels``) when ``progress``."""
+    bar = None
+    if progress and tasks:
+        from tqdm import tqdm
+
+        bar = tqdm(total=total, initial=total - len(tasks), unit="point", desc=desc)
+    try:
+        for task_key, result in executor.run(run_point, tasks):
+            yield task_key, result
+            if bar is not None:
+                bar.update(1)
+                if task_key in labels:
+                    bar.set_postfix_str(labels[task_key])
     finally:
         if bar is not None:
             bar.close()
-    return points, ran, done
+
+
+def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Executor,
+                  points: list[DesignPoint], done: dict[str, dict[str, Any]], progress: bool
+                  ) -> tuple[dict[tuple[str, int], dict[str, Any]], int]:
+    """The re-check rounds (:mod:`rvmsim.batch.recheck`), each re-check not in ``store``
+    yet run and stored as it arrives; (every finished re-check, how many ran now)."""
+    rechecks = store.rechecks()
+    neighbours = grid_neighbours(spec, points)
+    merged = merged_results(points, done, rechecks, upto_round=0)
+    turned: set[str] | None = None
+    ran = 0
+    for rnd in range(1, spec.recheck.rounds + 1):
+        chosen = recheck_points(points, neighbours, merged, turned)
+        if not chosen:
+            break
+        todo = {recheck_task_key(p, rnd): p for p in chosen if (p.key, rnd) not in rechecks}
+        tasks = {k: recheck_task(point_task(spec, p), spec, rnd,
+                                 recheck_starts(p, neighbours[p.key], merged,
+                                                spec.recheck.neighbours))
+                 for k, p in todo.items()}
+        with closing(_stream(executor, tasks, progress, len(chosen), f"re-check {rnd}",
+                             {k: p.label for k, p in todo.items()})) as arrivals:
+            for task_key, result in arrivals:
+                point = todo[task_key]
+                store.add_recheck(point, rnd, result, session)
+                rechecks[(point.key, rnd)] = result
+                ran += 1
+        before, merged = merged, merged_results(points, done, rechecks, upto_round=rnd)
+        turned = {k for k, r in merged.items() if r.get("verdict") == "pass"
+                  and before[k].get("verdict") != "pass"}
+    return rechecks, ran
 
 
 def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:
     """The points finished so far in ``out_dir/sweep.sqlite`` (after an interruption), with
-    ``ran`` 0; none before the store was made).  Reads only."""
+    the re-checks finished so far, and ``ran`` 0; none before the store was made).  Reads
+    only."""
     out_dir = Path(out_dir)
     done: dict[str, dict[str, Any]] = {}
+    rechecks: dict[tuple[str, int], dict[str, Any]] = {}
     if (out_dir / SWEEP_DB).is_file():
         store = SweepStore(out_dir / SWEEP_DB, readonly=True)
         try:
             done = store.done()
+            rechecks = store.rechecks()
         finally:
             store.close()
-    return SweepResult(spec, design_points(spec), done, 0, out_dir)
+    points = design_points(spec)
+    return SweepResult(spec, points, merged_results(points, done, rechecks), 0, out_dir)

@@ -14,6 +14,7 @@ Sweep file (YAML)::
       seed: 0
       config: {output: {size: [640, 360]}}     # a tuning config (as `rvmsim tune --config`)
       criteria: my_criteria.yaml               # optional, relative to the sweep file
+      recheck: {rounds: 3, budget_factor: 2, neighbours: 4}   # re-check of failing points
     map: [camera_height_m, pitch_deg]          # the feasibility map's x and y axes
     sensitivity: true
 
@@ -43,14 +44,17 @@ from ..criteria import Criteria, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
 
-__all__ = ["AXES", "SweepSpec", "DesignPoint", "load_sweep", "design_points",
-           "point_scene_doc", "MAX_AXIS_VALUES", "MAX_SWEEP_POINTS"]
+__all__ = ["AXES", "SweepSpec", "DesignPoint", "RecheckSettings", "load_sweep",
+           "design_points", "point_scene_doc", "MAX_AXIS_VALUES", "MAX_SWEEP_POINTS",
+           "MAX_RECHECK_ROUNDS"]
 
 #: Most values of one axis (a list or a range).
 MAX_AXIS_VALUES = 1000
 #: Most design points of a sweep (each one is a tuning run) unless ``allow_large``
 #: (``rvmsim sweep --allow-large``).
 MAX_SWEEP_POINTS = 1000
+#: Most re-check rounds of a sweep (``tune.recheck.rounds``).
+MAX_RECHECK_ROUNDS = 20
 
 #: Named axes: name → where a value is written.  Heights are positive up; the camera
 #: position's y is negative up.
@@ -82,6 +86,13 @@ class _Range(BaseModel):
     step: float | None = Field(default=None, gt=0)
 
 
+class _Recheck(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
+    rounds: int = Field(default=3, ge=0, le=MAX_RECHECK_ROUNDS)
+    budget_factor: float = Field(default=2.0, ge=1.0, le=100.0)
+    neighbours: int = Field(default=4, ge=0, le=26)
+
+
 class _Tune(BaseModel):
     model_config = ConfigDict(extra="forbid")
     strategy: str = "cmaes"
@@ -89,6 +100,22 @@ class _Tune(BaseModel):
     seed: int = 0
     config: dict[str, Any] = {}
     criteria: str | None = None
+    recheck: _Recheck = _Recheck()
+
+
+@dataclass(frozen=True)
+class RecheckSettings:
+    """How a sweep re-checks the points its first pass did not find passing
+    (``tune.recheck``; see :mod:`rvmsim.batch.recheck`).
+
+    ``rounds``: most re-check rounds (0: none); ``budget_factor``: each re-check's budget
+    as a multiple of ``tune.budget``; ``neighbours``: most neighbouring optima a re-check
+    starts from (best first), besides the point's own best.
+    """
+
+    rounds: int = 3
+    budget_factor: float = 2.0
+    neighbours: int = 4
 
 
 class _SweepFile(BaseModel):
@@ -122,6 +149,7 @@ class SweepSpec:
     map_axes: tuple[str, str] | None
     sensitivity: bool
     criteria_source: str = "sweep criteria"
+    recheck: RecheckSettings = RecheckSettings()
     lines: Mapping[tuple[Any, ...], int] = field(default_factory=dict, compare=False,
                                                  repr=False)
 
@@ -137,6 +165,13 @@ class SweepSpec:
             else:
                 h.update(b"?")
         return h.hexdigest()[:20]
+
+    def recheck_fingerprint(self) -> str:
+        """Hash of the re-check settings (kept apart from :meth:`fingerprint`, so a store
+        made before re-checks existed still resumes)."""
+        r = self.recheck
+        text = json.dumps([r.rounds, r.budget_factor, r.neighbours])
+        return hashlib.sha256(text.encode()).hexdigest()[:20]
 
     def criteria(self) -> Criteria:
         """The criteria every design point is judged by."""
@@ -309,7 +344,10 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
                      axes=axes, strategy=f.tune.strategy, budget=f.tune.budget,
                      seed=f.tune.seed, config=f.tune.config, criteria_doc=criteria_doc,
                      map_axes=f.map, sensitivity=f.sensitivity,
-                     criteria_source=criteria_source or "sweep criteria", lines=lines)
+                     criteria_source=criteria_source or "sweep criteria",
+                     recheck=RecheckSettings(f.tune.recheck.rounds,
+                                             float(f.tune.recheck.budget_factor),
+                                             f.tune.recheck.neighbours), lines=lines)
     # Every point's scene must load: check them all now, not in a worker an hour later.
     for point in design_points(spec):
         point_scene_doc(spec, point.values)

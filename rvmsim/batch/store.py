@@ -1,4 +1,9 @@
-"""``sweep.sqlite``: a sweep's settings and every finished design point, as they arrive."""
+"""``sweep.sqlite``: a sweep's settings, every finished design point and every finished
+re-check of one (:mod:`rvmsim.batch.recheck`), as they arrive.
+
+A store made before re-checks existed has no ``rechecks`` table: it reads as having none,
+and resuming it adds the table.
+"""
 
 from __future__ import annotations
 
@@ -18,7 +23,10 @@ SWEEP_DB = "sweep.sqlite"
 
 _SCHEMA = ("CREATE TABLE IF NOT EXISTS points (key TEXT PRIMARY KEY, idx INTEGER, "
            "values_json TEXT NOT NULL, result TEXT NOT NULL, session INTEGER NOT NULL, "
-           "finished REAL NOT NULL);")
+           "finished REAL NOT NULL);"
+           "CREATE TABLE IF NOT EXISTS rechecks (key TEXT NOT NULL, round INTEGER NOT NULL, "
+           "idx INTEGER, result TEXT NOT NULL, session INTEGER NOT NULL, "
+           "finished REAL NOT NULL, PRIMARY KEY (key, round));")
 
 
 def sweep_lock(out_dir: str | Path) -> FolderLock:
@@ -57,6 +65,12 @@ def _result_problem(r: Any) -> str | None:
                                                                    or _is_number(p["drop_5pct"]))
                                          for p in sens["params"].values())):
         return "sensitivity: not what a sweep stores"
+    inf = r.get("infeasible", [])  # absent in stores made before the check existed
+    if not (isinstance(inf, list) and all(isinstance(x, dict) and isinstance(x.get("ec"), str)
+                                          and isinstance(x.get("reason"), str)
+                                          and isinstance(x.get("short", ""), str)
+                                          for x in inf)):
+        return "infeasible: not what a sweep stores"
     return None
 
 
@@ -90,6 +104,13 @@ class SweepStore(SqliteStore):
             raise RvmsimError(f"{self.path}: meta: sessions: {n!r} is not a number of sessions")
         return n
 
+    def add_recheck(self, point: DesignPoint, round_: int, result: dict[str, Any],
+                    session: int) -> None:
+        """Store one finished re-check (round ``round_`` ≥ 1) of a point."""
+        self.write("INSERT OR REPLACE INTO rechecks VALUES (?, ?, ?, ?, ?, ?)",
+                   [(point.key, round_, point.index, json.dumps(result), session,
+                     time.time())])
+
     def done(self) -> dict[str, dict[str, Any]]:
         """Finished points (errors included) by key.
 
@@ -98,15 +119,38 @@ class SweepStore(SqliteStore):
         RvmsimError
             One line naming the point whose stored result is not a JSON object.
         """
+        return {str(key): self._result("points", str(key), text)
+                for key, text in self.rows("SELECT key, result FROM points")}
+
+    def rechecks(self) -> dict[tuple[str, int], dict[str, Any]]:
+        """Finished re-checks (errors included) by (point key, round); none in a store made
+        before re-checks existed.
+
+        Raises
+        ------
+        RvmsimError
+            One line naming the point and round whose stored result is not one.
+        """
+        have = self.rows("SELECT name FROM sqlite_master WHERE type = 'table' AND "
+                         "name = 'rechecks'")
+        if not have:
+            return {}
         out = {}
-        for key, text in self.rows("SELECT key, result FROM points"):
-            try:
-                result = json.loads(text)
-            except (TypeError, ValueError) as err:
-                raise RvmsimError(f"{self.path}: points: {key}: result: unreadable "
-                                  f"({err})") from None
-            problem = _result_problem(result)
-            if problem is not None:
-                raise RvmsimError(f"{self.path}: points: {key}: result: {problem}")
-            out[str(key)] = result
+        for key, rnd, text in self.rows("SELECT key, round, result FROM rechecks"):
+            if not isinstance(rnd, int) or isinstance(rnd, bool) or rnd < 1:
+                raise RvmsimError(f"{self.path}: rechecks: {key}: round: {rnd!r} is not a "
+                                  "round number")
+            out[(str(key), rnd)] = self._result("rechecks", f"{key} round {rnd}", text)
         return out
+
+    def _result(self, table: str, where: str, text: Any) -> dict[str, Any]:
+        """A stored result, checked (:func:`_result_problem`)."""
+        try:
+            result = json.loads(text)
+        except (TypeError, ValueError) as err:
+            raise RvmsimError(f"{self.path}: {table}: {where}: result: unreadable "
+                              f"({err})") from None
+        problem = _result_problem(result)
+        if problem is not None:
+            raise RvmsimError(f"{self.path}: {table}: {where}: result: {problem}")
+        return result

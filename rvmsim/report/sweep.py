@@ -1,6 +1,10 @@
 """The sweep page: the feasibility map, the sensitivity chart and the design-point table of a
 design-stage sweep (:mod:`rvmsim.batch`), on one self-contained HTML page.
 
+The map shows each cell's verdict (:data:`rvmsim.batch.VERDICTS`): *pass* cells green
+(darker for a higher score) inside a black outline, *not found* cells amber with the best
+score and the limiting EC, *infeasible* cells grey and hatched with a short reason.
+
 Convention: the feasibility map's cell (i, j) is the j-th value of its x axis and the i-th
 of its y axis, drawn with the origin at the lower left; cells are 1 unit wide, centred on
 integers.
@@ -15,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from ..batch import (DesignPoint, SweepResult, SweepSpec, csv_text, page_columns, sweep_json,
-                     sweep_table)
+from ..batch import (VERDICTS, DesignPoint, SweepResult, SweepSpec, csv_text, page_columns,
+                     point_verdict, sweep_json, sweep_table)
 from ..errors import RvmsimError
 from ..tune import json_default
 from .page import data_uri, escape, figure_png, page
@@ -27,8 +31,10 @@ __all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "sensitivit
 
 @dataclass(frozen=True)
 class FeasibilityGrid:
-    """The feasibility map's cells: per (y, x) value, the best score over the other axes,
-    whether that best passes every EC, and its limiting EC ("" when it passes or has none).
+    """The feasibility map's cells: per (y, x) value, the best point over the other axes
+    (passing first, then not found before infeasible, then by score): its score, whether it
+    passes every EC, its limiting EC ("" when it passes or has none), its verdict ("" where
+    no point finished), a short reason ("" unless infeasible) and its evaluations.
 
     ``y_axis`` is None for a one-axis map (one row, ``ys == [None]``); ``others`` are the
     other axes with several values, which the map takes the best over.
@@ -42,6 +48,9 @@ class FeasibilityGrid:
     passed: np.ndarray  # (len(ys), len(xs)) bool
     limiting: np.ndarray  # (len(ys), len(xs)) object (str)
     others: list[str]
+    verdict: np.ndarray  # (len(ys), len(xs)) object (str)
+    reason: np.ndarray  # (len(ys), len(xs)) object (str): a short reason where infeasible
+    evaluations: np.ndarray  # (len(ys), len(xs)) int, 0 where no point finished
 
 
 def _map_axes(spec: SweepSpec) -> tuple[str, str | None]:
@@ -55,15 +64,21 @@ def _map_axes(spec: SweepSpec) -> tuple[str, str | None]:
 
 def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
                      results: dict[str, dict[str, Any]]) -> FeasibilityGrid:
-    """Best score, pass and limiting EC on the map's grid, best over the other axes (a
-    passing point beats a failing one with a higher score)."""
+    """Verdict, best score, pass, limiting EC and reason on the map's grid, best over the
+    other axes (a passing point beats a failing one with a higher score, and a point not
+    found beats an infeasible one)."""
     axes = dict(spec.axes)
     xa, ya = _map_axes(spec)
     xs = list(axes[xa])
     ys = list(axes[ya]) if ya is not None else [None]
-    score = np.full((len(ys), len(xs)), np.nan)
-    passed = np.zeros((len(ys), len(xs)), bool)
-    limiting = np.full((len(ys), len(xs)), "", dtype=object)
+    shape = (len(ys), len(xs))
+    score = np.full(shape, np.nan)
+    passed = np.zeros(shape, bool)
+    limiting = np.full(shape, "", dtype=object)
+    verdict = np.full(shape, "", dtype=object)
+    reason = np.full(shape, "", dtype=object)
+    evaluations = np.zeros(shape, int)
+    best: dict[tuple[int, int], tuple[bool, bool, float]] = {}
     for p in points:
         r = results.get(p.key)
         if r is None or "error" in r:
@@ -71,12 +86,25 @@ def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
         v = dict(p.values)
         i = ys.index(v[ya]) if ya is not None else 0
         j = xs.index(v[xa])
-        if np.isnan(score[i, j]) or r["score"] > score[i, j] or (r["passed"] and not passed[i, j]):
-            score[i, j] = r["score"]
-            passed[i, j] = r["passed"]
-            limiting[i, j] = r["limiting_ec"] or ""
+        kind = point_verdict(r) or ""
+        rank = (bool(r["passed"]), kind != "infeasible", float(r["score"]))
+        if (i, j) in best and rank <= best[(i, j)]:
+            continue
+        best[(i, j)] = rank
+        score[i, j], passed[i, j] = r["score"], r["passed"]
+        limiting[i, j] = r["limiting_ec"] or ""
+        verdict[i, j] = kind
+        reason[i, j] = _short_reason(r) if kind == "infeasible" else ""
+        evaluations[i, j] = r.get("evaluations", 0)
     others = [n for n, v in spec.axes if n not in (xa, ya) and len(v) > 1]
-    return FeasibilityGrid(xa, ya, xs, ys, score, passed, limiting, others)
+    return FeasibilityGrid(xa, ya, xs, ys, score, passed, limiting, others, verdict, reason,
+                           evaluations)
+
+
+def _short_reason(r: dict[str, Any]) -> str:
+    """A few words on why a point is infeasible (its first reason's short form)."""
+    inf = r.get("infeasible") or [{}]
+    return str(inf[0].get("short") or (r.get("reason") or "")[:24])
 
 
 def _outline_passing(ax: Any, passed: np.ndarray) -> None:
@@ -93,32 +121,58 @@ def _outline_passing(ax: Any, passed: np.ndarray) -> None:
                 ax.plot(*seg, color="black", linewidth=2.5)
 
 
+#: Map colours: not found (amber), infeasible (grey), not run (white); pass is green-scaled.
+_NOT_FOUND, _INFEASIBLE, _NOT_RUN = "#f3c77a", "#c8c8c8", "#ffffff"
+
+
+def _cell_text(g: FeasibilityGrid, i: int, j: int) -> str:
+    """What a map cell says: score and "pass"; score, limiting EC and evaluations; or
+    "infeasible" and the short reason."""
+    s, kind = g.score[i, j], g.verdict[i, j]
+    if np.isnan(s):
+        return "—"
+    if kind == "pass":
+        return f"{s:.2f}\npass"
+    if kind == "infeasible":
+        return "infeasible\n" + "\n".join(str(g.reason[i, j]).split(": ", 1))
+    return f"not found\n{s:.2g} {g.limiting[i, j]}\n{g.evaluations[i, j]} evals"
+
+
 def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
                     results: dict[str, dict[str, Any]]) -> bytes:
-    """Heat map of the best EC score over the map's two axes, the pass region outlined in
-    black, and the limiting EC written in every failing cell (PNG bytes)."""
+    """The feasibility map over the map's two axes (PNG bytes): pass cells green-scaled by
+    score, the pass region outlined in black; not-found cells amber with the best score,
+    the limiting EC and the evaluations spent; infeasible cells grey and hatched with a
+    short reason; a legend below."""
     import matplotlib
 
     matplotlib.use("Agg")
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import ListedColormap, Normalize
     from matplotlib.figure import Figure
+    from matplotlib.patches import Patch, Rectangle
 
     g = feasibility_grid(spec, points, results)
-    fig = Figure(figsize=(1.6 + 1.1 * len(g.xs), 1.4 + 0.8 * len(g.ys)))
+    fig = Figure(figsize=(2.4 + 1.25 * len(g.xs), 2.2 + 0.9 * len(g.ys)))
     ax = fig.add_subplot(111)
-    im = ax.imshow(g.score, origin="lower", cmap="viridis", vmin=0.0, vmax=1.0, aspect="auto")
-    fig.colorbar(im, ax=ax, label="best EC score")
+    greens = ListedColormap(colormaps["Greens"](np.linspace(0.25, 1.0, 256)))
     for i in range(len(g.ys)):
         for j in range(len(g.xs)):
-            s = g.score[i, j]
-            if np.isnan(s):
-                txt = "—"
-            elif g.passed[i, j]:
-                txt = f"{s:.2f}\npass"
-            else:
-                txt = f"{s:.2g}\n{g.limiting[i, j]}"
-            ax.text(j, i, txt, ha="center", va="center", fontsize=8,
-                    color="white" if (np.isnan(s) or s < 0.5) else "black")
+            kind = g.verdict[i, j]
+            face = (greens(float(g.score[i, j])) if kind == "pass"
+                    else _NOT_FOUND if kind == "not found"
+                    else _INFEASIBLE if kind == "infeasible" else _NOT_RUN)
+            ax.add_patch(Rectangle((j - .5, i - .5), 1, 1, facecolor=face, edgecolor="#888",
+                                   linewidth=0.5, hatch="///" if kind == "infeasible" else None))
+            dark = kind == "pass" and g.score[i, j] > 0.6
+            ax.text(j, i, _cell_text(g, i, j), ha="center", va="center", fontsize=7,
+                    color="white" if dark else "black")
     _outline_passing(ax, g.passed)
+    ax.set_xlim(-.5, len(g.xs) - .5)
+    ax.set_ylim(-.5, len(g.ys) - .5)
+    fig.colorbar(ScalarMappable(Normalize(0.0, 1.0), greens), ax=ax,
+                 label="EC score of passing cells")
     ax.set_xticks(range(len(g.xs)), [str(x) for x in g.xs])
     ax.set_xlabel(g.x_axis)
     if g.y_axis is not None:
@@ -126,7 +180,14 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
         ax.set_ylabel(g.y_axis)
     else:
         ax.set_yticks([])
-    title = "feasibility: pass region outlined; failing cells name the limiting EC"
+    ax.legend(handles=[Patch(facecolor=greens(0.7), edgecolor="black", label="pass"),
+                       Patch(facecolor=_NOT_FOUND, label="not found (best score, limiting "
+                                                         "EC, evaluations)"),
+                       Patch(facecolor=_INFEASIBLE, hatch="///",
+                             label="infeasible (reason; no search needed)")],
+              loc="upper center", bbox_to_anchor=(0.5, -0.12 if g.y_axis else -0.3),
+              ncol=3, fontsize=7, frameon=False)
+    title = "feasibility: pass region outlined"
     if g.others:
         title += f"\n(best over {', '.join(g.others)})"
     ax.set_title(title, fontsize=9)
@@ -182,12 +243,14 @@ def sensitivity_png(points: list[DesignPoint], results: dict[str, dict[str, Any]
 
 
 def _cell_class(v: Any) -> str:
-    """Table cell colour class (the page kit's CSS): pass/True green, FAIL/False red,
-    anything else plain (the point numbers 0 and 1 too)."""
+    """Table cell colour class (the page kit's CSS): pass/True green, FAIL/False and "not
+    found" red, "infeasible" grey, anything else plain (the point numbers 0 and 1 too)."""
     if v == "pass" or v is True:
         return "pass"
-    if v == "FAIL" or v is False:
+    if v in ("FAIL", "not found") or v is False:
         return "fail"
+    if v == "infeasible":
+        return "off"
     return ""
 
 
@@ -202,7 +265,11 @@ def sweep_html(res: SweepResult, header: list[str], rows: list[list[Any]], colum
     the first ``columns`` columns of the design-point table (``header``, ``rows`` as
     :func:`rvmsim.batch.sweep_table` gives them)."""
     spec = res.spec
-    n_pass = sum(1 for r in res.results.values() if r.get("passed"))
+    counts = {k: 0 for k in VERDICTS}
+    for r in res.results.values():
+        kind = point_verdict(r)
+        if kind is not None:
+            counts[kind] += 1
     table = "".join("<tr>" + "".join(_cell(v) for v in row[:columns]) + "</tr>"
                     for row in rows)
     head = "".join(f"<th>{escape(h)}</th>" for h in header[:columns])
@@ -214,9 +281,16 @@ def sweep_html(res: SweepResult, header: list[str], rows: list[list[Any]], colum
 <h1>Feasibility sweep: {escape(spec.name)}</h1>
 <p>Base scene {escape(spec.base_scene)}; {len(res.points)} design points
 ({escape(sizes)}); tuning: {escape(spec.strategy)},
-budget {escape(spec.budget)}, seed {escape(spec.seed)}. {n_pass} of {len(res.results)} finished
-points pass every EC.</p>
+budget {escape(spec.budget)}, seed {escape(spec.seed)}; re-check: up to
+{escape(spec.recheck.rounds)} rounds at {escape(spec.recheck.budget_factor)}× the budget from
+the best of up to {escape(spec.recheck.neighbours)} neighbours. Of {len(res.results)} finished
+points, {counts["pass"]} pass every EC, {counts["not found"]} not found, {counts["infeasible"]}
+infeasible.</p>
 <h2>Feasibility map</h2><img src="{data_uri(feasibility)}" alt="feasibility map">
+<p class="muted"><b>pass</b>: tuned to pass every EC. <b>not found</b>: no passing setting was
+found within the evaluations shown (first pass and re-checks from the neighbours' optima); it
+may still exist. <b>infeasible</b>: no ISP setting can pass, for a reason that needs no search
+(the reason column).</p>
 {sens}
 <h2>Design points</h2><p>Tuned parameters per point: sweep.csv.</p>
 <table><tr>{head}</tr>{table}</table>

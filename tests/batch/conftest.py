@@ -3,12 +3,13 @@ on local processes, and a Dask LocalCluster on loopback (both for the whole pack
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
 import yaml
 
-from rvmsim.batch import LocalExecutor, load_sweep, run_sweep
+from rvmsim.batch import LocalExecutor, RecheckSettings, load_sweep, run_sweep
 
 from ..conftest import SCENES
 
@@ -49,7 +50,8 @@ def sweep_file(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="package")
 def local_run(sweep_file):
-    spec = load_sweep(sweep_file)
+    """The first pass only (no re-check rounds): the executors and the store under test."""
+    spec = dataclasses.replace(load_sweep(sweep_file), recheck=RecheckSettings(rounds=0))
     res = run_sweep(spec, sweep_file.parent / "local", executor=LocalExecutor(2))
     return spec, res
 

@@ -17,16 +17,20 @@ def test_table_columns_follow_the_axes_and_the_criteria(local_run):
     header, rows = sweep_table(spec, res.points, res.results)
     ec_ids = spec.criteria().ids
     n_axes = len(spec.axes)
-    assert header[:1 + n_axes + 3] == ["point", "camera_height_m", "pitch_deg", "ec_score",
-                                       "passed", "limiting_ec"]
-    assert header[1 + n_axes + 3:1 + n_axes + 3 + len(ec_ids)] == [f"ec_{e}" for e in ec_ids]
+    assert header[:1 + n_axes + 5] == ["point", "camera_height_m", "pitch_deg", "verdict",
+                                       "ec_score", "passed", "limiting_ec", "reason"]
+    assert header[1 + n_axes + 5:1 + n_axes + 5 + len(ec_ids)] == [f"ec_{e}" for e in ec_ids]
     assert header[-2:] == ["evaluations", "error"]
-    assert len(header) == 1 + n_axes + 3 + len(ec_ids) + len(IspParams.names()) + 2
+    assert len(header) == 1 + n_axes + 5 + len(ec_ids) + len(IspParams.names()) + 2
     assert [r[0] for r in rows] == list(range(6))
     for p, row in zip(res.points, rows):
         r = res.results[p.key]
         assert len(row) == len(header)
         assert row[header.index("ec_score")] == r["score"]
+        assert row[header.index("verdict")] == r["verdict"]
+        assert r["verdict"] in ("pass", "not found", "infeasible")
+        assert (r["verdict"] == "pass") == r["passed"]
+        assert (row[header.index("reason")] is None) == (r["verdict"] != "infeasible")
         for e in ec_ids:
             assert row[header.index(f"ec_{e}")] == ("pass" if r["ecs"][e]["passed"] else "FAIL")
     # A point not run (or failed) has only its axis values and the reason.
@@ -59,4 +63,8 @@ def test_written_outputs(local_run):
     # Point numbers 0 and 1 are not coloured as pass/fail (1 == True in Python).
     assert '<tr><td class="">0</td>' in html and '<tr><td class="">1</td>' in html
     n_ec = len(spec.criteria().ids)
-    assert html.count('class="fail">FAIL</td>') + html.count('class="pass">pass</td>') == 6 * n_ec
+    n_pass = sum(r["verdict"] == "pass" for r in res.results.values())
+    assert html.count('class="fail">FAIL</td>') + html.count('class="pass">pass</td>') == \
+        6 * n_ec + n_pass  # the EC cells and the passing verdicts
+    assert html.count('<td class="fail">not found</td>') + \
+        html.count('<td class="off">infeasible</td>') == 6 - n_pass

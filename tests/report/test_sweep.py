@@ -48,3 +48,56 @@ def test_default_map_axes_and_points_without_results():
     g = feasibility_grid(spec, pts, results)
     assert (g.x_axis, g.y_axis) == ("a", "b")
     assert np.isnan(g.score).all() and not g.passed.any()
+
+
+def _verdict_results(pts, verdict_of):
+    results = {}
+    for p in pts:
+        v = dict(p.values)
+        kind = verdict_of(v)
+        results[p.key] = {
+            "score": 0.8 if kind == "pass" else 0.01, "passed": kind == "pass",
+            "limiting_ec": None if kind == "pass" else "1-1", "evaluations": 1234,
+            "verdict": kind, "reason": "1-1: object F's lower patch is outside the lens's "
+                                      "field of view at this mount" if kind == "infeasible"
+            else None,
+            "infeasible": [{"ec": "1-1", "reason": "…", "short": "1-1: F out of view"}]
+            if kind == "infeasible" else []}
+    return results
+
+
+def _colour_pixels(png: bytes, hex_rgb: str) -> int:
+    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR)
+    bgr = [int(hex_rgb[i:i + 2], 16) for i in (5, 3, 1)]
+    return int(np.all(np.abs(img.astype(int) - bgr) <= 2, axis=2).sum())
+
+
+def test_map_shows_the_three_verdicts_distinctly():
+    """pass / not found / infeasible per cell; over another axis a point not found beats an
+    infeasible one; the map draws amber and grey only where those verdicts are."""
+    spec = _spec(("a", "b"))
+    pts = design_points(spec)
+
+    def verdict(v):
+        if v["a"] == 2 and v["b"] == 20:
+            return "pass"
+        if v["a"] == 1 and v["b"] == 10:
+            return "infeasible"
+        if v["a"] == 2 and v["b"] == 10:  # infeasible at c = x, not found at c = y
+            return "infeasible" if v["c"] == "x" else "not found"
+        return "not found"
+
+    results = _verdict_results(pts, verdict)
+    g = feasibility_grid(spec, pts, results)
+    assert g.verdict.tolist() == [["infeasible", "not found"], ["not found", "pass"]]
+    assert g.reason[0, 0] == "1-1: F out of view" and g.reason[0, 1] == ""
+    assert (g.evaluations == 1234).all()
+    png = feasibility_png(spec, pts, results)
+    amber, grey = "#f3c77a", "#c8c8c8"
+    only_pass = feasibility_png(spec, pts, _verdict_results(pts, lambda v: "pass"))
+    for colour in (amber, grey):  # beyond the legend's swatch: cells of that colour
+        assert _colour_pixels(png, colour) > 5 * _colour_pixels(only_pass, colour) + 1000
+    # Results without verdicts (a store from before them): pass or not found.
+    old = {k: {x: r[x] for x in ("score", "passed", "limiting_ec")} for k, r in results.items()}
+    g_old = feasibility_grid(spec, pts, old)
+    assert set(g_old.verdict.ravel()) == {"pass", "not found"}
