@@ -177,7 +177,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 @click.option("--workers", type=Integer(1, 64), default=_DEFAULT_WORKERS,
               show_default=True, help="Worker processes.")
 @click.option("--budget", type=Integer(1), default=None,
-              help="Evaluations (cmaes, random) or fine trials T per seed (grid-random).")
+              help="Evaluations (cmaes-solved, cmaes, random) or fine trials T per seed (grid-random).")
 @click.option("--max-time", type=FiniteFloat(0), default=None,
               help="Stop after this many seconds (the run can be resumed).")
 @click.option("--target-score", type=FiniteFloat(0, 1), default=None,

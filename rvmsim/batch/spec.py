@@ -9,7 +9,7 @@ Sweep file (YAML)::
       pitch_deg: {start: 25, stop: 40, num: 4} # ... lists or ranges (stop included) ...
       vehicle.bumper.top: [0.7, 0.8]           # ... or any scene key by its dotted path
     tune:
-      strategy: cmaes                          # any strategy of `rvmsim tune`
+      strategy: cmaes-solved                   # any strategy of `rvmsim tune`
       budget: 1500
       seed: 0
       config: {output: {size: [640, 360]}}     # a tuning config (as `rvmsim tune --config`)
@@ -43,6 +43,7 @@ from .._io import (image_size_problem, input_error_from_validation, key_lines, l
 from ..criteria import Criteria, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
+from ..tune import DEFAULT_STRATEGY
 
 __all__ = ["AXES", "SweepSpec", "DesignPoint", "RecheckSettings", "load_sweep",
            "design_points", "point_scene_doc", "MAX_AXIS_VALUES", "MAX_SWEEP_POINTS",
@@ -95,7 +96,7 @@ class _Recheck(BaseModel):
 
 class _Tune(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    strategy: str = "cmaes"
+    strategy: str = DEFAULT_STRATEGY
     budget: int | None = Field(default=1500, ge=1)
     seed: int = 0
     config: dict[str, Any] = {}
