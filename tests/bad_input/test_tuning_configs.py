@@ -40,6 +40,12 @@ FILES = [
     ("size-pixels", "output: {size: [8192, 8192]}\n", "output.size"),
     ("top-m-400-digits", f"top_m: {BIG}\n", "top_m"),
     ("batch-400-digits", f"batch: {BIG}\n", "batch"),
+    # the default strategy's settings (issue #15)
+    ("solved-growth-too-big", "cmaes_solved: {restart_growth: 9}\n", "cmaes_solved.restart_growth"),
+    ("solved-growth-nan", "cmaes_solved: {restart_growth: .nan}\n", "cmaes_solved.restart_growth"),
+    ("solved-explore-negative", "cmaes_solved: {explore: -1}\n", "cmaes_solved.explore"),
+    ("solved-budget-zero", "cmaes_solved: {budget: 0}\n", "cmaes_solved.budget"),
+    ("solved-unknown-setting", "cmaes_solved: {popsize: 12}\n", "cmaes_solved.popsize"),
 ]
 CASES = [Case(f"tuning-{i}", TUNE, (T, key), _file(text), keep=("run",))
          for i, text, key in FILES]
@@ -48,6 +54,8 @@ CASES += [Case(f"tuning-yaml-{i}", TUNE, (T, "limit"), _file("top_m: 5\n" + text
 CASES += [
     Case("tuning-init-outside-camera-range", TUNE, (T, "parameters.rad.init"),
          _file("parameters: {rad: {init: 1900}}\n"), keep=("run",)),
+    Case("tuning-default-strategy", TUNE[:6] + TUNE[8:], (T, "cmaes_solved.sigma0"),
+         _file("cmaes_solved: {sigma0: 0}\n"), keep=("run",)),
     Case("tuning-batch-command", ("batch", SMALL_SCENE, "--config", T, "--out", "b",
                                   "--no-progress"),
          (T, "fixed.tilt"), _file("fixed: {tilt: .nan}\n"), keep=("run",)),
