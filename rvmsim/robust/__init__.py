@@ -19,7 +19,24 @@ from .variation import (
     MOUNT_AXES,
 )
 from .samples import MountSample, draw_samples, nominal_sample
-from .images import sample_images, sample_camera, body_pose, cover_for
+from .images import sample_images, sample_camera, body_pose, cover_for, Refolder, refolder
+from .stats import (
+    YieldEstimate,
+    yield_estimate,
+    wilson_interval,
+    AxisEffect,
+    failure_drivers,
+    ec_margins,
+)
+from .robustness import (
+    EcStats,
+    ScalePoint,
+    SampleEvaluation,
+    RobustnessResult,
+    evaluate_samples,
+    robustness,
+    DEFAULT_SCALES,
+)
 
 __all__ = [
     "AxisDistribution",
@@ -37,4 +54,19 @@ __all__ = [
     "sample_camera",
     "body_pose",
     "cover_for",
+    "Refolder",
+    "refolder",
+    "YieldEstimate",
+    "yield_estimate",
+    "wilson_interval",
+    "AxisEffect",
+    "failure_drivers",
+    "ec_margins",
+    "EcStats",
+    "ScalePoint",
+    "SampleEvaluation",
+    "RobustnessResult",
+    "evaluate_samples",
+    "robustness",
+    "DEFAULT_SCALES",
 ]

@@ -30,6 +30,7 @@ import functools
 import itertools
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -40,7 +41,7 @@ from ..scene import Scene, build_parts
 from .samples import MountSample
 from .variation import LoadState
 
-__all__ = ["sample_images", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
+__all__ = ["sample_images", "Refolder", "refolder", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
 
 #: The covered angle ranges are rounded up to this step (degrees), so that sample sets of
 #: about the same spread share cached cubes.
@@ -111,8 +112,26 @@ def _viewpoint(sample: MountSample) -> tuple[tuple[float, ...], str]:
     return tuple(round(v, 9) for v in sample.render_position_mm), sample.load.name
 
 
+@dataclass(frozen=True)
+class Refolder:
+    """What every re-fold of one sample set shares: the covering layout and the camera's
+    pixel rays (:func:`refolder`)."""
+
+    cover: CubeLayout
+    rays: CameraRays
+
+
+def refolder(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0) -> Refolder:
+    """The :class:`Refolder` of ``samples`` (build it once for many calls of
+    :func:`sample_images` on parts of one sample set)."""
+    cam = scene.fisheye_camera()
+    return Refolder(cover_for(scene, samples, scale=scale),
+                    CameraRays.of(cam.scaled(scale) if scale != 1.0 else cam))
+
+
 def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0,
-                  progress: bool = False, color: bool = True) -> list[FisheyeImages]:
+                  progress: bool = False, color: bool = True,
+                  shared: Refolder | None = None) -> list[FisheyeImages]:
     """The fisheye colour and label images of every sample (see the module docstring).
 
     Parameters
@@ -127,6 +146,8 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
     color : bool
         Also fold the colour image; without it, ``color`` is black (a read-only broadcast
         view, no memory), for evaluations that read labels only.
+    shared : Refolder, optional
+        :func:`refolder` of a sample set holding ``samples`` (default: of ``samples``).
 
     Returns
     -------
@@ -141,9 +162,8 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
     """
     if not samples:
         return []
-    cover = cover_for(scene, samples, scale=scale)
-    rays = CameraRays.of(scene.fisheye_camera().scaled(scale) if scale != 1.0
-                         else scene.fisheye_camera())
+    shared = shared if shared is not None else refolder(scene, samples, scale=scale)
+    cover, rays = shared.cover, shared.rays
     groups: dict[tuple[tuple[float, ...], str], list[int]] = {}
     for i, s in enumerate(samples):
         groups.setdefault(_viewpoint(s), []).append(i)

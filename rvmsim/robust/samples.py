@@ -65,7 +65,7 @@ class MountSample:
 def nominal_sample(variation: Variation | None = None) -> MountSample:
     """The car as designed: no mount offset, the first load state (nominal if none)."""
     load = variation.load_states[0] if variation is not None else LoadState("nominal")
-    return MountSample(-1, (0.0,) * 6, (0.0, 0.0, 0.0), load, 0.0)  # type: ignore[arg-type]
+    return MountSample(-1, (0.0,) * 6, (0.0, 0.0, 0.0), load, 0.0)
 
 
 def _unit_points(n: int, seed: int) -> np.ndarray:
