@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 __all__ = ["VariationSpec", "MountTolerance", "AxisSpec", "UniformSpec", "NormalSpec",
            "LoadStateSpec", "MOUNT_AXES"]
@@ -92,15 +92,15 @@ class MountTolerance(_Model):
     roll_deg: AxisSpec | None = None
     position_levels: Annotated[int, Field(ge=1, le=9)] = 2
 
-    @model_validator(mode="after")
-    def _bounds(self) -> MountTolerance:
-        for name in MOUNT_AXES:
-            spec = getattr(self, name)
-            limit = _MAX_MM if name.endswith("_mm") else _MAX_DEG
-            if spec is not None and spec.bound > limit:
-                raise ValueError(f"{name}: reaches ±{spec.bound:g}, more than the ±{limit:g} "
-                                 f"{'mm' if name.endswith('_mm') else '°'} a tolerance may have")
-        return self
+    @field_validator(*MOUNT_AXES)
+    @classmethod
+    def _bound(cls, spec: AxisSpec | None, info: ValidationInfo) -> AxisSpec | None:
+        name = str(info.field_name)
+        limit = _MAX_MM if name.endswith("_mm") else _MAX_DEG
+        if spec is not None and spec.bound > limit:
+            raise ValueError(f"reaches ±{spec.bound:g}, more than the ±{limit:g} "
+                             f"{'mm' if name.endswith('_mm') else '°'} a tolerance may have")
+        return spec
 
 
 class LoadStateSpec(_Model):
@@ -119,9 +119,10 @@ class VariationSpec(_Model):
     mount: MountTolerance = MountTolerance()
     load_states: Annotated[list[LoadStateSpec], Field(max_length=20)] = []
 
-    @model_validator(mode="after")
-    def _names(self) -> VariationSpec:
-        names = [s.name for s in self.load_states]
+    @field_validator("load_states")
+    @classmethod
+    def _names(cls, states: list[LoadStateSpec]) -> list[LoadStateSpec]:
+        names = [s.name for s in states]
         if len(set(names)) != len(names):
             raise ValueError(f"load state names must differ, got {names}")
-        return self
+        return states
