@@ -4,9 +4,10 @@ into the fisheye image (:mod:`.fold`, :func:`render_fisheye`); cached on disk (:
 from __future__ import annotations
 
 from .cube import (CubeLayout, FaceCrop, CameraRays, cube_layout, cover_layout, refold_layout,
+                   refold_coords,
                    face_coords, face_rotation, FACE_NAMES, GUARD_PX)
 from .gl import FaceAtlas, render_faces
-from .fold import fold, fold_labels
+from .fold import fold, fold_labels, nearest_labels
 from .fisheye import FisheyeImages, render_fisheye
 from .viewpoint import posed_parts, cube_key, cached_cube, is_vehicle_label
 from .cache import (
@@ -27,6 +28,8 @@ __all__ = [
     "CameraRays",
     "cover_layout",
     "refold_layout",
+    "refold_coords",
+    "nearest_labels",
     "face_coords",
     "face_rotation",
     "render_faces",

@@ -25,6 +25,7 @@ import numpy as np
 from ..camera import FisheyeCamera
 
 __all__ = ["CubeLayout", "FaceCrop", "CameraRays", "cube_layout", "cover_layout", "refold_layout",
+           "refold_coords",
            "face_coords", "face_rotation", "FACE_NAMES", "GUARD_PX"]
 
 FACE_NAMES = ("+x", "-x", "+y", "-y", "+z", "-z")
@@ -254,11 +255,17 @@ class CameraRays:
     in_fov: np.ndarray
 
     @staticmethod
-    def of(camera: FisheyeCamera) -> CameraRays:
+    def of(camera: FisheyeCamera, pixels: np.ndarray | None = None) -> CameraRays:
+        """The rays of every in-field pixel, or of the in-field ones among ``pixels`` (flat
+        indices into the (H, W) image)."""
         rays, in_fov = camera.image_rays()
-        sel = rays[in_fov]
+        index = np.flatnonzero(in_fov)
+        if pixels is not None:
+            p = np.asarray(pixels, dtype=np.intp)
+            index = p[in_fov.ravel()[p]]
+        sel = rays.reshape(-1, 3)[index]
         x, y, z = (np.ascontiguousarray(sel[:, i], dtype=np.float32) for i in range(3))
-        return CameraRays(x, y, z, np.flatnonzero(in_fov), in_fov)
+        return CameraRays(x, y, z, index, in_fov)
 
 
 def _crop_tables(layout: CubeLayout) -> tuple[np.ndarray, ...]:
@@ -272,6 +279,43 @@ def _crop_tables(layout: CubeLayout) -> tuple[np.ndarray, ...]:
         x1[c.face], y1[c.face] = c.x0 + c.width - 2, c.y0 + c.height - 2
         ax0[c.face] = c.atlas_x0
     return present, x0, y0, x1, y1, ax0
+
+
+def refold_coords(cover: CubeLayout, cube_rotation: np.ndarray,
+                  rays: CameraRays) -> tuple[np.ndarray, np.ndarray]:
+    """The atlas coordinates (x, y; float32, one per ray of ``rays``) where a camera turned
+    about its centre samples ``cover``'s atlas: :func:`refold_layout` for chosen pixels only.
+
+    Raises
+    ------
+    ValueError
+        When a ray falls outside the rendered crops.
+    """
+    m = np.asarray(cube_rotation, dtype=np.float32)
+    x = rays.x * m[0, 0] + rays.y * m[1, 0] + rays.z * m[2, 0]
+    y = rays.x * m[0, 1] + rays.y * m[1, 1] + rays.z * m[2, 1]
+    z = rays.x * m[0, 2] + rays.y * m[1, 2] + rays.z * m[2, 2]
+    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+    on_x = (ax >= ay) & (ax >= az)
+    on_y = ~on_x & (ay >= az)
+    comp = np.where(on_x, x, np.where(on_y, y, z))
+    neg = comp < 0
+    sz = np.where(neg, z, -z)  # −sign(comp)·z
+    # face cameras (face_rotation): ±x: (∓z, y); +y: (x, −z); −y: (x, z); ±z: (±x, y)
+    inv = np.float32(cover.face_size / 2.0) / np.abs(comp)
+    u = np.where(on_x, sz, np.where(on_y, x, np.where(neg, -x, x))) * inv
+    v = np.where(on_y, sz, y) * inv
+    face = (np.where(on_x, 0, np.where(on_y, 2, 4)) + neg).astype(np.uint8)
+    present, x0, y0, x1, y1, ax0 = _crop_tables(cover)
+    c_px = np.float32(cover.centre_px)
+    fx = u + c_px
+    fy = v + c_px
+    inside = (np.take(present, face) & (fx >= np.take(x0, face)) & (fx <= np.take(x1, face))
+              & (fy >= np.take(y0, face)) & (fy <= np.take(y1, face)))
+    if not np.all(inside):
+        raise ValueError(f"{int(np.sum(~inside))} pixels of the turned camera fall outside the "
+                         "rendered cube's crops (cover a larger rotation)")
+    return fx + np.take(ax0 - x0, face), fy - np.take(y0, face)
 
 
 def refold_layout(cover: CubeLayout, cube_rotation: np.ndarray, rays: CameraRays) -> CubeLayout:
@@ -305,35 +349,12 @@ def refold_layout(cover: CubeLayout, cube_rotation: np.ndarray, rays: CameraRays
     As :func:`cube_layout`: dst → src atlas coordinates, pixel centres at integer
     coordinates, (−1, −1) outside the lens's field.
     """
-    m = np.asarray(cube_rotation, dtype=np.float32)
-    x = rays.x * m[0, 0] + rays.y * m[1, 0] + rays.z * m[2, 0]
-    y = rays.x * m[0, 1] + rays.y * m[1, 1] + rays.z * m[2, 1]
-    z = rays.x * m[0, 2] + rays.y * m[1, 2] + rays.z * m[2, 2]
-    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
-    on_x = (ax >= ay) & (ax >= az)
-    on_y = ~on_x & (ay >= az)
-    comp = np.where(on_x, x, np.where(on_y, y, z))
-    neg = comp < 0
-    sz = np.where(neg, z, -z)  # −sign(comp)·z
-    # face cameras (face_rotation): ±x: (∓z, y); +y: (x, −z); −y: (x, z); ±z: (±x, y)
-    inv = np.float32(cover.face_size / 2.0) / np.abs(comp)
-    u = np.where(on_x, sz, np.where(on_y, x, np.where(neg, -x, x))) * inv
-    v = np.where(on_y, sz, y) * inv
-    face = (np.where(on_x, 0, np.where(on_y, 2, 4)) + neg).astype(np.uint8)
-    present, x0, y0, x1, y1, ax0 = _crop_tables(cover)
-    c_px = np.float32(cover.centre_px)
-    fx = u + c_px
-    fy = v + c_px
-    inside = (np.take(present, face) & (fx >= np.take(x0, face)) & (fx <= np.take(x1, face))
-              & (fy >= np.take(y0, face)) & (fy <= np.take(y1, face)))
-    if not np.all(inside):
-        raise ValueError(f"{int(np.sum(~inside))} pixels of the turned camera fall outside the "
-                         "rendered cube's crops (cover a larger rotation)")
+    atlas_x_flat, atlas_y_flat = refold_coords(cover, cube_rotation, rays)
     shape = rays.in_fov.shape
     atlas_x = np.full(shape, -1.0, np.float32)
     atlas_y = np.full(shape, -1.0, np.float32)
-    atlas_x.ravel()[rays.index] = fx + np.take(ax0 - x0, face)
-    atlas_y.ravel()[rays.index] = fy - np.take(y0, face)
+    atlas_x.ravel()[rays.index] = atlas_x_flat
+    atlas_y.ravel()[rays.index] = atlas_y_flat
     return CubeLayout(cover.face_size, cover.crops, atlas_x, atlas_y, rays.in_fov,
                       np.asarray(cube_rotation, dtype=np.float64))
 

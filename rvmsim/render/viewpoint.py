@@ -62,28 +62,34 @@ def cube_key(scene: Scene, camera: FisheyeCamera, layout: CubeLayout,
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:24]
 
 
-def _read(folder: Path, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray] | None:
+def _read(folder: Path, shape: tuple[int, int],
+          color: bool) -> tuple[np.ndarray | None, np.ndarray] | None:
+    """The stored (colour or None, labels), or None if absent, damaged or of the wrong size.
+    Labels are decoded with OpenCV (faster than pillow for one channel)."""
+    import cv2
     import imageio.v3 as iio
 
     color_p, labels_p = folder / "cube_color.png", folder / "cube_labels.png"
     if not (color_p.is_file() and labels_p.is_file()):
         return None
     try:
-        color = np.asarray(iio.imread(color_p, plugin="pillow"))
-        labels = np.asarray(iio.imread(labels_p, plugin="pillow"))
+        img = np.asarray(iio.imread(color_p, plugin="pillow")) if color else None
+        labels = cv2.imread(str(labels_p), cv2.IMREAD_UNCHANGED)
+        if labels is None:
+            raise ValueError("not a PNG OpenCV can read")
     except (OSError, ValueError) as err:
         warnings.warn(f"{folder}: damaged cube cache entry, rendering again ({err})",
                       RuntimeWarning, stacklevel=3)
         return None
-    if color.shape[:2] != shape or labels.shape != shape:
+    if (img is not None and img.shape[:2] != shape) or labels.shape != shape:
         return None
-    return color, labels
+    return img, labels
 
 
 def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
                 body_pose: np.ndarray | None = None, scale: float = 1.0,
-                parts: Callable[[], list[Part]] | None = None,
-                progress: bool = False) -> tuple[np.ndarray, np.ndarray, bool]:
+                parts: Callable[[], list[Part]] | None = None, color: bool = True,
+                progress: bool = False) -> tuple[np.ndarray | None, np.ndarray, bool]:
     """The rendered atlas of ``layout`` seen by ``camera`` (its pose; its lens is not used),
     with the body at ``body_pose``: from the cache, or rendered and stored.
 
@@ -102,11 +108,13 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
     parts : callable, optional
         Gives ``build_parts(scene)`` (called only when rendering; lets callers build the
         scene's meshes, the slow part of a first render, once for many viewpoints).
+    color : bool
+        Also read the colour atlas from the cache (else ``color`` may be None).
     progress : bool
 
     Returns
     -------
-    color : (rows, cols, 3) uint8
+    color : (rows, cols, 3) uint8 or None
     labels : (rows, cols) uint8
         The atlas (0 where no geometry is hit), as :func:`~rvmsim.render.render_faces`.
     from_cache : bool
@@ -119,7 +127,7 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
     from ..errors import RvmsimError
 
     folder = cache_dir() / cube_key(scene, camera, layout, body_pose, scale)
-    entry = _read(folder, layout.atlas_shape)
+    entry = _read(folder, layout.atlas_shape, color)
     if entry is not None:
         return entry[0], entry[1], True
     base = build_parts(scene) if parts is None else parts()

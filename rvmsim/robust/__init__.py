@@ -19,7 +19,8 @@ from .variation import (
     MOUNT_AXES,
 )
 from .samples import MountSample, draw_samples, nominal_sample
-from .images import sample_images, sample_camera, body_pose, cover_for, Refolder, refolder
+from .images import (sample_images, sample_camera, body_pose, cover_for, Refolder, refolder,
+                     RvmPixels, rvm_pixels, sample_rvm_labels)
 from .stats import (
     YieldEstimate,
     yield_estimate,
@@ -56,6 +57,9 @@ __all__ = [
     "cover_for",
     "Refolder",
     "refolder",
+    "RvmPixels",
+    "rvm_pixels",
+    "sample_rvm_labels",
     "YieldEstimate",
     "yield_estimate",
     "wilson_interval",

@@ -29,19 +29,23 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..camera import FisheyeCamera, rotation_from_ypr
+from .. import labels as L
+from ..isp import IspParams, OutputSpec, apply_map, build_map
 from ..render import (CameraRays, CubeLayout, FisheyeImages, cached_cube, cover_layout,
-                      fold, fold_labels, refold_layout)
+                      fold, fold_labels, nearest_labels, refold_coords, refold_layout)
 from ..scene import Scene, build_parts
 from .samples import MountSample
 from .variation import LoadState
 
-__all__ = ["sample_images", "Refolder", "refolder", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
+__all__ = ["sample_images", "Refolder", "refolder", "RvmPixels", "rvm_pixels",
+           "sample_rvm_labels", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
 
 #: The covered angle ranges are rounded up to this step (degrees), so that sample sets of
 #: about the same spread share cached cubes.
@@ -164,31 +168,105 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
         return []
     shared = shared if shared is not None else refolder(scene, samples, scale=scale)
     cover, rays = shared.cover, shared.rays
-    groups: dict[tuple[tuple[float, ...], str], list[int]] = {}
-    for i, s in enumerate(samples):
-        groups.setdefault(_viewpoint(s), []).append(i)
     out: list[FisheyeImages | None] = [None] * len(samples)
-    parts = functools.lru_cache(maxsize=1)(lambda: build_parts(scene))
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(samples), desc="sample images", unit="sample", leave=False)
-    for idx in groups.values():
-        first = samples[idx[0]]
-        view_cam = _viewpoint_camera(scene, first, scale)
-        atlas_c, atlas_l, _ = cached_cube(scene, view_cam, cover, scale=scale, parts=parts,
-                                          body_pose=body_pose(scene, first.load))
+    bar = _bar(progress, len(samples), "sample images")
+    for idx, view_cam, atlas_c, atlas_l in _viewpoints(scene, samples, shared, scale, color):
         for i in idx:
             cam = sample_camera(scene, samples[i], scale=scale)
             layout = refold_layout(cover, cam.rotation.T @ view_cam.rotation, rays)
-            if color:
+            if color and atlas_c is not None:
                 img_c, img_l = fold(layout, atlas_c, atlas_l)
             else:
                 img_l = fold_labels(layout, atlas_l)
                 img_c = np.broadcast_to(np.zeros(3, np.uint8), (*img_l.shape, 3))
             out[i] = FisheyeImages(color=img_c, labels=img_l, camera=cam,
                                    face_size=cover.face_size)
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return [o for o in out if o is not None]
+
+
+def _bar(progress: bool, total: int, desc: str) -> Any:
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="sample", leave=False)
+
+
+def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, scale: float,
+                color: bool) -> Iterator[tuple[list[int], FisheyeCamera, np.ndarray | None,
+                                               np.ndarray]]:
+    """Per distinct viewpoint of ``samples``: the indices of its samples, the camera its cube
+    is rendered for, and the cube's atlas (colour None when not asked for and cached)."""
+    groups: dict[tuple[tuple[float, ...], str], list[int]] = {}
+    for i, s in enumerate(samples):
+        groups.setdefault(_viewpoint(s), []).append(i)
+    parts = functools.lru_cache(maxsize=1)(lambda: build_parts(scene))
+    for idx in groups.values():
+        first = samples[idx[0]]
+        view_cam = _viewpoint_camera(scene, first, scale)
+        atlas_c, atlas_l, _ = cached_cube(scene, view_cam, shared.cover, scale=scale,
+                                          parts=parts, body_pose=body_pose(scene, first.load),
+                                          color=color)
+        yield idx, view_cam, atlas_c, atlas_l
+
+
+@dataclass(frozen=True)
+class RvmPixels:
+    """Which fisheye pixel each RVM pixel shows under one ISP setting (the nearest sample of
+    its map, as :func:`rvmsim.isp.process` takes labels): ``source`` (H_o, W_o) flat fisheye
+    index (−1: no input), ``pixels`` the distinct ones, ``inverse`` each used RVM pixel's
+    entry in ``pixels``, ``rays`` the in-field ones' rays, ``in_field`` which of ``pixels``
+    lie in the lens's field."""
+
+    source: np.ndarray
+    pixels: np.ndarray
+    inverse: np.ndarray
+    rays: CameraRays
+    in_field: np.ndarray
+
+
+def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec) -> RvmPixels:
+    """:class:`RvmPixels` of ``params`` (for ``camera``'s sensor size) on ``camera``'s lens."""
+    w, h = camera.width, camera.height
+    index = np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w)  # exact below 2^24
+    src = np.rint(apply_map(index, build_map(params, (w, h), output), labels=True))
+    source = src.astype(np.intp) - 1
+    pixels, inverse = np.unique(source[source >= 0], return_inverse=True)
+    rays = CameraRays.of(camera, pixels)
+    return RvmPixels(source, pixels, inverse.ravel(), rays, rays.in_fov.ravel()[pixels])
+
+
+def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixels, *,
+                      scale: float = 1.0, shared: Refolder | None = None,
+                      progress: bool = False) -> list[np.ndarray]:
+    """The RVM label image of every sample under the ISP setting of ``rvm``: equal to
+    ``process(None, sample_images(...)[i].labels, params, output)`` (the tests check it), at
+    the cost of re-folding only the fisheye pixels the RVM image shows.
+
+    Returns
+    -------
+    list of (H_o, W_o) uint8
+        In ``samples``' order; ``VOID`` where the RVM image has no input.
+    """
+    if not samples:
+        return []
+    shared = shared if shared is not None else refolder(scene, samples, scale=scale)
+    used = rvm.source >= 0
+    out: list[np.ndarray | None] = [None] * len(samples)
+    bar = _bar(progress, len(samples), "samples")
+    for idx, view_cam, _, atlas_l in _viewpoints(scene, samples, shared, scale, False):
+        for i in idx:
+            cam = sample_camera(scene, samples[i], scale=scale)
+            ax, ay = refold_coords(shared.cover, cam.rotation.T @ view_cam.rotation, rvm.rays)
+            at_pixels = np.full(rvm.pixels.size, L.VOID, np.uint8)
+            at_pixels[rvm.in_field] = nearest_labels(atlas_l, ax, ay)
+            labels = np.full(rvm.source.shape, L.VOID, np.uint8)
+            labels[used] = at_pixels[rvm.inverse]
+            out[i] = labels
             if bar is not None:
                 bar.update(1)
     if bar is not None:

@@ -1,9 +1,10 @@
 """The yield of one ISP setting over production variation (``rvmsim robustness``).
 
-Every sample (:func:`~rvmsim.robust.draw_samples`) gets its fisheye label image
-(:func:`~rvmsim.robust.sample_images`: rotations re-folded, viewpoints rendered once and
-cached), the ISP maps it to the RVM image (one map for all samples: the parameters are
-fixed) and every EC is measured on it, exactly as ``rvmsim evaluate`` does.  The result
+Every sample (:func:`~rvmsim.robust.draw_samples`) gets its RVM label image: the ISP's map
+is the same for all samples (the parameters are fixed), so only the fisheye pixels it shows
+are re-folded from the sample's cube (:func:`~rvmsim.robust.sample_rvm_labels`, equal to
+running the ISP on :func:`~rvmsim.robust.sample_images`' label image), and every EC is
+measured on it, exactly as ``rvmsim evaluate`` does.  The result
 holds the yield with its 95 % interval (:mod:`.stats`), each EC's failure rate, worst
 value and margin and the axis that drives its failures, the yield against a tolerance
 scale factor, and the nominal and worst samples' RVM frames for the report.
@@ -19,10 +20,10 @@ from typing import Any
 import numpy as np
 
 from ..criteria import Criteria, default_criteria, evaluate
-from ..isp import IspParams, OutputSpec, params_to_dict, process
+from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params
 from ..scene import Scene
-from .images import refolder, sample_images
+from .images import refolder, rvm_pixels, sample_images, sample_rvm_labels
 from .samples import MountSample, draw_samples, nominal_sample
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
 from .variation import MOUNT_AXES, Variation, variation_from_scene
@@ -32,7 +33,7 @@ __all__ = ["EcStats", "ScalePoint", "SampleEvaluation", "RobustnessResult", "eva
 
 #: Tolerance scale factors of the yield curve.
 DEFAULT_SCALES = (0.5, 1.0, 1.5, 2.0)
-#: Samples re-folded per batch (bounds the memory of label images held at once).
+#: Samples re-folded per batch (bounds the memory of RVM label images held at once).
 _CHUNK = 32
 
 
@@ -75,19 +76,21 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
     passed = np.zeros((n, k), bool)
     scores = np.zeros(n)
     all_passed = np.zeros(n, bool)
-    shared = refolder(scene, samples, scale=scale) if n else None
+    if n == 0:
+        return SampleEvaluation(ids, values, passed, scores, all_passed)
+    shared = refolder(scene, samples, scale=scale)
+    cam = scene.fisheye_camera()
+    rvm = rvm_pixels(cam.scaled(scale) if scale != 1.0 else cam, p, output)
     bar = None
     if progress:
         from tqdm import tqdm
 
-        bar = tqdm(total=n, desc=f"samples (tolerance x{samples[0].scale:g})" if n else "samples",
-                   unit="sample", leave=False)
+        bar = tqdm(total=n, desc=f"samples (tolerance x{samples[0].scale:g})", unit="sample",
+                   leave=False)
     for start in range(0, n, _CHUNK):
         chunk = samples[start:start + _CHUNK]
-        for j, images in enumerate(sample_images(scene, chunk, scale=scale, color=False,
-                                                 shared=shared)):
-            _, labels = process(None, images.labels, p, output)
-            assert labels is not None
+        for j, labels in enumerate(sample_rvm_labels(scene, chunk, rvm, scale=scale,
+                                                     shared=shared)):
             ec = evaluate(labels, crit)
             i = start + j
             values[i] = [np.nan if ec[e].value is None else ec[e].value for e in ids]

@@ -166,3 +166,24 @@ def test_viewpoint_cubes_come_from_the_cache(tmp_path, monkeypatch):
         np.testing.assert_array_equal(a.labels, b.labels)
         assert not b.color.any() and b.color.shape == a.color.shape
     assert list(tmp_path.iterdir()) == entries
+
+
+def test_rvm_labels_of_samples_equal_the_isp_on_their_fisheye_labels():
+    """sample_rvm_labels re-folds only the pixels the RVM image shows; the result is the
+    ISP (rvmsim.isp.process) run on the whole re-folded fisheye label image."""
+    from rvmsim.isp import IspParams, OutputSpec, process
+    from rvmsim.robust import refolder, rvm_pixels, sample_rvm_labels
+
+    sc = small_scene(0.25, variation={**ANGLES_ONLY, "load_states": [
+        {"name": "curb"}, {"name": "full", "height_mm": -40, "pitch_deg": 1.0}]})
+    samples = draw_samples(variation_from_scene(sc), 6, seed=5)
+    assert len({s.load.name for s in samples}) == 2
+    params = IspParams(v_shift=4.0, zoom=1.2).for_input_scale(0.25)
+    output = OutputSpec(320, 180)
+    shared = refolder(sc, samples)
+    rvm = rvm_pixels(sc.fisheye_camera(), params, output)
+    direct = sample_rvm_labels(sc, samples, rvm, shared=shared)
+    for im, lab in zip(sample_images(sc, samples, color=False, shared=shared), direct):
+        _, ref = process(None, im.labels, params, output)
+        np.testing.assert_array_equal(lab, ref)
+    assert len({d.tobytes() for d in direct}) == len(direct)  # the samples differ
