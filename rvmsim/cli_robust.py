@@ -18,6 +18,20 @@ from .errors import RvmsimError, VariationError
 __all__ = ["robustness"]
 
 
+def _scales(ctx: click.Context, param: click.Parameter, value: str) -> tuple[float, ...]:
+    """``--scales``: comma-separated finite factors in [0, 10], at least one."""
+    out = []
+    for part in str(value).split(","):
+        try:
+            f = float(part)
+        except ValueError:
+            raise click.BadParameter(f"{part.strip()!r} is not a number", ctx, param) from None
+        if not 0 <= f <= 10:  # also refuses nan
+            raise click.BadParameter(f"{part.strip()} is outside [0, 10]", ctx, param)
+        out.append(f)
+    return tuple(dict.fromkeys(out))
+
+
 @cli.command()
 @click.argument("scene", type=click.Path(path_type=Path))
 @click.option("--params", "params_file", type=click.Path(path_type=Path), required=True,
@@ -35,14 +49,17 @@ __all__ = ["robustness"]
               help="Criteria file (YAML); default: the paper's thresholds.")
 @click.option("--scale", type=FiniteFloat(0.05, 1.0), default=1.0, show_default=True,
               help="Render at this fraction of the sensor (RAD and shifts follow).")
+@click.option("--scales", default="0.5,1,1.5,2", show_default=True, callback=_scales,
+              help="Tolerance scale factors of the yield curve (comma-separated; each other "
+                   "than 1 needs its own renders).")
 @click.option("--scale-samples", type=Integer(1, 100000), default=None,
               help="Samples per tolerance scale factor of the yield curve (default: "
                    "min(--samples, 64)).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Path,
                min_yield: float | None, variation_file: Path | None,
-               criteria_file: Path | None, scale: float, scale_samples: int | None,
-               progress: bool) -> None:
+               criteria_file: Path | None, scale: float, scales: tuple[float, ...],
+               scale_samples: int | None, progress: bool) -> None:
     """Yield of the ISP setting in --params over SCENE's production variation.
 
     Draws mount-tolerance and load-state samples (the scene's variation section, or
@@ -70,7 +87,8 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
         else:
             variation = variation_from_scene(sc)
         result = run_robustness(sc, params, output, criteria=criteria, variation=variation,
-                                samples=samples, seed=seed, scale_samples=scale_samples,
+                                samples=samples, seed=seed, scales=scales,
+                                scale_samples=scale_samples,
                                 render_scale=scale, min_yield=min_yield, progress=progress)
         written = write_robustness_outputs(result, out)
     except RvmsimError as err:

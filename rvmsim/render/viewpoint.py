@@ -4,8 +4,8 @@ A camera turned about its centre needs no render: its image is a re-fold of the 
 rendered at that centre (:func:`~rvmsim.render.refold_layout`).  A camera moved, or a body
 lowered and pitched by a load, changes what is seen: such a *viewpoint* is rendered once,
 as the atlas of a covering layout (:func:`~rvmsim.render.cover_layout`), and stored in the
-render cache as PNGs (no pickle): ``<cache>/<key>/cube_color.png``, ``cube_labels.png``,
-``cube.json``.  The key (:func:`cube_key`) hashes the scene's render key
+render cache as PNGs (no pickle): ``<cache>/<key>/cube_labels.png``, ``cube_color.png``
+(when colour was asked for), ``cube.json``.  The key (:func:`cube_key`) hashes the scene's render key
 (:func:`~rvmsim.render.scene_key`), the camera pose, the body pose, the face size and the
 crops.
 
@@ -70,7 +70,7 @@ def _read(folder: Path, shape: tuple[int, int],
     import imageio.v3 as iio
 
     color_p, labels_p = folder / "cube_color.png", folder / "cube_labels.png"
-    if not (color_p.is_file() and labels_p.is_file()):
+    if not labels_p.is_file() or (color and not color_p.is_file()):
         return None
     try:
         img = np.asarray(iio.imread(color_p, plugin="pillow")) if color else None
@@ -109,7 +109,8 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
         Gives ``build_parts(scene)`` (called only when rendering; lets callers build the
         scene's meshes, the slow part of a first render, once for many viewpoints).
     color : bool
-        Also read the colour atlas from the cache (else ``color`` may be None).
+        The colour atlas too.  Without it only the labels are rendered (half the work) and
+        stored; a later call asking for colour renders the viewpoint again, with colour.
     progress : bool
 
     Returns
@@ -132,14 +133,15 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
         return entry[0], entry[1], True
     base = build_parts(scene) if parts is None else parts()
     atlas = render_faces(posed_parts(base, body_pose), layout, camera,
-                         sky=scene.render.sky_color, progress=progress)
+                         sky=scene.render.sky_color, progress=progress, color=color)
     try:
-        write_png(folder / "cube_color.png", atlas.color)
         write_png(folder / "cube_labels.png", atlas.labels)
+        if color:
+            write_png(folder / "cube_color.png", atlas.color)
         (folder / "cube.json").write_text(json.dumps(
             {"scene": scene.source, "position": camera.position.tolist(),
              "face_size": layout.face_size, "faces": list(layout.faces)}, indent=2))
     except (OSError, RvmsimError) as err:
         warnings.warn(f"{folder}: cannot store the cube in the cache ({err})",
                       RuntimeWarning, stacklevel=2)
-    return atlas.color, atlas.labels, False
+    return (atlas.color if color else None), atlas.labels, False

@@ -86,6 +86,10 @@ FLAGS = [
     ("scale-zero", ("--scale", "0"), "--scale"),
     ("scale-samples-zero", ("--scale-samples", "0"), "--scale-samples"),
     ("unknown-option", ("--robust",), "--robust"),
+    ("scales-text", ("--scales", "0.5,big"), "--scales"),
+    ("scales-negative", ("--scales", "-1"), "--scales"),
+    ("scales-nan", ("--scales", "1,nan"), "--scales"),
+    ("scales-empty", ("--scales", ""), "--scales"),
 ]
 CASES += [Case(f"flag-{i}", _robustness(*extra), (opt,), _setup()) for i, extra, opt in FLAGS]
 CASES += [

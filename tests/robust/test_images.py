@@ -168,6 +168,20 @@ def test_viewpoint_cubes_come_from_the_cache(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == entries
 
 
+def test_a_labels_only_cube_is_rendered_again_for_colour(tmp_path, monkeypatch):
+    monkeypatch.setenv("RVMSIM_CACHE", str(tmp_path))
+    sc = small_scene(0.25, variation=ANGLES_ONLY)
+    samples = draw_samples(variation_from_scene(sc), 2, seed=0)
+    labels_only = sample_images(sc, samples, color=False)
+    (entry,) = tmp_path.iterdir()
+    assert (entry / "cube_labels.png").is_file() and not (entry / "cube_color.png").exists()
+    assert not labels_only[0].color.any()
+    both = sample_images(sc, samples)
+    assert (entry / "cube_color.png").is_file() and both[0].color.any()
+    for a, b in zip(labels_only, both):
+        np.testing.assert_array_equal(a.labels, b.labels)
+
+
 def test_rvm_labels_of_samples_equal_the_isp_on_their_fisheye_labels():
     """sample_rvm_labels re-folds only the pixels the RVM image shows; the result is the
     ISP (rvmsim.isp.process) run on the whole re-folded fisheye label image."""
