@@ -20,7 +20,7 @@ from .variation import (
 )
 from .samples import MountSample, draw_samples, nominal_sample
 from .images import (sample_images, sample_camera, body_pose, cover_for, Refolder, refolder,
-                     RvmPixels, rvm_pixels, sample_rvm_labels)
+                     RvmPixels, rvm_pixels, sample_rvm_labels, viewpoint_groups)
 from .stats import (
     YieldEstimate,
     yield_estimate,
@@ -60,6 +60,7 @@ __all__ = [
     "RvmPixels",
     "rvm_pixels",
     "sample_rvm_labels",
+    "viewpoint_groups",
     "YieldEstimate",
     "yield_estimate",
     "wilson_interval",

@@ -45,7 +45,7 @@ from .samples import MountSample
 from .variation import LoadState
 
 __all__ = ["sample_images", "Refolder", "refolder", "RvmPixels", "rvm_pixels",
-           "sample_rvm_labels", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
+           "sample_rvm_labels", "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
 
 #: The covered angle ranges are rounded up to this step (degrees), so that sample sets of
 #: about the same spread share cached cubes.
@@ -114,6 +114,17 @@ def cover_for(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.
 
 def _viewpoint(sample: MountSample) -> tuple[tuple[float, ...], str]:
     return tuple(round(v, 9) for v in sample.render_position_mm), sample.load.name
+
+
+def viewpoint_groups(samples: Sequence[MountSample]) -> list[list[int]]:
+    """The indices of ``samples`` by viewpoint (rendered position and load state): each
+    group needs one render.  To render the viewpoints elsewhere (an executor), call
+    :func:`sample_images` on each group's samples with the ``shared`` :func:`refolder` of
+    all of them (the same covering crops, so the same cache entries)."""
+    groups: dict[tuple[tuple[float, ...], str], list[int]] = {}
+    for i, s in enumerate(samples):
+        groups.setdefault(_viewpoint(s), []).append(i)
+    return list(groups.values())
 
 
 @dataclass(frozen=True)
@@ -201,11 +212,8 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
                                                np.ndarray]]:
     """Per distinct viewpoint of ``samples``: the indices of its samples, the camera its cube
     is rendered for, and the cube's atlas (colour None when not asked for and cached)."""
-    groups: dict[tuple[tuple[float, ...], str], list[int]] = {}
-    for i, s in enumerate(samples):
-        groups.setdefault(_viewpoint(s), []).append(i)
     parts = functools.lru_cache(maxsize=1)(lambda: build_parts(scene))
-    for idx in groups.values():
+    for idx in viewpoint_groups(samples):
         first = samples[idx[0]]
         view_cam = _viewpoint_camera(scene, first, scale)
         atlas_c, atlas_l, _ = cached_cube(scene, view_cam, shared.cover, scale=scale,

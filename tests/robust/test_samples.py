@@ -69,3 +69,14 @@ def test_bad_requests_and_the_nominal_sample():
         draw_samples(_variation(), 4, seed=0, scale=float("nan"))
     nom = nominal_sample(_variation())
     assert nom.offsets == (0.0,) * 6 and nom.load.name == "curb"
+
+
+def test_viewpoint_groups_hold_one_rendered_position_and_load_each():
+    from rvmsim.robust import viewpoint_groups
+
+    s = draw_samples(_variation(2), 128, seed=0)
+    groups = viewpoint_groups(s)
+    assert len(groups) == 2 * 2 * 3  # x and y at 2 levels, z fixed, 3 load states
+    assert sorted(i for g in groups for i in g) == list(range(128))
+    for g in groups:
+        assert len({(s[i].render_position_mm, s[i].load) for i in g}) == 1
