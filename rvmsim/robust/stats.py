@@ -91,6 +91,9 @@ class AxisEffect:
         top = max(self.rates)
         where = [s for s, r in zip(self.states, self.rates) if r >= 0.5 * top and r > 0]
         rates = " / ".join(f"{100 * r:.0f} %" for r in self.rates)
+        if len(where) == len(self.states) and len(where) > 1:  # no tercile is clear
+            worst = self.states[self.rates.index(top)]
+            return f"{self.axis} (fails throughout, most at {worst}: {rates})"
         return f"{self.axis} (fails at {' and '.join(where)}: {rates})"
 
     def as_dict(self) -> dict[str, object]:
