@@ -42,7 +42,6 @@ def _load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
 
-
 @click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},
              invoke_without_command=True, no_args_is_help=False)
 @click.version_option(package_name="rvmsim")
@@ -470,6 +469,9 @@ def sweep(sweep_file: Path, out: Path | None, workers: int, scheduler: str | Non
                f"{kinds.count('infeasible')} infeasible"
                + (f", {n_err} failed to run (see sweep.csv)" if n_err else ""))
     click.echo(f"wrote {', '.join(p.name for p in written)} in {out}")
+
+
+from . import cli_robust  # noqa: E402,F401  (registers robustness; cli.py is at its size limit)
 
 
 def main() -> None:

@@ -16,6 +16,7 @@ __all__ = [
     "TuningConfigError",
     "SweepFileError",
     "ParamsFileError",
+    "VariationError",
 ]
 
 
@@ -66,3 +67,7 @@ class SweepFileError(InputFileError):
 
 class ParamsFileError(InputFileError):
     """An ISP params file is unusable."""
+
+
+class VariationError(InputFileError):
+    """A variation file (``--variation``), or a scene's ``variation`` section, is unusable."""

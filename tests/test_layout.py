@@ -124,10 +124,11 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render", "isp"),
     ("criteria",),
     ("pipeline",),
+    ("robust",),
     ("tune",),
     ("batch", "validate"),
     ("report",),
-    ("cli", "cli_params", "__main__", "__init__"),
+    ("cli", "cli_params", "cli_robust", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
 

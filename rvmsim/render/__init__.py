@@ -3,10 +3,13 @@ into the fisheye image (:mod:`.fold`, :func:`render_fisheye`); cached on disk (:
 
 from __future__ import annotations
 
-from .cube import CubeLayout, FaceCrop, cube_layout, face_coords, face_rotation, FACE_NAMES, GUARD_PX
+from .cube import (CubeLayout, FaceCrop, CameraRays, cube_layout, cover_layout, refold_layout,
+                   refold_coords,
+                   face_coords, face_rotation, FACE_NAMES, GUARD_PX)
 from .gl import FaceAtlas, render_faces
-from .fold import fold
+from .fold import fold, fold_labels, nearest_labels
 from .fisheye import FisheyeImages, render_fisheye
+from .viewpoint import posed_parts, cube_key, cached_cube, is_vehicle_label
 from .cache import (
     cache_dir,
     scene_key,
@@ -22,10 +25,16 @@ __all__ = [
     "FaceCrop",
     "FaceAtlas",
     "cube_layout",
+    "CameraRays",
+    "cover_layout",
+    "refold_layout",
+    "refold_coords",
+    "nearest_labels",
     "face_coords",
     "face_rotation",
     "render_faces",
     "fold",
+    "fold_labels",
     "render_fisheye",
     "FACE_NAMES",
     "GUARD_PX",
@@ -35,4 +44,8 @@ __all__ = [
     "same_scene",
     "cached_render",
     "RENDER_VERSION",
+    "posed_parts",
+    "cube_key",
+    "cached_cube",
+    "is_vehicle_label",
 ]

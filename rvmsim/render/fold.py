@@ -18,7 +18,7 @@ import numpy as np
 from .. import labels as L
 from .cube import CubeLayout
 
-__all__ = ["fold"]
+__all__ = ["fold", "fold_labels", "nearest_labels"]
 
 
 def fold(layout: CubeLayout, color_atlas: np.ndarray,
@@ -52,13 +52,29 @@ def fold(layout: CubeLayout, color_atlas: np.ndarray,
         color_atlas, layout.atlas_x, layout.atlas_y, cv2.INTER_LINEAR,
         borderMode=cv2.BORDER_CONSTANT, borderValue=0,
     )
-    # Nearest sampling done explicitly: round half up, then plain indexing (exact IDs).
-    ix = np.floor(layout.atlas_x + 0.5).astype(np.intp)
-    iy = np.floor(layout.atlas_y + 0.5).astype(np.intp)
+    color[~layout.in_fov] = 0
+    return color, fold_labels(layout, label_atlas)
+
+
+def fold_labels(layout: CubeLayout, label_atlas: np.ndarray) -> np.ndarray:
+    """Only the fisheye label image of :func:`fold` (nearest sampling, round half up; ``SKY``
+    where the atlas is 0 inside the field, ``VOID`` outside it): (H, W) uint8."""
+    labels = nearest_labels(label_atlas, layout.atlas_x, layout.atlas_y)
+    labels[~layout.in_fov] = L.VOID
+    return labels
+
+
+def nearest_labels(label_atlas: np.ndarray, atlas_x: np.ndarray, atlas_y: np.ndarray) -> np.ndarray:
+    """The atlas labels nearest to atlas coordinates of any shape (round half up, clipped to
+    the atlas), ``SKY`` where the atlas is 0 (no geometry): uint8 of the coordinates' shape.
+
+    Convention
+    ----------
+    Pixel centres at integer coordinates.
+    """
+    ix = np.floor(atlas_x + 0.5).astype(np.intp)
+    iy = np.floor(atlas_y + 0.5).astype(np.intp)
     np.clip(ix, 0, label_atlas.shape[1] - 1, out=ix)
     np.clip(iy, 0, label_atlas.shape[0] - 1, out=iy)
     labels = label_atlas[iy, ix]
-    labels = np.where(labels == 0, L.SKY, labels).astype(np.uint8)
-    labels[~layout.in_fov] = L.VOID
-    color[~layout.in_fov] = 0
-    return color, labels
+    return np.where(labels == 0, L.SKY, labels).astype(np.uint8)

@@ -168,7 +168,7 @@ def _face_pose(camera: FisheyeCamera, layout: CubeLayout, crop: FaceCrop) -> np.
 
 
 def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *, sky: tuple[float, float, float],
-                 progress: bool = False) -> FaceAtlas:
+                 progress: bool = False, color: bool = True) -> FaceAtlas:
     """Render the crops of ``layout`` (colour and labels) for ``camera``.
 
     Parameters
@@ -183,6 +183,9 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
         Background colour, linear 0–1.
     progress : bool
         Show a progress bar over the faces.
+    color : bool
+        Render the colour pass too (else the colour atlas stays black: labels only, half
+        the work).
 
     Returns
     -------
@@ -224,12 +227,13 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
                 pscene.remove_node(cam_node)
             cam_node = pscene.add(gl_cam, pose=_face_pose(camera, layout, crop))
             renderer.viewport_width, renderer.viewport_height = crop.width, crop.height
-            color, _ = renderer.render(pscene, flags=flags.FLAT | flags.SKIP_CULL_FACES)
+            if color:
+                lit, _ = renderer.render(pscene, flags=flags.FLAT | flags.SKIP_CULL_FACES)
+                color_atlas[: crop.height, crop.atlas_x0:crop.atlas_x0 + crop.width] = lit[..., :3]
             seg_img, _ = renderer.render(
                 pscene, flags=flags.SEG | flags.SKIP_CULL_FACES, seg_node_map=seg
             )
             cols = slice(crop.atlas_x0, crop.atlas_x0 + crop.width)
-            color_atlas[: crop.height, cols] = color[..., :3]
             label_atlas[: crop.height, cols] = seg_img[..., 0]
     finally:
         renderer.delete()

@@ -19,6 +19,7 @@ from .sweep import (
     write_sweep_outputs,
 )
 from .validation import validation_page, write_validation_outputs, PICTURE_CAPTIONS
+from .robustness import robustness_page, write_robustness_outputs
 from .plots import (
     convergence_png,
     histogram_png,
@@ -40,6 +41,8 @@ __all__ = [
     "validation_page",
     "write_validation_outputs",
     "PICTURE_CAPTIONS",
+    "robustness_page",
+    "write_robustness_outputs",
     "convergence_png",
     "histogram_png",
 ]

@@ -25,6 +25,13 @@ from .schema import (
     GroundPattern,
     RenderSettings,
 )
+from .variation import (
+    VariationSpec,
+    MountTolerance,
+    AxisSpec,
+    LoadStateSpec,
+    MOUNT_AXES,
+)
 from .loading import (
     load_scene,
     read_scene_document,
@@ -62,6 +69,11 @@ __all__ = [
     "PatternBoard",
     "GroundPattern",
     "RenderSettings",
+    "VariationSpec",
+    "MountTolerance",
+    "AxisSpec",
+    "LoadStateSpec",
+    "MOUNT_AXES",
     "load_scene",
     "read_scene_document",
     "scene_from_dict",

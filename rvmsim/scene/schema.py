@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_val
 
 from . import fmvss111
 from ..camera import FisheyeCamera, rotation_from_ypr
+from .variation import VariationSpec
 
 __all__ = [
     "Scene",
@@ -447,6 +448,8 @@ class Scene(_Model):
     vehicle: Vehicle
     test_site: TestSite = TestSite()
     render: RenderSettings = RenderSettings()
+    #: Production variation (:mod:`rvmsim.robust`); not part of the render cache's key.
+    variation: VariationSpec | None = Field(default=None, exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).
     base_dir: str = Field(default=".", exclude=True)
     #: The file the scene was read from, for messages (not a YAML key).

@@ -1,0 +1,101 @@
+"""``rvmsim robustness``: the yield of one ISP setting over production variation.
+
+Its own module (cli.py is at its size limit); importing it adds the command to
+:data:`rvmsim.cli.cli` (cli.py imports it).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from .cli import cli
+from .cli_params import SEED, FiniteFloat, Integer, OutputFolder
+from .errors import RvmsimError, VariationError
+
+__all__ = ["robustness"]
+
+
+def _scales(ctx: click.Context, param: click.Parameter, value: str) -> tuple[float, ...]:
+    """``--scales``: comma-separated finite factors in [0, 10], at least one."""
+    out = []
+    for part in str(value).split(","):
+        try:
+            f = float(part)
+        except ValueError:
+            raise click.BadParameter(f"{part.strip()!r} is not a number", ctx, param) from None
+        if not 0 <= f <= 10:  # also refuses nan
+            raise click.BadParameter(f"{part.strip()} is outside [0, 10]", ctx, param)
+        out.append(f)
+    return tuple(dict.fromkeys(out))
+
+
+@cli.command()
+@click.argument("scene", type=click.Path(path_type=Path))
+@click.option("--params", "params_file", type=click.Path(path_type=Path), required=True,
+              help="ISP params file (YAML/JSON) to sign off.")
+@click.option("--samples", type=Integer(1, 100000), default=200, show_default=True,
+              help="Variation samples (Sobol, scrambled).")
+@click.option("--seed", type=SEED, default=0, show_default=True,
+              help="Scrambling seed: the same seed, the same samples.")
+@click.option("--out", "-o", type=OutputFolder(), required=True, help="Output folder.")
+@click.option("--min-yield", type=FiniteFloat(0, 1), default=None,
+              help="Exit 1 when the yield (0-1) is below this.")
+@click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
+              help="Variation file (default: the scene's variation section).")
+@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
+              help="Criteria file (YAML); default: the paper's thresholds.")
+@click.option("--scale", type=FiniteFloat(0.05, 1.0), default=1.0, show_default=True,
+              help="Render at this fraction of the sensor (RAD and shifts follow).")
+@click.option("--scales", default="0.5,1,1.5,2", show_default=True, callback=_scales,
+              help="Tolerance scale factors of the yield curve (comma-separated; each other "
+                   "than 1 needs its own renders).")
+@click.option("--scale-samples", type=Integer(1, 100000), default=None,
+              help="Samples per tolerance scale factor of the yield curve (default: "
+                   "min(--samples, 64)).")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Path,
+               min_yield: float | None, variation_file: Path | None,
+               criteria_file: Path | None, scale: float, scales: tuple[float, ...],
+               scale_samples: int | None, progress: bool) -> None:
+    """Yield of the ISP setting in --params over SCENE's production variation.
+
+    Draws mount-tolerance and load-state samples (the scene's variation section, or
+    --variation), evaluates every EC on each, and writes robustness.json and
+    robustness.html.  Exit status: 0 the yield is at least --min-yield (or none given),
+    1 below it, 2 an error.
+    """
+    from .cli import _fail, _fail_os, _load_isp
+    from .cli_params import check_scale
+    from .criteria import load_criteria
+    from .report import write_robustness_outputs
+    from .robust import load_variation, robustness as run_robustness, variation_from_scene
+    from .scene import load_scene
+
+    try:
+        params, output = _load_isp(params_file)
+        criteria = load_criteria(criteria_file)
+        sc = load_scene(scene)
+        check_scale(sc, params, scale)
+        if variation_file is not None:
+            variation = load_variation(variation_file)
+        elif sc.variation is None:
+            raise VariationError(str(scene), "variation", "the scene has no variation section "
+                                 "(add one, or give --variation FILE)")
+        else:
+            variation = variation_from_scene(sc)
+        result = run_robustness(sc, params, output, criteria=criteria, variation=variation,
+                                samples=samples, seed=seed, scales=scales,
+                                scale_samples=scale_samples,
+                                render_scale=scale, min_yield=min_yield, progress=progress)
+        written = write_robustness_outputs(result, out)
+    except RvmsimError as err:
+        _fail(err)
+    except OSError as err:
+        _fail_os(err, out)
+    click.echo(result.summary())
+    click.echo(f"wrote {', '.join(p.name for p in written)} in {out} "
+               f"({result.timings['total']:.1f} s)")
+    sys.exit(0 if result.meets_min_yield else 1)

@@ -1,0 +1,149 @@
+"""The robustness page: one self-contained HTML page for an ISP setting's yield over
+production variation (``rvmsim robustness``).
+
+Yield with its 95 % interval, a table per EC (failure rate, worst value and margin, the
+axis driving its failures), per-EC margin histograms, the yield against the tolerance scale
+factor, and the worst sample's annotated RVM image next to the nominal one (PNG data URIs,
+built with the page kit :mod:`.page`).  Every string from a user's files is HTML-escaped.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RvmsimError
+from ..robust import EcStats, RobustnessResult
+from ..tune import json_default
+from .page import escape, figure_png, img_tag, page, data_uri
+
+__all__ = ["robustness_page", "write_robustness_outputs", "margin_histograms_png",
+           "yield_curve_png"]
+
+#: Longest side of the embedded RVM images, px.
+PICTURE_MAX_PX = 640
+
+
+def margin_histograms_png(ecs: tuple[EcStats, ...]) -> bytes:
+    """One small histogram per enabled EC with a range: the samples' margins (EC unit; the
+    red line is the range's edge, left of it fails)."""
+    from matplotlib.figure import Figure
+
+    shown = [e for e in ecs if e.enabled and np.isfinite(np.asarray(e.margins)).any()]
+    cols = 4
+    rows = max(1, math.ceil(len(shown) / cols))
+    fig = Figure(figsize=(3.2 * cols, 2.4 * rows))
+    for k, e in enumerate(shown):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        m = np.asarray(e.margins)
+        m = m[np.isfinite(m)]
+        ax.hist(m, bins=30, color="C3" if e.n_fail else "C0")
+        ax.axvline(0.0, color="red", lw=1)
+        ax.set_title(f"EC {e.id}: {100 * e.failure_rate:.0f} % fail", fontsize=9)
+        ax.set_xlabel(f"margin ({e.unit})" if e.unit else "margin", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    return figure_png(fig)
+
+
+def yield_curve_png(result: RobustnessResult) -> bytes:
+    """Yield (with its 95 % interval) against the tolerance scale factor."""
+    from matplotlib.figure import Figure
+
+    pts = result.scale_curve
+    s = np.array([p.scale for p in pts])
+    y = np.array([p.estimate.yield_ for p in pts]) * 100
+    lo = np.array([p.estimate.ci[0] for p in pts]) * 100
+    hi = np.array([p.estimate.ci[1] for p in pts]) * 100
+    fig = Figure(figsize=(5.6, 3.4))
+    ax = fig.add_subplot()
+    ax.fill_between(s, lo, hi, color="C0", alpha=0.2, label="95 % interval")
+    ax.plot(s, y, "o-", color="C0", label="yield")
+    if result.min_yield is not None:
+        ax.axhline(100 * result.min_yield, color="red", lw=1, ls="--", label="--min-yield")
+    ax.set_xlabel("tolerance scale factor")
+    ax.set_ylabel("yield (%)")
+    ax.set_ylim(-2, 102)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    return figure_png(fig)
+
+
+def _ec_rows(result: RobustnessResult) -> str:
+    rows = []
+    for e in result.ecs:
+        cls = "off" if not e.enabled else ("fail" if e.n_fail else "pass")
+        d = e.driver
+        rng = f"[{'–' if e.low is None else f'{e.low:g}'}, {'–' if e.high is None else f'{e.high:g}'}]"
+        rows.append(
+            f'<tr class="{cls}"><td>{escape(e.id)}</td><td>{escape(e.name)}</td>'
+            f'<td class="num">{rng} {escape(e.unit)}</td>'
+            f'<td class="num">{100 * e.failure_rate:.1f} %</td>'
+            f'<td class="num">{"—" if e.worst_value is None else f"{e.worst_value:.3g}"}</td>'
+            f'<td class="num">{"—" if e.worst_margin is None else f"{e.worst_margin:+.3g}"}</td>'
+            f'<td>{"" if d is None else escape(d.describe())}</td></tr>')
+    return "".join(rows)
+
+
+def _sample_text(result: RobustnessResult) -> str:
+    s = result.samples[result.worst_index]
+    parts = [f"{n} {v:+.3g}" for n, v in zip(("x", "y", "z"), s.position_mm)]
+    parts += [f"{n} {v:+.3g}°" for n, v in zip(("yaw", "pitch", "roll"), s.angles_deg)]
+    return f"sample {s.index}: {', '.join(parts)} (mm, degrees), load {s.load.name}"
+
+
+def robustness_page(result: RobustnessResult) -> str:
+    """The whole HTML document for ``result``."""
+    lo, hi = result.ci
+    ok = result.meets_min_yield
+    badge = "" if result.min_yield is None else (
+        f' <span class="badge {"pass" if ok else "fail"}">{"meets" if ok else "below"} '
+        f"--min-yield {100 * result.min_yield:g} %</span>")
+    hist = data_uri(margin_histograms_png(result.ecs))
+    curve = data_uri(yield_curve_png(result))
+    nominal = "PASS" if result.nominal.ec.passed else "FAIL"
+    return page(f"Robustness: {result.scene_name}", f"""
+<h1>Robustness of {escape(result.scene_name)}</h1>
+<p>Yield <b>{100 * result.yield_:.1f} %</b> (95 % Wilson interval {100 * lo:.1f}–{100 * hi:.1f} %):
+{result.estimate.n_pass} of {result.estimate.n} samples pass every enabled EC{badge}.
+Criteria: {escape(result.criteria_name)}. Variation: {escape(result.variation.source)};
+seed {result.seed}. The nominal car: {nominal} (EC score {result.nominal.ec.score:.3g}).</p>
+<h2>Evaluation criteria over the samples</h2>
+<table><tr><th>EC</th><th>measurement</th><th>range</th><th>fails</th><th>worst value</th>
+<th>worst margin</th><th>driven by (failure rate per tercile of the axis)</th></tr>
+{_ec_rows(result)}</table>
+<h2>Margins</h2><figure><img src="{hist}" alt="margin histograms"><figcaption>Margin of
+each sample per EC (distance to the nearer end of its range; below 0 fails).</figcaption></figure>
+<h2>Yield against the tolerance scale</h2><figure><img src="{curve}" alt="yield curve">
+<figcaption>Mount tolerances times the factor (load states unchanged).</figcaption></figure>
+<h2>Worst sample and nominal</h2><div class="gallery">
+<figure>{img_tag(result.nominal.annotated if result.nominal.annotated is not None else result.nominal.color, "nominal", PICTURE_MAX_PX)}
+<figcaption>Nominal (as designed)</figcaption></figure>
+<figure>{img_tag(result.worst.annotated if result.worst.annotated is not None else result.worst.color, "worst sample", PICTURE_MAX_PX)}
+<figcaption>Worst: {escape(_sample_text(result))}</figcaption></figure></div>
+<pre>{escape(result.summary())}</pre>
+""")
+
+
+def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path) -> list[Path]:
+    """Write ``robustness.json`` and ``robustness.html`` into ``out_dir``.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        js = out / "robustness.json"
+        js.write_text(json.dumps(result.as_dict(), indent=2, default=json_default) + "\n")
+        html_path = out / "robustness.html"
+        html_path.write_text(robustness_page(result))
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+    return [js, html_path]

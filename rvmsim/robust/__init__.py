@@ -1,0 +1,77 @@
+"""Production variation: mount tolerances and load states, quasi-random samples of them,
+their fisheye images (rotations re-folded, few renders) and the yield of an ISP setting.
+
+Modules: :mod:`.variation` (the variation model), :mod:`.samples` (Sobol draws),
+:mod:`.images` (sample images), :mod:`.stats` (yield, confidence interval, what drives
+failures), :mod:`.robustness` (:func:`robustness`).  See docs/robustness.md.
+"""
+
+from __future__ import annotations
+
+from .variation import (
+    AxisDistribution,
+    LoadState,
+    Variation,
+    load_variation,
+    variation_from_scene,
+    variation_from_spec,
+    NOMINAL_LOAD,
+    MOUNT_AXES,
+)
+from .samples import MountSample, draw_samples, nominal_sample
+from .images import (sample_images, sample_camera, body_pose, cover_for, Refolder, refolder,
+                     RvmPixels, rvm_pixels, sample_rvm_labels, viewpoint_groups)
+from .stats import (
+    YieldEstimate,
+    yield_estimate,
+    wilson_interval,
+    AxisEffect,
+    failure_drivers,
+    ec_margins,
+)
+from .robustness import (
+    EcStats,
+    ScalePoint,
+    SampleEvaluation,
+    RobustnessResult,
+    evaluate_samples,
+    robustness,
+    DEFAULT_SCALES,
+)
+
+__all__ = [
+    "AxisDistribution",
+    "LoadState",
+    "Variation",
+    "load_variation",
+    "variation_from_scene",
+    "variation_from_spec",
+    "NOMINAL_LOAD",
+    "MOUNT_AXES",
+    "MountSample",
+    "draw_samples",
+    "nominal_sample",
+    "sample_images",
+    "sample_camera",
+    "body_pose",
+    "cover_for",
+    "Refolder",
+    "refolder",
+    "RvmPixels",
+    "rvm_pixels",
+    "sample_rvm_labels",
+    "viewpoint_groups",
+    "YieldEstimate",
+    "yield_estimate",
+    "wilson_interval",
+    "AxisEffect",
+    "failure_drivers",
+    "ec_margins",
+    "EcStats",
+    "ScalePoint",
+    "SampleEvaluation",
+    "RobustnessResult",
+    "evaluate_samples",
+    "robustness",
+    "DEFAULT_SCALES",
+]

@@ -1,0 +1,282 @@
+"""Fisheye images of variation samples: exact rotations by re-folding, few renders.
+
+Method
+------
+* A mount rotation turns the camera about its optical centre, so its image is a re-fold of
+  the cube rendered at that centre (:func:`rvmsim.render.refold_layout`): no render.  The
+  cube's crops cover every sample's rotation (:func:`rvmsim.render.cover_layout`, over a
+  grid spanning the samples' angle ranges).
+* A load state moves the body (camera and vehicle parts together) relative to the ground:
+  the body pitches about the camera's nominal centre by ``pitch_deg`` (rear down > 0) and the
+  camera's height changes by ``height_mm``.  A mount position offset moves the camera relative
+  to the body.  Both change the viewpoint, which is rendered once per distinct (rendered
+  position, load state) and kept in the render cache (:func:`rvmsim.render.cached_cube`).
+  Positions are rendered at the sample's ``render_position_mm`` (a few levels per axis, see
+  :mod:`rvmsim.robust.samples`); docs/robustness.md states the landmark error this costs.
+
+The images of a sample are the rotated camera's, at the rendered position: a sample's
+evaluation then costs what a tuning candidate's does.
+
+Conventions
+-----------
+Camera-to-scene rotation of a sample: ``R_b · R(yaw + δyaw, pitch + δpitch, roll + δroll)``
+with ``R_b`` the body pitch (:func:`~rvmsim.camera.rotation_from_ypr` (0, pitch_deg, 0));
+position ``p₀ + R_b · δp + (0, −height_mm, 0)`` (scene frame, Y toward the ground, mm → m).
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..camera import FisheyeCamera, rotation_from_ypr
+from .. import labels as L
+from ..isp import IspParams, OutputSpec, apply_map, build_map
+from ..render import (CameraRays, CubeLayout, FisheyeImages, cached_cube, cover_layout,
+                      fold, fold_labels, nearest_labels, refold_coords, refold_layout)
+from ..scene import Scene, build_parts
+from .samples import MountSample
+from .variation import LoadState
+
+__all__ = ["sample_images", "Refolder", "refolder", "RvmPixels", "rvm_pixels",
+           "sample_rvm_labels", "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
+
+#: The covered angle ranges are rounded up to this step (degrees), so that sample sets of
+#: about the same spread share cached cubes.
+ANGLE_STEP_DEG = 0.5
+
+
+def _body_rotation(load: LoadState) -> np.ndarray:
+    return rotation_from_ypr(0.0, load.pitch_deg, 0.0)
+
+
+def body_pose(scene: Scene, load: LoadState) -> np.ndarray | None:
+    """The (4, 4) rigid motion of the vehicle's parts under ``load`` (None: unmoved): the
+    body pitched about the camera's nominal centre, then lowered by the camera's drop."""
+    if load.height_mm == 0.0 and load.pitch_deg == 0.0:
+        return None
+    p0 = np.asarray(scene.camera.mount.position, dtype=np.float64)
+    rb = _body_rotation(load)
+    pose = np.eye(4)
+    pose[:3, :3] = rb
+    pose[:3, 3] = p0 - rb @ p0 + np.array([0.0, -load.height_mm / 1000.0, 0.0])
+    return pose
+
+
+def sample_camera(scene: Scene, sample: MountSample, *, scale: float = 1.0,
+                  rendered: bool = True) -> FisheyeCamera:
+    """The camera of ``sample``: its pose per the module's convention, the scene's lens at
+    ``scale`` of the sensor; at the rendered position (``rendered``) or the drawn one."""
+    m = scene.camera.mount
+    cam = scene.fisheye_camera()
+    cam = cam.scaled(scale) if scale != 1.0 else cam
+    rb = _body_rotation(sample.load)
+    dy, dp, dr = sample.angles_deg
+    rot = rb @ rotation_from_ypr(m.yaw_deg + dy, m.pitch_deg + dp, m.roll_deg + dr)
+    d = np.asarray(sample.render_position_mm if rendered else sample.position_mm) / 1000.0
+    pos = (np.asarray(m.position, dtype=np.float64) + rb @ d
+           + np.array([0.0, -sample.load.height_mm / 1000.0, 0.0]))
+    return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
+                         cam.skew, cam.fov_deg, rot, pos)
+
+
+def _viewpoint_camera(scene: Scene, sample: MountSample, scale: float) -> FisheyeCamera:
+    """The camera the viewpoint's cube is rendered for: the sample's rendered position and
+    load, the nominal mount angles."""
+    unturned = MountSample(sample.index, (*sample.render_position_mm, 0.0, 0.0, 0.0),
+                           sample.render_position_mm, sample.load, sample.scale)
+    return sample_camera(scene, unturned, scale=scale)
+
+
+def cover_for(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0) -> CubeLayout:
+    """The covering layout for ``samples``' rotations: a 5-level grid over each angle's
+    range (the samples' largest offset rounded up to :data:`ANGLE_STEP_DEG`, plus a step)."""
+    m = scene.camera.mount
+    cam = scene.fisheye_camera()
+    cam = cam.scaled(scale) if scale != 1.0 else cam
+    bounds = [math.ceil(max(abs(s.angles_deg[i]) for s in samples) / ANGLE_STEP_DEG - 1e-9)
+              * ANGLE_STEP_DEG for i in range(3)]
+    bounds = [b + ANGLE_STEP_DEG if b > 0 else 0.0 for b in bounds]
+    nominal = rotation_from_ypr(m.yaw_deg, m.pitch_deg, m.roll_deg)
+    grids = [np.linspace(-b, b, 5) if b > 0 else np.zeros(1) for b in bounds]
+    rotations = [rotation_from_ypr(m.yaw_deg + a, m.pitch_deg + b, m.roll_deg + c).T @ nominal
+                 for a, b, c in itertools.product(*grids)]
+    r = scene.render
+    return cover_layout(cam, rotations, face_size=r.face_size_px, oversample=r.oversample,
+                        max_face_size=r.max_face_size_px)
+
+
+def _viewpoint(sample: MountSample) -> tuple[tuple[float, ...], str]:
+    return tuple(round(v, 9) for v in sample.render_position_mm), sample.load.name
+
+
+def viewpoint_groups(samples: Sequence[MountSample]) -> list[list[int]]:
+    """The indices of ``samples`` by viewpoint (rendered position and load state): each
+    group needs one render.  To render the viewpoints elsewhere (an executor), call
+    :func:`sample_images` on each group's samples with the ``shared`` :func:`refolder` of
+    all of them (the same covering crops, so the same cache entries)."""
+    groups: dict[tuple[tuple[float, ...], str], list[int]] = {}
+    for i, s in enumerate(samples):
+        groups.setdefault(_viewpoint(s), []).append(i)
+    return list(groups.values())
+
+
+@dataclass(frozen=True)
+class Refolder:
+    """What every re-fold of one sample set shares: the covering layout and the camera's
+    pixel rays (:func:`refolder`)."""
+
+    cover: CubeLayout
+    rays: CameraRays
+
+
+def refolder(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0) -> Refolder:
+    """The :class:`Refolder` of ``samples`` (build it once for many calls of
+    :func:`sample_images` on parts of one sample set)."""
+    cam = scene.fisheye_camera()
+    return Refolder(cover_for(scene, samples, scale=scale),
+                    CameraRays.of(cam.scaled(scale) if scale != 1.0 else cam))
+
+
+def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0,
+                  progress: bool = False, color: bool = True,
+                  shared: Refolder | None = None) -> list[FisheyeImages]:
+    """The fisheye colour and label images of every sample (see the module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    samples : sequence of MountSample
+        From :func:`~rvmsim.robust.draw_samples`.
+    scale : float
+        Fraction of the sensor to render (as :func:`rvmsim.render.cached_render`).
+    progress : bool
+        Progress bars over the renders and the re-folds.
+    color : bool
+        Also fold the colour image; without it, ``color`` is black (a read-only broadcast
+        view, no memory), for evaluations that read labels only.
+    shared : Refolder, optional
+        :func:`refolder` of a sample set holding ``samples`` (default: of ``samples``).
+
+    Returns
+    -------
+    list of FisheyeImages
+        In ``samples``' order; ``camera`` is the sample's (:func:`sample_camera`, at its
+        rendered position).
+
+    Notes
+    -----
+    Pure apart from the render cache: the viewpoints' cubes can be rendered anywhere first
+    (the same call with the same samples finds them).
+    """
+    if not samples:
+        return []
+    shared = shared if shared is not None else refolder(scene, samples, scale=scale)
+    cover, rays = shared.cover, shared.rays
+    out: list[FisheyeImages | None] = [None] * len(samples)
+    bar = _bar(progress, len(samples), "sample images")
+    for idx, view_cam, atlas_c, atlas_l in _viewpoints(scene, samples, shared, scale, color):
+        for i in idx:
+            cam = sample_camera(scene, samples[i], scale=scale)
+            layout = refold_layout(cover, cam.rotation.T @ view_cam.rotation, rays)
+            if color and atlas_c is not None:
+                img_c, img_l = fold(layout, atlas_c, atlas_l)
+            else:
+                img_l = fold_labels(layout, atlas_l)
+                img_c = np.broadcast_to(np.zeros(3, np.uint8), (*img_l.shape, 3))
+            out[i] = FisheyeImages(color=img_c, labels=img_l, camera=cam,
+                                   face_size=cover.face_size)
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return [o for o in out if o is not None]
+
+
+def _bar(progress: bool, total: int, desc: str) -> Any:
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="sample", leave=False)
+
+
+def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, scale: float,
+                color: bool) -> Iterator[tuple[list[int], FisheyeCamera, np.ndarray | None,
+                                               np.ndarray]]:
+    """Per distinct viewpoint of ``samples``: the indices of its samples, the camera its cube
+    is rendered for, and the cube's atlas (colour None when not asked for and cached)."""
+    parts = functools.lru_cache(maxsize=1)(lambda: build_parts(scene))
+    for idx in viewpoint_groups(samples):
+        first = samples[idx[0]]
+        view_cam = _viewpoint_camera(scene, first, scale)
+        atlas_c, atlas_l, _ = cached_cube(scene, view_cam, shared.cover, scale=scale,
+                                          parts=parts, body_pose=body_pose(scene, first.load),
+                                          color=color)
+        yield idx, view_cam, atlas_c, atlas_l
+
+
+@dataclass(frozen=True)
+class RvmPixels:
+    """Which fisheye pixel each RVM pixel shows under one ISP setting (the nearest sample of
+    its map, as :func:`rvmsim.isp.process` takes labels): ``source`` (H_o, W_o) flat fisheye
+    index (−1: no input), ``pixels`` the distinct ones, ``inverse`` each used RVM pixel's
+    entry in ``pixels``, ``rays`` the in-field ones' rays, ``in_field`` which of ``pixels``
+    lie in the lens's field."""
+
+    source: np.ndarray
+    pixels: np.ndarray
+    inverse: np.ndarray
+    rays: CameraRays
+    in_field: np.ndarray
+
+
+def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec) -> RvmPixels:
+    """:class:`RvmPixels` of ``params`` (for ``camera``'s sensor size) on ``camera``'s lens."""
+    w, h = camera.width, camera.height
+    index = np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w)  # exact below 2^24
+    src = np.rint(apply_map(index, build_map(params, (w, h), output), labels=True))
+    source = src.astype(np.intp) - 1
+    pixels, inverse = np.unique(source[source >= 0], return_inverse=True)
+    rays = CameraRays.of(camera, pixels)
+    return RvmPixels(source, pixels, inverse.ravel(), rays, rays.in_fov.ravel()[pixels])
+
+
+def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixels, *,
+                      scale: float = 1.0, shared: Refolder | None = None,
+                      progress: bool = False) -> list[np.ndarray]:
+    """The RVM label image of every sample under the ISP setting of ``rvm``: equal to
+    ``process(None, sample_images(...)[i].labels, params, output)`` (the tests check it), at
+    the cost of re-folding only the fisheye pixels the RVM image shows.
+
+    Returns
+    -------
+    list of (H_o, W_o) uint8
+        In ``samples``' order; ``VOID`` where the RVM image has no input.
+    """
+    if not samples:
+        return []
+    shared = shared if shared is not None else refolder(scene, samples, scale=scale)
+    used = rvm.source >= 0
+    out: list[np.ndarray | None] = [None] * len(samples)
+    bar = _bar(progress, len(samples), "samples")
+    for idx, view_cam, _, atlas_l in _viewpoints(scene, samples, shared, scale, False):
+        for i in idx:
+            cam = sample_camera(scene, samples[i], scale=scale)
+            ax, ay = refold_coords(shared.cover, cam.rotation.T @ view_cam.rotation, rvm.rays)
+            at_pixels = np.full(rvm.pixels.size, L.VOID, np.uint8)
+            at_pixels[rvm.in_field] = nearest_labels(atlas_l, ax, ay)
+            labels = np.full(rvm.source.shape, L.VOID, np.uint8)
+            labels[used] = at_pixels[rvm.inverse]
+            out[i] = labels
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return [o for o in out if o is not None]

@@ -1,0 +1,324 @@
+"""The yield of one ISP setting over production variation (``rvmsim robustness``).
+
+Every sample (:func:`~rvmsim.robust.draw_samples`) gets its RVM label image: the ISP's map
+is the same for all samples (the parameters are fixed), so only the fisheye pixels it shows
+are re-folded from the sample's cube (:func:`~rvmsim.robust.sample_rvm_labels`, equal to
+running the ISP on :func:`~rvmsim.robust.sample_images`' label image), and every EC is
+measured on it, exactly as ``rvmsim evaluate`` does.  The result
+holds the yield with its 95 % interval (:mod:`.stats`), each EC's failure rate, worst
+value and margin and the axis that drives its failures, the yield against a tolerance
+scale factor, and the nominal and worst samples' RVM frames for the report.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..criteria import Criteria, default_criteria, evaluate
+from ..isp import IspParams, OutputSpec, params_to_dict
+from ..pipeline import RvmFrame, evaluate_params
+from ..scene import Scene
+from .images import refolder, rvm_pixels, sample_images, sample_rvm_labels
+from .samples import MountSample, draw_samples, nominal_sample
+from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
+from .variation import MOUNT_AXES, Variation, variation_from_scene
+
+__all__ = ["EcStats", "ScalePoint", "SampleEvaluation", "RobustnessResult", "evaluate_samples",
+           "robustness", "DEFAULT_SCALES"]
+
+#: Tolerance scale factors of the yield curve.
+DEFAULT_SCALES = (0.5, 1.0, 1.5, 2.0)
+#: Samples re-folded per batch (bounds the memory of RVM label images held at once).
+_CHUNK = 32
+
+
+@dataclass(frozen=True)
+class SampleEvaluation:
+    """The ECs of many samples: ``values`` (n, k) in ``ids`` order (NaN: not measured),
+    ``passed`` (n, k), ``scores`` (n,) EC scores, ``all_passed`` (n,) every enabled EC
+    passes."""
+
+    ids: tuple[str, ...]
+    values: np.ndarray
+    passed: np.ndarray
+    scores: np.ndarray
+    all_passed: np.ndarray
+
+
+def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspParams,
+                     output: OutputSpec, criteria: Criteria | None = None, *,
+                     scale: float = 1.0, progress: bool = False) -> SampleEvaluation:
+    """Every EC of one ISP setting on every sample.
+
+    Parameters
+    ----------
+    scene, samples
+        The scene and its variation samples.
+    params : IspParams
+        For the full sensor (RAD and shifts follow ``scale``).
+    output : OutputSpec
+    criteria : Criteria, optional
+        Default: the paper's.
+    scale : float
+        Fraction of the sensor rendered.
+    progress : bool
+    """
+    crit = criteria if criteria is not None else default_criteria()
+    p = _scaled_params(scene, params, scale)
+    ids = crit.ids
+    n, k = len(samples), len(ids)
+    values = np.full((n, k), np.nan)
+    passed = np.zeros((n, k), bool)
+    scores = np.zeros(n)
+    all_passed = np.zeros(n, bool)
+    if n == 0:
+        return SampleEvaluation(ids, values, passed, scores, all_passed)
+    shared = refolder(scene, samples, scale=scale)
+    cam = scene.fisheye_camera()
+    rvm = rvm_pixels(cam.scaled(scale) if scale != 1.0 else cam, p, output)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, desc=f"samples (tolerance x{samples[0].scale:g})", unit="sample",
+                   leave=False)
+    for start in range(0, n, _CHUNK):
+        chunk = samples[start:start + _CHUNK]
+        for j, labels in enumerate(sample_rvm_labels(scene, chunk, rvm, scale=scale,
+                                                     shared=shared)):
+            ec = evaluate(labels, crit)
+            i = start + j
+            values[i] = [np.nan if ec[e].value is None else ec[e].value for e in ids]
+            passed[i] = [ec[e].passed for e in ids]
+            scores[i], all_passed[i] = ec.score, ec.passed
+            if bar is not None:
+                bar.update(1)
+    if bar is not None:
+        bar.close()
+    return SampleEvaluation(ids, values, passed, scores, all_passed)
+
+
+def _scaled_params(scene: Scene, params: IspParams, scale: float) -> IspParams:
+    if scale == 1.0:
+        return params
+    width = scene.fisheye_camera().scaled(scale).width
+    return params.for_input_scale(width / scene.camera.image_size[0])
+
+
+@dataclass(frozen=True)
+class EcStats:
+    """One EC over the samples: failure rate, worst value and margin (signed distance to
+    the nearer end of the range, EC unit; < 0 fails), the margins (histograms) and the axes
+    driving its failures (strongest first; :func:`~rvmsim.robust.stats.failure_drivers`)."""
+
+    id: str
+    name: str
+    unit: str
+    low: float | None
+    high: float | None
+    enabled: bool
+    n_fail: int
+    failure_rate: float
+    worst_value: float | None
+    worst_margin: float | None
+    worst_sample: int
+    margins: tuple[float, ...]
+    drivers: tuple[AxisEffect, ...] = ()
+
+    @property
+    def driver(self) -> AxisEffect | None:
+        """The axis driving the failures (None when the EC never fails)."""
+        return self.drivers[0] if self.n_fail and self.drivers else None
+
+    def as_dict(self) -> dict[str, Any]:
+        d = self.driver
+        return {"id": self.id, "name": self.name, "unit": self.unit,
+                "range": [self.low, self.high], "enabled": self.enabled,
+                "n_fail": self.n_fail, "failure_rate": self.failure_rate,
+                "worst_value": self.worst_value, "worst_margin": self.worst_margin,
+                "worst_sample": self.worst_sample,
+                "driver": None if d is None else d.describe(),
+                "axes": [e.as_dict() for e in self.drivers]}
+
+
+@dataclass(frozen=True)
+class ScalePoint:
+    """The yield at one tolerance scale factor."""
+
+    scale: float
+    estimate: YieldEstimate
+
+
+@dataclass(frozen=True)
+class RobustnessResult:
+    """What ``rvmsim robustness`` reports (see the module docstring).
+
+    ``yield_`` and ``ci`` are the 95 % estimate's; ``ecs`` one :class:`EcStats` per EC in
+    the criteria's order; ``nominal`` and ``worst`` the annotated RVM frames of the car as
+    designed and of the worst sample (most ECs failing, then the lowest EC score)."""
+
+    scene_name: str
+    scene_file: str
+    params: IspParams
+    output: OutputSpec
+    criteria_name: str
+    variation: Variation
+    seed: int
+    samples: tuple[MountSample, ...]
+    evaluation: SampleEvaluation
+    estimate: YieldEstimate
+    ecs: tuple[EcStats, ...]
+    scale_curve: tuple[ScalePoint, ...]
+    nominal: RvmFrame
+    worst: RvmFrame
+    worst_index: int
+    min_yield: float | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def yield_(self) -> float:
+        return self.estimate.yield_
+
+    @property
+    def ci(self) -> tuple[float, float]:
+        return self.estimate.ci
+
+    @property
+    def meets_min_yield(self) -> bool:
+        return self.min_yield is None or self.yield_ >= self.min_yield
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready (robustness.json)."""
+        ev = self.evaluation
+        return {
+            "scene": self.scene_file, "vehicle": self.scene_name, "criteria": self.criteria_name,
+            "isp": params_to_dict(self.params, self.output), "seed": self.seed,
+            "variation": self.variation.as_dict(), **self.estimate.as_dict(),
+            "min_yield": self.min_yield, "meets_min_yield": self.meets_min_yield,
+            "nominal": self.nominal.ec.as_dict(), "worst_sample": self.worst_index,
+            "ecs": [e.as_dict() for e in self.ecs],
+            "scale_curve": [{"scale": p.scale, **p.estimate.as_dict()} for p in self.scale_curve],
+            "samples": [{**s.as_dict(), "ec_score": float(ev.scores[i]),
+                         "passed": bool(ev.all_passed[i]),
+                         "failed": [e for e, ok in zip(ev.ids, ev.passed[i]) if not ok]}
+                        for i, s in enumerate(self.samples)],
+            "timings_s": {k: round(v, 3) for k, v in self.timings.items()},
+        }
+
+    def summary(self) -> str:
+        """A few lines for the terminal."""
+        lo, hi = self.ci
+        lines = [f"{self.scene_name}: yield {100 * self.yield_:.1f} % "
+                 f"(95 % CI {100 * lo:.1f}–{100 * hi:.1f} %, {self.estimate.n_pass} of "
+                 f"{self.estimate.n} samples pass every EC)"]
+        for e in self.ecs:
+            if e.enabled and e.n_fail:
+                d = e.driver
+                lines.append(f"  EC {e.id} fails on {100 * e.failure_rate:.1f} % (worst "
+                             f"{_num(e.worst_value)} {e.unit}, margin {_num(e.worst_margin)})"
+                             + (f"; driven by {d.describe()}" if d is not None else ""))
+        lines.append("  yield by tolerance scale: " + ", ".join(
+            f"{p.scale:g}x {100 * p.estimate.yield_:.0f} %" for p in self.scale_curve))
+        return "\n".join(lines)
+
+
+def _num(x: float | None) -> str:
+    return "—" if x is None else f"{x:.3g}"
+
+
+def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: SampleEvaluation,
+              variation: Variation) -> tuple[EcStats, ...]:
+    axes = {n: np.array([s.offsets[i] for s in samples])
+            for i, n in enumerate(MOUNT_AXES) if variation.axes[i].varies}
+    loads = np.array([s.load.name for s in samples])
+    out = []
+    for j, d in enumerate(crit.ecs):
+        c = crit.items[d.id]
+        margins = ec_margins(ev.values[:, j], c.low, c.high)
+        failed = ~ev.passed[:, j]
+        finite = np.where(np.isnan(margins), np.inf, margins)
+        w = int(np.argmin(finite)) if np.isfinite(finite).any() else int(np.argmax(failed))
+        worst_value = ev.values[w, j]
+        out.append(EcStats(
+            d.id, d.name, d.unit, c.low, c.high, c.enabled, int(failed.sum()),
+            float(failed.mean()), None if np.isnan(worst_value) else float(worst_value),
+            None if np.isnan(margins[w]) else float(margins[w]), w,
+            tuple(float(m) for m in margins),
+            tuple(failure_drivers(failed, axes, loads)) if failed.any() else ()))
+    return tuple(out)
+
+
+def _frame(scene: Scene, sample: MountSample, params: IspParams, output: OutputSpec,
+           crit: Criteria, scale: float) -> RvmFrame:
+    images = sample_images(scene, [sample], scale=scale)[0]
+    return evaluate_params(images, _scaled_params(scene, params, scale), output, crit,
+                           annotate=True)
+
+
+def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(), *,
+               criteria: Criteria | None = None, variation: Variation | None = None,
+               samples: int = 200, seed: int = 0, scales: Sequence[float] = DEFAULT_SCALES,
+               scale_samples: int | None = None, render_scale: float = 1.0,
+               min_yield: float | None = None, progress: bool = False) -> RobustnessResult:
+    """The yield of ``params`` over ``scene``'s production variation.
+
+    Parameters
+    ----------
+    scene : Scene
+    params : IspParams
+        For the full sensor.
+    output : OutputSpec
+    criteria : Criteria, optional
+        Default: the paper's.
+    variation : Variation, optional
+        Default: the scene's ``variation`` section (:func:`variation_from_scene`).
+    samples : int
+        Samples at tolerance scale 1.
+    seed : int
+        Sobol scrambling seed (the same seed, the same samples and result).
+    scales : sequence of float
+        Tolerance scale factors of the yield curve (1 reuses the main samples).
+    scale_samples : int, optional
+        Samples per other scale factor; default ``min(samples, 64)``.
+    render_scale : float
+        Fraction of the sensor rendered (small renders for tests).
+    min_yield : float, optional
+        Recorded with the result (``meets_min_yield``).
+    progress : bool
+
+    Returns
+    -------
+    RobustnessResult
+    """
+    t0 = time.perf_counter()
+    crit = criteria if criteria is not None else default_criteria()
+    var = variation if variation is not None else variation_from_scene(scene)
+    drawn = draw_samples(var, samples, seed)
+    ev = evaluate_samples(scene, drawn, params, output, crit, scale=render_scale,
+                          progress=progress)
+    t1 = time.perf_counter()
+    curve = []
+    for s in scales:
+        if s == 1.0:
+            curve.append(ScalePoint(1.0, yield_estimate(ev.all_passed)))
+            continue
+        extra = draw_samples(var, scale_samples or min(samples, 64), seed, s)
+        e = evaluate_samples(scene, extra, params, output, crit, scale=render_scale,
+                             progress=progress)
+        curve.append(ScalePoint(float(s), yield_estimate(e.all_passed)))
+    t2 = time.perf_counter()
+    n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
+    worst = int(np.lexsort((ev.scores, -n_fail))[0])
+    nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale)
+    worst_frame = _frame(scene, drawn[worst], params, output, crit, render_scale)
+    t3 = time.perf_counter()
+    return RobustnessResult(
+        scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,
+        yield_estimate(ev.all_passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
+        worst_frame, worst, min_yield,
+        {"samples": t1 - t0, "scale_curve": t2 - t1, "frames": t3 - t2, "total": t3 - t0})

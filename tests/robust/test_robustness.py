@@ -1,0 +1,109 @@
+"""rvmsim.robust.robustness and ``rvmsim robustness``: yield of a setting over variation."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from rvmsim.criteria import CandidateEvaluator, Criteria, default_criteria
+from rvmsim.isp import IspParams, OutputSpec
+from rvmsim.render import render_fisheye
+from rvmsim.report import write_robustness_outputs
+from rvmsim.robust import robustness
+
+from ..bad_input.harness import run_rvmsim
+from .conftest import ANGLES_ONLY, ROOT, small_scene
+
+OUTPUT = OutputSpec(640, 360)
+
+
+def _only(ec: str) -> Criteria:
+    c = default_criteria()
+    items = {k: v if k == ec else dataclasses.replace(v, enabled=False) for k, v in c.items.items()}
+    return dataclasses.replace(c, items=items, name=f"only {ec}")
+
+
+@pytest.fixture(scope="module")
+def settings():
+    """Two settings of the small scene found on its nominal render by scanning the vertical
+    shift: EC 2-1 (bumper centre height, [4, 8] %) in the middle of its range, and just
+    inside its upper edge."""
+    sc = small_scene(0.25, variation=ANGLES_ONLY)
+    crit = _only("2-1")
+    ev = CandidateEvaluator(render_fisheye(sc).labels, OUTPUT, crit)
+    base = IspParams().for_input_scale(0.25)
+    shifts = np.arange(10.0, 25.0, 0.25)
+    values = np.array([ev(dataclasses.replace(base, v_shift=float(s)))["2-1"].value or 0.0
+                       for s in shifts])
+    mid = float(shifts[np.argmin(np.abs(values - 6.0))])
+    inside = np.flatnonzero(values <= 8.0)
+    edge = float(shifts[inside[np.argmax(values[inside])]])
+    assert 5.5 <= values[shifts == mid][0] <= 6.5 and 7.5 <= values[shifts == edge][0] <= 8.0
+    return sc, crit, dataclasses.replace(base, v_shift=mid), dataclasses.replace(base, v_shift=edge)
+
+
+def test_a_setting_on_an_ecs_edge_has_a_lower_yield(settings, tmp_path: Path):
+    sc, crit, mid, edge = settings
+    kw = dict(criteria=crit, samples=32, seed=1, scales=(0.5, 1.0))
+    r_mid = robustness(sc, mid, OUTPUT, **kw)
+    r_edge = robustness(sc, edge, OUTPUT, **kw)
+    assert r_edge.yield_ < r_mid.yield_
+    assert r_mid.nominal.ec.passed and r_edge.nominal.ec.passed  # both pass as designed
+    for r in (r_mid, r_edge):
+        assert r.ci[0] <= r.yield_ <= r.ci[1] and r.estimate.n == 32
+        assert [p.scale for p in r.scale_curve] == [0.5, 1.0]
+        assert r.scale_curve[1].estimate == r.estimate
+    e = r_edge.ecs[[x.id for x in r_edge.ecs].index("2-1")]
+    assert e.n_fail == 32 - r_edge.estimate.n_pass and e.worst_margin is not None
+    assert e.worst_margin < 0 and e.worst_value is not None and e.worst_value > 8.0
+    assert e.driver is not None and e.driver.axis == "pitch_deg"
+    assert not r_edge.worst.ec.passed
+    # the worst sample's frame is that sample's: its EC value is the recorded one
+    worst_2_1 = r_edge.evaluation.values[r_edge.worst_index, list(crit.ids).index("2-1")]
+    assert r_edge.worst.ec["2-1"].value == pytest.approx(worst_2_1)
+    written = write_robustness_outputs(r_edge, tmp_path)
+    doc = json.loads(written[0].read_text())
+    assert doc["yield"] == r_edge.yield_ and doc["interval"] == "Wilson score"
+    assert len(doc["samples"]) == 32 and doc["ecs"][4]["id"] == "2-1"
+    html = written[1].read_text()
+    assert html.count("data:image/png;base64,") == 4 and "<script" not in html
+    assert "Worst: sample" in html
+
+
+def test_the_same_seed_gives_the_same_result(settings):
+    sc, crit, _, edge = settings
+    a = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,))
+    b = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,))
+    np.testing.assert_array_equal(a.evaluation.values, b.evaluation.values)
+    assert a.as_dict()["samples"] == b.as_dict()["samples"]
+
+
+def _cli_case(folder: Path) -> None:
+    doc = yaml.safe_load((ROOT / "scenes" / "vehicle_a.yaml").read_text())
+    doc["camera"]["image_size"] = [320, 240]
+    for k in ("fx", "fy"):
+        doc["camera"]["intrinsics"][k] /= 4
+    doc["variation"] = ANGLES_ONLY
+    (folder / "scene.yaml").write_text(yaml.safe_dump(doc))
+    (folder / "params.yaml").write_text((ROOT / "params" / "paper_defaults.yaml").read_text())
+
+
+def test_cli_exit_status_follows_min_yield(tmp_path: Path):
+    """The paper's defaults do not pass on this car (yield 0): exit 1 below --min-yield,
+    0 at or above it; both write the outputs."""
+    _cli_case(tmp_path)
+    args = ["robustness", "scene.yaml", "--params", "params.yaml", "--samples", "8",
+            "--scale-samples", "4", "--no-progress"]
+    low = run_rvmsim([*args, "--out", "a", "--min-yield", "0.5"], cwd=tmp_path)
+    assert low.code == 1, low.stderr
+    assert "yield 0.0 %" in low.stdout
+    ok = run_rvmsim([*args, "--out", "b", "--min-yield", "0"], cwd=tmp_path)
+    assert ok.code == 0, ok.stderr
+    for out in ("a", "b"):
+        assert (tmp_path / out / "robustness.html").is_file()
+        assert json.loads((tmp_path / out / "robustness.json").read_text())["n"] == 8
