@@ -110,10 +110,14 @@ def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
         state = run_state(run_dir, store)
         n = store.count()
         top = store.top(top_m)
+        scenes, aggregate = store.meta().get("scenes"), store.meta().get("aggregate")
     finally:
         store.close()
     total = "" if state.total is None else f" / {state.total}"
     lines = [f"{run_dir}: {state.text}, strategy {state.strategy}, {n}{total} evaluations"]
+    if isinstance(scenes, list) and scenes:
+        names = ", ".join(str(r.get("vehicle") if isinstance(r, dict) else r) for r in scenes)
+        lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their {aggregate}")
     for k, rec in enumerate(top, start=1):
         fails = rec.failing()
         lines.append(f"  #{k}  EC score {rec.score:.4g}  trial {rec.idx:>6} ({rec.stage})  "
