@@ -215,7 +215,7 @@ class MembersScorer:
                          - weight * np.array([m.violation for m in per]).sum(axis=0))
         else:
             objective = self.aggregate.reduce(member_obj)
-        passed = np.array([m.passed for m in per]).all(axis=0)
+        passed = np.asarray(np.array([m.passed for m in per]).all(axis=0))
         members = [[(float(m.score[i]), float(member_obj[k, i]), bool(m.passed[i]),
                      m.ec_json[i]) for k, m in enumerate(per)] for i in range(len(params))]
         return ScoredBatch(score.tolist(), objective.tolist(), passed.tolist(),

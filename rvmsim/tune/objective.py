@@ -95,7 +95,7 @@ def score_vectors(evaluator: CandidateEvaluator, space: SearchSpace,
     params = [space.params(x) for x in xs]
     if solver is not None:
         params = [solver(p) for p in params]
-    m = score_params(evaluator, params)
+    m = score_params(evaluator, params, violation=objective == "pass-first")
     obj = m.log_score if objective == "log-score" else m.log_score - PASS_WEIGHT * m.violation
     return ScoredBatch(m.score.tolist(), obj.tolist(), m.passed.tolist(),
                        [params_json(p) for p in params], m.ec_json)
@@ -120,14 +120,17 @@ class ParamsScores:
     ec_json: list[str]
 
 
-def score_params(evaluator: CandidateEvaluator, params: Sequence[IspParams]) -> ParamsScores:
+def score_params(evaluator: CandidateEvaluator, params: Sequence[IspParams], *,
+                 violation: bool = True) -> ParamsScores:
     """Evaluate parameter sets (already solved) with ``evaluator``: the part of
-    :func:`score_vectors` that a multi-member evaluation repeats per member."""
+    :func:`score_vectors` that a multi-member evaluation repeats per member.  Without
+    ``violation`` the violations are not computed (zeros)."""
     ids = evaluator.criteria.ids
     values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(ids))
     b = score_batch(values, evaluator.criteria)
     ecs = [ec_json(ids, v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
                                                 b.passed.tolist())]
     return ParamsScores(np.asarray(b.score, np.float64), b.objective(OBJECTIVE_FLOOR),
-                        violations(values, evaluator.criteria).sum(axis=1),
+                        violations(values, evaluator.criteria).sum(axis=1) if violation
+                        else np.zeros(len(params)),
                         np.asarray(b.all_passed, bool), ecs)

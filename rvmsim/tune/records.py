@@ -118,10 +118,11 @@ class RunSettings:
 
     def as_json(self) -> dict[str, Any]:
         """The settings as ``run.json`` holds them (and ``run.sqlite``'s meta table)."""
-        doc = {"scene": self.scene, "scene_key": self.scene_key, "vehicle": self.vehicle,
-               "strategy": self.strategy, "seed": self.seed, "budget": self.budget,
-               "criteria_file": self.criteria_file,
-               "config": self.config.model_dump(mode="json")}
+        doc: dict[str, Any] = {"scene": self.scene, "scene_key": self.scene_key,
+                               "vehicle": self.vehicle,
+                               "strategy": self.strategy, "seed": self.seed,
+                               "budget": self.budget, "criteria_file": self.criteria_file,
+                               "config": self.config.model_dump(mode="json")}
         if self.scenes:
             doc["scenes"] = [r.as_json() for r in self.scenes]
             doc["aggregate"] = self.aggregate

@@ -86,7 +86,7 @@ def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
     if isinstance(scene, Scene):
         sc, recorded = scene, scene_file or scene.source
     else:
-        recorded = scene if scene is not None else scene_file
+        recorded = scene if scene is not None else scene_file  # type: ignore[assignment]
         if recorded is None:
             raise RvmsimError("tune: give a scene file, or resume a run")
         sc = load_scene(recorded)
