@@ -76,6 +76,7 @@ from .members import (
     member_evaluators,
     SOLVE_MODES,
     OBJECTIVE_COMBINE,
+    COMBINES,
 )
 from .store import (
     SqliteStore,
@@ -174,6 +175,7 @@ __all__ = [
     "member_evaluators",
     "SOLVE_MODES",
     "OBJECTIVE_COMBINE",
+    "COMBINES",
     "SceneRef",
     "search_members",
     "VectorScorer",

@@ -24,7 +24,7 @@ from ..errors import RvmsimError
 from ..isp import IspParams
 from .config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
-from .members import (Aggregate, Member, MembersScorer, MembersSolver, check_members,
+from .members import (OBJECTIVE_COMBINE, Aggregate, Member, MembersScorer, MembersSolver, check_members,
                       member_evaluators, parse_aggregate)
 from .records import StopReason, TrialRecord
 from .solve import EcSolver
@@ -329,6 +329,7 @@ def search_members(
     store: RunStore,
     aggregate: str | Aggregate = "min",
     solve: str = "mean",
+    combine: str = OBJECTIVE_COMBINE,
     seed: int = 0,
     budget: int | None = None,
     workers: int = 1,
@@ -352,6 +353,9 @@ def search_members(
         ``min`` (default) or ``quantile Q`` (:func:`parse_aggregate`).
     solve : str
         How the sub-solves of ``cmaes-solved`` combine (:data:`SOLVE_MODES`).
+    combine : str
+        How the ``min`` aggregate combines the members' objectives
+        (:data:`OBJECTIVE_COMBINE`: ``sum-violation`` or ``min``).
     strategy, seed, budget, workers, max_time, target_score, on_batch
         As in :func:`search_scene`.
     """
@@ -373,7 +377,7 @@ def search_members(
             solver = MembersSolver([EcSolver(ev.fisheye, output, criteria, strat.space)
                                     for ev in evaluators], solve)
             strat.solved = solver.names
-        scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg)
+        scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg, combine)
         batch_eval = BatchEvaluator(None, strat.space, workers, scorer=scorer)
     try:
         return run_search(strat, batch_eval, store, max_time=max_time,

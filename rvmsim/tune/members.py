@@ -48,14 +48,16 @@ if TYPE_CHECKING:
     from ..camera import FisheyeCamera
 
 __all__ = ["Member", "Aggregate", "parse_aggregate", "MembersSolver", "MembersScorer",
-           "check_members", "check_cameras", "worst_ec_json", "member_evaluators", "SOLVE_MODES", "OBJECTIVE_COMBINE"]
+           "check_members", "check_cameras", "worst_ec_json", "member_evaluators", "SOLVE_MODES", "OBJECTIVE_COMBINE", "COMBINES"]
 
 #: How the sub-solves of several members combine (:class:`MembersSolver`).
 SOLVE_MODES = ("mean", "first")
-#: How the ``min`` aggregate combines the members' pass-first objectives: ``sum-violation``
-#: (min log-score − PASS_WEIGHT · Σ over members of their violations) or ``min`` (the
-#: minimum of the members' own objectives).
+#: How the ``min`` aggregate combines the members' pass-first objectives by default:
+#: ``sum-violation`` (min log-score − PASS_WEIGHT · Σ over members of their violations; the
+#: other choice, ``min``, is the minimum of the members' own objectives).
 OBJECTIVE_COMBINE = "sum-violation"
+#: The choices of ``combine``.
+COMBINES = ("sum-violation", "min")
 
 
 @dataclass(frozen=True)
@@ -195,6 +197,8 @@ class MembersScorer:
                  objective: str = "log-score", aggregate: Aggregate = Aggregate(),
                  combine: str = OBJECTIVE_COMBINE):
         check_objective(objective)
+        if combine not in COMBINES:
+            raise ValueError(f"unknown combine {combine!r} (known: {', '.join(COMBINES)})")
         self.evaluators = list(evaluators)
         self.space = space
         self.solver = solver
