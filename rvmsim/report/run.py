@@ -347,7 +347,7 @@ def _build(run_dir: Path) -> tuple[str, _Summary]:
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
             + _gallery_section(r, str(run_dir), color))
-    summary = _Summary(r.scene.name, result.score, result.passed, _group_status(result),
+    summary = _Summary(title, result.score, result.passed, _group_status(result),
                        shrink(color, INDEX_THUMB_PX))
     return page(f"RVM tuning review: {title}", body), summary
 

@@ -104,13 +104,16 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
 
 
 def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
-    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too)."""
+    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too);
+    for a shared run also its scenes, and each top candidate's per-scene EC scores."""
     store = open_run(run_dir)
     try:
         state = run_state(run_dir, store)
         n = store.count()
         top = store.top(top_m)
-        scenes, aggregate = store.meta().get("scenes"), store.meta().get("aggregate")
+        meta = store.meta()
+        scenes, aggregate = meta.get("scenes"), meta.get("aggregate")
+        members = {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}
     finally:
         store.close()
     total = "" if state.total is None else f" / {state.total}"
@@ -120,8 +123,10 @@ def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
         lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their {aggregate}")
     for k, rec in enumerate(top, start=1):
         fails = rec.failing()
+        each = "" if not members[rec.idx] else "  [" + ", ".join(
+            f"{m:.4g}" for m in members[rec.idx]) + "]"
         lines.append(f"  #{k}  EC score {rec.score:.4g}  trial {rec.idx:>6} ({rec.stage})  "
-                     f"{'all pass' if not fails else 'fails ' + ','.join(fails)}")
+                     f"{'all pass' if not fails else 'fails ' + ','.join(fails)}{each}")
     return lines
 
 

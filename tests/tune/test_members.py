@@ -160,3 +160,20 @@ def test_members_of_different_sensor_sizes_are_refused(two):
         search_members([Member("A", imgs[0].labels, imgs[0].camera),
                         Member("A small", half.labels, half.camera)], config=CFG,
                        criteria=default_criteria(), strategy=strat, store=RunStore(":memory:"))
+
+
+def test_a_quantile_aggregate_takes_that_quantile_of_scores_and_objectives(two):
+    imgs, evs, space = two
+    rng = np.random.default_rng(5)
+    xs = [space.low + rng.random(len(space.names)) * (space.high - space.low) for _ in range(8)]
+    three = [evs[0], evs[1], evs[0]]
+    agg = parse_aggregate("quantile 0.5")
+    b = MembersScorer(three, space, objective="pass-first", aggregate=agg)(xs)
+    for i in range(len(xs)):
+        scores = sorted(m[0] for m in b.members[i])
+        objectives = sorted(m[1] for m in b.members[i])
+        assert b.score[i] == scores[1]  # the middle one of three
+        assert b.objective[i] == objectives[1]
+        assert b.passed[i] == all(m[2] for m in b.members[i])
+    with pytest.raises(ValueError, match="combine"):
+        MembersScorer(three, space, combine="mean")

@@ -84,6 +84,11 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     # status and select read it
     lines = status_lines(run)
     assert "shared by 2 scenes" in lines[1]
+    store = RunStore(run / "run.sqlite", readonly=True)
+    best = store.top(1)[0]
+    each = [m[0] for m in store.member_results(best.idx)]
+    store.close()
+    assert lines[2].endswith("[" + ", ".join(f"{m:.4g}" for m in each) + "]")
     assert "rank 1" in rank_params_text(run)
     # a changed second scene: resume refuses, naming it
     copy = tmp_path / "copy"
