@@ -163,9 +163,13 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 
 
 @cli.command()
-@click.argument("scene", type=click.Path(path_type=Path), required=False)
+@click.argument("scenes", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--out", "-o", type=OutputFolder(), default=None,
-              help="Run folder (default: runs/<scene name>).")
+              help="Run folder (default: runs/<scene name>, runs/<name>+<name>… with --shared).")
+@click.option("--shared", is_flag=True, help="One parameter set for all SCENES (the worst "
+              "scene's EC score is maximised, every scene must pass).")
+@click.option("--aggregate", default=None, metavar="min|quantile Q", help="With --shared: "
+              "the EC score is the scenes' minimum (default) or this quantile of them.")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
               default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
@@ -185,27 +189,26 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
               help="Continue the run in this folder (same settings, same final result).")
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
-def tune(scene: Path | None, out: Path | None, strategy: str, config_file: Path | None,
-         criteria_file: Path | None, seed: int, workers: int, budget: int | None,
-         max_time: float | None, target_score: float | None, resume_dir: Path | None,
-         force: bool, progress: bool) -> None:
-    """Tune the ISP parameters of SCENE (or continue a run with --resume RUN)."""
-    from .tune import load_tuning_config, summary_lines
+def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
+         strategy: str, config_file: Path | None, criteria_file: Path | None, seed: int,
+         workers: int, budget: int | None, max_time: float | None, target_score: float | None,
+         resume_dir: Path | None, force: bool, progress: bool) -> None:
+    """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared), or --resume RUN."""
+    from .tune import check_tune_arguments, load_tuning_config, summary_lines
     from .tune import tune as run_tune
 
     try:
+        check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None)
         if resume_dir is not None:
             result = run_tune(None, resume_dir, resume=True, workers=workers, max_time=max_time,
                               target_score=target_score, progress=progress)
         else:
-            if scene is None:
-                raise RvmsimError("tune: give a SCENE file, or --resume RUN")
-            cfg = load_tuning_config(config_file)
-            run_dir = out or Path("runs") / scene.stem
-            result = run_tune(scene, run_dir, strategy=strategy, force=force,
-                              config=cfg, criteria_file=criteria_file, seed=seed,
-                              workers=workers, budget=budget, max_time=max_time,
-                              target_score=target_score, progress=progress)
+            result = run_tune(list(scenes) if shared else scenes[0],
+                              out or Path("runs") / "+".join(s.stem for s in scenes),
+                              config=load_tuning_config(config_file), strategy=strategy,
+                              aggregate=aggregate or "min", force=force, seed=seed,
+                              criteria_file=criteria_file, workers=workers, budget=budget,
+                              max_time=max_time, target_score=target_score, progress=progress)
         lines = summary_lines(result)
     except RvmsimError as err:
         _fail(err)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import os
 import shlex
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 from urllib.parse import quote
@@ -27,6 +27,8 @@ import numpy as np
 
 from ..errors import RvmsimError
 from ..tune import find_runs, is_run_folder
+from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
+                      members_section)
 from .page import data_uri, escape, img_tag, page, shrink
 from .plots import convergence_png, histogram_png
 
@@ -78,6 +80,8 @@ class _Run:
     scores: np.ndarray
     count: int
     scene_changed: bool = False
+    members: list[MemberScene] = field(default_factory=list)
+    member_top: dict[int, list[float]] = field(default_factory=dict)
 
 
 def _resolve(recorded: str, run_dir: Path) -> Path | None:
@@ -106,6 +110,7 @@ def _load_run(run_dir: Path) -> _Run:
         curve = store.best_curve()
         scores = np.array(store.scores(), dtype=float)
         count = store.count()
+        member_top = member_scores(store, top) if settings.shared else {}
     finally:
         store.close()
     scene_file = _resolve(settings.scene, run_dir)
@@ -125,7 +130,7 @@ def _load_run(run_dir: Path) -> _Run:
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
                 crit_file, settings.config.output_spec(), top, curve, scores, count,
-                scene_changed)
+                scene_changed, load_member_scenes(settings, run_dir, _resolve), member_top)
 
 
 # ---------------------------------------------------------------------------- sections
@@ -284,7 +289,8 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             f'<h3>#{k} <span class="badge {badge}">{badge}</span></h3>'
             f'{img_tag(color, f"rank {k} RVM image", GALLERY_MAX_PX)}'
             f'<p>EC score <b>{rec.score:.4g}</b> <span class="muted">trial {rec.idx} '
-            f'({escape(rec.stage)})</span></p>{diff_html}'
+            f'({escape(rec.stage)})</span></p>'
+            f'{member_scores_html(r.members, r.member_top.get(rec.idx, []))}{diff_html}'
             f'<p>Export: <code>{escape(cmd)}</code></p></div>')
     return (f'<section id="gallery"><h2>Top-{len(r.top)} candidates</h2>'
             '<p class="muted">Each candidate\'s RVM image and EC score, with the ECs whose '
@@ -321,23 +327,29 @@ def _build(run_dir: Path) -> tuple[str, _Summary]:
     result, color, annotated = frame.ec, frame.color, frame.annotated
     assert annotated is not None
     badge = "pass" if result.passed else "fail"
-    header = (f"<h1>{escape(r.scene.name)}</h1>"
+    sections = SECTION_IDS if not r.members else ("members", *SECTION_IDS)
+    title = (r.scene.name if not r.members
+             else "shared: " + ", ".join(m.vehicle for m in r.members))
+    header = (f"<h1>{escape(title)}</h1>"
               f'<p>RVM tuning review — EC score <b>{result.score:.4g}</b> '
               f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
-              f"</span></p>"
+              f"</span>{' (first vehicle; all vehicles below)' if r.members else ''}</p>"
               "<nav><p>" + " · ".join(
-                  f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in SECTION_IDS)
+                  f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in sections)
               + "</p></nav>")
     if r.scene_changed:
         header += ('<p class="warn"><b>The scene file changed after this run.</b> The images and '
                    "EC values below are recomputed with the scene as it is now, so they can "
                    "differ from the scores the run stored.</p>")
+    if r.members:
+        header += members_section(r.members, r.top[0].params, r.output, r.criteria,
+                                  r.settings.aggregate or "min")
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
             + _gallery_section(r, str(run_dir), color))
-    summary = _Summary(r.scene.name, result.score, result.passed, _group_status(result),
+    summary = _Summary(title, result.score, result.passed, _group_status(result),
                        shrink(color, INDEX_THUMB_PX))
-    return page(f"RVM tuning review: {r.scene.name}", body), summary
+    return page(f"RVM tuning review: {title}", body), summary
 
 
 def _write(path: Path, text: str) -> None:

@@ -104,20 +104,29 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
 
 
 def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
-    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too)."""
+    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too);
+    for a shared run also its scenes, and each top candidate's per-scene EC scores."""
     store = open_run(run_dir)
     try:
         state = run_state(run_dir, store)
         n = store.count()
         top = store.top(top_m)
+        meta = store.meta()
+        scenes, aggregate = meta.get("scenes"), meta.get("aggregate")
+        members = {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}
     finally:
         store.close()
     total = "" if state.total is None else f" / {state.total}"
     lines = [f"{run_dir}: {state.text}, strategy {state.strategy}, {n}{total} evaluations"]
+    if isinstance(scenes, list) and scenes:
+        names = ", ".join(str(r.get("vehicle") if isinstance(r, dict) else r) for r in scenes)
+        lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their {aggregate}")
     for k, rec in enumerate(top, start=1):
         fails = rec.failing()
+        each = "" if not members[rec.idx] else "  [" + ", ".join(
+            f"{m:.4g}" for m in members[rec.idx]) + "]"
         lines.append(f"  #{k}  EC score {rec.score:.4g}  trial {rec.idx:>6} ({rec.stage})  "
-                     f"{'all pass' if not fails else 'fails ' + ','.join(fails)}")
+                     f"{'all pass' if not fails else 'fails ' + ','.join(fails)}{each}")
     return lines
 
 

@@ -24,6 +24,8 @@ from ..errors import RvmsimError
 from ..isp import IspParams
 from .config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
+from .members import (OBJECTIVE_COMBINE, Aggregate, Member, MembersScorer, MembersSolver, check_members,
+                      member_evaluators, parse_aggregate)
 from .records import StopReason, TrialRecord
 from .solve import EcSolver
 from .space import SearchSpace
@@ -33,27 +35,40 @@ from .strategies import Strategy
 if TYPE_CHECKING:
     from ..render import FisheyeImages
 
-__all__ = ["SearchOutcome", "run_search", "BatchEvaluator", "search_scene",
+__all__ = ["SearchOutcome", "run_search", "BatchEvaluator", "search_scene", "search_members",
+           "VectorScorer",
            "candidate_evaluator", "solver_for", "strategy_scorer"]
 
 
 # ---------------------------------------------------------------------------- worker pool
-_WORKER: tuple[CandidateEvaluator, SearchSpace, EcSolver | None, str] | None = None
+_WORKER: Callable[[list[np.ndarray]], ScoredBatch] | None = None
 
 
-def _init_worker(evaluator: CandidateEvaluator, space: SearchSpace,
-                 solver: EcSolver | None = None, objective: str = "log-score") -> None:
+class VectorScorer:
+    """``xs → ScoredBatch`` on one evaluator (:func:`score_vectors`); picklable, what
+    the worker processes of a one-scene search hold."""
+
+    def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace,
+                 solver: Callable[[IspParams], IspParams] | None = None,
+                 objective: str = "log-score"):
+        self.evaluator, self.space, self.solver, self.objective = (evaluator, space, solver,
+                                                                   objective)
+
+    def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
+        return score_vectors(self.evaluator, self.space, xs, self.solver, self.objective)
+
+
+def _init_worker(scorer: Callable[[list[np.ndarray]], ScoredBatch]) -> None:
     global _WORKER
     import cv2
 
     cv2.setNumThreads(1)
-    _WORKER = (evaluator, space, solver, objective)
+    _WORKER = scorer
 
 
 def _work(xs: list[np.ndarray]) -> ScoredBatch:
     assert _WORKER is not None
-    evaluator, space, solver, objective = _WORKER
-    return score_vectors(evaluator, space, xs, solver, objective)
+    return _WORKER(xs)
 
 
 def _chunks(n: int, workers: int, smallest: int = 8) -> list[tuple[int, int]]:
@@ -76,23 +91,32 @@ class BatchEvaluator:
 
     Workers are spawned (:func:`rvmsim._procs.spawn_pool`, the pool batches use too).
     ``solver`` (:func:`solver_for`) sets the solved parameters of every candidate first;
-    ``objective`` is the one the strategy maximises (:data:`rvmsim.tune.OBJECTIVES`)."""
+    ``objective`` is the one the strategy maximises (:data:`rvmsim.tune.OBJECTIVES`).
+    ``scorer`` replaces the one-evaluator scoring (``evaluator``, ``solver`` and
+    ``objective`` are then unused): a :class:`~rvmsim.tune.MembersScorer`."""
 
-    def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace, workers: int = 1,
-                 solver: EcSolver | None = None, objective: str = "log-score"):
+    def __init__(self, evaluator: CandidateEvaluator | None, space: SearchSpace,
+                 workers: int = 1, solver: Callable[[IspParams], IspParams] | None = None,
+                 objective: str = "log-score",
+                 scorer: Callable[[list[np.ndarray]], ScoredBatch] | None = None):
         self.evaluator = evaluator
         self.space = space
         self.solver = solver
         self.objective = objective
+        if scorer is None:
+            if evaluator is None:
+                raise ValueError("BatchEvaluator: give an evaluator or a scorer")
+            scorer = VectorScorer(evaluator, space, solver, objective)
+        self.scorer = scorer
         self.workers = max(1, workers)
         self.pool: ProcessPoolExecutor | None = None
         if self.workers > 1:
             self.pool = spawn_pool(self.workers, initializer=_init_worker,
-                                   initargs=(evaluator, space, solver, objective))
+                                   initargs=(scorer,))
 
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
         if self.pool is None:
-            return score_vectors(self.evaluator, self.space, xs, self.solver, self.objective)
+            return self.scorer(xs)
         try:
             parts = list(self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)]))
         except BrokenProcessPool as err:  # a worker died, or could not start (its state did
@@ -185,7 +209,8 @@ def run_search(
                     (i, stage, pj, s, o, int(ok), ej)
                     for i, pj, s, o, ok, ej in zip(indices, b.params_json, b.score, b.objective,
                                                    b.passed, b.ec_json)
-                ])
+                ], [(i, k, s, o, int(ok), ej) for i, ms in zip(indices, b.members)
+                    for k, (s, o, ok, ej) in enumerate(ms)])
                 told = list(zip(b.score, b.objective))
                 evaluated += len(xs)
             for i, (s, o) in zip(indices, told):
@@ -288,6 +313,72 @@ def search_scene(
         evaluator = candidate_evaluator(images, config, criteria)
     batch_eval = BatchEvaluator(evaluator, space, workers, solver_for(strat, evaluator),
                                 strat.objective)
+    try:
+        return run_search(strat, batch_eval, store, max_time=max_time,
+                          target_score=target_score, on_batch=on_batch)
+    finally:
+        batch_eval.close()
+
+
+def search_members(
+    members: Sequence[Member],
+    *,
+    config: TuningConfig,
+    criteria: Criteria,
+    strategy: str | Strategy,
+    store: RunStore,
+    aggregate: str | Aggregate = "min",
+    solve: str = "mean",
+    combine: str = OBJECTIVE_COMBINE,
+    seed: int = 0,
+    budget: int | None = None,
+    workers: int = 1,
+    max_time: float | None = None,
+    target_score: float | None = None,
+    on_batch: Callable[[int, float, str], None] | None = None,
+) -> SearchOutcome:
+    """Search one ISP parameter set for several members at once (shared tuning: one member
+    per vehicle; robust tuning: one per variation sample), see :mod:`rvmsim.tune.members`.
+
+    The space is the config's on the first member's camera (:func:`check_members`: every
+    member has that sensor size); with one member this is :func:`search_scene` exactly.
+    Each trial is stored with the aggregate verdicts, and each member's own in the store's
+    ``members`` table.
+
+    Parameters
+    ----------
+    members : sequence of Member
+        The label images to judge every candidate on, the first the nominal one.
+    aggregate : str or Aggregate
+        ``min`` (default) or ``quantile Q`` (:func:`parse_aggregate`).
+    solve : str
+        How the sub-solves of ``cmaes-solved`` combine (:data:`SOLVE_MODES`).
+    combine : str
+        How the ``min`` aggregate combines the members' objectives
+        (:data:`OBJECTIVE_COMBINE`: ``sum-violation`` or ``min``).
+    strategy, seed, budget, workers, max_time, target_score, on_batch
+        As in :func:`search_scene`.
+    """
+    check_members(members)
+    agg = parse_aggregate(aggregate)
+    if isinstance(strategy, Strategy):
+        strat = strategy
+    else:
+        strat = make_strategy(strategy, config.space(members[0].camera), config, seed, budget)
+    output = config.output_spec()
+    if len(members) == 1:
+        evaluator = CandidateEvaluator(members[0].labels, output, criteria)
+        batch_eval = BatchEvaluator(evaluator, strat.space, workers,
+                                    solver_for(strat, evaluator), strat.objective)
+    else:
+        evaluators = member_evaluators(members, output, criteria)
+        solver = None
+        if strat.solves:
+            solver = MembersSolver([EcSolver(ev.fisheye, output, criteria, strat.space)
+                                    for ev in evaluators], solve)
+            strat.solved = solver.names
+        scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg, combine)
+        batch_eval = BatchEvaluator(None, strat.space, workers, scorer=scorer)
     try:
         return run_search(strat, batch_eval, store, max_time=max_time,
                           target_score=target_score, on_batch=on_batch)

@@ -18,7 +18,7 @@ both), one of :data:`OBJECTIVES`:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
@@ -29,7 +29,7 @@ from .records import ec_json, params_json
 from .space import SearchSpace
 
 __all__ = ["OBJECTIVE_FLOOR", "OBJECTIVES", "PASS_WEIGHT", "MAX_VIOLATION", "ScoredBatch",
-           "score_vectors", "violations"]
+           "score_vectors", "violations", "ParamsScores", "score_params", "check_objective"]
 
 #: Floor of each EC score inside the objective's logarithm.
 OBJECTIVE_FLOOR = 1e-4
@@ -78,6 +78,8 @@ class ScoredBatch:
     passed: list[bool]
     params_json: list[str]
     ec_json: list[str]
+    #: per candidate, each member's (score, objective, passed, ec JSON): empty for one scene
+    members: list[list[tuple[float, float, bool, str]]] = field(default_factory=list)
 
 
 def score_vectors(evaluator: CandidateEvaluator, space: SearchSpace,
@@ -89,18 +91,46 @@ def score_vectors(evaluator: CandidateEvaluator, space: SearchSpace,
     (EC columns in ``evaluator.criteria.ids`` order).  ``solver`` (an
     :class:`~rvmsim.tune.EcSolver`) first sets the parameters it solves; the stored
     parameters are the solved ones.  ``objective`` is one of :data:`OBJECTIVES`."""
-    if objective not in OBJECTIVES:
-        raise ValueError(f"unknown objective {objective!r} (known: {', '.join(OBJECTIVES)})")
+    check_objective(objective)
     params = [space.params(x) for x in xs]
     if solver is not None:
         params = [solver(p) for p in params]
+    m = score_params(evaluator, params, violation=objective == "pass-first")
+    obj = m.log_score if objective == "log-score" else m.log_score - PASS_WEIGHT * m.violation
+    return ScoredBatch(m.score.tolist(), obj.tolist(), m.passed.tolist(),
+                       [params_json(p) for p in params], m.ec_json)
+
+
+def check_objective(objective: str) -> None:
+    """ValueError for a name not in :data:`OBJECTIVES`."""
+    if objective not in OBJECTIVES:
+        raise ValueError(f"unknown objective {objective!r} (known: {', '.join(OBJECTIVES)})")
+
+
+@dataclass(frozen=True)
+class ParamsScores:
+    """One evaluator's verdicts on a batch of parameter sets (n candidates): EC score,
+    log-score objective, summed range violation (:func:`violations`), all-pass, and the
+    ``ec`` column of each (:func:`rvmsim.tune.ec_json`)."""
+
+    score: np.ndarray
+    log_score: np.ndarray
+    violation: np.ndarray
+    passed: np.ndarray
+    ec_json: list[str]
+
+
+def score_params(evaluator: CandidateEvaluator, params: Sequence[IspParams], *,
+                 violation: bool = True) -> ParamsScores:
+    """Evaluate parameter sets (already solved) with ``evaluator``: the part of
+    :func:`score_vectors` that a multi-member evaluation repeats per member.  Without
+    ``violation`` the violations are not computed (zeros)."""
     ids = evaluator.criteria.ids
     values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(ids))
     b = score_batch(values, evaluator.criteria)
     ecs = [ec_json(ids, v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
                                                 b.passed.tolist())]
-    obj = b.objective(OBJECTIVE_FLOOR)
-    if objective == "pass-first":
-        obj = obj - PASS_WEIGHT * violations(values, evaluator.criteria).sum(axis=1)
-    return ScoredBatch(b.score.tolist(), obj.tolist(),
-                       b.all_passed.tolist(), [params_json(p) for p in params], ecs)
+    return ParamsScores(np.asarray(b.score, np.float64), b.objective(OBJECTIVE_FLOOR),
+                        violations(values, evaluator.criteria).sum(axis=1) if violation
+                        else np.zeros(len(params)),
+                        np.asarray(b.all_passed, bool), ecs)

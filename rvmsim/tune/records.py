@@ -19,6 +19,7 @@ from ..isp import IspParams
 from .config import TuningConfig
 
 __all__ = ["RunStatus", "StopReason", "EcOutcome", "TrialRecord", "RunSettings", "RunState",
+           "SceneRef",
            "params_json", "ec_json", "ecs_from_json", "json_default"]
 
 
@@ -75,13 +76,29 @@ class TrialRecord:
 
 
 @dataclass(frozen=True)
+class SceneRef:
+    """One scene of a shared run as recorded: its file (absolute path), its fingerprint
+    when the run started (:func:`rvmsim.render.scene_key`) and its vehicle name."""
+
+    scene: str
+    scene_key: str | None
+    vehicle: str
+
+    def as_json(self) -> dict[str, Any]:
+        return {"scene": self.scene, "scene_key": self.scene_key, "vehicle": self.vehicle}
+
+
+@dataclass(frozen=True)
 class RunSettings:
     """What a run is: everything ``--resume`` needs to continue it exactly.
 
     ``scene`` and ``criteria_file`` are the files as recorded (absolute paths);
     ``scene_key`` is the scene's fingerprint when the run started
     (:func:`rvmsim.render.scene_key`); ``budget`` the ``--budget`` given (None: the
-    config's)."""
+    config's).  A shared run (several scenes, one parameter set) records every scene in
+    ``scenes`` (the first is ``scene``) and how their scores combine in ``aggregate``
+    (:func:`rvmsim.tune.parse_aggregate`); a one-scene run has neither, and its stored
+    form is that of rvmsim before shared tuning."""
 
     scene: str
     scene_key: str | None
@@ -91,13 +108,25 @@ class RunSettings:
     budget: int | None
     criteria_file: str | None
     config: TuningConfig
+    scenes: tuple[SceneRef, ...] = ()
+    aggregate: str | None = None
+
+    @property
+    def shared(self) -> bool:
+        """Whether this is a shared run (several scenes)."""
+        return bool(self.scenes)
 
     def as_json(self) -> dict[str, Any]:
         """The settings as ``run.json`` holds them (and ``run.sqlite``'s meta table)."""
-        return {"scene": self.scene, "scene_key": self.scene_key, "vehicle": self.vehicle,
-                "strategy": self.strategy, "seed": self.seed, "budget": self.budget,
-                "criteria_file": self.criteria_file,
-                "config": self.config.model_dump(mode="json")}
+        doc: dict[str, Any] = {"scene": self.scene, "scene_key": self.scene_key,
+                               "vehicle": self.vehicle,
+                               "strategy": self.strategy, "seed": self.seed,
+                               "budget": self.budget, "criteria_file": self.criteria_file,
+                               "config": self.config.model_dump(mode="json")}
+        if self.scenes:
+            doc["scenes"] = [r.as_json() for r in self.scenes]
+            doc["aggregate"] = self.aggregate
+        return doc
 
     @classmethod
     def from_json(cls, doc: Mapping[str, Any]) -> RunSettings:
@@ -127,11 +156,21 @@ class RunSettings:
         except ValueError as err:  # pydantic's ValidationError
             raise ValueError(f"config: {err}") from None
         budget = doc.get("budget")
+        scenes = doc.get("scenes") or []
+        if not isinstance(scenes, list) or not all(isinstance(r, Mapping) for r in scenes):
+            raise ValueError(f"scenes: {str(scenes)[:40]!r} is not a list of scenes")
+        refs = tuple(SceneRef(str(text("scenes: scene", r.get("scene")) or ""),
+                              text("scenes: scene_key", r.get("scene_key")),
+                              str(text("scenes: vehicle", r.get("vehicle")) or ""))
+                     for r in scenes)
+        if any(not r.scene for r in refs):
+            raise KeyError("scenes: scene")
         return cls(str(text("scene", need("scene"))), text("scene_key", doc.get("scene_key")),
                    str(text("vehicle", doc.get("vehicle", "")) or ""),
                    str(text("strategy", need("strategy"))), whole("seed", need("seed")),
                    None if budget is None else whole("budget", budget),
-                   text("criteria_file", doc.get("criteria_file")), config)
+                   text("criteria_file", doc.get("criteria_file")), config, refs,
+                   text("aggregate", doc.get("aggregate")) if refs else None)
 
 
 @dataclass(frozen=True)

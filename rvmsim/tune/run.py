@@ -12,14 +12,17 @@ import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Sequence, Union
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from .config import TuningConfig, make_strategy
 from .folder import RUN_DB, RUN_JSON, open_run, rank_text, run_lock, run_settings
-from .loop import SearchOutcome, search_scene
+from .loop import SearchOutcome, search_members, search_scene
+from .members import parse_aggregate
 from .records import RunSettings, RunStatus
+from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
+                     write_member_results)
 from .store import RunStore
 from .strategies import DEFAULT_STRATEGY, Strategy, check_seed
 
@@ -30,6 +33,9 @@ if TYPE_CHECKING:
 
 __all__ = ["tune", "TuneResult", "write_results",
            "DISPLAY_SIZE", "summary_lines", "remove_run"]
+
+#: A scene as :func:`tune` takes it: its file, or a loaded Scene.
+SceneArg = Union[str, Path, "Scene"]
 
 #: Size of the RVM display image written for the best candidate (the ECs are measured at the
 #: tuning config's ``output`` size).
@@ -52,11 +58,12 @@ def _check_out(run_dir: Path) -> None:
         raise RvmsimError(f"{run_dir}: not a folder (a file is there); give a run folder")
 
 
-def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | Path | None,
-             strategy: str, config: TuningConfig | None, criteria: Criteria | None,
-             criteria_file: str | Path | None, seed: int, budget: int | None,
-             force: bool) -> tuple[RunSettings, Scene, Criteria]:
-    """The settings, scene and criteria of a new run in ``run_dir`` (nothing written yet:
+def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
+             scene_file: str | Path | None, strategy: str, config: TuningConfig | None,
+             criteria: Criteria | None, criteria_file: str | Path | None, seed: int,
+             budget: int | None, force: bool,
+             aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
+    """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
     every input is checked here, before anything in ``run_dir`` changes)."""
     from ..criteria import load_criteria
     from ..render import scene_key
@@ -69,11 +76,17 @@ def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | 
     if not force and (run_dir / RUN_DB).exists():
         raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it, "
                           "or --force to replace it")
+    if isinstance(scene, (list, tuple)):  # shared: one parameter set for every scene
+        agg = parse_aggregate(aggregate).text
+        scenes = load_shared_scenes(scene)
+        crit = criteria if criteria is not None else load_criteria(criteria_file)
+        return (shared_settings(scenes, strategy, seed, budget, criteria_file, config, agg),
+                [sc for _, sc in scenes], crit)
     recorded: str | Path | None
     if isinstance(scene, Scene):
         sc, recorded = scene, scene_file or scene.source
     else:
-        recorded = scene if scene is not None else scene_file
+        recorded = scene if scene is not None else scene_file  # type: ignore[assignment]
         if recorded is None:
             raise RvmsimError("tune: give a scene file, or resume a run")
         sc = load_scene(recorded)
@@ -83,10 +96,10 @@ def _new_run(run_dir: Path, scene: str | Path | Scene | None, scene_file: str | 
         strategy=strategy, seed=seed, budget=budget,
         criteria_file=None if criteria_file is None else str(Path(criteria_file).resolve()),
         config=config or TuningConfig())
-    return settings, sc, crit
+    return settings, [sc], crit
 
 
-def _resumed_run(run_dir: Path) -> tuple[RunSettings, Scene, Criteria]:
+def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scene and criteria of the run to resume in ``run_dir`` (read, not
     written), checking that its scene has not changed since."""
     from ..criteria import load_criteria
@@ -104,11 +117,14 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, Scene, Criteria]:
     finally:
         store.close()
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
+    if settings.shared:
+        parse_aggregate(settings.aggregate or "min")
+        return settings, resumed_scenes(settings), load_criteria(settings.criteria_file)
     sc = load_scene(settings.scene)
     if settings.scene_key is not None and not same_scene(settings.scene_key, sc, settings.scene):
         raise RvmsimError(f"{settings.scene}: the scene changed since this run started; "
                           "resuming would mix two scenes (start a new run)")
-    return settings, sc, load_criteria(settings.criteria_file)
+    return settings, [sc], load_criteria(settings.criteria_file)
 
 
 def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: bool) -> RunStore:
@@ -154,7 +170,7 @@ def _progress_bar(on: bool, total: int | None, vehicle: str,
 
 
 def tune(
-    scene: str | Path | Scene | None,
+    scene: SceneArg | Sequence[SceneArg] | None,
     run_dir: str | Path,
     *,
     scene_file: str | Path | None = None,
@@ -171,14 +187,21 @@ def tune(
     force: bool = False,
     progress: bool = False,
     progress_position: int = 0,
+    aggregate: str = "min",
 ) -> TuneResult:
-    """Tune the ISP for one scene; see the module docstring for what is written.
+    """Tune the ISP for one scene, or one parameter set for several (shared tuning, see
+    :mod:`rvmsim.tune.shared`); see the module docstring for what is written.
 
     Parameters
     ----------
-    scene : path or Scene
+    scene : path or Scene, or a list or tuple of them
         The scene file, or a loaded :class:`~rvmsim.scene.Scene` (then ``scene_file`` is the
-        path recorded for it, by default its ``source``).  Ignored with ``resume``.
+        path recorded for it, by default its ``source``).  Ignored with ``resume``.  A list
+        or tuple (at least two) is a shared run: the space is fitted to the first scene's
+        camera, and every scene's camera must have its sensor size.
+    aggregate : str
+        How a shared run combines the scenes' EC scores: ``min`` (default) or
+        ``quantile Q`` (:func:`rvmsim.tune.parse_aggregate`).
     criteria, criteria_file
         The criteria (default: loaded from ``criteria_file``, default the paper's); the file
         is recorded, for ``--resume`` and the report.
@@ -210,29 +233,33 @@ def tune(
     _check_out(run_dir)
     lock = run_lock(run_dir)
     lock.check_free()  # another writer: say so at once (its lock, taken below, decides)
-    settings, sc, crit = (_resumed_run(run_dir) if resume else _new_run(
+    settings, scenes, crit = (_resumed_run(run_dir) if resume else _new_run(
         run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget,
-        force))
-    cfg = settings.config
+        force, aggregate))
+    sc, cfg = scenes[0], settings.config
     # the strategy before the render: a bad config, strategy or seed fails in a moment
     strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
                           settings.seed, settings.budget)
-    images, _ = cached_render(sc, progress=progress)
+    renders = [cached_render(s, progress=progress)[0] for s in scenes]
     with lock:
         store = _writable_store(run_dir, settings, resume, force)
         try:
-            outcome = _search(store, images, settings, strat, crit, workers=workers,
+            outcome = _search(store, renders, scenes, settings, strat, crit, workers=workers,
                               max_time=max_time, target_score=target_score,
                               bar=_progress_bar(progress, strat.total(), sc.name,
                                                 progress_position))
-            write_results(run_dir, store, sc, images, cfg, crit)
+            write_results(run_dir, store, sc, renders[0], cfg, crit)
+            if settings.shared:
+                write_member_results(run_dir, store, scenes, renders, cfg, crit,
+                                     settings.aggregate or "min")
         finally:
             store.close()
     return TuneResult(run_dir, outcome, strat.total())
 
 
-def _search(store: RunStore, images: FisheyeImages, settings: RunSettings, strat: Strategy,
-            crit: Criteria, *, workers: int, max_time: float | None,
+def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[Scene],
+            settings: RunSettings, strat: Strategy, crit: Criteria, *, workers: int,
+            max_time: float | None,
             target_score: float | None,
             bar: tuple[Any, Callable[[int, float, str], None]]) -> SearchOutcome:
     """Search into ``store``, recording the run's state: running, then done, interrupted
@@ -242,9 +269,17 @@ def _search(store: RunStore, images: FisheyeImages, settings: RunSettings, strat
     store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
     progress, on_batch = bar
     try:
-        outcome = search_scene(images, config=settings.config, criteria=crit, strategy=strat,
-                               store=store, workers=workers, max_time=max_time,
-                               target_score=target_score, on_batch=on_batch)
+        if settings.shared:
+            outcome = search_members(scene_members(scenes, renders), config=settings.config,
+                                     criteria=crit, strategy=strat, store=store,
+                                     aggregate=settings.aggregate or "min", workers=workers,
+                                     max_time=max_time, target_score=target_score,
+                                     on_batch=on_batch)
+        else:
+            outcome = search_scene(renders[0], config=settings.config, criteria=crit,
+                                   strategy=strat, store=store, workers=workers,
+                                   max_time=max_time, target_score=target_score,
+                                   on_batch=on_batch)
     except KeyboardInterrupt:
         store.set_state(RunStatus.INTERRUPTED)
         raise

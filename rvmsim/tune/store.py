@@ -10,7 +10,9 @@ Tables: ``meta(key, value)`` — the run's :class:`~rvmsim.tune.RunSettings` (``
 rvmsim 0.1 have no ``format`` and their settings in ``run.json`` only, see
 :mod:`rvmsim.tune.folder`) — and ``trials(idx, stage, params, score, objective, passed,
 ec)`` where ``params`` is the JSON of all 14 ISP parameters and ``ec`` maps each EC to
-``[value, score, passed]``.
+``[value, score, passed]``; a multi-member run (shared or robust tuning) also has
+``members(idx, member, score, objective, passed, ec)``: each member's own results of a
+trial (member = its index in the run settings' scenes).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from ..isp import IspParams
 from .records import (
     RunSettings,
     RunState,
+    EcOutcome,
     RunStatus,
     StopReason,
     TrialRecord,
@@ -47,6 +50,20 @@ CREATE TABLE IF NOT EXISTS trials (
     ec TEXT NOT NULL
 );
 CREATE INDEX IF NOT EXISTS trials_score ON trials (score DESC, idx);
+"""
+
+#: Each member's own results of a multi-member run (shared or robust tuning), made with its
+#: first trials: a one-scene run has no such table.
+_MEMBERS_SCHEMA = """
+CREATE TABLE IF NOT EXISTS members (
+    idx INTEGER NOT NULL,
+    member INTEGER NOT NULL,
+    score REAL NOT NULL,
+    objective REAL NOT NULL,
+    passed INTEGER NOT NULL,
+    ec TEXT NOT NULL,
+    PRIMARY KEY (idx, member)
+);
 """
 
 
@@ -100,12 +117,16 @@ class SqliteStore:
         except sqlite3.DatabaseError as err:
             raise self._unreadable(err) from None
 
-    def write(self, sql: str, rows: Sequence[Sequence[Any]]) -> None:
-        """Run one statement for every row in one transaction; RvmsimError (one line) where
-        the database cannot be written (full disk, read-only file, junk)."""
+    def write(self, sql: str, rows: Sequence[Sequence[Any]],
+              *more: tuple[str, Sequence[Sequence[Any]]]) -> None:
+        """Run one statement for every row (and each further ``(statement, rows)``) in one
+        transaction; RvmsimError (one line) where the database cannot be written (full
+        disk, read-only file, junk)."""
         try:
             with self.db:
                 self.db.executemany(sql, rows)
+                for q, r in more:
+                    self.db.executemany(q, r)
         except sqlite3.DatabaseError as err:
             raise RvmsimError(f"{self.path}: cannot write the {self.what} database "
                               f"({err})") from None
@@ -143,15 +164,57 @@ class RunStore(SqliteStore):
 
     def __init__(self, path: str | Path, *, readonly: bool = False):
         super().__init__(path, _SCHEMA, "run", readonly=readonly, tables=("trials",))
+        self._members_table: bool | None = None
         if not readonly:
             self.db.execute("PRAGMA synchronous=NORMAL")
 
     # ------------------------------------------------------------------ trials
-    def add_rows(self, rows: list[tuple[int, str, str, float, float, int, str]]) -> None:
+    def add_rows(self, rows: list[tuple[int, str, str, float, float, int, str]],
+                 member_rows: Sequence[tuple[int, int, float, float, int, str]] = ()) -> None:
         """Write a batch of already serialised trials atomically: (idx, stage, params JSON,
-        score, objective, passed, EC JSON) each."""
+        score, objective, passed, EC JSON) each, and with them their members' results
+        (idx, member, score, objective, passed, EC JSON) in the same transaction."""
+        more: list[tuple[str, Sequence[Sequence[Any]]]] = []
+        if member_rows:
+            if not self._has_members:
+                try:
+                    self.db.executescript(_MEMBERS_SCHEMA)
+                except sqlite3.DatabaseError as err:
+                    raise self._unreadable(err) from None
+                self._has_members = True
+            more.append(("INSERT OR REPLACE INTO members (idx, member, score, objective, "
+                         "passed, ec) VALUES (?, ?, ?, ?, ?, ?)", member_rows))
         self.write("INSERT OR REPLACE INTO trials (idx, stage, params, score, objective, "
-                   "passed, ec) VALUES (?, ?, ?, ?, ?, ?, ?)", rows)
+                   "passed, ec) VALUES (?, ?, ?, ?, ?, ?, ?)", rows, *more)
+
+    @property
+    def _has_members(self) -> bool:
+        if self._members_table is None:
+            self._members_table = bool(self.rows(
+                "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'members'"))
+        return self._members_table
+
+    @_has_members.setter
+    def _has_members(self, value: bool) -> None:
+        self._members_table = value
+
+    def member_results(self, idx: int) -> list[tuple[float, float, bool, dict[str, EcOutcome]]]:
+        """Each member's (EC score, objective, passed, ECs) of trial ``idx``, in member
+        order; empty for a one-scene run (or a trial without them)."""
+        if not self._has_members:
+            return []
+        out = []
+        for member, score, objective, passed, ec in self.rows(
+                "SELECT member, score, objective, passed, ec FROM members WHERE idx = ? "
+                "ORDER BY member", (idx,)):
+            try:
+                ecs = ecs_from_json(ec)
+            except (TypeError, ValueError, AttributeError) as err:
+                raise RvmsimError(" ".join(f"{self.path}: members: trial {idx} member "
+                                           f"{member}: ec: unreadable ({err})".split())) from None
+            out.append((self._number(idx, "score", score),
+                        self._number(idx, "objective", objective), bool(passed), ecs))
+        return out
 
     def count(self) -> int:
         return int(self.rows("SELECT COUNT(*) FROM trials")[0][0])

@@ -1,0 +1,234 @@
+"""Multi-member evaluation: one candidate judged on several label images at once.
+
+A *member* is one fisheye label image with its camera: for shared tuning one per vehicle
+or variant (:func:`rvmsim.tune.tune` with several scenes), for robust tuning one per
+variation sample of one scene.  Every member is evaluated with its own
+:class:`~rvmsim.criteria.CandidateEvaluator` (in the worker processes, as for one scene),
+and the members' verdicts are combined into the one trial the run store and the strategy
+see:
+
+- **EC score** (the stored ``score``): the :class:`Aggregate` of the members' EC scores,
+  by default the minimum (a sign-off must pass on every vehicle, so the worst one is the
+  score), or a low quantile (``quantile 0.1``: a setting may lose the worst tenth).
+- **passed**: every member passes every enabled EC.
+- **ec** (the stored EC column): per EC the member that scores it worst (its value and
+  score), passed where it passes on every member, so ``failing()`` lists every EC that
+  fails on some member.  Each member's own results are stored too (the ``members`` table
+  of :class:`~rvmsim.tune.RunStore`).
+- **objective** (what the strategy maximises): for ``min``, the minimum over members of the
+  log-score minus ``PASS_WEIGHT`` times the range violations summed over *all* members
+  (:data:`OBJECTIVE_COMBINE`; every failing member keeps pulling, not only the worst); for a
+  quantile, that quantile of the members' own objectives.
+- **sub-solves** (``cmaes-solved``): each member's :class:`~rvmsim.tune.EcSolver` solves
+  the candidate and the solved parameters are the mean over members (:class:`MembersSolver`,
+  ``mean``): each pinned EC then sits in the middle of the members' spread, which leaves
+  the most margin to every member; ``first`` solves on the first (nominal) member only.
+
+With one member none of this runs: :func:`rvmsim.tune.search_scene` is the one-scene path.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Callable, Sequence
+
+import numpy as np
+
+from ..criteria import CandidateEvaluator, Criteria
+from ..errors import RvmsimError
+from ..isp import IspParams, OutputSpec
+from .objective import PASS_WEIGHT, ScoredBatch, check_objective, score_params
+from .records import params_json
+from .solve import EcSolver
+from .space import SearchSpace
+
+if TYPE_CHECKING:
+    from ..camera import FisheyeCamera
+
+__all__ = ["Member", "Aggregate", "parse_aggregate", "MembersSolver", "MembersScorer",
+           "check_members", "check_cameras", "worst_ec_json", "member_evaluators", "SOLVE_MODES", "OBJECTIVE_COMBINE", "COMBINES"]
+
+#: How the sub-solves of several members combine (:class:`MembersSolver`).
+SOLVE_MODES = ("mean", "first")
+#: How the ``min`` aggregate combines the members' pass-first objectives by default:
+#: ``sum-violation`` (min log-score − PASS_WEIGHT · Σ over members of their violations; the
+#: other choice, ``min``, is the minimum of the members' own objectives).
+OBJECTIVE_COMBINE = "sum-violation"
+#: The choices of ``combine``.
+COMBINES = ("sum-violation", "min")
+
+
+@dataclass(frozen=True)
+class Member:
+    """One label image a candidate is judged on: its name (the vehicle, or a sample's
+    label), the fisheye label image (H_i, W_i) uint8 and the camera that saw it."""
+
+    name: str
+    labels: np.ndarray
+    camera: FisheyeCamera
+
+
+@dataclass(frozen=True)
+class Aggregate:
+    """How the members' EC scores make the candidate's: ``min``, or ``quantile`` ``q``
+    (0 < q < 1; the members' score at that quantile, taken as the member value just below
+    it: ``numpy.quantile(..., method="lower")``)."""
+
+    kind: str = "min"
+    q: float = 0.0
+
+    @property
+    def text(self) -> str:
+        """As ``--aggregate`` takes it and the run settings record it."""
+        return "min" if self.kind == "min" else f"quantile {self.q:g}"
+
+    def reduce(self, values: np.ndarray) -> np.ndarray:
+        """(M, n) member values → (n,) aggregate."""
+        if self.kind == "min":
+            return values.min(axis=0)
+        return np.quantile(values, self.q, axis=0, method="lower")
+
+
+def parse_aggregate(text: str | Aggregate) -> Aggregate:
+    """``min`` or ``quantile Q`` (also ``quantile=Q``, ``qQ``) as an :class:`Aggregate`.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming ``--aggregate``.
+    """
+    if isinstance(text, Aggregate):
+        return text
+    t = str(text).strip().lower()
+    if t == "min":
+        return Aggregate()
+    m = re.fullmatch(r"(?:quantile|q)\s*[= :]?\s*([0-9.eE+-]+)", t)
+    q = None
+    if m:
+        try:
+            q = float(m.group(1))
+        except ValueError:
+            q = None
+    if q is None or not 0.0 < q < 1.0:
+        raise RvmsimError(f"--aggregate {text!r}: give min, or quantile Q with 0 < Q < 1 "
+                          "(e.g. quantile 0.1)")
+    return Aggregate("quantile", q)
+
+
+def check_members(members: Sequence[Member]) -> None:
+    """Refuse members that cannot share one search space: none, or cameras of different
+    sensor sizes (the space is fitted to the first member's camera; :func:`check_cameras`).
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the member that differs.
+    """
+    if not members:
+        raise RvmsimError("no members to evaluate on")
+    check_cameras([(m.name, m.camera) for m in members])
+
+
+def check_cameras(cameras: Sequence[tuple[str, FisheyeCamera]]) -> None:
+    """Refuse named cameras of different sensor sizes: one ISP setting is tuned for one
+    camera part, and the search space is fitted to the first camera.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the first camera that differs from the first one.
+    """
+    name0, cam0 = cameras[0]
+    for name, cam in cameras[1:]:
+        if (cam.width, cam.height) != (cam0.width, cam0.height):
+            raise RvmsimError(
+                f"{name}: camera of {cam.width}x{cam.height} px, but {name0} has "
+                f"{cam0.width}x{cam0.height} px: a shared setting needs one sensor size")
+
+
+class MembersSolver:
+    """The sub-solves for several members: each member's :class:`EcSolver` sets its
+    parameters, and ``mode`` combines them (``mean``: the mean over the members that solve
+    a parameter; ``first``: the first member's).  Picklable."""
+
+    def __init__(self, solvers: Sequence[EcSolver], mode: str = "mean"):
+        if mode not in SOLVE_MODES:
+            raise ValueError(f"unknown solve mode {mode!r} (known: {', '.join(SOLVE_MODES)})")
+        self.solvers = list(solvers) if mode == "mean" else list(solvers[:1])
+        self.mode = mode
+        names: list[str] = []
+        for s in self.solvers:
+            names += [n for n in s.names if n not in names]
+        self.names = tuple(names)
+
+    def __call__(self, params: IspParams) -> IspParams:
+        if len(self.solvers) == 1:
+            return self.solvers[0](params)
+        solved = [(s.names, s(params)) for s in self.solvers]
+        values = {}
+        for n in self.names:
+            got = [getattr(p, n) for names, p in solved if n in names]
+            values[n] = float(np.mean(got))
+        return params.replace(**values)
+
+
+def worst_ec_json(member_ecs: Sequence[str]) -> str:
+    """The trial's ``ec`` column from its members' (:func:`rvmsim.tune.ec_json` texts): per
+    EC the value and score of the member that scores it lowest (the first such), passed
+    where every member passes it."""
+    docs = [json.loads(e) for e in member_ecs]
+    out = {}
+    for ec in docs[0]:
+        cells = [d[ec] for d in docs]
+        worst = min(range(len(cells)), key=lambda k: cells[k][1])
+        out[ec] = [cells[worst][0], cells[worst][1], all(c[2] for c in cells)]
+    return json.dumps(out)
+
+
+class MembersScorer:
+    """``xs → ScoredBatch`` over several members (see the module docstring): what a
+    :class:`~rvmsim.tune.BatchEvaluator` runs in its workers for a multi-member search.
+    Picklable (each worker holds every member's evaluator)."""
+
+    def __init__(self, evaluators: Sequence[CandidateEvaluator], space: SearchSpace,
+                 solver: Callable[[IspParams], IspParams] | None = None,
+                 objective: str = "log-score", aggregate: Aggregate = Aggregate(),
+                 combine: str = OBJECTIVE_COMBINE):
+        check_objective(objective)
+        if combine not in COMBINES:
+            raise ValueError(f"unknown combine {combine!r} (known: {', '.join(COMBINES)})")
+        self.evaluators = list(evaluators)
+        self.space = space
+        self.solver = solver
+        self.objective = objective
+        self.aggregate = aggregate
+        self.combine = combine
+
+    def __call__(self, xs: Sequence[np.ndarray]) -> ScoredBatch:
+        params = [self.space.params(x) for x in xs]
+        if self.solver is not None:
+            params = [self.solver(p) for p in params]
+        per = [score_params(ev, params) for ev in self.evaluators]
+        weight = PASS_WEIGHT if self.objective == "pass-first" else 0.0
+        member_obj = np.array([m.log_score - weight * m.violation for m in per])
+        score = self.aggregate.reduce(np.array([m.score for m in per]))
+        if self.aggregate.kind == "min" and self.combine == "sum-violation":
+            objective = (np.array([m.log_score for m in per]).min(axis=0)
+                         - weight * np.array([m.violation for m in per]).sum(axis=0))
+        else:
+            objective = self.aggregate.reduce(member_obj)
+        passed = np.asarray(np.array([m.passed for m in per]).all(axis=0))
+        members = [[(float(m.score[i]), float(member_obj[k, i]), bool(m.passed[i]),
+                     m.ec_json[i]) for k, m in enumerate(per)] for i in range(len(params))]
+        return ScoredBatch(score.tolist(), objective.tolist(), passed.tolist(),
+                           [params_json(p) for p in params],
+                           [worst_ec_json([row[3] for row in r]) for r in members], members)
+
+
+def member_evaluators(members: Sequence[Member], output: OutputSpec,
+                      criteria: Criteria) -> list[CandidateEvaluator]:
+    """One :class:`CandidateEvaluator` per member on the run's RVM ``output`` and
+    ``criteria``."""
+    return [CandidateEvaluator(m.labels, output, criteria) for m in members]

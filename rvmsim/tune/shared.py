@@ -1,0 +1,157 @@
+"""Shared tuning: one ISP parameter set for several vehicles or variants (``rvmsim tune
+SCENE1 SCENE2 … --shared``).
+
+Every scene is a member (:mod:`rvmsim.tune.members`) of the run: a candidate's EC score is
+the minimum of the scenes' (or a low quantile, ``--aggregate``), and it passes where it
+passes on every scene.  The search space is the tuning config's on the **first** scene's
+camera (RAD and the shifts fitted to it, as for a one-scene run); the scenes must share its
+sensor size (one ISP setting is one camera part), else a one-line error.  The default
+space's ranges (±60 px of H shift, ±160 px of V shift at 1280 px, RAD ×0.55…1.45) cover
+the principal-point and focal-length spread of the bundled vehicles' cameras.
+
+The run settings record every scene with its fingerprint (:class:`~rvmsim.tune.SceneRef`);
+``--resume`` checks each.  The results are those of a one-scene run for the first scene
+(``best/`` holds its images) plus ``best/members.json`` and ``best/ec_table.txt`` with every
+scene's EC results.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Sequence
+
+from ..errors import RvmsimError
+from .config import TuningConfig
+from .members import Member, check_cameras
+from .records import RunSettings, SceneRef
+
+if TYPE_CHECKING:
+    from ..criteria import Criteria
+    from ..render import FisheyeImages
+    from ..scene import Scene
+    from .store import RunStore
+
+__all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "resumed_scenes", "scene_members",
+           "write_member_results"]
+
+
+def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
+                         resume: bool) -> None:
+    """``rvmsim tune``'s scene arguments against its flags (``--shared``, ``--aggregate``,
+    ``--resume``).
+
+    Raises
+    ------
+    RvmsimError
+        One line for a bad combination.
+    """
+    if resume:
+        if shared or n_scenes > 1:
+            raise RvmsimError("--resume: give no scenes and no --shared (a run resumes with "
+                              "its own scenes, recorded in its store)")
+        return
+    if not n_scenes:
+        raise RvmsimError("tune: give a SCENE file, or --resume RUN")
+    if shared and n_scenes < 2:
+        raise RvmsimError(f"--shared: give at least two scenes (got {n_scenes}); tune one "
+                          "scene without --shared")
+    if not shared and n_scenes > 1:
+        raise RvmsimError(f"tune: {n_scenes} scenes given: add --shared to tune one "
+                          "parameter set for all, or use rvmsim batch to tune each")
+    if aggregate is not None and not shared:
+        raise RvmsimError("--aggregate: only with --shared (several scenes)")
+
+
+def load_shared_scenes(scenes: Sequence[str | Path | Scene]) -> list[tuple[str, Scene]]:
+    """The scenes of a shared run as (recorded file, Scene): at least two, with cameras of
+    one sensor size.
+
+    Raises
+    ------
+    RvmsimError
+        One line: fewer than two scenes, a bad scene file, or cameras that differ.
+    """
+    from ..scene import Scene, load_scene
+
+    if len(scenes) < 2:
+        raise RvmsimError(f"--shared: give at least two scenes (got {len(scenes)}); tune one "
+                          "scene without --shared")
+    out = []
+    for s in scenes:
+        if isinstance(s, Scene):
+            out.append((str(s.source or s.name), s))
+        else:
+            out.append((str(s), load_scene(s)))
+    check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in out])
+    return out
+
+
+def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: int,
+                    budget: int | None, criteria_file: str | Path | None,
+                    config: TuningConfig | None, aggregate: str) -> RunSettings:
+    """The settings of a new shared run (the first scene is also ``scene``)."""
+    from ..render import scene_key
+
+    refs = tuple(SceneRef(str(Path(rec).resolve()), scene_key(sc), sc.name)
+                 for rec, sc in scenes)
+    return RunSettings(
+        scene=refs[0].scene, scene_key=refs[0].scene_key, vehicle=refs[0].vehicle,
+        strategy=strategy, seed=seed, budget=budget,
+        criteria_file=None if criteria_file is None else str(Path(criteria_file).resolve()),
+        config=config or TuningConfig(), scenes=refs, aggregate=aggregate)
+
+
+def resumed_scenes(settings: RunSettings) -> list[Scene]:
+    """The scenes of a shared run to resume, each checked against its fingerprint.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the scene that changed (or cannot be loaded).
+    """
+    from ..render import same_scene
+    from ..scene import load_scene
+
+    out = []
+    for ref in settings.scenes:
+        sc = load_scene(ref.scene)
+        if ref.scene_key is not None and not same_scene(ref.scene_key, sc, ref.scene):
+            raise RvmsimError(f"{ref.scene}: the scene changed since this run started; "
+                              "resuming would mix two scenes (start a new run)")
+        out.append(sc)
+    check_cameras([(f"{ref.scene} ({sc.name})", sc.fisheye_camera())
+                   for ref, sc in zip(settings.scenes, out)])
+    return out
+
+
+def scene_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages]) -> list[Member]:
+    """One member per scene: its vehicle name, label image and camera."""
+    return [Member(sc.name, im.labels, im.camera) for sc, im in zip(scenes, renders)]
+
+
+def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene],
+                         renders: Sequence[FisheyeImages], config: TuningConfig,
+                         criteria: Criteria, aggregate: str) -> None:
+    """``best/members.json`` (each scene's EC results under the best parameters, and the
+    aggregate) and ``best/ec_table.txt`` (each scene's EC table under its vehicle name)."""
+    from ..pipeline import evaluate_params
+
+    top = store.top(1)
+    if not top:
+        return
+    best = top[0]
+    out = config.output_spec()
+    docs, tables = [], []
+    for sc, im in zip(scenes, renders):
+        ec = evaluate_params(im, best.params, out, criteria, annotate=False).ec
+        docs.append({"vehicle": sc.name, "scene": sc.source, **ec.as_dict()})
+        tables.append(f"{sc.name}:\n{ec.table()}")
+    (run_dir / "best").mkdir(parents=True, exist_ok=True)
+    (run_dir / "best" / "members.json").write_text(json.dumps(
+        {"trial": best.idx, "aggregate": aggregate, "ec_score": best.score,
+         "passed": best.passed, "members": docs}, indent=2))
+    (run_dir / "best" / "ec_table.txt").write_text(
+        f"shared by {len(scenes)} scenes, EC score ({aggregate}) {best.score:.4g}, "
+        f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}\n\n"
+        + "\n\n".join(tables) + "\n")

@@ -1,0 +1,211 @@
+"""Shared tuning (`rvmsim tune SCENE1 SCENE2 --shared`): one setting that passes on two
+vehicles where each one's own optimum fails the other; stored and resumable like any run;
+status, select and report on it (small real renders, real searches)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from html.parser import HTMLParser
+
+import pytest
+import yaml
+
+from rvmsim.criteria import default_criteria
+from rvmsim.errors import RvmsimError
+from rvmsim.pipeline import evaluate_params
+from rvmsim.render import cached_render
+from rvmsim.report import write_report
+from rvmsim.scene import load_scene
+from rvmsim.tune import (RunStore, TuningConfig, rank_params_text, status_lines, tune)
+
+from .common import small_scene_file
+
+CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
+
+
+@pytest.fixture(scope="module")
+def scenes(cache, tmp_path_factory):
+    """Vehicles E and B at 320×240 px, as scene files."""
+    folder = tmp_path_factory.mktemp("scenes")
+    return [small_scene_file(letter, folder) for letter in "eb"]
+
+
+def verdicts(params, scene_files):
+    """Whether every EC passes on each scene, measured with the real evaluator."""
+    out = []
+    for f in scene_files:
+        images, _ = cached_render(load_scene(f))
+        frame = evaluate_params(images, params, TuningConfig.model_validate(CONFIG).output_spec(),
+                                default_criteria(), annotate=False)
+        out.append(frame.ec.passed)
+    return out
+
+
+@pytest.fixture(scope="module")
+def shared_run(scenes, tmp_path_factory):
+    run = tmp_path_factory.mktemp("runs") / "shared"
+    res = tune(list(scenes), run, config=TuningConfig.model_validate(CONFIG), budget=1000)
+    return run, res
+
+
+def test_shared_tuning_passes_both_where_each_alone_fails_the_other(scenes, shared_run,
+                                                                     tmp_path):
+    cfg = TuningConfig.model_validate(CONFIG)
+    alone = [tune(s, tmp_path / s.stem, config=cfg, budget=1000).outcome.best for s in scenes]
+    # each vehicle's own optimum passes on it and fails on the other
+    assert verdicts(alone[0].params, scenes) == [True, False]
+    assert verdicts(alone[1].params, scenes) == [False, True]
+    run, res = shared_run
+    best = res.outcome.best
+    assert verdicts(best.params, scenes) == [True, True]
+    assert best.passed
+    doc = json.loads((run / "best" / "members.json").read_text())
+    assert [m["vehicle"] for m in doc["members"]] == [load_scene(s).name for s in scenes]
+    assert doc["ec_score"] == pytest.approx(min(m["ec_score"] for m in doc["members"]))
+
+
+def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, shared_run,
+                                                                   tmp_path):
+    run, _ = shared_run
+    store = RunStore(run / "run.sqlite", readonly=True)
+    s = store.settings()
+    store.close()
+    assert s is not None and s.shared and s.aggregate == "min"
+    assert [r.scene for r in s.scenes] == [str(f.resolve()) for f in scenes]
+    assert s.scene == s.scenes[0].scene
+    assert json.loads((run / "run.json").read_text())["scenes"][1]["vehicle"] == \
+        load_scene(scenes[1]).name
+    # status and select read it
+    lines = status_lines(run)
+    assert "shared by 2 scenes" in lines[1]
+    store = RunStore(run / "run.sqlite", readonly=True)
+    best = store.top(1)[0]
+    each = [m[0] for m in store.member_results(best.idx)]
+    store.close()
+    assert lines[2].endswith("[" + ", ".join(f"{m:.4g}" for m in each) + "]")
+    assert "rank 1" in rank_params_text(run)
+    # a changed second scene: resume refuses, naming it
+    copy = tmp_path / "copy"
+    folder = tmp_path / "scenes"
+    folder.mkdir()
+    files = [small_scene_file(letter, folder) for letter in "eb"]
+    tune(files, copy, config=TuningConfig.model_validate(CONFIG), budget=40)
+    doc = yaml.safe_load(files[1].read_text())
+    doc["vehicle"]["bumper"]["top"] = 0.8
+    files[1].write_text(yaml.safe_dump(doc))
+    with pytest.raises(RvmsimError, match="vehicle_b.yaml: the scene changed"):
+        tune(None, copy, resume=True)
+
+
+class _Rows(HTMLParser):
+    """The rows of the report's members table: their cell texts."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.rows: list[list[str]] = []
+        self.section = False
+        self.cell: list[str] | None = None
+        self.scores = 0
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "section":
+            self.section = a.get("id") == "members"
+        if self.section and tag == "tr" and a.get("class") == "member":
+            self.rows.append([])
+        if self.section and tag == "td" and self.rows:
+            self.cell = []
+        if tag == "img" and self.section and self.rows:
+            self.rows[-1].append("<img>")
+        if tag == "ul" and a.get("class") == "member-scores":
+            self.scores += 1
+
+    def handle_data(self, data):
+        if self.cell is not None:
+            self.cell.append(data)
+
+    def handle_endtag(self, tag):
+        if tag == "td" and self.cell is not None:
+            self.rows[-1].append(" ".join(self.cell).strip())
+            self.cell = None
+        if tag == "section":
+            self.section = False
+
+
+def test_the_report_has_a_row_per_vehicle(scenes, shared_run, tmp_path):
+    run, res = shared_run
+    html = write_report(run, tmp_path / "report.html").read_text()
+    p = _Rows()
+    p.feed(html)
+    names = [load_scene(s).name for s in scenes]
+    assert len(p.rows) == 2
+    for row, name, ok in zip(p.rows, names, verdicts(res.outcome.best.params, scenes)):
+        assert row[0].startswith(name)
+        assert "<img>" in row
+        score, *cells = [c for c in row[row.index("<img>") + 1:] if c]  # after the thumbnail
+        assert float(score) > 0
+        assert len(cells) == 11 and (all(c == "pass" for c in cells) == ok)
+    # every top-M card shows the vehicles' scores
+    store = RunStore(run / "run.sqlite", readonly=True)
+    assert p.scores == len(store.top(TuningConfig.model_validate(CONFIG).top_m))
+    store.close()
+
+
+def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_path):
+    env = {**os.environ, "PYTHONPATH": os.environ.get("PYTHONPATH", "")}
+    cfg = tmp_path / "tune.yaml"
+    cfg.write_text(yaml.safe_dump({**CONFIG, "cmaes_solved": {"budget": 3000}}))
+
+    def cmd(out, *extra):
+        if extra:
+            return [sys.executable, "-m", "rvmsim", "tune", *extra, "--no-progress",
+                    "--workers", "1"]
+        return [sys.executable, "-m", "rvmsim", "tune", *map(str, scenes), "--shared",
+                "--out", str(out), "--config", str(cfg), "--no-progress", "--workers", "1"]
+
+    clean = subprocess.run(cmd(tmp_path / "clean"), env=env, capture_output=True, text=True,
+                           timeout=600)
+    assert clean.returncode == 0, clean.stderr
+    run = tmp_path / "killed"
+    proc = subprocess.Popen(cmd(run), env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    db = run / "run.sqlite"
+    deadline = time.time() + 300
+    while time.time() < deadline:
+        if db.exists():
+            try:
+                if sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0] >= 200:
+                    break
+            except sqlite3.Error:
+                pass  # not made yet
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    con = sqlite3.connect(db)
+    stored = con.execute("SELECT COUNT(*) FROM trials").fetchone()[0]
+    members = con.execute("SELECT COUNT(*) FROM members").fetchone()[0]
+    con.close()
+    assert 200 <= stored < 3000, stored
+    assert members == 2 * stored  # each trial's members written with it
+    resumed = subprocess.run(cmd(None, "--resume", str(run)), env=env, capture_output=True,
+                             text=True, timeout=600)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "replayed" in resumed.stdout
+
+    def content(path):
+        con = sqlite3.connect(path / "run.sqlite")
+        out = (con.execute("SELECT idx, params, score, objective, passed, ec FROM trials "
+                           "ORDER BY idx").fetchall(),
+               con.execute("SELECT * FROM members ORDER BY idx, member").fetchall())
+        con.close()
+        return out
+
+    assert content(run) == content(tmp_path / "clean")
+    assert (run / "best" / "members.json").read_text() == \
+        (tmp_path / "clean" / "best" / "members.json").read_text()
