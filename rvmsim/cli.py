@@ -170,6 +170,13 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
               "scene's EC score is maximised, every scene must pass).")
 @click.option("--aggregate", default=None, metavar="min|quantile Q", help="With --shared: "
               "the EC score is the scenes' minimum (default) or this quantile of them.")
+@click.option("--robust", is_flag=True, help="Judge every candidate on production variation "
+              "samples too (the scene's variation section, or --variation): its EC score is "
+              "the worst sample's.")
+@click.option("--samples", type=Integer(1, 256), default=None,
+              help="With --robust: variation samples per scene [default: 16].")
+@click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
+              help="With --robust: a variation file instead of the scene's section.")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
               default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
@@ -190,15 +197,17 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
-         strategy: str, config_file: Path | None, criteria_file: Path | None, seed: int,
+         robust: bool, samples: int | None, variation_file: Path | None, strategy: str, config_file: Path | None, criteria_file: Path | None, seed: int,
          workers: int, budget: int | None, max_time: float | None, target_score: float | None,
          resume_dir: Path | None, force: bool, progress: bool) -> None:
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared), or --resume RUN."""
     from .tune import check_tune_arguments, load_tuning_config, summary_lines
+    from .tune.robust import DEFAULT_SAMPLES
     from .tune import tune as run_tune
 
     try:
-        check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None)
+        check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None, robust,
+                             samples, variation_file)
         if resume_dir is not None:
             result = run_tune(None, resume_dir, resume=True, workers=workers, max_time=max_time,
                               target_score=target_score, progress=progress)
@@ -207,6 +216,8 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
                               out or Path("runs") / "+".join(s.stem for s in scenes),
                               config=load_tuning_config(config_file), strategy=strategy,
                               aggregate=aggregate or "min", force=force, seed=seed,
+                              robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
+                              variation_file=variation_file,
                               criteria_file=criteria_file, workers=workers, budget=budget,
                               max_time=max_time, target_score=target_score, progress=progress)
         lines = summary_lines(result)

@@ -110,11 +110,22 @@ class RunSettings:
     config: TuningConfig
     scenes: tuple[SceneRef, ...] = ()
     aggregate: str | None = None
+    #: A robust run: the variation samples per scene (None: not robust), drawn with
+    #: ``seed`` from ``variation_file`` (None: each scene's own ``variation`` section).
+    robust_samples: int | None = None
+    variation_file: str | None = None
+    #: Fingerprint of the variations the samples were drawn from (``--resume`` checks it).
+    variation_key: str | None = None
 
     @property
     def shared(self) -> bool:
         """Whether this is a shared run (several scenes)."""
         return bool(self.scenes)
+
+    @property
+    def robust(self) -> bool:
+        """Whether this is a robust run (judged on variation samples)."""
+        return self.robust_samples is not None
 
     def as_json(self) -> dict[str, Any]:
         """The settings as ``run.json`` holds them (and ``run.sqlite``'s meta table)."""
@@ -125,6 +136,11 @@ class RunSettings:
                                "config": self.config.model_dump(mode="json")}
         if self.scenes:
             doc["scenes"] = [r.as_json() for r in self.scenes]
+            doc["aggregate"] = self.aggregate
+        if self.robust_samples is not None:
+            doc["robust"] = {"samples": self.robust_samples,
+                             "variation_file": self.variation_file,
+                             "variation_key": self.variation_key}
             doc["aggregate"] = self.aggregate
         return doc
 
@@ -165,12 +181,23 @@ class RunSettings:
                      for r in scenes)
         if any(not r.scene for r in refs):
             raise KeyError("scenes: scene")
+        robust = doc.get("robust")
+        if robust is not None and not isinstance(robust, Mapping):
+            raise ValueError(f"robust: {str(robust)[:40]!r} is not an object")
+        samples = None if robust is None else whole("robust: samples", robust.get("samples"))
+        if samples is not None and samples < 1:
+            raise ValueError(f"robust: samples: {samples} is not at least 1")
         return cls(str(text("scene", need("scene"))), text("scene_key", doc.get("scene_key")),
                    str(text("vehicle", doc.get("vehicle", "")) or ""),
                    str(text("strategy", need("strategy"))), whole("seed", need("seed")),
                    None if budget is None else whole("budget", budget),
                    text("criteria_file", doc.get("criteria_file")), config, refs,
-                   text("aggregate", doc.get("aggregate")) if refs else None)
+                   text("aggregate", doc.get("aggregate")) if refs or robust else None,
+                   samples,
+                   None if robust is None else text("robust: variation_file",
+                                                    robust.get("variation_file")),
+                   None if robust is None else text("robust: variation_key",
+                                                    robust.get("variation_key")))
 
 
 @dataclass(frozen=True)

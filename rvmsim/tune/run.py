@@ -19,7 +19,9 @@ from ..isp import OutputSpec, params_to_dict
 from .config import TuningConfig, make_strategy
 from .folder import RUN_DB, RUN_JSON, open_run, rank_text, run_lock, run_settings
 from .loop import SearchOutcome, search_members, search_scene
-from .members import parse_aggregate
+from .members import Member, parse_aggregate
+from .robust import (check_samples, robust_members, run_variations, variation_key,
+                     write_robust_results)
 from .records import RunSettings, RunStatus
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
@@ -61,8 +63,9 @@ def _check_out(run_dir: Path) -> None:
 def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
              scene_file: str | Path | None, strategy: str, config: TuningConfig | None,
              criteria: Criteria | None, criteria_file: str | Path | None, seed: int,
-             budget: int | None, force: bool,
-             aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
+             budget: int | None, force: bool, aggregate: str,
+             robust: tuple[int, str | None] | None = None
+             ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
     every input is checked here, before anything in ``run_dir`` changes)."""
     from ..criteria import load_criteria
@@ -80,7 +83,8 @@ def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
         agg = parse_aggregate(aggregate).text
         scenes = load_shared_scenes(scene)
         crit = criteria if criteria is not None else load_criteria(criteria_file)
-        return (shared_settings(scenes, strategy, seed, budget, criteria_file, config, agg),
+        settings = shared_settings(scenes, strategy, seed, budget, criteria_file, config, agg)
+        return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg),
                 [sc for _, sc in scenes], crit)
     recorded: str | Path | None
     if isinstance(scene, Scene):
@@ -96,7 +100,23 @@ def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
         strategy=strategy, seed=seed, budget=budget,
         criteria_file=None if criteria_file is None else str(Path(criteria_file).resolve()),
         config=config or TuningConfig())
-    return settings, [sc], crit
+    return _robust_settings(settings, [sc], robust, parse_aggregate(aggregate).text), [sc], crit
+
+
+def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
+                     robust: tuple[int, str | None] | None, aggregate: str) -> RunSettings:
+    """``settings`` made robust (``robust`` = (samples, variation file or None)), with the
+    variations checked and fingerprinted; as they are without ``robust``."""
+    import dataclasses
+
+    if robust is None:
+        return settings
+    samples, variation_file = robust
+    check_samples(samples)
+    vfile = None if variation_file is None else str(Path(variation_file).resolve())
+    key = variation_key(run_variations(scenes, vfile))
+    return dataclasses.replace(settings, robust_samples=samples, variation_file=vfile,
+                               variation_key=key, aggregate=aggregate)
 
 
 def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
@@ -119,12 +139,20 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
     if settings.shared:
         parse_aggregate(settings.aggregate or "min")
-        return settings, resumed_scenes(settings), load_criteria(settings.criteria_file)
-    sc = load_scene(settings.scene)
-    if settings.scene_key is not None and not same_scene(settings.scene_key, sc, settings.scene):
-        raise RvmsimError(f"{settings.scene}: the scene changed since this run started; "
-                          "resuming would mix two scenes (start a new run)")
-    return settings, [sc], load_criteria(settings.criteria_file)
+        scenes = resumed_scenes(settings)
+    else:
+        sc = load_scene(settings.scene)
+        if settings.scene_key is not None and not same_scene(settings.scene_key, sc,
+                                                             settings.scene):
+            raise RvmsimError(f"{settings.scene}: the scene changed since this run started; "
+                              "resuming would mix two scenes (start a new run)")
+        scenes = [sc]
+    if settings.robust and variation_key(run_variations(scenes, settings.variation_file)) \
+            != settings.variation_key:
+        raise RvmsimError(f"{settings.variation_file or settings.scene}: the variation changed "
+                          "since this run started; resuming would mix two sample sets "
+                          "(start a new run)")
+    return settings, scenes, load_criteria(settings.criteria_file)
 
 
 def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: bool) -> RunStore:
@@ -188,6 +216,8 @@ def tune(
     progress: bool = False,
     progress_position: int = 0,
     aggregate: str = "min",
+    robust_samples: int | None = None,
+    variation_file: str | Path | None = None,
 ) -> TuneResult:
     """Tune the ISP for one scene, or one parameter set for several (shared tuning, see
     :mod:`rvmsim.tune.shared`); see the module docstring for what is written.
@@ -200,8 +230,13 @@ def tune(
         or tuple (at least two) is a shared run: the space is fitted to the first scene's
         camera, and every scene's camera must have its sensor size.
     aggregate : str
-        How a shared run combines the scenes' EC scores: ``min`` (default) or
+        How a shared or robust run combines its members' EC scores: ``min`` (default) or
         ``quantile Q`` (:func:`rvmsim.tune.parse_aggregate`).
+    robust_samples : int, optional
+        A robust run (:mod:`rvmsim.tune.robust`): judge every candidate on each scene's
+        nominal image and this many variation samples of it (``--robust --samples K``).
+    variation_file : path, optional
+        The variation to draw them from (default: each scene's ``variation`` section).
     criteria, criteria_file
         The criteria (default: loaded from ``criteria_file``, default the paper's); the file
         is recorded, for ``--resume`` and the report.
@@ -235,16 +270,20 @@ def tune(
     lock.check_free()  # another writer: say so at once (its lock, taken below, decides)
     settings, scenes, crit = (_resumed_run(run_dir) if resume else _new_run(
         run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget,
-        force, aggregate))
+        force, aggregate, None if robust_samples is None else (
+            robust_samples, None if variation_file is None else str(variation_file))))
     sc, cfg = scenes[0], settings.config
     # the strategy before the render: a bad config, strategy or seed fails in a moment
     strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
                           settings.seed, settings.budget)
     renders = [cached_render(s, progress=progress)[0] for s in scenes]
+    members = (robust_members(scenes, renders, settings, progress=progress) if settings.robust
+               else None)
     with lock:
         store = _writable_store(run_dir, settings, resume, force)
         try:
-            outcome = _search(store, renders, scenes, settings, strat, crit, workers=workers,
+            outcome = _search(store, renders, scenes, settings, strat, crit, members,
+                              workers=workers,
                               max_time=max_time, target_score=target_score,
                               bar=_progress_bar(progress, strat.total(), sc.name,
                                                 progress_position))
@@ -252,13 +291,15 @@ def tune(
             if settings.shared:
                 write_member_results(run_dir, store, scenes, renders, cfg, crit,
                                      settings.aggregate or "min")
+            write_robust_results(run_dir, store, settings, len(scenes))
         finally:
             store.close()
     return TuneResult(run_dir, outcome, strat.total())
 
 
 def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[Scene],
-            settings: RunSettings, strat: Strategy, crit: Criteria, *, workers: int,
+            settings: RunSettings, strat: Strategy, crit: Criteria,
+            members: Sequence[Member] | None, *, workers: int,
             max_time: float | None,
             target_score: float | None,
             bar: tuple[Any, Callable[[int, float, str], None]]) -> SearchOutcome:
@@ -269,8 +310,9 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
     store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
     progress, on_batch = bar
     try:
-        if settings.shared:
-            outcome = search_members(scene_members(scenes, renders), config=settings.config,
+        if settings.shared or members is not None:
+            outcome = search_members(members or scene_members(scenes, renders),
+                                     config=settings.config,
                                      criteria=crit, strategy=strat, store=store,
                                      aggregate=settings.aggregate or "min", workers=workers,
                                      max_time=max_time, target_score=target_score,

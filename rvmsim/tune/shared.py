@@ -37,7 +37,8 @@ __all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "res
 
 
 def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
-                         resume: bool) -> None:
+                         resume: bool, robust: bool = False, samples: int | None = None,
+                         variation: object = None) -> None:
     """``rvmsim tune``'s scene arguments against its flags (``--shared``, ``--aggregate``,
     ``--resume``).
 
@@ -46,7 +47,13 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
     RvmsimError
         One line for a bad combination.
     """
+    if not robust and (samples is not None or variation is not None):
+        raise RvmsimError(f"--{'samples' if samples is not None else 'variation'}: only with "
+                          "--robust (tune on production variation samples)")
     if resume:
+        if robust:
+            raise RvmsimError("--resume: give no --robust (a run resumes with its own "
+                              "samples, recorded in its store)")
         if shared or n_scenes > 1:
             raise RvmsimError("--resume: give no scenes and no --shared (a run resumes with "
                               "its own scenes, recorded in its store)")
@@ -59,8 +66,8 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
     if not shared and n_scenes > 1:
         raise RvmsimError(f"tune: {n_scenes} scenes given: add --shared to tune one "
                           "parameter set for all, or use rvmsim batch to tune each")
-    if aggregate is not None and not shared:
-        raise RvmsimError("--aggregate: only with --shared (several scenes)")
+    if aggregate is not None and not (shared or robust):
+        raise RvmsimError("--aggregate: only with --shared (several scenes) or --robust")
 
 
 def load_shared_scenes(scenes: Sequence[str | Path | Scene]) -> list[tuple[str, Scene]]:

@@ -1,0 +1,142 @@
+"""Robust tuning: one ISP setting judged on production variation (``rvmsim tune SCENE
+--robust [--samples K] [--variation FILE]``).
+
+Every scene of the run contributes its nominal label image and the label images of ``K``
+variation samples (:func:`rvmsim.robust.draw_samples` with the run's seed, rotations
+re-folded from the nominal cube, positions and load states rendered once and cached:
+:func:`rvmsim.robust.sample_images`) as members of the run (:mod:`rvmsim.tune.members`).
+A candidate's stored EC score is the **minimum** over them, and it passes where it passes on
+every one: the sign-off question is whether *every* car passes, and a low quantile would let
+a systematic failure on one tolerance corner through.  The strategies are told the members'
+combined pass-first objective (the sum of every member's violations, then the worst
+log-score), which keeps a slope toward passing on the failing samples.  A quantile is
+available (``--aggregate 'quantile 0.1'``).
+
+Resuming draws the same samples again (they are a function of the variation, ``K`` and the
+seed), so a resumed run judges the same members.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Sequence
+
+from ..errors import RvmsimError
+from .members import Member
+
+if TYPE_CHECKING:
+    from ..render import FisheyeImages
+    from ..robust import Variation
+    from ..scene import Scene
+    from .records import RunSettings
+    from .store import RunStore
+
+__all__ = ["DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
+           "robust_members", "check_samples",
+           "robust_summary", "write_robust_results"]
+
+#: ``--samples`` when not given.
+DEFAULT_SAMPLES = 16
+#: The most samples a robust run takes per scene (each costs one evaluation per candidate).
+MAX_SAMPLES = 256
+
+
+def run_variations(scenes: Sequence[Scene], variation_file: str | None) -> list[Variation]:
+    """Each scene's variation: the file's for all (``--variation``), else the scene's own
+    ``variation`` section.
+
+    Raises
+    ------
+    RvmsimError
+        One line: a bad variation file, or a scene without a variation section.
+    """
+    from ..robust import load_variation, variation_from_scene
+
+    if variation_file is not None:
+        v = load_variation(variation_file)
+        return [v] * len(scenes)
+    out = []
+    for sc in scenes:
+        if getattr(sc, "variation", None) is None:
+            raise RvmsimError(f"{sc.source}: --robust: the scene has no variation section; "
+                              "add one (docs/robustness.md) or give --variation FILE")
+        out.append(variation_from_scene(sc))
+    return out
+
+
+def variation_key(variations: Sequence[Variation]) -> str:
+    """A fingerprint of the variations (every axis, load state and weight; not where they
+    were read from)."""
+    import dataclasses
+    import hashlib
+
+    docs = []
+    for v in variations:
+        d = dataclasses.asdict(v)
+        d.pop("source", None)
+        docs.append(d)
+    return hashlib.sha256(json.dumps(docs, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
+                   settings: RunSettings, *, progress: bool = False) -> list[Member]:
+    """The members of a robust run: per scene its nominal image, then its samples'."""
+    from ..robust import draw_samples, sample_images
+
+    k = settings.robust_samples
+    if k is None:
+        raise ValueError("not a robust run")
+    out: list[Member] = []
+    for sc, im, var in zip(scenes, renders, run_variations(scenes, settings.variation_file)):
+        out.append(Member(f"{sc.name} nominal", im.labels, im.camera))
+        samples = draw_samples(var, k, settings.seed)
+        for i, s_im in enumerate(sample_images(sc, samples, progress=progress, color=False)):
+            out.append(Member(f"{sc.name} sample {i + 1}", s_im.labels, s_im.camera))
+    return out
+
+
+def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
+                   ) -> dict[str, Any] | None:
+    """Nominal score(s), robust (aggregate) score and yield over the samples of trial
+    ``idx``, from its stored member results (None when the store has none)."""
+    from ..robust import yield_estimate
+
+    results = store.member_results(idx)
+    if not results:
+        return None
+    per = 1 + samples
+    nominal = [results[j * per][0] for j in range(n_scenes)]
+    passed = [bool(results[j * per + 1 + i][2]) for j in range(n_scenes)
+              for i in range(samples)]
+    import numpy as np
+
+    y = yield_estimate(np.array(passed))
+    return {"nominal_score": min(nominal), "nominal_scores": nominal,
+            "nominal_passed": all(bool(results[j * per][2]) for j in range(n_scenes)),
+            "yield": y.yield_, "yield_ci": list(y.ci), "samples": len(passed)}
+
+
+def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
+                         n_scenes: int) -> None:
+    """``best/robust.json``: the top-M's nominal score, robust score and sample yield."""
+    if settings.robust_samples is None:
+        return
+    rows = []
+    for rank, rec in enumerate(store.top(settings.config.top_m), 1):
+        s = robust_summary(store, rec.idx, n_scenes, settings.robust_samples)
+        if s is not None:
+            rows.append({"rank": rank, "trial": rec.idx, "robust_score": rec.score,
+                         "passed_all": bool(rec.passed), **s})
+    (run_dir / "best").mkdir(parents=True, exist_ok=True)
+    (run_dir / "best" / "robust.json").write_text(json.dumps(
+        {"samples_per_scene": settings.robust_samples, "seed": settings.seed,
+         "variation_file": settings.variation_file, "aggregate": settings.aggregate,
+         "top": rows}, indent=2))
+
+
+def check_samples(samples: int) -> int:
+    """``--samples`` if it is a count from 1 to :data:`MAX_SAMPLES`."""
+    if not isinstance(samples, int) or isinstance(samples, bool) or not 1 <= samples <= MAX_SAMPLES:
+        raise RvmsimError(f"--samples {samples!r}: give a whole number from 1 to {MAX_SAMPLES}")
+    return samples
