@@ -118,7 +118,11 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
         store.close()
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
     if settings.shared:
-        parse_aggregate(settings.aggregate or "min")
+        try:
+            parse_aggregate(settings.aggregate or "min")
+        except RvmsimError:
+            raise RvmsimError(f"{run_dir / RUN_DB}: aggregate: {settings.aggregate!r} is not "
+                              "min or quantile Q (written by another rvmsim version?)") from None
         return settings, resumed_scenes(settings), load_criteria(settings.criteria_file)
     sc = load_scene(settings.scene)
     if settings.scene_key is not None and not same_scene(settings.scene_key, sc, settings.scene):
