@@ -137,8 +137,13 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
     finally:
         store.close()
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
+    if settings.shared or settings.robust:
+        try:
+            parse_aggregate(settings.aggregate or "min")
+        except RvmsimError:
+            raise RvmsimError(f"{run_dir / RUN_DB}: aggregate: {settings.aggregate!r} is not "
+                              "min or quantile Q (written by another rvmsim version?)") from None
     if settings.shared:
-        parse_aggregate(settings.aggregate or "min")
         scenes = resumed_scenes(settings)
     else:
         sc = load_scene(settings.scene)

@@ -4,7 +4,9 @@ byte-identical afterwards."""
 
 from __future__ import annotations
 
+import json
 import shutil
+import sqlite3
 from pathlib import Path
 
 import pytest
@@ -33,13 +35,27 @@ def _junk(name: str):
     return setup
 
 
-def _changed_shared_run(folder: Path) -> None:
-    """A finished shared run of scene.yaml and b.yaml in ``shared/``, then b.yaml changed."""
+def _shared_run(folder: Path) -> None:
+    """A finished shared run of scene.yaml and b.yaml in ``shared/``."""
     _variant()(folder)
     out = run_rvmsim(["tune", S, "b.yaml", "--shared", "--strategy", "random", "--budget", "20",
                       "--out", "shared", "--no-progress", "--workers", "1"], cwd=folder)
     assert out.code == 0, out.stderr
+
+
+def _changed_shared_run(folder: Path) -> None:
+    """A finished shared run, then its b.yaml changed."""
+    _shared_run(folder)
     _variant(edit={"vehicle.bumper.top": 0.82})(folder)
+
+
+def _bad_aggregate_run(folder: Path) -> None:
+    """A finished shared run whose stored aggregate is not one this version knows."""
+    _shared_run(folder)
+    db = sqlite3.connect(folder / "shared" / "run.sqlite")
+    with db:
+        db.execute("UPDATE meta SET value = ? WHERE key = 'aggregate'", (json.dumps("max"),))
+    db.close()
 
 
 CASES = [
@@ -61,6 +77,8 @@ CASES = [
                                   *NEW), ("--aggregate", "quantile 2"), setup=_variant()),
     Case("shared-resume-changed-scene", ("tune", "--resume", "shared", "--no-progress"),
          ("b.yaml", "changed"), setup=_changed_shared_run, keep=("shared",)),
+    Case("shared-resume-bad-stored-aggregate", ("tune", "--resume", "shared", "--no-progress"),
+         ("run.sqlite", "aggregate", "max"), setup=_bad_aggregate_run, keep=("shared",)),
 ]
 
 
