@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ..tune import RunSettings, RunStore, TrialRecord
 
 __all__ = ["MemberScene", "load_member_scenes", "member_scores", "members_section",
-           "member_scores_html", "MEMBER_THUMB_PX"]
+           "member_scores_html", "MEMBER_THUMB_PX", "robust_top", "robust_section"]
 
 #: Longest side of a member's thumbnail (px).
 MEMBER_THUMB_PX = 240
@@ -100,3 +100,42 @@ def member_scores_html(members: Sequence[MemberScene], scores: Sequence[float]) 
         return ""
     items = "".join(f"<li>{escape(m.vehicle)}: {s:.4g}</li>" for m, s in zip(members, scores))
     return f'<ul class="member-scores">{items}</ul>'
+
+
+def robust_top(store: RunStore, top: Sequence[TrialRecord], settings: RunSettings
+               ) -> list[dict | None]:
+    """Each top trial's nominal score, robust score and sample yield (a robust run; empty
+    for others), from its stored member results."""
+    from ..tune.robust import robust_summary
+
+    if settings.robust_samples is None:
+        return []
+    n_scenes = max(1, len(settings.scenes))
+    return [robust_summary(store, rec.idx, n_scenes, settings.robust_samples) for rec in top]
+
+
+def robust_section(top: Sequence[TrialRecord], rows: Sequence[dict | None],
+                   settings: RunSettings) -> str:
+    """The ``robust`` section: the top-M's nominal score, robust score (the worst member's,
+    or the run's quantile) and yield over the variation samples, side by side."""
+    body = []
+    for rank, (rec, row) in enumerate(zip(top, rows), 1):
+        if row is None:
+            continue
+        lo, hi = row["yield_ci"]
+        body.append(
+            f'<tr><td class="num">{rank}</td><td class="num">{rec.idx}</td>'
+            f'<td class="num {"pass" if row["nominal_passed"] else "fail"}">'
+            f'{row["nominal_score"]:.4g}</td>'
+            f'<td class="num {"pass" if rec.passed else "fail"}">{rec.score:.4g}</td>'
+            f'<td class="num">{100 * row["yield"]:.1f} % ({100 * lo:.0f}–{100 * hi:.0f} %)</td>'
+            "</tr>")
+    source = settings.variation_file or "the scene's variation section"
+    return (f'<section id="robust"><h2>Robust tuning</h2><p class="muted">Each candidate was '
+            f'judged on the nominal scene and {settings.robust_samples} variation samples '
+            f'(Sobol, seed {settings.seed}, from {escape(source)}); its robust score is their '
+            f'{escape(settings.aggregate or "min")}. The yield is the share of the samples '
+            "where every EC passes, with its 95 % Wilson interval; <code>rvmsim robustness"
+            "</code> measures it on many more samples.</p><table><tr><th>rank</th>"
+            "<th>trial</th><th>nominal score</th><th>robust score</th><th>yield (95 %)</th>"
+            f'</tr>{"".join(body)}</table></section>')

@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import RvmsimError
 from ..tune import find_runs, is_run_folder
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
-                      members_section)
+                      members_section, robust_section, robust_top)
 from .page import data_uri, escape, img_tag, page, shrink
 from .plots import convergence_png, histogram_png
 
@@ -82,6 +82,7 @@ class _Run:
     scene_changed: bool = False
     members: list[MemberScene] = field(default_factory=list)
     member_top: dict[int, list[float]] = field(default_factory=dict)
+    robust_rows: list[dict | None] = field(default_factory=list)
 
 
 def _resolve(recorded: str, run_dir: Path) -> Path | None:
@@ -111,6 +112,7 @@ def _load_run(run_dir: Path) -> _Run:
         scores = np.array(store.scores(), dtype=float)
         count = store.count()
         member_top = member_scores(store, top) if settings.shared else {}
+        robust_rows = robust_top(store, top, settings)
     finally:
         store.close()
     scene_file = _resolve(settings.scene, run_dir)
@@ -130,7 +132,8 @@ def _load_run(run_dir: Path) -> _Run:
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
                 crit_file, settings.config.output_spec(), top, curve, scores, count,
-                scene_changed, load_member_scenes(settings, run_dir, _resolve), member_top)
+                scene_changed, load_member_scenes(settings, run_dir, _resolve), member_top,
+                robust_rows)
 
 
 # ---------------------------------------------------------------------------- sections
@@ -327,7 +330,8 @@ def _build(run_dir: Path) -> tuple[str, _Summary]:
     result, color, annotated = frame.ec, frame.color, frame.annotated
     assert annotated is not None
     badge = "pass" if result.passed else "fail"
-    sections = SECTION_IDS if not r.members else ("members", *SECTION_IDS)
+    sections = (("members",) if r.members else ()) + (("robust",) if r.robust_rows else ()) \
+        + SECTION_IDS
     title = (r.scene.name if not r.members
              else "shared: " + ", ".join(m.vehicle for m in r.members))
     header = (f"<h1>{escape(title)}</h1>"
@@ -344,6 +348,8 @@ def _build(run_dir: Path) -> tuple[str, _Summary]:
     if r.members:
         header += members_section(r.members, r.top[0].params, r.output, r.criteria,
                                   r.settings.aggregate or "min")
+    if r.robust_rows:
+        header += robust_section(r.top, r.robust_rows, r.settings)
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
             + _ec_section(result) + _params_section(r) + _convergence_section(r)
             + _gallery_section(r, str(run_dir), color))

@@ -346,9 +346,25 @@ def summary_lines(result: TuneResult) -> list[str]:
     o, best = result.outcome, result.outcome.best
     if best is None:
         return ["no trials"]
+    robust = _robust_line(result.run_dir)
     return [f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
             f"{o.seconds:.1f} s ({o.stopped}); best EC score {best.score:.4g} (trial {best.idx})",
-            (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
+            *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
+
+
+def _robust_line(run_dir: Path) -> list[str]:
+    """A robust run's best candidate as ``best/robust.json`` has it (none for other runs)."""
+    path = run_dir / "best" / "robust.json"
+    if not path.is_file():
+        return []
+    doc = json.loads(path.read_text())
+    if not doc.get("top"):
+        return []
+    t = doc["top"][0]
+    lo, hi = t["yield_ci"]
+    return [f"robust: nominal EC score {t['nominal_score']:.4g}, robust (worst of "
+            f"{t['samples']} samples and nominal) {t['robust_score']:.4g}, yield over the "
+            f"samples {100 * t['yield']:.0f} % (95 %: {100 * lo:.0f}–{100 * hi:.0f} %)"]
 
 
 def remove_run(run_dir: str | Path) -> None:

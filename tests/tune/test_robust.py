@@ -48,7 +48,7 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
 
     cfg = TuningConfig.model_validate(CONFIG)
     nominal = tune(small, tmp_path / "nominal", config=cfg, budget=600, seed=1)
-    robust = tune(small, tmp_path / "robust", config=cfg, budget=600, seed=1,
+    tune(small, tmp_path / "robust", config=cfg, budget=600, seed=1,
                   robust_samples=8)
     out = OutputSpec(320, 180)
     scene = load_scene(small)
@@ -74,6 +74,14 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
         store.close()
     assert len(members) == 9 and rec.score == pytest.approx(min(m[0] for m in members))
     assert settings.robust_samples == 8 and settings.variation_key
+    # the report puts nominal score, robust score and yield side by side
+    from rvmsim.report import write_report
+
+    html = write_report(tmp_path / "robust").read_text()
+    section = html[html.index('<section id="robust">'):]
+    section = section[:section.index("</section>")]
+    assert section.count("<tr>") == 1 + 3  # header + the top 3
+    assert f"{top['nominal_score']:.4g}" in section and f"{top['robust_score']:.4g}" in section
 
 
 def test_a_robust_run_resumes_after_sigkill_to_the_unbroken_result(small, tmp_path):
