@@ -168,8 +168,9 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
               help="Run folder (default: runs/<scene name>, runs/<name>+<name>… with --shared).")
 @click.option("--shared", is_flag=True, help="One parameter set for all SCENES (the worst "
               "scene's EC score is maximised, every scene must pass).")
-@click.option("--aggregate", default=None, metavar="min|quantile Q", help="With --shared: "
-              "the EC score is the scenes' minimum (default) or this quantile of them.")
+@click.option("--aggregate", default=None, metavar="min|quantile Q", help="--shared, --robust: "
+              "the EC score is the members' minimum or this quantile [default: min, "
+              "quantile 0.1 with --robust].")
 @click.option("--robust", is_flag=True, help="Judge every candidate on production variation "
               "samples too (the scene's variation section, or --variation): its EC score is "
               "the worst sample's.")
@@ -215,7 +216,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
             result = run_tune(list(scenes) if shared else scenes[0],
                               out or Path("runs") / "+".join(s.stem for s in scenes),
                               config=load_tuning_config(config_file), strategy=strategy,
-                              aggregate=aggregate or "min", force=force, seed=seed,
+                              aggregate=aggregate, force=force, seed=seed,
                               robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
                               variation_file=variation_file,
                               criteria_file=criteria_file, workers=workers, budget=budget,

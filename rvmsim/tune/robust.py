@@ -5,12 +5,16 @@ Every scene of the run contributes its nominal label image and the label images 
 variation samples (:func:`rvmsim.robust.draw_samples` with the run's seed, rotations
 re-folded from the nominal cube, positions and load states rendered once and cached:
 :func:`rvmsim.robust.sample_images`) as members of the run (:mod:`rvmsim.tune.members`).
-A candidate's stored EC score is the **minimum** over them, and it passes where it passes on
-every one: the sign-off question is whether *every* car passes, and a low quantile would let
-a systematic failure on one tolerance corner through.  The strategies are told the members'
-combined pass-first objective (the sum of every member's violations, then the worst
-log-score), which keeps a slope toward passing on the failing samples.  A quantile is
-available (``--aggregate 'quantile 0.1'``).
+A candidate passes where it passes on every member.  Its stored EC score, and the objective
+the strategies are told, is by default the **10 % quantile** over the members
+(:data:`ROBUST_AGGREGATE`; ``--aggregate min`` for the minimum).  The minimum was the first
+choice (the sign-off asks whether every car passes), but where no setting passes every
+sample it spends the search on the single worst tolerance corner.  Measured on vehicle A at
+±1° / ±5 mm with the bundled load states (K = 16, budget 3,000, then ``rvmsim robustness``
+on 200 fresh samples, seed 5): the minimum's setting had a yield of 17 %, the 10 % quantile's
+37 %, the 25 % quantile's 24 %, the nominal-tuned setting's 32 %.  There the yield is bounded
+by EC 2-3 under roll (|t_l − t_r| ≤ 5 px fails on most samples with |roll| ≳ 0.5°): no single
+ISP setting corrects both signs of a roll.
 
 Resuming draws the same samples again (they are a function of the variation, ``K`` and the
 seed), so a resumed run judges the same members.
@@ -32,10 +36,12 @@ if TYPE_CHECKING:
     from .records import RunSettings
     from .store import RunStore
 
-__all__ = ["DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
+__all__ = ["ROBUST_AGGREGATE", "DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
            "robust_members", "check_samples",
            "robust_summary", "write_robust_results"]
 
+#: How a robust run combines its members when ``--aggregate`` is not given (see above).
+ROBUST_AGGREGATE = "quantile 0.1"
 #: ``--samples`` when not given.
 DEFAULT_SAMPLES = 16
 #: The most samples a robust run takes per scene (each costs one evaluation per candidate).

@@ -20,7 +20,7 @@ from .config import TuningConfig, make_strategy
 from .folder import RUN_DB, RUN_JSON, open_run, rank_text, run_lock, run_settings
 from .loop import SearchOutcome, search_members, search_scene
 from .members import Member, parse_aggregate
-from .robust import (check_samples, robust_members, run_variations, variation_key,
+from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_variations, variation_key,
                      write_robust_results)
 from .records import RunSettings, RunStatus
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
@@ -220,7 +220,7 @@ def tune(
     force: bool = False,
     progress: bool = False,
     progress_position: int = 0,
-    aggregate: str = "min",
+    aggregate: str | None = None,
     robust_samples: int | None = None,
     variation_file: str | Path | None = None,
 ) -> TuneResult:
@@ -234,9 +234,10 @@ def tune(
         path recorded for it, by default its ``source``).  Ignored with ``resume``.  A list
         or tuple (at least two) is a shared run: the space is fitted to the first scene's
         camera, and every scene's camera must have its sensor size.
-    aggregate : str
-        How a shared or robust run combines its members' EC scores: ``min`` (default) or
-        ``quantile Q`` (:func:`rvmsim.tune.parse_aggregate`).
+    aggregate : str, optional
+        How a shared or robust run combines its members' EC scores: ``min`` or ``quantile
+        Q`` (:func:`rvmsim.tune.parse_aggregate`); default ``min`` for a shared run and
+        :data:`rvmsim.tune.robust.ROBUST_AGGREGATE` for a robust one.
     robust_samples : int, optional
         A robust run (:mod:`rvmsim.tune.robust`): judge every candidate on each scene's
         nominal image and this many variation samples of it (``--robust --samples K``).
@@ -275,7 +276,8 @@ def tune(
     lock.check_free()  # another writer: say so at once (its lock, taken below, decides)
     settings, scenes, crit = (_resumed_run(run_dir) if resume else _new_run(
         run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget,
-        force, aggregate, None if robust_samples is None else (
+        force, aggregate or (ROBUST_AGGREGATE if robust_samples is not None else "min"),
+        None if robust_samples is None else (
             robust_samples, None if variation_file is None else str(variation_file))))
     sc, cfg = scenes[0], settings.config
     # the strategy before the render: a bad config, strategy or seed fails in a moment
@@ -362,8 +364,8 @@ def _robust_line(run_dir: Path) -> list[str]:
         return []
     t = doc["top"][0]
     lo, hi = t["yield_ci"]
-    return [f"robust: nominal EC score {t['nominal_score']:.4g}, robust (worst of "
-            f"{t['samples']} samples and nominal) {t['robust_score']:.4g}, yield over the "
+    return [f"robust: nominal EC score {t['nominal_score']:.4g}, robust ({doc['aggregate']} "
+            f"of {t['samples']} samples and nominal) {t['robust_score']:.4g}, yield over the "
             f"samples {100 * t['yield']:.0f} % (95 %: {100 * lo:.0f}–{100 * hi:.0f} %)"]
 
 
