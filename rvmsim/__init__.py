@@ -63,6 +63,7 @@ from .errors import (
     SceneError,
     SweepFileError,
     TuningConfigError,
+    VariationError,
 )
 
 __version__ = "0.1.0"
@@ -97,6 +98,10 @@ _LAZY: dict[str, tuple[str, str]] = {
     "RvmFrame": ("rvmsim.pipeline", "RvmFrame"),
     "evaluate_params": ("rvmsim.pipeline", "evaluate_params"),
     "render_rvm": ("rvmsim.pipeline", "render_rvm"),
+    # production variation
+    "load_variation": ("rvmsim.robust", "load_variation"),
+    "draw_samples": ("rvmsim.robust", "draw_samples"),
+    "robustness": ("rvmsim.robust", "robustness"),
     # tuning
     "tune_scene": ("rvmsim.tune", "tune"),
     "TuningConfig": ("rvmsim.tune", "TuningConfig"),
@@ -121,6 +126,7 @@ __all__ = [
     "TuningConfigError",
     "SweepFileError",
     "ParamsFileError",
+    "VariationError",
     *_LAZY,
 ]
 

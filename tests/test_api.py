@@ -14,8 +14,8 @@ import pytest
 import rvmsim
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("camera", "scene", "render", "isp", "criteria", "tune", "batch", "validate",
-            "report")
+PACKAGES = ("camera", "scene", "render", "isp", "criteria", "robust", "tune", "batch",
+            "validate", "report")
 
 
 @pytest.mark.parametrize("name", rvmsim.__all__)

@@ -9,7 +9,7 @@ from .cube import (CubeLayout, FaceCrop, CameraRays, cube_layout, cover_layout, 
 from .gl import FaceAtlas, render_faces
 from .fold import fold, fold_labels, nearest_labels
 from .fisheye import FisheyeImages, render_fisheye
-from .viewpoint import posed_parts, cube_key, cached_cube, is_vehicle_label
+from .viewpoint import posed_parts, cube_key, cached_cube, read_cube, is_vehicle_label
 from .cache import (
     cache_dir,
     scene_key,
@@ -47,5 +47,6 @@ __all__ = [
     "posed_parts",
     "cube_key",
     "cached_cube",
+    "read_cube",
     "is_vehicle_label",
 ]

@@ -33,7 +33,7 @@ from .cache import cache_dir, scene_key
 from .cube import CubeLayout
 from .gl import render_faces
 
-__all__ = ["posed_parts", "cube_key", "cached_cube", "is_vehicle_label"]
+__all__ = ["posed_parts", "cube_key", "cached_cube", "read_cube", "is_vehicle_label"]
 
 
 def is_vehicle_label(label: int) -> bool:
@@ -84,6 +84,15 @@ def _read(folder: Path, shape: tuple[int, int],
     if (img is not None and img.shape[:2] != shape) or labels.shape != shape:
         return None
     return img, labels
+
+
+def read_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
+              body_pose: np.ndarray | None = None, scale: float = 1.0,
+              color: bool = True) -> tuple[np.ndarray | None, np.ndarray] | None:
+    """The cached atlas of a viewpoint (as :func:`cached_cube`), or None when it is not in
+    the cache; never renders (so it may run in a thread, e.g. to read ahead)."""
+    return _read(cache_dir() / cube_key(scene, camera, layout, body_pose, scale),
+                 layout.atlas_shape, color)
 
 
 def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,

@@ -78,6 +78,8 @@ def _ec_rows(result: RobustnessResult) -> str:
     for e in result.ecs:
         cls = "off" if not e.enabled else ("fail" if e.n_fail else "pass")
         d = e.driver
+        why = escape(d.describe()) if d is not None else (
+            "every sample fails" if e.n_fail == result.estimate.n else "")
         rng = f"[{'–' if e.low is None else f'{e.low:g}'}, {'–' if e.high is None else f'{e.high:g}'}]"
         rows.append(
             f'<tr class="{cls}"><td>{escape(e.id)}</td><td>{escape(e.name)}</td>'
@@ -85,7 +87,7 @@ def _ec_rows(result: RobustnessResult) -> str:
             f'<td class="num">{100 * e.failure_rate:.1f} %</td>'
             f'<td class="num">{"—" if e.worst_value is None else f"{e.worst_value:.3g}"}</td>'
             f'<td class="num">{"—" if e.worst_margin is None else f"{e.worst_margin:+.3g}"}</td>'
-            f'<td>{"" if d is None else escape(d.describe())}</td></tr>')
+            f'<td>{why}</td></tr>')
     return "".join(rows)
 
 

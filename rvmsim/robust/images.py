@@ -39,7 +39,8 @@ from ..camera import FisheyeCamera, rotation_from_ypr
 from .. import labels as L
 from ..isp import IspParams, OutputSpec, apply_map, build_map
 from ..render import (CameraRays, CubeLayout, FisheyeImages, cached_cube, cover_layout,
-                      fold, fold_labels, nearest_labels, refold_coords, refold_layout)
+                      fold, fold_labels, nearest_labels, read_cube, refold_coords,
+                      refold_layout)
 from ..scene import Scene, build_parts
 from .samples import MountSample
 from .variation import LoadState
@@ -212,14 +213,30 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
                                                np.ndarray]]:
     """Per distinct viewpoint of ``samples``: the indices of its samples, the camera its cube
     is rendered for, and the cube's atlas (colour None when not asked for and cached)."""
+    from concurrent.futures import ThreadPoolExecutor
+
     parts = functools.lru_cache(maxsize=1)(lambda: build_parts(scene))
-    for idx in viewpoint_groups(samples):
-        first = samples[idx[0]]
-        view_cam = _viewpoint_camera(scene, first, scale)
-        atlas_c, atlas_l, _ = cached_cube(scene, view_cam, shared.cover, scale=scale,
-                                          parts=parts, body_pose=body_pose(scene, first.load),
-                                          color=color)
-        yield idx, view_cam, atlas_c, atlas_l
+    groups = viewpoint_groups(samples)
+    cams = [_viewpoint_camera(scene, samples[g[0]], scale) for g in groups]
+    poses = [body_pose(scene, samples[g[0]].load) for g in groups]
+
+    def read(k: int) -> tuple[np.ndarray | None, np.ndarray] | None:
+        return read_cube(scene, cams[k], shared.cover, body_pose=poses[k], scale=scale,
+                         color=color)
+
+    # the next viewpoint's cube is read (decoded) while this one's samples are re-folded
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        ahead = pool.submit(read, 0)
+        for k, idx in enumerate(groups):
+            entry = ahead.result()
+            if k + 1 < len(groups):
+                ahead = pool.submit(read, k + 1)
+            if entry is None:  # not cached: render here (GL stays in this thread)
+                atlas_c, atlas_l, _ = cached_cube(scene, cams[k], shared.cover, scale=scale,
+                                                  parts=parts, body_pose=poses[k], color=color)
+            else:
+                atlas_c, atlas_l = entry
+            yield idx, cams[k], atlas_c, atlas_l
 
 
 @dataclass(frozen=True)

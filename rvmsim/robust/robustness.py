@@ -132,8 +132,10 @@ class EcStats:
 
     @property
     def driver(self) -> AxisEffect | None:
-        """The axis driving the failures (None when the EC never fails)."""
-        return self.drivers[0] if self.n_fail and self.drivers else None
+        """The axis driving the failures (None when the EC never fails, or fails alike
+        whatever every axis's value, e.g. on every sample)."""
+        top = self.drivers[0] if self.n_fail and self.drivers else None
+        return top if top is not None and top.spread > 0 else None
 
     def as_dict(self) -> dict[str, Any]:
         d = self.driver
@@ -221,7 +223,9 @@ class RobustnessResult:
                 d = e.driver
                 lines.append(f"  EC {e.id} fails on {100 * e.failure_rate:.1f} % (worst "
                              f"{_num(e.worst_value)} {e.unit}, margin {_num(e.worst_margin)})"
-                             + (f"; driven by {d.describe()}" if d is not None else ""))
+                             + (f"; driven by {d.describe()}" if d is not None else
+                                "; on every sample: no axis drives it"
+                                if e.n_fail == self.estimate.n else ""))
         lines.append("  yield by tolerance scale: " + ", ".join(
             f"{p.scale:g}x {100 * p.estimate.yield_:.0f} %" for p in self.scale_curve))
         return "\n".join(lines)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.stats import binomtest
@@ -44,3 +46,15 @@ def test_failure_drivers_find_the_axis_and_its_pattern():
     assert monotone.axis == "x_mm" and "fails at high" in monotone.describe()
     by_load = failure_drivers(loads == "full", {"yaw_deg": yaw}, loads)[0]
     assert by_load.axis == "load" and by_load.rates == (0.0, 1.0)
+
+
+def test_an_ec_failing_on_every_sample_has_no_driver():
+    from rvmsim.robust import EcStats
+
+    rng = np.random.default_rng(1)
+    effects = tuple(failure_drivers(np.ones(90, bool), {"yaw_deg": rng.uniform(-1, 1, 90)}))
+    all_fail = EcStats("2-1", "x", "%", 4.0, 8.0, True, 90, 1.0, 9.0, -1.0, 0, (), effects)
+    assert effects[0].spread == 0 and all_fail.driver is None
+    some = failure_drivers(np.arange(90) < 30, {"yaw_deg": np.arange(90.0)})
+    ec = dataclasses.replace(all_fail, n_fail=30, drivers=tuple(some))
+    assert ec.driver is not None and ec.driver.axis == "yaw_deg"
