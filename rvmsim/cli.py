@@ -14,8 +14,10 @@ import click
 
 from .cli_params import (SEED, FiniteFloat, Group, Integer, OutputFile, OutputFolder,
                          SchedulerAddress, check_scale, usage_error_line)
+from .cli_params import fail as _fail
+from .cli_params import fail_os as _fail_os
+from .cli_params import load_isp as _load_isp
 from .errors import RvmsimError
-from .isp import IspParams, OutputSpec
 from .tune import DEFAULT_STRATEGY, STRATEGIES
 
 __all__ = ["cli", "main"]
@@ -24,22 +26,6 @@ __all__ = ["cli", "main"]
 _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.items()) + "."
 #: ``--workers`` of tune and batch: one per core, at most their limit of 64.
 _DEFAULT_WORKERS = min(os.cpu_count() or 1, 64)
-
-
-def _fail(err: Exception) -> None:
-    click.echo(f"rvmsim: error: {err}", err=True)
-    sys.exit(2)
-
-
-def _fail_os(err: OSError, where: Path | None) -> None:
-    name = getattr(err, "filename", None) or where
-    _fail(RvmsimError(f"{name}: {err.strerror or err}" if name else str(err.strerror or err)))
-
-
-def _load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
-    from .isp import load_params
-
-    return load_params(params_file) if params_file else (IspParams(), OutputSpec())
 
 
 @click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},
@@ -432,7 +418,12 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     sys.exit(0 if result.passed else 1)
 
 
-from . import cli_robust, cli_sweep  # noqa: E402,F401  (register robustness, sweep: cli.py is at its size limit)
+# two commands in modules of their own (cli.py is at its size limit)
+from .cli_robust import robustness  # noqa: E402
+from .cli_sweep import sweep  # noqa: E402
+
+cli.add_command(robustness)
+cli.add_command(sweep)
 
 
 def main() -> None:

@@ -17,17 +17,21 @@ from __future__ import annotations
 import math
 import os
 import re
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import click
 
+from .errors import RvmsimError
+
 if TYPE_CHECKING:
-    from .isp import IspParams
+    from .isp import IspParams, OutputSpec
     from .scene import Scene
 
 __all__ = ["Command", "FiniteFloat", "Group", "Integer", "OutputFile", "OutputFolder",
-           "SchedulerAddress", "SEED", "check_scale", "usage_error_line"]
+           "SchedulerAddress", "SEED", "check_scale", "usage_error_line", "fail", "fail_os",
+           "load_isp"]
 
 
 class Integer(click.IntRange):
@@ -196,3 +200,22 @@ def usage_error_line(err: click.UsageError, prog: str = "rvmsim") -> str:
     if text[:2].istitle():  # click's own sentences ("Got unexpected extra argument (b)")
         text = text[0].lower() + text[1:]
     return f"{where}: {text}"
+
+
+def fail(err: Exception) -> None:
+    """Print ``err`` as the one line ``rvmsim: error: …`` on stderr and exit with status 2."""
+    click.echo(f"rvmsim: error: {err}", err=True)
+    sys.exit(2)
+
+
+def fail_os(err: OSError, where: Path | None) -> None:
+    """:func:`fail` for an OS error, naming its file (or ``where``)."""
+    name = getattr(err, "filename", None) or where
+    fail(RvmsimError(f"{name}: {err.strerror or err}" if name else str(err.strerror or err)))
+
+
+def load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
+    """The params file's ISP parameters and output (the paper's defaults without one)."""
+    from .isp import IspParams, OutputSpec, load_params
+
+    return load_params(params_file) if params_file else (IspParams(), OutputSpec())

@@ -1,7 +1,7 @@
 """``rvmsim robustness``: the yield of one ISP setting over production variation.
 
-Its own module (cli.py is at its size limit); importing it adds the command to
-:data:`rvmsim.cli.cli` (cli.py imports it).
+Its own module (cli.py is at its size limit); cli.py adds the command to
+:data:`rvmsim.cli.cli`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ from pathlib import Path
 
 import click
 
-from .cli import cli
 from .cli_params import SEED, FiniteFloat, Integer, OutputFolder
 from .errors import RvmsimError, VariationError
 
@@ -32,7 +31,7 @@ def _scales(ctx: click.Context, param: click.Parameter, value: str) -> tuple[flo
     return tuple(dict.fromkeys(out))
 
 
-@cli.command()
+@click.command()
 @click.argument("scene", type=click.Path(path_type=Path))
 @click.option("--params", "params_file", type=click.Path(path_type=Path), required=True,
               help="ISP params file (YAML/JSON) to sign off.")
@@ -67,7 +66,9 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     robustness.html.  Exit status: 0 the yield is at least --min-yield (or none given),
     1 below it, 2 an error.
     """
-    from .cli import _fail, _fail_os, _load_isp
+    from .cli_params import fail as _fail
+    from .cli_params import fail_os as _fail_os
+    from .cli_params import load_isp as _load_isp
     from .cli_params import check_scale
     from .criteria import load_criteria
     from .report import write_robustness_outputs

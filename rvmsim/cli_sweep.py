@@ -1,7 +1,7 @@
 """``rvmsim sweep``: a design-stage feasibility sweep.
 
-Its own module (cli.py is at its size limit); importing it adds the command to
-:data:`rvmsim.cli.cli` (cli.py imports it).
+Its own module (cli.py is at its size limit); cli.py adds the command to
+:data:`rvmsim.cli.cli`.
 """
 
 from __future__ import annotations
@@ -12,14 +12,15 @@ from pathlib import Path
 
 import click
 
-from .cli import _fail, _fail_os, cli
+from .cli_params import fail as _fail
+from .cli_params import fail_os as _fail_os
 from .cli_params import Integer, OutputFolder, SchedulerAddress
 from .errors import RvmsimError
 
 __all__ = ["sweep"]
 
 
-@cli.command()
+@click.command()
 @click.argument("sweep_file", type=click.Path(path_type=Path))
 @click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Output folder (default: runs/sweep_<sweep file name>).")
