@@ -134,3 +134,31 @@ def test_a_robust_run_resumes_after_sigkill_to_the_unbroken_result(small, tmp_pa
             s.close()
 
     assert top(run) == top(tmp_path / "clean")
+
+
+def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, tmp_path):
+    """`--shared --robust`: each scene brings its nominal image and its samples; the stored
+    members are scene by scene, and robust.json has each scene's nominal score."""
+    import shutil
+
+    sub = tmp_path / "variant"
+    sub.mkdir()
+    other = write_small_scene(sub, {"vehicle.bumper.top": 0.8})
+    shutil.copy(other, tmp_path / "b.yaml")
+    cfg = TuningConfig.model_validate(CONFIG)
+    run = tmp_path / "both"
+    tune([small, tmp_path / "b.yaml"], run, config=cfg, budget=60, seed=2, robust_samples=3)
+    store = RunStore(run / "run.sqlite", readonly=True)
+    try:
+        rec = store.top(1)[0]
+        members = store.member_results(rec.idx)
+        settings = store.settings()
+    finally:
+        store.close()
+    assert settings.shared and settings.robust_samples == 3
+    assert len(members) == 2 * (1 + 3)
+    doc = json.loads((run / "best" / "robust.json").read_text())
+    top = doc["top"][0]
+    assert top["samples"] == 6 and len(top["nominal_scores"]) == 2
+    # the nominal scores are the first member of each scene's block
+    assert top["nominal_scores"] == pytest.approx([members[0][0], members[4][0]])
