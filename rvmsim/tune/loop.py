@@ -308,11 +308,22 @@ def search_scene(
         space = config.space(images.camera)
         strat = make_strategy(strategy, space, config, seed, budget,
                               [space.vector(p) for p in starts])
-    space = strat.space
     if evaluator is None:
         evaluator = candidate_evaluator(images, config, criteria)
-    batch_eval = BatchEvaluator(evaluator, space, workers, solver_for(strat, evaluator),
-                                strat.objective)
+    return _drive(strat, _one_scene(strat, evaluator, workers), store, max_time, target_score,
+                  on_batch)
+
+
+def _one_scene(strat: Strategy, evaluator: CandidateEvaluator, workers: int) -> BatchEvaluator:
+    """The batch evaluator of a one-scene search: solved and scored as ``strat`` asks."""
+    return BatchEvaluator(evaluator, strat.space, workers, solver_for(strat, evaluator),
+                          strat.objective)
+
+
+def _drive(strat: Strategy, batch_eval: BatchEvaluator, store: RunStore,
+           max_time: float | None, target_score: float | None,
+           on_batch: Callable[[int, float, str], None] | None) -> SearchOutcome:
+    """:func:`run_search` with ``batch_eval``, whose worker processes are stopped after."""
     try:
         return run_search(strat, batch_eval, store, max_time=max_time,
                           target_score=target_score, on_batch=on_batch)
@@ -367,9 +378,8 @@ def search_members(
         strat = make_strategy(strategy, config.space(members[0].camera), config, seed, budget)
     output = config.output_spec()
     if len(members) == 1:
-        evaluator = CandidateEvaluator(members[0].labels, output, criteria)
-        batch_eval = BatchEvaluator(evaluator, strat.space, workers,
-                                    solver_for(strat, evaluator), strat.objective)
+        batch_eval = _one_scene(strat, CandidateEvaluator(members[0].labels, output, criteria),
+                                workers)
     else:
         evaluators = member_evaluators(members, output, criteria)
         solver = None
@@ -379,8 +389,4 @@ def search_members(
             strat.solved = solver.names
         scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg, combine)
         batch_eval = BatchEvaluator(None, strat.space, workers, scorer=scorer)
-    try:
-        return run_search(strat, batch_eval, store, max_time=max_time,
-                          target_score=target_score, on_batch=on_batch)
-    finally:
-        batch_eval.close()
+    return _drive(strat, batch_eval, store, max_time, target_score, on_batch)

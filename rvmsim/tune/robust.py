@@ -64,7 +64,7 @@ def run_variations(scenes: Sequence[Scene], variation_file: str | None) -> list[
         return [v] * len(scenes)
     out = []
     for sc in scenes:
-        if getattr(sc, "variation", None) is None:
+        if sc.variation is None:
             raise RvmsimError(f"{sc.source}: --robust: the scene has no variation section; "
                               "add one (docs/robustness.md) or give --variation FILE")
         out.append(variation_from_scene(sc))
