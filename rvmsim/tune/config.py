@@ -224,6 +224,5 @@ def make_strategy(name: str, space: SearchSpace, cfg: TuningConfig, seed: int,
         raise RvmsimError(f"unknown strategy {name!r} (known: {', '.join(STRATEGIES)})")
     strategy = cls.from_settings(space, cfg.strategy_settings(name), seed=seed, budget=budget,
                                  batch=cfg.batch)
-    strategy.starts = tuple(np.clip(np.asarray(x, np.float64), space.low, space.high)
-                            for x in starts)
+    strategy.set_starts(starts)
     return strategy

@@ -165,11 +165,16 @@ class Strategy(ABC):
         #: Known good candidates (vectors of ``space``, clipped to it) the search should
         #: start from, e.g. a neighbouring design point's optimum; a strategy that cannot
         #: use them ignores them.
-        self.starts = tuple(np.clip(np.asarray(x, np.float64), space.low, space.high)
-                            for x in starts)
+        self.starts: tuple[np.ndarray, ...] = ()
+        self.set_starts(starts)
         #: The parameters set by the sub-solves at evaluation (those proposed are ignored):
         #: set by :func:`rvmsim.tune.solver_for` before the search starts.
         self.solved: tuple[str, ...] = ()
+
+    def set_starts(self, starts: Sequence[np.ndarray]) -> None:
+        """Set :attr:`starts` (vectors of :attr:`space`, clipped to its ranges)."""
+        self.starts = tuple(np.clip(np.asarray(x, np.float64), self.space.low,
+                                    self.space.high) for x in starts)
 
     @classmethod
     @abstractmethod
