@@ -6,12 +6,13 @@ Its own module (cli.py is at its size limit); cli.py adds the command to
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 import click
 
-from .cli_params import SEED, FiniteFloat, Integer, OutputFolder
+from .cli_params import SEED, FiniteFloat, Integer, OutputFolder, SchedulerAddress
 from .errors import RvmsimError, VariationError
 
 __all__ = ["robustness"]
@@ -54,11 +55,18 @@ def _scales(ctx: click.Context, param: click.Parameter, value: str) -> tuple[flo
 @click.option("--scale-samples", type=Integer(1, 100000), default=None,
               help="Samples per tolerance scale factor of the yield curve (default: "
                    "min(--samples, 64)).")
+@click.option("--workers", type=Integer(1, 64), default=min(os.cpu_count() or 1, 64),
+              show_default=True, help="Local processes rendering the viewpoints not yet in "
+                                      "the render cache.")
+@click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
+              help="Render those viewpoints on this Dask distributed cluster instead (the "
+                   "scene's mesh files must be readable there at the same paths).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Path,
                min_yield: float | None, variation_file: Path | None,
                criteria_file: Path | None, scale: float, scales: tuple[float, ...],
-               scale_samples: int | None, progress: bool) -> None:
+               scale_samples: int | None, workers: int, scheduler: str | None,
+               progress: bool) -> None:
     """Yield of the ISP setting in --params over SCENE's production variation.
 
     Draws mount-tolerance and load-state samples (the scene's variation section, or
@@ -69,6 +77,7 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     from .cli_params import fail as _fail
     from .cli_params import fail_os as _fail_os
     from .cli_params import load_isp as _load_isp
+    from .batch import make_executor
     from .cli_params import check_scale
     from .criteria import load_criteria
     from .report import write_robustness_outputs
@@ -87,10 +96,12 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
                                  "(add one, or give --variation FILE)")
         else:
             variation = variation_from_scene(sc)
-        result = run_robustness(sc, params, output, criteria=criteria, variation=variation,
-                                samples=samples, seed=seed, scales=scales,
-                                scale_samples=scale_samples,
-                                render_scale=scale, min_yield=min_yield, progress=progress)
+        with make_executor(scheduler, workers) as runner:
+            result = run_robustness(sc, params, output, criteria=criteria,
+                                    variation=variation, samples=samples, seed=seed,
+                                    scales=scales, scale_samples=scale_samples,
+                                    render_scale=scale, min_yield=min_yield, runner=runner,
+                                    progress=progress)
         written = write_robustness_outputs(result, out)
     except RvmsimError as err:
         _fail(err)

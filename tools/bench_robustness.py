@@ -109,6 +109,11 @@ def main() -> None:  # long: one report, step by step
     ap.add_argument("--samples", type=int, default=200)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--baseline-renders", type=int, default=3)
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                    help="Local processes rendering the viewpoints (as rvmsim robustness).")
+    ap.add_argument("--serial-baseline", action="store_true",
+                    help="Also time a cold run rendering in this process only (the renders "
+                         "as needed, one after another).")
     ap.add_argument("--snap-only", action="store_true",
                     help="Only the landmark error of the position levels.")
     args = ap.parse_args()
@@ -137,13 +142,27 @@ def main() -> None:  # long: one report, step by step
         params_file = Path(args.params) if args.params else _tuned_params(Path(args.scene),
                                                                            Path(tmp))
         params, output = load_params(params_file)
-        os.environ["RVMSIM_CACHE"] = str(Path(tmp) / "cache-run")
+        from rvmsim.batch import LocalExecutor
+
         times = []
-        for label in ("cold", "cached"):
+        if args.serial_baseline:
+            os.environ["RVMSIM_CACHE"] = str(Path(tmp) / "cache-serial")
             t = time.perf_counter()
             res = robustness(scene, params, output, samples=args.samples, seed=args.seed)
+            t_serial = time.perf_counter() - t
+            print(f"\nrobustness cold, rendering here one after another: {t_serial:.1f} s "
+                  f"({res.timings})")
+        os.environ["RVMSIM_CACHE"] = str(Path(tmp) / "cache-run")
+        for label in (f"cold, renders on {args.workers} processes", "cached"):
+            t = time.perf_counter()
+            with LocalExecutor(args.workers) as ex:
+                res = robustness(scene, params, output, samples=args.samples, seed=args.seed,
+                                 runner=ex)
             times.append(time.perf_counter() - t)
             print(f"\nrobustness {label}: {times[-1]:.1f} s ({res.timings})")
+        if args.serial_baseline:
+            print(f"cold: {t_serial / times[0]:.2f}x faster with the renders on "
+                  f"{args.workers} processes")
         print(res.summary())
         t1 = time.perf_counter()
         robustness(scene, params, output, samples=args.samples, seed=args.seed, scales=(1.0,))

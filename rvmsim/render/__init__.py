@@ -9,7 +9,8 @@ from .cube import (CubeLayout, FaceCrop, CameraRays, cube_layout, cover_layout, 
 from .gl import FaceAtlas, render_faces
 from .fold import fold, fold_labels, nearest_labels
 from .fisheye import FisheyeImages, render_fisheye
-from .viewpoint import posed_parts, cube_key, cached_cube, read_cube, is_vehicle_label
+from .viewpoint import (CubeView, TaskRunner, cached_cube, cube_key, cube_task, is_vehicle_label,
+                        posed_parts, read_cube, render_cubes)
 from .cache import (
     cache_dir,
     scene_key,
@@ -48,5 +49,9 @@ __all__ = [
     "cube_key",
     "cached_cube",
     "read_cube",
+    "CubeView",
+    "TaskRunner",
+    "render_cubes",
+    "cube_task",
     "is_vehicle_label",
 ]

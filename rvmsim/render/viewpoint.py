@@ -9,6 +9,11 @@ render cache as PNGs (no pickle): ``<cache>/<key>/cube_labels.png``, ``cube_colo
 (:func:`~rvmsim.render.scene_key`), the camera pose, the body pose, the face size and the
 crops.
 
+Viewpoints not yet in the cache can be rendered in parallel first
+(:func:`render_cubes`): one task per viewpoint (:func:`cube_task`) on any runner with the
+``run(fn, items)`` interface of ``rvmsim.batch``'s executors (local processes, a Dask
+cluster); each task returns its atlas as PNG bytes, which are stored here.
+
 Conventions
 -----------
 ``body_pose`` is a (4, 4) rigid transform of the scene frame applied to the vehicle's parts
@@ -20,9 +25,12 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import os
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -33,7 +41,8 @@ from .cache import cache_dir, scene_key
 from .cube import CubeLayout
 from .gl import render_faces
 
-__all__ = ["posed_parts", "cube_key", "cached_cube", "read_cube", "is_vehicle_label"]
+__all__ = ["posed_parts", "cube_key", "cached_cube", "read_cube", "is_vehicle_label",
+           "CubeView", "TaskRunner", "render_cubes", "cube_task"]
 
 
 def is_vehicle_label(label: int) -> bool:
@@ -133,9 +142,6 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
     -----
     A cache folder that cannot be written only warns (``RuntimeWarning``).
     """
-    from .._io import write_png
-    from ..errors import RvmsimError
-
     folder = cache_dir() / cube_key(scene, camera, layout, body_pose, scale)
     entry = _read(folder, layout.atlas_shape, color)
     if entry is not None:
@@ -143,14 +149,132 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
     base = build_parts(scene) if parts is None else parts()
     atlas = render_faces(posed_parts(base, body_pose), layout, camera,
                          sky=scene.render.sky_color, progress=progress, color=color)
-    try:
-        write_png(folder / "cube_labels.png", atlas.labels)
-        if color:
-            write_png(folder / "cube_color.png", atlas.color)
-        (folder / "cube.json").write_text(json.dumps(
-            {"scene": scene.source, "position": camera.position.tolist(),
-             "face_size": layout.face_size, "faces": list(layout.faces)}, indent=2))
-    except (OSError, RvmsimError) as err:
-        warnings.warn(f"{folder}: cannot store the cube in the cache ({err})",
-                      RuntimeWarning, stacklevel=2)
+    _store(folder, scene, camera, layout, _png(atlas.labels),
+           _png(atlas.color) if color else None)
     return (atlas.color if color else None), atlas.labels, False
+
+
+def _png(image: np.ndarray) -> bytes:
+    """PNG bytes of an (H, W) or RGB (H, W, 3) uint8 image (OpenCV's encoder, fast level)."""
+    import cv2
+
+    img = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
+    ok, buf = cv2.imencode(".png", np.ascontiguousarray(img), [cv2.IMWRITE_PNG_COMPRESSION, 1])
+    if not ok:
+        raise ValueError("OpenCV could not encode the atlas as PNG")
+    return buf.tobytes()
+
+
+def _store(folder: Path, scene: Scene, camera: FisheyeCamera, layout: CubeLayout,
+           labels_png: bytes, color_png: bytes | None) -> None:
+    """Write a cube's PNGs (each through a temporary file and a rename, so a reader never
+    sees half a file) and its ``cube.json``; a folder that cannot be written only warns."""
+    files = {"cube_labels.png": labels_png, "cube.json": json.dumps(
+        {"scene": scene.source, "position": camera.position.tolist(),
+         "face_size": layout.face_size, "faces": list(layout.faces)}, indent=2).encode()}
+    if color_png is not None:
+        files["cube_color.png"] = color_png
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for name, data in files.items():
+            tmp = folder / f".{name}.{os.getpid()}.tmp"
+            tmp.write_bytes(data)
+            os.replace(tmp, folder / name)
+    except OSError as err:
+        warnings.warn(f"{folder}: cannot store the cube in the cache ({err.strerror or err})",
+                      RuntimeWarning, stacklevel=3)
+
+
+@dataclass(frozen=True)
+class CubeView:
+    """One viewpoint to render: ``camera`` places the cube (its pose; the lens is not used),
+    ``layout`` gives the faces and crops, ``body_pose`` moves the vehicle's parts."""
+
+    camera: FisheyeCamera
+    layout: CubeLayout
+    body_pose: np.ndarray | None = None
+
+
+class TaskRunner(Protocol):
+    """Anything that runs ``fn(arg)`` for every item of ``items`` and yields ``(key,
+    result)`` as tasks finish (``rvmsim.batch.LocalExecutor``, ``DaskExecutor``)."""
+
+    def run(self, fn: Callable[[Any], Any], items: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+        ...
+
+
+def cube_task(task: dict[str, Any]) -> dict[str, bytes | None]:
+    """Render one viewpoint (a task for a worker process or a cluster worker).
+
+    ``task``: ``scene`` (Scene), ``view`` (:class:`CubeView`), ``color`` (bool).  Returns
+    ``{"labels": PNG bytes, "color": PNG bytes or None}`` (the atlas, as
+    :func:`cached_cube` stores it).
+    """
+    scene: Scene = task["scene"]
+    view: CubeView = task["view"]
+    atlas = render_faces(posed_parts(build_parts(scene), view.body_pose), view.layout,
+                         view.camera, sky=scene.render.sky_color, color=bool(task["color"]))
+    return {"labels": _png(atlas.labels),
+            "color": _png(atlas.color) if task["color"] else None}
+
+
+def render_cubes(scene: Scene, views: Sequence[CubeView], *, scale: float = 1.0,
+                 color: bool = False, runner: TaskRunner | None = None,
+                 progress: bool = False) -> int:
+    """Render, and store in the render cache, every view of ``views`` not already there.
+
+    Parameters
+    ----------
+    scene : Scene
+    views : sequence of CubeView
+        Repeats are rendered once.
+    scale : float
+        Fraction of the sensor (part of the cache key, as for :func:`cached_cube`).
+    color : bool
+        The colour atlas too (else labels only).
+    runner : TaskRunner, optional
+        Where the renders run (one task per view); default: one after another here.
+    progress : bool
+
+    Returns
+    -------
+    int
+        Views rendered (those found in the cache are not counted).
+
+    Notes
+    -----
+    A view counts as cached when its PNG files exist; a damaged entry is found (and
+    rendered again) when it is read.  Workers need the scene's mesh files at the same
+    paths.
+    """
+    todo: dict[str, CubeView] = {}
+    for v in views:
+        key = cube_key(scene, v.camera, v.layout, v.body_pose, scale)
+        folder = cache_dir() / key
+        have = (folder / "cube_labels.png").is_file() and (
+            not color or (folder / "cube_color.png").is_file())
+        if not have:
+            todo.setdefault(key, v)
+    if not todo:
+        return 0
+    items = {k: {"scene": scene, "view": v, "color": color} for k, v in todo.items()}
+    results = runner.run(cube_task, items) if runner is not None else (
+        (k, cube_task(t)) for k, t in items.items())
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(items), desc="render viewpoints", unit="view", leave=False)
+    try:
+        for key, out in results:
+            v = todo[key]
+            labels_png, color_png = out["labels"], out["color"]
+            if not isinstance(labels_png, bytes):
+                raise TypeError(f"render task {key} returned no label PNG")
+            _store(cache_dir() / key, scene, v.camera, v.layout, labels_png, color_png)
+            if bar is not None:
+                bar.update(1)
+    finally:
+        if bar is not None:
+            bar.close()
+    return len(items)

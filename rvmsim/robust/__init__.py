@@ -18,9 +18,10 @@ from .variation import (
     NOMINAL_LOAD,
     MOUNT_AXES,
 )
-from .samples import MountSample, draw_samples, nominal_sample
+from .samples import MountSample, draw_samples, nominal_sample, position_levels_at
 from .images import (sample_images, sample_camera, body_pose, cover_for, Refolder, refolder,
-                     RvmPixels, rvm_pixels, sample_rvm_labels, viewpoint_groups)
+                     RvmPixels, rvm_pixels, sample_rvm_labels, viewpoint_groups,
+                     render_viewpoints)
 from .stats import (
     YieldEstimate,
     yield_estimate,
@@ -51,6 +52,8 @@ __all__ = [
     "MountSample",
     "draw_samples",
     "nominal_sample",
+    "render_viewpoints",
+    "position_levels_at",
     "sample_images",
     "sample_camera",
     "body_pose",

@@ -38,15 +38,16 @@ import numpy as np
 from ..camera import FisheyeCamera, rotation_from_ypr
 from .. import labels as L
 from ..isp import IspParams, OutputSpec, apply_map, build_map
-from ..render import (CameraRays, CubeLayout, FisheyeImages, cached_cube, cover_layout,
-                      fold, fold_labels, nearest_labels, read_cube, refold_coords,
-                      refold_layout)
+from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, TaskRunner, cached_cube,
+                      cover_layout, fold, fold_labels, nearest_labels, read_cube,
+                      refold_coords, refold_layout, render_cubes)
 from ..scene import Scene, build_parts
 from .samples import MountSample
 from .variation import LoadState
 
 __all__ = ["sample_images", "Refolder", "refolder", "RvmPixels", "rvm_pixels",
-           "sample_rvm_labels", "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG"]
+           "sample_rvm_labels", "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG",
+           "render_viewpoints"]
 
 #: The covered angle ranges are rounded up to this step (degrees), so that sample sets of
 #: about the same spread share cached cubes.
@@ -126,6 +127,27 @@ def viewpoint_groups(samples: Sequence[MountSample]) -> list[list[int]]:
     for i, s in enumerate(samples):
         groups.setdefault(_viewpoint(s), []).append(i)
     return list(groups.values())
+
+
+def render_viewpoints(scene: Scene, sample_sets: Sequence[Sequence[MountSample]], *,
+                      scale: float = 1.0, runner: TaskRunner | None = None,
+                      shared: Sequence[Refolder] | None = None, progress: bool = False) -> int:
+    """Render (labels only) every viewpoint of every sample set that is not yet in the
+    render cache, on ``runner`` (e.g. ``rvmsim.batch.LocalExecutor(2)`` or a Dask
+    executor; default: here, one after another).  Each set gets its own covering crops
+    (its :func:`refolder`, or ``shared[k]`` for set ``k``), as :func:`sample_images` and
+    :func:`sample_rvm_labels` use them, so those calls then read every cube from the cache.
+    Returns the number rendered."""
+    views = []
+    for k, samples in enumerate(sample_sets):
+        if not samples:
+            continue
+        cover = shared[k].cover if shared is not None else cover_for(scene, samples, scale=scale)
+        for g in viewpoint_groups(samples):
+            s = samples[g[0]]
+            views.append(CubeView(_viewpoint_camera(scene, s, scale), cover,
+                                  body_pose(scene, s.load)))
+    return render_cubes(scene, views, scale=scale, runner=runner, progress=progress)
 
 
 @dataclass(frozen=True)

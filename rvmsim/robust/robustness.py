@@ -23,7 +23,8 @@ from ..criteria import Criteria, default_criteria, evaluate
 from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params
 from ..scene import Scene
-from .images import refolder, rvm_pixels, sample_images, sample_rvm_labels
+from ..render import TaskRunner
+from .images import Refolder, cover_for, refolder, render_viewpoints, rvm_pixels, sample_images, sample_rvm_labels
 from .samples import MountSample, draw_samples, nominal_sample
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
 from .variation import MOUNT_AXES, Variation, variation_from_scene
@@ -52,7 +53,8 @@ class SampleEvaluation:
 
 def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspParams,
                      output: OutputSpec, criteria: Criteria | None = None, *,
-                     scale: float = 1.0, progress: bool = False) -> SampleEvaluation:
+                     scale: float = 1.0, shared: Refolder | None = None,
+                     progress: bool = False) -> SampleEvaluation:
     """Every EC of one ISP setting on every sample.
 
     Parameters
@@ -66,6 +68,8 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
         Default: the paper's.
     scale : float
         Fraction of the sensor rendered.
+    shared : Refolder, optional
+        :func:`~rvmsim.robust.refolder` of ``samples`` (default: made here).
     progress : bool
     """
     crit = criteria if criteria is not None else default_criteria()
@@ -78,7 +82,7 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
     all_passed = np.zeros(n, bool)
     if n == 0:
         return SampleEvaluation(ids, values, passed, scores, all_passed)
-    shared = refolder(scene, samples, scale=scale)
+    shared = shared if shared is not None else refolder(scene, samples, scale=scale)
     cam = scene.fisheye_camera()
     rvm = rvm_pixels(cam.scaled(scale) if scale != 1.0 else cam, p, output)
     bar = None
@@ -258,8 +262,8 @@ def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: SampleEvaluati
 
 
 def _frame(scene: Scene, sample: MountSample, params: IspParams, output: OutputSpec,
-           crit: Criteria, scale: float) -> RvmFrame:
-    images = sample_images(scene, [sample], scale=scale)[0]
+           crit: Criteria, scale: float, shared: Refolder) -> RvmFrame:
+    images = sample_images(scene, [sample], scale=scale, shared=shared)[0]
     return evaluate_params(images, _scaled_params(scene, params, scale), output, crit,
                            annotate=True)
 
@@ -268,7 +272,8 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
                criteria: Criteria | None = None, variation: Variation | None = None,
                samples: int = 200, seed: int = 0, scales: Sequence[float] = DEFAULT_SCALES,
                scale_samples: int | None = None, render_scale: float = 1.0,
-               min_yield: float | None = None, progress: bool = False) -> RobustnessResult:
+               min_yield: float | None = None, runner: TaskRunner | None = None,
+               progress: bool = False) -> RobustnessResult:
     """The yield of ``params`` over ``scene``'s production variation.
 
     Parameters
@@ -293,6 +298,10 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         Fraction of the sensor rendered (small renders for tests).
     min_yield : float, optional
         Recorded with the result (``meets_min_yield``).
+    runner : TaskRunner, optional
+        Where the viewpoints not yet in the render cache are rendered, all before the
+        first sample is evaluated (``rvmsim.batch.LocalExecutor(workers)``, a Dask
+        executor); default: here, as they are needed.
     progress : bool
 
     Returns
@@ -303,26 +312,37 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
     crit = criteria if criteria is not None else default_criteria()
     var = variation if variation is not None else variation_from_scene(scene)
     drawn = draw_samples(var, samples, seed)
+    n_extra = scale_samples or min(samples, 64)
+    extra = {float(s): draw_samples(var, n_extra, seed, s)
+             for s in scales if s != 1.0}
+    sets = {1.0: drawn, **extra}
+    base = refolder(scene, drawn, scale=render_scale)
+    folds = {1.0: base, **{s: Refolder(cover_for(scene, v, scale=render_scale), base.rays)
+                           for s, v in extra.items()}}  # the same camera: the same rays
+    rendered = 0
+    if runner is not None:
+        rendered = render_viewpoints(scene, list(sets.values()), scale=render_scale,
+                                     runner=runner, shared=list(folds.values()),
+                                     progress=progress)
+    t_render = time.perf_counter()
     ev = evaluate_samples(scene, drawn, params, output, crit, scale=render_scale,
-                          progress=progress)
+                          shared=folds[1.0], progress=progress)
     t1 = time.perf_counter()
     curve = []
     for s in scales:
-        if s == 1.0:
-            curve.append(ScalePoint(1.0, yield_estimate(ev.all_passed)))
-            continue
-        extra = draw_samples(var, scale_samples or min(samples, 64), seed, s)
-        e = evaluate_samples(scene, extra, params, output, crit, scale=render_scale,
-                             progress=progress)
+        e = ev if s == 1.0 else evaluate_samples(scene, extra[float(s)], params, output, crit,
+                                                 scale=render_scale, shared=folds[float(s)],
+                                                 progress=progress)
         curve.append(ScalePoint(float(s), yield_estimate(e.all_passed)))
     t2 = time.perf_counter()
     n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
     worst = int(np.lexsort((ev.scores, -n_fail))[0])
-    nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale)
-    worst_frame = _frame(scene, drawn[worst], params, output, crit, render_scale)
+    nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale, base)
+    worst_frame = _frame(scene, drawn[worst], params, output, crit, render_scale, base)
     t3 = time.perf_counter()
     return RobustnessResult(
         scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,
         yield_estimate(ev.all_passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
         worst_frame, worst, min_yield,
-        {"samples": t1 - t0, "scale_curve": t2 - t1, "frames": t3 - t2, "total": t3 - t0})
+        {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
+         "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)})

@@ -17,7 +17,7 @@ import numpy as np
 
 from .variation import MOUNT_AXES, LoadState, Variation
 
-__all__ = ["MountSample", "draw_samples", "nominal_sample"]
+__all__ = ["MountSample", "draw_samples", "nominal_sample", "position_levels_at"]
 
 #: Sobol dimensions: the six mount axes, then the load state.
 _DIMS = len(MOUNT_AXES) + 1
@@ -78,6 +78,14 @@ def _unit_points(n: int, seed: int) -> np.ndarray:
     return np.clip(u, 1e-12, 1.0 - 1e-12)
 
 
+def position_levels_at(levels: int, scale: float) -> int:
+    """Rendered levels per position axis at tolerance ``scale`` for ``levels`` at 1×:
+    ``min(levels, max(1, ceil(levels · scale)))``.  At 0.5× of 2 levels that is 1 (the
+    position at 0: the snapping error of ±h/2 uniform at one level equals that of ±h at two,
+    RMS h/(2√3)); above 1× the levels stay (the bins widen with the tolerances)."""
+    return min(levels, max(1, math.ceil(levels * scale - 1e-9)))
+
+
 def draw_samples(variation: Variation, n: int, seed: int, scale: float = 1.0) -> list[MountSample]:
     """``n`` quasi-random samples of ``variation`` with its tolerances times ``scale``.
 
@@ -90,7 +98,9 @@ def draw_samples(variation: Variation, n: int, seed: int, scale: float = 1.0) ->
         Scrambling seed: the same seed gives the same samples.
     scale : float
         Tolerance scale factor (0.5, 1, 2, …): every mount offset is multiplied by it; load
-        states are discrete and do not scale.
+        states are discrete and do not scale.  Below 1 the positions are rendered at fewer
+        levels (:func:`position_levels_at`): bins no narrower in mm than at 1×, so no more
+        renders and no larger snapping error than at 1×.
 
     Returns
     -------
@@ -101,7 +111,7 @@ def draw_samples(variation: Variation, n: int, seed: int, scale: float = 1.0) ->
     if not (scale >= 0 and math.isfinite(scale)):
         raise ValueError(f"tolerance scale must be finite and ≥ 0, got {scale}")
     u = _unit_points(n, seed)
-    k = variation.position_levels
+    k = position_levels_at(variation.position_levels, scale)
     values = np.stack([a.ppf(u[:, i]) for i, a in enumerate(variation.axes)], axis=1) * scale
     snapped = np.stack([a.ppf((np.floor(u[:, i] * k) + 0.5) / k) if a.varies else
                         np.zeros(n) for i, a in enumerate(variation.axes[:3])], axis=1) * scale

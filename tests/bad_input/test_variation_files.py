@@ -90,6 +90,10 @@ FLAGS = [
     ("scales-negative", ("--scales", "-1"), "--scales"),
     ("scales-nan", ("--scales", "1,nan"), "--scales"),
     ("scales-empty", ("--scales", ""), "--scales"),
+    ("workers-zero", ("--workers", "0"), "--workers"),
+    ("workers-text", ("--workers", "two"), "--workers"),
+    ("scheduler-no-port", ("--scheduler", "tcp://127.0.0.1"), "--scheduler"),
+    ("scheduler-unreachable", ("--scheduler", "tcp://127.0.0.1:9"), "127.0.0.1:9"),
 ]
 CASES += [Case(f"flag-{i}", _robustness(*extra), (opt,), _setup()) for i, extra, opt in FLAGS]
 CASES += [

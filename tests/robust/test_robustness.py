@@ -107,3 +107,60 @@ def test_cli_exit_status_follows_min_yield(tmp_path: Path):
     for out in ("a", "b"):
         assert (tmp_path / out / "robustness.html").is_file()
         assert json.loads((tmp_path / out / "robustness.json").read_text())["n"] == 8
+
+
+#: ±1° on every angle, ±4 mm across and two load states: 2 x 2 viewpoints at 1x.
+WITH_POSITIONS = {"mount": {**ANGLES_ONLY["mount"], "x_mm": {"uniform": {"half_width": 4}}},
+                  "load_states": [{"name": "curb", "height_mm": 0, "pitch_deg": 0},
+                                  {"name": "full", "height_mm": -40, "pitch_deg": 0.8}]}
+
+
+def _runner_case(settings, cache: Path, monkeypatch: pytest.MonkeyPatch, runner):
+    _, crit, mid, _ = settings
+    monkeypatch.setenv("RVMSIM_CACHE", str(cache))
+    sc = small_scene(0.25, variation=WITH_POSITIONS)
+    return robustness(sc, mid, OUTPUT, criteria=crit, samples=16, seed=2,
+                      scales=(0.5, 1.0, 2.0), scale_samples=8, runner=runner)
+
+
+def _same_evaluation(a, b) -> None:
+    """The same samples and, up to a stray GL edge pixel, the same EC values."""
+    assert a.as_dict()["samples"][0].keys() == b.as_dict()["samples"][0].keys()
+    assert [s.offsets for s in a.samples] == [s.offsets for s in b.samples]
+    va, vb = a.evaluation.values, b.evaluation.values
+    assert (np.isnan(va) == np.isnan(vb)).all()
+    ok = ~np.isnan(va)
+    assert np.mean(va[ok] == vb[ok]) >= 0.99
+    np.testing.assert_allclose(va[ok], vb[ok], rtol=0, atol=1.0)
+    assert abs(a.estimate.n_pass - b.estimate.n_pass) <= 1
+
+
+def test_viewpoints_render_up_front_on_local_processes(settings, tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch):
+    from rvmsim.batch import LocalExecutor
+
+    here = _runner_case(settings, tmp_path / "a", monkeypatch, None)
+    with LocalExecutor(2) as ex:
+        spread = _runner_case(settings, tmp_path / "b", monkeypatch, ex)
+    # 1x: 2 x-levels x 2 loads; 0.5x: one level (position_levels_at) x 2; 2x: 2 x 2
+    assert spread.timings["viewpoints_rendered"] == 4 + 2 + 4
+    assert here.timings["viewpoints_rendered"] == 0  # rendered as needed, not up front
+    assert len(list((tmp_path / "b").iterdir())) >= 10  # + the two colour frames' entries
+    _same_evaluation(here, spread)
+    again = _runner_case(settings, tmp_path / "b", monkeypatch, LocalExecutor(1))
+    assert again.timings["viewpoints_rendered"] == 0  # all cached
+    np.testing.assert_array_equal(again.evaluation.values, spread.evaluation.values)
+
+
+def test_viewpoints_render_on_a_dask_cluster(settings, tmp_path: Path,
+                                             monkeypatch: pytest.MonkeyPatch):
+    distributed = pytest.importorskip("distributed")
+    from rvmsim.batch import DaskExecutor
+
+    here = _runner_case(settings, tmp_path / "a", monkeypatch, None)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=":0") as c, \
+            distributed.Client(c) as client:
+        remote = _runner_case(settings, tmp_path / "b", monkeypatch, DaskExecutor(client=client))
+    assert remote.timings["viewpoints_rendered"] == 10
+    _same_evaluation(here, remote)

@@ -80,3 +80,23 @@ def test_viewpoint_groups_hold_one_rendered_position_and_load_each():
     assert sorted(i for g in groups for i in g) == list(range(128))
     for g in groups:
         assert len({(s[i].render_position_mm, s[i].load) for i in g}) == 1
+
+
+
+def test_fewer_position_levels_below_1x_keep_the_snapping_error():
+    from rvmsim.robust import position_levels_at
+
+    assert [position_levels_at(2, s) for s in (0.25, 0.5, 0.75, 1.0, 1.5, 2.0)] == [1, 1, 2, 2, 2, 2]
+    assert [position_levels_at(3, s) for s in (0.3, 0.5, 1.0, 2.0)] == [1, 2, 3, 3]
+    errors = {}
+    for scale in (0.5, 1.0):
+        samples = draw_samples(_variation(2), 256, seed=3, scale=scale)
+        x = np.array([s.offsets[0] for s in samples])
+        rx = np.array([s.render_position_mm[0] for s in samples])
+        assert len(set(rx.round(9))) == (1 if scale == 0.5 else 2)
+        errors[scale] = x - rx
+    # x is ±5 mm uniform: at 1x two bins (rendered at ±2.5), at 0.5x one (at 0): the same
+    # error, uniform in ±2.5 mm (RMS 5/(2·√3) = 1.443 mm)
+    for e in errors.values():
+        assert np.abs(e).max() <= 2.5 + 1e-9
+        assert np.sqrt(np.mean(e ** 2)) == pytest.approx(5 / (2 * np.sqrt(3)), rel=0.03)
