@@ -96,8 +96,9 @@ def _check_run(run_dir: Path, want: dict[str, Any]) -> None:
         s = run_settings(run_dir, store)
     finally:
         store.close()
-    have = {"scene": s.scene, "strategy": s.strategy, "seed": s.seed, "budget": s.budget,
-            "robust_samples": s.robust_samples}
+    have = {"scene": s.scene, "scene_key": s.scene_key, "strategy": s.strategy,
+            "seed": s.seed, "budget": s.budget, "robust_samples": s.robust_samples,
+            "variation_key": s.variation_key}
     if have != want:
         raise SystemExit(f"{run_dir}: holds a run with other settings ({have}, wanted {want});"
                          " delete it or give another --out")
@@ -106,13 +107,21 @@ def _check_run(run_dir: Path, want: dict[str, Any]) -> None:
 def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
           args: argparse.Namespace) -> dict[str, Any]:
     """The best setting of one tuning run in ``run_dir`` (run, resumed, or read back when a
-    finished run's record ``<run_dir>.json`` is there)."""
+    finished run's record ``<run_dir>.json`` is there and the scene and its variation are
+    as they were)."""
     from rvmsim.isp import load_params, params_to_dict
+    from rvmsim.render import scene_key
+    from rvmsim.scene import load_scene
     from rvmsim.tune import DEFAULT_STRATEGY, tune
+    from rvmsim.tune.robust import run_variations, variation_key
 
+    scene = load_scene(scene_path)
     record = run_dir.with_name(run_dir.name + ".json")
-    want = {"scene": str(scene_path.resolve()), "strategy": DEFAULT_STRATEGY,
-            "seed": args.seed, "budget": args.budget, "robust_samples": robust_samples}
+    want = {"scene": str(scene_path.resolve()), "scene_key": scene_key(scene),
+            "strategy": DEFAULT_STRATEGY, "seed": args.seed, "budget": args.budget,
+            "robust_samples": robust_samples,
+            "variation_key": None if robust_samples is None else variation_key(
+                run_variations([scene], None))}
     rank_1 = run_dir / "top" / "rank_1.yaml"
     if record.is_file() and rank_1.is_file():
         doc = json.loads(record.read_text())
@@ -149,6 +158,8 @@ def yield_of(scene_path: Path, setting: dict[str, Any], path: Path,
              args: argparse.Namespace) -> dict[str, Any]:
     """:func:`rvmsim.robust.robustness` of one tuned setting (read back from ``path`` when
     it holds the result of the same scene, setting, samples, seed and scales)."""
+    import yaml
+
     from rvmsim.isp import load_params
     from rvmsim.render import scene_key
     from rvmsim.robust import robustness
@@ -162,8 +173,6 @@ def yield_of(scene_path: Path, setting: dict[str, Any], path: Path,
         if doc.get("key") == key:
             return {**doc, "reused": True}
     params_file = path.with_suffix(".params.yaml")
-    import yaml
-
     params_file.write_text(yaml.safe_dump(setting["isp"], sort_keys=False))
     params, output = load_params(params_file)
     say(f"  robustness of {path.stem}: {args.samples} samples")
@@ -334,8 +343,13 @@ def main() -> None:
     args.eval_seed = args.seed if args.eval_seed is None else args.eval_seed
     from rvmsim.tune import DEFAULT_STRATEGY
 
+    from rvmsim.errors import RvmsimError
+
     t0 = time.perf_counter()
-    rows = [vehicle_row(v, args) for v in letters]
+    try:
+        rows = [vehicle_row(v, args) for v in letters]
+    except RvmsimError as err:
+        raise SystemExit(f"yield_table: {err}") from None
     doc = {"machine": {"cpu_model": cpu_model(), "cores": os.cpu_count(),
                        "python": platform.python_version()},
            "settings": {"vehicles": letters, "samples": args.samples,
