@@ -23,10 +23,11 @@ that drives it), the machine and each vehicle's wall times, and writes
 ``OUT/yield_table.json`` and ``OUT/yield_table.md``.
 
 Everything is kept under ``--out`` and reused: the run folders (``OUT/<vehicle>/nominal-…``,
-``robust-k…``; an unfinished run is resumed), and each setting's robustness result
-(``robustness_<run>-n<samples>-e<eval seed>.json``, recomputed only when the setting, samples, seed or scales
-change), so a second invocation only rebuilds the table.  The wall times shown are those of
-the invocation that computed each step.
+``robust-k…``; an unfinished run is resumed) with a record of each finished one
+(``<run>.json``), and each setting's robustness result
+(``robustness_<run>-n<samples>-e<eval seed>.json``, recomputed only when the setting,
+samples, seed or scales change), so a second invocation only rebuilds the table.  The
+wall times shown are those of the invocation that computed each step.
 
 Note: the Sobol samples of one seed are a prefix sequence, so with ``--eval-seed`` equal to
 ``--seed`` the K tuning samples are the first K of the evaluation samples (the robust-tuned
@@ -276,7 +277,8 @@ def markdown(doc: dict[str, Any]) -> str:
     agg = doc["rows"][0]["robust_tuned"]["aggregate"] if doc["rows"] else "?"
     lines = [
         f"| vehicle | nominal-tuned: EC score at nominal | yield (95 % CI) | robust-tuned "
-        f"(K = {m['robust_samples']}): EC score at nominal | robust score ({agg}) | "
+        f"(K = {m['robust_samples']}): EC score at nominal | robust score ({agg} of nominal + "
+        f"K samples) | "
         "yield (95 % CI) | what prevents 100 % (EC: failure rate, driving axis) |",
         "|---|---|---|---|---|---|---|"]
     for r in doc["rows"]:
