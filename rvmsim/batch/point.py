@@ -32,16 +32,21 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
 
     ``task`` holds ``scene`` (document), ``config`` (tuning config document), ``label``,
     ``strategy``, ``budget``, ``seed``, ``criteria`` (text or None), ``criteria_source``,
-    ``sensitivity``; a re-check adds ``starts`` (parameter dicts, name → value, evaluated
-    first) and ``budget_factor`` (the budget, or the strategy's default size when the
-    budget is None, times this).
+    ``sensitivity``, ``robustness`` (``{"samples", "seed"}`` of the yield, or None: no
+    yield); a re-check adds ``starts`` (parameter dicts, name → value, evaluated first),
+    ``budget_factor`` (the budget, or the strategy's default size when the budget is None,
+    times this) and ``beat`` (``[passed, score]`` of the point's best so far: the yield is
+    measured only when this run's best ranks above it, as only then can it be the point's
+    final best).
 
     Returns a JSON-ready dict: ``score``, ``passed``, ``ecs`` (id → value, score, passed),
     ``params``, ``tuned``, ``evaluations``, ``budget`` (the budget searched with, None for
     the strategy's default), ``stopped``, ``limiting_ec`` (the failing enabled EC with the
     lowest score, or None), ``infeasible`` (the enabled ECs no ISP setting can pass here, as
     ``{"ec", "reason"}``: :func:`~rvmsim.batch.feasibility.infeasible_ecs`),
-    ``sensitivity`` (see :func:`sensitivity`) and ``seconds``; a problem with the point is
+    ``sensitivity`` (see :func:`sensitivity`), ``robustness`` (the best setting's yield,
+    :func:`~rvmsim.batch.yields.point_yield`; only when the task asks for one, the scene
+    has a ``variation`` section and the run beats ``beat``) and ``seconds``; a problem with the point is
     returned as ``{"error": message, "seconds"}``.
     """
     with task_malloc():
@@ -58,6 +63,7 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     from ..isp import IspParams
     from ..tune import RunStore, TuningConfig, candidate_evaluator, search_scene
     from .feasibility import infeasible_ecs
+    from .yields import point_yield
 
     t0 = time.perf_counter()
     try:
@@ -102,6 +108,13 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         result["limiting_ec"] = min(failing)[1] if failing else None
         if task.get("sensitivity", True):
             result["sensitivity"] = sensitivity(evaluator, space, best.params)
+        rob = task.get("robustness")
+        beat = task.get("beat")
+        if (rob and rob["samples"] > 0 and scene.variation is not None
+                and (beat is None or (result["passed"], result["score"]) > tuple(beat))):
+            with _RENDER_LOCK:  # renders the variation's viewpoints
+                result["robustness"] = point_yield(scene, best.params, config.output_spec(),
+                                                   criteria, rob["samples"], rob["seed"])
         result["seconds"] = time.perf_counter() - t0
         return result
     except RvmsimError as err:

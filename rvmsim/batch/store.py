@@ -15,6 +15,7 @@ from typing import Any
 from ..errors import RvmsimError
 from ..tune import FolderLock, SqliteStore
 from .spec import DesignPoint
+from .yields import yield_problem
 
 __all__ = ["SweepStore", "sweep_lock", "SWEEP_DB"]
 
@@ -71,6 +72,10 @@ def _result_problem(r: Any) -> str | None:
                                           and isinstance(x.get("short", ""), str)
                                           for x in inf)):
         return "infeasible: not what a sweep stores"
+    if "robustness" in r:  # absent in stores made before yields existed, or without one
+        problem = yield_problem(r["robustness"])
+        if problem is not None:
+            return f"robustness: {problem}"
     return None
 
 
