@@ -37,6 +37,7 @@ from .yields import (
     MAX_YIELD_SAMPLES,
     point_yield,
     yield_summary,
+    yield_cells,
 )
 from .point import (
     run_point,
@@ -102,6 +103,7 @@ __all__ = [
     "MAX_YIELD_SAMPLES",
     "point_yield",
     "yield_summary",
+    "yield_cells",
     "run_point",
     "sensitivity",
     "SENSITIVITY_STEPS",
