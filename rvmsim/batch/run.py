@@ -135,6 +135,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
                                             on_result)
             rechecks, rechecked = _run_rechecks(spec, store, session, executor, points, done,
                                                 progress)
+            _run_missing_yields(spec, store, executor, points, done, rechecks, progress)
         finally:
             store.close()
     return SweepResult(spec, points, merged_results(points, done, rechecks), ran, out_dir,
@@ -218,6 +219,37 @@ def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Ex
         turned = {k for k, r in merged.items() if r.get("verdict") == "pass"
                   and before[k].get("verdict") != "pass"}
     return rechecks, ran
+
+
+def _run_missing_yields(spec: SweepSpec, store: SweepStore, executor: Executor,
+                        points: list[DesignPoint], done: dict[str, dict[str, Any]],
+                        rechecks: dict[tuple[str, int], dict[str, Any]], progress: bool
+                        ) -> None:
+    """Measure the yield of each point whose best run has none although its scene has a
+    variation section (a result stored before yields existed: every run since measures
+    its own), adding it to that run's stored result (``done`` / ``rechecks`` too)."""
+    if not spec.robustness.samples:
+        return
+    merged = merged_results(points, done, rechecks)
+    todo, tasks = {}, {}
+    for p in points:
+        r = merged.get(p.key)
+        if r is None or "error" in r or "robustness" in r:
+            continue
+        task = point_task(spec, p)
+        if task["scene"].get("variation") is not None:
+            key = f"{p.task_key}-yield"
+            todo[key] = (p, int(r["found_in"]))
+            tasks[key] = {**task, "yield_of": r["params"]}
+    with closing(_stream(executor, tasks, progress, len(tasks), "yields",
+                         {k: p.label for k, (p, _) in todo.items()})) as arrivals:
+        for task_key, result in arrivals:
+            (point, rnd), y = todo[task_key], result.get("robustness")
+            if y is None:  # the point's scene failed to load on the worker
+                y = {"error": f"yield: {result.get('error', 'not measured')}"}
+            store.set_yield(point, rnd, y)
+            run = done[point.key] if rnd == 0 else rechecks[(point.key, rnd)]
+            run["robustness"] = y
 
 
 def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:

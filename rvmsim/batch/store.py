@@ -116,6 +116,17 @@ class SweepStore(SqliteStore):
                    [(point.key, round_, point.index, json.dumps(result), session,
                      time.time())])
 
+    def set_yield(self, point: DesignPoint, round_: int, robustness: dict[str, Any]) -> None:
+        """Add a yield (``robustness``) to the stored result of the run of ``point`` from
+        round ``round_`` (0: the first pass) that is its best; the row's session and time
+        stay (for results stored before yields existed: :func:`~rvmsim.batch.run.run_sweep`
+        measures theirs on resume)."""
+        table, where, args = (("points", "key = ?", (point.key,)) if round_ == 0 else
+                              ("rechecks", "key = ? AND round = ?", (point.key, round_)))
+        (text,), = self.rows(f"SELECT result FROM {table} WHERE {where}", args)
+        result = {**json.loads(text), "robustness": robustness}
+        self.write(f"UPDATE {table} SET result = ? WHERE {where}", [(json.dumps(result), *args)])
+
     def done(self) -> dict[str, dict[str, Any]]:
         """Finished points (errors included) by key.
 

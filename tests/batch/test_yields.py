@@ -216,3 +216,43 @@ def test_a_recheck_task_measures_the_yield_only_when_it_beats_the_best(yield_run
     beaten = run_point({**task, "beat": [False, -1.0]})
     assert beaten["robustness"]["n"] == spec.robustness.samples
     assert "robustness" not in run_point({**task, "robustness": None})
+
+
+def _strip_yields(db):
+    """Make ``db`` look as a sweep before yields wrote it: no yields, no yield
+    fingerprint."""
+    with sqlite3.connect(db) as con:
+        con.execute("DELETE FROM meta WHERE key = 'yield_fingerprint'")
+        for table, cols in (("points", "key"), ("rechecks", "key, round")):
+            for *where, text in con.execute(f"SELECT {cols}, result FROM {table}").fetchall():
+                r = json.loads(text)
+                r.pop("robustness", None)
+                cond = " AND ".join(f"{c.strip()} = ?" for c in cols.split(","))
+                con.execute(f"UPDATE {table} SET result = ? WHERE {cond}",
+                            (json.dumps(r), *where))
+
+
+def test_a_store_from_before_yields_gets_them_on_resume(yield_run, tmp_path):
+    """Resuming a store whose results have no yields (the previous version's) runs no
+    point again and measures only each point's best setting's yield, equal to the yields
+    of a sweep that measured them in its tasks; rows keep their session and time."""
+    _, spec, unbroken = yield_run
+    out = tmp_path / "old"
+    out.mkdir()
+    with sqlite3.connect(unbroken.out_dir / "sweep.sqlite") as src, \
+            sqlite3.connect(out / "sweep.sqlite") as dst:
+        src.backup(dst)
+    _strip_yields(out / "sweep.sqlite")
+    assert all("robustness" not in r for r in stored_sweep(spec, out).results.values())
+    with sqlite3.connect(out / "sweep.sqlite") as con:
+        times = con.execute("SELECT key, session, finished FROM points").fetchall()
+    res = run_sweep(spec, out, executor=LocalExecutor(1))
+    assert (res.ran, res.rechecked) == (0, 0)
+    for p in res.points:
+        got, want = res.results[p.key]["robustness"], unbroken.results[p.key]["robustness"]
+        assert {k: v for k, v in got.items() if k != "seconds"} == \
+            {k: v for k, v in want.items() if k != "seconds"}
+    assert stored_sweep(spec, out).results.keys() == res.results.keys()
+    assert all("robustness" in r for r in stored_sweep(spec, out).results.values())
+    with sqlite3.connect(out / "sweep.sqlite") as con:
+        assert con.execute("SELECT key, session, finished FROM points").fetchall() == times
