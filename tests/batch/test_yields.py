@@ -7,7 +7,12 @@ import csv
 import dataclasses
 import io
 import json
+import os
+import signal
 import sqlite3
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -256,3 +261,41 @@ def test_a_store_from_before_yields_gets_them_on_resume(yield_run, tmp_path):
     assert all("robustness" in r for r in stored_sweep(spec, out).results.values())
     with sqlite3.connect(out / "sweep.sqlite") as con:
         assert con.execute("SELECT key, session, finished FROM points").fetchall() == times
+
+
+def test_a_sweep_killed_mid_way_resumes_keeping_the_stored_yields(yield_run, tmp_path):
+    """SIGKILL once a point is stored: the resumed CLI sweep keeps that row as it was (its
+    yield included) and ends with the unbroken run's table."""
+    f, spec, unbroken = yield_run
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "rvmsim", "sweep", str(f), "--out", str(out), "--workers",
+           "1", "--no-progress"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    db = out / "sweep.sqlite"
+    deadline = time.time() + 300
+    while time.time() < deadline and proc.poll() is None and _points(db) < 1:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the sweep ended before it could be killed"
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=60)
+    with sqlite3.connect(db) as con:
+        before = con.execute("SELECT key, result, session, finished FROM points").fetchall()
+    assert before and all("robustness" in json.loads(r[1]) for r in before)
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    with sqlite3.connect(db) as con:
+        after = {r[0]: r for r in
+                 con.execute("SELECT key, result, session, finished FROM points")}
+    assert all(after[row[0]] == row for row in before)
+    resumed = stored_sweep(spec, out)
+    assert csv_text(*sweep_table(spec, resumed.points, resumed.results)) == \
+        csv_text(*sweep_table(spec, unbroken.points, unbroken.results))
+
+
+def _points(db):
+    try:
+        with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as con:
+            return con.execute("SELECT COUNT(*) FROM points").fetchone()[0]
+    except sqlite3.OperationalError:
+        return 0
