@@ -30,8 +30,8 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
     Columns: ``point``, the axes, ``verdict`` (pass, not found, infeasible), ``ec_score``,
     ``passed``, ``limiting_ec``, ``reason`` (why infeasible), ``ec_<id>`` (pass/FAIL) per EC
     of the sweep's criteria, :data:`~rvmsim.batch.yields.YIELD_COLUMNS` (empty without a
-    yield), the ISP parameters, ``evaluations`` (first pass and re-checks
-    summed) and ``error``.  Deterministic content only (no timings), so the same sweep gives the same
+    yield), the ISP parameters, ``evaluations`` (first pass and re-checks summed) and
+    ``error``.  Deterministic content only (no timings), so the same sweep gives the same
     table on any executor.
     """
     from ..isp import IspParams

@@ -47,8 +47,8 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
     ``{"ec", "reason"}``: :func:`~rvmsim.batch.feasibility.infeasible_ecs`),
     ``sensitivity`` (see :func:`sensitivity`), ``robustness`` (the best setting's yield,
     :func:`~rvmsim.batch.yields.point_yield`; only when the task asks for one, the scene
-    has a ``variation`` section and the run beats ``beat``) and ``seconds``; a problem with the point is
-    returned as ``{"error": message, "seconds"}``.
+    has a ``variation`` section and the run beats ``beat``) and ``seconds``; a problem
+    with the point is returned as ``{"error": message, "seconds"}``.
     """
     with task_malloc():
         return _run_point(task)
