@@ -6,6 +6,7 @@ tuning runs.
 - :mod:`.point`: one design point as a task (render, infeasibility, tune, sensitivity).
 - :mod:`.feasibility`: the ECs no ISP setting can pass at a point (no search needed).
 - :mod:`.recheck`: continuation over the grid, re-checks, and each point's verdict.
+- :mod:`.yields`: each design point's yield over production variation.
 - :mod:`.store`: ``sweep.sqlite``.
 - :mod:`.run`: running or resuming a sweep.
 - :mod:`.outputs`: the sweep table, CSV/JSON and the files of a sweep.
@@ -29,6 +30,14 @@ from .spec import (
     load_sweep,
     design_points,
     point_scene_doc,
+)
+from .yields import (
+    YieldSettings,
+    YIELD_COLUMNS,
+    MAX_YIELD_SAMPLES,
+    point_yield,
+    yield_summary,
+    yield_cells,
 )
 from .point import (
     run_point,
@@ -89,6 +98,12 @@ __all__ = [
     "load_sweep",
     "design_points",
     "point_scene_doc",
+    "YieldSettings",
+    "YIELD_COLUMNS",
+    "MAX_YIELD_SAMPLES",
+    "point_yield",
+    "yield_summary",
+    "yield_cells",
     "run_point",
     "sensitivity",
     "SENSITIVITY_STEPS",

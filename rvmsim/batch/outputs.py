@@ -1,7 +1,9 @@
 """A sweep's results as data: the design-point table (``sweep.csv``) and ``sweep.json``
 (:func:`rvmsim.report.write_sweep_outputs` writes them with the pictures and the page).
 
-The table's EC columns are the ECs of the sweep's criteria, in their order.
+The table's EC columns are the ECs of the sweep's criteria, in their order; the yield
+columns (:data:`~rvmsim.batch.yields.YIELD_COLUMNS`) are always there, empty for a point
+without a yield.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from typing import Any
 
 from .run import SweepResult
 from .spec import DesignPoint, SweepSpec
+from .yields import YIELD_COLUMNS, yield_cells
 
 __all__ = ["sweep_table", "csv_text", "sweep_json", "page_columns", "point_verdict"]
 
@@ -26,8 +29,9 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
 
     Columns: ``point``, the axes, ``verdict`` (pass, not found, infeasible), ``ec_score``,
     ``passed``, ``limiting_ec``, ``reason`` (why infeasible), ``ec_<id>`` (pass/FAIL) per EC
-    of the sweep's criteria, the ISP parameters, ``evaluations`` (first pass and re-checks
-    summed) and ``error``.  Deterministic content only (no timings), so the same sweep gives the same
+    of the sweep's criteria, :data:`~rvmsim.batch.yields.YIELD_COLUMNS` (empty without a
+    yield), the ISP parameters, ``evaluations`` (first pass and re-checks summed) and
+    ``error``.  Deterministic content only (no timings), so the same sweep gives the same
     table on any executor.
     """
     from ..isp import IspParams
@@ -35,20 +39,21 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
     ec_ids = spec.criteria().ids
     param_names = IspParams.names()
     header = ["point", *(n for n, _ in spec.axes), *_SCORE_COLUMNS,
-              *[f"ec_{e}" for e in ec_ids], *param_names, "evaluations", "error"]
+              *[f"ec_{e}" for e in ec_ids], *YIELD_COLUMNS, *param_names, "evaluations",
+              "error"]
     rows = []
     for p in points:
         r = results.get(p.key)
         vals = [json.dumps(v) if isinstance(v, list) else v for _, v in p.values]
         if r is None or "error" in r:
             rows.append([p.index, *vals, *[None] * len(_SCORE_COLUMNS), *[None] * len(ec_ids),
-                         *[None] * len(param_names), None,
+                         *[None] * len(YIELD_COLUMNS), *[None] * len(param_names), None,
                          "not run" if r is None else r["error"]])
             continue
         rows.append([p.index, *vals, point_verdict(r), r["score"], r["passed"],
                      r["limiting_ec"], r.get("reason"),
                      *["pass" if r["ecs"][e]["passed"] else "FAIL" for e in ec_ids],
-                     *[r["params"][n] for n in param_names], r["evaluations"], ""])
+                     *yield_cells(r), *[r["params"][n] for n in param_names], r["evaluations"], ""])
     return header, rows
 
 
@@ -61,9 +66,11 @@ def point_verdict(result: dict[str, Any]) -> str | None:
 
 
 def page_columns(spec: SweepSpec) -> int:
-    """How many leading table columns the page shows: the point, the axes, the scores and
-    the ECs (the tuned parameters are in sweep.csv)."""
-    return 1 + len(spec.axes) + len(_SCORE_COLUMNS) + len(spec.criteria().ids)
+    """How many leading table columns the page shows: the point, the axes, the scores, the
+    ECs and, when the sweep measures yields, the yield columns (the tuned parameters are in
+    sweep.csv)."""
+    yields = len(YIELD_COLUMNS) if spec.has_variation and spec.robustness.samples else 0
+    return 1 + len(spec.axes) + len(_SCORE_COLUMNS) + len(spec.criteria().ids) + yields
 
 
 def csv_text(header: list[str], rows: list[list[Any]]) -> str:
@@ -77,7 +84,9 @@ def csv_text(header: list[str], rows: list[list[Any]]) -> str:
 
 
 def sweep_json(res: SweepResult) -> dict[str, Any]:
-    """``sweep.json``'s document: the settings and every point's full result."""
+    """``sweep.json``'s document: the settings and every point's full result (with the
+    :data:`~rvmsim.batch.yields.YIELD_COLUMNS` as keys where it has a yield; the details
+    under ``robustness``)."""
     spec = res.spec
     return {"name": spec.name, "sweep_file": spec.source, "base_scene": str(spec.base_scene),
             "axes": [[n, list(v)] for n, v in spec.axes], "strategy": spec.strategy,
@@ -85,6 +94,18 @@ def sweep_json(res: SweepResult) -> dict[str, Any]:
             "recheck": {"rounds": spec.recheck.rounds,
                         "budget_factor": spec.recheck.budget_factor,
                         "neighbours": spec.recheck.neighbours},
-            "points": [{"index": p.index, "values": dict(p.values),
-                        **res.results.get(p.key, {"error": "not run"})}
-                       for p in res.points]}
+            "robustness": {"samples": spec.robustness.samples, "seed": spec.robustness.seed,
+                           "variation": spec.has_variation},
+            "points": [_point_json(p, res.results.get(p.key)) for p in res.points]}
+
+
+def _point_json(point: DesignPoint, result: dict[str, Any] | None) -> dict[str, Any]:
+    """One point's entry of ``sweep.json``."""
+    out: dict[str, Any] = {"index": point.index, "values": dict(point.values),
+                           **(result if result is not None else {"error": "not run"})}
+    if result is not None and "error" not in result and "robustness" in result:
+        cells = yield_cells(result)
+        if cells[0] is not None:
+            out.update(zip(YIELD_COLUMNS, cells))
+            out["yield_limiting_driver"] = result["robustness"].get("limiting_driver")
+    return out

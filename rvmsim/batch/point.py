@@ -32,17 +32,23 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
 
     ``task`` holds ``scene`` (document), ``config`` (tuning config document), ``label``,
     ``strategy``, ``budget``, ``seed``, ``criteria`` (text or None), ``criteria_source``,
-    ``sensitivity``; a re-check adds ``starts`` (parameter dicts, name → value, evaluated
-    first) and ``budget_factor`` (the budget, or the strategy's default size when the
-    budget is None, times this).
+    ``sensitivity``, ``robustness`` (``{"samples", "seed"}`` of the yield, or None: no
+    yield); a re-check adds ``starts`` (parameter dicts, name → value, evaluated first),
+    ``budget_factor`` (the budget, or the strategy's default size when the budget is None,
+    times this), ``beat`` (``[passed, score]`` of the point's best so far: the yield is
+    measured only when this run's best ranks above it, as only then can it be the point's
+    final best).  A task with ``yield_of`` (a parameter dict) only measures that setting's
+    yield: it returns ``{"robustness", "seconds"}``.
 
     Returns a JSON-ready dict: ``score``, ``passed``, ``ecs`` (id → value, score, passed),
     ``params``, ``tuned``, ``evaluations``, ``budget`` (the budget searched with, None for
     the strategy's default), ``stopped``, ``limiting_ec`` (the failing enabled EC with the
     lowest score, or None), ``infeasible`` (the enabled ECs no ISP setting can pass here, as
     ``{"ec", "reason"}``: :func:`~rvmsim.batch.feasibility.infeasible_ecs`),
-    ``sensitivity`` (see :func:`sensitivity`) and ``seconds``; a problem with the point is
-    returned as ``{"error": message, "seconds"}``.
+    ``sensitivity`` (see :func:`sensitivity`), ``robustness`` (the best setting's yield,
+    :func:`~rvmsim.batch.yields.point_yield`; only when the task asks for one, the scene
+    has a ``variation`` section and the run beats ``beat``) and ``seconds``; a problem
+    with the point is returned as ``{"error": message, "seconds"}``.
     """
     with task_malloc():
         return _run_point(task)
@@ -52,21 +58,21 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     import os
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from ..criteria import criteria_from_text, default_criteria
     from ..render import cached_render
-    from ..scene import scene_from_dict
     from ..isp import IspParams
-    from ..tune import RunStore, TuningConfig, candidate_evaluator, search_scene
+    from ..tune import RunStore, candidate_evaluator, search_scene
     from .feasibility import infeasible_ecs
+    from .yields import point_yield
 
     t0 = time.perf_counter()
     try:
-        scene = scene_from_dict(task["scene"], source=task["label"])
-        config = TuningConfig.model_validate(task["config"])
-        # The criteria file's path names it in messages and resolves its plugin paths.
-        criteria = (criteria_from_text(task["criteria"],
-                                       task.get("criteria_source") or "sweep criteria")
-                    if task.get("criteria") else default_criteria())
+        scene, config, criteria = _task_inputs(task)
+        if "yield_of" in task:  # a yield only (a result stored before yields existed)
+            rob = task["robustness"]
+            with _RENDER_LOCK:
+                y = point_yield(scene, IspParams(**task["yield_of"]), config.output_spec(),
+                                criteria, rob["samples"], rob["seed"])
+            return {"robustness": y, "seconds": time.perf_counter() - t0}
         # One render at a time per process: a Dask worker with several threads would
         # otherwise open several OpenGL contexts at once.
         with _RENDER_LOCK:
@@ -102,10 +108,32 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         result["limiting_ec"] = min(failing)[1] if failing else None
         if task.get("sensitivity", True):
             result["sensitivity"] = sensitivity(evaluator, space, best.params)
+        rob = task.get("robustness")
+        beat = task.get("beat")
+        if (rob and rob["samples"] > 0 and scene.variation is not None
+                and (beat is None or (result["passed"], result["score"]) > tuple(beat))):
+            with _RENDER_LOCK:  # renders the variation's viewpoints
+                result["robustness"] = point_yield(scene, best.params, config.output_spec(),
+                                                   criteria, rob["samples"], rob["seed"])
         result["seconds"] = time.perf_counter() - t0
         return result
     except RvmsimError as err:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
+
+
+def _task_inputs(task: dict[str, Any]) -> tuple[Any, Any, Any]:
+    """(scene, tuning config, criteria) of a point's task."""
+    from ..criteria import criteria_from_text, default_criteria
+    from ..scene import scene_from_dict
+    from ..tune import TuningConfig
+
+    scene = scene_from_dict(task["scene"], source=task["label"])
+    config = TuningConfig.model_validate(task["config"])
+    # The criteria file's path names it in messages and resolves its plugin paths.
+    criteria = (criteria_from_text(task["criteria"],
+                                   task.get("criteria_source") or "sweep criteria")
+                if task.get("criteria") else default_criteria())
+    return scene, config, criteria
 
 
 def _task_budget(task: dict[str, Any], images: Any, config: Any) -> int | None:

@@ -159,11 +159,17 @@ def recheck_starts(point: DesignPoint, neighbours: Sequence[DesignPoint],
 
 
 def recheck_task(base: Mapping[str, Any], spec: SweepSpec, round_: int,
-                 starts: list[dict[str, float]]) -> dict[str, Any]:
+                 starts: list[dict[str, float]], best: Mapping[str, Any] | None = None
+                 ) -> dict[str, Any]:
     """The :func:`~rvmsim.batch.point.run_point` task of re-check round ``round_`` from the
-    point's first-pass task ``base``."""
-    return {**base, "seed": recheck_seed(spec.seed, round_),
+    point's first-pass task ``base``; ``best``: the point's merged result over the earlier
+    rounds (its rank is the task's ``beat``: the re-check measures a yield only when it
+    beats it, and only then can it become the point's final best, :func:`merge_point`)."""
+    task = {**base, "seed": recheck_seed(spec.seed, round_),
             "budget_factor": spec.recheck.budget_factor, "starts": starts}
+    if best is not None and "error" not in best:
+        task["beat"] = [bool(best["passed"]), float(best["score"])]
+    return task
 
 
 def recheck_task_key(point: DesignPoint, round_: int) -> str:

@@ -62,11 +62,12 @@ def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
 
 
 def _check_fingerprints(spec: SweepSpec, meta: dict[str, Any], out_dir: Path) -> None:
-    """Refuse a stored sweep of other settings (a store from before re-checks existed has
-    no re-check fingerprint, and resumes)."""
-    rf = meta.get("recheck_fingerprint")
+    """Refuse a stored sweep of other settings (a store from before re-checks or yields
+    existed has no re-check or yield fingerprint, and resumes)."""
+    rf, yf = meta.get("recheck_fingerprint"), meta.get("yield_fingerprint")
     if meta.get("fingerprint") != spec.fingerprint() or (
-            rf is not None and rf != spec.recheck_fingerprint()):
+            rf is not None and rf != spec.recheck_fingerprint()) or (
+            yf is not None and yf != spec.yield_fingerprint()):
         raise RvmsimError(f"{out_dir}: this sweep's settings or base scene changed since it "
                           "started (results would mix); use --force to start over")
 
@@ -89,7 +90,8 @@ def _open_store(spec: SweepSpec, out_dir: Path, force: bool) -> tuple[SweepStore
     session = store.sessions() + 1
     store.set_meta(fingerprint=spec.fingerprint(), name=spec.name, source=spec.source,
                    sessions=session, axes=[[n, list(v)] for n, v in spec.axes],
-                   recheck_fingerprint=spec.recheck_fingerprint())
+                   recheck_fingerprint=spec.recheck_fingerprint(),
+                   yield_fingerprint=spec.yield_fingerprint())
     return store, session
 
 
@@ -98,7 +100,9 @@ def point_task(spec: SweepSpec, point: DesignPoint) -> dict[str, Any]:
     doc, config = point_scene_doc(spec, point.values)
     return {"scene": doc, "config": config, "label": point.label, "strategy": spec.strategy,
             "budget": spec.budget, "seed": spec.seed, "criteria": spec.criteria_doc,
-            "criteria_source": spec.criteria_source, "sensitivity": spec.sensitivity}
+            "criteria_source": spec.criteria_source, "sensitivity": spec.sensitivity,
+            "robustness": ({"samples": spec.robustness.samples, "seed": spec.robustness.seed}
+                           if spec.robustness.samples else None)}
 
 
 def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None = None,
@@ -131,6 +135,7 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
                                             on_result)
             rechecks, rechecked = _run_rechecks(spec, store, session, executor, points, done,
                                                 progress)
+            _run_missing_yields(spec, store, executor, points, done, rechecks, progress)
         finally:
             store.close()
     return SweepResult(spec, points, merged_results(points, done, rechecks), ran, out_dir,
@@ -201,7 +206,7 @@ def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Ex
         todo = {recheck_task_key(p, rnd): p for p in chosen if (p.key, rnd) not in rechecks}
         tasks = {k: recheck_task(point_task(spec, p), spec, rnd,
                                  recheck_starts(p, neighbours[p.key], merged,
-                                                spec.recheck.neighbours))
+                                                spec.recheck.neighbours), merged[p.key])
                  for k, p in todo.items()}
         with closing(_stream(executor, tasks, progress, len(chosen), f"re-check {rnd}",
                              {k: p.label for k, p in todo.items()})) as arrivals:
@@ -214,6 +219,37 @@ def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Ex
         turned = {k for k, r in merged.items() if r.get("verdict") == "pass"
                   and before[k].get("verdict") != "pass"}
     return rechecks, ran
+
+
+def _run_missing_yields(spec: SweepSpec, store: SweepStore, executor: Executor,
+                        points: list[DesignPoint], done: dict[str, dict[str, Any]],
+                        rechecks: dict[tuple[str, int], dict[str, Any]], progress: bool
+                        ) -> None:
+    """Measure the yield of each point whose best run has none although its scene has a
+    variation section (a result stored before yields existed: every run since measures
+    its own), adding it to that run's stored result (``done`` / ``rechecks`` too)."""
+    if not spec.robustness.samples:
+        return
+    merged = merged_results(points, done, rechecks)
+    todo, tasks = {}, {}
+    for p in points:
+        r = merged.get(p.key)
+        if r is None or "error" in r or "robustness" in r:
+            continue
+        task = point_task(spec, p)
+        if task["scene"].get("variation") is not None:
+            key = f"{p.task_key}-yield"
+            todo[key] = (p, int(r["found_in"]))
+            tasks[key] = {**task, "yield_of": r["params"]}
+    with closing(_stream(executor, tasks, progress, len(tasks), "yields",
+                         {k: p.label for k, (p, _) in todo.items()})) as arrivals:
+        for task_key, result in arrivals:
+            (point, rnd), y = todo[task_key], result.get("robustness")
+            if y is None:  # the point's scene failed to load on the worker
+                y = {"error": f"yield: {result.get('error', 'not measured')}"}
+            store.set_yield(point, rnd, y)
+            run = done[point.key] if rnd == 0 else rechecks[(point.key, rnd)]
+            run["robustness"] = y
 
 
 def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:

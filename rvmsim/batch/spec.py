@@ -17,6 +17,7 @@ Sweep file (YAML)::
       recheck: {rounds: 3, budget_factor: 2, neighbours: 4}   # re-check of failing points
     map: [camera_height_m, pitch_deg]          # the feasibility map's x and y axes
     sensitivity: true
+    robustness: {samples: 64, seed: 0}         # each point's yield (base scene's variation)
 
 Every combination of axis values is one :class:`DesignPoint`; :func:`point_scene_doc` builds
 its scene document and tuning config.  Problems with the file are
@@ -31,7 +32,7 @@ import itertools
 import json
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +45,7 @@ from ..criteria import Criteria, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
 from ..tune import DEFAULT_STRATEGY
+from .yields import YieldModel, YieldSettings
 
 __all__ = ["AXES", "SweepSpec", "DesignPoint", "RecheckSettings", "load_sweep",
            "design_points", "point_scene_doc", "MAX_AXIS_VALUES", "MAX_SWEEP_POINTS",
@@ -127,6 +129,7 @@ class _SweepFile(BaseModel):
     tune: _Tune = _Tune()
     map: tuple[str, str] | None = None
     sensitivity: bool = True
+    robustness: YieldModel = YieldModel()
 
 
 @dataclass(frozen=True)
@@ -134,6 +137,8 @@ class SweepSpec:
     """A loaded sweep file.  ``axes`` keeps the file's order; every value list is expanded.
 
     ``criteria_doc`` is the criteria file's text (None: the default criteria);
+    ``robustness``: the yield settings; ``has_variation``: some design point's scene has a
+    ``variation`` section (those points get a yield unless ``robustness.samples`` is 0);
     ``lines`` maps the file's key paths to their lines, for error messages.
     """
 
@@ -151,6 +156,8 @@ class SweepSpec:
     sensitivity: bool
     criteria_source: str = "sweep criteria"
     recheck: RecheckSettings = RecheckSettings()
+    robustness: YieldSettings = YieldSettings()
+    has_variation: bool = False
     lines: Mapping[tuple[Any, ...], int] = field(default_factory=dict, compare=False,
                                                  repr=False)
 
@@ -172,6 +179,13 @@ class SweepSpec:
         made before re-checks existed still resumes)."""
         r = self.recheck
         text = json.dumps([r.rounds, r.budget_factor, r.neighbours])
+        return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+    def yield_fingerprint(self) -> str:
+        """Hash of the yield settings, or of "no yield" when no point gets one (kept apart
+        from :meth:`fingerprint`, so a store made before yields existed still resumes)."""
+        r = self.robustness
+        text = json.dumps([r.samples, r.seed] if self.has_variation and r.samples else "-")
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
     def criteria(self) -> Criteria:
@@ -348,11 +362,15 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
                      criteria_source=criteria_source or "sweep criteria",
                      recheck=RecheckSettings(f.tune.recheck.rounds,
                                              float(f.tune.recheck.budget_factor),
-                                             f.tune.recheck.neighbours), lines=lines)
+                                             f.tune.recheck.neighbours),
+                     robustness=YieldSettings(f.robustness.samples, f.robustness.seed),
+                     lines=lines)
     # Every point's scene must load: check them all now, not in a worker an hour later.
+    has_variation = False
     for point in design_points(spec):
-        point_scene_doc(spec, point.values)
-    return spec
+        doc, _ = point_scene_doc(spec, point.values)
+        has_variation = has_variation or doc.get("variation") is not None
+    return replace(spec, has_variation=has_variation)
 
 
 # ---------------------------------------------------------------------------- points

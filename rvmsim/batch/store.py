@@ -15,6 +15,7 @@ from typing import Any
 from ..errors import RvmsimError
 from ..tune import FolderLock, SqliteStore
 from .spec import DesignPoint
+from .yields import yield_problem
 
 __all__ = ["SweepStore", "sweep_lock", "SWEEP_DB"]
 
@@ -71,6 +72,10 @@ def _result_problem(r: Any) -> str | None:
                                           and isinstance(x.get("short", ""), str)
                                           for x in inf)):
         return "infeasible: not what a sweep stores"
+    if "robustness" in r:  # absent in stores made before yields existed, or without one
+        problem = yield_problem(r["robustness"])
+        if problem is not None:
+            return f"robustness: {problem}"
     return None
 
 
@@ -110,6 +115,17 @@ class SweepStore(SqliteStore):
         self.write("INSERT OR REPLACE INTO rechecks VALUES (?, ?, ?, ?, ?, ?)",
                    [(point.key, round_, point.index, json.dumps(result), session,
                      time.time())])
+
+    def set_yield(self, point: DesignPoint, round_: int, robustness: dict[str, Any]) -> None:
+        """Add a yield (``robustness``) to the stored result of the run of ``point`` from
+        round ``round_`` (0: the first pass) that is its best; the row's session and time
+        stay (for results stored before yields existed: :func:`~rvmsim.batch.run.run_sweep`
+        measures theirs on resume)."""
+        table, where, args = (("points", "key = ?", (point.key,)) if round_ == 0 else
+                              ("rechecks", "key = ? AND round = ?", (point.key, round_)))
+        (text,), = self.rows(f"SELECT result FROM {table} WHERE {where}", args)
+        result = {**json.loads(text), "robustness": robustness}
+        self.write(f"UPDATE {table} SET result = ? WHERE {where}", [(json.dumps(result), *args)])
 
     def done(self) -> dict[str, dict[str, Any]]:
         """Finished points (errors included) by key.

@@ -3,7 +3,9 @@ design-stage sweep (:mod:`rvmsim.batch`), on one self-contained HTML page.
 
 The map shows each cell's verdict (:data:`rvmsim.batch.VERDICTS`): *pass* cells green
 (darker for a higher score) inside a black outline, *not found* cells amber with the best
-score and the limiting EC, *infeasible* cells grey and hatched with a short reason.
+score and the limiting EC, *infeasible* cells grey and hatched with a short reason.  When
+the sweep measured yields (:mod:`rvmsim.batch.yields`), the yield map beside it shows the
+yield of the same point per cell, with its 95 % interval and the EC failing most often.
 
 Convention: the feasibility map's cell (i, j) is the j-th value of its x axis and the i-th
 of its y axis, drawn with the origin at the lower left; cells are 1 unit wide, centred on
@@ -20,13 +22,13 @@ from typing import Any
 import numpy as np
 
 from ..batch import (VERDICTS, DesignPoint, SweepResult, SweepSpec, csv_text, page_columns,
-                     point_verdict, sweep_json, sweep_table)
+                     point_verdict, sweep_json, sweep_table, yield_cells)
 from ..errors import RvmsimError
 from ..tune import json_default
 from .page import data_uri, escape, figure_png, page
 
-__all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "sensitivity_png",
-           "sweep_html", "write_sweep_outputs"]
+__all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "yield_png",
+           "sensitivity_png", "sweep_html", "write_sweep_outputs"]
 
 
 @dataclass(frozen=True)
@@ -34,7 +36,8 @@ class FeasibilityGrid:
     """The feasibility map's cells: per (y, x) value, the best point over the other axes
     (passing first, then not found before infeasible, then by score): its score, whether it
     passes every EC, its limiting EC ("" when it passes or has none), its verdict ("" where
-    no point finished), a short reason ("" unless infeasible) and its evaluations.
+    no point finished), a short reason ("" unless infeasible), its evaluations, its yield
+    (NaN without one), the yield's 95 % interval and the EC failing on most samples.
 
     ``y_axis`` is None for a one-axis map (one row, ``ys == [None]``); ``others`` are the
     other axes with several values, which the map takes the best over.
@@ -51,6 +54,9 @@ class FeasibilityGrid:
     verdict: np.ndarray  # (len(ys), len(xs)) object (str)
     reason: np.ndarray  # (len(ys), len(xs)) object (str): a short reason where infeasible
     evaluations: np.ndarray  # (len(ys), len(xs)) int, 0 where no point finished
+    yield_: np.ndarray | None = None  # (len(ys), len(xs)) float, NaN where no yield
+    yield_ci: np.ndarray | None = None  # (len(ys), len(xs), 2) float, NaN where no yield
+    yield_ec: np.ndarray | None = None  # (len(ys), len(xs)) object (str): "" where none
 
 
 def _map_axes(spec: SweepSpec) -> tuple[str, str | None]:
@@ -78,6 +84,8 @@ def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
     verdict = np.full(shape, "", dtype=object)
     reason = np.full(shape, "", dtype=object)
     evaluations = np.zeros(shape, int)
+    yield_, yield_ci = np.full(shape, np.nan), np.full(shape + (2,), np.nan)
+    yield_ec = np.full(shape, "", dtype=object)
     best: dict[tuple[int, int], tuple[bool, bool, float]] = {}
     for p in points:
         r = results.get(p.key)
@@ -96,9 +104,13 @@ def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
         verdict[i, j] = kind
         reason[i, j] = _short_reason(r) if kind == "infeasible" else ""
         evaluations[i, j] = r.get("evaluations", 0)
+        y, lo, hi, y_ec = yield_cells(r)[:4]
+        yield_[i, j] = np.nan if y is None else y
+        yield_ci[i, j] = (np.nan, np.nan) if y is None else (lo, hi)
+        yield_ec[i, j] = y_ec or ""
     others = [n for n, v in spec.axes if n not in (xa, ya) and len(v) > 1]
     return FeasibilityGrid(xa, ya, xs, ys, score, passed, limiting, others, verdict, reason,
-                           evaluations)
+                           evaluations, yield_, yield_ci, yield_ec)
 
 
 def _short_reason(r: dict[str, Any]) -> str:
@@ -169,17 +181,9 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
             ax.text(j, i, _cell_text(g, i, j), ha="center", va="center", fontsize=7,
                     color="white" if dark else "black")
     _outline_passing(ax, g.passed)
-    ax.set_xlim(-.5, len(g.xs) - .5)
-    ax.set_ylim(-.5, len(g.ys) - .5)
+    _axes_ticks(ax, g)
     fig.colorbar(ScalarMappable(Normalize(0.0, 1.0), greens), ax=ax,
                  label="EC score of passing cells")
-    ax.set_xticks(range(len(g.xs)), [str(x) for x in g.xs])
-    ax.set_xlabel(g.x_axis)
-    if g.y_axis is not None:
-        ax.set_yticks(range(len(g.ys)), [str(y) for y in g.ys])
-        ax.set_ylabel(g.y_axis)
-    else:
-        ax.set_yticks([])
     ax.legend(handles=[Patch(facecolor=greens(0.7), edgecolor="black", label="pass"),
                        Patch(facecolor=_NOT_FOUND, label="not found (best score, limiting "
                                                          "EC, evaluations)"),
@@ -190,6 +194,63 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
     title = "feasibility: pass region outlined"
     if g.others:
         title += f"\n(best over {', '.join(g.others)})"
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return figure_png(fig)
+
+
+def _axes_ticks(ax: Any, g: FeasibilityGrid) -> None:
+    """The map's limits, ticks and axis names."""
+    ax.set_xlim(-.5, len(g.xs) - .5)
+    ax.set_ylim(-.5, len(g.ys) - .5)
+    ax.set_xticks(range(len(g.xs)), [str(x) for x in g.xs])
+    ax.set_xlabel(g.x_axis)
+    if g.y_axis is not None:
+        ax.set_yticks(range(len(g.ys)), [str(y) for y in g.ys])
+        ax.set_ylabel(g.y_axis)
+    else:
+        ax.set_yticks([])
+
+
+def yield_png(spec: SweepSpec, points: list[DesignPoint],
+              results: dict[str, dict[str, Any]]) -> bytes | None:
+    """The yield map (PNG bytes): per cell of the feasibility map, the yield of the point
+    that map shows there (red 0 % to green 100 %), its 95 % interval and the EC failing on
+    most samples; the pass region outlined as on the feasibility map.  None when no point
+    has a yield."""
+    g = feasibility_grid(spec, points, results)
+    if g.yield_ is None or g.yield_ci is None or g.yield_ec is None or np.isnan(g.yield_).all():
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import colormaps
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    cmap = colormaps["RdYlGn"]
+    fig = Figure(figsize=(2.4 + 1.25 * len(g.xs), 2.2 + 0.9 * len(g.ys)))
+    ax = fig.add_subplot(111)
+    for i in range(len(g.ys)):
+        for j in range(len(g.xs)):
+            y = g.yield_[i, j]
+            ax.add_patch(Rectangle((j - .5, i - .5), 1, 1, linewidth=0.5, edgecolor="#888",
+                                   facecolor=_NOT_RUN if np.isnan(y) else cmap(float(y))))
+            lo, hi = g.yield_ci[i, j]
+            text = ("—" if np.isnan(y) else f"{100 * y:.0f} %\n[{100 * lo:.0f}–{100 * hi:.0f}]"
+                    + (f"\n{g.yield_ec[i, j]}" if g.yield_ec[i, j] else ""))
+            ax.text(j, i, text, ha="center", va="center", fontsize=7,
+                    color="white" if not np.isnan(y) and not 0.2 <= y <= 0.85 else "black")
+    _outline_passing(ax, g.passed)
+    _axes_ticks(ax, g)
+    fig.colorbar(ScalarMappable(Normalize(0.0, 1.0), cmap), ax=ax,
+                 label="yield (share of samples passing every EC)")
+    title = (f"yield over production variation ({spec.robustness.samples} samples)\n"
+             "[95 % interval]; the EC failing most")
+    if g.others:
+        title += " (points as on the feasibility map)"
     ax.set_title(title, fontsize=9)
     fig.tight_layout()
     return figure_png(fig)
@@ -260,10 +321,12 @@ def _cell(v: Any) -> str:
 
 
 def sweep_html(res: SweepResult, header: list[str], rows: list[list[Any]], columns: int,
-               feasibility: bytes, sensitivity: bytes | None) -> str:
-    """The sweep page: settings, the feasibility map and sensitivity chart (PNG bytes), and
-    the first ``columns`` columns of the design-point table (``header``, ``rows`` as
-    :func:`rvmsim.batch.sweep_table` gives them)."""
+               feasibility: bytes, sensitivity: bytes | None,
+               yield_map: bytes | None = None) -> str:
+    """The sweep page: settings, the feasibility map, the yield map beside it (when given)
+    and the sensitivity chart (PNG bytes), and the first ``columns`` columns of the
+    design-point table (``header``, ``rows`` as :func:`rvmsim.batch.sweep_table` gives
+    them)."""
     spec = res.spec
     counts = {k: 0 for k in VERDICTS}
     for r in res.results.values():
@@ -277,6 +340,14 @@ def sweep_html(res: SweepResult, header: list[str], rows: list[list[Any]], colum
     sens = ("" if sensitivity is None else
             "<h2>Sensitivity to the ISP parameters around the optimum</h2>"
             f'<img src="{data_uri(sensitivity)}" alt="sensitivity">')
+    yields = "" if yield_map is None else f'<img src="{data_uri(yield_map)}" alt="yield map">'
+    rob = spec.robustness
+    yield_text = ("" if yield_map is None else
+                  f"<p class=\"muted\"><b>yield</b>: the share of {rob.samples} production "
+                  f"variation samples (seed {rob.seed}; the scene's variation section) on which "
+                  "the point's best setting passes every EC, with its 95 % Wilson interval; "
+                  "yield_limiting_ec fails on most samples, yield_limiting_axis drives its "
+                  "failures.</p>")
     return page(f"Sweep: {spec.name}", f"""
 <h1>Feasibility sweep: {escape(spec.name)}</h1>
 <p>Base scene {escape(spec.base_scene)}; {len(res.points)} design points
@@ -286,11 +357,14 @@ budget {escape(spec.budget)}, seed {escape(spec.seed)}; re-check: up to
 the best of up to {escape(spec.recheck.neighbours)} neighbours. Of {len(res.results)} finished
 points, {counts["pass"]} pass every EC, {counts["not found"]} not found, {counts["infeasible"]}
 infeasible.</p>
-<h2>Feasibility map</h2><img src="{data_uri(feasibility)}" alt="feasibility map">
+<h2>Feasibility map{" and yield" if yield_map is not None else ""}</h2>
+<div style="display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start">
+<img src="{data_uri(feasibility)}" alt="feasibility map">{yields}</div>
 <p class="muted"><b>pass</b>: tuned to pass every EC. <b>not found</b>: no passing setting was
 found within the evaluations shown (first pass and re-checks from the neighbours' optima); it
 may still exist. <b>infeasible</b>: no ISP setting can pass, for a reason that needs no search
 (the reason column).</p>
+{yield_text}
 {sens}
 <h2>Design points</h2><p>Tuned parameters per point: sweep.csv.</p>
 <table><tr>{head}</tr>{table}</table>
@@ -299,7 +373,8 @@ may still exist. <b>infeasible</b>: no ISP setting can pass, for a reason that n
 
 def write_sweep_outputs(res: SweepResult) -> list[Path]:
     """Write sweep.csv, sweep.json, feasibility.png, sensitivity.png (when the sweep probed
-    the sensitivity and some point scored) and sweep.html into ``res.out_dir``; returns the
+    the sensitivity and some point scored), yield.png (when some point has a yield) and
+    sweep.html into ``res.out_dir``; returns the
     files written.
 
     Raises
@@ -322,7 +397,11 @@ def write_sweep_outputs(res: SweepResult) -> list[Path]:
         if sens is not None:
             (out / "sensitivity.png").write_bytes(sens)
             written.append(out / "sensitivity.png")
-        html = sweep_html(res, header, rows, page_columns(res.spec), feas, sens)
+        ymap = yield_png(res.spec, res.points, res.results)
+        if ymap is not None:
+            (out / "yield.png").write_bytes(ymap)
+            written.append(out / "yield.png")
+        html = sweep_html(res, header, rows, page_columns(res.spec), feas, sens, ymap)
         (out / "sweep.html").write_text(html)
         written.append(out / "sweep.html")
     except OSError as err:

@@ -7,7 +7,7 @@ import json
 
 import cv2
 
-from rvmsim.batch import csv_text, sweep_table
+from rvmsim.batch import YIELD_COLUMNS, csv_text, sweep_table
 from rvmsim.report import write_sweep_outputs
 from rvmsim.isp import IspParams
 
@@ -20,8 +20,11 @@ def test_table_columns_follow_the_axes_and_the_criteria(local_run):
     assert header[:1 + n_axes + 5] == ["point", "camera_height_m", "pitch_deg", "verdict",
                                        "ec_score", "passed", "limiting_ec", "reason"]
     assert header[1 + n_axes + 5:1 + n_axes + 5 + len(ec_ids)] == [f"ec_{e}" for e in ec_ids]
+    yields_at = 1 + n_axes + 5 + len(ec_ids)
+    assert header[yields_at:yields_at + len(YIELD_COLUMNS)] == list(YIELD_COLUMNS)
     assert header[-2:] == ["evaluations", "error"]
-    assert len(header) == 1 + n_axes + 5 + len(ec_ids) + len(IspParams.names()) + 2
+    assert len(header) == (1 + n_axes + 5 + len(ec_ids) + len(YIELD_COLUMNS)
+                           + len(IspParams.names()) + 2)
     assert [r[0] for r in rows] == list(range(6))
     for p, row in zip(res.points, rows):
         r = res.results[p.key]
