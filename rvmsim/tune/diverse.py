@@ -10,7 +10,8 @@ top-M"):
 2. then the **all-pass** trials, each next one the trial farthest from every candidate
    chosen so far (greedy farthest-point selection; ties to the higher score);
 3. only if fewer than M came from them: the failing trials whose EC score is within
-   ``score_tolerance`` (a fraction) of the best one, farthest-point as well;
+   ``score_tolerance`` (a fraction) of the best one, farthest-point as well (a score of
+   0 is near nothing);
 4. only if still fewer than M: the remaining trials in score order (the best-scoring
    ones that are different, not the far-away worst of the search).
 
@@ -118,7 +119,7 @@ def choose(x: np.ndarray, score: np.ndarray, objective: np.ndarray, idx: np.ndar
         return []
     order = np.lexsort((idx, -objective, -score))  # best first; ties: objective, earliest
     xs, sc, ok = x[order], score[order], passed[order]
-    near = ~ok & (sc >= sc[0] - score_tolerance * abs(sc[0]))
+    near = ~ok & (sc > 0) & (sc >= sc[0] * (1 - score_tolerance))  # a 0 is near nothing
     tiers = (ok, near, ~ok & ~near)
 
     def dist(j: int) -> np.ndarray:
@@ -128,7 +129,7 @@ def choose(x: np.ndarray, score: np.ndarray, objective: np.ndarray, idx: np.ndar
     nearest = to_first.copy()  # distance of every row to the nearest chosen one
     taken = np.zeros(n, bool)
     taken[0] = True
-    chosen = [(0, POOLS[0] if ok[0] else POOLS[1])]
+    chosen = [(0, POOLS[0] if ok[0] else POOLS[1] if near[0] else POOLS[2])]
     for tier, (pool, farthest) in zip(tiers, ((POOLS[0], True), (POOLS[1], True),
                                               (POOLS[2], False))):
         while len(chosen) < m:
