@@ -150,15 +150,14 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
         scenes, aggregate = meta.get("scenes"), meta.get("aggregate")
         top: list[tuple[int, TrialRecord, str]] = []
         note = ""
-        if n:
-            try:
-                top = [(c.rank, rec, "" if not c.differs else f"  (d {c.distance:.2f}: "
-                        f"{c.differs})") for c, rec in store_candidates(
-                            store, run_settings(run_dir, store), top_m, min_distance,
-                            by_score=by_score)]
-            except RvmsimError as err:  # status needs only the store: say why, show by score
-                note = f"top candidates by EC score (the diverse top-M needs: {err})"
-                top = [(k, rec, "") for k, rec in enumerate(store.top(top_m or 5), start=1)]
+        try:
+            top = [(c.rank, rec, "" if not c.differs else f"  (d {c.distance:.2f}: "
+                    f"{c.differs})") for c, rec in store_candidates(
+                        store, run_settings(run_dir, store), top_m, min_distance,
+                        by_score=by_score)]
+        except RvmsimError as err:  # status needs only the store: say why, show by score
+            note = f"top candidates by EC score (the diverse top-M needs: {err})"
+            top = [(k, rec, "") for k, rec in enumerate(store.top(top_m or 5), start=1)]
         members = {rec.idx: [m[0] for m in store.member_results(rec.idx)] for _, rec, _ in top}
     finally:
         store.close()
