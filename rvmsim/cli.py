@@ -292,15 +292,26 @@ def batch(scenes, out, strategy, config_file, criteria_file, seed, workers, budg
         sys.exit(1)
 
 
+_MIN_DISTANCE = click.option(
+    "--min-distance", type=FiniteFloat(0, 1, min_open=True), default=None,
+    help="Least distance between candidates, in fractions of each tuned parameter's span "
+         "(default: the run's diverse.min_distance).")
+_BY_SCORE = click.option("--by-score", is_flag=True,
+                         help="The plain order by EC score instead of the diverse top-M.")
+
+
 @cli.command()
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--top", "top_m", type=Integer(1, 100), default=5, show_default=True)
-def status(run: Path, top_m: int) -> None:
-    """Show a run's progress and its current top candidates (works while it runs)."""
+@click.option("--top", "top_m", type=Integer(1, 100), default=None,
+              help="Candidates to show (M; default: the run's).")
+@_MIN_DISTANCE
+@_BY_SCORE
+def status(run: Path, top_m: int | None, min_distance: float | None, by_score: bool) -> None:
+    """Show a run's progress and its diverse top-M candidates (works while it runs)."""
     from .tune import status_lines
 
     try:
-        lines = status_lines(run, top_m)
+        lines = status_lines(run, top_m, by_score=by_score, min_distance=min_distance)
     except RvmsimError as err:
         _fail(err)
     click.echo("\n".join(lines))
@@ -308,15 +319,19 @@ def status(run: Path, top_m: int) -> None:
 
 @cli.command()
 @click.argument("run", type=click.Path(path_type=Path))
-@click.option("--rank", type=Integer(1), default=1, show_default=True)
+@click.option("--rank", type=Integer(1), default=1, show_default=True,
+              help="Rank K in the run's diverse top-M (as status, top/ and the report list it).")
 @click.option("--out", "-o", type=OutputFile(), default=None,
               help="Params file to write (default: print it).")
-def select(run: Path, rank: int, out: Path | None) -> None:
+@_MIN_DISTANCE
+@_BY_SCORE
+def select(run: Path, rank: int, out: Path | None, min_distance: float | None,
+           by_score: bool) -> None:
     """Export the rank-K parameter set of a run as a params file."""
     from .tune import rank_params_text
 
     try:
-        text = rank_params_text(run, rank)
+        text = rank_params_text(run, rank, by_score=by_score, min_distance=min_distance)
     except RvmsimError as err:
         _fail(err)
     if out is None:

@@ -3,8 +3,9 @@
 A report shows what a tuning run found, for engineers reviewing it with colleagues and
 customers: the scene (vehicle, camera, lens, mount, criteria), the fisheye image with the
 ROI of the chosen parameters, the RVM image and the annotated EC image, the EC table, the
-parameter table, the convergence of the search, and the top-M candidates so the expert can
-make the final choice (``rvmsim select RUN --rank K`` exports any of them).
+parameter table, the convergence of the search, and the diverse top-M candidates (each with
+how it differs from rank 1, :mod:`rvmsim.tune.diverse`) so the expert can make the final
+choice (``rvmsim select RUN --rank K`` exports any of them).
 
 Everything is embedded (PNG images as ``data:`` URIs, CSS in a ``<style>`` element); the page
 needs no network, fonts or scripts.  Every string that comes from a user's files (vehicle
@@ -37,7 +38,7 @@ if TYPE_CHECKING:
     from ..isp import OutputSpec
     from ..render import FisheyeImages
     from ..scene import Scene
-    from ..tune import RunSettings, RunState, TrialRecord, TuningConfig
+    from ..tune import Candidate, RunSettings, RunState, TrialRecord, TuningConfig
 
 __all__ = ["write_report", "write_batch_report", "write_any_report", "find_runs",
            "EC_GROUP_NAMES", "SECTION_IDS"]
@@ -83,6 +84,7 @@ class _Run:
     members: list[MemberScene] = field(default_factory=list)
     member_top: dict[int, list[float]] = field(default_factory=dict)
     robust_rows: list[dict | None] = field(default_factory=list)
+    candidates: list[Candidate] = field(default_factory=list)
 
 
 def _resolve(recorded: str, run_dir: Path) -> Path | None:
@@ -101,13 +103,14 @@ def _load_run(run_dir: Path) -> _Run:
     from ..criteria import load_criteria
     from ..render import cached_render, same_scene
     from ..scene import load_scene
-    from ..tune import open_run, run_settings, run_state
+    from ..tune import open_run, run_settings, run_state, store_candidates
 
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
         state = run_state(run_dir, store)
-        top = store.top(settings.config.top_m)
+        pairs = store_candidates(store, settings)
+        top = [rec for _, rec in pairs]
         curve = store.best_curve()
         scores = np.array(store.scores(), dtype=float)
         count = store.count()
@@ -133,7 +136,7 @@ def _load_run(run_dir: Path) -> _Run:
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
                 crit_file, settings.config.output_spec(), top, curve, scores, count,
                 scene_changed, load_member_scenes(settings, run_dir, _resolve), member_top,
-                robust_rows)
+                robust_rows, [c for c, _ in pairs])
 
 
 # ---------------------------------------------------------------------------- sections
@@ -276,15 +279,17 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
 
     cards = []
     first = r.top[0]
-    for k, rec in enumerate(r.top, start=1):
+    for cand, rec in zip(r.candidates, r.top):
+        k = cand.rank
         color = best_color if k == 1 else rvm_color(r.images, rec.params, r.output)
         diffs = _differences(rec, first, r.criteria)
         if k == 1:
             diff_html = "<p class='muted'>reference (rank 1)</p>"
-        elif diffs:
-            diff_html = "<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
         else:
-            diff_html = "<p class='muted'>same pass/fail as #1 on every EC</p>"
+            diff_html = (f'<p class="differs">{escape(cand.differs)} <span class="muted">'
+                         f'(distance {cand.distance:.2f})</span></p>')
+            diff_html += ("<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
+                          if diffs else "<p class='muted'>same pass/fail as #1 on every EC</p>")
         badge = "pass" if rec.passed else "fail"
         cmd = f"rvmsim select {shlex.quote(run_arg)} --rank {k}"
         cards.append(
@@ -295,9 +300,13 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             f'({escape(rec.stage)})</span></p>'
             f'{member_scores_html(r.members, r.member_top.get(rec.idx, []))}{diff_html}'
             f'<p>Export: <code>{escape(cmd)}</code></p></div>')
+    dmin = r.config.diverse.min_distance
     return (f'<section id="gallery"><h2>Top-{len(r.top)} candidates</h2>'
-            '<p class="muted">Each candidate\'s RVM image and EC score, with the ECs whose '
-            'result differs from #1; choose one and export it with the command shown.</p>'
+            '<p class="muted">Genuinely different candidates for the final choice: after #1 '
+            '(the best trial), the all-pass trials farthest from those already shown, each '
+            f'at least {dmin:g} of the search span from every other (docs/tuning.md, "The '
+            'diverse top-M"). Each card says how it differs from #1 and which ECs change '
+            'result; choose one and export it with the command shown.</p>'
             f'<div class="gallery">{"".join(cards)}</div></section>')
 
 

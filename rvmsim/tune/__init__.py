@@ -7,7 +7,8 @@ Modules: :mod:`~rvmsim.tune.space` (ParamRange, SearchSpace, default_space),
 :mod:`~rvmsim.tune.store` (RunStore), :mod:`~rvmsim.tune.config` (TuningConfig),
 :mod:`~rvmsim.tune.loop` (run_search, search_scene, search_members, the worker pool),
 :mod:`~rvmsim.tune.members` (multi-member evaluation: shared and robust tuning),
-:mod:`~rvmsim.tune.folder` (reading run folders), :mod:`~rvmsim.tune.lock` (the writer
+:mod:`~rvmsim.tune.diverse` (the diverse top-M: Candidate, select_diverse),
+:mod:`~rvmsim.tune.folder` (reading run folders, diverse_candidates), :mod:`~rvmsim.tune.lock` (the writer
 lock of run and sweep folders), :mod:`~rvmsim.tune.run` (tune).
 """
 
@@ -36,6 +37,7 @@ from .strategies import (
 )
 from .config import (
     TuningConfig,
+    DiverseConfig,
     load_tuning_config,
     make_strategy,
 )
@@ -99,6 +101,17 @@ from .lock import (
     FolderLock,
     Writer,
 )
+from .diverse import (
+    Candidate,
+    select_diverse,
+    differs_text,
+    margins_of,
+    normalised,
+    POOLS,
+    candidates_json,
+    run_space,
+    store_candidates,
+)
 from .folder import (
     open_run,
     run_settings,
@@ -109,6 +122,8 @@ from .folder import (
     status_lines,
     rank_text,
     rank_params_text,
+    diverse_candidates,
+    write_top_files,
 )
 from .shared import (
     check_tune_arguments,
@@ -142,6 +157,18 @@ __all__ = [
     "DEFAULT_STRATEGY",
     "check_seed",
     "TuningConfig",
+    "DiverseConfig",
+    "Candidate",
+    "select_diverse",
+    "diverse_candidates",
+    "differs_text",
+    "margins_of",
+    "normalised",
+    "POOLS",
+    "candidates_json",
+    "run_space",
+    "store_candidates",
+    "write_top_files",
     "load_tuning_config",
     "make_strategy",
     "RunStatus",

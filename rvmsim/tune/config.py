@@ -26,7 +26,7 @@ from .strategies import (
     Strategy,
 )
 
-__all__ = ["TuningConfig", "load_tuning_config", "make_strategy"]
+__all__ = ["TuningConfig", "DiverseConfig", "load_tuning_config", "make_strategy"]
 
 
 _SPEC = {s.name: s for s in PARAM_SPECS}
@@ -60,13 +60,32 @@ class _Output(BaseModel):
         return size
 
 
+class DiverseConfig(BaseModel):
+    """The ``diverse`` section: how the top-M candidates are chosen (see
+    :mod:`rvmsim.tune.diverse` and docs/tuning.md).
+
+    ``m``: the candidates offered (default: ``top_m``); ``min_distance``: the least distance
+    between any two of them in normalised parameter space (each tuned parameter divided by
+    its search span, so 0.05 is 5 % of one parameter's span); ``score_tolerance``: trials
+    that fail but score within this fraction of the best EC score come after the all-pass
+    ones (and before any other).
+    """
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    m: Annotated[int, Field(ge=1, le=1000)] | None = None
+    min_distance: Annotated[float, Field(gt=0, le=1)] = 0.05
+    score_tolerance: Annotated[float, Field(ge=0, lt=1)] = 0.02
+
+
 class TuningConfig(BaseModel):
     """A tuning config file (YAML); every key optional.
 
     ``tuned``: the parameters to search (default: the paper's nine); ``parameters``: per
     parameter ``init``, ``range`` and coarse ``step`` (default: fitted to the camera, see
     :func:`rvmsim.tune.default_space`); ``fixed``: values of untuned parameters;
-    ``output``: the RVM image the ECs are measured on during tuning; one section per
+    ``output``: the RVM image the ECs are measured on during tuning; ``top_m`` and
+    ``diverse``: the candidates offered for the final choice (:class:`DiverseConfig`); one
+    section per
     registered strategy (``grid_random``, ``cmaes``, ``random``: each strategy's
     ``section`` and ``Settings``, which reject keys the strategy does not use).
     """
@@ -77,6 +96,7 @@ class TuningConfig(BaseModel):
     fixed: dict[str, float] = {}
     output: _Output = _Output()
     top_m: Annotated[int, Field(ge=1, le=1000)] = 10
+    diverse: DiverseConfig = DiverseConfig()
     #: Candidates evaluated (and stored in one transaction) at a time.
     batch: Annotated[int, Field(ge=1, le=100000)] = 1024
     # The registered strategies' sections (a test checks they match the registry).
@@ -144,6 +164,11 @@ class TuningConfig(BaseModel):
             problem = _SPEC[name].problem(value) if name in _SPEC else None
             if problem is not None:
                 raise self.error(("fixed", name), problem)
+
+    @property
+    def diverse_m(self) -> int:
+        """The candidates offered: ``diverse.m``, else ``top_m``."""
+        return self.diverse.m if self.diverse.m is not None else self.top_m
 
     def output_spec(self) -> OutputSpec:
         """The RVM image the ECs are measured on while tuning."""

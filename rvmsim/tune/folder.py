@@ -2,7 +2,8 @@
 ``rvmsim status`` and ``rvmsim select`` print.
 
 A run folder holds ``run.sqlite`` (the truth: settings, state, trials), ``run.json`` (a
-human-readable export of the settings), ``top/`` and ``best/``.  Runs written by rvmsim 0.1
+human-readable export of the settings), ``top/`` (the diverse top-M: ``rank_K.yaml`` and
+``candidates.json``, see :mod:`rvmsim.tune.diverse`) and ``best/``.  Runs written by rvmsim 0.1
 kept their settings in ``run.json`` only and their status as free text; they are read as they
 are (:func:`run_settings`), and a resumed one is brought to the current format.
 """
@@ -12,16 +13,20 @@ from __future__ import annotations
 import dataclasses
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from .lock import FolderLock
-from .records import RunSettings, RunState, RunStatus, TrialRecord
+from .diverse import Candidate, candidates_json, store_candidates
+from .records import RunSettings, RunState, RunStatus, TrialRecord, json_default
 from .store import RunStore
 
+if TYPE_CHECKING:
+    from ..criteria import Criteria
+
 __all__ = ["open_run", "run_settings", "run_state", "run_lock", "find_runs", "is_run_folder",
-           "status_lines", "rank_text", "rank_params_text"]
+           "status_lines", "rank_text", "rank_params_text", "diverse_candidates", "write_top_files"]
 
 RUN_DB = "run.sqlite"
 RUN_JSON = "run.json"
@@ -103,17 +108,57 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
         raise RvmsimError(" ".join(msg.split())) from None
 
 
-def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
-    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too);
-    for a shared run also its scenes, and each top candidate's per-scene EC scores."""
+def diverse_candidates(run_dir: str | Path, m: int | None = None,
+                       min_distance: float | None = None, *, by_score: bool = False
+                       ) -> list[Candidate]:
+    """The diverse top-M of the run in ``run_dir`` (:mod:`rvmsim.tune.diverse`): what its
+    ``top/`` files, its report's gallery, ``rvmsim status`` and ``rvmsim select`` offer.
+    ``m`` and ``min_distance`` default to the run's tuning config; ``by_score``: the M best
+    by EC score instead (the plain order).
+
+    Raises
+    ------
+    RvmsimError
+        One line: not a run, unreadable settings or trials, its criteria file (or, for a
+        run of an earlier version, its scene file) unreadable.
+    """
+    return [c for c, _ in _run_candidates(run_dir, m, min_distance, by_score)]
+
+
+def _run_candidates(run_dir: str | Path, m: int | None, min_distance: float | None,
+                    by_score: bool) -> list[tuple[Candidate, TrialRecord]]:
+    store = open_run(run_dir)
+    try:
+        return store_candidates(store, run_settings(run_dir, store), m, min_distance,
+                                by_score=by_score)
+    finally:
+        store.close()
+
+
+def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: bool = False,
+                 min_distance: float | None = None) -> list[str]:
+    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too)
+    as :func:`diverse_candidates` chooses them (``by_score``: the M best by score), each
+    after rank 1 with its distance to rank 1 and how it differs; for a shared run also its
+    scenes, and each top candidate's per-scene EC scores.  ``top_m``: M (default: the
+    run's, ``diverse.m`` or ``top_m`` of its tuning config)."""
     store = open_run(run_dir)
     try:
         state = run_state(run_dir, store)
         n = store.count()
-        top = store.top(top_m)
         meta = store.meta()
         scenes, aggregate = meta.get("scenes"), meta.get("aggregate")
-        members = {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}
+        top: list[tuple[int, TrialRecord, str]] = []
+        note = ""
+        try:
+            top = [(c.rank, rec, "" if not c.differs else f"  (d {c.distance:.2f}: "
+                    f"{c.differs})") for c, rec in store_candidates(
+                        store, run_settings(run_dir, store), top_m, min_distance,
+                        by_score=by_score)]
+        except RvmsimError as err:  # status needs only the store: say why, show by score
+            note = f"top candidates by EC score (the diverse top-M needs: {err})"
+            top = [(k, rec, "") for k, rec in enumerate(store.top(top_m or 5), start=1)]
+        members = {rec.idx: [m[0] for m in store.member_results(rec.idx)] for _, rec, _ in top}
     finally:
         store.close()
     total = "" if state.total is None else f" / {state.total}"
@@ -121,28 +166,36 @@ def status_lines(run_dir: str | Path, top_m: int = 5) -> list[str]:
     if isinstance(scenes, list) and scenes:
         names = ", ".join(str(r.get("vehicle") if isinstance(r, dict) else r) for r in scenes)
         lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their {aggregate}")
-    for k, rec in enumerate(top, start=1):
+    if note:
+        lines.append("  " + " ".join(note.split()))
+    for rank, rec, how in top:
         fails = rec.failing()
         each = "" if not members[rec.idx] else "  [" + ", ".join(
             f"{m:.4g}" for m in members[rec.idx]) + "]"
-        lines.append(f"  #{k}  EC score {rec.score:.4g}  trial {rec.idx:>6} ({rec.stage})  "
-                     f"{'all pass' if not fails else 'fails ' + ','.join(fails)}{each}")
+        lines.append(f"  #{rank}  EC score {rec.score:.4g}  trial {rec.idx:>6} "
+                     f"({rec.stage})  {'all pass' if not fails else 'fails ' + ','.join(fails)}"
+                     f"{each}{how}")
     return lines
 
 
-def rank_text(rec: TrialRecord, rank: int, output: OutputSpec, vehicle: str | None = None) -> str:
+def rank_text(rec: TrialRecord, rank: int, output: OutputSpec, vehicle: str | None = None,
+              differs: str = "") -> str:
     """A trial as a params file (YAML, loadable by :func:`rvmsim.isp.load_params`) with a
-    comment line naming its rank, EC score, trial and stage."""
+    comment line naming its rank, EC score, trial and stage (and, given ``differs``, a
+    second one saying how it differs from rank 1)."""
     import yaml
 
     of = "" if vehicle is None else f" of {vehicle}"
+    how = "" if not differs else f"# differs from rank 1: {' '.join(differs.split())}\n"
     return (f"# rank {rank}{of}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
-            + yaml.safe_dump(params_to_dict(rec.params, output), sort_keys=False))
+            + how + yaml.safe_dump(params_to_dict(rec.params, output), sort_keys=False))
 
 
-def rank_params_text(run_dir: str | Path, rank: int = 1) -> str:
+def rank_params_text(run_dir: str | Path, rank: int = 1, *, by_score: bool = False,
+                     min_distance: float | None = None) -> str:
     """The rank-K parameter set of a run as a params file (what ``rvmsim select`` writes),
-    at the run's tuning output size.
+    at the run's tuning output size: rank K of :func:`diverse_candidates` (``by_score``: of
+    the plain score order); ranks beyond the run's M continue the same list.
 
     Raises
     ------
@@ -152,9 +205,38 @@ def rank_params_text(run_dir: str | Path, rank: int = 1) -> str:
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
-        top = store.top(rank)
+        top = store_candidates(store, settings, max(rank, settings.config.diverse_m),
+                               min_distance, by_score=by_score)
     finally:
         store.close()
     if len(top) < rank:
-        raise RvmsimError(f"{run_dir}: only {len(top)} candidates, no rank {rank}")
-    return rank_text(top[rank - 1], rank, settings.config.output_spec())
+        apart = "" if by_score else (
+            f" at least {min_distance or settings.config.diverse.min_distance:g} apart "
+            "(see --by-score)")
+        raise RvmsimError(f"{run_dir}: only {len(top)} candidates{apart}, no rank {rank}")
+    cand, rec = top[rank - 1]
+    return rank_text(rec, rank, settings.config.output_spec(), differs=cand.differs)
+
+
+def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
+                    vehicle: str | None = None, criteria: Criteria | None = None) -> list[Candidate]:
+    """``top/rank_K.yaml`` (params files, each with its ``differs`` line as a comment) and
+    ``top/candidates.json`` for the run's diverse top-M; any ``rank_K.yaml`` of an earlier
+    top-M beyond them removed.  Returns the candidates."""
+    cfg = settings.config
+    pairs = store_candidates(store, settings, criteria=criteria)
+    top = Path(run_dir) / "top"
+    top.mkdir(parents=True, exist_ok=True)
+    out = cfg.output_spec()
+    for cand, rec in pairs:
+        (top / f"rank_{cand.rank}.yaml").write_text(
+            rank_text(rec, cand.rank, out, vehicle, cand.differs), encoding="utf-8")
+    for old in top.glob("rank_*.yaml"):
+        k = old.stem[len("rank_"):]
+        if not k.isdigit() or not 1 <= int(k) <= len(pairs):
+            old.unlink()
+    cands = [c for c, _ in pairs]
+    (top / "candidates.json").write_text(json.dumps(candidates_json(
+        cands, cfg.diverse_m, cfg.diverse.min_distance, cfg.diverse.score_tolerance),
+        indent=2, default=json_default), encoding="utf-8")
+    return cands

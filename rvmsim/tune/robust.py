@@ -125,11 +125,15 @@ def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
 
 def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
                          n_scenes: int) -> None:
-    """``best/robust.json``: the top-M's nominal score, robust score and sample yield."""
+    """``best/robust.json``: the nominal score, robust score and sample yield of the top-M
+    (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`)."""
     if settings.robust_samples is None:
         return
+    from .diverse import store_candidates
+
     rows = []
-    for rank, rec in enumerate(store.top(settings.config.top_m), 1):
+    for cand, rec in store_candidates(store, settings):
+        rank = cand.rank
         s = robust_summary(store, rec.idx, n_scenes, settings.robust_samples)
         if s is not None:
             rows.append({"rank": rank, "trial": rec.idx, "robust_score": rec.score,

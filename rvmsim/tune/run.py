@@ -2,7 +2,8 @@
 
 A run lives in a folder: ``run.sqlite`` (settings, state and every candidate, see
 :mod:`rvmsim.tune.store`), ``run.json`` (the settings, for people), and at the end
-``top/rank_K.yaml`` (the top-M parameter sets) and ``best/`` (the best candidate's RVM
+``top/`` (the diverse top-M, :mod:`rvmsim.tune.diverse`: ``rank_K.yaml`` params files and
+``candidates.json``) and ``best/`` (the best candidate's RVM
 image, annotated EC image and EC table).
 """
 
@@ -17,7 +18,7 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence, Union
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from .config import TuningConfig, make_strategy
-from .folder import RUN_DB, RUN_JSON, open_run, rank_text, run_lock, run_settings
+from .folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
 from .loop import SearchOutcome, search_members, search_scene
 from .members import Member, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_variations, variation_key,
@@ -315,6 +316,7 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
     # state first: `rvmsim status` reads a store without settings as one of rvmsim 0.1
     store.set_state(RunStatus.RUNNING, strategy=settings.strategy, total=strat.total())
     store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
+    store.write_space(strat.space)  # the space the diverse top-M measures distances in
     progress, on_batch = bar
     try:
         if settings.shared or members is not None:
@@ -383,18 +385,20 @@ def remove_run(run_dir: str | Path) -> None:
 
 def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeImages,
                   config: TuningConfig, criteria: Criteria) -> None:
-    """top/rank_K.yaml for the top-M, and best/: RVM image (tuning size and display size),
-    annotated ECs, EC table."""
+    """top/: the diverse top-M (:func:`rvmsim.tune.write_top_files`: ``rank_K.yaml`` and
+    ``candidates.json``), and best/ (rank 1, the best trial): RVM image (tuning size and
+    display size), annotated ECs, EC table."""
     from .._io import write_png
     from ..pipeline import evaluate_params, rvm_color, write_frame
 
-    top = store.top(config.top_m)
-    if not top:
+    settings = store.settings()
+    if settings is None:
+        raise RvmsimError(f"{store.path}: no run settings recorded")  # tune() writes them first
+    cands = write_top_files(run_dir, store, settings, scene.name, criteria)
+    if not cands:
         return
+    top = store.trials_at([cands[0].trial])
     out = config.output_spec()
-    (run_dir / "top").mkdir(parents=True, exist_ok=True)
-    for k, rec in enumerate(top, start=1):
-        (run_dir / "top" / f"rank_{k}.yaml").write_text(rank_text(rec, k, out, scene.name))
     best = top[0]
     frame = evaluate_params(images, best.params, out, criteria)
     write_frame(frame, run_dir / "best")

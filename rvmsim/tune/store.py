@@ -10,17 +10,21 @@ Tables: ``meta(key, value)`` — the run's :class:`~rvmsim.tune.RunSettings` (``
 rvmsim 0.1 have no ``format`` and their settings in ``run.json`` only, see
 :mod:`rvmsim.tune.folder`) — and ``trials(idx, stage, params, score, objective, passed,
 ec)`` where ``params`` is the JSON of all 14 ISP parameters and ``ec`` maps each EC to
-``[value, score, passed]``; a multi-member run (shared or robust tuning) also has
+``[value, score, passed]``; ``meta.space`` records the search space (since the diverse
+top-M, :mod:`rvmsim.tune.diverse`, measures distances in it); a multi-member run (shared or robust tuning) also has
 ``members(idx, member, score, objective, passed, ec)``: each member's own results of a
 trial (member = its index in the run settings' scenes).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sqlite3
 from pathlib import Path
 from typing import Any, Sequence
+
+import numpy as np
 
 from ..errors import RvmsimError
 from ..isp import IspParams
@@ -33,6 +37,7 @@ from .records import (
     TrialRecord,
     ecs_from_json,
 )
+from .space import ParamRange, SearchSpace
 
 __all__ = ["SqliteStore", "RunStore", "RUN_FORMAT"]
 
@@ -280,6 +285,35 @@ class RunStore(SqliteStore):
         args.append(m)
         return [self._record(r) for r in self.rows(q, args)]
 
+    def vectors(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                     np.ndarray, np.ndarray]:
+        """Every trial as arrays, for choosing among all of them at once (the ECs are not
+        read): index, EC score, objective, passed, and the values of the parameters
+        ``names`` (one row per trial, one column per name), in index order."""
+        rows = self.rows("SELECT idx, params, score, objective, passed FROM trials ORDER BY idx")
+        n = len(rows)
+        idx, score, objective = np.empty(n, np.int64), np.empty(n), np.empty(n)
+        passed, x = np.empty(n, bool), np.empty((n, len(names)))
+        for i, (k, params, sc, obj, ok) in enumerate(rows):
+            try:
+                doc = json.loads(params)
+                x[i] = [float(doc[name]) for name in names]
+            except (TypeError, ValueError, KeyError) as err:
+                raise self._bad_cell(k, "params", err) from None
+            idx[i], passed[i] = int(k), bool(ok)
+            score[i], objective[i] = self._number(k, "score", sc), self._number(k, "objective", obj)
+        return idx, score, objective, passed, x
+
+    def trials_at(self, idxs: Sequence[int]) -> list[TrialRecord]:
+        """The trials of the indices ``idxs``, in that order (missing ones left out)."""
+        if not idxs:
+            return []
+        marks = ", ".join("?" * len(idxs))
+        found = {r.idx: r for r in (self._record(row) for row in self.rows(
+            "SELECT idx, stage, params, score, objective, passed, ec FROM trials WHERE idx "
+            f"IN ({marks})", [int(i) for i in idxs]))}
+        return [found[int(i)] for i in idxs if int(i) in found]
+
     def best_curve(self) -> list[tuple[int, float, str]]:
         """(idx, best EC score so far, stage) after every trial, for convergence plots."""
         out, best = [], 0.0
@@ -294,6 +328,31 @@ class RunStore(SqliteStore):
                 for idx, s in self.rows("SELECT idx, score FROM trials ORDER BY idx")]
 
     # ------------------------------------------------------------------ settings and state
+    def write_space(self, space: SearchSpace) -> None:
+        """Record the search space the run searches (``meta.space``: its ranges and the
+        values of the untuned parameters), for the readers that measure distances in it."""
+        self.set_meta(space={"ranges": [dataclasses.asdict(r) for r in space.ranges],
+                             "base": {n: getattr(space.base, n) for n in IspParams.names()}})
+
+    def space(self) -> SearchSpace | None:
+        """The search space the run recorded (None: a run of an earlier version, which
+        recorded none).
+
+        Raises
+        ------
+        RvmsimError
+            One line: a recorded space that cannot be read.
+        """
+        doc = self.meta().get("space")
+        if doc is None:
+            return None
+        try:
+            return SearchSpace(tuple(ParamRange(**r) for r in doc["ranges"]),
+                               IspParams(**doc["base"]))
+        except (TypeError, ValueError, KeyError) as err:
+            raise RvmsimError(" ".join(f"{self.path}: meta: space: unreadable "
+                                       f"({err})".split())) from None
+
     def write_settings(self, settings: RunSettings) -> None:
         """Record what the run is (once, when it starts, or when an old run is resumed)."""
         self.set_meta(format=RUN_FORMAT, **settings.as_json())

@@ -10,7 +10,8 @@ import sys
 import pytest
 
 from rvmsim.errors import RvmsimError
-from rvmsim.tune import find_runs, is_run_folder, rank_params_text, status_lines, tune
+from rvmsim.tune import (diverse_candidates, find_runs, is_run_folder, rank_params_text,
+                         status_lines, tune)
 
 from .common import make_legacy_run
 
@@ -19,19 +20,34 @@ def test_status_and_params_file_of_a_run(clean, tmp_path):
     from rvmsim.isp import load_params
     from rvmsim.tune import RunStore
 
-    lines = status_lines(clean, 2)
+    # the plain score order (--by-score), as status and select offered it before the
+    # diverse top-M
+    lines = status_lines(clean, 2, by_score=True)
     assert lines[0] == f"{clean}: done, strategy random, 60 / 60 evaluations"
     assert len(lines) == 3 and lines[1].startswith("  #1  EC score ")
     store = RunStore(clean / "run.sqlite")
     second = store.top(2)[1]
     store.close()
     assert f"trial {second.idx:>6} (random)" in lines[2]
-    text = rank_params_text(clean, 2)
+    text = rank_params_text(clean, 2, by_score=True)
     assert text.startswith(f"# rank 2: EC score {second.score:.6g} (trial {second.idx}, random)")
     (tmp_path / "p.yaml").write_text(text)
     params, out = load_params(tmp_path / "p.yaml")
     assert params == second.params and (out.width, out.height) == (160, 90)
     with pytest.raises(RvmsimError, match="only 60 candidates, no rank 61"):
+        rank_params_text(clean, 61, by_score=True)
+    # the default: rank K of the diverse top-M
+    diverse = diverse_candidates(clean, 2)
+    lines = status_lines(clean, 2)
+    assert len(lines) == 3 and f"trial {diverse[1].trial:>6} (random)" in lines[2]
+    assert f"(d {diverse[1].distance:.2f}: {diverse[1].differs})" in lines[2]
+    text = rank_params_text(clean, 2)
+    assert text.startswith(f"# rank 2: EC score {diverse[1].score:.6g} (trial "
+                           f"{diverse[1].trial}, random)\n# differs from rank 1: ")
+    (tmp_path / "p.yaml").write_text(text)
+    assert load_params(tmp_path / "p.yaml")[0] == diverse[1].params
+    with pytest.raises(RvmsimError, match=r"only \d+ candidates at least 0.05 apart .*, no "
+                                          "rank 61"):
         rank_params_text(clean, 61)
     assert is_run_folder(clean) and find_runs(clean.parent) == [clean]
     assert not is_run_folder(tmp_path) and find_runs(tmp_path / "nothing") == []

@@ -145,7 +145,8 @@ def test_force_with_a_bad_scene_keeps_the_old_run(work, undisturbed, tmp_path):
                   "random", "--budget", "30", "--workers", "1", "--no-progress")
     assert res.returncode == 0, res.stderr
     assert _result(run)[1] == 30
-    assert {p.name for p in (run / "top").iterdir()} == {f"rank_{k}.yaml" for k in range(1, 11)}
+    assert {p.name for p in (run / "top").iterdir()} == \
+        {f"rank_{k}.yaml" for k in range(1, 11)} | {"candidates.json"}  # the diverse top-M
 
 
 # ---------------------------------------------------------------------------- in this process

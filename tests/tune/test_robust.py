@@ -65,6 +65,10 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     assert doc["samples_per_scene"] == 8 and top["samples"] == 8
     assert top["robust_score"] <= top["nominal_score"]  # a low quantile, nominal included
     assert 0.0 <= top["yield_ci"][0] <= top["yield"] <= top["yield_ci"][1] <= 1.0
+    # its rows are the diverse top-M of top/ (rank for rank)
+    listed = json.loads((tmp_path / "robust" / "top" / "candidates.json").read_text())
+    assert [(r["rank"], r["trial"]) for r in doc["top"]] == \
+        [(c["rank"], c["trial"]) for c in listed["candidates"]]
     # the stored members: the nominal image, then the 8 samples
     store = RunStore(tmp_path / "robust" / "run.sqlite", readonly=True)
     try:

@@ -90,6 +90,14 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     store.close()
     assert lines[2].endswith("[" + ", ".join(f"{m:.4g}" for m in each) + "]")
     assert "rank 1" in rank_params_text(run)
+    # the diverse top-M of a shared run: top/, status and select agree
+    from rvmsim.tune import diverse_candidates
+
+    cands = diverse_candidates(run)
+    listed = json.loads((run / "top" / "candidates.json").read_text())["candidates"]
+    assert [c["trial"] for c in listed] == [c.trial for c in cands]
+    assert [ln for ln in lines if ln.startswith("  #")][-1].split()[0] == f"#{len(cands)}"
+    assert f"(trial {cands[-1].trial}," in rank_params_text(run, len(cands))
     # a changed second scene: resume refuses, naming it
     copy = tmp_path / "copy"
     folder = tmp_path / "scenes"
