@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
 import yaml
 
 from ..errors import RvmsimError
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
     from ..isp import IspParams
     from .session import ConsoleFrame, ConsoleSession
 
-__all__ = ["save_params", "write_setting_report", "params_text"]
+__all__ = ["save_params", "write_setting_report", "params_text", "setting_page"]
 
 
 def _new_file(session: ConsoleSession, stem: str, label: str, suffix: str, text: str) -> Path:
@@ -78,8 +79,8 @@ def _params_table(session: ConsoleSession, params: IspParams) -> str:
     return f'<section id="params"><h2>ISP parameters</h2><table>{head}{rows}</table></section>'
 
 
-def setting_page(session: ConsoleSession, frame: ConsoleFrame, annotated: object,
-                 color: object) -> str:
+def setting_page(session: ConsoleSession, frame: ConsoleFrame, annotated: np.ndarray,
+                 color: np.ndarray) -> str:
     """The review page of one setting: scene, images, EC table, parameters."""
     sc = session.scene
     rows = [("Vehicle", sc.name), ("Description", sc.description or "—"),
@@ -112,5 +113,6 @@ def write_setting_report(session: ConsoleSession, params: IspParams, label: str 
     full = evaluate_params(session.images, params, session.ec_output, session.criteria)
     frame = ConsoleFrame(params, full.ec, b"", None, [], {})
     color = rvm_color(session.images, params, session.display)
+    assert full.annotated is not None  # asked for (evaluate_params annotates by default)
     text = setting_page(session, frame, full.annotated, color)
     return _new_file(session, "report", label, ".html", text)
