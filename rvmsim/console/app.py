@@ -2,7 +2,8 @@
 
 Routes: ``GET /`` (the page), ``/static/…`` (its JS and CSS, from the package),
 ``GET /api/session`` (scene, controls, start values, candidates), ``GET /api/fisheye.jpg``,
-``POST /api/evaluate`` (a parameter set → its ECs, ROI and picture URLs),
+``GET /api/evaluate?q=JSON`` (a parameter set → its ECs, ROI and picture URLs; a GET:
+it changes nothing),
 ``GET /api/frame/{id}/{display|annotated}.jpg``, ``POST /api/save``, ``POST /api/report``.
 
 Access: with a token, every request must carry it (``X-Rvm-Token`` header, ``token`` query
@@ -109,9 +110,8 @@ def session_json(session: ConsoleSession) -> dict[str, Any]:
     }
 
 
-async def _body(request: Request) -> dict[str, Any]:
-    """The request's JSON object (413 too large, 400 not JSON, 422 not an object)."""
-    raw = await request.body()
+def _json_object(raw: bytes | str) -> dict[str, Any]:
+    """A JSON object from the browser (413 too large, 400 not JSON, 422 not an object)."""
     if len(raw) > MAX_BODY_BYTES:
         raise ConsoleInputError("", f"request body over {MAX_BODY_BYTES} bytes", 413)
     try:
@@ -121,6 +121,11 @@ async def _body(request: Request) -> dict[str, Any]:
     if not isinstance(doc, dict):
         raise ConsoleInputError("", "the request body must be a JSON object")
     return doc
+
+
+async def _body(request: Request) -> dict[str, Any]:
+    """The request body's JSON object (:func:`_json_object`)."""
+    return _json_object(await request.body())
 
 
 def _guard(app: FastAPI, token: str | None) -> None:
@@ -197,9 +202,9 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
     async def fisheye() -> Response:
         return Response(session.fisheye_jpeg, media_type="image/jpeg")
 
-    @app.post("/api/evaluate")
-    async def post_evaluate(request: Request) -> JSONResponse:
-        doc = await _body(request)
+    @app.get("/api/evaluate")
+    async def get_evaluate(q: str = "{}") -> JSONResponse:
+        doc = _json_object(q)
         frame = await run_in_threadpool(evaluate, doc)
         return JSONResponse(_frame_json(frames.add(frame), frame),
                             headers={"Cache-Control": "no-store"})

@@ -8,15 +8,19 @@
   const $ = (id) => document.getElementById(id);
   const state = {
     session: null, current: {}, history: [], inflight: false, pending: null,
-    annotate: false, b: null, bResult: null, last: null, timings: [], frames: 0, controls: {},
+    annotate: false, b: null, bResult: null, last: null, timings: [], server: [], frames: 0,
+    inputs: 0, controls: {},
   };
   window.rvmConsole = state;  // for the tests and tools/bench_console.py
 
-  async function api(path, body) {
+  // api(path): GET; api(path, body): POST of a JSON body (saves); api(path, null, query):
+  // GET with ?q=JSON (evaluations, which change nothing).
+  async function api(path, body, query) {
     const headers = {"Content-Type": "application/json"};
     if (token) headers["X-Rvm-Token"] = token;
-    const r = await fetch(path, {method: body ? "POST" : "GET", headers,
-                                 body: body ? JSON.stringify(body) : undefined});
+    const url = query ? `${path}?q=${encodeURIComponent(JSON.stringify(query))}` : path;
+    const r = await fetch(url, {method: body ? "POST" : "GET", headers,
+                                body: body ? JSON.stringify(body) : undefined});
     let doc;
     try { doc = await r.json(); } catch (e) { doc = {error: `HTTP ${r.status}`}; }
     if (!r.ok) throw new Error(doc.error || `HTTP ${r.status}`);
@@ -43,6 +47,7 @@
 
   // ------------------------------------------------------------------ evaluation
   function request(t0) {
+    state.inputs += 1;
     state.pending = {params: {...state.current}, annotate: state.annotate,
                      t0: t0 === undefined ? performance.now() : t0};
     if (!state.inflight) pump();
@@ -54,16 +59,20 @@
     if (!job) return;
     state.inflight = true;
     try {
-      const doc = await api("/api/evaluate", {params: job.params, annotate: job.annotate});
+      const doc = await api("/api/evaluate", null, {params: job.params, annotate: job.annotate});
+      const tJson = performance.now();
       const img = $("rvm");
       img.src = doc.annotated || doc.image;
       await img.decode();
+      const tImage = performance.now();
       showEcs(doc);
       showRoi(doc.roi);
       $("ab-a").src = doc.image;
       state.last = doc;
       state.frames += 1;
       state.timings.push(performance.now() - job.t0);
+      state.server.push({...doc.timings_ms, page_json: tJson - job.t0, page_image: tImage - tJson,
+                         page_table: performance.now() - tImage});
       document.body.dataset.frame = String(doc.frame);
       if ($("message").className === "error") say("", "");
     } catch (e) {
@@ -107,7 +116,7 @@
 
   async function setB(params, caption) {
     try {
-      const doc = await api("/api/evaluate", {params});
+      const doc = await api("/api/evaluate", null, {params});
       state.b = params;
       state.bResult = doc;
       $("ab-b").src = doc.image;
