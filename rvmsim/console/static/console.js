@@ -68,6 +68,7 @@
       showEcs(doc);
       showRoi(doc.roi);
       $("ab-a").src = doc.image;
+      $("ab-a-cap").textContent = `A: current — EC score ${fmt(doc.ec_score)}, ${doc.passed ? "all pass" : "not all pass"}`;
       state.last = doc;
       state.frames += 1;
       state.timings.push(performance.now() - job.t0);
