@@ -189,3 +189,27 @@ def test_user_strings_are_shown_as_text(tmp_path, browser):
         assert page.locator("#injected").count() == 0
         assert page.evaluate("window.pwned") is None
         assert not errors
+
+
+def test_annotation_toggle_pin_b_and_reset(served_run, browser):
+    folder, session, url = served_run
+    page, errors = _open(browser, url)
+    _settled(page)
+    assert page.get_attribute("#rvm", "src").endswith("/display.jpg")
+    page.check("#annotate")
+    page.wait_for_function("document.getElementById('rvm').src.endsWith('/annotated.jpg')")
+    width = page.evaluate("document.getElementById('rvm').naturalWidth")
+    assert width > session.ec_output.width  # the EC image plus its results panel
+    page.click("#pin")
+    page.wait_for_function("window.rvmConsole.bResult !== null")
+    b_cells = page.eval_on_selector_all("#ec-table tbody tr td:nth-child(8)",
+                                        "cells => cells.map(c => c.textContent)")
+    assert all(b_cells)
+    page.fill("#box-fov", "150")
+    page.press("#box-fov", "Enter")
+    _settled(page)
+    assert page.evaluate("window.rvmConsole.last.params.fov") == 150.0
+    page.click("#reset")
+    _settled(page)
+    assert page.evaluate("window.rvmConsole.last.params.fov") == session.start.fov
+    assert not errors
