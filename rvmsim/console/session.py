@@ -14,7 +14,7 @@ its measurements drawn (at the EC size, with its results panel).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -75,16 +75,16 @@ class ConsoleSession:
     run_dir: Path | None
     root: Path
     save_dir: Path
-    scene: Scene
+    scene: Scene = field(repr=False)
     scene_file: Path
-    images: FisheyeImages
-    criteria: Criteria
+    images: FisheyeImages = field(repr=False)
+    criteria: Criteria = field(repr=False)
     ec_output: OutputSpec
     display: OutputSpec
     start: IspParams
-    controls: tuple[ParamControl, ...]
-    candidates: tuple[Candidate, ...]
-    fisheye_jpeg: bytes
+    controls: tuple[ParamControl, ...] = field(repr=False)
+    candidates: tuple[Candidate, ...] = field(repr=False)
+    fisheye_jpeg: bytes = field(repr=False)
 
     @property
     def kind(self) -> str:
@@ -98,10 +98,10 @@ class ConsoleFrame:
     outline in fisheye px, and the time each step took (ms)."""
 
     params: IspParams
-    ec: EcResult
-    display_jpeg: bytes
-    annotated_jpeg: bytes | None
-    roi: list[list[float]]
+    ec: EcResult = field(repr=False)
+    display_jpeg: bytes = field(repr=False)
+    annotated_jpeg: bytes | None = field(repr=False)
+    roi: list[list[float]] = field(repr=False)
     timings_ms: dict[str, float]
 
 
