@@ -84,11 +84,13 @@ class _Frames:
             return self._frames.get(fid)
 
 
-def _frame_json(fid: int, frame: ConsoleFrame) -> dict[str, Any]:
+def _frame_json(fid: int, frame: ConsoleFrame, server: str) -> dict[str, Any]:
+    """A frame as the page reads it; its picture URLs carry ``server`` (made per app), so a
+    browser's cached frame 1 of an earlier console is never taken for this one's."""
     return {"frame": fid, "params": params_to_dict(frame.params), **frame.ec.as_dict(),
-            "roi": frame.roi, "image": f"/api/frame/{fid}/display.jpg",
+            "roi": frame.roi, "image": f"/api/frame/{fid}/display.jpg?v={server}",
             "annotated": (None if frame.annotated_jpeg is None
-                          else f"/api/frame/{fid}/annotated.jpg"),
+                          else f"/api/frame/{fid}/annotated.jpg?v={server}"),
             "timings_ms": frame.timings_ms}
 
 
@@ -175,6 +177,7 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
     token, and loopback ``Host`` names only)."""
     app = FastAPI(title="rvmsim console", docs_url=None, redoc_url=None, openapi_url=None)
     frames = _Frames()
+    server = secrets.token_hex(6)
     evaluating = threading.Lock()  # one evaluation at a time: the page sends one at a time
     _guard(app, token)
     _errors(app)
@@ -206,7 +209,7 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
     async def get_evaluate(q: str = "{}") -> JSONResponse:
         doc = _json_object(q)
         frame = await run_in_threadpool(evaluate, doc)
-        return JSONResponse(_frame_json(frames.add(frame), frame),
+        return JSONResponse(_frame_json(frames.add(frame), frame, server),
                             headers={"Cache-Control": "no-store"})
 
     @app.get("/api/frame/{fid}/{kind}.jpg")
@@ -216,7 +219,9 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
                                            "annotated": frame.annotated_jpeg}.get(kind)
         if data is None:
             return _error(404, f"no picture {kind} of frame {fid} (superseded)")
-        return Response(data, media_type="image/jpeg", headers={"Cache-Control": "no-store"})
+        # a frame's pictures never change: the A/B view reuses the one just shown
+        return Response(data, media_type="image/jpeg",
+                        headers={"Cache-Control": "private, max-age=600, immutable"})
 
     @app.post("/api/save")
     async def post_save(request: Request) -> JSONResponse:

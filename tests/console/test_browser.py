@@ -195,9 +195,9 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     folder, session, url = served_run
     page, errors = _open(browser, url)
     _settled(page)
-    assert page.get_attribute("#rvm", "src").endswith("/display.jpg")
+    assert "/display.jpg?v=" in page.get_attribute("#rvm", "src")
     page.check("#annotate")
-    page.wait_for_function("document.getElementById('rvm').src.endsWith('/annotated.jpg')")
+    page.wait_for_function("document.getElementById('rvm').src.includes('/annotated.jpg')")
     width = page.evaluate("document.getElementById('rvm').naturalWidth")
     assert width > session.ec_output.width  # the EC image plus its results panel
     page.click("#pin")
