@@ -433,10 +433,12 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
     sys.exit(0 if result.passed else 1)
 
 
-# two commands in modules of their own (cli.py is at its size limit)
+# commands in modules of their own (cli.py is at its size limit)
+from .cli_console import console  # noqa: E402
 from .cli_robust import robustness  # noqa: E402
 from .cli_sweep import sweep  # noqa: E402
 
+cli.add_command(console)
 cli.add_command(robustness)
 cli.add_command(sweep)
 

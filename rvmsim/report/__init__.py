@@ -9,6 +9,7 @@ from .run import (
     find_runs,
     EC_GROUP_NAMES,
     SECTION_IDS,
+    ec_section,
 )
 from .sweep import (
     FeasibilityGrid,
@@ -33,6 +34,7 @@ __all__ = [
     "find_runs",
     "EC_GROUP_NAMES",
     "SECTION_IDS",
+    "ec_section",
     "FeasibilityGrid",
     "feasibility_grid",
     "feasibility_png",

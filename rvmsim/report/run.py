@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from ..tune import Candidate, RunSettings, RunState, TrialRecord, TuningConfig
 
 __all__ = ["write_report", "write_batch_report", "write_any_report", "find_runs",
-           "EC_GROUP_NAMES", "SECTION_IDS"]
+           "EC_GROUP_NAMES", "SECTION_IDS", "ec_section"]
 
 #: The paper groups the ECs by their first digit.
 EC_GROUP_NAMES: dict[str, str] = {
@@ -215,6 +215,10 @@ def _ec_section(result: EcResult) -> str:
                f'</span> <span class="muted">criteria: {escape(result.criteria_name)}</span></p>')
     return (f'<section id="ec-table"><h2>Evaluation criteria</h2>{summary}'
             f'<table>{head}{"".join(rows)}</table></section>')
+
+
+#: The EC table section, public for the console's setting report.
+ec_section = _ec_section
 
 
 def _params_section(r: _Run) -> str:

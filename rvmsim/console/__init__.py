@@ -1,0 +1,54 @@
+"""The expert console: a local web app to adjust a candidate live and watch the ECs respond
+(``rvmsim console RUN_OR_SCENE``, see ``docs/console.md``).
+
+Modules: :mod:`.session` (what it works on, one setting's evaluation), :mod:`.candidates`
+(the run's candidates), :mod:`.inputs` (checking the browser's values), :mod:`.outputs`
+(params files and setting reports, inside the run folder), :mod:`.app` (the FastAPI app),
+:mod:`.server` (access rule, socket, uvicorn); the page's HTML, JS and CSS in ``static/``.
+"""
+
+from __future__ import annotations
+
+from .candidates import Candidate, candidate_json
+from .session import (
+    CONSOLE_DIR,
+    ConsoleFrame,
+    ConsoleSession,
+    ParamControl,
+    evaluate_setting,
+    jpeg_bytes,
+    open_session,
+)
+from .inputs import ConsoleInputError, parse_params, parse_label
+from .outputs import save_params, write_setting_report, params_text
+from .app import create_app, session_json, TOKEN_HEADER, LOOPBACK_HOSTS
+from .server import Access, check_access, is_loopback, listen, make_server, serve, console_url
+
+__all__ = [
+    "Candidate",
+    "candidate_json",
+    "CONSOLE_DIR",
+    "ConsoleFrame",
+    "ConsoleSession",
+    "ParamControl",
+    "evaluate_setting",
+    "jpeg_bytes",
+    "open_session",
+    "ConsoleInputError",
+    "parse_params",
+    "parse_label",
+    "save_params",
+    "write_setting_report",
+    "params_text",
+    "create_app",
+    "session_json",
+    "TOKEN_HEADER",
+    "LOOPBACK_HOSTS",
+    "Access",
+    "check_access",
+    "is_loopback",
+    "listen",
+    "make_server",
+    "serve",
+    "console_url",
+]

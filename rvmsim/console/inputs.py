@@ -1,0 +1,71 @@
+"""Checking what the browser sends: parameter values, labels and options.
+
+Every problem is a :class:`ConsoleInputError`, one line naming the key, which the app
+answers with a 4xx JSON error that the page shows; nothing from the browser reaches the
+evaluation unchecked.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from ..errors import RvmsimError
+from ..isp import PARAM_SPECS, IspParams
+
+__all__ = ["ConsoleInputError", "parse_params", "parse_label", "parse_flag", "MAX_LABEL"]
+
+_SPEC = {s.name: s for s in PARAM_SPECS}
+#: Longest label of a saved file (characters, after sanitising).
+MAX_LABEL = 40
+
+
+class ConsoleInputError(RvmsimError):
+    """A bad value from the browser: ``key`` names it, ``status`` is the HTTP status."""
+
+    def __init__(self, key: str, message: str, status: int = 422):
+        super().__init__(f"{key}: {message}" if key else message)
+        self.key = key
+        self.status = status
+
+
+def parse_params(doc: Any, base: IspParams) -> IspParams:
+    """The parameters of a request body's ``params`` mapping (name → number); names left
+    out keep their value in ``base``.
+
+    Raises
+    ------
+    ConsoleInputError
+        Not a mapping, an unknown name, a non-number, a value outside its range.
+    """
+    if not isinstance(doc, dict):
+        raise ConsoleInputError("params", "expected an object of parameter names and values")
+    changes: dict[str, float] = {}
+    for key, value in doc.items():
+        spec = _SPEC.get(key) if isinstance(key, str) else None
+        if spec is None:
+            raise ConsoleInputError(str(key)[:40], "unknown ISP parameter")
+        problem = spec.problem(value)
+        if problem is not None:
+            raise ConsoleInputError(key, problem)
+        changes[key] = float(value)
+    return base.replace(**changes)
+
+
+def parse_label(value: Any) -> str:
+    """A label for a file name: letters, digits, ``-`` and ``_`` only (anything else
+    becomes ``-``), at most :data:`MAX_LABEL` characters; "" for none."""
+    if value is None:
+        return ""
+    if not isinstance(value, str):
+        raise ConsoleInputError("label", "must be text")
+    return re.sub(r"[^A-Za-z0-9_-]+", "-", value).strip("-_")[:MAX_LABEL]
+
+
+def parse_flag(value: Any, key: str) -> bool:
+    """A true/false option (missing: false)."""
+    if value is None:
+        return False
+    if not isinstance(value, bool):
+        raise ConsoleInputError(key, "must be true or false")
+    return value

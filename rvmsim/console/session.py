@@ -1,0 +1,216 @@
+"""What the console works on: a run (or a scene), its fisheye images rendered once, and the
+evaluation of one parameter set as the page shows it.
+
+Convention
+----------
+The ECs are measured on the RVM image at the **EC output** size: the run's tuning output
+(``output`` of its tuning config, default 640 × 360), which is also the ``output`` of the
+params files ``rvmsim select`` and the console write, so ``rvmsim evaluate --params FILE``
+measures exactly what the page shows.  The picture is the same view at the **display** size
+(1280 × 720, :data:`rvmsim.tune.DISPLAY_SIZE`); the annotated picture is the EC image with
+its measurements drawn (at the EC size, with its results panel).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import RvmsimError
+from ..isp import PARAM_SPECS, IspParams, OutputSpec, roi_outline
+from ..tune import DISPLAY_SIZE, TuningConfig, is_run_folder, open_run, run_settings
+from .candidates import Candidate, _candidates
+
+if TYPE_CHECKING:
+    from ..criteria import Criteria, EcResult
+    from ..render import FisheyeImages
+    from ..scene import Scene
+
+__all__ = ["ParamControl", "ConsoleSession", "ConsoleFrame", "open_session", "evaluate_setting",
+           "jpeg_bytes", "CONSOLE_DIR"]
+
+#: The folder, inside the run folder (or the scene's ``out/<scene>/``), that the console
+#: writes its params files and reports into.
+CONSOLE_DIR = "console"
+#: JPEG quality of the pictures sent to the page.
+JPEG_QUALITY = 85
+
+
+@dataclass(frozen=True)
+class ParamControl:
+    """One parameter's control on the page: the slider spans ``[low, high]`` (the search
+    range of a tuned parameter, else the parameter's whole range), the number box accepts
+    ``[spec_low, spec_high]`` (the range :class:`~rvmsim.isp.IspParams` accepts)."""
+
+    name: str
+    paper_name: str
+    symbol: str
+    unit: str
+    note: str
+    tuned: bool
+    low: float
+    high: float
+    spec_low: float
+    spec_high: float
+    default: float
+
+    def as_json(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class ConsoleSession:
+    """Everything the console serves, loaded once at start.
+
+    ``run_dir`` is None for a scene without a run; ``save_dir`` is where the console
+    writes (``RUN/console``, or ``out/<scene>/console`` for a scene); ``root`` is the folder
+    it may never write outside of (the run folder, or ``out/<scene>``).
+    """
+
+    source: Path
+    run_dir: Path | None
+    root: Path
+    save_dir: Path
+    scene: Scene = field(repr=False)
+    scene_file: Path
+    images: FisheyeImages = field(repr=False)
+    criteria: Criteria = field(repr=False)
+    ec_output: OutputSpec
+    display: OutputSpec
+    start: IspParams
+    controls: tuple[ParamControl, ...] = field(repr=False)
+    candidates: tuple[Candidate, ...] = field(repr=False)
+    fisheye_jpeg: bytes = field(repr=False)
+
+    @property
+    def kind(self) -> str:
+        return "run" if self.run_dir is not None else "scene"
+
+
+@dataclass(frozen=True)
+class ConsoleFrame:
+    """One parameter set as the page shows it: its ECs (at the EC output size), the
+    picture at the display size (JPEG), the annotated EC image (JPEG, when asked), the ROI
+    outline in fisheye px, and the time each step took (ms)."""
+
+    params: IspParams
+    ec: EcResult = field(repr=False)
+    display_jpeg: bytes = field(repr=False)
+    annotated_jpeg: bytes | None = field(repr=False)
+    roi: list[list[float]] = field(repr=False)
+    timings_ms: dict[str, float]
+
+
+def jpeg_bytes(image: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
+    """``image`` ((H, W, 3) RGB uint8) encoded as JPEG."""
+    import cv2
+
+    ok, buf = cv2.imencode(".jpg", np.ascontiguousarray(image[:, :, ::-1]),
+                           [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    if not ok:
+        raise RvmsimError("console: JPEG encoding failed")
+    return buf.tobytes()
+
+
+def _recorded_file(recorded: str, run_dir: Path, what: str) -> Path:
+    """A file as ``tune`` recorded it (absolute, or relative to the current folder, the run
+    folder or its parent); RvmsimError when it is gone."""
+    p = Path(recorded).expanduser()
+    for cand in ([p] if p.is_absolute() else [p, run_dir / p, run_dir.parent / p]):
+        if cand.is_file():
+            return cand
+    raise RvmsimError(f"{run_dir}: {what} {recorded} not found")
+
+
+def _controls(config: TuningConfig, scene: Scene) -> tuple[ParamControl, ...]:
+    """The 14 controls, the tuned ones first (in the search space's order)."""
+    ranges = {r.name: r for r in config.space(scene.fisheye_camera()).ranges}
+    order = [*ranges, *(s.name for s in PARAM_SPECS if s.name not in ranges)]
+    specs = {s.name: s for s in PARAM_SPECS}
+    out = []
+    for name in order:
+        s, r = specs[name], ranges.get(name)
+        out.append(ParamControl(s.name, s.paper_name, s.symbol, s.unit, s.note, r is not None,
+                                r.low if r else s.low, r.high if r else s.high, s.low, s.high,
+                                s.default))
+    return tuple(out)
+
+
+def open_session(source: str | Path, *, out_root: str | Path = "out") -> ConsoleSession:
+    """Load a run folder (its scene, criteria, tuning config and candidates; it starts at
+    rank 1) or a scene file (the paper's defaults, the default tuning config; it writes
+    into ``out_root/<scene file stem>/console``), and render the fisheye images once (the
+    render cache, as ``tune`` does).
+
+    Raises
+    ------
+    RvmsimError
+        One line: no such run or scene, an unreadable run, scene or criteria file, a run
+        without candidates.
+    """
+    from ..criteria import load_criteria
+    from ..render import cached_render
+    from ..scene import load_scene
+
+    source = Path(source)
+    if source.is_dir():
+        if not is_run_folder(source):
+            raise RvmsimError(f"{source}: not a run folder (no run.sqlite) and not a scene file")
+        store = open_run(source)
+        try:
+            settings = run_settings(source, store)
+        finally:
+            store.close()
+        scene_file = _recorded_file(settings.scene, source, "scene file")
+        crit_file = (None if not settings.criteria_file
+                     else _recorded_file(settings.criteria_file, source, "criteria file"))
+        config, run_dir, root = settings.config, source, source
+        candidates = tuple(_candidates(source))
+        if not candidates:
+            raise RvmsimError(f"{source}: no evaluated candidates yet")
+        start = candidates[0].params
+    elif source.is_file():
+        scene_file, crit_file, config, run_dir = source, None, TuningConfig(), None
+        root, candidates, start = Path(out_root) / source.stem, (), IspParams()
+    else:
+        raise RvmsimError(f"{source}: no such run folder or scene file")
+    criteria = load_criteria(crit_file)
+    scene = load_scene(scene_file)
+    images, _ = cached_render(scene)
+    ec_output = config.output_spec()
+    return ConsoleSession(
+        source=source, run_dir=run_dir, root=root, save_dir=root / CONSOLE_DIR, scene=scene,
+        scene_file=scene_file, images=images, criteria=criteria, ec_output=ec_output,
+        display=OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], ec_output.mirror), start=start,
+        controls=_controls(config, scene), candidates=candidates,
+        fisheye_jpeg=jpeg_bytes(images.color))
+
+
+def evaluate_setting(session: ConsoleSession, params: IspParams, *,
+                     annotate: bool = False) -> ConsoleFrame:
+    """Evaluate ``params`` as the page shows it: the ECs at the EC output size (the one
+    evaluation path, :func:`rvmsim.pipeline.evaluate_params`), the picture at the display
+    size, and, with ``annotate``, the EC image with its measurements drawn."""
+    from ..criteria import annotate as annotate_ecs
+    from ..pipeline import evaluate_params, rvm_color
+
+    t0 = time.perf_counter()
+    frame = evaluate_params(session.images, params, session.ec_output, session.criteria,
+                            annotate=False)
+    t1 = time.perf_counter()
+    display = jpeg_bytes(rvm_color(session.images, params, session.display))
+    t2 = time.perf_counter()
+    annotated = (jpeg_bytes(annotate_ecs(frame.color, frame.labels, frame.ec)) if annotate
+                 else None)
+    t3 = time.perf_counter()
+    poly = roi_outline(params, (session.images.color.shape[1], session.images.color.shape[0]),
+                       session.ec_output, samples_per_side=32)
+    roi = [[round(float(x), 2), round(float(y), 2)] for x, y in poly[np.isfinite(poly).all(1)]]
+    t4 = time.perf_counter()
+    ms = {"ecs": t1 - t0, "display": t2 - t1, "annotated": t3 - t2, "roi": t4 - t3}
+    return ConsoleFrame(params, frame.ec, display, annotated, roi,
+                        {k: round(1e3 * v, 2) for k, v in ms.items()})

@@ -1,0 +1,215 @@
+"""The console in a real browser (Chromium through Playwright): drive the page as an
+expert does, and check what it shows against ``rvmsim evaluate``."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from rvmsim.console import check_access, open_session
+from rvmsim.isp import load_params
+
+from .conftest import serving
+
+REPO_ENV_KEYS = ("PYTHONPATH", "PATH", "HOME", "RVMSIM_CACHE", "PYOPENGL_PLATFORM")
+
+
+@pytest.fixture(scope="module")
+def served_run(small_run, browser, tmp_path_factory):
+    """The small run's console, served on loopback without a token (a copy of the run, so
+    saves land in a folder of this module)."""
+    import shutil
+
+    folder = tmp_path_factory.mktemp("served")
+    shutil.copy(small_run / "scene.yaml", folder / "scene.yaml")
+    shutil.copytree(small_run / "run", folder / "run")
+    session = open_session(folder / "run")
+    with serving(session, check_access("127.0.0.1", None)) as url:
+        yield folder, session, url
+
+
+def _new_page(browser):
+    """A page whose scripts the test may evaluate (bypass_csp: the page's CSP forbids
+    eval, which Playwright's wait_for_function uses; the page itself never needs it)."""
+    return browser.new_context(bypass_csp=True, viewport={"width": 1400, "height": 900}
+                               ).new_page()
+
+
+def _open(browser, url):
+    page = _new_page(browser)
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url)
+    page.wait_for_function("window.rvmConsole && window.rvmConsole.frames >= 1", timeout=30000)
+    return page, errors
+
+
+def _settled(page, timeout: float = 30000) -> None:
+    """Wait until the newest value has been shown (nothing in flight, nothing pending)."""
+    page.wait_for_function("(() => { const s = window.rvmConsole; return !s.inflight && "
+                           "!s.pending && s.last && Object.keys(s.current).every("
+                           "k => s.last.params[k] === s.current[k]); })()", timeout=timeout)
+
+
+def _drag(page, selector: str, fraction: float) -> None:
+    """Drag a slider's thumb with the mouse from where it is to ``fraction`` of its width."""
+    box = page.locator(selector).bounding_box()
+    assert box is not None
+    value = page.eval_on_selector(selector, "e => (e.value - e.min) / (e.max - e.min)")
+    y = box["y"] + box["height"] / 2
+    page.mouse.move(box["x"] + 8 + value * (box["width"] - 16), y)
+    page.mouse.down()
+    for k in range(1, 9):
+        t = value + (fraction - value) * k / 8
+        page.mouse.move(box["x"] + 8 + t * (box["width"] - 16), y)
+    page.mouse.up()
+
+
+def _table(page) -> list[list[str]]:
+    return page.eval_on_selector_all(
+        "#ec-table tbody tr", "rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+
+
+def _evaluate_cli(scene, params_file, out) -> dict:
+    """``rvmsim evaluate SCENE --params FILE`` in a child process; its ec.json."""
+    import os
+
+    env = {k: os.environ[k] for k in REPO_ENV_KEYS if k in os.environ}
+    res = subprocess.run([sys.executable, "-m", "rvmsim", "evaluate", str(scene), "--params",
+                          str(params_file), "--out", str(out), "--no-progress"],
+                         capture_output=True, text=True, env=env, timeout=300)
+    assert res.returncode == 0, res.stderr
+    return json.loads((out / "ec.json").read_text())
+
+
+def test_zoom_slider_updates_the_picture_and_the_ecs_as_evaluate(served_run, browser, tmp_path):
+    folder, session, url = served_run
+    page, errors = _open(browser, url)
+    _settled(page)
+    before_frame = page.get_attribute("#rvm", "src")
+    before_table = _table(page)
+    before_zoom = page.evaluate("window.rvmConsole.current.zoom")
+    _drag(page, "#slider-zoom", 0.9)
+    _settled(page)
+    state = page.evaluate("window.rvmConsole.last")
+    assert state["params"]["zoom"] != before_zoom
+    assert page.get_attribute("#rvm", "src") != before_frame
+    after_table = _table(page)
+    assert after_table != before_table
+    # what the page shows is the evaluation it got, EC by EC
+    assert [row[0] for row in after_table] == [e["id"] for e in state["ecs"]]
+    for row, ec in zip(after_table, state["ecs"]):
+        assert row[5] == f"{ec['score']:.4f}"
+        assert row[2] == ("—" if ec["value"] is None else f"{ec['value']:.3f}")
+    # save it, and evaluate the saved file as `rvmsim evaluate` does: the same ECs
+    page.click("#save")
+    page.wait_for_function("window.rvmConsole.lastWrite !== undefined")
+    saved = page.evaluate("window.rvmConsole.lastWrite")
+    doc = _evaluate_cli(folder / "scene.yaml", saved["path"], tmp_path / "ev")
+    assert doc["ec_score"] == pytest.approx(state["ec_score"], rel=1e-9, abs=1e-300)
+    for mine, theirs in zip(state["ecs"], doc["ecs"]):
+        assert mine["id"] == theirs["id"]
+        assert mine["passed"] == theirs["passed"]
+        assert mine["score"] == pytest.approx(theirs["score"], rel=1e-9, abs=1e-12)
+        if theirs["value"] is None:
+            assert mine["value"] is None
+        else:
+            assert mine["value"] == pytest.approx(theirs["value"], rel=1e-9, abs=1e-12)
+    assert not errors
+
+
+def test_load_candidate_3_and_save_it(served_run, browser):
+    folder, session, url = served_run
+    page, errors = _open(browser, url)
+    _settled(page)
+    page.click('#candidates tr[data-rank="3"] button.load')
+    _settled(page)
+    third = session.candidates[2].params
+    shown = page.evaluate("window.rvmConsole.last.params")
+    assert shown == {n: getattr(third, n) for n in shown}
+    page.fill("#label", "third try")
+    page.click("#save")
+    page.wait_for_function("window.rvmConsole.lastWrite !== undefined")
+    saved = page.evaluate("window.rvmConsole.lastWrite")
+    path = (folder / "run" / saved["file"])
+    assert path.parent == folder / "run" / "console" and "third-try" in path.name
+    params, output = load_params(path)
+    assert params == third
+    assert (output.width, output.height) == (session.ec_output.width, session.ec_output.height)
+    assert saved["file"] in page.text_content("#message")
+    # undo goes back to rank 1, reset too
+    page.click("#undo")
+    _settled(page)
+    assert page.evaluate("window.rvmConsole.last.params.zoom") == session.start.zoom
+    assert not errors
+
+
+def test_out_of_range_value_shows_a_message(served_run, browser):
+    folder, session, url = served_run
+    page, errors = _open(browser, url)
+    _settled(page)
+    page.fill("#box-zoom", "50")
+    page.press("#box-zoom", "Enter")
+    page.wait_for_function("document.getElementById('message').className === 'error'")
+    text = page.text_content("#message")
+    assert "zoom" in text and "outside" in text and "Traceback" not in text
+    assert not errors
+
+
+def test_non_loopback_host_needs_the_token(small_run, browser):
+    access = check_access("0.0.0.0", None)  # what `--host 0.0.0.0` gets: a made token
+    assert access.token and access.generated
+    session = open_session(small_run / "run")
+    with serving(session, access) as url:  # listening on loopback, with that rule
+        page = _new_page(browser)
+        response = page.goto(url + "/")
+        assert response is not None and response.status == 403
+        assert "token" in page.text_content("body")
+        response = page.goto(url + "/api/session?token=" + "x" * 32)
+        assert response is not None and response.status == 403
+        page.goto(f"{url}/?token={access.token}")
+        page.wait_for_function("window.rvmConsole && window.rvmConsole.frames >= 1",
+                               timeout=30000)
+        assert page.text_content("#title") == session.scene.name
+
+
+def test_user_strings_are_shown_as_text(tmp_path, browser):
+    from tests.bad_input.conftest import write_small_scene
+
+    name = '<img src=x id=injected onerror="window.pwned=1">'
+    scene = write_small_scene(tmp_path, {"name": name, "description": "<b>bold</b> & co"})
+    session = open_session(scene, out_root=tmp_path / "out")
+    with serving(session, check_access("127.0.0.1", None)) as url:
+        page, errors = _open(browser, url)
+        assert page.text_content("#title") == name
+        assert "<b>bold</b> & co" in page.text_content("#subtitle")
+        assert page.locator("#injected").count() == 0
+        assert page.evaluate("window.pwned") is None
+        assert not errors
+
+
+def test_annotation_toggle_pin_b_and_reset(served_run, browser):
+    folder, session, url = served_run
+    page, errors = _open(browser, url)
+    _settled(page)
+    assert "/display.jpg?v=" in page.get_attribute("#rvm", "src")
+    page.check("#annotate")
+    page.wait_for_function("document.getElementById('rvm').src.includes('/annotated.jpg')")
+    width = page.evaluate("document.getElementById('rvm').naturalWidth")
+    assert width > session.ec_output.width  # the EC image plus its results panel
+    page.click("#pin")
+    page.wait_for_function("window.rvmConsole.bResult !== null")
+    b_cells = page.eval_on_selector_all("#ec-table tbody tr td:nth-child(8)",
+                                        "cells => cells.map(c => c.textContent)")
+    assert all(b_cells)
+    page.fill("#box-fov", "150")
+    page.press("#box-fov", "Enter")
+    _settled(page)
+    assert page.evaluate("window.rvmConsole.last.params.fov") == 150.0
+    page.click("#reset")
+    _settled(page)
+    assert page.evaluate("window.rvmConsole.last.params.fov") == session.start.fov
+    assert not errors

@@ -1,0 +1,55 @@
+"""The access rule, the listening socket and the URL."""
+
+from __future__ import annotations
+
+
+import pytest
+
+from rvmsim.console import check_access, console_url, is_loopback, listen
+from rvmsim.errors import RvmsimError
+
+
+@pytest.mark.parametrize("host, loop", [("127.0.0.1", True), ("127.8.0.1", True),
+                                        ("localhost", True), ("::1", True), ("[::1]", True),
+                                        ("0.0.0.0", False), ("192.168.1.4", False),
+                                        ("example.org", False), ("::", False)])
+def test_is_loopback(host, loop):
+    assert is_loopback(host) is loop
+
+
+def test_loopback_needs_no_token_and_others_get_one():
+    assert check_access("127.0.0.1", None).token is None
+    given = "a" * 20
+    assert check_access("127.0.0.1", given).token == given
+    made = check_access("0.0.0.0", None)
+    assert made.generated and len(made.token or "") >= 16
+    assert check_access("0.0.0.0", None).token != made.token
+    assert check_access("0.0.0.0", given) == check_access("0.0.0.0", given)
+    assert not check_access("0.0.0.0", given).generated
+
+
+@pytest.mark.parametrize("host, token, word", [("", None, "--host"), ("0.0.0.0", "short", "--token"),
+                                               ("0.0.0.0", "x" * 16 + "/", "--token")])
+def test_bad_hosts_and_tokens(host, token, word):
+    with pytest.raises(RvmsimError, match=word):
+        check_access(host, token)
+
+
+def test_listen_on_a_free_port_and_refuse_a_taken_one():
+    sock = listen("127.0.0.1", 0)
+    try:
+        port = sock.getsockname()[1]
+        assert port > 0
+        with pytest.raises(RvmsimError, match=f"--port {port}"):
+            blocker = listen("127.0.0.1", port)
+            blocker.close()
+    finally:
+        sock.close()
+    with pytest.raises(RvmsimError, match="--host"):
+        listen("no-such-host.invalid", 0)
+
+
+def test_console_url():
+    assert console_url("127.0.0.1", 8765, None) == "http://127.0.0.1:8765/"
+    assert console_url("0.0.0.0", 1, "tok") == "http://127.0.0.1:1/?token=tok"
+    assert console_url("::1", 2, None) == "http://[::1]:2/"

@@ -1,0 +1,65 @@
+"""Opening a console session on a run or a scene, and one setting's evaluation."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from rvmsim.console import evaluate_setting, open_session
+from rvmsim.errors import RvmsimError
+from rvmsim.isp import PARAM_SPECS, IspParams, TUNED_BY_DEFAULT
+from rvmsim.tune import open_run
+
+
+def test_a_run_starts_at_rank_1_with_its_candidates(small_run):
+    s = open_session(small_run / "run")
+    store = open_run(small_run / "run")
+    try:
+        top = store.top(10)
+    finally:
+        store.close()
+    assert s.kind == "run" and s.start == top[0].params
+    assert [c.trial for c in s.candidates] == [r.idx for r in top]
+    assert s.save_dir == small_run / "run" / "console" and s.root == small_run / "run"
+    assert (s.ec_output.width, s.ec_output.height) == (640, 360)
+    assert (s.display.width, s.display.height) == (1280, 720)
+    names = [c.name for c in s.controls]
+    assert sorted(names) == sorted(p.name for p in PARAM_SPECS)
+    assert names[:len(TUNED_BY_DEFAULT)] == list(TUNED_BY_DEFAULT)
+    zoom = next(c for c in s.controls if c.name == "zoom")
+    assert zoom.tuned and (zoom.low, zoom.high) == (0.25, 1.45)
+    tilt = next(c for c in s.controls if c.name == "tilt")
+    assert not tilt.tuned and (tilt.low, tilt.high) == (-180.0, 180.0)
+
+
+def test_a_scene_starts_at_the_papers_defaults(small_run, tmp_path):
+    s = open_session(small_run / "scene.yaml", out_root=tmp_path / "out")
+    assert s.kind == "scene" and s.start == IspParams() and s.candidates == ()
+    assert s.save_dir == tmp_path / "out" / "scene" / "console"
+    assert not s.save_dir.exists()  # nothing written before a save
+
+
+def test_missing_and_wrong_sources_are_one_line_errors(tmp_path):
+    from rvmsim.tune import tune
+    from tests.bad_input.conftest import write_small_scene
+
+    with pytest.raises(RvmsimError, match="no such run folder or scene file"):
+        open_session(tmp_path / "nope")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(RvmsimError, match="not a run folder"):
+        open_session(tmp_path / "empty")
+    scene = write_small_scene(tmp_path)
+    tune(scene, tmp_path / "run", strategy="random", budget=4, workers=1)
+    shutil.move(scene, tmp_path / "elsewhere.yaml")
+    with pytest.raises(RvmsimError, match="scene file .* not found"):
+        open_session(tmp_path / "run")
+
+
+def test_the_ecs_change_with_the_zoom(small_run):
+    s = open_session(small_run / "run")
+    a = evaluate_setting(s, s.start)
+    b = evaluate_setting(s, s.start.replace(zoom=s.start.zoom * 1.5))
+    assert a.ec.as_dict() != b.ec.as_dict()
+    assert a.display_jpeg != b.display_jpeg and a.roi != b.roi
+    assert set(a.timings_ms) == {"ecs", "display", "annotated", "roi"}
