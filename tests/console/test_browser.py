@@ -56,6 +56,7 @@ def _settled(page, timeout: float = 30000) -> None:
 
 def _drag(page, selector: str, fraction: float) -> None:
     """Drag a slider's thumb with the mouse from where it is to ``fraction`` of its width."""
+    page.locator(selector).scroll_into_view_if_needed()
     box = page.locator(selector).bounding_box()
     assert box is not None
     value = page.eval_on_selector(selector, "e => (e.value - e.min) / (e.max - e.min)")
