@@ -239,6 +239,9 @@ def load_criteria(path: str | Path | None) -> Criteria:
     if text is not None:
         return _load(text, str(path), default_criteria(), Path("."))
     path = Path(path)
+    if not path.exists() and not path.suffix:  # perhaps a misspelt bundled set's name
+        raise CriteriaError(str(path), "", "no such file or bundled criteria set (bundled: "
+                            f"{', '.join(BUNDLED_CRITERIA)})")
     return _load(read_text(path, CriteriaError), str(path), default_criteria(), path.parent)
 
 

@@ -153,8 +153,8 @@ def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
     mean_limit = options.parameter("1-6", "mean_arcmin", rule.IMAGE_SIZE_MEAN_ARCMIN)
     each_limit = options.parameter("1-6", "each_arcmin", rule.IMAGE_SIZE_MIN_ARCMIN)
     angles = [w["arcmin"] for w in widths.values()]
-    margin = min(np.mean(angles) / mean_limit, min(angles) / each_limit)
-    return Measurement(float(margin), widths)
+    margin = min(sum(angles) / len(angles) / mean_limit, min(angles) / each_limit)
+    return Measurement(margin, widths)
 
 
 def _draw_widths(canvas: Canvas, item: EcValue, widths: Any, keys: tuple[str, ...]) -> None:
