@@ -67,16 +67,22 @@ def _measure_1_5(src: LabelSource, options: MeasureOptions) -> Measurement:
     if ctx is None or isp is None:
         return Measurement(None)
     poly = isp.footprint(32)
+    contour = poly.astype(np.float32).reshape(-1, 1, 2)
     fractions: dict[str, float] = {}
     outlines: dict[str, np.ndarray] = {}
     for letter in FULL_VIEW_OBJECTS:
         sil = silhouette(ctx, letter)
         if sil is None or sil.area == 0:
             continue
-        inside = np.zeros(sil.inner.shape, np.uint8)
-        pts = np.round((poly - sil.box) * 16.0).astype(np.int32).reshape(-1, 1, 2)
-        cv2.fillPoly(inside, [pts], 255, cv2.LINE_8, shift=4)
-        seen = cv2.countNonZero(cv2.bitwise_and(sil.visible, inside))
+        h, w = sil.inner.shape
+        centre = (sil.box[0] + (w - 1) / 2.0, sil.box[1] + (h - 1) / 2.0)
+        if cv2.pointPolygonTest(contour, centre, True) > math.hypot(w, h) / 2.0 + 1.0:
+            seen = sil.visible_area  # the RVM border is farther than the whole box: all in
+        else:
+            inside = np.zeros((h, w), np.uint8)
+            pts = np.round((poly - sil.box) * 16.0).astype(np.int32).reshape(-1, 1, 2)
+            cv2.fillPoly(inside, [pts], 255, cv2.LINE_8, shift=4)
+            seen = cv2.countNonZero(cv2.bitwise_and(sil.visible, inside))
         fractions[letter] = 100.0 * seen / sil.area
         outlines[letter] = sil.outline
     if not fractions:
@@ -98,8 +104,9 @@ def _draw_1_5(canvas: Canvas, item: EcValue, detail: Any) -> None:
                 pts = np.round(uv * 16).astype(np.int32).reshape(-1, 1, 2)
                 cv2.polylines(canvas.image, [pts], True, colour, canvas.line_width,
                               cv2.LINE_AA, shift=4)
-                x, y = uv.min(axis=0)
-                canvas.text(f"{letter} {frac:.0f}%", (x, max(10.0, y - 4)), colour)
+                if frac < 100.0:  # (whole ones: the outline's colour says so)
+                    x, y = uv.min(axis=0)
+                    canvas.text(f"{letter} {frac:.0f}%", (x, max(10.0, y - 4)), colour)
 
 
 # ---------------------------------------------------------------------------- 1-6 and 6-1
@@ -141,7 +148,8 @@ def _widths(display: Any, ctx: Any, isp: IspView) -> dict[str, dict[str, float]]
         arcmin = _ARCMIN * 2.0 * math.atan(mm * cos_view / (2.0 * display.eye_distance_mm))
         out[letter] = {"px": px, "mm": mm, "arcmin": arcmin, "magnification": float(mag[k]),
                        "px_per_deg": px / e.angle_deg if e.angle_deg > 0 else 0.0,
-                       "x": float(x), "y": float(y)}
+                       "x": float(x), "y": float(y), "x0": float(xl), "y0": float(yl),
+                       "x1": float(xr), "y1": float(yr)}
     return out
 
 
@@ -158,13 +166,24 @@ def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_widths(canvas: Canvas, item: EcValue, widths: Any, keys: tuple[str, ...]) -> None:
+    """The objects' figures as a block of lines (1-6 at the top left, 6-1 at the top right)
+    and, for 1-6, each measured width as a line across the object."""
+    import cv2
+
     if not widths:
         return
     colour = canvas.status(item)
+    row = 16 * canvas.text_scale / 0.35
+    left = keys[0] == "px"
+    x = 4.0 if left else canvas.shape[1] - 150 * canvas.text_scale / 0.35
     for n, (letter, w) in enumerate(widths.items()):
-        text = f"{letter} " + " ".join(f.format(w[k]) for f, k in zip(_FORMATS[keys], keys))
-        y = w["y"] + (n % 2) * 14 * canvas.text_scale / 0.45
-        canvas.text(text, (w["x"] - 30, y + (24 if keys[0] == "px" else 48)), colour)
+        text = f"{item.id} {letter} " + " ".join(f.format(w[k]) for f, k in
+                                                zip(_FORMATS[keys], keys))
+        canvas.text(text, (x, row * (n + 1)), colour)
+        if left:
+            ends = [(int(round(w["x0"])), int(round(w["y0"]))),
+                    (int(round(w["x1"])), int(round(w["y1"])))]
+            cv2.line(canvas.image, ends[0], ends[1], colour, canvas.line_width)
 
 
 _FORMATS = {("px", "mm", "arcmin"): ("{:.1f}px", "{:.2f}mm", "{:.1f}'"),

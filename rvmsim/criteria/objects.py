@@ -46,7 +46,8 @@ class ObjectSilhouette:
     ``inner`` (h, w) uint8 255 where the silhouette, eroded by 1 px, lies (its boundary
     pixels are left out: the rendered mesh and the analytic cylinder may disagree there by
     a fraction of a pixel); ``visible`` the same pixels where the rendered label image
-    shows the object itself (not hidden, inside the image); ``outline`` the silhouette's
+    shows the object itself (not hidden, inside the image); ``area`` and ``visible_area``
+    their pixel counts; ``outline`` the silhouette's
     outer contour, fisheye px (N, 2) float64, for drawings.
     """
 
@@ -54,6 +55,7 @@ class ObjectSilhouette:
     inner: np.ndarray
     visible: np.ndarray
     area: int
+    visible_area: int
     outline: np.ndarray
 
 
@@ -123,8 +125,9 @@ def _compute_silhouette(ctx: SceneContext, letter: str) -> ObjectSilhouette | No
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     outline = (max(contours, key=len).reshape(-1, 2).astype(np.float64) + (x0, y0)
                if contours else np.zeros((0, 2)))
-    return ObjectSilhouette((x0, y0), inner, cv2.bitwise_and(inner, own),
-                            int(cv2.countNonZero(inner)), outline)
+    visible = cv2.bitwise_and(inner, own)
+    return ObjectSilhouette((x0, y0), inner, visible, int(cv2.countNonZero(inner)),
+                            int(cv2.countNonZero(visible)), outline)
 
 
 def silhouette(ctx: SceneContext, letter: str) -> ObjectSilhouette | None:
