@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .criteria import Criteria, EcResult, default_criteria, evaluate
+from .criteria import Criteria, EcResult, IspView, default_criteria, evaluate, scene_context
 from .criteria import annotate as annotate_ecs
 from .isp import IspParams, OutputSpec, draw_roi, params_to_dict, process
 from .render import FisheyeImages, render_fisheye
@@ -51,7 +51,8 @@ def evaluate_params(images: FisheyeImages, params: IspParams, output: OutputSpec
     Parameters
     ----------
     images : FisheyeImages
-        Rendered fisheye colour and label images.
+        Rendered fisheye colour and label images (``images.scene``, when set, is the scene
+        that ECs needing its geometry or display read).
     params : IspParams
         ISP parameters for ``images``' size.
     output : OutputSpec
@@ -68,7 +69,10 @@ def evaluate_params(images: FisheyeImages, params: IspParams, output: OutputSpec
     criteria = criteria if criteria is not None else default_criteria()
     color, labels = process(images.color, images.labels, params, output)
     assert color is not None and labels is not None  # process returns what it is given
-    ec = evaluate(labels, criteria)
+    # ECs that need the scene or the map (e.g. 1-5, 1-6, 6-1) read them from here
+    context = scene_context(images.scene, images.camera, images.labels)
+    isp = IspView(params, (images.labels.shape[1], images.labels.shape[0]), output)
+    ec = evaluate(labels, criteria, context=context, isp=isp)
     drawn = annotate_ecs(color, labels, ec) if annotate else None
     return RvmFrame(fisheye=images, params=params, output=output, color=color, labels=labels,
                     ec=ec, annotated=drawn)

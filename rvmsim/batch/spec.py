@@ -41,7 +41,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
                    parse_yaml_mapping, read_text)
-from ..criteria import Criteria, criteria_from_text, default_criteria
+from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
 from ..tune import DEFAULT_STRATEGY
@@ -313,6 +313,9 @@ def _read_criteria(f: _SweepFile, folder: Path) -> tuple[str | None, str]:
     defaults."""
     if f.tune.criteria is None:
         return None, ""
+    bundled = bundled_criteria_text(f.tune.criteria)  # a bundled set's name (fmvss111-full)
+    if bundled is not None and not (folder / f.tune.criteria).exists():
+        return bundled, f.tune.criteria
     cpath = Path(f.tune.criteria)
     cpath = cpath if cpath.is_absolute() else (folder / cpath).resolve()
     text = read_text(cpath, CriteriaError)

@@ -133,13 +133,16 @@ def _local_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings, prog
 
 def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
                  scheduler: str) -> Iterator[SceneRun]:
+    from ..criteria import bundled_criteria_text, criteria_reference
     from .executors import DaskExecutor
 
     tasks, by_key = {}, {}
     for k, scene in enumerate(scenes):
         try:  # a bad scene or criteria file skips the scene, as in local runs
             doc = portable_scene_doc(scene)
-            crit = Path(settings.criteria_file).read_text() if settings.criteria_file else None
+            crit = None if not settings.criteria_file else (  # a bundled set's name, or a file
+                bundled_criteria_text(settings.criteria_file)
+                or Path(settings.criteria_file).read_text())
         except (RvmsimError, OSError) as err:
             yield SceneRun.failed(scene, err)
             continue
@@ -150,7 +153,7 @@ def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
                       "budget": settings.budget, "criteria": crit, "workers": 1,
                       "scene_file": str(scene.resolve()),
                       "criteria_file": (None if settings.criteria_file is None
-                                        else str(Path(settings.criteria_file).resolve()))}
+                                        else criteria_reference(settings.criteria_file))}
     with DaskExecutor(scheduler) as ex:
         for key, res in ex.run(tune_task, tasks):
             scene = by_key[key]

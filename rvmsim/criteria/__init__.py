@@ -1,7 +1,9 @@
 """Evaluation criteria (ECs): a registry of ECs, the paper's eleven, their measurement on the
 RVM label image, sigmoid scores, drawings and the fast tuning evaluator.
 
-Modules: :mod:`.registry` (what an EC is, plugins), :mod:`.groups` (label groups, windows),
+Modules: :mod:`.registry` (what an EC is, plugins), :mod:`.context` (the scene and ISP map
+an EC may read besides the labels), :mod:`.fmvss111` and :mod:`.objects` (ECs 1-5, 1-6,
+6-1: FMVSS 111 beyond the paper, a plugin), :mod:`.groups` (label groups, windows),
 :mod:`.measure` (label sources and helpers for measure functions), :mod:`.builtin` (the
 paper's eleven, a plugin like any other), :mod:`.sigmoid` and :mod:`.scoring` (scores,
 criteria, results), :mod:`.config` (criteria files), :mod:`.image` (whole-image measure and
@@ -41,6 +43,11 @@ from .registry import (
     load_plugin,
     resolve_plugin,
 )
+from .context import (
+    IspView,
+    SceneContext,
+    scene_context,
+)
 from .scoring import (
     Criteria,
     EcBatch,
@@ -51,6 +58,9 @@ from .scoring import (
     values_array,
 )
 from .config import (
+    BUNDLED_CRITERIA,
+    bundled_criteria_text,
+    criteria_reference,
     criteria_from_text,
     default_criteria,
     load_criteria,
@@ -104,6 +114,12 @@ __all__ = [
     "score",
     "values_array",
     "criteria_from_text",
+    "BUNDLED_CRITERIA",
+    "bundled_criteria_text",
+    "criteria_reference",
+    "SceneContext",
+    "IspView",
+    "scene_context",
     "load_criteria",
     "default_criteria",
     "measure",

@@ -8,12 +8,16 @@ plugins it names explicitly under ``plugins:``.  Format (every key optional)::
     edge_columns: 4
     plugins: [acme_rvm.criteria, ./board_centred.py]   # modules, or files next to this one
     ecs: [1-1, 1-2, acme-board-x]   # the selected ECs, in evaluation order
+    display: {eye_distance_mm: 650} # the driver's display (EC 1-6; a scene's own wins)
     criteria:                       # per EC: what changes from its defaults
       2-1: {range: [5, 9], tolerance: 1.0}
       4-1: {enabled: false}
+      6-1: {parameters: {max_magnification: 2.5}}   # an EC's named parameters
 
 Without ``ecs``, a file selects the ECs of the criteria it extends (the paper's eleven),
-then every EC of its plugins, in the order listed.  See docs/criteria.md.
+then every EC of its plugins, in the order listed.  Bundled criteria sets are selected by
+name wherever a criteria file is (:data:`BUNDLED_CRITERIA`: ``fmvss111-full``).  See
+docs/criteria.md.
 """
 
 from __future__ import annotations
@@ -27,11 +31,17 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from .._io import input_error_from_validation, key_lines, line_of, parse_yaml_mapping, read_text
 from ..errors import CriteriaError
+from ..scene import Display
 from .registry import EcDefinition, builtin_ecs, load_plugin, resolve_plugin
 from .scoring import Criteria
 from .sigmoid import Criterion, Sigmoid
 
-__all__ = ["load_criteria", "default_criteria", "criteria_from_text"]
+__all__ = ["load_criteria", "default_criteria", "criteria_from_text", "BUNDLED_CRITERIA",
+           "bundled_criteria_text", "criteria_reference"]
+
+#: Criteria sets shipped with rvmsim, selected by name (``--criteria fmvss111-full``, a sweep
+#: file's ``criteria:``): name → file in this package.
+BUNDLED_CRITERIA: dict[str, str] = {"fmvss111-full": "criteria_fmvss111_full.yaml"}
 
 
 def _not_nan(value: float) -> float:
@@ -58,6 +68,7 @@ class _CriterionModel(BaseModel):
     range: tuple[_Number | None, _Number | None] | None = None
     sigmoid: _SigmoidModel | None = None
     tolerance: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None
+    parameters: dict[str, Annotated[float, Field(allow_inf_nan=False)]] = {}
 
     @model_validator(mode="after")
     def _check(self) -> _CriterionModel:
@@ -81,6 +92,7 @@ class _CriteriaModel(BaseModel):
     edge_columns: Annotated[int, Field(ge=1, le=64)] = 4
     plugins: list[str] = []
     ecs: list[str] | None = None
+    display: Display | None = None
     criteria: dict[str, _CriterionModel] = {}
 
 
@@ -160,6 +172,19 @@ def _criterion(ec: EcDefinition, prev: Criterion, m: _CriterionModel | None) -> 
     return Criterion(ec.id, low, high, sig, m.enabled)
 
 
+def _parameters(ec: EcDefinition, base: Criteria | None, m: _CriterionModel | None,
+                f: _File) -> dict[str, float]:
+    """The changes a file (and the criteria it extends) make to an EC's parameters."""
+    out = dict(base.parameters.get(ec.id, {})) if base is not None else {}
+    known = dict(ec.parameters)
+    for name, value in (m.parameters if m is not None else {}).items():
+        if name not in known:
+            raise f.error(("criteria", ec.id, "parameters", name), f"EC {ec.id!r} has no "
+                          f"parameter {name!r} (known: {', '.join(known) or 'none'})")
+        out[name] = float(value)
+    return out
+
+
 def _load(text: str, source: str, base: Criteria | None, base_dir: Path) -> Criteria:
     data = parse_yaml_mapping(text, source, CriteriaError, "a criteria file", empty_ok=True)
     if isinstance(data.get("criteria"), dict):  # YAML may read 1-1 … as strings already
@@ -173,12 +198,16 @@ def _load(text: str, source: str, base: Criteria | None, base_dir: Path) -> Crit
         raise input_error_from_validation(err, source, f.lines, CriteriaError) from None
     available = _available(model, base, f)
     items: dict[str, Criterion] = {}
+    params: dict[str, dict[str, float]] = {}
     for ec_id in _selection(model, base, available, f):
         ec = available[ec_id]
         prev = base.items.get(ec_id) if base is not None else None
         items[ec_id] = _criterion(ec, prev or ec.default_criterion(), model.criteria.get(ec_id))
+        params[ec_id] = _parameters(ec, base, model.criteria.get(ec_id), f)
+    display = model.display or (base.display if base is not None else None)
     criteria = Criteria(model.name, items, model.upper_region_fraction, model.edge_columns,
-                        source, tuple(available[i] for i in items))
+                        source, tuple(available[i] for i in items), display,
+                        {k: v for k, v in params.items() if v})
     try:
         criteria.groups  # noqa: B018 - two ECs may not give one group name different labels
     except ValueError as err:
@@ -206,8 +235,32 @@ def load_criteria(path: str | Path | None) -> Criteria:
     """
     if path is None:
         return default_criteria()
+    text = bundled_criteria_text(path)
+    if text is not None:
+        return _load(text, str(path), default_criteria(), Path("."))
     path = Path(path)
+    if not path.exists() and not path.suffix:  # perhaps a misspelt bundled set's name
+        raise CriteriaError(str(path), "", "no such file or bundled criteria set (bundled: "
+                            f"{', '.join(BUNDLED_CRITERIA)})")
     return _load(read_text(path, CriteriaError), str(path), default_criteria(), path.parent)
+
+
+def bundled_criteria_text(name: str | Path) -> str | None:
+    """The text of the bundled criteria set ``name`` (:data:`BUNDLED_CRITERIA`), or None when
+    ``name`` is no bundled set's name or an existing file of that name is in the way (a
+    file always wins)."""
+    key = str(name)
+    if key not in BUNDLED_CRITERIA or Path(key).exists():
+        return None
+    return resources.files("rvmsim.criteria").joinpath(BUNDLED_CRITERIA[key]).read_text("utf-8")
+
+
+def criteria_reference(value: str | Path) -> str:
+    """How a run records its criteria: a bundled set's name as given, a file's absolute path
+    (so that ``--resume`` and ``report`` find the same criteria from anywhere)."""
+    if bundled_criteria_text(value) is not None:
+        return str(value)
+    return str(Path(value).resolve())
 
 
 def criteria_from_text(text: str, source: str = "<criteria>", *,

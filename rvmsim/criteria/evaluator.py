@@ -39,8 +39,11 @@ from typing import Any
 import numpy as np
 
 from .. import labels as L
+from ..camera import FisheyeCamera
 from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
+from ..scene import Scene
 from .config import default_criteria
+from .context import IspView, SceneContext, scene_context
 from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
@@ -128,7 +131,10 @@ class _RemapSource(LabelSource):
     (:func:`_merge_windows`), remapped on first use."""
 
     def __init__(self, fisheye: np.ndarray, nodes: MapNodes, windows: list[Window],
-                 shape: tuple[int, int], groups: dict[str, Window]):
+                 shape: tuple[int, int], groups: dict[str, Window], *,
+                 context: SceneContext | None, isp: IspView):
+        self.context = context
+        self.isp = isp
         self.fisheye = fisheye
         self.nodes = nodes
         self.groups = groups
@@ -178,13 +184,21 @@ class CandidateEvaluator:
     windowed : bool
         Remap only the windows the ECs need (default); False remaps the whole image for every
         measurement (the slow reference the windowed path is tested against).
+    scene : Scene, optional
+        The scene the labels were rendered from: ECs that need its geometry or display
+        read it (``source.context``, :class:`rvmsim.criteria.SceneContext`); without it they
+        cannot be measured.
+    camera : FisheyeCamera, optional
+        The camera the labels were rendered with (default: the scene's, scaled to the
+        labels' size).
 
     Pickles (to tuning's worker processes) with its criteria, whose ECs pickle by reference
     to their plugin.
     """
 
     def __init__(self, fisheye_labels: np.ndarray, output: OutputSpec = OutputSpec(),
-                 criteria: Criteria | None = None, *, windowed: bool = True):
+                 criteria: Criteria | None = None, *, windowed: bool = True,
+                 scene: Scene | None = None, camera: FisheyeCamera | None = None):
         labels = np.ascontiguousarray(np.asarray(fisheye_labels))
         if labels.ndim != 2 or labels.dtype != np.uint8:
             raise TypeError("fisheye_labels must be a 2-D uint8 label image")
@@ -193,6 +207,8 @@ class CandidateEvaluator:
         self.output = output
         self.criteria = criteria or default_criteria()
         self.windowed = windowed
+        #: The scene as the ECs see it (None without a scene).
+        self.context = scene_context(scene, camera, labels)
         self._rays = RayCache()  # views recur in the coarse grid with other FOV/RAD/shifts
         # one distance image per eight groups
         self._chunks = group_chunks(self.criteria.groups)
@@ -266,7 +282,8 @@ class CandidateEvaluator:
         w, h = self.output.width, self.output.height
         groups = self.windows(params, nodes) if self.windowed else self._whole()
         return _RemapSource(self.fisheye, nodes, list(groups.values()) + self._regions, (h, w),
-                            groups)
+                            groups, context=self.context,
+                            isp=IspView(params, self.input_size, self.output))
 
     def measure(self, params: IspParams) -> Measurements:
         """The raw measurements of one parameter set."""

@@ -12,6 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .config import default_criteria
+from .context import IspView, SceneContext
 from .groups import unique_groups
 from .measure import LabelSource, Measurements, MeasureOptions, measure_ecs
 from .registry import EcDefinition, builtin_ecs
@@ -52,7 +53,8 @@ def measure_source(src: LabelSource, *, upper_region_fraction: float = 0.5,
                        MeasureOptions(upper_region_fraction, edge_columns))
 
 
-def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None) -> EcResult:
+def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None, *,
+             context: SceneContext | None = None, isp: IspView | None = None) -> EcResult:
     """Measure and score an RVM label image (the EC score of one ISP parameter set).
 
     Parameters
@@ -61,6 +63,10 @@ def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None) -> EcResu
         RVM label image.
     criteria : Criteria, optional
         Default: :func:`default_criteria`.
+    context : SceneContext, optional
+        The scene shown, for ECs that need it (``source.context``).
+    isp : IspView, optional
+        The ISP map that made ``rvm_labels``, for ECs that need it (``source.isp``).
 
     Returns
     -------
@@ -68,5 +74,5 @@ def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None) -> EcResu
         One item per EC the criteria select, in their order.
     """
     criteria = criteria or default_criteria()
-    src = LabelSource(rvm_labels, criteria.groups)
+    src = LabelSource(rvm_labels, criteria.groups, context=context, isp=isp)
     return score(measure_ecs(src, criteria.ecs, criteria.options), criteria)

@@ -26,6 +26,8 @@ from ..errors import CriteriaError
 from .groups import LabelGroup, Window, group_windows
 
 if TYPE_CHECKING:
+    from ..scene import Display
+    from .context import IspView, SceneContext
     from .registry import EcDefinition
 
 __all__ = ["MeasureOptions", "Measurement", "Measurements", "LabelSource", "measure_ecs",
@@ -45,14 +47,30 @@ class MeasureOptions:
         body parts; groups with ``upper_region=True`` are read there only).
     edge_columns : int
         Columns averaged for each bumper height (t_l, t_r at the edges, t_c centred).
+    display : Display, optional
+        The criteria file's ``display`` section (a scene's own wins:
+        :meth:`rvmsim.criteria.SceneContext.display`).
+    parameters : tuple
+        Per EC, its named parameters with the criteria file's changes applied:
+        ``((ec_id, ((name, value), ...)), ...)``; read them with :meth:`parameter`.
     """
 
     upper_region_fraction: float = 0.5
     edge_columns: int = 4
+    display: Display | None = None
+    parameters: tuple[tuple[str, tuple[tuple[str, float], ...]], ...] = ()
 
     def upper_rows(self, height: int) -> int:
         """Rows of the upper region of an image ``height`` px high."""
         return int(round(self.upper_region_fraction * height))
+
+    def parameter(self, ec_id: str, name: str, default: float) -> float:
+        """EC ``ec_id``'s parameter ``name`` (:attr:`EcDefinition.parameters`), ``default``
+        when the options do not carry it (e.g. the load-time probe)."""
+        for ec, values in self.parameters:
+            if ec == ec_id:
+                return dict(values).get(name, default)
+        return default
 
 
 class Measurement(NamedTuple):
@@ -95,9 +113,21 @@ class LabelSource:
         (:func:`rvmsim.criteria.group_windows`); asking for another group is an error, so an
         EC that reads a group it does not declare fails here as it would in the fast
         evaluator.  Default: any group, each found when first asked for.
+    context : SceneContext, optional
+        The scene the image shows (:attr:`context`; :mod:`rvmsim.criteria.context`).
+    isp : IspView, optional
+        The ISP map that made the image (:attr:`isp`).
+
+    Attributes
+    ----------
+    context : SceneContext or None
+        Per scene: the scene, camera and fisheye label image, and a per-scene cache.
+    isp : IspView or None
+        Per candidate: exact point mappings of its ISP map (fisheye px ↔ RVM px).
     """
 
-    def __init__(self, labels: np.ndarray, groups: Sequence[LabelGroup] | None = None):
+    def __init__(self, labels: np.ndarray, groups: Sequence[LabelGroup] | None = None, *,
+                 context: SceneContext | None = None, isp: IspView | None = None):
         labels = np.asarray(labels)
         if labels.ndim != 2 or labels.dtype != np.uint8:
             raise TypeError(f"labels must be a 2-D uint8 image, got {labels.dtype} {labels.shape}")
@@ -106,6 +136,8 @@ class LabelSource:
         self._declared = groups is not None
         self._windows = {} if groups is None else group_windows(self.labels, groups)
         self._shared: dict[Any, Any] = {}
+        self.context = context
+        self.isp = isp
 
     def window(self, group: LabelGroup | str) -> Window:
         """A window that holds every pixel of ``group`` and the pixels next to them."""

@@ -21,7 +21,7 @@ import importlib
 import importlib.util
 import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -94,6 +94,11 @@ class EcDefinition:
         image columns), so that the fast evaluator remaps them together.
     plugin : str
         Set when loaded (:func:`load_plugin`): the plugin's source, for pickling.
+    parameters : dict
+        Named numeric parameters of the measurement and their defaults (e.g. a limit), which
+        a criteria file may change (``criteria: {id: {parameters: {name: value}}}``); the
+        measure function reads them with ``options.parameter(id, name, default)``.  Stored
+        as a tuple of ``(name, value)`` pairs (``dict(ec.parameters)``).
     """
 
     id: str
@@ -108,6 +113,7 @@ class EcDefinition:
     description: str = ""
     regions: RegionsFn | None = None
     plugin: str = ""
+    parameters: Mapping[str, float] | tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id or any(c.isspace() for c in self.id):
@@ -138,6 +144,13 @@ class EcDefinition:
             raise TypeError(f"EC {self.id!r}: default_sigmoid must be a Sigmoid or None")
         if not isinstance(self.binary, bool):
             raise TypeError(f"EC {self.id!r}: binary must be True or False")
+        params = self.parameters
+        pairs = list(params.items()) if isinstance(params, Mapping) else list(params)
+        if not all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[0], str)
+                   and isinstance(p[1], (int, float)) and math.isfinite(p[1]) for p in pairs):
+            raise TypeError(f"EC {self.id!r}: parameters must map names to finite numbers")
+        # a tuple of (name, value) pairs: the definition stays hashable
+        object.__setattr__(self, "parameters", tuple((k, float(v)) for k, v in pairs))
 
     def default_criterion(self) -> Criterion:
         """The EC's :class:`Criterion` when a criteria file changes nothing about it."""

@@ -6,10 +6,11 @@ candidate passes when every enabled EC's value lies in its acceptable range.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +18,9 @@ from .groups import LabelGroup, unique_groups
 from .measure import Measurements, MeasureOptions
 from .registry import EcDefinition, builtin_ecs
 from .sigmoid import Criterion, Sigmoid
+
+if TYPE_CHECKING:
+    from ..scene import Display
 
 __all__ = ["Criteria", "EcValue", "EcResult", "EcBatch", "score_batch", "score",
            "values_array"]
@@ -40,6 +44,11 @@ class Criteria:
         Where the criteria came from (a file, ``<default>``).
     ecs : tuple of EcDefinition
         The selected ECs in evaluation order; default: the paper's eleven.
+    display : Display, optional
+        The criteria file's ``display`` section (a scene's own wins).
+    parameters : dict
+        EC id → {parameter name: value}: the criteria file's changes to ECs' parameters
+        (:attr:`EcDefinition.parameters`).
     """
 
     name: str
@@ -48,6 +57,8 @@ class Criteria:
     edge_columns: int = 4
     source: str = "<default>"
     ecs: tuple[EcDefinition, ...] = ()
+    display: Display | None = None
+    parameters: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.ecs:
@@ -66,8 +77,12 @@ class Criteria:
 
     @functools.cached_property
     def options(self) -> MeasureOptions:
-        """The measurement options the ECs receive."""
-        return MeasureOptions(self.upper_region_fraction, self.edge_columns)
+        """The measurement options the ECs receive (each EC's parameters: its defaults with
+        :attr:`parameters`' changes)."""
+        params = tuple((ec.id, tuple({**dict(ec.parameters), **self.parameters.get(ec.id, {})
+                                      }.items())) for ec in self.ecs if ec.parameters)
+        return MeasureOptions(self.upper_region_fraction, self.edge_columns, self.display,
+                              params)
 
     @functools.cached_property
     def groups(self) -> tuple[LabelGroup, ...]:

@@ -142,7 +142,7 @@ def cached_render(scene: Scene, *, scale: float = 1.0,
     folder = cache_dir() / scene_key(scene, scale)
     entry = _read_entry(folder, cam.width, cam.height)
     if entry is not None:
-        return FisheyeImages(color=entry[0], labels=entry[1], camera=cam), True
+        return FisheyeImages(color=entry[0], labels=entry[1], camera=cam, scene=scene), True
     images = render_fisheye(scene, camera=cam, progress=progress)
     try:
         write_png(folder / "fisheye_color.png", images.color)

@@ -54,6 +54,8 @@ class FisheyeImages:
         Cube face size used, px.
     faces : tuple of str
         Names of the cube faces rendered.
+    scene : Scene, optional
+        The scene rendered (ECs that need its geometry read it; None when unknown).
     """
 
     color: np.ndarray
@@ -62,6 +64,7 @@ class FisheyeImages:
     timings: dict[str, float] = field(default_factory=dict)
     face_size: int = 0
     faces: tuple[str, ...] = ()
+    scene: Scene | None = None
 
 
 def render_fisheye(
@@ -128,4 +131,5 @@ def render_fisheye(
                  "fold": t4 - t3},
         face_size=layout.face_size,
         faces=tuple(FACE_NAMES[f] for f in layout.faces),
+        scene=scene,
     )

@@ -100,7 +100,7 @@ def _resolve(recorded: str, run_dir: Path) -> Path | None:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from ..criteria import load_criteria
+    from ..criteria import bundled_criteria_text, load_criteria
     from ..render import cached_render, same_scene
     from ..scene import load_scene
     from ..tune import open_run, run_settings, run_state, store_candidates
@@ -123,7 +123,9 @@ def _load_run(run_dir: Path) -> _Run:
         raise RvmsimError(f"{run_dir}: scene file {settings.scene} not found")
     crit_file = None
     if settings.criteria_file:
-        crit_file = _resolve(settings.criteria_file, run_dir)
+        crit_file = (Path(settings.criteria_file)  # a bundled set's name, or a file
+                     if bundled_criteria_text(settings.criteria_file) is not None
+                     else _resolve(settings.criteria_file, run_dir))
         if crit_file is None:
             raise RvmsimError(f"{run_dir}: criteria file {settings.criteria_file} not found")
     criteria = load_criteria(crit_file)

@@ -214,7 +214,7 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
                 img_l = fold_labels(layout, atlas_l)
                 img_c = np.broadcast_to(np.zeros(3, np.uint8), (*img_l.shape, 3))
             out[i] = FisheyeImages(color=img_c, labels=img_l, camera=cam,
-                                   face_size=cover.face_size)
+                                   face_size=cover.face_size, scene=scene)
             if bar is not None:
                 bar.update(1)
     if bar is not None:

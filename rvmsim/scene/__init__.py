@@ -25,6 +25,7 @@ from .schema import (
     GroundPattern,
     RenderSettings,
 )
+from .display import Display
 from .variation import (
     VariationSpec,
     MountTolerance,
@@ -69,6 +70,7 @@ __all__ = [
     "PatternBoard",
     "GroundPattern",
     "RenderSettings",
+    "Display",
     "VariationSpec",
     "MountTolerance",
     "AxisSpec",

@@ -20,6 +20,13 @@ __all__ = [
     "OBJECT_POSITIONS_M",
     "OBJECT_POSITION_REFERENCE",
     "VERTICAL_STRIPE_FACING",
+    "EYE_TO_DISPLAY_MM",
+    "DISPLAY_WIDTH_MM",
+    "DISPLAY_HEIGHT_MM",
+    "DISPLAY_RESOLUTION_PX",
+    "DISPLAY_VIEWING_ANGLE_DEG",
+    "IMAGE_SIZE_MEAN_ARCMIN",
+    "IMAGE_SIZE_MIN_ARCMIN",
 ]
 
 #: Test object height: 0.8 m (32 in), confirmed; exact S14 figure ⚠️H.
@@ -52,3 +59,24 @@ OBJECT_POSITION_REFERENCE = "centre"
 #: object's own z; alternatives in the scene file are "vehicle" (toward −Z), "camera", or an
 #: azimuth in degrees.
 VERTICAL_STRIPE_FACING = "vehicle_centreline"
+
+# ---------------------------------------------------------------------------- the display
+# S5.5.2 judges the image on the display, seen from the driver's eye point.  The defaults of
+# the scene's (or criteria file's) ``display:`` section (:class:`rvmsim.scene.Display`).
+#: Distance from the driver's eye point to the display, mm.  ⚠️L: the facts sheet's worked
+#: example (0.70 m), not a value of the regulation (S14 derives the eye point from the seat's
+#: H-point; the offsets were not retrieved).  Set the vehicle's own figure in ``display:``.
+EYE_TO_DISPLAY_MM = 700.0
+#: Active area of the display, mm: a 7-inch 800 × 480 panel (assumed typical; not from the
+#: regulation, which sets no display size).
+DISPLAY_WIDTH_MM = 154.08
+DISPLAY_HEIGHT_MM = 85.92
+#: Display resolution (width, height), px (the same assumed 7-inch panel).
+DISPLAY_RESOLUTION_PX = (800, 480)
+#: Angle between the eye's line of sight and the display's normal, in the horizontal plane,
+#: degrees: 0 = square to the eye (assumed).
+DISPLAY_VIEWING_ANGLE_DEG = 0.0
+#: S5.5.2: the visual angle of the horizontal width of A, B and C averages at least 5′,
+#: each at least 3′ (arc-minutes).  ⚠️H
+IMAGE_SIZE_MEAN_ARCMIN = 5.0
+IMAGE_SIZE_MIN_ARCMIN = 3.0

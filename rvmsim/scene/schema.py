@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_val
 
 from . import fmvss111
 from ..camera import FisheyeCamera, rotation_from_ypr
+from .display import Display
 from .variation import VariationSpec
 
 __all__ = [
@@ -448,6 +449,9 @@ class Scene(_Model):
     vehicle: Vehicle
     test_site: TestSite = TestSite()
     render: RenderSettings = RenderSettings()
+    #: The display the driver sees (EC 1-6, :mod:`rvmsim.scene.display`); None: the criteria
+    #: file's, else the defaults.  Not part of the render cache's key.
+    display: Display | None = Field(default=None, exclude=True)
     #: Production variation (:mod:`rvmsim.robust`); not part of the render cache's key.
     variation: VariationSpec | None = Field(default=None, exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).

@@ -255,7 +255,8 @@ def strategy_scorer(strategy: Strategy, evaluator: CandidateEvaluator
 def candidate_evaluator(images: FisheyeImages, config: TuningConfig,
                         criteria: Criteria) -> CandidateEvaluator:
     """The evaluator tuning uses: ``images``' labels, the config's RVM output, ``criteria``."""
-    return CandidateEvaluator(images.labels, config.output_spec(), criteria)
+    return CandidateEvaluator(images.labels, config.output_spec(), criteria, scene=images.scene,
+                              camera=images.camera)
 
 
 def search_scene(
@@ -378,8 +379,7 @@ def search_members(
         strat = make_strategy(strategy, config.space(members[0].camera), config, seed, budget)
     output = config.output_spec()
     if len(members) == 1:
-        batch_eval = _one_scene(strat, CandidateEvaluator(members[0].labels, output, criteria),
-                                workers)
+        batch_eval = _one_scene(strat, member_evaluators(members, output, criteria)[0], workers)
     else:
         evaluators = member_evaluators(members, output, criteria)
         solver = None

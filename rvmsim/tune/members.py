@@ -46,6 +46,7 @@ from .space import SearchSpace
 
 if TYPE_CHECKING:
     from ..camera import FisheyeCamera
+    from ..scene import Scene
 
 __all__ = ["Member", "Aggregate", "parse_aggregate", "MembersSolver", "MembersScorer",
            "check_members", "check_cameras", "worst_ec_json", "member_evaluators", "SOLVE_MODES", "OBJECTIVE_COMBINE", "COMBINES"]
@@ -63,11 +64,13 @@ COMBINES = ("sum-violation", "min")
 @dataclass(frozen=True)
 class Member:
     """One label image a candidate is judged on: its name (the vehicle, or a sample's
-    label), the fisheye label image (H_i, W_i) uint8 and the camera that saw it."""
+    label), the fisheye label image (H_i, W_i) uint8, the camera that saw it and the scene
+    (for ECs that read its geometry; None when unknown)."""
 
     name: str
     labels: np.ndarray
     camera: FisheyeCamera
+    scene: Scene | None = None
 
 
 @dataclass(frozen=True)
@@ -231,4 +234,5 @@ def member_evaluators(members: Sequence[Member], output: OutputSpec,
                       criteria: Criteria) -> list[CandidateEvaluator]:
     """One :class:`CandidateEvaluator` per member on the run's RVM ``output`` and
     ``criteria``."""
-    return [CandidateEvaluator(m.labels, output, criteria) for m in members]
+    return [CandidateEvaluator(m.labels, output, criteria, scene=m.scene, camera=m.camera)
+            for m in members]

@@ -95,10 +95,10 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
         raise ValueError("not a robust run")
     out: list[Member] = []
     for sc, im, var in zip(scenes, renders, run_variations(scenes, settings.variation_file)):
-        out.append(Member(f"{sc.name} nominal", im.labels, im.camera))
+        out.append(Member(f"{sc.name} nominal", im.labels, im.camera, sc))
         samples = draw_samples(var, k, settings.seed)
         for i, s_im in enumerate(sample_images(sc, samples, progress=progress, color=False)):
-            out.append(Member(f"{sc.name} sample {i + 1}", s_im.labels, s_im.camera))
+            out.append(Member(f"{sc.name} sample {i + 1}", s_im.labels, s_im.camera, sc))
     return out
 
 

@@ -69,7 +69,7 @@ def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
              ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
     every input is checked here, before anything in ``run_dir`` changes)."""
-    from ..criteria import load_criteria
+    from ..criteria import criteria_reference, load_criteria
     from ..render import scene_key
     from ..scene import Scene, load_scene
 
@@ -99,7 +99,7 @@ def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
     settings = RunSettings(
         scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
         strategy=strategy, seed=seed, budget=budget,
-        criteria_file=None if criteria_file is None else str(Path(criteria_file).resolve()),
+        criteria_file=None if criteria_file is None else criteria_reference(criteria_file),
         config=config or TuningConfig())
     return _robust_settings(settings, [sc], robust, parse_aggregate(aggregate).text), [sc], crit
 

@@ -98,6 +98,7 @@ def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: in
                     budget: int | None, criteria_file: str | Path | None,
                     config: TuningConfig | None, aggregate: str) -> RunSettings:
     """The settings of a new shared run (the first scene is also ``scene``)."""
+    from ..criteria import criteria_reference
     from ..render import scene_key
 
     refs = tuple(SceneRef(str(Path(rec).resolve()), scene_key(sc), sc.name)
@@ -105,7 +106,7 @@ def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: in
     return RunSettings(
         scene=refs[0].scene, scene_key=refs[0].scene_key, vehicle=refs[0].vehicle,
         strategy=strategy, seed=seed, budget=budget,
-        criteria_file=None if criteria_file is None else str(Path(criteria_file).resolve()),
+        criteria_file=None if criteria_file is None else criteria_reference(criteria_file),
         config=config or TuningConfig(), scenes=refs, aggregate=aggregate)
 
 
@@ -134,7 +135,7 @@ def resumed_scenes(settings: RunSettings) -> list[Scene]:
 
 def scene_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages]) -> list[Member]:
     """One member per scene: its vehicle name, label image and camera."""
-    return [Member(sc.name, im.labels, im.camera) for sc, im in zip(scenes, renders)]
+    return [Member(sc.name, im.labels, im.camera, sc) for sc, im in zip(scenes, renders)]
 
 
 def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene],

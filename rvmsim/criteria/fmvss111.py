@@ -1,0 +1,237 @@
+"""ECs beyond the paper: FMVSS No. 111 on the display, full visibility of A–E, resolution.
+
+A plugin of the EC registry written against the public API only (the worked example of an EC
+that needs more than the RVM label pixels: the scene's geometry, ``source.context``, and the
+candidate's ISP map, ``source.isp``; see docs/criteria.md).  The bundled criteria set
+``fmvss111-full`` selects the paper's eleven and these three.
+
+========  ===========================================================================  ====
+EC        measurement                                                                  unit
+========  ===========================================================================  ====
+1-5       S5.5.1(b): the smallest fraction, over A–E, of an object's silhouette            %
+          (hidden parts included) that the RVM image shows
+1-6       S5.5.2: image size margin min(mean/5′, min/3′) of the visual angles of the        ×
+          horizontal widths of A, B, C on the display, from the driver's eye point
+6-1       resolution margin at A–C: min(limit / magnification, px per degree / limit)       ×
+========  ===========================================================================  ====
+
+Formulas and defaults: docs/criteria.md.  The limits are EC parameters (a criteria file
+changes them under ``criteria: {id: {parameters: …}}``); the S5.5.2 figures and the display's
+defaults are named in :mod:`rvmsim.scene.fmvss111` (⚠ values there are unverified).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..scene import fmvss111 as rule
+from . import (
+    Canvas,
+    EcDefinition,
+    EcValue,
+    IspView,
+    LabelSource,
+    Measurement,
+    MeasureOptions,
+    Sigmoid,
+)
+from .objects import silhouette, width_edges
+
+__all__ = ["ECS", "FULL_VIEW_OBJECTS", "SIZE_OBJECTS", "MAX_MAGNIFICATION",
+           "MIN_PIXELS_PER_DEGREE", "object_widths"]
+
+#: S5.5.1(b): objects whose full width and height must be visible.
+FULL_VIEW_OBJECTS = "ABCDE"
+#: S5.5.2: objects whose image size is judged (also where 6-1 measures resolution).
+SIZE_OBJECTS = "ABC"
+#: EC 6-1: an RVM px that shows less than 1/2 fisheye px (in its most magnified direction)
+#: adds no detail, only blur.
+MAX_MAGNIFICATION = 2.0
+#: EC 6-1: RVM px per degree of the camera's view at A–C, at least (not from the rule: our
+#: choice): the 0.3 m objects at ~6.5 m (≈ 2.6°) then span ≥ 5 RVM px each.
+MIN_PIXELS_PER_DEGREE = 2.0
+#: Arc-minutes per radian.
+_ARCMIN = 180.0 * 60.0 / math.pi
+
+
+# ---------------------------------------------------------------------------- 1-5
+def _measure_1_5(src: LabelSource, options: MeasureOptions) -> Measurement:
+    """min over A–E of visible / whole silhouette (fisheye px of its 1-px-eroded interior;
+    visible: the label image shows the object there and the RVM image samples it)."""
+    import cv2
+
+    ctx, isp = src.context, src.isp
+    if ctx is None or isp is None:
+        return Measurement(None)
+    poly = isp.footprint(32)
+    contour = poly.astype(np.float32).reshape(-1, 1, 2)
+    fractions: dict[str, float] = {}
+    outlines: dict[str, np.ndarray] = {}
+    for letter in FULL_VIEW_OBJECTS:
+        sil = silhouette(ctx, letter)
+        if sil is None or sil.area == 0:
+            continue
+        h, w = sil.inner.shape
+        centre = (sil.box[0] + (w - 1) / 2.0, sil.box[1] + (h - 1) / 2.0)
+        if cv2.pointPolygonTest(contour, centre, True) > math.hypot(w, h) / 2.0 + 1.0:
+            seen = sil.visible_area  # the RVM border is farther than the whole box: all in
+        else:
+            inside = np.zeros((h, w), np.uint8)
+            pts = np.round((poly - sil.box) * 16.0).astype(np.int32).reshape(-1, 1, 2)
+            cv2.fillPoly(inside, [pts], 255, cv2.LINE_8, shift=4)
+            seen = cv2.countNonZero(cv2.bitwise_and(sil.visible, inside))
+        fractions[letter] = 100.0 * seen / sil.area
+        outlines[letter] = sil.outline
+    if not fractions:
+        return Measurement(None)
+    return Measurement(min(fractions.values()), (fractions, outlines, isp))
+
+
+def _draw_1_5(canvas: Canvas, item: EcValue, detail: Any) -> None:
+    import cv2
+
+    if detail is None or item.value is None:
+        return
+    fractions, outlines, isp = detail
+    for letter, frac in fractions.items():
+        colour = canvas.status(item) if frac < 100.0 else (0, 200, 255)
+        if len(outlines[letter]) >= 3:
+            uv, ok = isp.to_output(outlines[letter])
+            if np.all(ok):
+                pts = np.round(uv * 16).astype(np.int32).reshape(-1, 1, 2)
+                cv2.polylines(canvas.image, [pts], True, colour, canvas.line_width,
+                              cv2.LINE_AA, shift=4)
+                if frac < 100.0:  # (whole ones: the outline's colour says so)
+                    x, y = uv.min(axis=0)
+                    canvas.text(f"{letter} {frac:.0f}%", (x, max(10.0, y - 4)), colour)
+
+
+# ---------------------------------------------------------------------------- 1-6 and 6-1
+def object_widths(src: LabelSource, options: MeasureOptions) -> dict[str, dict[str, float]] | None:
+    """Per object of :data:`SIZE_OBJECTS`: its horizontal width in RVM px (``px``), on the
+    display (``mm``), the visual angle from the eye point (``arcmin``), the RVM px per degree
+    of the camera's view (``px_per_deg``), the ISP's magnification there (``magnification``,
+    RVM px per px of the camera's sensor, whatever fraction of it was rendered) and its RVM
+    position (``x``, ``y``).  None without a scene or map.
+
+    Convention: width = the distance between the RVM images of the two points where the
+    camera's lines of sight touch the cylinder at half its height; on the display the RVM
+    image is scaled to fit the active area; θ = 2·atan(w·cos(viewing angle) / 2d).
+    """
+    ctx, isp = src.context, src.isp
+    if ctx is None or isp is None:
+        return None
+    return src.shared(("fmvss111.widths", options.display),
+                      lambda: _widths(ctx.display(options.display), ctx, isp))
+
+
+def _widths(display: Any, ctx: Any, isp: IspView) -> dict[str, dict[str, float]] | None:
+    edges = {c: width_edges(ctx, c) for c in SIZE_OBJECTS}
+    if any(e is None for e in edges.values()):
+        return None
+    pts = np.concatenate([np.concatenate([e.points, e.centre]) for e in edges.values() if e])
+    uv, ok = isp.to_output(pts)
+    if not np.all(ok):
+        return None
+    mag = isp.magnification(pts[2::3]) * ctx.sensor_scale  # per px of the real sensor
+    mx, my = display.mm_per_rvm_px((isp.output.width, isp.output.height))
+    cos_view = math.cos(math.radians(display.viewing_angle_deg))
+    out = {}
+    for k, (letter, e) in enumerate(edges.items()):
+        assert e is not None
+        (xl, yl), (xr, yr), (x, y) = uv[3 * k : 3 * k + 3]
+        px = math.hypot(xr - xl, yr - yl)
+        mm = math.hypot((xr - xl) * mx, (yr - yl) * my)
+        arcmin = _ARCMIN * 2.0 * math.atan(mm * cos_view / (2.0 * display.eye_distance_mm))
+        out[letter] = {"px": px, "mm": mm, "arcmin": arcmin, "magnification": float(mag[k]),
+                       "px_per_deg": px / e.angle_deg if e.angle_deg > 0 else 0.0,
+                       "x": float(x), "y": float(y), "x0": float(xl), "y0": float(yl),
+                       "x1": float(xr), "y1": float(yr)}
+    return out
+
+
+def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
+    """min(mean / mean limit, min / each limit) of the objects' visual angles (≥ 1 passes)."""
+    widths = object_widths(src, options)
+    if widths is None:
+        return Measurement(None)
+    mean_limit = options.parameter("1-6", "mean_arcmin", rule.IMAGE_SIZE_MEAN_ARCMIN)
+    each_limit = options.parameter("1-6", "each_arcmin", rule.IMAGE_SIZE_MIN_ARCMIN)
+    angles = [w["arcmin"] for w in widths.values()]
+    margin = min(sum(angles) / len(angles) / mean_limit, min(angles) / each_limit)
+    return Measurement(margin, widths)
+
+
+def _draw_widths(canvas: Canvas, item: EcValue, widths: Any, keys: tuple[str, ...]) -> None:
+    """The objects' figures as a block of lines (1-6 at the top left, 6-1 at the top right)
+    and, for 1-6, each measured width as a line across the object."""
+    import cv2
+
+    if not widths:
+        return
+    colour = canvas.status(item)
+    row = 16 * canvas.text_scale / 0.35
+    left = keys[0] == "px"
+    x = 4.0 if left else canvas.shape[1] - 150 * canvas.text_scale / 0.35
+    for n, (letter, w) in enumerate(widths.items()):
+        text = f"{item.id} {letter} " + " ".join(f.format(w[k]) for f, k in
+                                                zip(_FORMATS[keys], keys))
+        canvas.text(text, (x, row * (n + 1)), colour)
+        if left:
+            ends = [(int(round(w["x0"])), int(round(w["y0"]))),
+                    (int(round(w["x1"])), int(round(w["y1"])))]
+            cv2.line(canvas.image, ends[0], ends[1], colour, canvas.line_width)
+
+
+_FORMATS = {("px", "mm", "arcmin"): ("{:.1f}px", "{:.2f}mm", "{:.1f}'"),
+            ("magnification", "px_per_deg"): ("x{:.2f}", "{:.1f}px/deg")}
+
+
+def _draw_1_6(canvas: Canvas, item: EcValue, widths: Any) -> None:
+    _draw_widths(canvas, item, widths, ("px", "mm", "arcmin"))
+
+
+def _measure_6_1(src: LabelSource, options: MeasureOptions) -> Measurement:
+    """min over A–C of min(max magnification / magnification, px per degree / minimum)."""
+    widths = object_widths(src, options)
+    if widths is None:
+        return Measurement(None)
+    max_mag = options.parameter("6-1", "max_magnification", MAX_MAGNIFICATION)
+    min_ppd = options.parameter("6-1", "min_pixels_per_degree", MIN_PIXELS_PER_DEGREE)
+    margins = []
+    for w in widths.values():
+        zoom = max_mag / w["magnification"] if w["magnification"] > 0 else math.inf
+        ppd = w["px_per_deg"] / min_ppd if min_ppd > 0 else math.inf
+        margins.append(min(zoom, ppd))
+    value = min(margins)
+    return Measurement(None if math.isinf(value) else float(value), widths)
+
+
+def _draw_6_1(canvas: Canvas, item: EcValue, widths: Any) -> None:
+    _draw_widths(canvas, item, widths, ("magnification", "px_per_deg"))
+
+
+ECS = [
+    EcDefinition(
+        id="1-5", name="abcde_full_silhouette", unit="%", groups=(),
+        measure=_measure_1_5, annotate=_draw_1_5, default_range=(100.0, None),
+        default_sigmoid=Sigmoid.from_range(100.0, None, tolerance=5.0),
+        description="smallest visible fraction of an A–E silhouette (hidden parts included)"),
+    EcDefinition(
+        id="1-6", name="abc_display_size_margin", unit="x", groups=(),
+        measure=_measure_1_6, annotate=_draw_1_6, default_range=(1.0, None),
+        default_sigmoid=Sigmoid.from_range(1.0, None, tolerance=0.3),
+        description="min(mean/5', min/3') of A, B, C's visual angles on the display",
+        parameters={"mean_arcmin": rule.IMAGE_SIZE_MEAN_ARCMIN,
+                    "each_arcmin": rule.IMAGE_SIZE_MIN_ARCMIN}),
+    EcDefinition(
+        id="6-1", name="abc_resolution_margin", unit="x", groups=(),
+        measure=_measure_6_1, annotate=_draw_6_1, default_range=(1.0, None),
+        default_sigmoid=Sigmoid.from_range(1.0, None, tolerance=0.3),
+        description="min(limit/magnification, px per degree/limit) at A, B, C",
+        parameters={"max_magnification": MAX_MAGNIFICATION,
+                    "min_pixels_per_degree": MIN_PIXELS_PER_DEGREE}),
+]
