@@ -129,7 +129,7 @@ def _test_objects(scene: Scene) -> list[Part]:
 def _guidelines(scene: Scene) -> list[Part]:
     """The two side guidelines, then the cross lines 1, 2, … (none when disabled)."""
     g = scene.test_site.guidelines
-    if not g.enabled:
+    if not scene.guidelines_shown:
         return []
     hw = g.line_width / 2
     parts: list[Part] = []
@@ -160,15 +160,19 @@ def board_frame(board: PatternBoard) -> tuple[np.ndarray, np.ndarray, np.ndarray
     Convention
     ----------
     Scene frame (:mod:`rvmsim.camera.mount`); a board on the ground has ``normal`` = −Y (up)
-    and its front surface ``BOARD_LIFT_M`` above the ground.
+    and its front surface ``BOARD_LIFT_M`` above the ground.  ``upright`` and ``free``
+    boards: ``a``, ``b``, ``normal`` are the columns of
+    ``rotation_from_ypr(yaw, pitch, roll)`` applied to +X, −Y and −Z (an upright board
+    facing the car when every angle is 0); ``upright`` is ``free`` with pitch = roll = 0.
     """
-    r = rotation_from_ypr(board.yaw_deg, 0.0, 0.0)
     c = np.asarray(board.position, dtype=np.float64)
     if board.placement == "ground":
+        r = rotation_from_ypr(board.yaw_deg, 0.0, 0.0)
         a, b, nrm = r @ [1.0, 0, 0], r @ [0, 0, 1.0], np.array([0, -1.0, 0])
         c = c + nrm * BOARD_LIFT_M
     else:
-        a, b, nrm = r @ [1.0, 0, 0], np.array([0, -1.0, 0]), r @ [0, 0, -1.0]
+        r = rotation_from_ypr(board.yaw_deg, board.pitch_deg, board.roll_deg)
+        a, b, nrm = r @ [1.0, 0, 0], r @ [0, -1.0, 0], r @ [0, 0, -1.0]
     return c, a, b, nrm
 
 
