@@ -37,20 +37,16 @@ def capture_files(paths: list[str | Path]) -> list[Path]:
 
 
 def load_grey(path: str | Path) -> np.ndarray:
-    """The capture as (H, W) uint8 grey (8/16-bit, grey/RGB/RGBA).
+    """The capture as (H, W) uint8 grey, read by :func:`rvmsim.validate.load_capture`
+    (8/16-bit, grey/RGB/RGBA; its header and pixel-limit checks).
 
     Raises
     ------
-    CalibrationInputError
-        When the file is not a readable image.
+    RvmsimError
+        One line naming the file: missing, unreadable, blank or over the pixel limit.
     """
     import cv2
 
-    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    if img is None or img.size == 0:
-        raise CalibrationInputError(str(path), "", "not a readable image (PNG/JPEG/TIFF/BMP)")
-    if img.dtype != np.uint8:
-        img = cv2.normalize(img.astype(np.float64), None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
-    if img.ndim == 3:
-        img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
-    return img
+    from ..validate import load_capture
+
+    return cv2.cvtColor(load_capture(path), cv2.COLOR_RGB2GRAY)

@@ -14,10 +14,12 @@ __all__ = ["find_board_corners"]
 def _grey(image: np.ndarray) -> np.ndarray:
     import cv2
 
-    if image.ndim == 2:
-        return image if image.dtype == np.uint8 else cv2.normalize(
-            image, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
-    return cv2.cvtColor(image[..., :3], cv2.COLOR_RGB2GRAY)
+    if image.ndim == 3:
+        image = cv2.cvtColor(np.ascontiguousarray(image[..., :3]), cv2.COLOR_RGB2GRAY)
+    if image.dtype == np.uint8:
+        return image
+    lo, hi = float(image.min()), float(image.max())
+    return ((image.astype(np.float64) - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
 
 
 def _classic(grey: np.ndarray, inner: tuple[int, int]) -> np.ndarray | None:

@@ -44,16 +44,31 @@ def _floats(path: Path, key: str, value: Any, n: int) -> np.ndarray:
     return a
 
 
+def _cv2_message(err: Exception) -> str:
+    """The last line of a cv2.error (its "error: (-215:…) …" part)."""
+    text = str(err).strip().splitlines()[-1] if str(err).strip() else type(err).__name__
+    return text.split(" error: ")[-1][:160]
+
+
 def _opencv(path: Path) -> ImportedCamera:
     import cv2
 
-    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     try:
-        K = fs.getNode("camera_matrix").mat()
-        D = fs.getNode("dist_coeffs").mat()
-        res = fs.getNode("resolution").mat()
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    except cv2.error as err:
+        raise _err(path, "", f"not an OpenCV FileStorage file: {_cv2_message(err)}") from None
+    mats = {}
+    try:
+        for key in ("camera_matrix", "dist_coeffs", "resolution"):
+            node = fs.getNode(key)
+            mats[key] = None if node.empty() else node.mat()
+            if not node.empty() and mats[key] is None:
+                raise _err(path, key, "expected an !!opencv-matrix (rows, cols, dt, data)")
+    except cv2.error as err:
+        raise _err(path, key, f"unreadable: {_cv2_message(err)}") from None
     finally:
         fs.release()
+    K, D, res = mats["camera_matrix"], mats["dist_coeffs"], mats["resolution"]
     if K is None:
         raise _err(path, "camera_matrix", "missing (OpenCV FileStorage)")
     if D is None:
@@ -104,9 +119,16 @@ def _ocam_numbers(path: Path, text: str) -> list[list[float]]:
             rows.append([float(x) for x in line.split()])
         except ValueError:
             raise _err(path, "", f"not a number in line {line[:40]!r} (OCamCalib)") from None
-    if len(rows) < 5 or len(rows[0]) < 2 or int(rows[0][0]) != len(rows[0]) - 1:
+    if (len(rows) < 5 or len(rows[0]) < 2 or int(rows[0][0]) != len(rows[0]) - 1
+            or len(rows[2]) < 2 or len(rows[3]) < 3 or len(rows[4]) < 2):
         raise _err(path, "", "expected the OCamCalib calib_results.txt layout (polynomial, "
                              "inverse polynomial, centre, affine c d e, height width)")
+    c, d, e = rows[3][:3]
+    if not (1 <= rows[4][0] <= 100000 and 1 <= rows[4][1] <= 100000) or abs(c - d * e) < 1e-12:
+        raise _err(path, "", "OCamCalib: image size must be 1..100000 px and the affine "
+                             "matrix [c d; e 1] invertible")
+    if not all(np.isfinite(x) for r in rows for x in r):
+        raise _err(path, "", "OCamCalib: every number must be finite")
     return rows
 
 
@@ -117,8 +139,8 @@ def _ocam(path: Path, text: str) -> ImportedCamera:
     c, d, e = rows[3][:3]
     h, w = int(rows[4][0]), int(rows[4][1])
     # Rays of a grid of pixels (cam2world), then Kannala-Brandt fitted to them.
-    col, row = np.meshgrid(np.linspace(0, w - 1, 41), np.linspace(0, h - 1, 31))
-    col, row = col.ravel(), row.ravel()
+    grid_c, grid_r = np.meshgrid(np.linspace(0, w - 1, 41), np.linspace(0, h - 1, 31))
+    col, row = grid_c.ravel(), grid_r.ravel()
     inv = 1.0 / (c - d * e)
     xp = inv * ((row - xc) - d * (col - yc))
     yp = inv * (-e * (row - xc) + c * (col - yc))
