@@ -135,3 +135,19 @@ def test_board_size_is_honoured_by_mesh_and_corners():
     span_b = np.ptp(ext @ b)
     assert span_a == pytest.approx(9 * 0.05 + 0.04) and span_b == pytest.approx(7 * 0.05 + 0.04)
     assert len([c for c in checker_corners(scene) if c.name.startswith("board")]) == 8 * 6
+
+
+def test_tilted_board_only_scene_validates():
+    """A capture of the tilted board, rendered from a camera 8 mm and 0.4° off the scene's,
+    validates: the board's corners are matched and the pose correction is recovered."""
+    from rvmsim.validate import validate
+
+    d = _board_only({})
+    true = copy.deepcopy(d)
+    true["camera"]["mount"] = {"position": [0.008, -1.0, 0.0], "yaw_deg": 0.4}
+    capture = render_fisheye(scene_from_dict(true, base_dir=BOARD_ONLY.parent)).color
+    scene = scene_from_dict(d, base_dir=BOARD_ONLY.parent)
+    res = validate(scene, capture, capture_name="tilted.png")
+    assert res.n_inliers >= 40 and res.rms_after_px < 0.5 and res.passed
+    corr = res.correction
+    assert abs(corr.yaw_deg - 0.4) < 0.15 and abs(corr.d_position_mm[0] - 8.0) < 4.0
