@@ -210,10 +210,50 @@ def _board(scene: Scene) -> list[Part]:
             squares.append(
                 quad(np.array([board_point(board, sa, sb, BOARD_SQUARE_LIFT_M) for sa, sb in corners]))
             )
-    return [
+    parts = [
         Part("pattern_board", L.BOARD, plate, WHITE),
         Part("pattern_board_squares", L.BOARD, concatenate(squares), BLACK),
     ]
+    if board.pattern == "charuco":
+        parts.append(Part("pattern_board_markers", L.BOARD, _charuco_markers(board), BLACK))
+    return parts
+
+
+def _charuco_markers(board: PatternBoard) -> trimesh.Trimesh:
+    """The black cells of the ChArUco markers, one quad each, in the white squares.
+
+    Convention
+    ----------
+    As ``cv2.aruco.CharucoBoard`` draws the board: cv2's row r (from the top of its image)
+    is the board's row ``squares[1] − 1 − r`` along v, its column c is column c along u;
+    marker ids 0, 1, … go through the white squares row by row from cv2's top row.
+    """
+    import cv2
+
+    d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, board.aruco_dictionary))
+    cells = d.markerSize + 2
+    assert board.marker_size is not None
+    cell = board.marker_size / cells
+    s = board.square_size
+    w, h = board.size
+    a0, b0 = -w / 2 + board.margin, -h / 2 + board.margin
+    gap = (s - board.marker_size) / 2
+    cols, rows = board.squares
+    quads, marker_id = [], 0
+    for r in range(rows):
+        j = rows - 1 - r
+        for i in range(cols):
+            if (i + j) % 2 == 0:
+                continue  # a black square
+            bits = d.generateImageMarker(marker_id, cells)
+            marker_id += 1
+            u0, v_top = a0 + i * s + gap, b0 + (j + 1) * s - gap
+            for mr, mc in zip(*np.nonzero(bits < 128)):
+                ua, vb = u0 + mc * cell, v_top - (mr + 1) * cell
+                corners = [(ua, vb), (ua + cell, vb), (ua + cell, vb + cell), (ua, vb + cell)]
+                quads.append(quad(np.array([board_point(board, sa, sb, 2 * BOARD_SQUARE_LIFT_M)
+                                            for sa, sb in corners])))
+    return concatenate(quads)
 
 
 def pattern_point(pattern: GroundPattern, u: float, v: float, lift: float = 0.0) -> np.ndarray:

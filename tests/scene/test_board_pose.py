@@ -151,3 +151,51 @@ def test_tilted_board_only_scene_validates():
     assert res.n_inliers >= 40 and res.rms_after_px < 0.5 and res.passed
     corr = res.correction
     assert abs(corr.yaw_deg - 0.4) < 0.15 and abs(corr.d_position_mm[0] - 8.0) < 4.0
+
+
+@pytest.mark.parametrize("rows", [10, 9])
+def test_charuco_board_is_read_by_cv2_aruco_at_our_inner_corners(rows):
+    """cv2.aruco.CharucoDetector finds every marker of the rendered ChArUco board, and its
+    corner ids land on our board_inner corners (≤ 0.5 px) under the documented mapping."""
+    cols = 7
+    d = _board_only({"pattern": "charuco", "marker_size": 0.045, "yaw_deg": 10.0,
+                     "pitch_deg": 5.0, "roll_deg": 5.0, "position": [0.0, -1.0, 1.0]},
+                    squares=(cols, rows))
+    d["camera"]["image_size"] = [960, 720]
+    d["camera"]["intrinsics"] = {"fx": 300.0, "fy": 300.0}
+    scene = scene_from_dict(d, base_dir=BOARD_ONLY.parent)
+    cam = scene.fisheye_camera()
+    grey = cv2.cvtColor(render_fisheye(scene).color, cv2.COLOR_RGB2GRAY)
+    up = cv2.resize(grey, None, fx=2, fy=2, interpolation=cv2.INTER_CUBIC)
+    dic = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_4X4_50)
+    board = cv2.aruco.CharucoBoard((cols, rows), 0.06, 0.045, dic)
+    board.setLegacyPattern(rows % 2 == 0)
+    corners, ids, _, marker_ids = cv2.aruco.CharucoDetector(board).detectBoard(up)
+    assert marker_ids is not None and len(marker_ids) >= cols * rows // 2 - 1
+    assert ids is not None and len(ids) >= 0.9 * (cols - 1) * (rows - 1)
+    pts = {c.name: c.point for c in checker_corners(scene)}
+    rvec, tvec = cam.rvec_tvec
+    errs = []
+    for k, p in zip(ids.ravel(), corners.reshape(-1, 2)):
+        c, r = k % (cols - 1), k // (cols - 1)  # cv2's inner corner (c, r), r from the top
+        point = np.array(pts[f"board_inner_{c + 1}_{rows - 1 - r}"])
+        q = cv2.fisheye.projectPoints(point.reshape(1, 1, 3), rvec, tvec, cam.K, cam.D)[0]
+        errs.append(np.linalg.norm((p + 0.5) / 2 - 0.5 - q.ravel()))
+    assert np.median(errs) < 0.25 and max(errs) < 0.8
+
+
+@pytest.mark.parametrize("board, match", [
+    ({"pattern": "charuco"}, "marker_size"),
+    ({"pattern": "charuco", "marker_size": 0.2}, "below square_size"),
+    ({"pattern": "charuco", "marker_size": 0.03, "aruco_dictionary": "DICT_NOPE"},
+     "not a cv2.aruco dictionary"),
+    ({"pattern": "charuco", "marker_size": 0.03, "squares": [12, 12]}, "has 50 markers"),
+    ({"marker_size": 0.03}, "for pattern: charuco"),
+])
+def test_charuco_settings_are_checked(board, match, tmp_path):
+    d = _board_only({**board, "square_size": 0.05}, squares=tuple(board.get("squares", (8, 10))))
+    import yaml
+
+    (tmp_path / "s.yaml").write_text(yaml.safe_dump(d))
+    with pytest.raises(SceneError, match=match):
+        load_scene(tmp_path / "s.yaml")
