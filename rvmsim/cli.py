@@ -434,10 +434,12 @@ def validate(scene: Path, capture_file: Path, params_file: Path | None,
 
 
 # commands in modules of their own (cli.py is at its size limit)
+from .cli_calibrate import calibrate  # noqa: E402
 from .cli_console import console  # noqa: E402
 from .cli_robust import robustness  # noqa: E402
 from .cli_sweep import sweep  # noqa: E402
 
+cli.add_command(calibrate)
 cli.add_command(console)
 cli.add_command(robustness)
 cli.add_command(sweep)

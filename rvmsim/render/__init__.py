@@ -7,7 +7,7 @@ from .cube import (CubeLayout, FaceCrop, CameraRays, cube_layout, cover_layout, 
                    refold_coords,
                    face_coords, face_rotation, FACE_NAMES, GUARD_PX)
 from .gl import FaceAtlas, render_faces
-from .fold import fold, fold_labels, nearest_labels
+from .fold import fold, fold_color, fold_labels, nearest_labels
 from .fisheye import FisheyeImages, render_fisheye
 from .viewpoint import (CubeView, TaskRunner, cached_cube, cube_key, cube_task, is_vehicle_label,
                         posed_parts, read_cube, render_cubes)
@@ -35,6 +35,7 @@ __all__ = [
     "face_rotation",
     "render_faces",
     "fold",
+    "fold_color",
     "fold_labels",
     "render_fisheye",
     "FACE_NAMES",

@@ -80,8 +80,8 @@ def file_scene_key(scene: Scene, scene_file: str | Path, scale: float = 1.0) -> 
     h.update(RENDER_VERSION.encode())
     h.update(f"scale={scale!r}".encode())
     h.update(Path(scene_file).read_bytes())
-    parts = [scene.vehicle.bumper, scene.vehicle.garnish, scene.vehicle.trunk,
-             *scene.vehicle.extra]
+    v = scene.vehicle
+    parts = [] if v is None else [v.bumper, v.garnish, v.trunk, *v.extra]
     for part in parts:
         if isinstance(part, MeshPart):
             h.update(scene.resolve_path(part.mesh).read_bytes())

@@ -253,6 +253,6 @@ def site_landmarks(scene: Scene) -> list[Landmark]:
     # Inner checker corners: the board's, then the ground patterns'.
     out += [Landmark(c.name, c.point, c.label, "interior", c.normal)
             for c in checker_corners(scene)]
-    if site.guidelines.enabled:
+    if scene.guidelines_shown:
         out += _guideline_landmarks(site.guidelines)
     return out

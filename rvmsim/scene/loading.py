@@ -117,7 +117,9 @@ def camera_problem(camera: CameraSpec) -> tuple[str, str] | None:
 
 def mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
     """The scene's mesh-file parts with their dotted keys (``vehicle.bumper.mesh``, ...)."""
-    out = []
+    out: list[tuple[str, MeshPart]] = []
+    if scene.vehicle is None:
+        return out
     for name in ("bumper", "garnish", "trunk"):
         part = getattr(scene.vehicle, name)
         if isinstance(part, MeshPart):

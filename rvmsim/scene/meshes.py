@@ -17,7 +17,8 @@ from .. import labels as L
 from .._io import env_limit
 from ..errors import SceneError
 from .primitives import Part, swept_block
-from .schema import MAX_METRES, BlockPart, MeshPart, Rgb, Scene
+from .fields import MAX_METRES
+from .schema import BlockPart, MeshPart, Rgb, Scene
 from .site import site_parts
 
 __all__ = ["build_parts", "DEFAULT_MAX_MESH_VERTICES", "MESH_BYTES_PER_VERTEX",
@@ -111,6 +112,8 @@ def build_parts(scene: Scene) -> list[Part]:
     """
     v = scene.vehicle
     parts = site_parts(scene)
+    if v is None:
+        return parts
     parts += _body_part(scene, "bumper", L.BUMPER, v.paint)
     parts += _body_part(scene, "garnish", L.GARNISH, GARNISH_COLOR)
     parts += _body_part(scene, "trunk", L.TRUNK, v.paint)

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
+from pydantic import Discriminator, Field, Tag, model_validator
 
 from . import fmvss111
 from ..camera import FisheyeCamera, rotation_from_ypr
@@ -45,27 +45,9 @@ __all__ = [
     "RenderSettings",
 ]
 
-#: Largest distance in a scene (metres): every length and coordinate lies within it.
-MAX_METRES = 1000.0
-Metres = Annotated[float, Field(ge=-MAX_METRES, le=MAX_METRES)]
-PositiveFloat = Annotated[float, Field(gt=0, le=MAX_METRES)]
-NonNegFloat = Annotated[float, Field(ge=0, le=MAX_METRES)]
-#: Intrinsics in px (focal lengths px/rad), checked against the image size when loaded.
-PositivePx = Annotated[float, Field(gt=0, le=1e7)]
-Px = Annotated[float, Field(ge=-1e7, le=1e7)]
-Angle180 = Annotated[float, Field(ge=-180, le=180)]
-Rgb = tuple[
-    Annotated[float, Field(ge=0, le=1)],
-    Annotated[float, Field(ge=0, le=1)],
-    Annotated[float, Field(ge=0, le=1)],
-]
-Vec3 = tuple[Metres, Metres, Metres]
-
-
-class _Model(BaseModel):
-    # Every float finite: a NaN or an infinity anywhere is an error naming its key.
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
+from .board import PatternBoard
+from .fields import (Angle180, Metres, NonNegFloat, PositiveFloat, PositivePx, Px,
+                     Rect, Rgb, Vec3, _Model)
 
 # ---------------------------------------------------------------------------- camera
 class Intrinsics(_Model):
@@ -309,36 +291,6 @@ class Guidelines(_Model):
         return self
 
 
-class PatternBoard(_Model):
-    """Calibration pattern board: a checkerboard with a white margin.
-
-    ``placement: ground`` lays it flat on the ground (its rows running away from the car);
-    ``upright`` stands it vertically facing the car.  The default, 4 × 6 squares of 0.14 m
-    (0.64 m × 0.92 m with its margin) lying between cross guidelines 2 and 3, looks about
-    square from a rear-view camera, as EC 4-1 expects of a calibration board.  ``position`` is the board centre in the
-    scene frame (metres); ``yaw_deg`` turns it about the vertical.
-    """
-
-    enabled: bool = True
-    squares: tuple[Annotated[int, Field(ge=2)], Annotated[int, Field(ge=2)]] = (4, 6)
-    square_size: PositiveFloat = 0.14
-    margin: NonNegFloat = 0.04
-    placement: Literal["ground", "upright"] = "ground"
-    position: Vec3 = (0.0, 0.0, 1.5)
-    yaw_deg: Angle180 = 0.0
-
-    @property
-    def size(self) -> tuple[float, float]:
-        """(width, height) of the whole board, metres."""
-        return (
-            self.squares[0] * self.square_size + 2 * self.margin,
-            self.squares[1] * self.square_size + 2 * self.margin,
-        )
-
-
-Rect = tuple[Metres, Metres, Metres, Metres]
-
-
 class GroundPattern(_Model):
     """A flat black-and-white pattern lying on the ground: a calibration mat, painted squares.
 
@@ -380,9 +332,14 @@ class GroundPattern(_Model):
 
 
 class TestSite(_Model):
-    """The FMVSS 111 layout (defaults in :mod:`rvmsim.scene.fmvss111`) plus customer fixtures."""
+    """The FMVSS 111 layout (defaults in :mod:`rvmsim.scene.fmvss111`) plus customer fixtures.
+
+    ``fmvss: false`` leaves the FMVSS test objects A–G and the guidelines out (a minimal
+    camera-plus-board scene); ``objects`` and ``guidelines`` may then not be given.
+    """
 
     __test__ = False
+    fmvss: bool = True
     object_height: PositiveFloat = fmvss111.OBJECT_HEIGHT_M
     object_diameter: PositiveFloat = fmvss111.OBJECT_DIAMETER_M
     stripe_width: PositiveFloat = fmvss111.STRIPE_WIDTH_M
@@ -398,6 +355,11 @@ class TestSite(_Model):
 
     @model_validator(mode="after")
     def _check(self) -> TestSite:
+        if not self.fmvss:
+            given = sorted({"objects", "guidelines"} & self.model_fields_set)
+            if given:
+                raise ValueError(f"fmvss: false has no FMVSS objects or guidelines "
+                                 f"(remove {', '.join(given)})")
         if self.stripe_width >= self.object_height:
             raise ValueError("stripe_width must be smaller than object_height")
         if self.lower_patch_height >= self.object_height:
@@ -411,10 +373,13 @@ class TestSite(_Model):
 
         Convention
         ----------
-        Scene frame on the ground plane; with ``position_reference: surface`` the given
+        Scene frame on the ground plane; None for every object when ``fmvss`` is false.
+        With ``position_reference: surface`` the given
         position is the object's surface nearest the car, so the axis lies a radius further
         rearward (+Z).
         """
+        if not self.fmvss:
+            return None
         override = self.objects.get(letter)  # type: ignore[call-overload]
         if override is not None and not override.enabled:
             return None
@@ -441,12 +406,16 @@ class RenderSettings(_Model):
 
 
 class Scene(_Model):
-    """One vehicle at the test site.  Build with :func:`load_scene` or :func:`scene_from_dict`."""
+    """One vehicle at the test site.  Build with :func:`load_scene` or :func:`scene_from_dict`.
+
+    ``vehicle`` may be absent or null: a camera with no body in view (a camera on a bench in
+    front of a calibration board, :attr:`TestSite.fmvss` false).
+    """
 
     name: str
     description: str = ""
     camera: CameraSpec
-    vehicle: Vehicle
+    vehicle: Vehicle | None = None
     test_site: TestSite = TestSite()
     render: RenderSettings = RenderSettings()
     #: The display the driver sees (EC 1-6, :mod:`rvmsim.scene.display`); None: the criteria
@@ -458,6 +427,11 @@ class Scene(_Model):
     base_dir: str = Field(default=".", exclude=True)
     #: The file the scene was read from, for messages (not a YAML key).
     source: str = Field(default="<dict>", exclude=True)
+
+    @property
+    def guidelines_shown(self) -> bool:
+        """Whether the scene has the painted guidelines (enabled, and an FMVSS site)."""
+        return self.test_site.fmvss and self.test_site.guidelines.enabled
 
     def fisheye_camera(self) -> FisheyeCamera:
         """The rear-view camera as a :class:`~rvmsim.camera.FisheyeCamera`."""

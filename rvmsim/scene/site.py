@@ -129,7 +129,7 @@ def _test_objects(scene: Scene) -> list[Part]:
 def _guidelines(scene: Scene) -> list[Part]:
     """The two side guidelines, then the cross lines 1, 2, … (none when disabled)."""
     g = scene.test_site.guidelines
-    if not g.enabled:
+    if not scene.guidelines_shown:
         return []
     hw = g.line_width / 2
     parts: list[Part] = []
@@ -160,15 +160,19 @@ def board_frame(board: PatternBoard) -> tuple[np.ndarray, np.ndarray, np.ndarray
     Convention
     ----------
     Scene frame (:mod:`rvmsim.camera.mount`); a board on the ground has ``normal`` = −Y (up)
-    and its front surface ``BOARD_LIFT_M`` above the ground.
+    and its front surface ``BOARD_LIFT_M`` above the ground.  ``upright`` and ``free``
+    boards: ``a``, ``b``, ``normal`` are the columns of
+    ``rotation_from_ypr(yaw, pitch, roll)`` applied to +X, −Y and −Z (an upright board
+    facing the car when every angle is 0); ``upright`` is ``free`` with pitch = roll = 0.
     """
-    r = rotation_from_ypr(board.yaw_deg, 0.0, 0.0)
     c = np.asarray(board.position, dtype=np.float64)
     if board.placement == "ground":
+        r = rotation_from_ypr(board.yaw_deg, 0.0, 0.0)
         a, b, nrm = r @ [1.0, 0, 0], r @ [0, 0, 1.0], np.array([0, -1.0, 0])
         c = c + nrm * BOARD_LIFT_M
     else:
-        a, b, nrm = r @ [1.0, 0, 0], np.array([0, -1.0, 0]), r @ [0, 0, -1.0]
+        r = rotation_from_ypr(board.yaw_deg, board.pitch_deg, board.roll_deg)
+        a, b, nrm = r @ [1.0, 0, 0], r @ [0, -1.0, 0], r @ [0, 0, -1.0]
     return c, a, b, nrm
 
 
@@ -206,10 +210,50 @@ def _board(scene: Scene) -> list[Part]:
             squares.append(
                 quad(np.array([board_point(board, sa, sb, BOARD_SQUARE_LIFT_M) for sa, sb in corners]))
             )
-    return [
+    parts = [
         Part("pattern_board", L.BOARD, plate, WHITE),
         Part("pattern_board_squares", L.BOARD, concatenate(squares), BLACK),
     ]
+    if board.pattern == "charuco":
+        parts.append(Part("pattern_board_markers", L.BOARD, _charuco_markers(board), BLACK))
+    return parts
+
+
+def _charuco_markers(board: PatternBoard) -> trimesh.Trimesh:
+    """The black cells of the ChArUco markers, one quad each, in the white squares.
+
+    Convention
+    ----------
+    As ``cv2.aruco.CharucoBoard`` draws the board: cv2's row r (from the top of its image)
+    is the board's row ``squares[1] − 1 − r`` along v, its column c is column c along u;
+    marker ids 0, 1, … go through the white squares row by row from cv2's top row.
+    """
+    import cv2
+
+    d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, board.aruco_dictionary))
+    cells = d.markerSize + 2
+    assert board.marker_size is not None
+    cell = board.marker_size / cells
+    s = board.square_size
+    w, h = board.size
+    a0, b0 = -w / 2 + board.margin, -h / 2 + board.margin
+    gap = (s - board.marker_size) / 2
+    cols, rows = board.squares
+    quads, marker_id = [], 0
+    for r in range(rows):
+        j = rows - 1 - r
+        for i in range(cols):
+            if (i + j) % 2 == 0:
+                continue  # a black square
+            bits = d.generateImageMarker(marker_id, cells)
+            marker_id += 1
+            u0, v_top = a0 + i * s + gap, b0 + (j + 1) * s - gap
+            for mr, mc in zip(*np.nonzero(bits < 128)):
+                ua, vb = u0 + mc * cell, v_top - (mr + 1) * cell
+                corners = [(ua, vb), (ua + cell, vb), (ua + cell, vb + cell), (ua, vb + cell)]
+                quads.append(quad(np.array([board_point(board, sa, sb, 2 * BOARD_SQUARE_LIFT_M)
+                                            for sa, sb in corners])))
+    return concatenate(quads)
 
 
 def pattern_point(pattern: GroundPattern, u: float, v: float, lift: float = 0.0) -> np.ndarray:

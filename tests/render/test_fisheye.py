@@ -169,7 +169,9 @@ def test_colour_and_labels_are_aligned(letter):
     # Board: the checker squares are dark, the margin white, all inside the board label.
     board = (img.labels == L.BOARD) & ~border
     dark = lum < 70
-    assert 0.3 < dark[board].mean() < 0.7
+    # Squares a few px wide blend at their edges (area-averaged fold): count the pixels
+    # below the black/white midpoint, the squares' area fraction (0.40 for the bundled board).
+    assert 0.3 < (lum[board] < 128).mean() < 0.7
     assert not np.any(dark & _dilate(img.labels == L.GROUND, 0) & ~border & (lum < 40))
 
 

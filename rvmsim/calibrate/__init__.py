@@ -1,0 +1,26 @@
+"""Fisheye intrinsics from board captures (``rvmsim calibrate``), and existing
+calibrations imported as Kannala-Brandt cameras.
+
+Modules: :mod:`.board` (``--board`` specs), :mod:`.captures` (image files),
+:mod:`.detect` (corner detection), :mod:`.intrinsics` (``cv2.fisheye.calibrate`` with
+outlier rejection), :mod:`.imports` (OpenCV / Kalibr / OCamCalib / camera-block files),
+:mod:`.outputs` (JSON, coverage picture, camera block, ``--write-scene``).
+See ``docs/calibration.md``.
+"""
+
+from __future__ import annotations
+
+from .board import BoardSpec, CalibrationInputError, parse_board_spec
+from .captures import capture_files, load_grey
+from .detect import find_board_corners
+from .imports import ImportedCamera, fit_kannala_brandt, import_calibration
+from .intrinsics import BoardView, Calibration, ViewFit, calibrate_fisheye
+from .outputs import camera_block, coverage_image, write_calibration_outputs, write_scene_camera
+
+__all__ = [
+    "BoardSpec", "CalibrationInputError", "parse_board_spec",
+    "capture_files", "load_grey", "find_board_corners",
+    "ImportedCamera", "fit_kannala_brandt", "import_calibration",
+    "BoardView", "Calibration", "ViewFit", "calibrate_fisheye",
+    "camera_block", "coverage_image", "write_calibration_outputs", "write_scene_camera",
+]
