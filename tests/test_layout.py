@@ -128,7 +128,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tune",),
     ("batch", "validate"),
     ("report",),
-    ("cli", "cli_params", "cli_robust", "cli_sweep", "__main__", "__init__"),
+    ("cli", "cli_params", "cli_robust", "cli_sweep", "cli_validate", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
 
