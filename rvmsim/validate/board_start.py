@@ -36,7 +36,7 @@ from .capture import grey
 from .pose import fit_pose
 from .projection import project
 
-__all__ = ["BoardStart", "find_board_start", "ypr_from_rotation"]
+__all__ = ["BoardStart", "find_board_start", "ypr_from_rotation", "VIEWS", "predicted_shift_px"]
 
 #: Perspective view: the board may lie this far from its predicted direction, degrees.
 VIEW_MARGIN_DEG = 20.0
@@ -46,6 +46,9 @@ VIEW_SQUARE_PX = 18.0
 VIEW_MAX_PX = 1200
 #: A candidate whose squares' colours correlate less than this with the capture is wrong.
 MIN_COLOUR_SCORE = 0.5
+#: Corners fitting one board pose worse than this fraction of their spacing (RMS) are not
+#: the board.
+MAX_START_RMS = 0.03
 
 
 @dataclass(frozen=True)
@@ -191,8 +194,12 @@ def _candidates(camera: FisheyeCamera, layout: BoardLayout, det: np.ndarray,
     return out
 
 
+#: Where :func:`find_board_start` runs the detector, in order.
+VIEWS = ("whole image", "perspective view")
+
+
 def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
-                     layout: BoardLayout) -> BoardStart | None:
+                     layout: BoardLayout, views: tuple[str, ...] = VIEWS) -> BoardStart | None:
     """The scene's mount correction from the board found in ``capture``, or None.
 
     Parameters
@@ -203,6 +210,9 @@ def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.nd
     ypr0_deg : (3,) float
         The scene's mount yaw, pitch, roll, degrees.
     layout : BoardLayout
+    views : tuple of str
+        Where to run the detector, in order (of :data:`VIEWS`): the first that gives a
+        board pose wins.
 
     Returns
     -------
@@ -217,26 +227,54 @@ def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.nd
     g = grey(capture)
     g_u8 = np.clip(g, 0, 255).astype(np.uint8)
     shade = BoardShade(layout, camera, g.astype(np.float32))
-    for view in ("whole image", "perspective view"):
+    for view in views:
         det = (_detect(g_u8, layout.grid) if view == "whole image"
                else _perspective_detect(g_u8, camera, layout))
         if det is None:
             continue
-        cands = [c for c in _candidates(camera, layout, det, shade) if c[0] >= MIN_COLOUR_SCORE]
-        if not cands:
-            continue
-        best = max(c[0] for c in cands)
-        # Candidates the colours cannot tell apart (a symmetric board's half turns).
-        close = [c for c in cands if c[0] >= best - 0.2]
-        score, _, pos, rot, found = min(close, key=lambda c: c[1])
-        x0 = np.concatenate([pos - camera.position,
-                             (ypr_from_rotation(rot) - ypr0_deg + 180.0) % 360.0 - 180.0])
-        pts = layout.corner_points.reshape(-1, 3)
-        x, resid, _ = fit_pose(camera, ypr0_deg, pts, found.reshape(-1, 2), x0=x0)
-        return BoardStart(x=x, found=found, view=view,
-                          rms_px=float(np.sqrt(np.mean(resid ** 2))),
-                          colour_score=float(score), ambiguous=len(close) > 1)
+        if view == "perspective view":  # corners through the view's interpolation
+            det = _refine(g.astype(np.float32), det)
+        start = _best_start(camera, ypr0_deg, layout, det, shade, view)
+        if start is not None:
+            return start
     return None
+
+
+def _refine(grey_f: np.ndarray, det: np.ndarray) -> np.ndarray:
+    """The detector's corners (ny, nx, 2) refined by ``cv2.cornerSubPix`` in the capture,
+    with a window of 0.3 grid spacing."""
+    import cv2
+
+    step = np.concatenate([np.linalg.norm(np.diff(det, axis=0), axis=-1).ravel(),
+                           np.linalg.norm(np.diff(det, axis=1), axis=-1).ravel()])
+    win = int(np.clip(round(0.3 * float(np.median(step))), 2, 12))
+    pts = cv2.cornerSubPix(grey_f, det.reshape(-1, 1, 2).astype(np.float32), (win, win),
+                           (-1, -1), (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3))
+    return np.asarray(pts, np.float64).reshape(det.shape)
+
+
+def _best_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
+                det: np.ndarray, shade: BoardShade, view: str) -> BoardStart | None:
+    """The start from the detected corners ``det``: the assignment with the board's colours
+    (nearest the scene's rotation among those colours cannot tell apart), polished by our
+    fisheye PnP; None when none has the colours or the corners do not fit one board pose
+    (a spurious detection: RMS over :data:`MAX_START_RMS` of the grid spacing)."""
+    cands = [c for c in _candidates(camera, layout, det, shade) if c[0] >= MIN_COLOUR_SCORE]
+    if not cands:
+        return None
+    best = max(c[0] for c in cands)
+    close = [c for c in cands if c[0] >= best - 0.2]
+    score, _, pos, rot, found = min(close, key=lambda c: c[1])
+    x0 = np.concatenate([pos - camera.position,
+                         (ypr_from_rotation(rot) - ypr0_deg + 180.0) % 360.0 - 180.0])
+    pts = layout.corner_points.reshape(-1, 3)
+    x, resid, _ = fit_pose(camera, ypr0_deg, pts, found.reshape(-1, 2), x0=x0)
+    rms = float(np.sqrt(np.mean(resid ** 2)))
+    step = float(np.median(np.linalg.norm(np.diff(found, axis=0), axis=-1)))
+    if rms > max(0.5, MAX_START_RMS * step):
+        return None
+    return BoardStart(x=x, found=found, view=view, rms_px=rms, colour_score=float(score),
+                      ambiguous=len(close) > 1)
 
 
 def predicted_shift_px(camera: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarray,
