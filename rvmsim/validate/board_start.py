@@ -121,8 +121,8 @@ def _perspective_detect(grey_u8: np.ndarray, camera: FisheyeCamera,
     basis = _view_basis(centre)
     unit = rays / np.linalg.norm(rays, axis=1, keepdims=True)
     spread = np.degrees(np.arccos(np.clip(unit @ basis[:, 2], -1, 1))).max()
-    half = np.radians(min(spread + layout.square_size / np.linalg.norm(centre) * 57.3
-                          + VIEW_MARGIN_DEG, 65.0))
+    square_deg = np.degrees(layout.square_size / np.linalg.norm(centre))
+    half = np.radians(min(spread + square_deg + VIEW_MARGIN_DEG, 65.0))
     f = VIEW_SQUARE_PX * np.linalg.norm(centre) / layout.square_size
     f = min(f, VIEW_MAX_PX / 2 / np.tan(half))
     n = int(2 * f * np.tan(half)) + 1
