@@ -362,87 +362,18 @@ def report(path: Path, out: Path | None) -> None:
     click.echo(f"wrote {written}")
 
 
-@cli.command()
-@click.argument("scene", type=click.Path(path_type=Path))
-@click.option("--capture", "capture_file", type=click.Path(path_type=Path), required=True,
-              help="Real frame from the vehicle's rear-view camera (PNG/JPEG/TIFF, the "
-                   "camera's full image size).")
-@click.option("--params", "params_file", type=click.Path(path_type=Path), default=None,
-              help="ISP params file: also compare the RVM images and the ECs.")
-@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
-              help="Criteria file for the ECs (with --params).")
-@click.option("--out", "-o", type=OutputFolder(), default=None,
-              help="Output folder (default: out/<scene name>/validate).")
-@click.option("--write-scene", "write_scene", type=OutputFile(), default=None,
-              help="Write a copy of SCENE with the corrected mount pose here.")
-@click.option("--max-rms-px", type=FiniteFloat(0, min_open=True), default=2.0,
-              show_default=True, help="Landmark RMS after the pose correction, px.")
-@click.option("--max-position-mm", type=FiniteFloat(0), default=30.0, show_default=True,
-              help="Largest mount position correction, mm.")
-@click.option("--max-angle-deg", type=FiniteFloat(0), default=0.5, show_default=True,
-              help="Largest mount angle correction (yaw, pitch or roll), degrees.")
-@click.option("--max-chamfer-px", type=FiniteFloat(0), default=None,
-              help="Largest edge chamfer distance with the scene's pose, px (default: not judged).")
-@click.option("--min-landmarks", type=Integer(6), default=8, show_default=True,
-              help="Fewer matched landmarks is an error (exit 2).")
-@click.option("--search-px", type=FiniteFloat(2.0, 200.0), default=30.0, show_default=True,
-              help="How far from its predicted place a landmark is first searched for, px.")
-@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
-def validate(scene: Path, capture_file: Path, params_file: Path | None,
-             criteria_file: Path | None, out: Path | None, write_scene: Path | None,
-             max_rms_px: float, max_position_mm: float, max_angle_deg: float,
-             max_chamfer_px: float | None, min_landmarks: int, search_px: float,
-             progress: bool) -> None:
-    """Compare SCENE's synthetic fisheye frame with a real capture of its camera.
-
-    Finds the scene's checker corners (calibration board, ground patterns) in the capture,
-    fits the mount pose that explains them, compares edges, and judges the scene against the
-    tolerances.  Writes validation.json, validation.html and PNGs (landmarks, blended overlays,
-    edge overlays).  Exit status: 0 pass, 1 the verdict failed, 2 an error.
-    """
-    from .criteria import load_criteria
-    from .scene import load_scene
-    from .report import write_validation_outputs
-    from .validate import Tolerances, load_capture, write_corrected_scene
-    from .validate import validate as run_validate
-
-    try:
-        sc = load_scene(scene)
-        params, output = _load_isp(params_file) if params_file else (None, None)
-        criteria = load_criteria(criteria_file) if params_file else None
-        capture = load_capture(capture_file, sc.fisheye_camera())
-        tol = Tolerances(max_rms_px=max_rms_px, max_position_mm=max_position_mm,
-                         max_angle_deg=max_angle_deg, max_chamfer_px=max_chamfer_px,
-                         min_landmarks=min_landmarks)
-        result = run_validate(sc, capture, use_cache=True, capture_name=str(capture_file),
-                              params=params, output=output, criteria=criteria,
-                              tolerances=tol, search_px=search_px, progress=progress)
-        out = out or Path("out") / scene.stem / "validate"
-        written = write_validation_outputs(result, out)
-        if write_scene is not None:
-            write_corrected_scene(scene, result.correction, write_scene)
-    except RvmsimError as err:
-        _fail(err)
-    except OSError as err:
-        _fail_os(err, out)
-    click.echo(f"{sc.name} vs {capture_file}")
-    click.echo(result.summary())
-    click.echo(f"wrote {written[1]} and {len(written) - 2} PNGs in {out}")
-    if write_scene is not None:
-        click.echo(f"wrote the scene with the corrected mount to {write_scene}")
-    sys.exit(0 if result.passed else 1)
-
-
 # commands in modules of their own (cli.py is at its size limit)
 from .cli_calibrate import calibrate  # noqa: E402
 from .cli_console import console  # noqa: E402
 from .cli_robust import robustness  # noqa: E402
 from .cli_sweep import sweep  # noqa: E402
+from .cli_validate import validate  # noqa: E402
 
 cli.add_command(calibrate)
 cli.add_command(console)
 cli.add_command(robustness)
 cli.add_command(sweep)
+cli.add_command(validate)
 
 
 def main() -> None:

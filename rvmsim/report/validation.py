@@ -7,8 +7,14 @@ name, capture path) is HTML-escaped.
 
 from __future__ import annotations
 
+import csv
+import io
 import json
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from .._io import write_png
 from ..errors import RvmsimError
@@ -16,7 +22,9 @@ from ..tune import json_default
 from ..validate import Validation
 from .page import escape, img_tag, page
 
-__all__ = ["validation_page", "write_validation_outputs", "PICTURE_CAPTIONS"]
+__all__ = ["validation_page", "write_validation_outputs", "PICTURE_CAPTIONS", "write_pictures",
+           "CaptureOutcome", "SUMMARY_COLUMNS", "summary_table", "write_validation_summary",
+           "summary_page"]
 
 #: Caption of each validation picture, by file stem.
 PICTURE_CAPTIONS: dict[str, str] = {
@@ -38,19 +46,25 @@ PICTURE_MAX_PX = 960
 
 def validation_page(result: Validation) -> str:
     """The whole HTML document for ``result``: verdict, numbers, pictures."""
+    return page(f"Validation: {result.scene_name}", _validation_body(result, 1))
+
+
+def _validation_body(result: Validation, level: int) -> str:
+    """The sections of one validation, headings from ``<h{level}>`` down."""
     verdict = "PASS" if result.passed else "FAIL"
-    return page(f"Validation: {result.scene_name}", f"""
-<h1>Validation of {escape(result.scene_name)}: {verdict}</h1>
+    h1, h2 = f"h{level}", f"h{level + 1}"
+    return f"""
+<{h1}>Validation of {escape(result.scene_name)} against {escape(result.capture)}: {verdict}</{h1}>
 <p>Capture: {escape(result.capture)}, {result.image_size[0]}×{result.image_size[1]} px.
 {result.n_inliers} landmarks matched ({result.n_found} found,
-{result.n_predicted} predicted visible).</p>
-<h2>Verdict</h2><table><tr><th>check</th><th>value</th><th>limit</th><th></th>
+{result.n_predicted} predicted visible). Start: {escape(result.start)}.</p>
+<{h2}>Verdict</{h2}><table><tr><th>check</th><th>value</th><th>limit</th><th></th>
 <th>what to fix</th></tr>{_check_rows(result)}</table>
-<h2>Pose correction</h2><table><tr><th></th><th>change</th><th>σ</th><th></th></tr>{_pose_rows(result)}
+<{h2}>Pose correction</{h2}><table><tr><th></th><th>change</th><th>σ</th><th></th></tr>{_pose_rows(result)}
 </table>
 <pre>{escape(result.summary())}</pre>
-<h2>Pictures</h2>{_figures(result)}
-""")
+<{h2}>Pictures</{h2}>{_figures(result.images)}
+"""
 
 
 def _check_rows(result: Validation) -> str:
@@ -77,11 +91,11 @@ def _pose_rows(result: Validation) -> str:
     )
 
 
-def _figures(result: Validation) -> str:
+def _figures(images: dict[str, np.ndarray]) -> str:
     return "".join(
         f"<figure>{img_tag(img, name, PICTURE_MAX_PX)}<figcaption>"
         f"{escape(PICTURE_CAPTIONS.get(name, name))}</figcaption></figure>"
-        for name, img in result.images.items()
+        for name, img in images.items()
     )
 
 
@@ -99,12 +113,8 @@ def write_validation_outputs(result: Validation, out_dir: str | Path) -> list[Pa
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
-    paths = [write_png(out / f"{name}.png", img) for name, img in result.images.items()]
+    out = _make_folder(out_dir)
+    paths = write_pictures(result.images, out)
     js = out / "validation.json"
     try:
         js.write_text(json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
@@ -113,3 +123,144 @@ def write_validation_outputs(result: Validation, out_dir: str | Path) -> list[Pa
     except OSError as err:
         raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
     return [js, html_path, *paths]
+
+
+def _make_folder(out_dir: str | Path) -> Path:
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
+    return out
+
+
+def write_pictures(images: dict[str, np.ndarray], out_dir: str | Path) -> list[Path]:
+    """Write each picture as ``<key>.png`` into ``out_dir`` (created); also what a failed
+    validation leaves (:attr:`rvmsim.validate.ValidationFailure.images`).
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    out = _make_folder(out_dir)
+    return [write_png(out / f"{name}.png", img) for name, img in images.items()]
+
+
+@dataclass(frozen=True)
+class CaptureOutcome:
+    """One capture of a several-capture validation.
+
+    Attributes
+    ----------
+    capture : str
+        The capture's file.
+    out_dir : Path
+        Where its outputs went.
+    result : Validation or None
+        None when the validation stopped with an error.
+    error : str
+        The error's one-line message ("" when it finished).
+    step : str
+        The failed step: ``detection``, ``correspondence``, ``pose fit`` (an error),
+        ``check`` (a failed verdict), ``error`` (another error), "" (passed).
+    images : dict of str to (H, W, 3) uint8
+        The failure's pictures (when ``result`` is None).
+    """
+
+    capture: str
+    out_dir: Path
+    result: Validation | None
+    error: str = ""
+    step: str = ""
+    images: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def verdict(self) -> str:
+        if self.result is None:
+            return "ERROR"
+        return "PASS" if self.result.passed else "FAIL"
+
+    def row(self) -> dict[str, Any]:
+        """The summary table's row (numbers px, mm, degrees; None where not measured)."""
+        r = self.result
+        c = None if r is None else r.correction
+        return {
+            "capture": self.capture, "verdict": self.verdict, "step_failed": self.step,
+            "inliers": None if r is None else r.n_inliers,
+            "predicted": None if r is None else r.n_predicted,
+            "rms_before_px": None if r is None else r.rms_before_px,
+            "rms_after_px": None if r is None else r.rms_after_px,
+            "d_position_mm": None if c is None else c.d_position_norm_mm,
+            "max_d_angle_deg": None if c is None else c.max_d_angle_deg,
+            "error": self.error, "out_dir": str(self.out_dir),
+        }
+
+
+#: Columns of the summary table, in order.
+SUMMARY_COLUMNS = ("capture", "verdict", "step_failed", "inliers", "predicted",
+                   "rms_before_px", "rms_after_px", "d_position_mm", "max_d_angle_deg",
+                   "error", "out_dir")
+
+
+def summary_table(outcomes: list[CaptureOutcome]) -> str:
+    """The summary as fixed-width text for the terminal, one line per capture."""
+    def num(v: Any, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    lines = [f"{'capture':<40} {'verdict':<7} {'inliers':>7} {'RMS px':>7} {'Δpos mm':>8} "
+             f"{'Δangle°':>8}  step failed"]
+    for o in outcomes:
+        r = o.row()
+        lines.append(f"{o.capture[-40:]:<40} {o.verdict:<7} {num(r['inliers'], 'd'):>7} "
+                     f"{num(r['rms_after_px'], '.2f'):>7} {num(r['d_position_mm'], '.1f'):>8} "
+                     f"{num(r['max_d_angle_deg'], '.3f'):>8}  {o.step}")
+    return "\n".join(lines)
+
+
+def write_validation_summary(outcomes: list[CaptureOutcome], out_dir: str | Path) -> list[Path]:
+    """Write ``summary.json``, ``summary.csv`` and ``validation.html`` (one page: the table,
+    then every capture's validation or failure with its pictures) into ``out_dir``.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    out = _make_folder(out_dir)
+    rows = [o.row() for o in outcomes]
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    paths = [out / "summary.json", out / "summary.csv", out / "validation.html"]
+    try:
+        paths[0].write_text(json.dumps(rows, indent=2, default=json_default) + "\n")
+        paths[1].write_text(buf.getvalue())
+        paths[2].write_text(summary_page(outcomes))
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+    return paths
+
+
+def summary_page(outcomes: list[CaptureOutcome]) -> str:
+    """One HTML document for several captures: the summary table, then each capture."""
+    head = "".join(f"<th>{escape(c)}</th>" for c in SUMMARY_COLUMNS if c != "out_dir")
+    body = "".join(
+        f'<tr class="{"pass" if o.verdict == "PASS" else "fail"}">' + "".join(
+            f"<td>{escape(_cell(v))}</td>" for k, v in o.row().items() if k != "out_dir")
+        + "</tr>" for o in outcomes)
+    sections = "".join(
+        _validation_body(o.result, 2) if o.result is not None else
+        f"<h2>{escape(o.capture)}: ERROR</h2><p>{escape(o.error)}</p>{_figures(o.images)}"
+        for o in outcomes)
+    n_pass = sum(o.verdict == "PASS" for o in outcomes)
+    return page("Validation of several captures", f"""
+<h1>Validation: {n_pass} of {len(outcomes)} captures pass</h1>
+<table><tr>{head}</tr>{body}</table>{sections}""")
+
+
+def _cell(v: Any) -> str:
+    if v is None:
+        return "-"
+    return f"{v:.3g}" if isinstance(v, float) else str(v)

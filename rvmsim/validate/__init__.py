@@ -4,6 +4,9 @@ Modules, in the order :func:`validate` uses them:
 
 - :mod:`.capture`: reading a capture (:func:`load_capture`) and its checks.
 - :mod:`.landmarks`: the scene's checker corners the synthetic frame shows usably.
+- :mod:`.board`: the calibration board's corner grid and square colours (:class:`BoardShade`).
+- :mod:`.board_start`: the global start: the board found by the chessboard detector without
+  predicted corners, and a planar PnP on it (:func:`find_board_start`).
 - :mod:`.matching`: finding them in the capture (chessboard detector, NCC + cornerSubPix).
 - :mod:`.pose`: the mount pose fit (:func:`fit_pose`), the dense pre-alignment on the
   ground patterns' shade and the checker-shift disambiguation.
@@ -13,14 +16,18 @@ Modules, in the order :func:`validate` uses them:
 - :mod:`.scene_edit`: the scene with the corrected mount (:func:`scene_with_mount`,
   :func:`write_corrected_scene`).
 - :mod:`.outputs`: the pictures (the output folder: :func:`rvmsim.report.write_validation_outputs`).
+- :mod:`.failure`: :class:`ValidationFailure`, the error naming the step that failed.
 - :mod:`.validation`: :func:`validate`, the steps in order.
 - :mod:`.projection`: scene points to pixels at a corrected pose (shared by the above).
 """
 
 from __future__ import annotations
 
+from .board import BoardLayout, BoardShade, board_layout
+from .board_start import BoardStart, find_board_start, ypr_from_rotation
 from .capture import load_capture
 from .edges import CHAMFER_TRUNCATE_PX, compare_edges
+from .failure import ValidationFailure
 from .matching import find_landmarks
 from .pose import fit_pose
 from .scene_edit import scene_with_mount, write_corrected_scene
@@ -51,4 +58,11 @@ __all__ = [
     "write_corrected_scene",
     "scene_with_mount",
     "CHAMFER_TRUNCATE_PX",
+    "ValidationFailure",
+    "BoardLayout",
+    "BoardShade",
+    "board_layout",
+    "BoardStart",
+    "find_board_start",
+    "ypr_from_rotation",
 ]

@@ -1,6 +1,7 @@
 """Finding the landmarks in a capture.
 
-The calibration board is found with OpenCV's chessboard detector where it is visible whole;
+The calibration board is found with OpenCV's chessboard detector where it may be visible
+(at least half its inner corners predicted usable);
 every other checker corner by normalised cross-correlation (NCC) of its rendered
 neighbourhood within a search radius, followed by ``cv2.cornerSubPix``.  The colours of a
 checker corner's four squares make the match polarity-safe against its neighbours (which
@@ -153,10 +154,13 @@ def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
     method = [""] * len(corners)
     board_idx = [n for n, c in enumerate(corners)
                  if c.label == L.BOARD and c.name.startswith("board_inner")]
-    if board_idx and all(usable[n] for n in board_idx):
+    # The detector sees the whole board or nothing; it runs whenever the board may be seen
+    # (half its inner corners usable), and its finds count for the usable corners.
+    if board_idx and 2 * sum(bool(usable[n]) for n in board_idx) >= len(board_idx):
         for n, xy in _match_board(cap_g.astype(np.uint8), scene, board_idx, pred,
                                   spacing, radius_px).items():
-            found[n], ncc[n], method[n] = xy, 1.0, "chessboard"
+            if usable[n]:
+                found[n], ncc[n], method[n] = xy, 1.0, "chessboard"
     for n in range(len(corners)):
         if not usable[n] or method[n]:
             continue

@@ -32,11 +32,16 @@ from ..camera import FisheyeCamera
 from ..errors import RvmsimError
 from ..render import FisheyeImages
 from ..scene import PATTERN_LIFT_M, GroundPattern, Scene, pattern_axes, pattern_shade
+from .board import BoardShade
 from .capture import grey
+from .failure import ValidationFailure
 from .landmarks import VisibleLandmarks
 from .matching import find_landmarks
 from .projection import corrected_pose, project
 from .verdict import PoseCorrection
+
+#: At the fitted pose, the board's squares must correlate this well with the capture.
+MIN_BOARD_SCORE = 0.5
 
 __all__ = [
     "fit_pose",
@@ -187,11 +192,14 @@ class PoseSearch:
                 rotation=rot, radius_px=radius, usable=lm.usable)
             ok = np.isfinite(found[:, 0])
             if ok.sum() < need:
-                raise RvmsimError(
+                raise ValidationFailure(
+                    "detection",
                     f"{self.capture_name}: too few landmarks found: {int(ok.sum())} of "
                     f"{lm.n_usable} predicted checker corners (need {need}); is this a capture "
-                    f"of this scene, and is the pose within ~{self.search_px:g} px "
-                    "(--search-px)?")
+                    "of this scene? Corners are searched for within 0.6 square of their "
+                    "predicted place, so without a calibration board the chessboard detector "
+                    "finds, the scene's mount must be within about half a square of the "
+                    "camera's", found=found)
             idx = np.flatnonzero(ok)
             x_r, res_r, _ = fit_pose(cam, self.ypr0_deg, pts[idx], found[idx], robust=True, x0=x)
             mad = float(np.median(res_r)) * 1.4826
@@ -200,6 +208,11 @@ class PoseSearch:
                 keep = res_r <= np.sort(res_r)[need - 1]
             x, res_i, sigma = fit_pose(cam, self.ypr0_deg, pts[idx[keep]], found[idx[keep]],
                                        robust=False, x0=x_r)
+            if not (np.all(np.isfinite(x)) and np.all(np.isfinite(sigma))):
+                raise ValidationFailure(
+                    "pose fit", f"{self.capture_name}: the {int(keep.sum())} matched "
+                    "landmarks do not determine the mount pose (they lie on a line or too "
+                    "close together)", found=found)
             inl = np.zeros(len(lm.corners), bool)
             inl[idx[keep]] = True
             rms = float(np.sqrt(np.mean(res_i ** 2)))
@@ -288,40 +301,71 @@ def dense_align(shade: GroundShade, cam: FisheyeCamera, ypr0_deg: np.ndarray) ->
     return np.asarray(res.x) if res.fun < cost(x0) else x0
 
 
-def find_pose(search: PoseSearch) -> PoseFit:
-    """The matched landmarks and fitted pose, from the scene's pose or near it.
+def find_pose(search: PoseSearch, board: BoardShade | None = None,
+              board_index: np.ndarray | None = None) -> PoseFit:
+    """The matched landmarks and fitted pose, from the search's pose or near it.
 
-    Without ground patterns: :meth:`PoseSearch.match_and_fit` from the scene's pose.  With
-    them, the pose whose ground-pattern shade best fits the capture (:func:`dense_align`)
-    brings the corners within a few px even when the scene's pose is tens of px off.  A
-    checker is periodic: a pose one square off diagonally matches every corner with the
-    right polarity.  The patterns' non-periodic parts (borders, white squares, discs)
-    decide: each same-polarity shift is tried, and the fit whose ground shade correlates
-    better by > 0.02 wins.
+    With ground patterns, the pose whose ground-pattern shade best fits the capture
+    (:func:`dense_align`) brings the corners within a few px even when the search's pose is
+    tens of px off; then :meth:`PoseSearch.match_and_fit`.  A checker is periodic: a pose
+    one square off diagonally matches every corner with the right polarity.  The
+    non-periodic parts decide: the ground patterns' borders, white squares and discs
+    (:class:`GroundShade`), and the board's outer ring of squares (``board``,
+    :class:`~.board.BoardShade`).  Each same-polarity shift is tried, and the fit whose
+    mean shade correlation is better by > 0.02 wins.
+
+    Parameters
+    ----------
+    search : PoseSearch
+    board : BoardShade, optional
+        The scene's board, when it has one.
+    board_index : (K,) int, optional
+        The board's inner corners among the landmarks.
 
     Raises
     ------
-    RvmsimError
-        Too few landmarks found from the starting pose.
+    ValidationFailure
+        Too few landmarks found from the starting pose (step ``detection``); the board's
+        corners were matched but its squares' colours do not fit the pose, i.e. a
+        one-square alias that no shift resolves (step ``correspondence``).
     """
-    if not search.scene.test_site.ground_patterns:
-        return search.match_and_fit(np.zeros(6))
     cam = search.synthetic.camera
-    shade = GroundShade.sample(search.scene, cam, search.synthetic.labels, search.capture)
-    fit = search.match_and_fit(dense_align(shade, cam, search.ypr0_deg))
-    score = shade(*search.pose(fit.x))
-    for dx in shade.shifts():
+    shades: list[GroundShade | BoardShade] = []
+    x0 = np.zeros(6)
+    if search.scene.test_site.ground_patterns:
+        ground = GroundShade.sample(search.scene, cam, search.synthetic.labels, search.capture)
+        shades.append(ground)
+        x0 = dense_align(ground, cam, search.ypr0_deg)
+    if board is not None:
+        shades.append(board)
+    fit = search.match_and_fit(x0)
+    if not shades:
+        return fit
+
+    def score(x: np.ndarray) -> float:
+        return float(np.mean([sh(*search.pose(x)) for sh in shades]))
+
+    best = score(fit.x)
+    for dx in [d for sh in shades for d in sh.shifts()]:
         x_try = fit.x.copy()
         x_try[:3] += dx
-        if shade(*search.pose(x_try)) <= score + 0.02:
+        if score(x_try) <= best + 0.02:
             continue
         try:
             alt = search.match_and_fit(x_try)
         except RvmsimError:
             continue  # too few landmarks from that shift: it is not the pose
-        alt_score = shade(*search.pose(alt.x))
-        if alt_score > score + 0.02:
-            fit, score = alt, alt_score
+        alt_score = score(alt.x)
+        if alt_score > best + 0.02:
+            fit, best = alt, alt_score
+    if board is not None and board_index is not None and fit.inliers[board_index].sum() >= 4:
+        board_score = board(*search.pose(fit.x))
+        if board_score < MIN_BOARD_SCORE:
+            raise ValidationFailure(
+                "correspondence",
+                f"{search.capture_name}: the board's corners were matched, but its squares' "
+                f"colours do not fit the pose (correlation {board_score:.2f} < "
+                f"{MIN_BOARD_SCORE}): the match is probably one square off", found=fit.found)
     return fit
 
 

@@ -30,7 +30,10 @@ from ..criteria import Criteria
 from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
-from .capture import check_capture_size
+from .board import BoardShade, board_layout
+from .board_start import BoardStart, find_board_start, predicted_shift_px
+from .capture import check_capture_size, grey
+from .failure import ValidationFailure
 from .landmarks import VisibleLandmarks, visible_landmarks
 from .outputs import compare_with_pictures, landmark_picture
 from .pose import PoseFit, PoseSearch, find_pose, pose_correction
@@ -39,7 +42,11 @@ from .rvm import compare_rvm
 from .scene_edit import scene_with_mount
 from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
 
-__all__ = ["validate"]
+__all__ = ["validate", "RERENDER_SHIFT_PX"]
+
+#: A board start that moves the landmarks' predictions further than this re-renders the
+#: synthetic frame there before matching, px.
+RERENDER_SHIFT_PX = 3.0
 
 
 def validate(
@@ -56,6 +63,7 @@ def validate(
     search_px: float = 30.0,
     rerender: bool = True,
     progress: bool = False,
+    global_start: bool = True,
 ) -> Validation:
     """Compare a real capture with the scene's synthetic frame.
 
@@ -83,12 +91,18 @@ def validate(
         edge comparison after correction and the capture's ECs).
     progress : bool
         Progress bars while rendering.
+    global_start : bool
+        Look for the scene's board in the capture with the chessboard detector and start
+        the pose search from the pose it gives (:func:`~.board_start.find_board_start`);
+        else start from the scene's pose.
 
     Raises
     ------
     RvmsimError
-        Capture of the wrong size, a scene without enough visible checker corners, or
-        fewer than ``tolerances.min_landmarks`` landmarks found.
+        Capture of the wrong size, or a scene without enough visible checker corners.
+    ValidationFailure
+        A step failed (``detection``: fewer than ``tolerances.min_landmarks`` landmarks
+        found; ``correspondence``: a one-square alias; ``pose fit``), with the pictures.
     """
     if synthetic is None:
         synthetic = (cached_render(scene, progress=progress)[0] if use_cache
@@ -96,9 +110,24 @@ def validate(
     cam = synthetic.camera
     check_capture_size(capture, cam, capture_name)
     ypr0 = _mount_ypr_deg(scene)
-    landmarks = visible_landmarks(scene, synthetic, tolerances.min_landmarks)
-    fit = find_pose(PoseSearch(capture, synthetic, scene, landmarks, ypr0, float(search_px),
-                               tolerances.min_landmarks, capture_name))
+    # Few corners in view at the scene's pose is an error only when no board start helps.
+    landmarks = visible_landmarks(scene, synthetic, 0 if global_start else tolerances.min_landmarks)
+    layout = board_layout(scene, landmarks.corners)
+    start = (find_board_start(capture, cam, ypr0, layout)
+             if global_start and layout is not None else None)
+    board = (None if layout is None
+             else BoardShade(layout, cam, grey(capture).astype(np.float32)))
+    try:
+        x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, start, ypr0,
+                                                       tolerances.min_landmarks, progress)
+        fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
+                                   float(search_px), tolerances.min_landmarks, capture_name),
+                        board, None if layout is None else layout.corner_index.ravel())
+    except ValidationFailure as fail:
+        raise fail.with_images(_failure_pictures(capture, synthetic, landmarks, fail.found)) \
+            from None
+    fit = replace(fit, x=fit.x + x_start)
+    landmarks = replace(search_lm, predicted_px=landmarks.predicted_px)
     correction = pose_correction(cam, ypr0, fit.x, fit.sigma)
     pos1, rot1 = corrected_pose(cam, ypr0, fit.x)
     matches = _landmark_matches(landmarks, fit, project(cam, pos1, rot1, landmarks.points))
@@ -126,7 +155,60 @@ def validate(
         rms_after_px=rms_after, max_after_px=float(err_after.max()),
         correction=correction, edges_before=edges_before, edges_after=edges_after, rvm=rvm,
         checks=judge(rms_after, correction, edges_before, tolerances), images=images,
+        start=_start_text(start),
     )
+
+
+def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLandmarks,
+                  start: BoardStart | None, ypr0: np.ndarray, min_landmarks: int,
+                  progress: bool) -> tuple[np.ndarray, FisheyeImages, VisibleLandmarks]:
+    """Where the pose search starts: (the start's correction, the frame rendered there, its
+    landmarks).  The scene's own frame when there is no board start or it moves no usable
+    landmark by more than :data:`RERENDER_SHIFT_PX` (the local matching's templates come
+    from that frame, so it must show the capture's view closely)."""
+    if start is None:
+        return np.zeros(6), synthetic, visible_landmarks(scene, synthetic, min_landmarks)
+    if landmarks.n_usable >= max(min_landmarks, 1) and predicted_shift_px(
+            synthetic.camera, ypr0, start.x,
+            landmarks.points[landmarks.usable]) <= RERENDER_SHIFT_PX:
+        return np.zeros(6), synthetic, landmarks
+    pos, rot = corrected_pose(synthetic.camera, ypr0, start.x)
+    frame = _render_corrected(scene, synthetic,
+                              pose_correction(synthetic.camera, ypr0, start.x, np.zeros(6)),
+                              pos, rot, progress)
+    return start.x, frame, visible_landmarks(scene, frame, min_landmarks)
+
+
+def _start_text(start: BoardStart | None) -> str:
+    """How the pose search started, for the summary."""
+    if start is None:
+        return "the scene's pose"
+    text = (f"the board found by the chessboard detector ({start.view}; corner RMS "
+            f"{start.rms_px:.2f} px, square colours r = {start.colour_score:.2f})")
+    if start.ambiguous:
+        text += ("; the board is half-turn symmetric, so its orientation was taken from the "
+                 "scene's pose")
+    return text
+
+
+def _failure_pictures(capture: np.ndarray, synthetic: FisheyeImages,
+                      landmarks: VisibleLandmarks,
+                      found: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The pictures of a validation that stopped: the blend and edges with the scene's pose,
+    and the landmarks (predicted; found ones drawn as not fitted)."""
+    _, images = compare_with_pictures(capture, synthetic.color, synthetic.labels,
+                                      "overlay", "edges")
+    uv = landmarks.predicted_px
+    matches = tuple(
+        LandmarkMatch(name=c.name, point=c.point,
+                      predicted_px=(float(uv[n, 0]), float(uv[n, 1])),
+                      found_px=None if found is None or not np.isfinite(found[n, 0])
+                      else (float(found[n, 0]), float(found[n, 1])),
+                      corrected_px=(float(uv[n, 0]), float(uv[n, 1])),
+                      method="", ncc=0.0, inlier=False)
+        for n, c in enumerate(landmarks.corners) if landmarks.usable[n])
+    images["landmarks"] = landmark_picture(capture, matches)
+    return images
 
 
 def _landmark_matches(landmarks: VisibleLandmarks, fit: PoseFit,

@@ -239,7 +239,9 @@ class Validation:
     """Everything :func:`rvmsim.validate.validate` measured.
 
     ``images`` holds the pictures for people (RGB uint8 arrays keyed by file stem, in the
-    order they are written); it is not part of :meth:`to_dict` nor of equality.
+    order they are written); it is not part of :meth:`to_dict` nor of equality.  ``start``
+    says where the pose search started (the scene's pose, or the board the chessboard
+    detector found).
     """
 
     scene_name: str
@@ -257,6 +259,7 @@ class Validation:
     rvm: RvmComparison | None
     checks: tuple[Check, ...]
     images: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+    start: str = "the scene's pose"
 
     @property
     def n_found(self) -> int:
@@ -277,6 +280,7 @@ class Validation:
             "capture": self.capture,
             "image_size": list(self.image_size),
             "passed": self.passed,
+            "start": self.start,
             "checks": [{**asdict(c), "passed": c.passed} for c in self.checks],
             "landmarks": {
                 "predicted": self.n_predicted,
@@ -304,6 +308,7 @@ class Validation:
         """A few lines for the terminal."""
         c = self.correction
         lines = [
+            f"start: {self.start}",
             f"landmarks: {self.n_inliers} inliers of {self.n_found} found "
             f"({self.n_predicted} predicted visible)",
             f"landmark error: RMS {self.rms_before_px:.2f} px (max {self.max_before_px:.2f}) "
@@ -325,7 +330,9 @@ class Validation:
             mark = "ok  " if chk.passed else "FAIL"
             lines.append(f"{mark} {chk.name}: {chk.value:.3g} (limit {chk.limit:g})"
                          + ("" if chk.passed else f" — {chk.hint}"))
-        lines.append("verdict: " + ("PASS" if self.passed else "FAIL"))
+        failed = [c.name for c in self.checks if not c.passed]
+        lines.append("verdict: PASS" if not failed else
+                     "verdict: FAIL (step failed: check: " + ", ".join(failed) + ")")
         return "\n".join(lines)
 
 

@@ -84,3 +84,37 @@ CASES += [Case("capture-missing", VALIDATE + ("gone.png",), ("gone.png", "not fo
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
 def test_bad_capture(case, case_dir):
     check_case(case, case_dir)
+
+
+def _folder_without_captures(folder):
+    (folder / "caps").mkdir()
+    (folder / "caps" / "notes.txt").write_text("no images here\n")
+
+
+def _two_captures(folder):
+    for name in ("a.png", "b.png"):
+        (folder / name).write_bytes(b"")
+
+
+def _folder_with_a_corrupt_capture(folder):
+    (folder / "caps").mkdir()
+    (folder / "caps" / "x.png").write_bytes(png(320, 240, zlib.compress(b"\x01" * 5000))[:60])
+
+
+#: Several captures (issue #18): a folder without any, --write-scene with two, a folder
+#: whose only capture is unreadable (its error is one stderr line; the summary is written).
+CASES_SEVERAL = [
+    Case("capture-folder-without-captures", VALIDATE + ("caps",), ("caps", "no captures"),
+         _folder_without_captures, keep=("run",)),
+    Case("write-scene-with-two-captures",
+         ("validate", SMALL_SCENE, "--out", "v", "--no-progress", "--capture", "a.png",
+          "--capture", "b.png", "--write-scene", "fixed.yaml"), ("--write-scene", "2 given"),
+         _two_captures, keep=("run",)),
+    Case("capture-folder-with-a-corrupt-capture", VALIDATE + ("caps",), ("x.png",),
+         _folder_with_a_corrupt_capture, keep=("run",)),
+]
+
+
+@pytest.mark.parametrize("case", CASES_SEVERAL, ids=[c.id for c in CASES_SEVERAL])
+def test_bad_captures_of_several(case, case_dir):
+    check_case(case, case_dir)

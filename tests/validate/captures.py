@@ -177,3 +177,51 @@ def write_scene(tmp_path: Path, mount: dict = MOUNT, name: str = "mat.yaml") -> 
     p = tmp_path / name
     p.write_text(text)
     return p
+
+
+#: The board-only scene's true mount and board (7 × 9 squares of 0.08 m: 48 inner corners).
+BOARD_MOUNT = {"position": [0.03, -1.0, -0.1], "yaw_deg": 1.0, "pitch_deg": 25.0,
+               "roll_deg": 0.5}
+BOARD_SQUARE_M = 0.08
+
+
+def board_scene(d_position_m: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                d_ypr_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Scene:
+    """A board-dominant scene: an upright checkerboard 1.1 m behind the camera, no test
+    objects or guidelines, 640 × 480; the mount moved by ``d_position_m`` (m) and turned by
+    ``d_ypr_deg`` (degrees)."""
+    d = yaml.safe_load((SCENES / "vehicle_a.yaml").read_text())
+    mount = copy.deepcopy(BOARD_MOUNT)
+    mount["position"] = [p + dp for p, dp in zip(mount["position"], d_position_m)]
+    for key, dv in zip(("yaw_deg", "pitch_deg", "roll_deg"), d_ypr_deg):
+        mount[key] += dv
+    d["camera"] = {
+        "image_size": [640, 480],
+        "intrinsics": {"fx": 200.0, "fy": 204.0, "cx": 321.0, "cy": 238.5},
+        "lens": {"model": "kannala_brandt", "k": [-0.04, 0.003, -0.002, 0.0], "fov_deg": 190},
+        "mount": mount,
+    }
+    d["test_site"] = {
+        "objects": {k: {"enabled": False} for k in "ABCDEFG"},
+        "guidelines": {"enabled": False},
+        "board": {"placement": "upright", "position": [0.0, -0.7, 1.0],
+                  "squares": [7, 9], "square_size": BOARD_SQUARE_M},
+    }
+    return make_scene(d)
+
+
+@functools.lru_cache(maxsize=None)
+def board_capture() -> np.ndarray:
+    """The board-only scene's frame at its true pose, degraded like a sensor."""
+    truth = render_fisheye(board_scene())
+    return degrade(truth.color, truth.labels, seed=3)
+
+
+def moved_mount(d_position_m: tuple[float, float, float],
+                d_ypr_deg: tuple[float, float, float]) -> dict:
+    """:data:`MOUNT` moved by ``d_position_m`` (m) and turned by ``d_ypr_deg`` (degrees)."""
+    m = copy.deepcopy(MOUNT)
+    m["position"] = [p + dp for p, dp in zip(m["position"], d_position_m)]
+    for key, dv in zip(("yaw_deg", "pitch_deg", "roll_deg"), d_ypr_deg):
+        m[key] += dv
+    return m

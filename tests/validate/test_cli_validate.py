@@ -98,3 +98,58 @@ def test_cli_bad_captures_are_one_line_errors(tmp_path, cache_env, case):
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
     assert expect in lines[0] and str(cap) in lines[0]
+
+
+def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path, cache_env):
+    scene_file = write_scene(tmp_path)
+    cap = tmp_path / "noise.png"
+    cv2.imwrite(str(cap), np.random.default_rng(1).integers(0, 255, (480, 640), np.uint8))
+    out = tmp_path / "v"
+    res = _run("validate", str(scene_file), "--capture", str(cap), "--out", str(out),
+               "--no-progress", env=cache_env)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "(step failed: detection)" in lines[0], res.stderr
+    assert str(out) in lines[0] and "--search-px" not in lines[0]
+    for name in ("overlay", "edges", "landmarks"):
+        img = cv2.imread(str(out / f"{name}.png"))
+        assert img is not None and img.shape == (480, 640, 3), name
+    assert not (out / "validation.json").exists()
+
+
+def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
+    """A folder plus a file: three captures, one passing (the scene's own frame), one failing
+    its checks (the perturbed capture), one unrelated (an error, with its pictures)."""
+    from .captures import base
+
+    folder = tmp_path / "caps"
+    folder.mkdir()
+    cv2.imwrite(str(folder / "a_same.png"), base()[1].color[..., ::-1])
+    cv2.imwrite(str(folder / "b_perturbed.png"), perturbed()[1][..., ::-1])
+    (folder / "notes.txt").write_text("not a capture")
+    noise = tmp_path / "noise.png"
+    cv2.imwrite(str(noise), np.random.default_rng(2).integers(0, 255, (480, 640), np.uint8))
+    scene_file = write_scene(tmp_path)
+    out = tmp_path / "v"
+    res = _run("validate", str(scene_file), "--capture", str(folder), "--capture", str(noise),
+               "--out", str(out), "--no-progress", env=cache_env)
+    assert res.returncode == 2, res.stdout + res.stderr  # one capture is an error
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1 and "noise.png" in err[0] and "step failed: detection" in err[0]
+    rows = json.loads((out / "summary.json").read_text())
+    assert [Path(r["capture"]).name for r in rows] == ["a_same.png", "b_perturbed.png",
+                                                       "noise.png"]
+    assert [r["verdict"] for r in rows] == ["PASS", "FAIL", "ERROR"]
+    assert rows[1]["step_failed"].startswith("check: ") and rows[2]["step_failed"] == "detection"
+    csv_lines = (out / "summary.csv").read_text().splitlines()
+    assert len(csv_lines) == 4 and csv_lines[0].startswith("capture,verdict,step_failed")
+    for line, verdict in zip(res.stdout.splitlines()[2:5], ("PASS", "FAIL", "ERROR")):
+        assert verdict in line, res.stdout
+    page = (out / "validation.html").read_text()
+    assert "1 of 3 captures pass" in page
+    assert all(n in page for n in ("a_same.png", "b_perturbed.png", "noise.png"))
+    assert page.count("<img") >= 3 + 3 + 3  # every capture's pictures, the error's too
+    for sub in ("a_same", "b_perturbed"):
+        assert json.loads((out / sub / "validation.json").read_text())["capture"].endswith(
+            f"{sub}.png")
+    assert (out / "noise" / "landmarks.png").is_file()
