@@ -121,7 +121,7 @@ def render_fisheye(
     t1 = time.perf_counter()
     atlas = render_faces(parts, layout, cam, sky=scene.render.sky_color, progress=progress)
     t3 = time.perf_counter()
-    color, labels = fold(layout, atlas.color, atlas.labels)
+    color, labels = fold(layout, atlas.color, atlas.labels, scene.render.color_filter)
     t4 = time.perf_counter()
     return FisheyeImages(
         color=color,

@@ -30,8 +30,8 @@ AA_TAPS = 3
 _SEAM_STEP_PX = 16.0
 
 
-def fold(layout: CubeLayout, color_atlas: np.ndarray,
-         label_atlas: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def fold(layout: CubeLayout, color_atlas: np.ndarray, label_atlas: np.ndarray,
+         color_filter: str = "bilinear") -> tuple[np.ndarray, np.ndarray]:
     """The fisheye colour and label images from the rendered atlas.
 
     Parameters
@@ -42,12 +42,15 @@ def fold(layout: CubeLayout, color_atlas: np.ndarray,
         Rendered colour of the face crops, side by side.
     label_atlas : (rows, cols) uint8
         Rendered label IDs of the same crops; 0 where no geometry is hit.
+    color_filter : {"bilinear", "area"}
+        How colour is sampled: one bilinear tap per fisheye pixel (the default), or
+        area-averaged over the pixel's footprint (:func:`fold_color` with
+        :data:`AA_TAPS`² taps), so that edge sharpness does not depend on the oversample.
 
     Returns
     -------
     color : (H, W, 3) uint8
-        Area-averaged resampling of ``color_atlas`` (:func:`fold_color`); black outside the
-        lens's field.
+        ``color_atlas`` resampled by ``color_filter``; black outside the lens's field.
     labels : (H, W) uint8
         Nearest sampling (round half up) of ``label_atlas``; ``SKY`` where it is 0 inside the
         field, ``VOID`` outside it.
@@ -56,7 +59,8 @@ def fold(layout: CubeLayout, color_atlas: np.ndarray,
     ----------
     Map direction dst → src (fisheye pixel → atlas), pixel centres at integer coordinates.
     """
-    return fold_color(layout, color_atlas), fold_labels(layout, label_atlas)
+    taps = {"bilinear": 1, "area": AA_TAPS}[color_filter]
+    return fold_color(layout, color_atlas, taps), fold_labels(layout, label_atlas)
 
 
 def _step(a: np.ndarray, axis: int) -> np.ndarray:
@@ -83,10 +87,10 @@ def _crop_limits(layout: CubeLayout) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return x0[k], x0[k] + w[k] - 1, h[k] - 1
 
 
-def fold_color(layout: CubeLayout, color_atlas: np.ndarray) -> np.ndarray:
+def fold_color(layout: CubeLayout, color_atlas: np.ndarray, taps: int = AA_TAPS) -> np.ndarray:
     """The fisheye colour image, area-averaged: (H, W, 3) uint8, black outside the field.
 
-    Each pixel is the mean of :data:`AA_TAPS`² bilinear samples at the offsets
+    Each pixel is the mean of ``taps``² bilinear samples (1: one tap at its centre) at the offsets
     ((i + ½)/n − ½, (j + ½)/n − ½) fisheye px from its centre, mapped into the atlas by the
     map's local Jacobian and kept inside the pixel's own face crop.
 
@@ -101,14 +105,14 @@ def fold_color(layout: CubeLayout, color_atlas: np.ndarray) -> np.ndarray:
     jyx, jyy = _step(ay, 1), _step(ay, 0)
     lo, hi, ymax = _crop_limits(layout)
     acc = np.zeros((*ax.shape, color_atlas.shape[2]), np.float32)
-    offsets = (np.arange(AA_TAPS, dtype=np.float32) + 0.5) / AA_TAPS - 0.5
+    offsets = (np.arange(taps, dtype=np.float32) + 0.5) / taps - 0.5
     for oy in offsets:
         for ox in offsets:
             mx = np.clip(ax + jxx * ox + jxy * oy, lo, hi)
             my = np.clip(ay + jyx * ox + jyy * oy, 0.0, ymax)
             acc += cv2.remap(color_atlas, mx, my, cv2.INTER_LINEAR,
                              borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    color = np.rint(acc * (1.0 / AA_TAPS**2)).astype(np.uint8)
+    color = np.rint(acc * (1.0 / taps**2)).astype(np.uint8)
     color[~layout.in_fov] = 0
     return color
 

@@ -209,7 +209,7 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
             cam = sample_camera(scene, samples[i], scale=scale)
             layout = refold_layout(cover, cam.rotation.T @ view_cam.rotation, rays)
             if color and atlas_c is not None:
-                img_c, img_l = fold(layout, atlas_c, atlas_l)
+                img_c, img_l = fold(layout, atlas_c, atlas_l, scene.render.color_filter)
             else:
                 img_l = fold_labels(layout, atlas_l)
                 img_c = np.broadcast_to(np.zeros(3, np.uint8), (*img_l.shape, 3))

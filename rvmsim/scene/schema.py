@@ -396,10 +396,14 @@ class RenderSettings(_Model):
 
     ``face_size_px``: cube face resolution (None: automatic, ``oversample`` face pixels per
     fisheye pixel where the faces are least dense).  Nearest label sampling puts a label
-    border within 0.5 / ``oversample`` px of its true place.
+    border within 0.5 / ``oversample`` px of its true place.  ``color_filter``: ``bilinear``
+    (one tap per fisheye pixel) or ``area`` (averaged over the pixel's footprint: edge
+    sharpness independent of ``oversample``; not the default yet, because the corner
+    matching of ``rvmsim validate`` is tuned on bilinear frames).
     """
 
     face_size_px: Annotated[int, Field(ge=16, le=8192)] | None = None
+    color_filter: Literal["bilinear", "area"] = "bilinear"
     oversample: Annotated[float, Field(ge=0.5, le=4.0)] = 1.5
     max_face_size_px: Annotated[int, Field(ge=16, le=8192)] = 4096
     sky_color: Rgb = (0.62, 0.76, 0.92)

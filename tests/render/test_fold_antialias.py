@@ -20,7 +20,7 @@ BOARD_ONLY = ROOT / "docs" / "examples" / "board_only.yaml"
 def _corner_rms(oversample: float, pose: dict) -> float:
     """RMS (px) of cornerSubPix on the rendered board against cv2.fisheye.projectPoints."""
     d = yaml.safe_load(BOARD_ONLY.read_text())
-    d["render"] = {"oversample": oversample}
+    d["render"] = {"oversample": oversample, "color_filter": "area"}
     d["test_site"]["board"].update(pose)
     scene = scene_from_dict(d, base_dir=BOARD_ONLY.parent)
     cam = scene.fisheye_camera()
