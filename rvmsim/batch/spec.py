@@ -19,9 +19,8 @@ Sweep file (YAML)::
     sensitivity: true
     robustness: {samples: 64, seed: 0}         # each point's yield (base scene's variation)
 
-Every combination of axis values is one :class:`DesignPoint`; :func:`point_scene_doc` builds
-its scene document and tuning config.  Problems with the file are
-:class:`~rvmsim.errors.SweepFileError` (one line naming the file, the key and its line).
+Each combination of axis values is a :class:`DesignPoint` (:func:`point_scene_doc`: its scene
+and tuning config); problems are one-line errors (:class:`~rvmsim.errors.SweepFileError`).
 """
 
 from __future__ import annotations
