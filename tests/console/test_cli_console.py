@@ -84,6 +84,7 @@ def test_off_loopback_it_makes_a_token_and_refuses_requests_without_it(small_run
 def test_a_scene_saves_into_its_out_folder(small_run, source):
     proc, lines = _start([source, "--port", "0", "--no-browser"], small_run)
     try:
-        assert lines[-1].startswith("saves go to out/scene/console"), lines
+        # (a uvicorn RuntimeWarning line was once seen after it under load: see the note)
+        assert any(ln.startswith("saves go to out/scene/console") for ln in lines), lines
     finally:
         _stop(proc)
