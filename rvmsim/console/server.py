@@ -7,6 +7,7 @@ one-line error, and port 0 picks a free port (tests).
 
 from __future__ import annotations
 
+import asyncio
 import ipaddress
 import re
 import secrets
@@ -117,14 +118,33 @@ def make_server(session: ConsoleSession, access: Access) -> uvicorn.Server:
 
 def serve(session: ConsoleSession, access: Access, port: int, *,
           on_ready: Callable[[str], None] = print, open_browser: bool = True) -> None:
-    """Listen, tell ``on_ready`` the URL, open it in a browser (unless not wanted), and
-    serve until Ctrl-C."""
+    """Listen, serve, and once uvicorn is serving tell ``on_ready`` the URL and open it in
+    a browser (unless not wanted); serve until Ctrl-C.
+
+    ``on_ready`` runs only after uvicorn has taken over Ctrl-C, so a Ctrl-C any time after
+    the URL is printed is a clean shutdown (KeyboardInterrupt, nothing on stderr).
+    """
     sock = listen(access.host, port)
     url = console_url(access.host, sock.getsockname()[1], access.token)
     server = make_server(session, access)
-    on_ready(url)
-    if open_browser:
-        import webbrowser
 
-        threading.Timer(0.5, webbrowser.open, args=(url,)).start()
-    server.run(sockets=[sock])
+    async def serve_and_tell() -> None:
+        serving = asyncio.ensure_future(server.serve(sockets=[sock]))
+        while not (server.started or serving.done()):
+            await asyncio.sleep(0.005)
+        if server.started:
+            on_ready(url)
+            if open_browser:
+                import webbrowser
+
+                threading.Timer(0.5, webbrowser.open, args=(url,)).start()
+        await serving
+
+    main = serve_and_tell()
+    try:
+        with asyncio.Runner() as runner:
+            runner.run(main)
+    finally:
+        # A Ctrl-C before the loop ran it leaves the coroutine unstarted; closing it keeps
+        # Python's "never awaited" warning off stderr.  (A no-op once it has finished.)
+        main.close()

@@ -53,3 +53,34 @@ def test_console_url():
     assert console_url("127.0.0.1", 8765, None) == "http://127.0.0.1:8765/"
     assert console_url("0.0.0.0", 1, "tok") == "http://127.0.0.1:1/?token=tok"
     assert console_url("::1", 2, None) == "http://[::1]:2/"
+
+
+def test_the_url_is_told_only_once_uvicorn_holds_ctrl_c(small_run):
+    """``serve`` tells the URL after uvicorn has taken over SIGINT, so a Ctrl-C right after
+    the URL is printed is uvicorn's clean shutdown, not a KeyboardInterrupt thrown into a
+    half-started event loop (which left a "coroutine was never awaited" warning on stderr)."""
+    import gc
+    import signal
+    import warnings
+
+    from rvmsim.console import open_session, serve
+
+    session = open_session(small_run / "run")
+    seen: dict[str, object] = {}
+
+    def ready(url: str) -> None:
+        seen["url"] = url
+        seen["handler"] = signal.getsignal(signal.SIGINT)
+        signal.raise_signal(signal.SIGINT)  # Ctrl-C the instant the URL is shown
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(KeyboardInterrupt):
+            serve(session, check_access("127.0.0.1", None), 0, on_ready=ready,
+                  open_browser=False)
+        gc.collect()
+    assert str(seen["url"]).startswith("http://127.0.0.1:")
+    assert seen["handler"] not in (signal.default_int_handler, signal.SIG_DFL), seen
+    assert getattr(seen["handler"], "__self__", None).__class__.__name__ == "Server"
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], caught
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # given back
