@@ -31,7 +31,7 @@ _SEAM_STEP_PX = 16.0
 
 
 def fold(layout: CubeLayout, color_atlas: np.ndarray, label_atlas: np.ndarray,
-         color_filter: str = "bilinear") -> tuple[np.ndarray, np.ndarray]:
+         color_filter: str = "area") -> tuple[np.ndarray, np.ndarray]:
     """The fisheye colour and label images from the rendered atlas.
 
     Parameters

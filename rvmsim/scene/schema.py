@@ -396,14 +396,15 @@ class RenderSettings(_Model):
 
     ``face_size_px``: cube face resolution (None: automatic, ``oversample`` face pixels per
     fisheye pixel where the faces are least dense).  Nearest label sampling puts a label
-    border within 0.5 / ``oversample`` px of its true place.  ``color_filter``: ``bilinear``
-    (one tap per fisheye pixel) or ``area`` (averaged over the pixel's footprint: edge
-    sharpness independent of ``oversample``; not the default yet, because the corner
-    matching of ``rvmsim validate`` is tuned on bilinear frames).
+    border within 0.5 / ``oversample`` px of its true place.  ``color_filter``: ``area``
+    (the default: each fisheye pixel averaged over its footprint, so edge sharpness does not
+    depend on ``oversample``) or ``bilinear`` (one tap per fisheye pixel, a little faster;
+    a denser atlas then aliases: checker corners 0.15 px RMS at oversample 1.5, 0.22 px at
+    3.5, against 0.06 px at both with ``area``).
     """
 
     face_size_px: Annotated[int, Field(ge=16, le=8192)] | None = None
-    color_filter: Literal["bilinear", "area"] = "bilinear"
+    color_filter: Literal["bilinear", "area"] = "area"
     oversample: Annotated[float, Field(ge=0.5, le=4.0)] = 1.5
     max_face_size_px: Annotated[int, Field(ge=16, le=8192)] = 4096
     sky_color: Rgb = (0.62, 0.76, 0.92)

@@ -9,14 +9,19 @@ for a Kannala-Brandt lens that is ``cv2.fisheye.undistortPoints``), and ``cv2.so
 (IPPE, planar) on them gives the camera pose, which our fisheye PnP (:func:`.pose.fit_pose`)
 then polishes.
 
-Correspondence: the detector gives the grid, not which end is which.  Every assignment of
-its grid to the board's inner corners (the four flips, and the transposes of a square grid)
-is tried; a mirrored assignment puts the camera behind the board and is dropped; of the
-rest, the colours of the board's squares decide (:class:`.board.BoardShade`).  A board whose
-half turn has the same colours (squares along width + height even) cannot be told from it:
-the candidate nearest the scene's (CAD) rotation wins and the start says it was ambiguous.
-A one-square (diagonal) alias cannot occur here: the detector finds exactly the board's
-``nx × ny`` inner corners, and the colours of the outer ring of squares are checked.
+Correspondence: the detector gives a grid of the board's size, not which end is which,
+nor even that it is the board's inner corners: on a small or blurred board it may take the
+board's edge for a row and miss a row or column inside (seen on area-averaged renders of a
+5 × 4 board: a 3 × 4 grid, one row of it on the board's lower edge).  So the detected grid
+is read as a patch of the board's square lattice, in each of the eight ways it can lie
+(turns and mirror images) and at each place it fits, its corners on the inner corners or on
+the square corners of the board's edge; a reading that puts the camera behind the board is
+dropped; of the rest, the colours of the board's squares decide (:class:`.board.BoardShade`),
+and a reading turned more than :data:`MAX_START_TURN_DEG` from the scene's (CAD) rotation
+is not believed.  A board whose half turn has the same colours (squares along width + height
+even) cannot be told from it: the reading nearest the scene's rotation wins and the start
+says it was ambiguous.  The one-square (diagonal) alias is one of these readings, and the
+outer ring of squares' colours rejects it.
 
 Convention
 ----------
@@ -49,6 +54,13 @@ MIN_COLOUR_SCORE = 0.5
 #: Corners fitting one board pose worse than this fraction of their spacing (RMS) are not
 #: the board.
 MAX_START_RMS = 0.03
+#: Readings within this of the best colour score are told apart by the scene's rotation
+#: (a half-turn-symmetric board's two readings sample the same squares, so they score
+#: alike to rounding; a reading one square or a quarter turn off scores ~0.1 lower).
+COLOUR_TIE = 0.02
+#: A start turned further than this from the scene's rotation is not believed, degrees:
+#: a CAD mount is within a few degrees of the real one.
+MAX_START_TURN_DEG = 30.0
 
 
 @dataclass(frozen=True)
@@ -59,8 +71,10 @@ class BoardStart:
     ----------
     x : (6,) float
         Pose correction of the scene's mount (m, degrees), see :mod:`.projection`.
-    found : (nx, ny, 2) float
-        The detected inner corners in the capture, in the board's grid order, px.
+    found : (K, 2) float
+        The detected corners that are the board's inner corners, px.
+    corner_ij : (K, 2) int
+        Which inner corner (i along the board's width, j along its height) each is.
     view : str
         Where the detector found them: ``"whole image"`` or ``"perspective view"``.
     rms_px : float
@@ -73,6 +87,7 @@ class BoardStart:
 
     x: np.ndarray
     found: np.ndarray
+    corner_ij: np.ndarray
     view: str
     rms_px: float
     colour_score: float
@@ -142,28 +157,52 @@ def _perspective_detect(grey_u8: np.ndarray, camera: FisheyeCamera,
     return np.asarray(camera.project_rays(back)[0]).reshape(found.shape)
 
 
-def _assignments(det: np.ndarray, grid: tuple[int, int]) -> list[np.ndarray]:
-    """Every way of reading the detector's grid (ny, nx, 2) as the board's (nx, ny, 2)."""
-    base = det.transpose(1, 0, 2)  # [i, j] with i along the detector's rows
-    cands = [base[::fi, ::fj] for fi in (1, -1) for fj in (1, -1)]
-    if grid[0] == grid[1]:
-        cands += [c.transpose(1, 0, 2) for c in cands]
-    return [np.ascontiguousarray(c) for c in cands]
+def _readings(det: np.ndarray, grid: tuple[int, int]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Every way of reading the detector's grid (rows, cols, 2) as a patch of the board's
+    square lattice: (lattice indices (K, 2) int, the corners (K, 2) px).
+
+    Lattice index (i, j) is inner corner (i, j) for 0 ≤ i < nx, 0 ≤ j < ny; −1 and nx (ny)
+    are the square corners on the board's edge.  A reading lies in that range and holds at
+    least half of the board's inner corners.
+    """
+    nx, ny = grid
+    rows, cols = det.shape[:2]
+    r, c = np.mgrid[0:rows, 0:cols]
+    pts = det.reshape(-1, 2)
+    out = []
+    seen = set()
+    for swap in (False, True):
+        u, v = (c, r) if not swap else (r, c)
+        for su in (1, -1):
+            for sv in (1, -1):
+                i0, j0 = (su * u).ravel(), (sv * v).ravel()
+                for di in range(-1 - i0.min(), nx - i0.max()):
+                    for dj in range(-1 - j0.min(), ny - j0.max()):
+                        ij = np.stack([i0 + di, j0 + dj], axis=1)
+                        key = ij.tobytes()
+                        inner = (ij[:, 0] >= 0) & (ij[:, 0] < nx) & (ij[:, 1] >= 0) \
+                            & (ij[:, 1] < ny)
+                        if key in seen or 2 * inner.sum() < nx * ny:
+                            continue
+                        seen.add(key)
+                        out.append((ij, pts))
+    return out
 
 
-def _pnp(camera: FisheyeCamera, layout: BoardLayout,
+def _pnp(camera: FisheyeCamera, layout: BoardLayout, ij: np.ndarray,
          found: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """Camera (position m, camera-to-scene rotation) from the corners ``found`` (nx, ny, 2)
-    assigned to the board's grid, by planar PnP in a pinhole view along their mean ray."""
+    """Camera (position m, camera-to-scene rotation) from the corners ``found`` (K, 2) px
+    at the board's lattice indices ``ij`` (K, 2), by planar PnP in a pinhole view along their
+    mean ray."""
     import cv2
 
-    rays, _ = camera.pixel_rays(found.reshape(-1, 2))
+    rays, _ = camera.pixel_rays(found)
     basis = _view_basis(rays.mean(axis=0))
     r_v = rays @ basis
     if np.any(r_v[:, 2] <= 1e-3):
         return None
     img = (r_v[:, :2] / r_v[:, 2:3]).astype(np.float64)
-    obj = layout.local_points().reshape(-1, 3)
+    obj = np.column_stack([ij * layout.square_size, np.zeros(len(ij))]).astype(np.float64)
     ok, rvec, tvec = cv2.solvePnP(obj, img, np.eye(3), None, flags=cv2.SOLVEPNP_IPPE)
     if not ok:
         return None
@@ -175,14 +214,26 @@ def _pnp(camera: FisheyeCamera, layout: BoardLayout,
     return pos, rot
 
 
+@dataclass(frozen=True)
+class _Reading:
+    """A reading of the detected grid with its PnP pose: colour score, degrees from the
+    scene's rotation, position m, rotation, lattice indices (K, 2), corners (K, 2) px."""
+
+    score: float
+    turn_deg: float
+    position: np.ndarray
+    rotation: np.ndarray
+    ij: np.ndarray
+    found: np.ndarray
+
+
 def _candidates(camera: FisheyeCamera, layout: BoardLayout, det: np.ndarray,
-                shade: BoardShade) -> list[tuple[float, float, np.ndarray, np.ndarray, np.ndarray]]:
-    """(colour score, angle to the scene's rotation in degrees, position, rotation, the
-    corners in the board's grid order) of each assignment that puts the camera in front of
-    the board."""
+                shade: BoardShade) -> list[_Reading]:
+    """Each reading of the detection (:func:`_readings`) that puts the camera in front of
+    the board, with its pose and colour score."""
     out = []
-    for found in _assignments(det, layout.grid):
-        pose = _pnp(camera, layout, found)
+    for ij, found in _readings(det, layout.grid):
+        pose = _pnp(camera, layout, ij, found)
         if pose is None:
             continue
         pos, rot = pose
@@ -190,7 +241,7 @@ def _candidates(camera: FisheyeCamera, layout: BoardLayout, det: np.ndarray,
             continue  # mirrored: the camera would see the board from behind
         d_rot = rot.T @ camera.rotation
         angle = np.degrees(np.arccos(np.clip((np.trace(d_rot) - 1) / 2, -1, 1)))
-        out.append((shade(pos, rot), float(angle), pos, rot, found))
+        out.append(_Reading(shade(pos, rot), float(angle), pos, rot, ij, found))
     return out
 
 
@@ -255,26 +306,35 @@ def _refine(grey_f: np.ndarray, det: np.ndarray) -> np.ndarray:
 
 def _best_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
                 det: np.ndarray, shade: BoardShade, view: str) -> BoardStart | None:
-    """The start from the detected corners ``det``: the assignment with the board's colours
+    """The start from the detected corners ``det``: the reading with the board's colours
     (nearest the scene's rotation among those colours cannot tell apart), polished by our
-    fisheye PnP; None when none has the colours or the corners do not fit one board pose
-    (a spurious detection: RMS over :data:`MAX_START_RMS` of the grid spacing)."""
-    cands = [c for c in _candidates(camera, layout, det, shade) if c[0] >= MIN_COLOUR_SCORE]
+    fisheye PnP on its inner corners; None when no reading within
+    :data:`MAX_START_TURN_DEG` of the scene's rotation has the colours, or the inner corners
+    do not fit one board pose (a spurious detection: RMS over :data:`MAX_START_RMS` of the
+    grid spacing)."""
+    readings = [c for c in _candidates(camera, layout, det, shade) if c.score >= MIN_COLOUR_SCORE]
+    cands = [c for c in readings if c.turn_deg <= MAX_START_TURN_DEG]
     if not cands:
         return None
-    best = max(c[0] for c in cands)
-    close = [c for c in cands if c[0] >= best - 0.2]
-    score, _, pos, rot, found = min(close, key=lambda c: c[1])
-    x0 = np.concatenate([pos - camera.position,
-                         (ypr_from_rotation(rot) - ypr0_deg + 180.0) % 360.0 - 180.0])
-    pts = layout.corner_points.reshape(-1, 3)
-    x, resid, _ = fit_pose(camera, ypr0_deg, pts, found.reshape(-1, 2), x0=x0)
+    best = max(c.score for c in cands)
+    pick = min((c for c in cands if c.score >= best - COLOUR_TIE), key=lambda c: c.turn_deg)
+    # Ambiguous: another reading (the half turn, however far from the scene's rotation)
+    # has the same colours, so the scene's rotation chose.
+    ties = [c for c in readings if c.score >= best - COLOUR_TIE]
+    nx, ny = layout.grid
+    inner = (pick.ij[:, 0] >= 0) & (pick.ij[:, 0] < nx) & (pick.ij[:, 1] >= 0) \
+        & (pick.ij[:, 1] < ny)
+    ij, found = pick.ij[inner], pick.found[inner]
+    x0 = np.concatenate([pick.position - camera.position,
+                         (ypr_from_rotation(pick.rotation) - ypr0_deg + 180.0) % 360.0 - 180.0])
+    pts = layout.corner_points[ij[:, 0], ij[:, 1]]
+    x, resid, _ = fit_pose(camera, ypr0_deg, pts, found, x0=x0)
     rms = float(np.sqrt(np.mean(resid ** 2)))
-    step = float(np.median(np.linalg.norm(np.diff(found, axis=0), axis=-1)))
+    step = float(np.median(np.linalg.norm(np.diff(det, axis=0), axis=-1)))
     if rms > max(0.5, MAX_START_RMS * step):
         return None
-    return BoardStart(x=x, found=found, view=view, rms_px=rms, colour_score=float(score),
-                      ambiguous=len(close) > 1)
+    return BoardStart(x=x, found=found, corner_ij=ij, view=view, rms_px=rms,
+                      colour_score=float(pick.score), ambiguous=len(ties) > 1)
 
 
 def predicted_shift_px(camera: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarray,

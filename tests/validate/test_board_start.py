@@ -141,3 +141,56 @@ def test_without_the_board_colours_the_alias_would_be_accepted():
     fixed = find_pose(search, shade, layout.corner_index.ravel())
     np.testing.assert_allclose(fixed.x[:3], [-s, s, 0.0], atol=0.004)
     assert shade(*search.pose(fixed.x)) > shade(*search.pose(alias.x)) + 0.1
+
+
+def _exact_start(det_ij: np.ndarray, scene):
+    """:func:`_best_start` from ``scene``'s pose on a 'detection' that is the exact
+    projections, at the true pose (:data:`MOUNT`), of the board's lattice points ``det_ij``
+    (rows, cols, 2)."""
+    from rvmsim.validate.board_start import _best_start
+    from rvmsim.validate.projection import project
+
+    truth = base()[0].fisheye_camera()
+    layout = board_layout(scene, tuple(checker_corners(scene)))
+    s = layout.square_size
+    pts = (layout.origin + det_ij[..., :1] * s * layout.a + det_ij[..., 1:] * s * layout.b)
+    det = project(truth, truth.position, truth.rotation, pts.reshape(-1, 3)).reshape(
+        *det_ij.shape[:2], 2)
+    cam = scene.fisheye_camera()
+    m = scene.camera.mount
+    ypr0 = np.array([m.yaw_deg, m.pitch_deg, m.roll_deg])
+    shade = BoardShade(layout, cam, grey(base()[1].color).astype(np.float32))
+    start = _best_start(cam, ypr0, layout, det, shade, "test")
+    return start, ypr0
+
+
+@pytest.mark.parametrize("flip_rows, flip_cols", [(1, 1), (-1, 1), (1, -1), (-1, -1)])
+def test_a_grid_that_takes_the_boards_edge_for_a_row_is_read_right(flip_rows, flip_cols):
+    """The detector's grid on a small blurred 5 × 4 board (4 × 3 inner corners) was once
+    3 × 4: three of the inner columns turned a quarter, and the board's lower edge as a
+    fourth row.  Read as the board's own grid that is a pose 90° off with RMS 0.27 px; read
+    as a patch of the board's lattice it is the true pose, from a scene 8° and 0.2 m off."""
+    scene = make_scene(scene_dict(moved_mount((0.2, 0.1, -0.2), (-8.0, 6.0, 5.0))))
+    r, c = np.mgrid[0:3, 0:4]
+    det_ij = np.stack([3 - r, 2 - c], axis=-1)[::flip_rows, ::flip_cols]  # i = 1..3, j = -1..2
+    start, ypr0 = _exact_start(det_ij, scene)
+    assert start is not None and not start.ambiguous
+    cam = scene.fisheye_camera()
+    np.testing.assert_allclose(cam.position + start.x[:3], MOUNT["position"], atol=1e-3)
+    np.testing.assert_allclose(ypr0 + start.x[3:],
+                               [MOUNT["yaw_deg"], MOUNT["pitch_deg"], MOUNT["roll_deg"]],
+                               atol=0.01)
+    # only the nine inner corners are the start's corners; the edge row is not one
+    assert sorted(map(tuple, start.corner_ij)) == [(i, j) for i in (1, 2, 3) for j in (0, 1, 2)]
+    assert start.colour_score > 0.9
+
+
+def test_a_start_turned_far_from_the_scenes_rotation_is_not_believed():
+    """The whole inner grid, exact; from a scene 10° off in yaw it gives the true pose, from
+    one 40° off none: no CAD mount is that far from the real one."""
+    r, c = np.mgrid[0:3, 0:4]
+    det_ij = np.stack([c, r], axis=-1)
+    near, _ = _exact_start(det_ij, make_scene(scene_dict(moved_mount((0, 0, 0), (10, 0, 0)))))
+    assert near is not None and abs(near.x[3] + 10.0) < 0.01
+    far, _ = _exact_start(det_ij, make_scene(scene_dict(moved_mount((0, 0, 0), (40, 0, 0)))))
+    assert far is None
