@@ -27,6 +27,7 @@ import numpy as np
 from .. import labels as L
 from ..camera import FisheyeCamera
 from ..scene import CheckerCorner, Scene, board_frame, board_point
+from .charuco import CharucoPattern
 
 __all__ = ["BoardLayout", "BoardShade", "board_layout"]
 
@@ -44,13 +45,17 @@ class BoardLayout:
     corner_points : (nx, ny, 3) float
         The inner corners' scene points, m.
     square_points : (M, 3) float
-        Sample points on the squares (the centre and four points ±0.3 square from it), m.
+        Sample points on the squares (the centre and four points ±0.3 square from it; on a
+        ChArUco board's white squares, four points in the ring around the marker), m.
     square_shade : (M,) float
         Their colour: 0 black, 1 white.
     origin, a, b, normal : (3,) float
         Inner corner (0, 0) and the board's unit axes and front normal, scene frame.
     square_size : float
         m.
+    charuco : CharucoPattern or None
+        The board's markers, when it is a ChArUco board (its white squares are then sampled
+        only in the white ring around the marker).
     """
 
     grid: tuple[int, int]
@@ -63,6 +68,7 @@ class BoardLayout:
     b: np.ndarray
     normal: np.ndarray
     square_size: float
+    charuco: CharucoPattern | None = None
 
     @property
     def symmetric(self) -> bool:
@@ -95,16 +101,24 @@ def board_layout(scene: Scene, corners: tuple[CheckerCorner, ...]) -> BoardLayou
     w, h = board.size
     s = board.square_size
     a0, b0 = -w / 2 + board.margin, -h / 2 + board.margin
-    offsets = ((0.5, 0.5), (0.2, 0.2), (0.8, 0.2), (0.2, 0.8), (0.8, 0.8))
+    offsets: tuple[tuple[float, float], ...] = ((0.5, 0.5), (0.2, 0.2), (0.8, 0.2),
+                                                (0.2, 0.8), (0.8, 0.8))
+    charuco = None
+    ring = offsets
+    if board.pattern == "charuco" and board.marker_size is not None:
+        charuco = CharucoPattern((board.squares[0], board.squares[1]), s, board.marker_size,
+                                 board.aruco_dictionary)
+        f = (1.0 - board.marker_size / s) / 4  # the middle of the white ring around a marker
+        ring = ((0.5, f), (0.5, 1 - f), (f, 0.5), (1 - f, 0.5))
     samples, shade = [], []
     for i in range(board.squares[0]):
         for j in range(board.squares[1]):
-            for oa, ob in offsets:
+            for oa, ob in (offsets if (i + j) % 2 == 0 else ring):
                 samples.append(board_point(board, a0 + (i + oa) * s, b0 + (j + ob) * s))
                 shade.append(float((i + j) % 2))
     return BoardLayout((nx, ny), index, pts, np.array(samples), np.array(shade),
                        pts[0, 0].copy(), np.asarray(a, float), np.asarray(b, float),
-                       np.asarray(nrm, float), float(s))
+                       np.asarray(nrm, float), float(s), charuco)
 
 
 @dataclass(frozen=True)

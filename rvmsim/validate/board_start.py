@@ -38,6 +38,7 @@ import numpy as np
 from ..camera import FisheyeCamera
 from .board import BoardLayout, BoardShade
 from .capture import grey
+from .charuco import detect_charuco
 from .pose import fit_pose
 from .projection import project
 
@@ -278,6 +279,10 @@ def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.nd
     g = grey(capture)
     g_u8 = np.clip(g, 0, 255).astype(np.uint8)
     shade = BoardShade(layout, camera, g.astype(np.float32))
+    if layout.charuco is not None:
+        start = _charuco_start(g_u8, camera, ypr0_deg, layout, shade)
+        if start is not None:
+            return start
     for view in views:
         det = (_detect(g_u8, layout.grid) if view == "whole image"
                else _perspective_detect(g_u8, camera, layout))
@@ -324,17 +329,45 @@ def _best_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout
     nx, ny = layout.grid
     inner = (pick.ij[:, 0] >= 0) & (pick.ij[:, 0] < nx) & (pick.ij[:, 1] >= 0) \
         & (pick.ij[:, 1] < ny)
-    ij, found = pick.ij[inner], pick.found[inner]
-    x0 = np.concatenate([pick.position - camera.position,
-                         (ypr_from_rotation(pick.rotation) - ypr0_deg + 180.0) % 360.0 - 180.0])
+    step = float(np.median(np.linalg.norm(np.diff(det, axis=0), axis=-1)))
+    return _polished(camera, ypr0_deg, layout, pick.position, pick.rotation,
+                     pick.ij[inner], pick.found[inner], step, view, pick.score, len(ties) > 1)
+
+
+def _polished(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
+              position: np.ndarray, rotation: np.ndarray, ij: np.ndarray, found: np.ndarray,
+              step_px: float, view: str, score: float, ambiguous: bool) -> BoardStart | None:
+    """The start from a PnP pose (``position`` m, ``rotation``) and the inner corners
+    ``ij`` (K, 2) found at ``found`` (K, 2) px, polished by our fisheye PnP; None when they
+    do not fit one board pose (RMS over :data:`MAX_START_RMS` of ``step_px``, or 0.5 px)."""
+    x0 = np.concatenate([position - camera.position,
+                         (ypr_from_rotation(rotation) - ypr0_deg + 180.0) % 360.0 - 180.0])
     pts = layout.corner_points[ij[:, 0], ij[:, 1]]
     x, resid, _ = fit_pose(camera, ypr0_deg, pts, found, x0=x0)
     rms = float(np.sqrt(np.mean(resid ** 2)))
-    step = float(np.median(np.linalg.norm(np.diff(det, axis=0), axis=-1)))
-    if rms > max(0.5, MAX_START_RMS * step):
+    if rms > max(0.5, MAX_START_RMS * step_px):
         return None
     return BoardStart(x=x, found=found, corner_ij=ij, view=view, rms_px=rms,
-                      colour_score=float(pick.score), ambiguous=len(ties) > 1)
+                      colour_score=float(score), ambiguous=ambiguous)
+
+
+def _charuco_start(grey_u8: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
+                   layout: BoardLayout, shade: BoardShade) -> BoardStart | None:
+    """The start from a ChArUco board's markers (:func:`.charuco.detect_charuco`): its
+    corners are named, so there is one reading and no ambiguity."""
+    assert layout.charuco is not None
+    det = detect_charuco(grey_u8, layout.charuco)
+    if det is None:
+        return None
+    ij, found = det
+    pose = _pnp(camera, layout, ij, found)
+    if pose is None:
+        return None
+    pos, rot = pose
+    d = np.linalg.norm(layout.corner_points[ij[:, 0], ij[:, 1]] - pos, axis=1)
+    step = float(np.median(camera.fx * layout.square_size / d))  # ~px per square
+    return _polished(camera, ypr0_deg, layout, pos, rot, ij, found, step, "ChArUco markers",
+                     shade(pos, rot), False)
 
 
 def predicted_shift_px(camera: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarray,

@@ -1,7 +1,8 @@
 """Finding the landmarks in a capture.
 
 The calibration board is found with OpenCV's chessboard detector where it may be visible
-(at least half its inner corners predicted usable);
+(at least half its inner corners predicted usable), a ChArUco board by its markers (the
+corners :func:`.charuco.detect_charuco` names, found once per capture);
 every other checker corner by normalised cross-correlation (NCC) of its rendered
 neighbourhood within a search radius, followed by ``cv2.cornerSubPix``.  The colours of a
 checker corner's four squares make the match polarity-safe against its neighbours (which
@@ -32,19 +33,37 @@ __all__ = ["MIN_NCC", "find_landmarks"]
 MIN_NCC = 0.6
 
 
+def _peak_offset(res: np.ndarray, x: int, y: int) -> tuple[float, float] | None:
+    """Sub-pixel offset of the correlation peak at (x, y) of ``res``: a parabola through it
+    and its neighbours along each axis; None at the border of ``res``."""
+    if not (0 < x < res.shape[1] - 1 and 0 < y < res.shape[0] - 1):
+        return None
+
+    def vertex(a: float, b: float, c: float) -> float:
+        d = a - 2.0 * b + c
+        return 0.0 if d >= 0 else float(np.clip(0.5 * (a - c) / d, -0.5, 0.5))
+
+    return (vertex(res[y, x - 1], res[y, x], res[y, x + 1]),
+            vertex(res[y - 1, x], res[y, x], res[y + 1, x]))
+
+
 def _match_local(cap: np.ndarray, syn: np.ndarray, p_syn: np.ndarray, p_pred: np.ndarray,
-                 spacing: float, radius: float) -> tuple[np.ndarray | None, float]:
+                 spacing: float, radius: float,
+                 refine: str = "corner") -> tuple[np.ndarray | None, float]:
     """Find the rendered neighbourhood of ``p_syn`` in the capture near ``p_pred``.
 
     ``cap`` and ``syn`` are grey (float32) capture and synthetic frame; ``p_syn`` the
     corner's pixel in ``syn``, ``p_pred`` its predicted pixel in ``cap``; ``spacing`` and
-    ``radius`` px.  Returns the refined capture pixel (None: not found) and the NCC.
+    ``radius`` px.  ``refine``: ``"corner"`` refines the match by ``cv2.cornerSubPix`` (an
+    X corner with nothing else in its window), ``"ncc"`` by the correlation peak's sub-pixel
+    vertex (a ChArUco corner, whose window holds marker edges that would pull cornerSubPix
+    off it).  Returns the capture pixel (None: not found) and the NCC.
     """
     import cv2
 
     h, w = cap.shape
     half = int(np.clip(round(0.45 * spacing), 4, 24))
-    r = int(math.ceil(radius))
+    r = int(math.ceil(radius)) + (1 if refine == "ncc" else 0)
     x0, y0 = int(round(p_syn[0])) - half, int(round(p_syn[1])) - half
     tmpl = syn[y0:y0 + 2 * half + 1, x0:x0 + 2 * half + 1]
     sx0 = int(round(p_pred[0])) - half - r
@@ -59,6 +78,9 @@ def _match_local(cap: np.ndarray, syn: np.ndarray, p_syn: np.ndarray, p_pred: np
     if not np.isfinite(best) or best < MIN_NCC:
         return None, float(best) if np.isfinite(best) else 0.0
     est = np.array([p_syn[0] + sx0 + loc[0] - x0, p_syn[1] + sy0 + loc[1] - y0])
+    if refine == "ncc":
+        off = _peak_offset(res, loc[0], loc[1])
+        return (None if off is None else est + np.array(off)), float(best)
     win = int(np.clip(round(0.3 * spacing), 2, 12))
     pt = cv2.cornerSubPix(cap, est.reshape(1, 1, 2).astype(np.float32), (win, win), (-1, -1),
                           (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3))
@@ -111,7 +133,8 @@ def _match_board(cap_u8: np.ndarray, scene: Scene, idx: list[int], pred: np.ndar
 def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
                    corners: list[CheckerCorner] | tuple[CheckerCorner, ...], *,
                    position: np.ndarray, rotation: np.ndarray, radius_px: float,
-                   usable: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
+                   usable: np.ndarray, named: dict[int, np.ndarray] | None = None,
+                   ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """Find ``corners`` in the capture, predicted from the pose (position, rotation).
 
     Parameters
@@ -130,6 +153,13 @@ def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
         Search radius around each prediction, px.
     usable : (N,) bool
         Which corners to look for.
+    named : dict, optional
+        Corners already found by name, {index in ``corners``: capture px} (a ChArUco
+        board's, :func:`.charuco.detect_charuco`): used where usable and within
+        ``radius_px`` + 2 px of the prediction, refined by the correlation of their rendered
+        neighbourhood within 1.5 px (method ``"charuco"``).  The board's other corners are
+        matched locally with that refinement too, not ``cv2.cornerSubPix`` (the markers in
+        their windows would bias it).
 
     Returns
     -------
@@ -138,7 +168,7 @@ def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
     ncc : (N,) float
         Normalised cross-correlation of each match (1.0 for the chessboard detector).
     method : list of str
-        ``"chessboard"``, ``"local"`` or ``""`` (not found).
+        ``"chessboard"``, ``"charuco"``, ``"local"`` or ``""`` (not found).
     predicted : (N, 2) float
         The predictions searched around, px.
     """
@@ -154,9 +184,21 @@ def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
     method = [""] * len(corners)
     board_idx = [n for n, c in enumerate(corners)
                  if c.label == L.BOARD and c.name.startswith("board_inner")]
+    charuco = np.zeros(len(corners), bool)
+    if named:
+        # A ChArUco board: its markers say where each corner is; the rendered neighbourhood
+        # (markers and all) places it to a fraction of a pixel.
+        charuco[board_idx] = True
+        for n, xy in named.items():
+            if not usable[n] or np.linalg.norm(np.asarray(xy) - pred[n]) > radius_px + 2.0:
+                continue
+            local, score = _match_local(cap_g, syn_g, syn_uv[n], np.asarray(xy), spacing[n],
+                                        1.5, refine="ncc")
+            found[n], ncc[n], method[n] = (np.asarray(xy) if local is None else local), \
+                max(score, 0.0), "charuco"
     # The detector sees the whole board or nothing; it runs whenever the board may be seen
     # (half its inner corners usable), and its finds count for the usable corners.
-    if board_idx and 2 * sum(bool(usable[n]) for n in board_idx) >= len(board_idx):
+    elif board_idx and 2 * sum(bool(usable[n]) for n in board_idx) >= len(board_idx):
         for n, xy in _match_board(cap_g.astype(np.uint8), scene, board_idx, pred,
                                   spacing, radius_px).items():
             if usable[n]:
@@ -165,7 +207,8 @@ def find_landmarks(capture: np.ndarray, synthetic: FisheyeImages, scene: Scene,
         if not usable[n] or method[n]:
             continue
         r = min(radius_px, 0.6 * spacing[n])
-        local, score = _match_local(cap_g, syn_g, syn_uv[n], pred[n], spacing[n], r)
+        local, score = _match_local(cap_g, syn_g, syn_uv[n], pred[n], spacing[n], r,
+                                    refine="ncc" if charuco[n] else "corner")
         ncc[n] = score
         if local is not None:
             found[n], method[n] = local, "local"

@@ -123,7 +123,7 @@ class PoseFit:
     ncc : (N,) float
         Match correlations.
     method : tuple of str
-        How each landmark was found (``"chessboard"``, ``"local"``, ``""``).
+        How each landmark was found (``"chessboard"``, ``"charuco"``, ``"local"``, ``""``).
     inliers : (N,) bool
         Landmarks used by the final least-squares fit.
     sigma : (6,) float
@@ -157,6 +157,8 @@ class PoseSearch:
         Fewer found landmarks is an error.
     capture_name : str
         For messages.
+    named : dict, optional
+        Landmarks found by name in the capture, {index: px} (a ChArUco board's corners).
     """
 
     capture: np.ndarray
@@ -167,6 +169,7 @@ class PoseSearch:
     search_px: float
     min_landmarks: int
     capture_name: str
+    named: dict[int, np.ndarray] | None = None
 
     def pose(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position m, rotation) after the correction ``x``."""
@@ -189,7 +192,7 @@ class PoseSearch:
             pos, rot = self.pose(x)
             found, ncc, method, _pred = find_landmarks(
                 self.capture, self.synthetic, self.scene, lm.corners, position=pos,
-                rotation=rot, radius_px=radius, usable=lm.usable)
+                rotation=rot, radius_px=radius, usable=lm.usable, named=self.named)
             ok = np.isfinite(found[:, 0])
             if ok.sum() < need:
                 raise ValidationFailure(

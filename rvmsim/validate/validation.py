@@ -30,9 +30,10 @@ from ..criteria import Criteria
 from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
-from .board import BoardShade, board_layout
+from .board import BoardLayout, BoardShade, board_layout
 from .board_start import BoardStart, find_board_start, predicted_shift_px
 from .capture import check_capture_size, grey
+from .charuco import detect_charuco
 from .failure import ValidationFailure
 from .landmarks import VisibleLandmarks, visible_landmarks
 from .outputs import compare_with_pictures, landmark_picture
@@ -117,11 +118,13 @@ def validate(
              if global_start and layout is not None else None)
     board = (None if layout is None
              else BoardShade(layout, cam, grey(capture).astype(np.float32)))
+    named = _charuco_named(capture, layout)
     try:
         x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, start, ypr0,
                                                        tolerances.min_landmarks, progress)
         fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
-                                   float(search_px), tolerances.min_landmarks, capture_name),
+                                   float(search_px), tolerances.min_landmarks, capture_name,
+                                   named),
                         board, None if layout is None else layout.corner_index.ravel())
     except ValidationFailure as fail:
         raise fail.with_images(_failure_pictures(capture, synthetic, landmarks, fail.found)) \
@@ -179,10 +182,24 @@ def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLand
     return start.x, frame, visible_landmarks(scene, frame, min_landmarks)
 
 
+def _charuco_named(capture: np.ndarray, layout: BoardLayout | None) -> dict[int, np.ndarray] | None:
+    """A ChArUco board's inner corners found by its markers, {landmark index: px}; None for
+    other boards or when its markers are not found."""
+    if layout is None or layout.charuco is None:
+        return None
+    det = detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco)
+    if det is None:
+        return None
+    return {int(layout.corner_index[i, j]): xy for (i, j), xy in zip(*det)}
+
+
 def _start_text(start: BoardStart | None) -> str:
     """How the pose search started, for the summary."""
     if start is None:
         return "the scene's pose"
+    if start.view == "ChArUco markers":
+        return (f"the board found by its ChArUco markers ({len(start.found)} corners; corner "
+                f"RMS {start.rms_px:.2f} px, square colours r = {start.colour_score:.2f})")
     text = (f"the board found by the chessboard detector ({start.view}; corner RMS "
             f"{start.rms_px:.2f} px, square colours r = {start.colour_score:.2f})")
     if start.ambiguous:
