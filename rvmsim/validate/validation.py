@@ -121,7 +121,8 @@ def validate(
     named = _charuco_named(capture, layout)
     try:
         x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, start, ypr0,
-                                                       tolerances.min_landmarks, progress)
+                                                       tolerances.min_landmarks, progress,
+                                                       capture_name)
         fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
                                    float(search_px), tolerances.min_landmarks, capture_name,
                                    named),
@@ -164,13 +165,21 @@ def validate(
 
 def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLandmarks,
                   start: BoardStart | None, ypr0: np.ndarray, min_landmarks: int,
-                  progress: bool) -> tuple[np.ndarray, FisheyeImages, VisibleLandmarks]:
+                  progress: bool, capture_name: str) -> tuple[np.ndarray, FisheyeImages, VisibleLandmarks]:
     """Where the pose search starts: (the start's correction, the frame rendered there, its
     landmarks).  The scene's own frame when there is no board start or it moves no usable
     landmark by more than :data:`RERENDER_SHIFT_PX` (the local matching's templates come
     from that frame, so it must show the capture's view closely)."""
     if start is None:
-        return np.zeros(6), synthetic, visible_landmarks(scene, synthetic, min_landmarks)
+        if landmarks.n_usable < min_landmarks:
+            board = ("the chessboard detector did not find the scene's board in the capture"
+                     if scene.test_site.board.enabled else "the scene has no board to look for")
+            raise ValidationFailure(
+                "detection", f"{capture_name}: {board}, and at the scene's pose only "
+                f"{landmarks.n_usable} checker corners are visible in the synthetic frame "
+                f"(need {min_landmarks}); compare the pictures: is the mount far off, or "
+                "the board out of view or too small?")
+        return np.zeros(6), synthetic, landmarks
     if landmarks.n_usable >= max(min_landmarks, 1) and predicted_shift_px(
             synthetic.camera, ypr0, start.x,
             landmarks.points[landmarks.usable]) <= RERENDER_SHIFT_PX:

@@ -194,3 +194,45 @@ def test_a_start_turned_far_from_the_scenes_rotation_is_not_believed():
     assert near is not None and abs(near.x[3] + 10.0) < 0.01
     far, _ = _exact_start(det_ij, make_scene(scene_dict(moved_mount((0, 0, 0), (40, 0, 0)))))
     assert far is None
+
+
+def test_corners_matched_on_squares_of_the_wrong_colours_are_refused():
+    """Step ``correspondence``: the board's corners match, but at the fitted pose its
+    squares' colours do not explain the capture the shade looks at (here the board's area
+    painted over with noise), and no same-colour shift does better: the fit is refused, not
+    accepted, with what was found."""
+    from rvmsim import labels as L
+    from rvmsim.validate import ValidationFailure
+
+    scene = board_scene()
+    syn = render_fisheye(scene)
+    cap = board_capture()
+    lm = visible_landmarks(scene, syn, 8)
+    m = scene.camera.mount
+    search = PoseSearch(cap, syn, scene, lm, np.array([m.yaw_deg, m.pitch_deg, m.roll_deg]),
+                        30.0, 8, "painted")
+    layout = board_layout(scene, lm.corners)
+    assert find_pose(search, BoardShade(layout, syn.camera, grey(cap).astype(np.float32)),
+                     layout.corner_index.ravel()).inliers.sum() >= 40  # the true board: fine
+    painted = grey(cap).astype(np.float32)
+    board = syn.labels == L.BOARD
+    painted[board] = np.random.default_rng(1).uniform(0, 255, int(board.sum()))
+    with pytest.raises(ValidationFailure) as err:
+        find_pose(search, BoardShade(layout, syn.camera, painted), layout.corner_index.ravel())
+    assert err.value.step == "correspondence" and "one square off" in str(err.value)
+    assert err.value.found is not None and np.isfinite(err.value.found[:, 0]).sum() >= 30
+
+
+def test_no_board_in_the_capture_and_none_in_view_is_a_detection_failure_with_pictures():
+    """The scene's camera turned 120° away from its board, and the capture is of the board:
+    the detector cannot look where the scene points, and the scene's view has no corners.
+    It is a ``detection`` failure naming both, with the pictures, not a bare error."""
+    from rvmsim.validate import ValidationFailure
+
+    scene = board_scene(d_ypr_deg=(120.0, 0.0, 0.0))
+    with pytest.raises(ValidationFailure) as err:
+        validate(scene, board_capture(), rerender=False)
+    assert err.value.step == "detection"
+    assert "did not find the scene's board" in str(err.value)
+    assert "checker corners are visible" in str(err.value)
+    assert {"overlay", "edges", "landmarks"} <= set(err.value.images)
