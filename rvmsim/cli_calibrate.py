@@ -23,9 +23,8 @@ __all__ = ["calibrate"]
 def _from_captures(captures: tuple[Path, ...], board_spec: str | None, out: Path,
                    fov_deg: float | None) -> tuple[dict, str]:
     """Detect, calibrate, write; returns the camera block and a summary."""
-    from .calibrate import (BoardView, calibrate_fisheye, camera_block, capture_files,
-                            find_board_corners, load_grey, parse_board_spec,
-                            write_calibration_outputs)
+    from .calibrate import (calibrate_fisheye, camera_block, capture_files, find_board_view,
+                            load_grey, parse_board_spec, write_calibration_outputs)
 
     if board_spec is None:
         raise RvmsimError("--board is required with captures (e.g. --board 9x7:0.03)")
@@ -35,11 +34,11 @@ def _from_captures(captures: tuple[Path, ...], board_spec: str | None, out: Path
     for f in files:
         grey = load_grey(f)
         sizes.add((grey.shape[1], grey.shape[0]))
-        corners = find_board_corners(grey, board)
-        if corners is None:
+        view = find_board_view(grey, board, f.name)
+        if view is None:
             missed.append(f.name)
         else:
-            views.append(BoardView(f.name, corners))
+            views.append(view)
     if len(sizes) > 1:
         raise RvmsimError(f"captures differ in size: {sorted(sizes)} (one camera per run)")
     calib = calibrate_fisheye(views, board, sizes.pop())
@@ -80,7 +79,9 @@ def _from_import(file: Path, out: Path, fov_deg: float | None) -> tuple[dict, st
 @click.argument("captures", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--board", "board_spec", metavar="SPEC",
               help="COLSxROWS:SQUARE (inner corners across and down, square side in m, "
-                   "e.g. 9x7:0.03), or a scene file whose test_site.board was used.")
+                   "e.g. 9x7:0.03), charuco:COLSxROWS:SQUARE:MARKER[:DICT] (a ChArUco "
+                   "board: squares, m, a cv2.aruco dictionary; e.g. charuco:7x10:0.08:0.06), "
+                   "or a scene file whose test_site.board was used.")
 @click.option("--import", "import_file", type=click.Path(path_type=Path),
               help="Import an existing calibration instead: OpenCV FileStorage YAML, Kalibr "
                    "camchain (pinhole-equidistant), OCamCalib calib_results.txt.")

@@ -12,14 +12,14 @@ from __future__ import annotations
 
 from .board import BoardSpec, CalibrationInputError, parse_board_spec
 from .captures import capture_files, load_grey
-from .detect import find_board_corners
+from .detect import find_board_corners, find_board_view
 from .imports import ImportedCamera, fit_kannala_brandt, import_calibration
 from .intrinsics import BoardView, Calibration, ViewFit, calibrate_fisheye
 from .outputs import camera_block, coverage_image, write_calibration_outputs, write_scene_camera
 
 __all__ = [
     "BoardSpec", "CalibrationInputError", "parse_board_spec",
-    "capture_files", "load_grey", "find_board_corners",
+    "capture_files", "load_grey", "find_board_corners", "find_board_view",
     "ImportedCamera", "fit_kannala_brandt", "import_calibration",
     "BoardView", "Calibration", "ViewFit", "calibrate_fisheye",
     "camera_block", "coverage_image", "write_calibration_outputs", "write_scene_camera",

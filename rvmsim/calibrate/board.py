@@ -1,8 +1,11 @@
 """The calibration board of ``rvmsim calibrate``: its inner-corner grid and square size.
 
-``--board`` is either ``COLSxROWS:SQUARE`` (inner corners across and down, square side in
-metres, e.g. ``9x7:0.03``) or a scene file whose ``test_site.board`` is the board used
-(its ``squares`` minus one inner corners each way).
+``--board`` is ``COLSxROWS:SQUARE`` (a checkerboard: inner corners across and down, square
+side in metres, e.g. ``9x7:0.03``), ``charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]`` (a
+ChArUco board as ``cv2.aruco.CharucoBoard`` counts it: *squares* across and down, square
+and marker side in metres, a ``cv2.aruco`` dictionary, default ``DICT_4X4_50``; e.g.
+``charuco:7x10:0.08:0.06``), or a scene file whose ``test_site.board`` is the board used
+(its ``squares`` minus one inner corners each way; ChArUco when its pattern is).
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputFileError, RvmsimError
+from ..scene.board import PatternBoard
+from ..validate.charuco import CharucoPattern
 
 __all__ = ["BoardSpec", "parse_board_spec", "CalibrationInputError"]
 
@@ -32,10 +37,14 @@ class BoardSpec:
         Inner corners (columns across, rows down); each at least 2.
     square_size : float
         Side of a square, metres.
+    charuco : CharucoPattern or None
+        The markers of a ChArUco board (its corners are then found by them, and a view
+        may hold only some of them).
     """
 
     inner: tuple[int, int]
     square_size: float
+    charuco: CharucoPattern | None = None
 
     def object_points(self) -> np.ndarray:
         """(N, 3) float64 board points, metres, row by row (x fastest), z = 0.
@@ -52,6 +61,32 @@ class BoardSpec:
 
 
 _SPEC = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*:\s*([0-9.eE+-]+)\s*$")
+_CHARUCO = re.compile(r"^\s*charuco\s*:\s*(\d+)\s*[xX]\s*(\d+)\s*:\s*([0-9.eE+-]+)\s*:"
+                      r"\s*([0-9.eE+-]+)\s*(?::\s*(\w+)\s*)?$", re.IGNORECASE)
+
+
+def _charuco_spec(spec: str, m: re.Match[str]) -> BoardSpec:
+    """The ChArUco board of ``charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]``, checked as a
+    scene's board is (marker below the square, a dictionary with enough markers)."""
+    from pydantic import ValidationError
+
+    try:
+        board = PatternBoard(pattern="charuco", squares=(int(m.group(1)), int(m.group(2))),
+                             square_size=float(m.group(3)), marker_size=float(m.group(4)),
+                             aruco_dictionary=m.group(5) or "DICT_4X4_50")
+    except ValidationError as err:
+        msg = err.errors()[0]["msg"].removeprefix("Value error, ")
+        raise RvmsimError(f"--board {spec}: {msg}") from None
+    return _from_pattern_board(board)
+
+
+def _from_pattern_board(board: PatternBoard) -> BoardSpec:
+    """The calibration board of a scene's ``test_site.board``."""
+    charuco = None
+    if board.pattern == "charuco" and board.marker_size is not None:
+        charuco = CharucoPattern((board.squares[0], board.squares[1]), board.square_size,
+                                 board.marker_size, board.aruco_dictionary)
+    return BoardSpec((board.squares[0] - 1, board.squares[1] - 1), board.square_size, charuco)
 
 
 def parse_board_spec(spec: str) -> BoardSpec:
@@ -63,6 +98,9 @@ def parse_board_spec(spec: str) -> BoardSpec:
     RvmsimError
         One line naming ``--board`` when the spec is neither.
     """
+    c = _CHARUCO.match(spec)
+    if c is not None:
+        return _charuco_spec(spec, c)
     m = _SPEC.match(spec)
     if m is not None:
         cols, rows, size = int(m.group(1)), int(m.group(2)), float(m.group(3))
@@ -75,7 +113,7 @@ def parse_board_spec(spec: str) -> BoardSpec:
     if path.suffix.lower() in (".yaml", ".yml") and path.is_file():
         from ..scene import load_scene
 
-        board = load_scene(path).test_site.board
-        return BoardSpec((board.squares[0] - 1, board.squares[1] - 1), board.square_size)
+        return _from_pattern_board(load_scene(path).test_site.board)
     raise RvmsimError(f"--board {spec}: expected COLSxROWS:SQUARE (inner corners, metres, "
-                      "e.g. 9x7:0.03) or a scene file")
+                      "e.g. 9x7:0.03), charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares, "
+                      "metres) or a scene file")

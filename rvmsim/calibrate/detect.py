@@ -1,14 +1,20 @@
-"""Checkerboard corners in a fisheye capture: OpenCV's sector-based detector, then the
-classic detector with sub-pixel refinement, each on the capture and on a 2× upsampled copy
-(small boards)."""
+"""Board corners in a fisheye capture.
+
+A checkerboard: OpenCV's sector-based detector, then the classic detector with sub-pixel
+refinement, each on the capture and on a 2× upsampled copy (small boards); the board is
+found whole or not at all.  A ChArUco board: its markers (``cv2.aruco.CharucoDetector``,
+:func:`rvmsim.validate.charuco.detect_charuco`), so a view may hold any part of it, down
+to :data:`~.intrinsics.MIN_VIEW_CORNERS` corners not all on one line.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .board import BoardSpec
+from .intrinsics import MIN_VIEW_CORNERS, BoardView
 
-__all__ = ["find_board_corners"]
+__all__ = ["find_board_corners", "find_board_view"]
 
 
 def _grey(image: np.ndarray) -> np.ndarray:
@@ -70,3 +76,33 @@ def find_board_corners(image: np.ndarray, board: BoardSpec) -> np.ndarray | None
         if c2 is not None:
             return (c2 + 0.5) / scale - 0.5
     return None
+
+
+def find_board_view(image: np.ndarray, board: BoardSpec, name: str) -> BoardView | None:
+    """The board's corners in ``image`` as a calibration view, or None when not found.
+
+    A checkerboard is found whole (:func:`find_board_corners`).  A ChArUco board's corners
+    are found by its markers, each with its board point (cv2's
+    ``CharucoBoard.getChessboardCorners``), and a view needs
+    :data:`~.intrinsics.MIN_VIEW_CORNERS` of them spanning two rows and two columns.
+
+    Convention
+    ----------
+    Pixel centres at integer coordinates (as cv2).
+    """
+    if board.charuco is None:
+        corners = find_board_corners(image, board)
+        return None if corners is None else BoardView(name, corners)
+    from ..validate.charuco import detect_charuco
+
+    det = detect_charuco(_grey(image), board.charuco)
+    if det is None:
+        return None
+    ij, px = det
+    if len(px) < MIN_VIEW_CORNERS or len(set(ij[:, 0])) < 2 or len(set(ij[:, 1])) < 2:
+        return None
+    # cv2's corner id from our (i, j): the inverse of CharucoPattern.corner_ij.
+    cols, rows = board.charuco.squares
+    ids = (rows - 2 - ij[:, 1]) * (cols - 1) + ij[:, 0]
+    obj = np.asarray(board.charuco.cv2_board().getChessboardCorners(), np.float64)[ids]
+    return BoardView(name, px, obj)

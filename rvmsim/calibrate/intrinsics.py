@@ -20,12 +20,23 @@ OUTLIER_MIN_EXCESS_PX = 0.3
 MIN_VIEWS = 3
 
 
+#: Fewest corners a view of a ChArUco board (which may show part of it) is used with.
+MIN_VIEW_CORNERS = 8
+
+
 @dataclass(frozen=True)
 class BoardView:
-    """One capture's found corners: ``name`` (the file) and ``corners`` (N, 2) px."""
+    """One capture's found corners: ``name`` (the file), ``corners`` (N, 2) px, and
+    ``object_points`` (N, 3) m, the board points they are (None: the whole board, in the
+    order of :meth:`~.board.BoardSpec.object_points`; a ChArUco view names its own)."""
 
     name: str
     corners: np.ndarray
+    object_points: np.ndarray | None = None
+
+    def points(self, board: BoardSpec) -> np.ndarray:
+        """The view's board points (N, 3), metres."""
+        return board.object_points() if self.object_points is None else self.object_points
 
 
 @dataclass(frozen=True)
@@ -81,16 +92,16 @@ def _flag(name: str) -> int:
     return int(getattr(cv2.fisheye, name, None) or getattr(cv2, name))
 
 
-def _fit(obj: np.ndarray, views: list[BoardView],
+def _fit(objs: list[np.ndarray], views: list[BoardView],
          size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, list, list]:
-    """cv2.fisheye.calibrate from its own start and from focal lengths of W/8 … W (cv2's
-    start fails on wide views); the lowest RMS wins."""
+    """cv2.fisheye.calibrate of the views (board points ``objs``) from its own start and
+    from focal lengths of W/8 … W (cv2's start fails on wide views); the lowest RMS wins."""
     import cv2
 
     flags = _flag("CALIB_RECOMPUTE_EXTRINSIC") | _flag("CALIB_FIX_SKEW")
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 300, 1e-12)
     # (1, N, 3) / (1, N, 2): the shapes every OpenCV version accepts.
-    objs = [obj.reshape(1, -1, 3).astype(np.float64) for _ in views]
+    obj_in = [o.reshape(1, -1, 3).astype(np.float64) for o in objs]
     imgs = [v.corners.reshape(1, -1, 2).astype(np.float64) for v in views]
     w, h = size
     best: tuple | None = None
@@ -99,8 +110,9 @@ def _fit(obj: np.ndarray, views: list[BoardView],
         K0 = np.array([[f0 or 1.0, 0, (w - 1) / 2], [0, f0 or 1.0, (h - 1) / 2], [0, 0, 1]])
         fl = flags if f0 is None else flags | _flag("CALIB_USE_INTRINSIC_GUESS")
         try:
-            rms, K, D, rvecs, tvecs = cv2.fisheye.calibrate(objs, imgs, size, K0, np.zeros((4, 1)),
-                                                            flags=fl, criteria=crit)
+            rms, K, D, rvecs, tvecs = cv2.fisheye.calibrate(obj_in, imgs, size, K0,
+                                                            np.zeros((4, 1)), flags=fl,
+                                                            criteria=crit)
         except cv2.error as err:
             last = str(err).strip().splitlines()[-1]
             continue
@@ -139,27 +151,31 @@ def calibrate_fisheye(views: list[BoardView], board: BoardSpec,
     if len(views) < MIN_VIEWS:
         raise RvmsimError(f"calibration needs the board found in at least {MIN_VIEWS} "
                           f"captures (found in {len(views)})")
-    obj = board.object_points()
+    objs = [v.points(board) for v in views]
+    for v, o in zip(views, objs):
+        if len(o) != len(v.corners):
+            raise RvmsimError(f"{v.name}: {len(v.corners)} corners for {len(o)} board points")
     used = list(range(len(views)))
     while True:
-        K, D, rvecs, tvecs = _fit(obj, [views[i] for i in used], image_size)
-        rms = np.array([np.sqrt(np.mean(_errors(obj, views[i], K, D, r, t) ** 2))
+        K, D, rvecs, tvecs = _fit([objs[i] for i in used], [views[i] for i in used],
+                                  image_size)
+        rms = np.array([np.sqrt(np.mean(_errors(objs[i], views[i], K, D, r, t) ** 2))
                         for i, r, t in zip(used, rvecs, tvecs)])
         med = float(np.median(rms))
         bad = rms > max(OUTLIER_FACTOR * med, med + OUTLIER_MIN_EXCESS_PX)
         if not bad.any() or len(used) - int(bad.sum()) < MIN_VIEWS:
             break
         used = [i for i, b in zip(used, bad) if not b]
-    return _result(obj, views, used, K, D, image_size)
+    return _result(objs, views, used, K, D, image_size)
 
 
-def _result(obj: np.ndarray, views: list[BoardView], used: list[int], K: np.ndarray,
+def _result(objs: list[np.ndarray], views: list[BoardView], used: list[int], K: np.ndarray,
             D: np.ndarray, size: tuple[int, int]) -> Calibration:
     """Every view's fit (rejected ones posed by solvePnP with the final K, D)."""
     import cv2
 
     fits, sq = [], []
-    for i, v in enumerate(views):
+    for i, (v, obj) in enumerate(zip(views, objs)):
         ok, rvec, tvec = cv2.fisheye.solvePnP(obj.reshape(-1, 1, 3), v.corners.reshape(-1, 1, 2),
                                               K, D)
         if not ok:

@@ -83,3 +83,25 @@ def detected_views(board_views):
         assert c is not None, f"board not found in {p.name}"
         views.append(BoardView(p.name, c))
     return board, views
+
+
+#: The ChArUco board of the ChArUco views: 7 × 10 squares of 0.08 m, 0.06 m markers.
+CHARUCO = {"pattern": "charuco", "squares": [7, 10], "square_size": 0.08,
+           "marker_size": 0.06}
+
+
+@pytest.fixture(scope="session")
+def charuco_views(tmp_path_factory) -> list[Path]:
+    """The 12 poses with a ChArUco board instead, as PNG files (some show only part of
+    it: at 60-70° off-axis it reaches past the field)."""
+    import imageio.v3 as iio
+
+    folder = tmp_path_factory.mktemp("charuco_views")
+    out = []
+    for k, p in enumerate(POSES):
+        pose = {**board_pose(*p), **CHARUCO}
+        img = render_fisheye(board_scene(pose)).color
+        path = folder / f"charuco_{k:02d}.png"
+        iio.imwrite(path, img)
+        out.append(path)
+    return out
