@@ -124,16 +124,22 @@ def test_one_square_diagonal_alias_is_corrected_not_accepted():
         assert ("half-turn symmetric" in res.start) == global_start
 
 
+def _board_search(scene, name: str):
+    """(the PoseSearch of the board capture from ``scene``'s pose, its frame, landmarks)."""
+    syn = render_fisheye(scene)
+    lm = visible_landmarks(scene, syn, 8)
+    m = scene.camera.mount
+    search = PoseSearch(board_capture(), syn, scene, lm,
+                        np.array([m.yaw_deg, m.pitch_deg, m.roll_deg]), 30.0, 8, name)
+    return search, syn, lm
+
+
 def test_without_the_board_colours_the_alias_would_be_accepted():
     """The alias is real: matching and fitting alone lock onto it; the board shade does not."""
     s = BOARD_SQUARE_M
     off = board_scene((s, -s, 0.0))
-    syn = render_fisheye(off)
+    search, syn, lm = _board_search(off, "alias")
     cap = board_capture()
-    lm = visible_landmarks(off, syn, 8)
-    m = off.camera.mount
-    search = PoseSearch(cap, syn, off, lm, np.array([m.yaw_deg, m.pitch_deg, m.roll_deg]),
-                        30.0, 8, "alias")
     alias = find_pose(search)
     assert np.linalg.norm(alias.x[:3]) < 0.01  # stays one square (113 mm) off the truth
     layout = board_layout(off, lm.corners)
@@ -205,12 +211,8 @@ def test_corners_matched_on_squares_of_the_wrong_colours_are_refused():
     from rvmsim.validate import ValidationFailure
 
     scene = board_scene()
-    syn = render_fisheye(scene)
+    search, syn, lm = _board_search(scene, "painted")
     cap = board_capture()
-    lm = visible_landmarks(scene, syn, 8)
-    m = scene.camera.mount
-    search = PoseSearch(cap, syn, scene, lm, np.array([m.yaw_deg, m.pitch_deg, m.roll_deg]),
-                        30.0, 8, "painted")
     layout = board_layout(scene, lm.corners)
     assert find_pose(search, BoardShade(layout, syn.camera, grey(cap).astype(np.float32)),
                      layout.corner_index.ravel()).inliers.sum() >= 40  # the true board: fine
