@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, TypeVar
 
 import numpy as np
 
@@ -28,7 +28,6 @@ from .groups import LabelGroup, Window, group_windows
 if TYPE_CHECKING:
     from ..scene import Display
     from .context import IspView, SceneContext
-    from .registry import EcDefinition
 
 __all__ = ["MeasureOptions", "Measurement", "Measurements", "LabelSource", "measure_ecs",
            "label_mask", "count_label", "bounding_box", "offset"]
@@ -65,8 +64,8 @@ class MeasureOptions:
         return int(round(self.upper_region_fraction * height))
 
     def parameter(self, ec_id: str, name: str, default: float) -> float:
-        """EC ``ec_id``'s parameter ``name`` (:attr:`EcDefinition.parameters`), ``default``
-        when the options do not carry it (e.g. the load-time probe)."""
+        """EC ``ec_id``'s parameter ``name`` (:attr:`~.registry.EcDefinition.parameters`),
+        ``default`` when the options do not carry it (e.g. the load-time probe)."""
         for ec, values in self.parameters:
             if ec == ec_id:
                 return dict(values).get(name, default)
@@ -168,7 +167,21 @@ class LabelSource:
             return out
 
 
-def measure_ecs(src: LabelSource, ecs: Sequence[EcDefinition],
+class MeasuredEc(Protocol):
+    """What :func:`measure_ecs` needs of an EC (an :class:`~.registry.EcDefinition` is
+    one): its id, the plugin that defines it (for messages) and its measure function."""
+
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def plugin(self) -> str: ...
+
+    @property
+    def measure(self) -> Callable[[LabelSource, MeasureOptions], Any]: ...
+
+
+def measure_ecs(src: LabelSource, ecs: Sequence[MeasuredEc],
                 options: MeasureOptions) -> Measurements:
     """Run each EC's measure function on one source.
 
@@ -191,7 +204,7 @@ def measure_ecs(src: LabelSource, ecs: Sequence[EcDefinition],
     return Measurements(values, (w, h), details)
 
 
-def _checked_value(ec: EcDefinition, value: object) -> float | None:
+def _checked_value(ec: MeasuredEc, value: object) -> float | None:
     if value is None:
         return None
     if isinstance(value, (bool, int, float, np.integer, np.floating)):

@@ -35,8 +35,8 @@ from .measure import LabelSource, Measurement, MeasureOptions, measure_ecs
 from .sigmoid import Criterion, Sigmoid
 
 if TYPE_CHECKING:
-    from .annotate import Canvas
-    from .scoring import EcValue
+    from .canvas import Canvas
+    from .values import EcValue
 
 __all__ = ["EcDefinition", "EC_IDS", "BUILTIN_PLUGIN", "ENTRY_POINT_GROUP", "MeasureFn",
            "AnnotateFn", "RegionsFn", "load_plugin", "resolve_plugin", "builtin_ecs",

@@ -18,6 +18,7 @@ from .groups import LabelGroup, unique_groups
 from .measure import Measurements, MeasureOptions
 from .registry import EcDefinition, builtin_ecs
 from .sigmoid import Criterion, Sigmoid
+from .values import EcValue
 
 if TYPE_CHECKING:
     from ..scene import Display
@@ -106,30 +107,6 @@ class Criteria:
             np.array([s.c3 for s in sig]), np.array([s.c4 for s in sig]),
             np.array([c.enabled for c in items], bool),
         )
-
-
-@dataclass(frozen=True)
-class EcValue:
-    """One EC's outcome: its value (``None``: not measured) in ``unit``, its acceptable
-    range, score in [0, 1], pass/fail and whether it counts."""
-
-    id: str
-    name: str
-    value: float | None
-    unit: str
-    low: float | None
-    high: float | None
-    score: float
-    passed: bool
-    enabled: bool
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-ready: id, name, value, unit, range, score, passed, enabled."""
-        return {
-            "id": self.id, "name": self.name, "value": self.value, "unit": self.unit,
-            "range": [self.low, self.high], "score": self.score, "passed": self.passed,
-            "enabled": self.enabled,
-        }
 
 
 @dataclass(frozen=True)
