@@ -77,7 +77,7 @@ def point_yield(scene: Any, params: Any, output: Any, criteria: Any, samples: in
     t0 = time.perf_counter()
     try:
         res = robustness(scene, params, output, criteria=criteria, samples=samples, seed=seed,
-                         scales=(1.0,), render_scale=render_scale)
+                         scales=(1.0,), render_scale=render_scale, frames=False)
     except RvmsimError as err:
         return {"error": f"yield: {err}", "seconds": time.perf_counter() - t0}
     return {**yield_summary(res), "seconds": time.perf_counter() - t0}

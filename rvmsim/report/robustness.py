@@ -107,6 +107,9 @@ def robustness_page(result: RobustnessResult) -> str:
         f"--min-yield {100 * result.min_yield:g} %</span>")
     hist = data_uri(margin_histograms_png(result.ecs))
     curve = data_uri(yield_curve_png(result))
+    if result.nominal is None or result.worst is None:
+        raise ValueError("the robustness page needs the nominal and worst frames "
+                         "(robustness(..., frames=True))")
     nominal = "PASS" if result.nominal.ec.passed else "FAIL"
     return page(f"Robustness: {result.scene_name}", f"""
 <h1>Robustness of {escape(result.scene_name)}</h1>

@@ -166,7 +166,8 @@ class RobustnessResult:
 
     ``yield_`` and ``ci`` are the 95 % estimate's; ``ecs`` one :class:`EcStats` per EC in
     the criteria's order; ``nominal`` and ``worst`` the annotated RVM frames of the car as
-    designed and of the worst sample (most ECs failing, then the lowest EC score)."""
+    designed and of the worst sample (most ECs failing, then the lowest EC score), None
+    when they were not asked for (``robustness(..., frames=False)``)."""
 
     scene_name: str
     scene_file: str
@@ -180,8 +181,8 @@ class RobustnessResult:
     estimate: YieldEstimate
     ecs: tuple[EcStats, ...]
     scale_curve: tuple[ScalePoint, ...]
-    nominal: RvmFrame
-    worst: RvmFrame
+    nominal: RvmFrame | None
+    worst: RvmFrame | None
     worst_index: int
     min_yield: float | None = None
     timings: dict[str, float] = field(default_factory=dict)
@@ -206,7 +207,8 @@ class RobustnessResult:
             "isp": params_to_dict(self.params, self.output), "seed": self.seed,
             "variation": self.variation.as_dict(), **self.estimate.as_dict(),
             "min_yield": self.min_yield, "meets_min_yield": self.meets_min_yield,
-            "nominal": self.nominal.ec.as_dict(), "worst_sample": self.worst_index,
+            "nominal": None if self.nominal is None else self.nominal.ec.as_dict(),
+            "worst_sample": self.worst_index,
             "ecs": [e.as_dict() for e in self.ecs],
             "scale_curve": [{"scale": p.scale, **p.estimate.as_dict()} for p in self.scale_curve],
             "samples": [{**s.as_dict(), "ec_score": float(ev.scores[i]),
@@ -273,7 +275,7 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
                samples: int = 200, seed: int = 0, scales: Sequence[float] = DEFAULT_SCALES,
                scale_samples: int | None = None, render_scale: float = 1.0,
                min_yield: float | None = None, runner: TaskRunner | None = None,
-               progress: bool = False) -> RobustnessResult:
+               frames: bool = True, progress: bool = False) -> RobustnessResult:
     """The yield of ``params`` over ``scene``'s production variation.
 
     Parameters
@@ -302,6 +304,9 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         Where the viewpoints not yet in the render cache are rendered, all before the
         first sample is evaluated (``rvmsim.batch.LocalExecutor(workers)``, a Dask
         executor); default: here, as they are needed.
+    frames : bool
+        Make the nominal and worst samples' annotated RVM frames (for the report; each
+        renders its viewpoint in colour).  A sweep's yield column does without.
     progress : bool
 
     Returns
@@ -337,8 +342,10 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
     t2 = time.perf_counter()
     n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
     worst = int(np.lexsort((ev.scores, -n_fail))[0])
-    nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale, base)
-    worst_frame = _frame(scene, drawn[worst], params, output, crit, render_scale, base)
+    nominal = worst_frame = None
+    if frames:
+        nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale, base)
+        worst_frame = _frame(scene, drawn[worst], params, output, crit, render_scale, base)
     t3 = time.perf_counter()
     return RobustnessResult(
         scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,

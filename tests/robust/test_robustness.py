@@ -76,11 +76,16 @@ def test_a_setting_on_an_ecs_edge_has_a_lower_yield(settings, tmp_path: Path):
 
 
 def test_the_same_seed_gives_the_same_result(settings):
+    """And without the report's frames (a sweep's yield column) the same samples and
+    values, but no nominal or worst frame."""
     sc, crit, _, edge = settings
     a = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,))
-    b = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,))
+    b = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,),
+                   frames=False)
     np.testing.assert_array_equal(a.evaluation.values, b.evaluation.values)
     assert a.as_dict()["samples"] == b.as_dict()["samples"]
+    assert a.nominal is not None and a.worst is not None
+    assert b.nominal is None and b.worst is None and b.as_dict()["nominal"] is None
 
 
 def _cli_case(folder: Path) -> None:
