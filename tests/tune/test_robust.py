@@ -43,6 +43,16 @@ def _best(run):
         store.close()
 
 
+
+def _best_members(run_dir):
+    """(the run's best record, its members' results, the run's settings), read-only."""
+    store = RunStore(run_dir / "run.sqlite", readonly=True)
+    try:
+        rec = store.top(1)[0]
+        return rec, store.member_results(rec.idx), store.settings()
+    finally:
+        store.close()
+
 def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     from rvmsim.isp import OutputSpec
     from rvmsim.robust import robustness
@@ -70,13 +80,7 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     assert [(r["rank"], r["trial"]) for r in doc["top"]] == \
         [(c["rank"], c["trial"]) for c in listed["candidates"]]
     # the stored members: the nominal image, then the 8 samples
-    store = RunStore(tmp_path / "robust" / "run.sqlite", readonly=True)
-    try:
-        rec = store.top(1)[0]
-        members = store.member_results(rec.idx)
-        settings = store.settings()
-    finally:
-        store.close()
+    rec, members, settings = _best_members(tmp_path / "robust")
     # the robust score is the members' 10 % quantile (the default), here the lowest of nine
     assert len(members) == 9 and rec.score == pytest.approx(
         float(np.quantile([m[0] for m in members], 0.1, method="lower")))
@@ -152,13 +156,7 @@ def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, 
     cfg = TuningConfig.model_validate(CONFIG)
     run = tmp_path / "both"
     tune([small, tmp_path / "b.yaml"], run, config=cfg, budget=60, seed=2, robust_samples=3)
-    store = RunStore(run / "run.sqlite", readonly=True)
-    try:
-        rec = store.top(1)[0]
-        members = store.member_results(rec.idx)
-        settings = store.settings()
-    finally:
-        store.close()
+    rec, members, settings = _best_members(run)
     assert settings.shared and settings.robust_samples == 3
     assert len(members) == 2 * (1 + 3)
     doc = json.loads((run / "best" / "robust.json").read_text())
