@@ -43,7 +43,6 @@ def _best(run):
         store.close()
 
 
-
 def _best_members(run_dir):
     """(the run's best record, its members' results, the run's settings), read-only."""
     store = RunStore(run_dir / "run.sqlite", readonly=True)
@@ -52,6 +51,7 @@ def _best_members(run_dir):
         return rec, store.member_results(rec.idx), store.settings()
     finally:
         store.close()
+
 
 def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     from rvmsim.isp import OutputSpec
