@@ -251,7 +251,8 @@ VIEWS = ("whole image", "perspective view")
 
 
 def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
-                     layout: BoardLayout, views: tuple[str, ...] = VIEWS) -> BoardStart | None:
+                     layout: BoardLayout, views: tuple[str, ...] = VIEWS,
+                     charuco: tuple[np.ndarray, np.ndarray] | None = None) -> BoardStart | None:
     """The scene's mount correction from the board found in ``capture``, or None.
 
     Parameters
@@ -265,6 +266,9 @@ def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.nd
     views : tuple of str
         Where to run the detector, in order (of :data:`VIEWS`): the first that gives a
         board pose wins.
+    charuco : (ij, px), optional
+        A ChArUco board's corners already found in ``capture``
+        (:func:`.charuco.detect_charuco`); found here when not given.
 
     Returns
     -------
@@ -280,7 +284,8 @@ def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.nd
     g_u8 = np.clip(g, 0, 255).astype(np.uint8)
     shade = BoardShade(layout, camera, g.astype(np.float32))
     if layout.charuco is not None:
-        start = _charuco_start(g_u8, camera, ypr0_deg, layout, shade)
+        named = charuco if charuco is not None else detect_charuco(g_u8, layout.charuco)
+        start = None if named is None else _charuco_start(camera, ypr0_deg, layout, named, shade)
         if start is not None:
             return start
     for view in views:
@@ -351,14 +356,11 @@ def _polished(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
                       colour_score=float(score), ambiguous=ambiguous)
 
 
-def _charuco_start(grey_u8: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
-                   layout: BoardLayout, shade: BoardShade) -> BoardStart | None:
-    """The start from a ChArUco board's markers (:func:`.charuco.detect_charuco`): its
-    corners are named, so there is one reading and no ambiguity."""
-    assert layout.charuco is not None
-    det = detect_charuco(grey_u8, layout.charuco)
-    if det is None:
-        return None
+def _charuco_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
+                   det: tuple[np.ndarray, np.ndarray], shade: BoardShade) -> BoardStart | None:
+    """The start from a ChArUco board's corners found by its markers (``det``, as
+    :func:`.charuco.detect_charuco` gives them): they are named, so there is one reading
+    and no ambiguity."""
     ij, found = det
     pose = _pnp(camera, layout, ij, found)
     if pose is None:

@@ -30,7 +30,7 @@ from ..criteria import Criteria
 from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
-from .board import BoardLayout, BoardShade, board_layout
+from .board import BoardShade, board_layout
 from .board_start import BoardStart, find_board_start, predicted_shift_px
 from .capture import check_capture_size, grey
 from .charuco import detect_charuco
@@ -114,11 +114,15 @@ def validate(
     # Few corners in view at the scene's pose is an error only when no board start helps.
     landmarks = visible_landmarks(scene, synthetic, 0 if global_start else tolerances.min_landmarks)
     layout = board_layout(scene, landmarks.corners)
-    start = (find_board_start(capture, cam, ypr0, layout)
+    charuco = (None if layout is None or layout.charuco is None else
+               detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco))
+    start = (find_board_start(capture, cam, ypr0, layout, charuco=charuco)
              if global_start and layout is not None else None)
     board = (None if layout is None
              else BoardShade(layout, cam, grey(capture).astype(np.float32)))
-    named = _charuco_named(capture, layout)
+    # A ChArUco board's corners, by landmark index (its markers name them).
+    named = (None if charuco is None or layout is None else
+             {int(layout.corner_index[i, j]): xy for (i, j), xy in zip(*charuco)})
     try:
         x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, start, ypr0,
                                                        tolerances.min_landmarks, progress,
@@ -189,17 +193,6 @@ def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLand
                               pose_correction(synthetic.camera, ypr0, start.x, np.zeros(6)),
                               pos, rot, progress)
     return start.x, frame, visible_landmarks(scene, frame, min_landmarks)
-
-
-def _charuco_named(capture: np.ndarray, layout: BoardLayout | None) -> dict[int, np.ndarray] | None:
-    """A ChArUco board's inner corners found by its markers, {landmark index: px}; None for
-    other boards or when its markers are not found."""
-    if layout is None or layout.charuco is None:
-        return None
-    det = detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco)
-    if det is None:
-        return None
-    return {int(layout.corner_index[i, j]): xy for (i, j), xy in zip(*det)}
 
 
 def _start_text(start: BoardStart | None) -> str:
