@@ -101,8 +101,4 @@ def find_board_view(image: np.ndarray, board: BoardSpec, name: str) -> BoardView
     ij, px = det
     if len(px) < MIN_VIEW_CORNERS or len(set(ij[:, 0])) < 2 or len(set(ij[:, 1])) < 2:
         return None
-    # cv2's corner id from our (i, j): the inverse of CharucoPattern.corner_ij.
-    cols, rows = board.charuco.squares
-    ids = (rows - 2 - ij[:, 1]) * (cols - 1) + ij[:, 0]
-    obj = np.asarray(board.charuco.cv2_board().getChessboardCorners(), np.float64)[ids]
-    return BoardView(name, px, obj)
+    return BoardView(name, px, board.charuco.board_points(ij))

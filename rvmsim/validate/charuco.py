@@ -67,6 +67,14 @@ class CharucoPattern:
         ids = np.asarray(ids, dtype=int).ravel()
         return np.stack([ids % (cols - 1), rows - 2 - ids // (cols - 1)], axis=1)
 
+    def board_points(self, ij: np.ndarray) -> np.ndarray:
+        """The points (K, 3) m, in cv2's board frame (``getChessboardCorners``), of the
+        inner corners ``ij`` (K, 2): the inverse of :meth:`corner_ij`, then cv2's points."""
+        cols, rows = self.squares
+        ij = np.asarray(ij, dtype=int)
+        ids = (rows - 2 - ij[:, 1]) * (cols - 1) + ij[:, 0]
+        return np.asarray(self.cv2_board().getChessboardCorners(), np.float64)[ids]
+
 
 def detect_charuco(grey_u8: np.ndarray, pattern: CharucoPattern,
                    upsample: tuple[int, ...] = UPSAMPLE) -> tuple[np.ndarray, np.ndarray] | None:
