@@ -1,23 +1,17 @@
-"""The candidates the console offers to load: the run's diverse top-M
-(:func:`rvmsim.tune.diverse_candidates`, as its ``top/`` files, ``status`` and ``select``
-offer them), and their JSON for the page.
+"""The candidates the console offers to load are the run's diverse top-M
+(:func:`rvmsim.tune.store_candidates`, as its ``top/`` files, ``status`` and ``select``
+offer them); here, their JSON for the page.
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Any
 
 from ..isp import params_to_dict
-from ..tune import Candidate, diverse_candidates
+from ..tune import Candidate
 
 __all__ = ["Candidate", "candidate_json"]
-
-
-def _candidates(run_dir: str | Path) -> list[Candidate]:
-    """The run's diverse top-M (its tuning config's M and minimum distance), rank 1 first."""
-    return diverse_candidates(run_dir)
 
 
 def candidate_json(c: Any) -> dict[str, Any]:

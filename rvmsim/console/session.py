@@ -22,8 +22,9 @@ import numpy as np
 
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec, roi_outline
-from ..tune import DISPLAY_SIZE, TuningConfig, is_run_folder, open_run, run_settings
-from .candidates import Candidate, _candidates
+from ..tune import (DISPLAY_SIZE, TuningConfig, is_run_folder, open_run, run_inputs, run_settings,
+                    store_candidates)
+from .candidates import Candidate
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -116,16 +117,6 @@ def jpeg_bytes(image: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
     return buf.tobytes()
 
 
-def _recorded_file(recorded: str, run_dir: Path, what: str) -> Path:
-    """A file as ``tune`` recorded it (absolute, or relative to the current folder, the run
-    folder or its parent); RvmsimError when it is gone."""
-    p = Path(recorded).expanduser()
-    for cand in ([p] if p.is_absolute() else [p, run_dir / p, run_dir.parent / p]):
-        if cand.is_file():
-            return cand
-    raise RvmsimError(f"{run_dir}: {what} {recorded} not found")
-
-
 def _controls(config: TuningConfig, scene: Scene) -> tuple[ParamControl, ...]:
     """The 14 controls, the tuned ones first (in the search space's order)."""
     ranges = {r.name: r for r in config.space(scene.fisheye_camera()).ranges}
@@ -163,22 +154,22 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         store = open_run(source)
         try:
             settings = run_settings(source, store)
+            scene_file, crit_file = run_inputs(source, settings)
+            criteria = load_criteria(crit_file)
+            candidates = tuple(c for c, _ in store_candidates(store, settings,
+                                                              criteria=criteria))
         finally:
             store.close()
-        scene_file = _recorded_file(settings.scene, source, "scene file")
-        crit_file = (None if not settings.criteria_file
-                     else _recorded_file(settings.criteria_file, source, "criteria file"))
         config, run_dir, root = settings.config, source, source
-        candidates = tuple(_candidates(source))
         if not candidates:
             raise RvmsimError(f"{source}: no evaluated candidates yet")
         start = candidates[0].params
     elif source.is_file():
-        scene_file, crit_file, config, run_dir = source, None, TuningConfig(), None
+        scene_file, config, run_dir = source, TuningConfig(), None
+        criteria = load_criteria(None)
         root, candidates, start = Path(out_root) / source.stem, (), IspParams()
     else:
         raise RvmsimError(f"{source}: no such run folder or scene file")
-    criteria = load_criteria(crit_file)
     scene = load_scene(scene_file)
     images, _ = cached_render(scene)
     ec_output = config.output_spec()

@@ -87,29 +87,20 @@ class _Run:
     candidates: list[Candidate] = field(default_factory=list)
 
 
-def _resolve(recorded: str, run_dir: Path) -> Path | None:
-    """A path as ``tune`` recorded it: absolute, relative to the current folder (where tune
-    usually ran), or relative to the run folder."""
-    p = Path(recorded).expanduser()
-    if p.is_absolute():
-        return p if p.is_file() else None
-    for cand in (p, run_dir / p, run_dir.parent / p):
-        if cand.is_file():
-            return cand
-    return None
-
-
 def _load_run(run_dir: Path) -> _Run:
-    from ..criteria import bundled_criteria_text, load_criteria
+    from ..criteria import load_criteria
     from ..render import cached_render, same_scene
     from ..scene import load_scene
-    from ..tune import open_run, run_settings, run_state, store_candidates
+    from ..tune import (open_run, recorded_path, run_inputs, run_settings, run_state,
+                        store_candidates)
 
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
+        scene_file, crit_file = run_inputs(run_dir, settings)
+        criteria = load_criteria(crit_file)
         state = run_state(run_dir, store)
-        pairs = store_candidates(store, settings)
+        pairs = store_candidates(store, settings, criteria=criteria)
         top = [rec for _, rec in pairs]
         curve = store.best_curve()
         scores = np.array(store.scores(), dtype=float)
@@ -118,17 +109,6 @@ def _load_run(run_dir: Path) -> _Run:
         robust_rows = robust_top(store, top, settings)
     finally:
         store.close()
-    scene_file = _resolve(settings.scene, run_dir)
-    if scene_file is None:
-        raise RvmsimError(f"{run_dir}: scene file {settings.scene} not found")
-    crit_file = None
-    if settings.criteria_file:
-        crit_file = (Path(settings.criteria_file)  # a bundled set's name, or a file
-                     if bundled_criteria_text(settings.criteria_file) is not None
-                     else _resolve(settings.criteria_file, run_dir))
-        if crit_file is None:
-            raise RvmsimError(f"{run_dir}: criteria file {settings.criteria_file} not found")
-    criteria = load_criteria(crit_file)
     scene = load_scene(scene_file)
     if not top:
         raise RvmsimError(f"{run_dir}: no evaluated candidates to report yet")
@@ -137,7 +117,7 @@ def _load_run(run_dir: Path) -> _Run:
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
                 crit_file, settings.config.output_spec(), top, curve, scores, count,
-                scene_changed, load_member_scenes(settings, run_dir, _resolve), member_top,
+                scene_changed, load_member_scenes(settings, run_dir, recorded_path), member_top,
                 robust_rows, [c for c, _ in pairs])
 
 

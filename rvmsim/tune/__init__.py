@@ -113,6 +113,8 @@ from .diverse import (
     store_candidates,
 )
 from .folder import (
+    recorded_path,
+    run_inputs,
     open_run,
     run_settings,
     run_state,
@@ -161,6 +163,8 @@ __all__ = [
     "Candidate",
     "select_diverse",
     "diverse_candidates",
+    "recorded_path",
+    "run_inputs",
     "differs_text",
     "margins_of",
     "normalised",

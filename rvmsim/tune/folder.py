@@ -25,8 +25,8 @@ from .store import RunStore
 if TYPE_CHECKING:
     from ..criteria import Criteria
 
-__all__ = ["open_run", "run_settings", "run_state", "run_lock", "find_runs", "is_run_folder",
-           "status_lines", "rank_text", "rank_params_text", "diverse_candidates", "write_top_files"]
+__all__ = ["recorded_path", "run_inputs", "open_run", "run_settings", "run_state", "run_lock",
+           "find_runs", "is_run_folder", "status_lines", "rank_text", "rank_params_text", "diverse_candidates", "write_top_files"]
 
 RUN_DB = "run.sqlite"
 RUN_JSON = "run.json"
@@ -106,6 +106,43 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         msg = f"{run_json}: not a readable {RUN_JSON} ({err}); restore it, or start a new run"
         raise RvmsimError(" ".join(msg.split())) from None
+
+
+def recorded_path(recorded: str, run_dir: Path) -> Path | None:
+    """A file as ``tune`` recorded it: absolute, or relative to the current folder (where
+    tune usually ran), the run folder or its parent; None when it is not there."""
+    p = Path(recorded).expanduser()
+    if p.is_absolute():
+        return p if p.is_file() else None
+    for cand in (p, run_dir / p, run_dir.parent / p):
+        if cand.is_file():
+            return cand
+    return None
+
+
+def run_inputs(run_dir: str | Path, settings: RunSettings) -> tuple[Path, Path | None]:
+    """The run's scene file and its criteria (a bundled set's name, as a path, or the file;
+    None: the paper's), found as :func:`recorded_path` finds them.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the scene or criteria file that is gone.
+    """
+    from ..criteria import bundled_criteria_text
+
+    run_dir = Path(run_dir)
+    scene_file = recorded_path(settings.scene, run_dir)
+    if scene_file is None:
+        raise RvmsimError(f"{run_dir}: scene file {settings.scene} not found")
+    if not settings.criteria_file:
+        return scene_file, None
+    if bundled_criteria_text(settings.criteria_file) is not None:
+        return scene_file, Path(settings.criteria_file)
+    crit_file = recorded_path(settings.criteria_file, run_dir)
+    if crit_file is None:
+        raise RvmsimError(f"{run_dir}: criteria file {settings.criteria_file} not found")
+    return scene_file, crit_file
 
 
 def diverse_candidates(run_dir: str | Path, m: int | None = None,

@@ -63,3 +63,17 @@ def test_the_ecs_change_with_the_zoom(small_run):
     assert a.ec.as_dict() != b.ec.as_dict()
     assert a.display_jpeg != b.display_jpeg and a.roi != b.roi
     assert set(a.timings_ms) == {"ecs", "display", "annotated", "roi"}
+
+
+def test_a_run_tuned_with_a_bundled_criteria_set_opens(tmp_path):
+    """A run records a bundled set by its name (``fmvss111-full``), not as a file: the
+    console finds it as ``report`` does, with the run's 14 ECs."""
+    from rvmsim.tune import tune
+    from tests.bad_input.conftest import write_small_scene
+
+    scene = write_small_scene(tmp_path)
+    tune(scene, tmp_path / "run", strategy="random", budget=4, workers=1,
+         criteria_file="fmvss111-full")
+    s = open_session(tmp_path / "run")
+    assert s.kind == "run" and len(s.criteria.ids) == 14 and "6-1" in s.criteria.ids
+    assert s.candidates and s.start == s.candidates[0].params
