@@ -129,19 +129,13 @@ def validate(scene: Path, capture_paths: tuple[Path, ...], params_file: Path | N
 def _validate_one(run: _Run, scene: Path, capture_file: Path, out: Path,
                   write_scene: Path | None) -> None:
     """One capture: its outputs in ``out``, the summary printed; exits."""
-    from .report.validation import write_pictures, write_validation_outputs
-    from .validate import ValidationFailure, load_capture, write_corrected_scene
-    from .validate import validate as run_validate
+    from .validate import ValidationFailure, write_corrected_scene
 
     try:
-        capture = load_capture(capture_file, run.scene.fisheye_camera())
         try:
-            result = run_validate(run.scene, capture, use_cache=True,
-                                  capture_name=str(capture_file), **run.kwargs)
+            result, written = _validated(run, capture_file, out)
         except ValidationFailure as fail:
-            write_pictures(fail.images, out)
             raise RvmsimError(f"{fail}; pictures in {out}") from None
-        written = write_validation_outputs(result, out)
         if write_scene is not None:
             write_corrected_scene(scene, result.correction, write_scene)
     except RvmsimError as err:
@@ -154,6 +148,24 @@ def _validate_one(run: _Run, scene: Path, capture_file: Path, out: Path,
     if write_scene is not None:
         click.echo(f"wrote the scene with the corrected mount to {write_scene}")
     sys.exit(0 if result.passed else 1)
+
+
+def _validated(run: _Run, capture_file: Path, out: Path) -> tuple[Any, list[Path]]:
+    """One capture loaded, validated and its outputs written into ``out``: (the
+    Validation, the files written).  A ValidationFailure is raised again once its pictures
+    are written (an error writing them is raised instead)."""
+    from .report.validation import write_pictures, write_validation_outputs
+    from .validate import ValidationFailure, load_capture
+    from .validate import validate as run_validate
+
+    capture = load_capture(capture_file, run.scene.fisheye_camera())
+    try:
+        result = run_validate(run.scene, capture, use_cache=True,
+                              capture_name=str(capture_file), **run.kwargs)
+    except ValidationFailure as fail:
+        write_pictures(fail.images, out)
+        raise
+    return result, write_validation_outputs(result, out)
 
 
 def _validate_several(run: _Run, captures: list[Path], out: Path) -> None:
@@ -183,17 +195,12 @@ def _validate_several(run: _Run, captures: list[Path], out: Path) -> None:
 def _outcome(run: _Run, capture_file: Path, out: Path) -> Any:
     """One capture of several: validated, outputs written; an error becomes its row (and a
     one-line message on stderr)."""
-    from .report.validation import CaptureOutcome, write_pictures, write_validation_outputs
-    from .validate import ValidationFailure, load_capture
-    from .validate import validate as run_validate
+    from .report.validation import CaptureOutcome
+    from .validate import ValidationFailure
 
     try:
-        capture = load_capture(capture_file, run.scene.fisheye_camera())
-        result = run_validate(run.scene, capture, use_cache=True,
-                              capture_name=str(capture_file), **run.kwargs)
-        write_validation_outputs(result, out)
+        result, _ = _validated(run, capture_file, out)
     except ValidationFailure as fail:
-        write_pictures(fail.images, out)
         click.echo(f"rvmsim: error: {fail}; pictures in {out}", err=True)
         return CaptureOutcome(str(capture_file), out, None, str(fail), fail.step, fail.images)
     except RvmsimError as err:

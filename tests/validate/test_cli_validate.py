@@ -153,3 +153,28 @@ def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
         assert json.loads((out / sub / "validation.json").read_text())["capture"].endswith(
             f"{sub}.png")
     assert (out / "noise" / "landmarks.png").is_file()
+
+
+def test_cli_several_captures_a_failure_whose_pictures_cannot_be_written_is_a_row(
+        tmp_path, cache_env):
+    """Several captures: one fails detection and its output folder cannot be made (a file
+    is in the way). It is that capture's ERROR row and one line, not a traceback, and the
+    other capture is still validated."""
+    from .captures import base
+
+    same = tmp_path / "a_same.png"
+    cv2.imwrite(str(same), base()[1].color[..., ::-1])
+    noise = tmp_path / "noise.png"
+    cv2.imwrite(str(noise), np.random.default_rng(2).integers(0, 255, (480, 640), np.uint8))
+    scene_file = write_scene(tmp_path)
+    out = tmp_path / "v"
+    out.mkdir()
+    (out / "noise").write_text("in the way")
+    res = _run("validate", str(scene_file), "--capture", str(same), "--capture", str(noise),
+               "--out", str(out), "--no-progress", env=cache_env)
+    assert res.returncode == 2, res.stdout + res.stderr
+    assert "Traceback" not in res.stderr
+    err = res.stderr.strip().splitlines()
+    assert len(err) == 1 and "noise" in err[0], res.stderr
+    rows = json.loads((out / "summary.json").read_text())
+    assert [r["verdict"] for r in rows] == ["PASS", "ERROR"]
