@@ -42,10 +42,11 @@ def fold(layout: CubeLayout, color_atlas: np.ndarray, label_atlas: np.ndarray,
         Rendered colour of the face crops, side by side.
     label_atlas : (rows, cols) uint8
         Rendered label IDs of the same crops; 0 where no geometry is hit.
-    color_filter : {"bilinear", "area"}
-        How colour is sampled: one bilinear tap per fisheye pixel (the default), or
-        area-averaged over the pixel's footprint (:func:`fold_color` with
-        :data:`AA_TAPS`² taps), so that edge sharpness does not depend on the oversample.
+    color_filter : {"area", "bilinear"}
+        How colour is sampled: area-averaged over the pixel's footprint (the default, as
+        the scene's ``render.color_filter``; :func:`fold_color` with :data:`AA_TAPS`² taps),
+        so that edge sharpness does not depend on the oversample, or one bilinear tap per
+        fisheye pixel.
 
     Returns
     -------
