@@ -219,19 +219,20 @@ ECS = [
         id="1-5", name="abcde_full_silhouette", unit="%", groups=(),
         measure=_measure_1_5, annotate=_draw_1_5, default_range=(100.0, None),
         default_sigmoid=Sigmoid.from_range(100.0, None, tolerance=5.0),
-        description="smallest visible fraction of an A–E silhouette (hidden parts included)"),
+        description="smallest visible fraction of an A–E silhouette (hidden parts included)",
+        uses_scene=True),
     EcDefinition(
         id="1-6", name="abc_display_size_margin", unit="x", groups=(),
         measure=_measure_1_6, annotate=_draw_1_6, default_range=(1.0, None),
         default_sigmoid=Sigmoid.from_range(1.0, None, tolerance=0.3),
         description="min(mean/5', min/3') of A, B, C's visual angles on the display",
         parameters={"mean_arcmin": rule.IMAGE_SIZE_MEAN_ARCMIN,
-                    "each_arcmin": rule.IMAGE_SIZE_MIN_ARCMIN}),
+                    "each_arcmin": rule.IMAGE_SIZE_MIN_ARCMIN}, uses_scene=True),
     EcDefinition(
         id="6-1", name="abc_resolution_margin", unit="x", groups=(),
         measure=_measure_6_1, annotate=_draw_6_1, default_range=(1.0, None),
         default_sigmoid=Sigmoid.from_range(1.0, None, tolerance=0.3),
         description="min(limit/magnification, px per degree/limit) at A, B, C",
         parameters={"max_magnification": MAX_MAGNIFICATION,
-                    "min_pixels_per_degree": MIN_PIXELS_PER_DEGREE}),
+                    "min_pixels_per_degree": MIN_PIXELS_PER_DEGREE}, uses_scene=True),
 ]

@@ -99,6 +99,11 @@ class EcDefinition:
         a criteria file may change (``criteria: {id: {parameters: {name: value}}}``); the
         measure function reads them with ``options.parameter(id, name, default)``.  Stored
         as a tuple of ``(name, value)`` pairs (``dict(ec.parameters)``).
+    uses_scene : bool
+        The measure reads ``source.context`` and ``source.isp`` (the scene, its fisheye
+        labels, the candidate's ISP map), not only the RVM labels: an evaluation must pass
+        them, e.g. ``rvmsim robustness`` evaluates such criteria on each sample's full
+        fisheye labels (:attr:`rvmsim.criteria.Criteria.uses_scene`).
     """
 
     id: str
@@ -114,6 +119,7 @@ class EcDefinition:
     regions: RegionsFn | None = None
     plugin: str = ""
     parameters: Mapping[str, float] | tuple[tuple[str, float], ...] = ()
+    uses_scene: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id or any(c.isspace() for c in self.id):

@@ -85,6 +85,12 @@ class Criteria:
         return MeasureOptions(self.upper_region_fraction, self.edge_columns, self.display,
                               params)
 
+    @property
+    def uses_scene(self) -> bool:
+        """Some selected EC reads the scene, its fisheye labels or the ISP map
+        (:attr:`EcDefinition.uses_scene`), not only the RVM labels."""
+        return any(ec.uses_scene for ec in self.ecs)
+
     @functools.cached_property
     def groups(self) -> tuple[LabelGroup, ...]:
         """The label groups the selected ECs read, each once."""

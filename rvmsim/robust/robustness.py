@@ -4,7 +4,9 @@ Every sample (:func:`~rvmsim.robust.draw_samples`) gets its RVM label image: the
 is the same for all samples (the parameters are fixed), so only the fisheye pixels it shows
 are re-folded from the sample's cube (:func:`~rvmsim.robust.sample_rvm_labels`, equal to
 running the ISP on :func:`~rvmsim.robust.sample_images`' label image), and every EC is
-measured on it, exactly as ``rvmsim evaluate`` does.  The result
+measured on it, exactly as ``rvmsim evaluate`` does.  Criteria whose ECs read the scene
+(:attr:`~rvmsim.criteria.Criteria.uses_scene`) get each sample's whole fisheye images and
+:func:`~rvmsim.pipeline.evaluate_params` instead.  The result
 holds the yield with its 95 % interval (:mod:`.stats`), each EC's failure rate, worst
 value and margin and the axis that drives its failures, the yield against a tolerance
 scale factor, and the nominal and worst samples' RVM frames for the report.
@@ -84,7 +86,8 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
         return SampleEvaluation(ids, values, passed, scores, all_passed)
     shared = shared if shared is not None else refolder(scene, samples, scale=scale)
     cam = scene.fisheye_camera()
-    rvm = rvm_pixels(cam.scaled(scale) if scale != 1.0 else cam, p, output)
+    rvm = None if crit.uses_scene else rvm_pixels(cam.scaled(scale) if scale != 1.0 else cam,
+                                                  p, output)
     bar = None
     if progress:
         from tqdm import tqdm
@@ -93,9 +96,15 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
                    leave=False)
     for start in range(0, n, _CHUNK):
         chunk = samples[start:start + _CHUNK]
-        for j, labels in enumerate(sample_rvm_labels(scene, chunk, rvm, scale=scale,
-                                                     shared=shared)):
-            ec = evaluate(labels, crit)
+        if crit.uses_scene:  # ECs that read the scene need each sample's fisheye labels
+            ecs = (evaluate_params(im, p, output, crit, annotate=False).ec
+                   for im in sample_images(scene, chunk, scale=scale, color=False,
+                                           shared=shared))
+        else:  # the RVM pixels' labels alone
+            assert rvm is not None
+            ecs = (evaluate(labels, crit) for labels in sample_rvm_labels(
+                scene, chunk, rvm, scale=scale, shared=shared))
+        for j, ec in enumerate(ecs):
             i = start + j
             values[i] = [np.nan if ec[e].value is None else ec[e].value for e in ids]
             passed[i] = [ec[e].passed for e in ids]

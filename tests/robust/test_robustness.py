@@ -169,3 +169,23 @@ def test_viewpoints_render_on_a_dask_cluster(settings, tmp_path: Path,
         remote = _runner_case(settings, tmp_path / "b", monkeypatch, DaskExecutor(client=client))
     assert remote.timings["viewpoints_rendered"] == 10
     _same_evaluation(here, remote)
+
+
+def test_ecs_that_read_the_scene_are_measured_on_every_sample(settings):
+    """``fmvss111-full``'s 1-5, 1-6 and 6-1 read the scene, the sample's fisheye labels and
+    the ISP map: every sample gets them measured (they came out "not measured", failing
+    every sample), and the paper's eleven on that path equal the RVM-pixel path's."""
+    from rvmsim.criteria import load_criteria
+
+    sc, _, mid, _ = settings
+    full = load_criteria("fmvss111-full")
+    assert full.uses_scene and not default_criteria().uses_scene
+    kw = dict(samples=8, seed=3, scales=(1.0,), frames=False)
+    res = robustness(sc, mid, OUTPUT, criteria=full, **kw)
+    ev = res.evaluation
+    cols = [ev.ids.index(e) for e in ("1-5", "1-6", "6-1")]
+    assert np.isfinite(ev.values[:, cols]).all(), ev.values[:, cols]
+    paper = robustness(sc, mid, OUTPUT, criteria=default_criteria(), **kw).evaluation
+    same = [ev.ids.index(e) for e in paper.ids]
+    np.testing.assert_allclose(ev.values[:, same], paper.values, rtol=1e-9, equal_nan=True)
+    np.testing.assert_array_equal(ev.passed[:, same], paper.passed)
