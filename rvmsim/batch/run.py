@@ -228,8 +228,8 @@ def _run_missing_yields(spec: SweepSpec, store: SweepStore, executor: Executor,
     """Measure the yield of each point whose best run has none although its scene has a
     variation section (a result stored before yields existed: every run since measures
     its own), adding it to that run's stored result (``done`` / ``rechecks`` too)."""
-    if not spec.robustness.samples:
-        return
+    if not (spec.has_variation and spec.robustness.samples):
+        return  # no point's scene varies: nothing to look for (each look builds a scene)
     merged = merged_results(points, done, rechecks)
     todo, tasks = {}, {}
     for p in points:
