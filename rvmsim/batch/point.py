@@ -159,8 +159,8 @@ def sensitivity(evaluator: Any, space: Any, best: Any) -> dict[str, Any]:
 
     Parameters
     ----------
-    evaluator : CandidateEvaluator
-        The point's evaluator.
+    evaluator : ImageEvaluator
+        The point's evaluator (:func:`rvmsim.pipeline.make_evaluator`).
     space : SearchSpace
         The tuned parameters and their ranges.
     best : IspParams

@@ -68,6 +68,7 @@ from .config import (
 from .image import (
     evaluate,
     measure,
+    measure_labels,
     measure_source,
 )
 from .annotate import (
@@ -124,6 +125,7 @@ __all__ = [
     "default_criteria",
     "measure",
     "measure_source",
+    "measure_labels",
     "evaluate",
     "annotate",
     "Canvas",

@@ -18,7 +18,7 @@ from .measure import LabelSource, Measurements, MeasureOptions, measure_ecs
 from .registry import EcDefinition, builtin_ecs
 from .scoring import Criteria, EcResult, score
 
-__all__ = ["measure", "measure_source", "evaluate"]
+__all__ = ["measure", "measure_source", "measure_labels", "evaluate"]
 
 
 def measure(labels: np.ndarray, *, upper_region_fraction: float = 0.5, edge_columns: int = 4,
@@ -74,5 +74,13 @@ def evaluate(rvm_labels: np.ndarray, criteria: Criteria | None = None, *,
         One item per EC the criteria select, in their order.
     """
     criteria = criteria or default_criteria()
+    return score(measure_labels(rvm_labels, criteria, context=context, isp=isp), criteria)
+
+
+def measure_labels(rvm_labels: np.ndarray, criteria: Criteria, *,
+                   context: SceneContext | None = None,
+                   isp: IspView | None = None) -> Measurements:
+    """The raw measurements of :func:`evaluate` (unscored): the criteria's ECs on an RVM
+    label image, with the scene and map for the ECs that read them."""
     src = LabelSource(rvm_labels, criteria.groups, context=context, isp=isp)
-    return score(measure_ecs(src, criteria.ecs, criteria.options), criteria)
+    return measure_ecs(src, criteria.ecs, criteria.options)

@@ -20,8 +20,7 @@ from .variation import (
 )
 from .samples import MountSample, draw_samples, nominal_sample, position_levels_at
 from .images import (sample_images, sample_camera, body_pose, cover_for, Refolder, refolder,
-                     RvmPixels, rvm_pixels, sample_rvm_labels, viewpoint_groups,
-                     render_viewpoints)
+                     SampleSet, sample_rvm_labels, viewpoint_groups, render_viewpoints)
 from .stats import (
     YieldEstimate,
     yield_estimate,
@@ -33,7 +32,6 @@ from .stats import (
 from .robustness import (
     EcStats,
     ScalePoint,
-    SampleEvaluation,
     RobustnessResult,
     evaluate_samples,
     robustness,
@@ -60,8 +58,7 @@ __all__ = [
     "cover_for",
     "Refolder",
     "refolder",
-    "RvmPixels",
-    "rvm_pixels",
+    "SampleSet",
     "sample_rvm_labels",
     "viewpoint_groups",
     "YieldEstimate",
@@ -72,7 +69,6 @@ __all__ = [
     "ec_margins",
     "EcStats",
     "ScalePoint",
-    "SampleEvaluation",
     "RobustnessResult",
     "evaluate_samples",
     "robustness",

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..camera import FisheyeCamera, rotation_from_ypr
 from .. import labels as L
-from ..isp import IspParams, OutputSpec, apply_map, build_map
+from ..pipeline import FisheyeLabels, RvmPixels
 from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, TaskRunner, cached_cube,
                       cover_layout, fold, fold_labels, nearest_labels, read_cube,
                       refold_coords, refold_layout, render_cubes)
@@ -45,8 +45,8 @@ from ..scene import Scene, build_parts
 from .samples import MountSample
 from .variation import LoadState
 
-__all__ = ["sample_images", "Refolder", "refolder", "RvmPixels", "rvm_pixels",
-           "sample_rvm_labels", "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG",
+__all__ = ["sample_images", "Refolder", "refolder", "SampleSet", "sample_rvm_labels",
+           "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG",
            "render_viewpoints"]
 
 #: The covered angle ranges are rounded up to this step (degrees), so that sample sets of
@@ -261,32 +261,6 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
             yield idx, cams[k], atlas_c, atlas_l
 
 
-@dataclass(frozen=True)
-class RvmPixels:
-    """Which fisheye pixel each RVM pixel shows under one ISP setting (the nearest sample of
-    its map, as :func:`rvmsim.isp.process` takes labels): ``source`` (H_o, W_o) flat fisheye
-    index (−1: no input), ``pixels`` the distinct ones, ``inverse`` each used RVM pixel's
-    entry in ``pixels``, ``rays`` the in-field ones' rays, ``in_field`` which of ``pixels``
-    lie in the lens's field."""
-
-    source: np.ndarray
-    pixels: np.ndarray
-    inverse: np.ndarray
-    rays: CameraRays
-    in_field: np.ndarray
-
-
-def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec) -> RvmPixels:
-    """:class:`RvmPixels` of ``params`` (for ``camera``'s sensor size) on ``camera``'s lens."""
-    w, h = camera.width, camera.height
-    index = np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w)  # exact below 2^24
-    src = np.rint(apply_map(index, build_map(params, (w, h), output), labels=True))
-    source = src.astype(np.intp) - 1
-    pixels, inverse = np.unique(source[source >= 0], return_inverse=True)
-    rays = CameraRays.of(camera, pixels)
-    return RvmPixels(source, pixels, inverse.ravel(), rays, rays.in_fov.ravel()[pixels])
-
-
 def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixels, *,
                       scale: float = 1.0, shared: Refolder | None = None,
                       progress: bool = False) -> list[np.ndarray]:
@@ -302,7 +276,6 @@ def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixe
     if not samples:
         return []
     shared = shared if shared is not None else refolder(scene, samples, scale=scale)
-    used = rvm.source >= 0
     out: list[np.ndarray | None] = [None] * len(samples)
     bar = _bar(progress, len(samples), "samples")
     for idx, view_cam, _, atlas_l in _viewpoints(scene, samples, shared, scale, False):
@@ -311,11 +284,58 @@ def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixe
             ax, ay = refold_coords(shared.cover, cam.rotation.T @ view_cam.rotation, rvm.rays)
             at_pixels = np.full(rvm.pixels.size, L.VOID, np.uint8)
             at_pixels[rvm.in_field] = nearest_labels(atlas_l, ax, ay)
-            labels = np.full(rvm.source.shape, L.VOID, np.uint8)
-            labels[used] = at_pixels[rvm.inverse]
-            out[i] = labels
+            out[i] = rvm.labels(at_pixels)
             if bar is not None:
                 bar.update(1)
     if bar is not None:
         bar.close()
     return [o for o in out if o is not None]
+
+
+@dataclass(frozen=True)
+class SampleSet:
+    """Variation samples of one scene as a batch of fisheye images
+    (:class:`rvmsim.pipeline.FisheyeSet`): what :func:`rvmsim.pipeline.make_evaluator` judges
+    one ISP setting on.
+
+    Parameters
+    ----------
+    scene : Scene
+    samples : tuple of MountSample
+    scale : float
+        Fraction of the sensor rendered.
+    shared : Refolder
+        :func:`refolder` of a sample set holding ``samples`` (:meth:`of` makes it).
+    """
+
+    scene: Scene
+    samples: tuple[MountSample, ...]
+    scale: float
+    shared: Refolder
+
+    @classmethod
+    def of(cls, scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0,
+           shared: Refolder | None = None) -> SampleSet:
+        """The set of ``samples`` (its :class:`Refolder` made here unless given)."""
+        return cls(scene, tuple(samples), scale,
+                   shared if shared is not None else refolder(scene, samples, scale=scale))
+
+    @property
+    def camera(self) -> FisheyeCamera:
+        """The scene's camera at ``scale`` (the samples' lens and sensor size)."""
+        cam = self.scene.fisheye_camera()
+        return cam.scaled(self.scale) if self.scale != 1.0 else cam
+
+    def __len__(self) -> int:
+        return len(self.samples)
+
+    def fisheye(self, indices: Sequence[int]) -> Iterator[FisheyeLabels]:
+        """The samples' fisheye label images (:func:`sample_images`, no colour)."""
+        yield from sample_images(self.scene, [self.samples[i] for i in indices],
+                                 scale=self.scale, color=False, shared=self.shared)
+
+    def rvm_labels(self, pixels: RvmPixels, indices: Sequence[int]) -> Iterator[np.ndarray]:
+        """The samples' RVM label images under ``pixels``' setting
+        (:func:`sample_rvm_labels`)."""
+        yield from sample_rvm_labels(self.scene, [self.samples[i] for i in indices], pixels,
+                                     scale=self.scale, shared=self.shared)

@@ -1,12 +1,13 @@
 """The yield of one ISP setting over production variation (``rvmsim robustness``).
 
-Every sample (:func:`~rvmsim.robust.draw_samples`) gets its RVM label image: the ISP's map
-is the same for all samples (the parameters are fixed), so only the fisheye pixels it shows
-are re-folded from the sample's cube (:func:`~rvmsim.robust.sample_rvm_labels`, equal to
-running the ISP on :func:`~rvmsim.robust.sample_images`' label image), and every EC is
-measured on it, exactly as ``rvmsim evaluate`` does.  Criteria whose ECs read the scene
-(:attr:`~rvmsim.criteria.Criteria.uses_scene`) get each sample's whole fisheye images and
-:func:`~rvmsim.pipeline.evaluate_params` instead.  The result
+The samples are a batch of fisheye images (:class:`~rvmsim.robust.SampleSet`) judged by
+the evaluator :func:`rvmsim.pipeline.make_evaluator` chooses: the ISP's map is the same for
+all samples (the parameters are fixed), so only the fisheye pixels it shows are re-folded
+from each sample's cube (:func:`~rvmsim.robust.sample_rvm_labels`, equal to running the ISP
+on :func:`~rvmsim.robust.sample_images`' label image), and every EC is measured on it,
+exactly as ``rvmsim evaluate`` does; criteria whose ECs read the scene
+(:attr:`~rvmsim.criteria.Criteria.uses_scene`) get each sample's whole fisheye labels on the
+full path instead.  The result
 holds the yield with its 95 % interval (:mod:`.stats`), each EC's failure rate, worst
 value and margin and the axis that drives its failures, the yield against a tolerance
 scale factor, and the nominal and worst samples' RVM frames for the report.
@@ -21,43 +22,29 @@ from typing import Any
 
 import numpy as np
 
-from ..criteria import Criteria, default_criteria, evaluate
+from ..criteria import Criteria, EcBatch, default_criteria, score_batch
 from ..isp import IspParams, OutputSpec, params_to_dict
-from ..pipeline import RvmFrame, evaluate_params
+from ..pipeline import RvmFrame, evaluate_params, make_evaluator
 from ..scene import Scene
 from ..render import TaskRunner
-from .images import Refolder, cover_for, refolder, render_viewpoints, rvm_pixels, sample_images, sample_rvm_labels
+from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
 from .variation import MOUNT_AXES, Variation, variation_from_scene
 
-__all__ = ["EcStats", "ScalePoint", "SampleEvaluation", "RobustnessResult", "evaluate_samples",
-           "robustness", "DEFAULT_SCALES"]
+__all__ = ["EcStats", "ScalePoint", "RobustnessResult", "evaluate_samples", "robustness",
+           "DEFAULT_SCALES"]
 
 #: Tolerance scale factors of the yield curve.
 DEFAULT_SCALES = (0.5, 1.0, 1.5, 2.0)
-#: Samples re-folded per batch (bounds the memory of RVM label images held at once).
-_CHUNK = 32
-
-
-@dataclass(frozen=True)
-class SampleEvaluation:
-    """The ECs of many samples: ``values`` (n, k) in ``ids`` order (NaN: not measured),
-    ``passed`` (n, k), ``scores`` (n,) EC scores, ``all_passed`` (n,) every enabled EC
-    passes."""
-
-    ids: tuple[str, ...]
-    values: np.ndarray
-    passed: np.ndarray
-    scores: np.ndarray
-    all_passed: np.ndarray
 
 
 def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspParams,
                      output: OutputSpec, criteria: Criteria | None = None, *,
                      scale: float = 1.0, shared: Refolder | None = None,
-                     progress: bool = False) -> SampleEvaluation:
-    """Every EC of one ISP setting on every sample.
+                     progress: bool = False) -> EcBatch:
+    """Every EC of one ISP setting on every sample, through
+    :func:`rvmsim.pipeline.make_evaluator` (the path the criteria allow).
 
     Parameters
     ----------
@@ -73,47 +60,20 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
     shared : Refolder, optional
         :func:`~rvmsim.robust.refolder` of ``samples`` (default: made here).
     progress : bool
+
+    Returns
+    -------
+    EcBatch
+        One row per sample (``values`` NaN where not measured, ``passed``, ``score``,
+        ``all_passed``).
     """
     crit = criteria if criteria is not None else default_criteria()
-    p = _scaled_params(scene, params, scale)
-    ids = crit.ids
-    n, k = len(samples), len(ids)
-    values = np.full((n, k), np.nan)
-    passed = np.zeros((n, k), bool)
-    scores = np.zeros(n)
-    all_passed = np.zeros(n, bool)
-    if n == 0:
-        return SampleEvaluation(ids, values, passed, scores, all_passed)
-    shared = shared if shared is not None else refolder(scene, samples, scale=scale)
-    cam = scene.fisheye_camera()
-    rvm = None if crit.uses_scene else rvm_pixels(cam.scaled(scale) if scale != 1.0 else cam,
-                                                  p, output)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=n, desc=f"samples (tolerance x{samples[0].scale:g})", unit="sample",
-                   leave=False)
-    for start in range(0, n, _CHUNK):
-        chunk = samples[start:start + _CHUNK]
-        if crit.uses_scene:  # ECs that read the scene need each sample's fisheye labels
-            ecs = (evaluate_params(im, p, output, crit, annotate=False).ec
-                   for im in sample_images(scene, chunk, scale=scale, color=False,
-                                           shared=shared))
-        else:  # the RVM pixels' labels alone
-            assert rvm is not None
-            ecs = (evaluate(labels, crit) for labels in sample_rvm_labels(
-                scene, chunk, rvm, scale=scale, shared=shared))
-        for j, ec in enumerate(ecs):
-            i = start + j
-            values[i] = [np.nan if ec[e].value is None else ec[e].value for e in ids]
-            passed[i] = [ec[e].passed for e in ids]
-            scores[i], all_passed[i] = ec.score, ec.passed
-            if bar is not None:
-                bar.update(1)
-    if bar is not None:
-        bar.close()
-    return SampleEvaluation(ids, values, passed, scores, all_passed)
+    if not samples:
+        return score_batch(np.zeros((0, len(crit.ids))), crit)
+    evaluator = make_evaluator(SampleSet.of(scene, samples, scale=scale, shared=shared),
+                               output, crit)
+    desc = f"samples (tolerance x{samples[0].scale:g})" if progress else None
+    return evaluator(_scaled_params(scene, params, scale), progress=desc)
 
 
 def _scaled_params(scene: Scene, params: IspParams, scale: float) -> IspParams:
@@ -186,7 +146,7 @@ class RobustnessResult:
     variation: Variation
     seed: int
     samples: tuple[MountSample, ...]
-    evaluation: SampleEvaluation
+    evaluation: EcBatch
     estimate: YieldEstimate
     ecs: tuple[EcStats, ...]
     scale_curve: tuple[ScalePoint, ...]
@@ -220,7 +180,7 @@ class RobustnessResult:
             "worst_sample": self.worst_index,
             "ecs": [e.as_dict() for e in self.ecs],
             "scale_curve": [{"scale": p.scale, **p.estimate.as_dict()} for p in self.scale_curve],
-            "samples": [{**s.as_dict(), "ec_score": float(ev.scores[i]),
+            "samples": [{**s.as_dict(), "ec_score": float(ev.score[i]),
                          "passed": bool(ev.all_passed[i]),
                          "failed": [e for e, ok in zip(ev.ids, ev.passed[i]) if not ok]}
                         for i, s in enumerate(self.samples)],
@@ -250,7 +210,7 @@ def _num(x: float | None) -> str:
     return "—" if x is None else f"{x:.3g}"
 
 
-def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: SampleEvaluation,
+def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: EcBatch,
               variation: Variation) -> tuple[EcStats, ...]:
     axes = {n: np.array([s.offsets[i] for s in samples])
             for i, n in enumerate(MOUNT_AXES) if variation.axes[i].varies}
@@ -350,7 +310,7 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         curve.append(ScalePoint(float(s), yield_estimate(e.all_passed)))
     t2 = time.perf_counter()
     n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
-    worst = int(np.lexsort((ev.scores, -n_fail))[0])
+    worst = int(np.lexsort((ev.score, -n_fail))[0])
     nominal = worst_frame = None
     if frames:
         nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale, base)

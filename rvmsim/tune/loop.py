@@ -19,9 +19,10 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from .._procs import spawn_pool, stop_pool
-from ..criteria import CandidateEvaluator, Criteria
+from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams
+from ..pipeline import ImageEvaluator, make_evaluator
 from .config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
 from .members import (OBJECTIVE_COMBINE, Aggregate, Member, MembersScorer, MembersSolver, check_members,
@@ -48,7 +49,7 @@ class VectorScorer:
     """``xs → ScoredBatch`` on one evaluator (:func:`score_vectors`); picklable, what
     the worker processes of a one-scene search hold."""
 
-    def __init__(self, evaluator: CandidateEvaluator, space: SearchSpace,
+    def __init__(self, evaluator: ImageEvaluator, space: SearchSpace,
                  solver: Callable[[IspParams], IspParams] | None = None,
                  objective: str = "log-score"):
         self.evaluator, self.space, self.solver, self.objective = (evaluator, space, solver,
@@ -95,7 +96,7 @@ class BatchEvaluator:
     ``scorer`` replaces the one-evaluator scoring (``evaluator``, ``solver`` and
     ``objective`` are then unused): a :class:`~rvmsim.tune.MembersScorer`."""
 
-    def __init__(self, evaluator: CandidateEvaluator | None, space: SearchSpace,
+    def __init__(self, evaluator: ImageEvaluator | None, space: SearchSpace,
                  workers: int = 1, solver: Callable[[IspParams], IspParams] | None = None,
                  objective: str = "log-score",
                  scorer: Callable[[list[np.ndarray]], ScoredBatch] | None = None):
@@ -233,7 +234,7 @@ def run_search(
 
 
 # ---------------------------------------------------------------------------- the core
-def solver_for(strategy: Strategy, evaluator: CandidateEvaluator) -> EcSolver | None:
+def solver_for(strategy: Strategy, evaluator: ImageEvaluator) -> EcSolver | None:
     """The :class:`EcSolver` a strategy that solves (``strategy.solves``) evaluates its
     candidates with, on ``evaluator``'s scene, output and criteria; it also tells the
     strategy which parameters are solved (``strategy.solved``).  None for other strategies."""
@@ -244,7 +245,7 @@ def solver_for(strategy: Strategy, evaluator: CandidateEvaluator) -> EcSolver | 
     return solver
 
 
-def strategy_scorer(strategy: Strategy, evaluator: CandidateEvaluator
+def strategy_scorer(strategy: Strategy, evaluator: ImageEvaluator
                     ) -> Callable[[list[np.ndarray]], ScoredBatch]:
     """``xs → ScoredBatch`` for ``strategy``'s candidates in this process, solved when the
     strategy solves (for benchmarks and custom loops; :func:`search_scene` is the full run)."""
@@ -253,10 +254,10 @@ def strategy_scorer(strategy: Strategy, evaluator: CandidateEvaluator
 
 
 def candidate_evaluator(images: FisheyeImages, config: TuningConfig,
-                        criteria: Criteria) -> CandidateEvaluator:
-    """The evaluator tuning uses: ``images``' labels, the config's RVM output, ``criteria``."""
-    return CandidateEvaluator(images.labels, config.output_spec(), criteria, scene=images.scene,
-                              camera=images.camera)
+                        criteria: Criteria) -> ImageEvaluator:
+    """The evaluator tuning uses: ``images``' labels, the config's RVM output, ``criteria``
+    (:func:`rvmsim.pipeline.make_evaluator`'s windowed path)."""
+    return make_evaluator(images, config.output_spec(), criteria)
 
 
 def search_scene(
@@ -272,7 +273,7 @@ def search_scene(
     max_time: float | None = None,
     target_score: float | None = None,
     on_batch: Callable[[int, float, str], None] | None = None,
-    evaluator: CandidateEvaluator | None = None,
+    evaluator: ImageEvaluator | None = None,
     starts: Sequence[IspParams] = (),
 ) -> SearchOutcome:
     """Search one scene's ISP parameters: the core of a tuning run, a sweep point or a task.
@@ -293,7 +294,7 @@ def search_scene(
         ``--budget`` (see :func:`rvmsim.tune.make_strategy`).
     workers : int
         Worker processes (1: evaluate in this process).
-    evaluator : CandidateEvaluator, optional
+    evaluator : ImageEvaluator, optional
         Made with :func:`candidate_evaluator` when not given (pass one to reuse it after the
         search, e.g. for a sensitivity analysis).
     starts : sequence of IspParams
@@ -315,7 +316,7 @@ def search_scene(
                   on_batch)
 
 
-def _one_scene(strat: Strategy, evaluator: CandidateEvaluator, workers: int) -> BatchEvaluator:
+def _one_scene(strat: Strategy, evaluator: ImageEvaluator, workers: int) -> BatchEvaluator:
     """The batch evaluator of a one-scene search: solved and scored as ``strat`` asks."""
     return BatchEvaluator(evaluator, strat.space, workers, solver_for(strat, evaluator),
                           strat.objective)

@@ -3,7 +3,7 @@
 A *member* is one fisheye label image with its camera: for shared tuning one per vehicle
 or variant (:func:`rvmsim.tune.tune` with several scenes), for robust tuning one per
 variation sample of one scene.  Every member is evaluated with its own
-:class:`~rvmsim.criteria.CandidateEvaluator` (in the worker processes, as for one scene),
+evaluator (:func:`rvmsim.pipeline.make_evaluator`, in the worker processes, as for one scene),
 and the members' verdicts are combined into the one trial the run store and the strategy
 see:
 
@@ -36,9 +36,10 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
-from ..criteria import CandidateEvaluator, Criteria
+from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
+from ..pipeline import ImageEvaluator, make_evaluator
 from .objective import PASS_WEIGHT, ScoredBatch, check_objective, score_params
 from .records import params_json
 from .solve import EcSolver
@@ -195,7 +196,7 @@ class MembersScorer:
     :class:`~rvmsim.tune.BatchEvaluator` runs in its workers for a multi-member search.
     Picklable (each worker holds every member's evaluator)."""
 
-    def __init__(self, evaluators: Sequence[CandidateEvaluator], space: SearchSpace,
+    def __init__(self, evaluators: Sequence[ImageEvaluator], space: SearchSpace,
                  solver: Callable[[IspParams], IspParams] | None = None,
                  objective: str = "log-score", aggregate: Aggregate = Aggregate(),
                  combine: str = OBJECTIVE_COMBINE):
@@ -231,8 +232,7 @@ class MembersScorer:
 
 
 def member_evaluators(members: Sequence[Member], output: OutputSpec,
-                      criteria: Criteria) -> list[CandidateEvaluator]:
-    """One :class:`CandidateEvaluator` per member on the run's RVM ``output`` and
-    ``criteria``."""
-    return [CandidateEvaluator(m.labels, output, criteria, scene=m.scene, camera=m.camera)
-            for m in members]
+                      criteria: Criteria) -> list[ImageEvaluator]:
+    """One evaluator per member (:func:`rvmsim.pipeline.make_evaluator`) on the run's RVM
+    ``output`` and ``criteria``."""
+    return [make_evaluator(m, output, criteria) for m in members]

@@ -23,8 +23,9 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..criteria import CandidateEvaluator, Criteria, score_batch
+from ..criteria import Criteria, score_batch
 from ..isp import IspParams
+from ..pipeline import ImageEvaluator
 from .records import ec_json, params_json
 from .space import SearchSpace
 
@@ -82,12 +83,12 @@ class ScoredBatch:
     members: list[list[tuple[float, float, bool, str]]] = field(default_factory=list)
 
 
-def score_vectors(evaluator: CandidateEvaluator, space: SearchSpace,
+def score_vectors(evaluator: ImageEvaluator, space: SearchSpace,
                   xs: Sequence[np.ndarray],
                   solver: Callable[[IspParams], IspParams] | None = None,
                   objective: str = "log-score") -> ScoredBatch:
-    """Evaluate candidate vectors of ``space`` with a
-    :class:`~rvmsim.criteria.CandidateEvaluator`, scored and serialised for the store
+    """Evaluate candidate vectors of ``space`` with an evaluator
+    (:func:`rvmsim.pipeline.make_evaluator`), scored and serialised for the store
     (EC columns in ``evaluator.criteria.ids`` order).  ``solver`` (an
     :class:`~rvmsim.tune.EcSolver`) first sets the parameters it solves; the stored
     parameters are the solved ones.  ``objective`` is one of :data:`OBJECTIVES`."""
@@ -120,7 +121,7 @@ class ParamsScores:
     ec_json: list[str]
 
 
-def score_params(evaluator: CandidateEvaluator, params: Sequence[IspParams], *,
+def score_params(evaluator: ImageEvaluator, params: Sequence[IspParams], *,
                  violation: bool = True) -> ParamsScores:
     """Evaluate parameter sets (already solved) with ``evaluator``: the part of
     :func:`score_vectors` that a multi-member evaluation repeats per member.  Without

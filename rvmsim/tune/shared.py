@@ -143,7 +143,7 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
                          criteria: Criteria, aggregate: str) -> None:
     """``best/members.json`` (each scene's EC results under the best parameters, and the
     aggregate) and ``best/ec_table.txt`` (each scene's EC table under its vehicle name)."""
-    from ..pipeline import evaluate_params
+    from ..pipeline import make_evaluator
 
     top = store.top(1)
     if not top:
@@ -152,7 +152,7 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
     out = config.output_spec()
     docs, tables = [], []
     for sc, im in zip(scenes, renders):
-        ec = evaluate_params(im, best.params, out, criteria, annotate=False).ec
+        ec = make_evaluator(im, out, criteria, path="full")(best.params)
         docs.append({"vehicle": sc.name, "scene": sc.source, **ec.as_dict()})
         tables.append(f"{sc.name}:\n{ec.table()}")
     (run_dir / "best").mkdir(parents=True, exist_ok=True)

@@ -186,7 +186,8 @@ def test_rvm_labels_of_samples_equal_the_isp_on_their_fisheye_labels():
     """sample_rvm_labels re-folds only the pixels the RVM image shows; the result is the
     ISP (rvmsim.isp.process) run on the whole re-folded fisheye label image."""
     from rvmsim.isp import IspParams, OutputSpec, process
-    from rvmsim.robust import refolder, rvm_pixels, sample_rvm_labels
+    from rvmsim.pipeline import rvm_pixels
+    from rvmsim.robust import refolder, sample_rvm_labels
 
     sc = small_scene(0.25, variation={**ANGLES_ONLY, "load_states": [
         {"name": "curb"}, {"name": "full", "height_mm": -40, "pitch_deg": 1.0}]})

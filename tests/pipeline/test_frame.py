@@ -11,7 +11,7 @@ from rvmsim.criteria import annotate, criteria_from_text, default_criteria, eval
 from rvmsim.isp import IspParams, OutputSpec, process
 from rvmsim.pipeline import evaluate_params, render_rvm, rvm_color, write_frame
 
-from .conftest import bundled_scene, small_render
+from ..conftest import bundled_scene, small_render
 
 PARAMS = IspParams().replace(rad=306.0, zoom=0.6, adv_v_shift=0.2)  # for the half-size render
 OUT = OutputSpec(320, 180)

@@ -1,0 +1,46 @@
+"""Rendered fisheye images → RVM images → ECs: the evaluation paths and the one factory that
+chooses among them.
+
+Modules: :mod:`.frame` (:func:`evaluate_params`, the full path: one candidate's RVM colour
+and label images, ECs and annotated image; :func:`render_rvm`), :mod:`.evaluators`
+(:func:`make_evaluator`: the evaluator of one image for many candidates, or of a batch of
+images for one setting, on the fastest exact path the criteria allow), :mod:`.pixels` (the
+fisheye pixels an RVM image shows), :mod:`.files` (what ``render``, ``process`` and
+``evaluate`` write).
+"""
+
+from __future__ import annotations
+
+from .frame import RvmFrame, evaluate_params, evaluate_rvm_labels, render_rvm, rvm_color
+from .pixels import RvmPixels, rvm_pixels
+from .evaluators import (
+    EvaluationPath,
+    FisheyeLabels,
+    FisheyeSet,
+    FullEvaluator,
+    ImageEvaluator,
+    SetEvaluator,
+    make_evaluator,
+)
+from .files import write_evaluation, write_fisheye, write_frame, write_processed
+
+__all__ = [
+    "RvmFrame",
+    "evaluate_params",
+    "evaluate_rvm_labels",
+    "render_rvm",
+    "rvm_color",
+    "RvmPixels",
+    "rvm_pixels",
+    "EvaluationPath",
+    "FisheyeLabels",
+    "FisheyeSet",
+    "FullEvaluator",
+    "ImageEvaluator",
+    "SetEvaluator",
+    "make_evaluator",
+    "write_evaluation",
+    "write_fisheye",
+    "write_frame",
+    "write_processed",
+]

@@ -1,0 +1,277 @@
+"""One factory for every evaluator: a candidate's ECs on one fisheye image, or one setting's
+ECs on a batch of images (variation samples today, cars off the line next).
+
+:func:`make_evaluator` is the only place an evaluator is chosen.  It takes what is judged
+and the criteria, and picks the path from what the criteria declare:
+
+==================  ==========================================================================
+source              path
+==================  ==========================================================================
+one image           ``windowed`` (:class:`rvmsim.criteria.CandidateEvaluator`): the map's
+                    node grid, only the windows of the label groups the ECs declare; built
+                    once per image, for many candidates (tuning).
+a batch of images   ``rvm-pixels``: one map per setting, each image's labels only at the
+                    fisheye pixels the RVM image shows (:class:`RvmPixels`) — when no EC
+                    reads the scene (:attr:`rvmsim.criteria.Criteria.uses_scene`); else
+                    ``full``: each image's whole fisheye labels through the full path.
+==================  ==========================================================================
+
+``path="full"`` asks for the full path (:func:`rvmsim.pipeline.evaluate_rvm_labels` on the
+whole remapped label image, what ``rvmsim evaluate`` measures) whatever the criteria: the
+reference the fast paths are tested against, EC value for EC value.
+
+Criteria whose ECs read the scene (1-5, 1-6, 6-1) are refused for images that carry no
+scene: those ECs would come out "not measured" and fail every candidate.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Iterator, Sequence
+from typing import Any, Protocol, overload, runtime_checkable
+
+import numpy as np
+
+from ..camera import FisheyeCamera
+from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measurements,
+                        default_criteria, measure_labels, scene_context, score, score_batch,
+                        values_array)
+from ..isp import IspParams, OutputSpec, process
+from ..scene import Scene
+from .frame import evaluate_rvm_labels
+from .pixels import RvmPixels, rvm_pixels
+
+__all__ = ["EvaluationPath", "FisheyeLabels", "FisheyeSet", "ImageEvaluator", "FullEvaluator",
+           "SetEvaluator", "make_evaluator"]
+
+#: Images of a batch held at once (bounds the memory of label images in flight).
+_CHUNK = 32
+
+
+class EvaluationPath(str, enum.Enum):
+    """How an evaluator gets the RVM labels it measures (see the module docstring)."""
+
+    WINDOWED = "windowed"
+    FULL = "full"
+    RVM_PIXELS = "rvm-pixels"
+
+
+class FisheyeLabels(Protocol):
+    """One fisheye label image with the camera that saw it and the scene it shows (None when
+    unknown): :class:`rvmsim.render.FisheyeImages`, a tuning member, …"""
+
+    @property
+    def labels(self) -> np.ndarray: ...
+
+    @property
+    def camera(self) -> FisheyeCamera: ...
+
+    @property
+    def scene(self) -> Scene | None: ...
+
+
+@runtime_checkable
+class FisheyeSet(Protocol):
+    """A batch of fisheye images that one ISP setting is judged on: one lens and sensor size
+    (``camera``, at the images' size), one scene (None when unknown), each image its own pose.
+
+    ``fisheye(indices)`` yields those images' whole label images (with their own cameras);
+    ``rvm_labels(pixels, indices)`` yields their RVM label images under the setting of
+    ``pixels``, reading only the fisheye pixels it lists — equal to
+    ``process(None, image.labels, params, output)[1]`` (implementations test this).
+    """
+
+    @property
+    def camera(self) -> FisheyeCamera: ...
+
+    @property
+    def scene(self) -> Scene | None: ...
+
+    def __len__(self) -> int: ...
+
+    def fisheye(self, indices: Sequence[int]) -> Iterator[FisheyeLabels]: ...
+
+    def rvm_labels(self, pixels: RvmPixels, indices: Sequence[int]) -> Iterator[np.ndarray]: ...
+
+
+class ImageEvaluator(Protocol):
+    """A candidate's ECs on one fisheye label image (``fisheye``), for parameter sets of that
+    image's size: what tuning calls (``values`` per candidate, in ``criteria.ids`` order,
+    NaN where not measured)."""
+
+    @property
+    def criteria(self) -> Criteria: ...
+
+    @property
+    def output(self) -> OutputSpec: ...
+
+    @property
+    def fisheye(self) -> np.ndarray: ...
+
+    def measure(self, params: IspParams) -> Measurements: ...
+
+    def values(self, params: IspParams) -> np.ndarray: ...
+
+    def __call__(self, params: IspParams) -> EcResult: ...
+
+
+class FullEvaluator:
+    """The full path for one image: every call remaps the whole label image
+    (:func:`rvmsim.isp.process`) and measures it as ``rvmsim evaluate`` does.  Picklable."""
+
+    path = EvaluationPath.FULL
+
+    def __init__(self, image: FisheyeLabels, output: OutputSpec, criteria: Criteria):
+        self.fisheye = np.ascontiguousarray(image.labels)
+        self.output = output
+        self.criteria = criteria
+        self.context = scene_context(image.scene, image.camera, self.fisheye)
+
+    def measure(self, params: IspParams) -> Measurements:
+        """The raw measurements of one parameter set."""
+        _, rvm = process(None, self.fisheye, params, self.output)
+        assert rvm is not None
+        return evaluate_rvm_labels(rvm, self.fisheye, params, self.output, self.criteria,
+                                   context=self.context).measurements
+
+    def values(self, params: IspParams) -> np.ndarray:
+        """The measured values, (k,) in ``criteria.ids`` order, NaN where not measured."""
+        return values_array(self.measure(params), self.criteria.ids)
+
+    def __call__(self, params: IspParams) -> EcResult:
+        return score(self.measure(params), self.criteria)
+
+
+class SetEvaluator:
+    """One ISP setting's ECs on every image of a :class:`FisheyeSet` (see the module
+    docstring for :attr:`path`).  Made by :func:`make_evaluator`."""
+
+    def __init__(self, images: FisheyeSet, output: OutputSpec, criteria: Criteria,
+                 path: EvaluationPath):
+        self.images = images
+        self.output = output
+        self.criteria = criteria
+        self.path = path
+
+    def __call__(self, params: IspParams | Sequence[IspParams], *,
+                 indices: Sequence[int] | None = None, progress: str | None = None) -> EcBatch:
+        """Every EC on every image (or the images ``indices``).
+
+        Parameters
+        ----------
+        params : IspParams or sequence of IspParams
+            For the images' size: one setting for all, or one per image (per-car values).
+        indices : sequence of int, optional
+            The images to judge, in this order (default: all).
+        progress : str, optional
+            Show a progress bar with this description.
+
+        Returns
+        -------
+        EcBatch
+            One row per image (``values`` NaN where not measured; ``score``, ``all_passed``).
+        """
+        idx = list(range(len(self.images))) if indices is None else list(indices)
+        per_image = [params] * len(idx) if isinstance(params, IspParams) else list(params)
+        if len(per_image) != len(idx):
+            raise ValueError(f"{len(per_image)} parameter sets for {len(idx)} images")
+        values = np.full((len(idx), len(self.criteria.ids)), np.nan)
+        bar = _bar(progress, len(idx))
+        for rows, p in _runs(per_image):
+            for start in range(0, len(rows), _CHUNK):
+                chunk = rows[start:start + _CHUNK]
+                values[chunk] = self._values(p, [idx[r] for r in chunk])
+                if bar is not None:
+                    bar.update(len(chunk))
+        if bar is not None:
+            bar.close()
+        return score_batch(values, self.criteria)
+
+    def _values(self, params: IspParams, indices: list[int]) -> np.ndarray:
+        crit = self.criteria
+        if self.path is EvaluationPath.RVM_PIXELS:
+            pixels = rvm_pixels(self.images.camera, params, self.output)
+            results = (measure_labels(labels, crit)
+                       for labels in self.images.rvm_labels(pixels, indices))
+        else:
+            results = (FullEvaluator(im, self.output, crit).measure(params)
+                       for im in self.images.fisheye(indices))
+        return np.array([values_array(m, crit.ids) for m in results]).reshape(
+            len(indices), len(crit.ids))
+
+
+def _runs(per_image: list[IspParams]) -> list[tuple[list[int], IspParams]]:
+    """Rows grouped by their parameter set (first-seen order): one map per setting."""
+    groups: dict[IspParams, list[int]] = {}
+    for r, p in enumerate(per_image):
+        groups.setdefault(p, []).append(r)
+    return [(rows, p) for p, rows in groups.items()]
+
+
+def _bar(desc: str | None, total: int) -> Any:
+    """A tqdm bar (untyped), or None without a description."""
+    if desc is None:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="image", leave=False)
+
+
+@overload
+def make_evaluator(source: FisheyeSet, output: OutputSpec, criteria: Criteria | None = ...,
+                   *, path: EvaluationPath | str | None = ...) -> SetEvaluator: ...
+
+
+@overload
+def make_evaluator(source: FisheyeLabels, output: OutputSpec, criteria: Criteria | None = ...,
+                   *, path: EvaluationPath | str | None = ...) -> ImageEvaluator: ...
+
+
+def make_evaluator(source: FisheyeLabels | FisheyeSet, output: OutputSpec,
+                   criteria: Criteria | None = None, *,
+                   path: EvaluationPath | str | None = None) -> ImageEvaluator | SetEvaluator:
+    """The evaluator of ``criteria`` on ``source``, on the path the criteria allow.
+
+    Parameters
+    ----------
+    source : FisheyeLabels or FisheyeSet
+        One fisheye label image (e.g. :class:`rvmsim.render.FisheyeImages`), judged for many
+        candidates, or a batch of images judged for one setting at a time.
+    output : OutputSpec
+        The RVM image size (px) and mirroring the ECs are measured at.
+    criteria : Criteria, optional
+        Default: the paper's (:func:`rvmsim.criteria.default_criteria`).
+    path : EvaluationPath or str, optional
+        Default: the fastest exact path (the module docstring's table); ``"full"`` for the
+        reference.  One image takes ``windowed`` or ``full``; a batch ``rvm-pixels`` (only
+        when no EC reads the scene) or ``full``.
+
+    Returns
+    -------
+    ImageEvaluator or SetEvaluator
+
+    Raises
+    ------
+    ValueError
+        The criteria read the scene but ``source`` carries none; or ``path`` does not fit.
+    """
+    crit = criteria if criteria is not None else default_criteria()
+    chosen = None if path is None else EvaluationPath(path)
+    if crit.uses_scene and source.scene is None:
+        ids = ", ".join(ec.id for ec in crit.ecs if ec.uses_scene)
+        raise ValueError(f"criteria {crit.name!r}: ECs {ids} read the scene, but the images "
+                         "carry none")
+    if isinstance(source, FisheyeSet):
+        chosen = chosen or (EvaluationPath.FULL if crit.uses_scene else EvaluationPath.RVM_PIXELS)
+        if chosen is EvaluationPath.WINDOWED or (chosen is EvaluationPath.RVM_PIXELS
+                                                 and crit.uses_scene):
+            raise ValueError(f"a batch of images cannot take the {chosen.value} path"
+                             + (" with ECs that read the scene" if crit.uses_scene else ""))
+        return SetEvaluator(source, output, crit, chosen)
+    chosen = chosen or EvaluationPath.WINDOWED
+    if chosen is EvaluationPath.RVM_PIXELS:
+        raise ValueError("one image takes the windowed or the full path")
+    if chosen is EvaluationPath.FULL:
+        return FullEvaluator(source, output, crit)
+    return CandidateEvaluator(source.labels, output, crit, scene=source.scene,
+                              camera=source.camera)
