@@ -24,8 +24,8 @@ import numpy as np  # noqa: E402
 from skimage.measure import regionprops  # noqa: E402
 
 from rvmsim.criteria import default_criteria, evaluate  # noqa: E402
-from rvmsim.criteria import CandidateEvaluator  # noqa: E402
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map  # noqa: E402
+from rvmsim.pipeline import make_evaluator  # noqa: E402
 from rvmsim.render import render_fisheye  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
 
@@ -61,7 +61,7 @@ def main() -> None:
     for p in cands:
         evaluate(apply_map(img.labels, build_map(p, size, out)), crit)
     per_cand = (time.perf_counter() - t) / len(cands)
-    fast = CandidateEvaluator(img.labels, out, crit)
+    fast = make_evaluator(img, out, crit)  # the windowed path
     t = time.perf_counter()
     for p in cands:
         fast(p)

@@ -19,7 +19,8 @@ from pathlib import Path
 
 import yaml
 
-from rvmsim.criteria import CandidateEvaluator, default_criteria
+from rvmsim.criteria import default_criteria
+from rvmsim.pipeline import make_evaluator
 from rvmsim.render import cached_render
 from rvmsim.scene import load_scene
 from rvmsim.tune import COMBINES, SOLVE_MODES, Member, RunStore, TuningConfig, score_params
@@ -58,7 +59,7 @@ def main() -> None:
         sc = load_scene(small_scene(letter, folder))
         images, _ = cached_render(sc)
         members.append(Member(letter, images.labels, images.camera))
-    evs = [CandidateEvaluator(m.labels, cfg.output_spec(), crit) for m in members]
+    evs = [make_evaluator(m, cfg.output_spec(), crit) for m in members]
 
     def judge(params) -> tuple[float, bool, str]:
         res = [score_params(ev, [params]) for ev in evs]
