@@ -81,7 +81,8 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     from .cli_params import check_scale
     from .criteria import load_criteria
     from .report import write_robustness_outputs
-    from .robust import load_variation, robustness as run_robustness, variation_from_scene
+    from .robust import RobustnessSettings, load_variation, variation_from_scene
+    from .robust import robustness as run_robustness
     from .scene import load_scene
 
     try:
@@ -97,11 +98,9 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
         else:
             variation = variation_from_scene(sc)
         with make_executor(scheduler, workers) as runner:
-            result = run_robustness(sc, params, output, criteria=criteria,
-                                    variation=variation, samples=samples, seed=seed,
-                                    scales=scales, scale_samples=scale_samples,
-                                    render_scale=scale, min_yield=min_yield, runner=runner,
-                                    progress=progress)
+            result = run_robustness(sc, params, RobustnessSettings(
+                output, criteria, variation, samples, seed, scales, scale_samples, scale,
+                min_yield), runner=runner, progress=progress)
         written = write_robustness_outputs(result, out)
     except RvmsimError as err:
         _fail(err)

@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 
 from rvmsim.isp import load_params  # noqa: E402
 from rvmsim.render import posed_parts  # noqa: E402
-from rvmsim.robust import (body_pose, draw_samples, robustness, sample_camera,  # noqa: E402
+from rvmsim.robust import (RobustnessSettings, body_pose, draw_samples, robustness, sample_camera,  # noqa: E402
                            sample_images, variation_from_scene)
 from rvmsim.scene import BlockPart, Scene, load_scene, site_landmarks  # noqa: E402
 
@@ -148,7 +148,8 @@ def main() -> None:  # long: one report, step by step
         if args.serial_baseline:
             os.environ["RVMSIM_CACHE"] = str(Path(tmp) / "cache-serial")
             t = time.perf_counter()
-            res = robustness(scene, params, output, samples=args.samples, seed=args.seed)
+            res = robustness(scene, params, RobustnessSettings(output, samples=args.samples,
+                                                                seed=args.seed))
             t_serial = time.perf_counter() - t
             print(f"\nrobustness cold, rendering here one after another: {t_serial:.1f} s "
                   f"({res.timings})")
@@ -156,8 +157,8 @@ def main() -> None:  # long: one report, step by step
         for label in (f"cold, renders on {args.workers} processes", "cached"):
             t = time.perf_counter()
             with LocalExecutor(args.workers) as ex:
-                res = robustness(scene, params, output, samples=args.samples, seed=args.seed,
-                                 runner=ex)
+                res = robustness(scene, params, RobustnessSettings(
+                    output, samples=args.samples, seed=args.seed), runner=ex)
             times.append(time.perf_counter() - t)
             print(f"\nrobustness {label}: {times[-1]:.1f} s ({res.timings})")
         if args.serial_baseline:
@@ -165,7 +166,8 @@ def main() -> None:  # long: one report, step by step
                   f"{args.workers} processes")
         print(res.summary())
         t1 = time.perf_counter()
-        robustness(scene, params, output, samples=args.samples, seed=args.seed, scales=(1.0,))
+        robustness(scene, params, RobustnessSettings(output, samples=args.samples,
+                                                     seed=args.seed, scales=(1.0,)))
         t_one = time.perf_counter() - t1
     print(f"\ncached, without the yield curve: {t_one:.1f} s")
     print(f"baseline: one full render per sample: {t_full:.2f} s each (mean of {k}) -> "

@@ -24,7 +24,7 @@ from rvmsim.pipeline import make_evaluator
 from rvmsim.render import cached_render
 from rvmsim.scene import load_scene
 from rvmsim.tune import COMBINES, SOLVE_MODES, Member, RunStore, TuningConfig, score_params
-from rvmsim.tune import search_members
+from rvmsim.tune import SearchSettings, search_members
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -69,16 +69,16 @@ def main() -> None:
 
     if args.alone:
         for m in members:
-            o = search_members([m], config=cfg, criteria=crit, strategy="cmaes-solved",
-                               store=RunStore(":memory:"), budget=args.budget)
+            o = search_members([m], SearchSettings(cfg, crit, "cmaes-solved",
+                                                   budget=args.budget), RunStore(":memory:"))
             print(f"{m.name} alone: {judge(o.best.params)[2]}")
     table: dict[tuple[str, str], list[tuple[float, bool]]] = {}
     for seed in range(args.seeds):
         for combine in COMBINES:
             for solve in SOLVE_MODES:
-                o = search_members(members, config=cfg, criteria=crit, strategy="cmaes-solved",
-                                   store=RunStore(":memory:"), seed=seed, budget=args.budget,
-                                   combine=combine, solve=solve)
+                how = SearchSettings(cfg, crit, "cmaes-solved", seed, args.budget,
+                                     solve=solve, combine=combine)
+                o = search_members(members, how, RunStore(":memory:"))
                 low, ok, text = judge(o.best.params)
                 table.setdefault((combine, solve), []).append((low, ok))
                 print(f"seed {seed} {combine:13} {solve:5} agg {o.best.score:.3f}  {text}")

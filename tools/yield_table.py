@@ -163,7 +163,7 @@ def yield_of(scene_path: Path, setting: dict[str, Any], path: Path,
 
     from rvmsim.isp import load_params
     from rvmsim.render import scene_key
-    from rvmsim.robust import robustness
+    from rvmsim.robust import RobustnessSettings, robustness
     from rvmsim.scene import load_scene
 
     scene = load_scene(scene_path)
@@ -178,8 +178,10 @@ def yield_of(scene_path: Path, setting: dict[str, Any], path: Path,
     params, output = load_params(params_file)
     say(f"  robustness of {path.stem}: {args.samples} samples")
     t0 = time.perf_counter()
-    res = robustness(scene, params, output, samples=args.samples, seed=args.eval_seed,
-                     scales=args.scales, progress=args.progress)
+    res = robustness(scene, params, RobustnessSettings(output, samples=args.samples,
+                                                       seed=args.eval_seed,
+                                                       scales=tuple(args.scales)),
+                     progress=args.progress)
     doc = {"key": key, "seconds": time.perf_counter() - t0, "result": res.as_dict()}
     path.write_text(json.dumps(doc, indent=1))
     return {**doc, "reused": False}

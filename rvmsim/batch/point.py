@@ -60,7 +60,7 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from ..render import cached_render
     from ..isp import IspParams
-    from ..tune import RunStore, candidate_evaluator, search_scene
+    from ..tune import RunStore, SearchSettings, candidate_evaluator, search_scene
     from .feasibility import infeasible_ecs
     from .yields import point_yield
 
@@ -83,9 +83,9 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         starts = [IspParams(**p) for p in task.get("starts", ())]
         store = RunStore(":memory:")
         try:
-            outcome = search_scene(images, config=config, criteria=criteria,
-                                   strategy=task["strategy"], store=store, seed=task["seed"],
-                                   budget=budget, evaluator=evaluator, starts=starts)
+            how = SearchSettings(config, criteria, task["strategy"], task["seed"], budget,
+                                 tuple(starts))
+            outcome = search_scene(images, how, store, evaluator=evaluator)
             n_eval = store.count()
         finally:
             store.close()

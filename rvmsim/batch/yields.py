@@ -72,12 +72,13 @@ def point_yield(scene: Any, params: Any, output: Any, criteria: Any, samples: in
     render_scale : float
         Fraction of the sensor rendered: 1, as the point's tuning renders it.
     """
-    from ..robust import robustness
+    from ..robust import RobustnessSettings, robustness
 
     t0 = time.perf_counter()
+    settings = RobustnessSettings(output, criteria, samples=samples, seed=seed, scales=(1.0,),
+                                  render_scale=render_scale)
     try:
-        res = robustness(scene, params, output, criteria=criteria, samples=samples, seed=seed,
-                         scales=(1.0,), render_scale=render_scale, frames=False)
+        res = robustness(scene, params, settings, frames=False)
     except RvmsimError as err:
         return {"error": f"yield: {err}", "seconds": time.perf_counter() - t0}
     return {**yield_summary(res), "seconds": time.perf_counter() - t0}

@@ -32,8 +32,8 @@ from .samples import MountSample, draw_samples, nominal_sample
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
 from .variation import MOUNT_AXES, Variation, variation_from_scene
 
-__all__ = ["EcStats", "ScalePoint", "RobustnessResult", "evaluate_samples", "robustness",
-           "DEFAULT_SCALES"]
+__all__ = ["EcStats", "ScalePoint", "RobustnessResult", "RobustnessSettings", "evaluate_samples",
+           "robustness", "DEFAULT_SCALES"]
 
 #: Tolerance scale factors of the yield curve.
 DEFAULT_SCALES = (0.5, 1.0, 1.5, 2.0)
@@ -239,20 +239,14 @@ def _frame(scene: Scene, sample: MountSample, params: IspParams, output: OutputS
                            annotate=True)
 
 
-def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(), *,
-               criteria: Criteria | None = None, variation: Variation | None = None,
-               samples: int = 200, seed: int = 0, scales: Sequence[float] = DEFAULT_SCALES,
-               scale_samples: int | None = None, render_scale: float = 1.0,
-               min_yield: float | None = None, runner: TaskRunner | None = None,
-               frames: bool = True, progress: bool = False) -> RobustnessResult:
-    """The yield of ``params`` over ``scene``'s production variation.
+@dataclass(frozen=True)
+class RobustnessSettings:
+    """What a yield is judged with (``rvmsim robustness``'s options; recorded in the result).
 
     Parameters
     ----------
-    scene : Scene
-    params : IspParams
-        For the full sensor.
     output : OutputSpec
+        The RVM image the ECs are measured on.
     criteria : Criteria, optional
         Default: the paper's.
     variation : Variation, optional
@@ -261,7 +255,7 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         Samples at tolerance scale 1.
     seed : int
         Sobol scrambling seed (the same seed, the same samples and result).
-    scales : sequence of float
+    scales : tuple of float
         Tolerance scale factors of the yield curve (1 reuses the main samples).
     scale_samples : int, optional
         Samples per other scale factor; default ``min(samples, 64)``.
@@ -269,6 +263,32 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
         Fraction of the sensor rendered (small renders for tests).
     min_yield : float, optional
         Recorded with the result (``meets_min_yield``).
+    """
+
+    output: OutputSpec = OutputSpec()
+    criteria: Criteria | None = None
+    variation: Variation | None = None
+    samples: int = 200
+    seed: int = 0
+    scales: tuple[float, ...] = DEFAULT_SCALES
+    scale_samples: int | None = None
+    render_scale: float = 1.0
+    min_yield: float | None = None
+
+
+def robustness(scene: Scene, params: IspParams,
+               settings: RobustnessSettings = RobustnessSettings(), *,
+               runner: TaskRunner | None = None, frames: bool = True,
+               progress: bool = False) -> RobustnessResult:
+    """The yield of ``params`` over ``scene``'s production variation.
+
+    Parameters
+    ----------
+    scene : Scene
+    params : IspParams
+        For the full sensor.
+    settings : RobustnessSettings
+        The output, criteria, variation, samples, seed, yield curve and render scale.
     runner : TaskRunner, optional
         Where the viewpoints not yet in the render cache are rendered, all before the
         first sample is evaluated (``rvmsim.batch.LocalExecutor(workers)``, a Dask
@@ -283,12 +303,13 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
     RobustnessResult
     """
     t0 = time.perf_counter()
-    crit = criteria if criteria is not None else default_criteria()
-    var = variation if variation is not None else variation_from_scene(scene)
-    drawn = draw_samples(var, samples, seed)
-    n_extra = scale_samples or min(samples, 64)
+    crit = settings.criteria if settings.criteria is not None else default_criteria()
+    var = settings.variation if settings.variation is not None else variation_from_scene(scene)
+    seed, output, render_scale = settings.seed, settings.output, settings.render_scale
+    drawn = draw_samples(var, settings.samples, seed)
+    n_extra = settings.scale_samples or min(settings.samples, 64)
     extra = {float(s): draw_samples(var, n_extra, seed, s)
-             for s in scales if s != 1.0}
+             for s in settings.scales if s != 1.0}
     sets = {1.0: drawn, **extra}
     base = refolder(scene, drawn, scale=render_scale)
     folds = {1.0: base, **{s: Refolder(cover_for(scene, v, scale=render_scale), base.rays)
@@ -303,7 +324,7 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
                           shared=folds[1.0], progress=progress)
     t1 = time.perf_counter()
     curve = []
-    for s in scales:
+    for s in settings.scales:
         e = ev if s == 1.0 else evaluate_samples(scene, extra[float(s)], params, output, crit,
                                                  scale=render_scale, shared=folds[float(s)],
                                                  progress=progress)
@@ -319,6 +340,6 @@ def robustness(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
     return RobustnessResult(
         scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,
         yield_estimate(ev.all_passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
-        worst_frame, worst, min_yield,
+        worst_frame, worst, settings.min_yield,
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
          "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)})

@@ -96,6 +96,7 @@ from .loop import (
     solver_for,
     strategy_scorer,
 )
+from .requests import SearchOptions, SearchSettings
 from .solve import EcSolver, SOLVED_PARAMS
 from .lock import (
     FolderLock,
@@ -223,6 +224,8 @@ __all__ = [
     "SOLVED_PARAMS",
     "CmaEsSolved",
     "candidate_evaluator",
+    "SearchSettings",
+    "SearchOptions",
     "FolderLock",
     "Writer",
     "open_run",

@@ -25,9 +25,10 @@ from ..isp import IspParams
 from ..pipeline import ImageEvaluator, make_evaluator
 from .config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
-from .members import (OBJECTIVE_COMBINE, Aggregate, Member, MembersScorer, MembersSolver, check_members,
-                      member_evaluators, parse_aggregate)
+from .members import (Member, MembersScorer, MembersSolver, check_members, member_evaluators,
+                      parse_aggregate)
 from .records import StopReason, TrialRecord
+from .requests import SearchOptions, SearchSettings
 from .solve import EcSolver
 from .space import SearchSpace
 from .store import RunStore
@@ -260,25 +261,12 @@ def candidate_evaluator(images: FisheyeImages, config: TuningConfig,
     return make_evaluator(images, config.output_spec(), criteria)
 
 
-def search_scene(
-    images: FisheyeImages,
-    *,
-    config: TuningConfig,
-    criteria: Criteria,
-    strategy: str | Strategy,
-    store: RunStore,
-    seed: int = 0,
-    budget: int | None = None,
-    workers: int = 1,
-    max_time: float | None = None,
-    target_score: float | None = None,
-    on_batch: Callable[[int, float, str], None] | None = None,
-    evaluator: ImageEvaluator | None = None,
-    starts: Sequence[IspParams] = (),
-) -> SearchOutcome:
+def search_scene(images: FisheyeImages, settings: SearchSettings, store: RunStore, *,
+                 options: SearchOptions = SearchOptions(),
+                 evaluator: ImageEvaluator | None = None) -> SearchOutcome:
     """Search one scene's ISP parameters: the core of a tuning run, a sweep point or a task.
 
-    Builds the config's space on ``images.camera`` and the registered ``strategy``, and runs
+    Builds the config's space on ``images.camera`` and the registered strategy, and runs
     it (:func:`run_search`) into ``store``, continuing what the store holds already.  Writes
     no files besides the store (``RunStore(":memory:")`` for none at all).
 
@@ -286,34 +274,25 @@ def search_scene(
     ----------
     images : FisheyeImages
         The scene's rendered fisheye images (only the labels are used).
-    strategy : str or Strategy
-        A name in :data:`rvmsim.tune.STRATEGIES` (made with :func:`rvmsim.tune.make_strategy`
-        from ``config``, ``seed`` and ``budget`` on the config's space), or a strategy already
-        made (its space is used; ``seed`` and ``budget`` are then ignored).
-    budget : int, optional
-        ``--budget`` (see :func:`rvmsim.tune.make_strategy`).
-    workers : int
-        Worker processes (1: evaluate in this process).
+    settings : SearchSettings
+        Config, criteria, strategy, seed, budget and starting points.
+    store : RunStore
+    options : SearchOptions
+        Worker processes, stop conditions, progress callback.
     evaluator : ImageEvaluator, optional
         Made with :func:`candidate_evaluator` when not given (pass one to reuse it after the
         search, e.g. for a sensitivity analysis).
-    starts : sequence of IspParams
-        Parameter sets to start from (e.g. neighbouring design points' optima), evaluated
-        first by the strategies that use them (:attr:`Strategy.starts`); ignored when
-        ``strategy`` is a strategy already made.
-    max_time, target_score, on_batch
-        As in :func:`run_search`.
     """
-    if isinstance(strategy, Strategy):
-        strat = strategy
+    config = settings.config
+    if isinstance(settings.strategy, Strategy):
+        strat = settings.strategy
     else:
         space = config.space(images.camera)
-        strat = make_strategy(strategy, space, config, seed, budget,
-                              [space.vector(p) for p in starts])
+        strat = make_strategy(settings.strategy, space, config, settings.seed, settings.budget,
+                              [space.vector(p) for p in settings.starts])
     if evaluator is None:
-        evaluator = candidate_evaluator(images, config, criteria)
-    return _drive(strat, _one_scene(strat, evaluator, workers), store, max_time, target_score,
-                  on_batch)
+        evaluator = candidate_evaluator(images, config, settings.criteria)
+    return _drive(strat, _one_scene(strat, evaluator, options.workers), store, options)
 
 
 def _one_scene(strat: Strategy, evaluator: ImageEvaluator, workers: int) -> BatchEvaluator:
@@ -323,33 +302,17 @@ def _one_scene(strat: Strategy, evaluator: ImageEvaluator, workers: int) -> Batc
 
 
 def _drive(strat: Strategy, batch_eval: BatchEvaluator, store: RunStore,
-           max_time: float | None, target_score: float | None,
-           on_batch: Callable[[int, float, str], None] | None) -> SearchOutcome:
+           options: SearchOptions) -> SearchOutcome:
     """:func:`run_search` with ``batch_eval``, whose worker processes are stopped after."""
     try:
-        return run_search(strat, batch_eval, store, max_time=max_time,
-                          target_score=target_score, on_batch=on_batch)
+        return run_search(strat, batch_eval, store, max_time=options.max_time,
+                          target_score=options.target_score, on_batch=options.on_batch)
     finally:
         batch_eval.close()
 
 
-def search_members(
-    members: Sequence[Member],
-    *,
-    config: TuningConfig,
-    criteria: Criteria,
-    strategy: str | Strategy,
-    store: RunStore,
-    aggregate: str | Aggregate = "min",
-    solve: str = "mean",
-    combine: str = OBJECTIVE_COMBINE,
-    seed: int = 0,
-    budget: int | None = None,
-    workers: int = 1,
-    max_time: float | None = None,
-    target_score: float | None = None,
-    on_batch: Callable[[int, float, str], None] | None = None,
-) -> SearchOutcome:
+def search_members(members: Sequence[Member], settings: SearchSettings, store: RunStore, *,
+                   options: SearchOptions = SearchOptions()) -> SearchOutcome:
     """Search one ISP parameter set for several members at once (shared tuning: one member
     per vehicle; robust tuning: one per variation sample), see :mod:`rvmsim.tune.members`.
 
@@ -362,32 +325,31 @@ def search_members(
     ----------
     members : sequence of Member
         The label images to judge every candidate on, the first the nominal one.
-    aggregate : str or Aggregate
-        ``min`` (default) or ``quantile Q`` (:func:`parse_aggregate`).
-    solve : str
-        How the sub-solves of ``cmaes-solved`` combine (:data:`SOLVE_MODES`).
-    combine : str
-        How the ``min`` aggregate combines the members' objectives
-        (:data:`OBJECTIVE_COMBINE`: ``sum-violation`` or ``min``).
-    strategy, seed, budget, workers, max_time, target_score, on_batch
-        As in :func:`search_scene`.
+    settings : SearchSettings
+        As for :func:`search_scene`, with how the members combine (``aggregate``, ``solve``,
+        ``combine``); ``starts`` are not used.
+    store : RunStore
+    options : SearchOptions
     """
     check_members(members)
-    agg = parse_aggregate(aggregate)
-    if isinstance(strategy, Strategy):
-        strat = strategy
+    agg = parse_aggregate(settings.aggregate)
+    config, criteria = settings.config, settings.criteria
+    if isinstance(settings.strategy, Strategy):
+        strat = settings.strategy
     else:
-        strat = make_strategy(strategy, config.space(members[0].camera), config, seed, budget)
+        strat = make_strategy(settings.strategy, config.space(members[0].camera), config,
+                              settings.seed, settings.budget)
     output = config.output_spec()
+    evaluators = member_evaluators(members, output, criteria)
     if len(members) == 1:
-        batch_eval = _one_scene(strat, member_evaluators(members, output, criteria)[0], workers)
+        batch_eval = _one_scene(strat, evaluators[0], options.workers)
     else:
-        evaluators = member_evaluators(members, output, criteria)
         solver = None
         if strat.solves:
             solver = MembersSolver([EcSolver(ev.fisheye, output, criteria, strat.space)
-                                    for ev in evaluators], solve)
+                                    for ev in evaluators], settings.solve)
             strat.solved = solver.names
-        scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg, combine)
-        batch_eval = BatchEvaluator(None, strat.space, workers, scorer=scorer)
-    return _drive(strat, batch_eval, store, max_time, target_score, on_batch)
+        scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg,
+                               settings.combine)
+        batch_eval = BatchEvaluator(None, strat.space, options.workers, scorer=scorer)
+    return _drive(strat, batch_eval, store, options)

@@ -24,6 +24,7 @@ from .members import Member, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_variations, variation_key,
                      write_robust_results)
 from .records import RunSettings, RunStatus
+from .requests import SearchOptions, SearchSettings
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
 from .store import RunStore
@@ -319,18 +320,14 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
     store.write_space(strat.space)  # the space the diverse top-M measures distances in
     progress, on_batch = bar
     try:
+        how = SearchSettings(settings.config, crit, strat,
+                             aggregate=settings.aggregate or "min")
+        opts = SearchOptions(workers, max_time, target_score, on_batch)
         if settings.shared or members is not None:
-            outcome = search_members(members or scene_members(scenes, renders),
-                                     config=settings.config,
-                                     criteria=crit, strategy=strat, store=store,
-                                     aggregate=settings.aggregate or "min", workers=workers,
-                                     max_time=max_time, target_score=target_score,
-                                     on_batch=on_batch)
+            outcome = search_members(members or scene_members(scenes, renders), how, store,
+                                     options=opts)
         else:
-            outcome = search_scene(renders[0], config=settings.config, criteria=crit,
-                                   strategy=strat, store=store, workers=workers,
-                                   max_time=max_time, target_score=target_score,
-                                   on_batch=on_batch)
+            outcome = search_scene(renders[0], how, store, options=opts)
     except KeyboardInterrupt:
         store.set_state(RunStatus.INTERRUPTED)
         raise

@@ -23,7 +23,7 @@ from rvmsim.criteria import default_criteria
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import IspParams
 from rvmsim.report import write_sweep_outputs
-from rvmsim.robust import robustness
+from rvmsim.robust import RobustnessSettings, robustness
 from rvmsim.scene import scene_from_dict
 from rvmsim.tune import TuningConfig
 
@@ -68,9 +68,9 @@ def _direct(spec, point, params):
     doc, config = point_scene_doc(spec, point.values)
     scene = scene_from_dict(doc, source="direct")
     output = TuningConfig.model_validate(config).output_spec()
-    return robustness(scene, IspParams(**params), output, criteria=default_criteria(),
-                      samples=spec.robustness.samples, seed=spec.robustness.seed,
-                      scales=(1.0,))
+    return robustness(scene, IspParams(**params), RobustnessSettings(
+        output, default_criteria(), samples=spec.robustness.samples,
+        seed=spec.robustness.seed, scales=(1.0,)))
 
 
 def test_each_point_has_the_yield_of_its_stored_best_setting(yield_run):

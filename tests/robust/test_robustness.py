@@ -14,7 +14,7 @@ from rvmsim.criteria import CandidateEvaluator, Criteria, default_criteria
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.render import render_fisheye
 from rvmsim.report import write_robustness_outputs
-from rvmsim.robust import robustness
+from rvmsim.robust import RobustnessSettings, robustness
 
 from ..bad_input.harness import run_rvmsim
 from .conftest import ANGLES_ONLY, ROOT, small_scene
@@ -49,9 +49,9 @@ def settings():
 
 def test_a_setting_on_an_ecs_edge_has_a_lower_yield(settings, tmp_path: Path):
     sc, crit, mid, edge = settings
-    kw = dict(criteria=crit, samples=32, seed=1, scales=(0.5, 1.0))
-    r_mid = robustness(sc, mid, OUTPUT, **kw)
-    r_edge = robustness(sc, edge, OUTPUT, **kw)
+    how = RobustnessSettings(OUTPUT, crit, samples=32, seed=1, scales=(0.5, 1.0))
+    r_mid = robustness(sc, mid, how)
+    r_edge = robustness(sc, edge, how)
     assert r_edge.yield_ < r_mid.yield_
     assert r_mid.nominal.ec.passed and r_edge.nominal.ec.passed  # both pass as designed
     for r in (r_mid, r_edge):
@@ -79,9 +79,9 @@ def test_the_same_seed_gives_the_same_result(settings):
     """And without the report's frames (a sweep's yield column) the same samples and
     values, but no nominal or worst frame."""
     sc, crit, _, edge = settings
-    a = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,))
-    b = robustness(sc, edge, OUTPUT, criteria=crit, samples=16, seed=4, scales=(1.0,),
-                   frames=False)
+    how = RobustnessSettings(OUTPUT, crit, samples=16, seed=4, scales=(1.0,))
+    a = robustness(sc, edge, how)
+    b = robustness(sc, edge, how, frames=False)
     np.testing.assert_array_equal(a.evaluation.values, b.evaluation.values)
     assert a.as_dict()["samples"] == b.as_dict()["samples"]
     assert a.nominal is not None and a.worst is not None
@@ -124,8 +124,9 @@ def _runner_case(settings, cache: Path, monkeypatch: pytest.MonkeyPatch, runner)
     _, crit, mid, _ = settings
     monkeypatch.setenv("RVMSIM_CACHE", str(cache))
     sc = small_scene(0.25, variation=WITH_POSITIONS)
-    return robustness(sc, mid, OUTPUT, criteria=crit, samples=16, seed=2,
-                      scales=(0.5, 1.0, 2.0), scale_samples=8, runner=runner)
+    return robustness(sc, mid, RobustnessSettings(OUTPUT, crit, samples=16, seed=2,
+                                                  scales=(0.5, 1.0, 2.0), scale_samples=8),
+                      runner=runner)
 
 
 def _same_evaluation(a, b) -> None:
@@ -180,12 +181,13 @@ def test_ecs_that_read_the_scene_are_measured_on_every_sample(settings):
     sc, _, mid, _ = settings
     full = load_criteria("fmvss111-full")
     assert full.uses_scene and not default_criteria().uses_scene
-    kw = dict(samples=8, seed=3, scales=(1.0,), frames=False)
-    res = robustness(sc, mid, OUTPUT, criteria=full, **kw)
+    kw = dict(samples=8, seed=3, scales=(1.0,))
+    res = robustness(sc, mid, RobustnessSettings(OUTPUT, full, **kw), frames=False)
     ev = res.evaluation
     cols = [ev.ids.index(e) for e in ("1-5", "1-6", "6-1")]
     assert np.isfinite(ev.values[:, cols]).all(), ev.values[:, cols]
-    paper = robustness(sc, mid, OUTPUT, criteria=default_criteria(), **kw).evaluation
+    paper = robustness(sc, mid, RobustnessSettings(OUTPUT, default_criteria(), **kw),
+                       frames=False).evaluation
     same = [ev.ids.index(e) for e in paper.ids]
     np.testing.assert_allclose(ev.values[:, same], paper.values, rtol=1e-9, equal_nan=True)
     np.testing.assert_array_equal(ev.passed[:, same], paper.passed)

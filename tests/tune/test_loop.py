@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 
@@ -35,8 +37,8 @@ def _problem():
 def test_search_scene_is_the_loop_over_the_config_strategy_and_evaluator():
     """search_scene = make_strategy + run_search with score_vectors, on one process or two."""
     from rvmsim.criteria import CandidateEvaluator
-    from rvmsim.tune import (RunStore, StopReason, make_strategy, run_search, score_vectors,
-                             search_scene)
+    from rvmsim.tune import (RunStore, SearchOptions, SearchSettings, StopReason, make_strategy,
+                             run_search, score_vectors, search_scene)
 
     images, config, criteria = _problem()
     space = config.space(images.camera)
@@ -46,8 +48,8 @@ def test_search_scene_is_the_loop_over_the_config_strategy_and_evaluator():
     run_search(strat, lambda xs: score_vectors(ev, space, xs), by_hand)
     for workers in (1, 2):
         store = RunStore(":memory:")
-        out = search_scene(images, config=config, criteria=criteria, strategy="random", seed=3,
-                           budget=40, store=store, workers=workers)
+        out = search_scene(images, SearchSettings(config, criteria, "random", 3, 40), store,
+                           options=SearchOptions(workers=workers))
         assert (out.evaluated, out.replayed, out.stopped, out.total) == (40, 0,
                                                                            StopReason.DONE, 40)
         assert out.space == space
@@ -61,17 +63,17 @@ def test_search_scene_continues_its_store_and_refuses_other_settings():
     """A search stopped by max_time continues in the same store to the unbroken result; a
     store of other settings is not mixed in."""
     from rvmsim.errors import RvmsimError
-    from rvmsim.tune import RunStore, StopReason, search_scene
+    from rvmsim.tune import RunStore, SearchOptions, SearchSettings, StopReason, search_scene
 
     images, config, criteria = _problem()
-    kw = dict(config=config, criteria=criteria, strategy="cmaes", budget=60)
+    how = SearchSettings(config, criteria, "cmaes", seed=1, budget=60)
     whole = RunStore(":memory:")
-    search_scene(images, seed=1, store=whole, **kw)
+    search_scene(images, how, whole)
     store = RunStore(":memory:")
-    first = search_scene(images, seed=1, store=store, max_time=0.0, **kw)
+    first = search_scene(images, how, store, options=SearchOptions(max_time=0.0))
     assert first.stopped is StopReason.MAX_TIME and 0 < first.evaluated < 60
-    rest = search_scene(images, seed=1, store=store, **kw)
+    rest = search_scene(images, how, store)
     assert rest.replayed == first.evaluated and rest.stopped is StopReason.DONE
     assert store.trials() == whole.trials()
     with pytest.raises(RvmsimError, match="trial 0 differs from what this strategy, seed"):
-        search_scene(images, seed=2, store=store, **kw)
+        search_scene(images, dataclasses.replace(how, seed=2), store)

@@ -18,6 +18,8 @@ from rvmsim.tune import (
     MembersScorer,
     MembersSolver,
     RunStore,
+    SearchOptions,
+    SearchSettings,
     TuningConfig,
     check_members,
     ec_json,
@@ -113,10 +115,9 @@ def test_one_member_searches_exactly_as_one_scene(two):
     crit = default_criteria()
     a = RunStore(":memory:")
     b = RunStore(":memory:")
-    search_scene(imgs[0], config=CFG, criteria=crit, strategy="cmaes-solved", store=a,
-                 budget=120)
-    search_members([Member("A", imgs[0].labels, imgs[0].camera)], config=CFG, criteria=crit,
-                   strategy="cmaes-solved", store=b, budget=120)
+    how = SearchSettings(CFG, crit, "cmaes-solved", budget=120)
+    search_scene(imgs[0], how, a)
+    search_members([Member("A", imgs[0].labels, imgs[0].camera)], how, b)
     assert [(r.params, r.score, r.objective, r.ecs) for r in a.trials()] == \
         [(r.params, r.score, r.objective, r.ecs) for r in b.trials()]
     assert b.member_results(0) == []  # no members table for one member
@@ -127,8 +128,8 @@ def test_two_members_store_each_members_results(two, tmp_path):
     crit = default_criteria()
     store = RunStore(tmp_path / "run.sqlite")
     members = [Member(n, i.labels, i.camera) for n, i in zip("AE", imgs)]
-    out = search_members(members, config=CFG, criteria=crit, strategy="cmaes-solved",
-                         store=store, budget=60, workers=2)
+    how = SearchSettings(CFG, crit, "cmaes-solved", budget=60)
+    out = search_members(members, how, store, options=SearchOptions(workers=2))
     assert out.evaluated >= 60
     best = out.best
     rows = store.member_results(best.idx)
@@ -143,8 +144,7 @@ def test_two_members_store_each_members_results(two, tmp_path):
     store.close()
     # a worker-process search and an in-process one agree
     again = RunStore(":memory:")
-    search_members(members, config=CFG, criteria=crit, strategy="cmaes-solved", store=again,
-                   budget=60)
+    search_members(members, how, again)
     assert [r.score for r in again.trials()] == [r.score for r in RunStore(
         tmp_path / "run.sqlite", readonly=True).trials()]
 
@@ -158,8 +158,8 @@ def test_members_of_different_sensor_sizes_are_refused(two):
     strat = make_strategy("random", CFG.space(imgs[0].camera), CFG, 0, 10)
     with pytest.raises(RvmsimError, match="A small"):
         search_members([Member("A", imgs[0].labels, imgs[0].camera),
-                        Member("A small", half.labels, half.camera)], config=CFG,
-                       criteria=default_criteria(), strategy=strat, store=RunStore(":memory:"))
+                        Member("A small", half.labels, half.camera)],
+                       SearchSettings(CFG, default_criteria(), strat), RunStore(":memory:"))
 
 
 def test_a_quantile_aggregate_takes_that_quantile_of_scores_and_objectives(two):

@@ -55,7 +55,7 @@ def _best_members(run_dir):
 
 def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     from rvmsim.isp import OutputSpec
-    from rvmsim.robust import robustness
+    from rvmsim.robust import RobustnessSettings, robustness
 
     cfg = TuningConfig.model_validate(CONFIG)
     nominal = tune(small, tmp_path / "nominal", config=cfg, budget=600, seed=1)
@@ -64,10 +64,9 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     out = OutputSpec(320, 180)
     scene = load_scene(small)
     # judged on 48 samples the runs never saw (another seed)
-    y_nom = robustness(scene, _best(tmp_path / "nominal").params, out, samples=48, seed=77,
-                       scales=(1.0,))
-    y_rob = robustness(scene, _best(tmp_path / "robust").params, out, samples=48, seed=77,
-                       scales=(1.0,))
+    fresh = RobustnessSettings(out, samples=48, seed=77, scales=(1.0,))
+    y_nom = robustness(scene, _best(tmp_path / "nominal").params, fresh)
+    y_rob = robustness(scene, _best(tmp_path / "robust").params, fresh)
     assert y_rob.estimate.yield_ > y_nom.estimate.yield_
     assert nominal.outcome.best.passed  # the nominal setting passes where it was tuned
     doc = json.loads((tmp_path / "robust" / "best" / "robust.json").read_text())
