@@ -32,8 +32,8 @@ image and ECs under the paper's default ISP parameters:
 A short tuning run (every trial goes into ``run/run.sqlite``; ``best/`` and ``top/`` hold the
 results) and its review report:
 
->>> result = rvmsim.tune_scene("scenes/vehicle_a.yaml", run_dir, strategy="random",
-...                            budget=40, seed=0)
+>>> request = rvmsim.TuneRequest(("scenes/vehicle_a.yaml",), strategy="random", budget=40)
+>>> result = rvmsim.tune_scene(request, run_dir)
 >>> result.outcome.evaluated
 40
 >>> 0.0 <= result.outcome.best.score <= 1.0
@@ -98,12 +98,17 @@ _LAZY: dict[str, tuple[str, str]] = {
     "RvmFrame": ("rvmsim.pipeline", "RvmFrame"),
     "evaluate_params": ("rvmsim.pipeline", "evaluate_params"),
     "render_rvm": ("rvmsim.pipeline", "render_rvm"),
+    "make_evaluator": ("rvmsim.pipeline", "make_evaluator"),
     # production variation
     "load_variation": ("rvmsim.robust", "load_variation"),
     "draw_samples": ("rvmsim.robust", "draw_samples"),
     "robustness": ("rvmsim.robust", "robustness"),
+    "RobustnessSettings": ("rvmsim.robust", "RobustnessSettings"),
     # tuning
     "tune_scene": ("rvmsim.tune", "tune"),
+    "TuneRequest": ("rvmsim.tune", "TuneRequest"),
+    "RunOptions": ("rvmsim.tune", "RunOptions"),
+    "resume_run": ("rvmsim.tune", "resume"),
     "TuningConfig": ("rvmsim.tune", "TuningConfig"),
     "load_tuning_config": ("rvmsim.tune", "load_tuning_config"),
     "STRATEGIES": ("rvmsim.tune", "STRATEGIES"),

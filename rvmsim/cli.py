@@ -188,25 +188,26 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
          workers: int, budget: int | None, max_time: float | None, target_score: float | None,
          resume_dir: Path | None, force: bool, progress: bool) -> None:
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared), or --resume RUN."""
-    from .tune import check_tune_arguments, load_tuning_config, summary_lines
-    from .tune.robust import DEFAULT_SAMPLES
+    from .tune import (RunOptions, TuneRequest, check_tune_arguments, load_tuning_config,
+                       summary_lines)
+    from .tune import resume as resume_run
     from .tune import tune as run_tune
+    from .tune.robust import DEFAULT_SAMPLES
 
     try:
         check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None, robust,
                              samples, variation_file)
+        options = RunOptions(workers, max_time, target_score, progress)
         if resume_dir is not None:
-            result = run_tune(None, resume_dir, resume=True, workers=workers, max_time=max_time,
-                              target_score=target_score, progress=progress)
+            result = resume_run(resume_dir, options=options)
         else:
-            result = run_tune(list(scenes) if shared else scenes[0],
-                              out or Path("runs") / "+".join(s.stem for s in scenes),
-                              config=load_tuning_config(config_file), strategy=strategy,
-                              aggregate=aggregate, force=force, seed=seed,
-                              robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
-                              variation_file=variation_file,
-                              criteria_file=criteria_file, workers=workers, budget=budget,
-                              max_time=max_time, target_score=target_score, progress=progress)
+            request = TuneRequest(
+                tuple(scenes), strategy, load_tuning_config(config_file),
+                criteria_file=criteria_file, seed=seed, budget=budget, aggregate=aggregate,
+                robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
+                variation_file=variation_file)
+            result = run_tune(request, out or Path("runs") / "+".join(s.stem for s in scenes),
+                              options=options, force=force)
         lines = summary_lines(result)
     except RvmsimError as err:
         _fail(err)

@@ -22,7 +22,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim.tune import TuningConfig, tune  # noqa: E402
+from rvmsim.tune import RunOptions, TuneRequest, TuningConfig, tune  # noqa: E402
 
 
 def main() -> None:
@@ -36,13 +36,13 @@ def main() -> None:
         tmp = Path(tmp)
         cfg = TuningConfig()
         # Warm the render cache (rendering is once per scene, not part of the protocol).
-        tune(args.scene, tmp / "warm", strategy="random", config=cfg, budget=1, workers=1)
-        one = tune(args.scene, tmp / "one", strategy="grid-random", config=cfg, workers=1,
-                   budget=args.trials, max_time=10.0)  # stops after ~10 s of searching
+        tune(TuneRequest((args.scene,), "random", cfg, budget=1), tmp / "warm")
+        one = tune(TuneRequest((args.scene,), "grid-random", cfg, budget=args.trials),
+                   tmp / "one", options=RunOptions(max_time=10.0))  # ~10 s of searching
         base_rate = one.outcome.evaluated / one.outcome.seconds
         t = time.perf_counter()
-        run = tune(args.scene, tmp / "full", strategy="grid-random", config=cfg,
-                   workers=args.workers, budget=args.trials)
+        run = tune(TuneRequest((args.scene,), "grid-random", cfg, budget=args.trials),
+                   tmp / "full", options=RunOptions(args.workers))
         wall = time.perf_counter() - t
         n = run.outcome.evaluated
         print(f"scene {args.scene}: paper protocol, {n} evaluations "

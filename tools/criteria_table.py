@@ -26,7 +26,7 @@ from rvmsim.isp import load_params
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.scene import absolute_mesh_paths, load_scene, read_scene_document
-from rvmsim.tune import tune
+from rvmsim.tune import RunOptions, TuneRequest, tune
 
 ROOT = Path(__file__).resolve().parent.parent
 CRITERIA = "fmvss111-full"
@@ -104,8 +104,8 @@ def main() -> None:
         if args.scale != 1.0:
             scene_file = scaled_scene_file(scene_file, args.scale, args.out / "scenes")
         run_dir = args.out / f"vehicle_{letter}"
-        result = tune(scene_file, run_dir, criteria_file=CRITERIA, seed=0,
-                      workers=args.workers, budget=args.budget, force=True)
+        result = tune(TuneRequest((scene_file,), criteria_file=CRITERIA, budget=args.budget),
+                      run_dir, options=RunOptions(args.workers), force=True)
         scene = load_scene(scene_file)
         params, output = load_params(run_dir / "top" / "rank_1.yaml")
         images, _ = cached_render(scene)

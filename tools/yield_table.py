@@ -113,7 +113,7 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
     from rvmsim.isp import load_params, params_to_dict
     from rvmsim.render import scene_key
     from rvmsim.scene import load_scene
-    from rvmsim.tune import DEFAULT_STRATEGY, tune
+    from rvmsim.tune import DEFAULT_STRATEGY, RunOptions, TuneRequest, resume, tune
     from rvmsim.tune.robust import run_variations, variation_key
 
     scene = load_scene(scene_path)
@@ -133,12 +133,12 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
     if resumed:
         _check_run(run_dir, want)
         say(f"  resuming {run_dir}")
-        result = tune(None, run_dir, resume=True, workers=args.workers, progress=args.progress)
+        result = resume(run_dir, options=RunOptions(args.workers, progress=args.progress))
     else:
         say(f"  tuning into {run_dir}")
-        result = tune(scene_path, run_dir, strategy=DEFAULT_STRATEGY, seed=args.seed,
-                      budget=args.budget, robust_samples=robust_samples, workers=args.workers,
-                      progress=args.progress)
+        result = tune(TuneRequest((scene_path,), DEFAULT_STRATEGY, seed=args.seed,
+                                  budget=args.budget, robust_samples=robust_samples), run_dir,
+                      options=RunOptions(args.workers, progress=args.progress))
     seconds = time.perf_counter() - t0
     params, output = load_params(rank_1)
     best = result.outcome.best

@@ -113,17 +113,18 @@ def run_batch(scenes: Sequence[Path], out: Path, settings: BatchSettings, *,
 
 def _local_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings, progress: bool,
                 on_start: Callable[[int, Path], None] | None) -> Iterator[SceneRun]:
-    from ..tune import tune
+    from ..tune import RunOptions, TuneRequest, tune
 
     for k, scene in enumerate(scenes, start=1):
         if on_start is not None:
             on_start(k, scene)
         run_dir = out / scene.stem
         try:
-            r = tune(scene, run_dir, strategy=settings.strategy, config=settings.config,
-                     criteria_file=settings.criteria_file, seed=settings.seed,
-                     workers=settings.workers, budget=settings.budget, progress=progress,
-                     progress_position=1)
+            r = tune(TuneRequest((scene,), settings.strategy, settings.config,
+                                 criteria_file=settings.criteria_file, seed=settings.seed,
+                                 budget=settings.budget), run_dir,
+                     options=RunOptions(settings.workers, progress=progress,
+                                        progress_position=1))
         except RvmsimError as err:
             yield SceneRun.failed(scene, err)
             continue
@@ -247,7 +248,7 @@ def tune_task(task: dict[str, Any]) -> dict[str, Any]:
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from ..criteria import criteria_from_text
     from ..scene import scene_from_dict
-    from ..tune import TuningConfig, tune
+    from ..tune import RunOptions, TuneRequest, TuningConfig, tune
     from .executors import task_malloc
 
     try:
@@ -258,10 +259,11 @@ def tune_task(task: dict[str, Any]) -> dict[str, Any]:
             criteria = (criteria_from_text(task["criteria"], crit_source)
                         if task.get("criteria") else None)
             run_dir = Path(tmp) / "run"
-            res = tune(scene, run_dir, scene_file=recorded, strategy=task["strategy"],
-                       config=TuningConfig.model_validate(task["config"]), criteria=criteria,
-                       criteria_file=task.get("criteria_file"), seed=task["seed"],
-                       workers=task.get("workers", 1), budget=task.get("budget"))
+            request = TuneRequest((scene,), task["strategy"],
+                                  TuningConfig.model_validate(task["config"]), criteria,
+                                  task.get("criteria_file"), task["seed"], task.get("budget"),
+                                  scene_file=recorded)
+            res = tune(request, run_dir, options=RunOptions(task.get("workers", 1)))
             files = {str(p.relative_to(run_dir)): p.read_bytes()
                      for p in sorted(run_dir.rglob("*")) if p.is_file()}
             return {"files": files, "evaluated": res.outcome.evaluated,

@@ -96,7 +96,7 @@ from .loop import (
     solver_for,
     strategy_scorer,
 )
-from .requests import SearchOptions, SearchSettings
+from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .solve import EcSolver, SOLVED_PARAMS
 from .lock import (
     FolderLock,
@@ -135,6 +135,7 @@ from .shared import (
 )
 from .run import (
     tune,
+    resume,
     TuneResult,
     write_results,
     DISPLAY_SIZE,
@@ -226,6 +227,8 @@ __all__ = [
     "candidate_evaluator",
     "SearchSettings",
     "SearchOptions",
+    "TuneRequest",
+    "RunOptions",
     "FolderLock",
     "Writer",
     "open_run",
@@ -241,6 +244,7 @@ __all__ = [
     "load_shared_scenes",
     "write_member_results",
     "tune",
+    "resume",
     "TuneResult",
     "write_results",
     "DISPLAY_SIZE",

@@ -1,5 +1,6 @@
-"""What a search is asked to do, as frozen objects: what defines it (:class:`SearchSettings`)
-and how it runs here and now (:class:`SearchOptions`).
+"""What a search or a tuning run is asked to do, as frozen objects: what defines it
+(:class:`SearchSettings`, :class:`TuneRequest`) and how it runs here and now
+(:class:`SearchOptions`, :class:`RunOptions`).
 
 A new option of the search is one field with one default here; the CLI, a sweep point and
 a cluster task build the objects and pass them down unchanged.
@@ -9,6 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Union
 
 from ..criteria import Criteria
 from ..isp import IspParams
@@ -16,7 +19,13 @@ from .config import TuningConfig
 from .members import OBJECTIVE_COMBINE, Aggregate
 from .strategies import DEFAULT_STRATEGY, Strategy
 
-__all__ = ["SearchSettings", "SearchOptions"]
+if TYPE_CHECKING:
+    from ..scene import Scene
+
+__all__ = ["SearchSettings", "SearchOptions", "TuneRequest", "RunOptions", "SceneArg"]
+
+#: A scene as a tuning run takes it: its file, or a loaded Scene.
+SceneArg = Union[str, Path, "Scene"]
 
 
 @dataclass(frozen=True)
@@ -80,3 +89,88 @@ class SearchOptions:
     max_time: float | None = None
     target_score: float | None = None
     on_batch: Callable[[int, float, str], None] | None = None
+
+
+@dataclass(frozen=True)
+class TuneRequest:
+    """What defines a new tuning run (:func:`rvmsim.tune.tune`); recorded in its store as
+    :class:`~rvmsim.tune.RunSettings`, so a resumed run reads it back.
+
+    Parameters
+    ----------
+    scenes : tuple of (path or Scene)
+        The scene file, or a loaded :class:`~rvmsim.scene.Scene` (recorded by
+        ``scene_file``, by default its ``source``); two or more make a shared run (one
+        parameter set for all; the space is fitted to the first scene's camera, and every
+        scene's camera must have its sensor size).  One scene may be given alone.
+    strategy : str
+        A name in :data:`rvmsim.tune.STRATEGIES`.
+    config : TuningConfig, optional
+        Default: ``TuningConfig()`` (ranges fitted to the camera).
+    criteria : Criteria, optional
+        Default: loaded from ``criteria_file``, default the paper's.
+    criteria_file : path, optional
+        Recorded, for ``--resume`` and the report.
+    seed : int
+    budget : int, optional
+        Evaluations for ``cmaes-solved``/``cmaes``/``random``; for ``grid-random`` the fine
+        trials per seed (T), replacing the config's value (a shortened protocol).
+    aggregate : str, optional
+        How a shared or robust run combines its members' EC scores: ``min`` or ``quantile
+        Q`` (:func:`rvmsim.tune.parse_aggregate`); default ``min`` for a shared run and
+        :data:`rvmsim.tune.robust.ROBUST_AGGREGATE` for a robust one.
+    robust_samples : int, optional
+        A robust run (:mod:`rvmsim.tune.robust`): judge every candidate on each scene's
+        nominal image and this many variation samples of it (``--robust --samples K``).
+    variation_file : path, optional
+        The variation to draw them from (default: each scene's ``variation`` section).
+    scene_file : path, optional
+        The path recorded for a loaded Scene given alone.
+    """
+
+    scenes: tuple[SceneArg, ...]
+    strategy: str = DEFAULT_STRATEGY
+    config: TuningConfig | None = None
+    criteria: Criteria | None = None
+    criteria_file: str | Path | None = None
+    seed: int = 0
+    budget: int | None = None
+    aggregate: str | None = None
+    robust_samples: int | None = None
+    variation_file: str | Path | None = None
+    scene_file: str | Path | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scenes, (tuple, list)) or not self.scenes:
+            raise TypeError("TuneRequest.scenes: give a tuple of one or more scenes")
+        object.__setattr__(self, "scenes", tuple(self.scenes))
+
+    @property
+    def shared(self) -> bool:
+        """Several scenes: one parameter set for all."""
+        return len(self.scenes) > 1
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How a tuning run runs here (not recorded: a resume may use others).
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (1: evaluate in this process).
+    max_time : float, optional
+        Stop (resumably) after this many seconds.
+    target_score : float, optional
+        Stop once the best EC score reaches this.
+    progress : bool
+        Show a progress bar (evaluations/s, best EC score, ETA).
+    progress_position : int
+        Line of that bar (``rvmsim batch`` puts its overall bar above it).
+    """
+
+    workers: int = 1
+    max_time: float | None = None
+    target_score: float | None = None
+    progress: bool = False
+    progress_position: int = 0

@@ -13,7 +13,7 @@ import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Sequence, Union
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
@@ -24,22 +24,20 @@ from .members import Member, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_variations, variation_key,
                      write_robust_results)
 from .records import RunSettings, RunStatus
-from .requests import SearchOptions, SearchSettings
+from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
 from .store import RunStore
-from .strategies import DEFAULT_STRATEGY, Strategy, check_seed
+from .strategies import Strategy, check_seed
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
+    from .lock import FolderLock
     from ..render import FisheyeImages
     from ..scene import Scene
 
-__all__ = ["tune", "TuneResult", "write_results",
+__all__ = ["tune", "resume", "TuneResult", "write_results",
            "DISPLAY_SIZE", "summary_lines", "remove_run"]
-
-#: A scene as :func:`tune` takes it: its file, or a loaded Scene.
-SceneArg = Union[str, Path, "Scene"]
 
 #: Size of the RVM display image written for the best candidate (the ECs are measured at the
 #: tuning config's ``output`` size).
@@ -62,11 +60,7 @@ def _check_out(run_dir: Path) -> None:
         raise RvmsimError(f"{run_dir}: not a folder (a file is there); give a run folder")
 
 
-def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
-             scene_file: str | Path | None, strategy: str, config: TuningConfig | None,
-             criteria: Criteria | None, criteria_file: str | Path | None, seed: int,
-             budget: int | None, force: bool, aggregate: str,
-             robust: tuple[int, str | None] | None = None
+def _new_run(run_dir: Path, request: TuneRequest, force: bool
              ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
     every input is checked here, before anything in ``run_dir`` changes)."""
@@ -74,35 +68,37 @@ def _new_run(run_dir: Path, scene: SceneArg | Sequence[SceneArg] | None,
     from ..render import scene_key
     from ..scene import Scene, load_scene
 
-    check_seed(seed)
-    if budget is not None and (not isinstance(budget, int) or isinstance(budget, bool)
-                               or budget < 1):
-        raise RvmsimError(f"--budget {budget!r}: give a whole number of at least 1")
+    r = request
+    check_seed(r.seed)
+    if r.budget is not None and (not isinstance(r.budget, int) or isinstance(r.budget, bool)
+                                 or r.budget < 1):
+        raise RvmsimError(f"--budget {r.budget!r}: give a whole number of at least 1")
     if not force and (run_dir / RUN_DB).exists():
         raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it, "
                           "or --force to replace it")
-    if isinstance(scene, (list, tuple)):  # shared: one parameter set for every scene
-        agg = parse_aggregate(aggregate).text
-        scenes = load_shared_scenes(scene)
-        crit = criteria if criteria is not None else load_criteria(criteria_file)
-        settings = shared_settings(scenes, strategy, seed, budget, criteria_file, config, agg)
+    agg = parse_aggregate(r.aggregate or (ROBUST_AGGREGATE if r.robust_samples is not None
+                                          else "min")).text
+    robust = None if r.robust_samples is None else (
+        r.robust_samples, None if r.variation_file is None else str(r.variation_file))
+    crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
+    if r.shared:  # one parameter set for every scene
+        scenes = load_shared_scenes(r.scenes)
+        settings = shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
+                                   r.config, agg)
         return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg),
                 [sc for _, sc in scenes], crit)
-    recorded: str | Path | None
+    scene = r.scenes[0]
+    recorded: str | Path
     if isinstance(scene, Scene):
-        sc, recorded = scene, scene_file or scene.source
+        sc, recorded = scene, r.scene_file or scene.source
     else:
-        recorded = scene if scene is not None else scene_file  # type: ignore[assignment]
-        if recorded is None:
-            raise RvmsimError("tune: give a scene file, or resume a run")
-        sc = load_scene(recorded)
-    crit = criteria if criteria is not None else load_criteria(criteria_file)
+        recorded, sc = scene, load_scene(scene)
     settings = RunSettings(
         scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
-        strategy=strategy, seed=seed, budget=budget,
-        criteria_file=None if criteria_file is None else criteria_reference(criteria_file),
-        config=config or TuningConfig())
-    return _robust_settings(settings, [sc], robust, parse_aggregate(aggregate).text), [sc], crit
+        strategy=r.strategy, seed=r.seed, budget=r.budget,
+        criteria_file=None if r.criteria_file is None else criteria_reference(r.criteria_file),
+        config=r.config or TuningConfig())
+    return _robust_settings(settings, [sc], robust, agg), [sc], crit
 
 
 def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
@@ -204,56 +200,20 @@ def _progress_bar(on: bool, total: int | None, vehicle: str,
     return bar, on_batch
 
 
-def tune(
-    scene: SceneArg | Sequence[SceneArg] | None,
-    run_dir: str | Path,
-    *,
-    scene_file: str | Path | None = None,
-    strategy: str = DEFAULT_STRATEGY,
-    config: TuningConfig | None = None,
-    criteria: Criteria | None = None,
-    criteria_file: str | Path | None = None,
-    seed: int = 0,
-    workers: int = 1,
-    budget: int | None = None,
-    max_time: float | None = None,
-    target_score: float | None = None,
-    resume: bool = False,
-    force: bool = False,
-    progress: bool = False,
-    progress_position: int = 0,
-    aggregate: str | None = None,
-    robust_samples: int | None = None,
-    variation_file: str | Path | None = None,
-) -> TuneResult:
+def tune(request: TuneRequest, run_dir: str | Path, *, options: RunOptions = RunOptions(),
+         force: bool = False) -> TuneResult:
     """Tune the ISP for one scene, or one parameter set for several (shared tuning, see
     :mod:`rvmsim.tune.shared`); see the module docstring for what is written.
 
     Parameters
     ----------
-    scene : path or Scene, or a list or tuple of them
-        The scene file, or a loaded :class:`~rvmsim.scene.Scene` (then ``scene_file`` is the
-        path recorded for it, by default its ``source``).  Ignored with ``resume``.  A list
-        or tuple (at least two) is a shared run: the space is fitted to the first scene's
-        camera, and every scene's camera must have its sensor size.
-    aggregate : str, optional
-        How a shared or robust run combines its members' EC scores: ``min`` or ``quantile
-        Q`` (:func:`rvmsim.tune.parse_aggregate`); default ``min`` for a shared run and
-        :data:`rvmsim.tune.robust.ROBUST_AGGREGATE` for a robust one.
-    robust_samples : int, optional
-        A robust run (:mod:`rvmsim.tune.robust`): judge every candidate on each scene's
-        nominal image and this many variation samples of it (``--robust --samples K``).
-    variation_file : path, optional
-        The variation to draw them from (default: each scene's ``variation`` section).
-    criteria, criteria_file
-        The criteria (default: loaded from ``criteria_file``, default the paper's); the file
-        is recorded, for ``--resume`` and the report.
-    budget : int, optional
-        Evaluations for ``cmaes``/``random``; for ``grid-random`` the fine trials per seed
-        (T), replacing the config's value (a shortened protocol).
-    resume : bool
-        Continue the run in ``run_dir`` with its own settings (the other arguments that
-        define the run are taken from its store).
+    request : TuneRequest
+        What defines the run: scenes, strategy, config, criteria, seed, budget, robust or
+        shared settings.
+    run_dir : path
+        The run folder.
+    options : RunOptions
+        Worker processes, time limits, progress bar.
     force : bool
         Replace a run in ``run_dir`` (``--force``).  The old run is deleted only once every
         input of the new one has loaded, the scene has rendered and this process holds the
@@ -265,37 +225,51 @@ def tune(
         One line: a bad input (scene, criteria, config, strategy, seed, budget), a run
         folder that is a file or holds a run already (without ``force``), or one in use
         by another writer (``RUN is in use by process N``).
-    progress : bool
-        Show a progress bar (evaluations/s, best EC score, ETA).
-    progress_position : int
-        Line of that bar (``rvmsim batch`` puts its overall bar above it).
     """
-    from ..render import cached_render
-
     run_dir = Path(run_dir)
     _check_out(run_dir)
     lock = run_lock(run_dir)
     lock.check_free()  # another writer: say so at once (its lock, taken below, decides)
-    settings, scenes, crit = (_resumed_run(run_dir) if resume else _new_run(
-        run_dir, scene, scene_file, strategy, config, criteria, criteria_file, seed, budget,
-        force, aggregate or (ROBUST_AGGREGATE if robust_samples is not None else "min"),
-        None if robust_samples is None else (
-            robust_samples, None if variation_file is None else str(variation_file))))
+    settings, scenes, crit = _new_run(run_dir, request, force)
+    return _run(run_dir, lock, settings, scenes, crit, options, resume=False, force=force)
+
+
+def resume(run_dir: str | Path, *, options: RunOptions = RunOptions()) -> TuneResult:
+    """Continue the run in ``run_dir`` with its own settings, read from its store (after
+    Ctrl-C, a kill, ``--max-time``): the same final result as an unbroken run.
+
+    Raises
+    ------
+    RvmsimError
+        One line: no run there, an unreadable store, a scene or variation changed since the
+        run started, or a run in use by another writer.
+    """
+    run_dir = Path(run_dir)
+    _check_out(run_dir)
+    lock = run_lock(run_dir)
+    lock.check_free()
+    settings, scenes, crit = _resumed_run(run_dir)
+    return _run(run_dir, lock, settings, scenes, crit, options, resume=True, force=False)
+
+
+def _run(run_dir: Path, lock: FolderLock, settings: RunSettings, scenes: list[Scene],
+         crit: Criteria, options: RunOptions, *, resume: bool, force: bool) -> TuneResult:
+    """Render, search into the run's store under its lock, write the results."""
+    from ..render import cached_render
+
     sc, cfg = scenes[0], settings.config
     # the strategy before the render: a bad config, strategy or seed fails in a moment
     strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
                           settings.seed, settings.budget)
-    renders = [cached_render(s, progress=progress)[0] for s in scenes]
-    members = (robust_members(scenes, renders, settings, progress=progress) if settings.robust
-               else None)
+    renders = [cached_render(s, progress=options.progress)[0] for s in scenes]
+    members = (robust_members(scenes, renders, settings, progress=options.progress)
+               if settings.robust else None)
     with lock:
         store = _writable_store(run_dir, settings, resume, force)
         try:
-            outcome = _search(store, renders, scenes, settings, strat, crit, members,
-                              workers=workers,
-                              max_time=max_time, target_score=target_score,
-                              bar=_progress_bar(progress, strat.total(), sc.name,
-                                                progress_position))
+            outcome = _search(store, renders, scenes, settings, strat, crit, members, options,
+                              _progress_bar(options.progress, strat.total(), sc.name,
+                                            options.progress_position))
             write_results(run_dir, store, sc, renders[0], cfg, crit)
             if settings.shared:
                 write_member_results(run_dir, store, scenes, renders, cfg, crit,
@@ -308,9 +282,7 @@ def tune(
 
 def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[Scene],
             settings: RunSettings, strat: Strategy, crit: Criteria,
-            members: Sequence[Member] | None, *, workers: int,
-            max_time: float | None,
-            target_score: float | None,
+            members: Sequence[Member] | None, options: RunOptions,
             bar: tuple[Any, Callable[[int, float, str], None]]) -> SearchOutcome:
     """Search into ``store``, recording the run's state: running, then done, interrupted
     (Ctrl-C) or failed (an error, passed on as it is)."""
@@ -322,7 +294,8 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
     try:
         how = SearchSettings(settings.config, crit, strat,
                              aggregate=settings.aggregate or "min")
-        opts = SearchOptions(workers, max_time, target_score, on_batch)
+        opts = SearchOptions(options.workers, options.max_time, options.target_score,
+                             on_batch)
         if settings.shared or members is not None:
             outcome = search_members(members or scene_members(scenes, renders), how, store,
                                      options=opts)

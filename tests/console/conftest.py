@@ -21,11 +21,11 @@ CHROMIUM = Path("/usr/bin/chromium")
 def small_run(tmp_path_factory) -> Path:
     """A folder holding ``scene.yaml`` (the 320×240 vehicle-A scene) and ``run/``, a
     finished tuning run of it (random search, 40 evaluations, top 10)."""
-    from rvmsim.tune import tune
+    from rvmsim.tune import TuneRequest, tune
 
     folder = tmp_path_factory.mktemp("console_run")
     scene = write_small_scene(folder)
-    tune(scene, folder / "run", strategy="random", budget=40, workers=1, seed=3)
+    tune(TuneRequest((scene,), "random", seed=3, budget=40), folder / "run")
     return folder
 
 

@@ -41,7 +41,7 @@ def test_a_scene_starts_at_the_papers_defaults(small_run, tmp_path):
 
 
 def test_missing_and_wrong_sources_are_one_line_errors(tmp_path):
-    from rvmsim.tune import tune
+    from rvmsim.tune import TuneRequest, tune
     from tests.bad_input.conftest import write_small_scene
 
     with pytest.raises(RvmsimError, match="no such run folder or scene file"):
@@ -50,7 +50,7 @@ def test_missing_and_wrong_sources_are_one_line_errors(tmp_path):
     with pytest.raises(RvmsimError, match="not a run folder"):
         open_session(tmp_path / "empty")
     scene = write_small_scene(tmp_path)
-    tune(scene, tmp_path / "run", strategy="random", budget=4, workers=1)
+    tune(TuneRequest((scene,), "random", budget=4), tmp_path / "run")
     shutil.move(scene, tmp_path / "elsewhere.yaml")
     with pytest.raises(RvmsimError, match="scene file .* not found"):
         open_session(tmp_path / "run")
@@ -68,12 +68,12 @@ def test_the_ecs_change_with_the_zoom(small_run):
 def test_a_run_tuned_with_a_bundled_criteria_set_opens(tmp_path):
     """A run records a bundled set by its name (``fmvss111-full``), not as a file: the
     console finds it as ``report`` does, with the run's 14 ECs."""
-    from rvmsim.tune import tune
+    from rvmsim.tune import TuneRequest, tune
     from tests.bad_input.conftest import write_small_scene
 
     scene = write_small_scene(tmp_path)
-    tune(scene, tmp_path / "run", strategy="random", budget=4, workers=1,
-         criteria_file="fmvss111-full")
+    tune(TuneRequest((scene,), "random", criteria_file="fmvss111-full", budget=4),
+         tmp_path / "run")
     s = open_session(tmp_path / "run")
     assert s.kind == "run" and len(s.criteria.ids) == 14 and "6-1" in s.criteria.ids
     assert s.candidates and s.start == s.candidates[0].params

@@ -94,7 +94,7 @@ def _assert_self_contained(text: str, doc: _Collector) -> None:
 def runs(tmp_path_factory):
     """Two real tiny runs in one folder: an evil-named copy of vehicle A (custom criteria with
     4-1 off, CMA-ES) and vehicle B (random search)."""
-    from rvmsim.tune import TuningConfig, tune
+    from rvmsim.tune import TuneRequest, TuningConfig, tune
 
     root = tmp_path_factory.mktemp("report")
     old = os.environ.get("RVMSIM_CACHE")
@@ -113,10 +113,9 @@ def runs(tmp_path_factory):
             "top_m": TOP_M, "batch": 20})
         runs_dir = root / "runs"
         evil_run = runs_dir / "a & <b>"
-        tune(scene, evil_run, strategy="cmaes", config=cfg, criteria_file=crit, budget=80,
-             workers=1)
-        tune(SCENES / "vehicle_b.yaml", runs_dir / "b", strategy="random", config=cfg,
-             budget=60, workers=1)
+        tune(TuneRequest((scene,), "cmaes", cfg, criteria_file=crit, budget=80), evil_run)
+        tune(TuneRequest((SCENES / "vehicle_b.yaml",), "random", cfg, budget=60),
+             runs_dir / "b")
         report = write_report(evil_run)
         yield {"root": root, "runs_dir": runs_dir, "evil_run": evil_run, "report": report,
                "scene": scene, "crit": crit}
@@ -235,7 +234,7 @@ def test_report_missing_scene_is_one_line_error(runs, tmp_path):
 def test_changed_scene_warns_in_the_report_and_blocks_resume(runs, tmp_path):
     """The run records the scene's fingerprint: a report of a run whose scene file has
     changed since says so, and --resume refuses to mix two scenes."""
-    from rvmsim.tune import tune
+    from rvmsim.tune import resume
 
     scene = tmp_path / "scene.yaml"
     scene.write_text(runs["scene"].read_text())
@@ -246,7 +245,7 @@ def test_changed_scene_warns_in_the_report_and_blocks_resume(runs, tmp_path):
     scene.write_text(scene.read_text().replace("pitch_deg: 32.0", "pitch_deg: 31.0"))
     assert "scene file changed after this run" in write_report(run).read_text()
     with pytest.raises(RvmsimError) as err:
-        tune(None, run, resume=True, workers=1)
+        resume(run)
     assert "scene changed" in str(err.value) and "\n" not in str(err.value)
 
 

@@ -6,7 +6,7 @@ import os
 
 import pytest
 
-from rvmsim.tune import RunStore, TuningConfig, tune
+from rvmsim.tune import RunStore, TuneRequest, TuningConfig, tune
 
 from ..conftest import SCENES
 
@@ -30,8 +30,8 @@ def cache(tmp_path_factory):
 def clean(cache, tmp_path_factory):
     """A finished random-search run of vehicle A (60 candidates, 3 batches)."""
     run = tmp_path_factory.mktemp("clean") / "run"
-    tune(SCENES / "vehicle_a.yaml", run, strategy="random", budget=60, seed=2,
-         config=TuningConfig.model_validate(CONFIG))
+    tune(TuneRequest((SCENES / "vehicle_a.yaml",), "random", TuningConfig.model_validate(CONFIG),
+                     seed=2, budget=60), run)
     return run
 
 

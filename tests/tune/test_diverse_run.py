@@ -15,8 +15,8 @@ import pytest
 
 from rvmsim.isp import load_params
 from rvmsim.scene import load_scene
-from rvmsim.tune import (RunStore, TuningConfig, diverse_candidates, rank_params_text,
-                         status_lines, tune)
+from rvmsim.tune import (RunStore, TuneRequest, TuningConfig, diverse_candidates,
+                         rank_params_text, status_lines, tune)
 
 from .common import small_scene_file
 
@@ -29,7 +29,7 @@ def run(cache, tmp_path_factory):
     folder = tmp_path_factory.mktemp("diverse")
     scene = small_scene_file("a", folder)
     out = folder / "run"
-    tune(scene, out, config=TuningConfig.model_validate(CONFIG), budget=300, seed=0)
+    tune(TuneRequest((scene,), config=TuningConfig.model_validate(CONFIG), budget=300), out)
     return out
 
 
@@ -142,8 +142,8 @@ def test_the_diverse_section_of_the_config_sets_m_and_the_distance(run, tmp_path
                                        "diverse": {"m": 4, "min_distance": 0.2}})
     assert cfg.diverse_m == 4 and TuningConfig().diverse_m == 10
     small = tmp_path / "small"
-    tune(small_scene_file("a", tmp_path), small, config=cfg, strategy="random", budget=60,
-         seed=1)
+    tune(TuneRequest((small_scene_file("a", tmp_path),), "random", cfg, seed=1, budget=60),
+         small)
     cands = diverse_candidates(small)
     assert 2 <= len(cands) <= 4
     assert sorted(p.name for p in (small / "top").iterdir()) == sorted(

@@ -11,7 +11,7 @@ import pytest
 
 from rvmsim.errors import RvmsimError
 from rvmsim.tune import (diverse_candidates, find_runs, is_run_folder, rank_params_text,
-                         status_lines, tune)
+                         resume, status_lines)
 
 from .common import make_legacy_run
 
@@ -78,7 +78,7 @@ def test_old_runs_that_cannot_be_read_are_refused_with_what_to_do(clean, tmp_pat
 
     bare = make_legacy_run(clean, tmp_path / "bare", run_json=False)
     assert "done, strategy random, 60 / 60" in status_lines(bare)[0]  # the store suffices
-    for call in (lambda: rank_params_text(bare), lambda: tune(None, bare, resume=True),
+    for call in (lambda: rank_params_text(bare), lambda: resume(bare),
                  lambda: write_report(bare)):
         with pytest.raises(RvmsimError) as err:
             call()
@@ -89,7 +89,7 @@ def test_old_runs_that_cannot_be_read_are_refused_with_what_to_do(clean, tmp_pat
     (broken / "run.json").write_text("{not json")
     with pytest.raises(RvmsimError, match=r"run\.json: not a readable run\.json .*start a new "
                                           "run") as err:
-        tune(None, broken, resume=True)
+        resume(broken)
     assert "\n" not in str(err.value)
     sel = subprocess.run([sys.executable, "-m", "rvmsim", "select", str(bare)],
                          capture_output=True, text=True, timeout=300)

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from rvmsim.scene import load_scene
-from rvmsim.tune import RunStore, TuningConfig, tune
+from rvmsim.tune import RunStore, TuneRequest, TuningConfig, tune
 
 from ..bad_input.conftest import write_small_scene
 
@@ -58,9 +58,9 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     from rvmsim.robust import RobustnessSettings, robustness
 
     cfg = TuningConfig.model_validate(CONFIG)
-    nominal = tune(small, tmp_path / "nominal", config=cfg, budget=600, seed=1)
-    tune(small, tmp_path / "robust", config=cfg, budget=600, seed=1,
-                  robust_samples=8)
+    nominal = tune(TuneRequest((small,), config=cfg, budget=600, seed=1), tmp_path / "nominal")
+    tune(TuneRequest((small,), config=cfg, budget=600, seed=1, robust_samples=8),
+         tmp_path / "robust")
     out = OutputSpec(320, 180)
     scene = load_scene(small)
     # judged on 48 samples the runs never saw (another seed)
@@ -154,7 +154,8 @@ def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, 
     shutil.copy(other, tmp_path / "b.yaml")
     cfg = TuningConfig.model_validate(CONFIG)
     run = tmp_path / "both"
-    tune([small, tmp_path / "b.yaml"], run, config=cfg, budget=60, seed=2, robust_samples=3)
+    tune(TuneRequest((small, tmp_path / "b.yaml"), config=cfg, budget=60, seed=2,
+                     robust_samples=3), run)
     rec, members, settings = _best_members(run)
     assert settings.shared and settings.robust_samples == 3
     assert len(members) == 2 * (1 + 3)

@@ -23,8 +23,10 @@ from rvmsim.tune import (
     RunStore,
     Strategy,
     StopReason,
+    TuneRequest,
     TuningConfig,
     register_strategy,
+    resume,
     run_settings,
     status_lines,
     tune,
@@ -53,8 +55,8 @@ def test_a_scene_object_and_a_task_record_the_paths_they_are_given(clean, tmp_pa
 
     path = SCENES / "vehicle_a.yaml"
     run = tmp_path / "obj"
-    tune(load_scene(path), run, scene_file=path, strategy="random", budget=60, seed=2,
-         config=TuningConfig.model_validate(CONFIG))
+    tune(TuneRequest((load_scene(path),), "random", TuningConfig.model_validate(CONFIG),
+                     seed=2, budget=60, scene_file=path), run)
     assert top_of(run) == top_of(clean)
     assert json.loads((run / "run.json").read_text()) == json.loads((clean / "run.json").read_text())
     res = tune_task({"scene": portable_scene_doc(path), "config": CONFIG, "strategy": "random",
@@ -87,8 +89,8 @@ def test_a_failing_search_is_recorded_as_failed(cache, tmp_path):
     register_strategy(_FailsAfterOneBatch)
     try:
         with pytest.raises(ValueError, match="gives up"):
-            tune(SCENES / "vehicle_a.yaml", tmp_path / "r", strategy="fails-after-one-batch",
-                 config=TuningConfig.model_validate(CONFIG))
+            tune(TuneRequest((SCENES / "vehicle_a.yaml",), "fails-after-one-batch",
+                             TuningConfig.model_validate(CONFIG)), tmp_path / "r")
     finally:
         del STRATEGIES["fails-after-one-batch"]
     store = RunStore(tmp_path / "r" / "run.sqlite")
@@ -102,7 +104,7 @@ def test_an_interrupted_old_run_resumes_to_the_unbroken_result(clean, tmp_path):
     old = make_legacy_run(clean, tmp_path / "old", keep=20,
                           status="interrupted (continue with --resume)")
     assert "interrupted (continue with --resume), strategy random, 20 / 60" in status_lines(old)[0]
-    res = tune(None, old, resume=True)
+    res = resume(old)
     assert (res.outcome.replayed, res.outcome.evaluated) == (20, 40)
     assert top_of(old) == top_of(clean)
     store = RunStore(old / "run.sqlite")

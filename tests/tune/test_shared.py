@@ -22,7 +22,8 @@ from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.report import write_report
 from rvmsim.scene import load_scene
-from rvmsim.tune import (RunStore, TuningConfig, rank_params_text, status_lines, tune)
+from rvmsim.tune import (RunStore, TuneRequest, TuningConfig, rank_params_text, resume,
+                         status_lines, tune)
 
 from .common import small_scene_file
 
@@ -50,14 +51,16 @@ def verdicts(params, scene_files):
 @pytest.fixture(scope="module")
 def shared_run(scenes, tmp_path_factory):
     run = tmp_path_factory.mktemp("runs") / "shared"
-    res = tune(list(scenes), run, config=TuningConfig.model_validate(CONFIG), budget=1000)
+    res = tune(TuneRequest(tuple(scenes), config=TuningConfig.model_validate(CONFIG),
+                           budget=1000), run)
     return run, res
 
 
 def test_shared_tuning_passes_both_where_each_alone_fails_the_other(scenes, shared_run,
                                                                      tmp_path):
     cfg = TuningConfig.model_validate(CONFIG)
-    alone = [tune(s, tmp_path / s.stem, config=cfg, budget=1000).outcome.best for s in scenes]
+    alone = [tune(TuneRequest((s,), config=cfg, budget=1000), tmp_path / s.stem).outcome.best
+             for s in scenes]
     # each vehicle's own optimum passes on it and fails on the other
     assert verdicts(alone[0].params, scenes) == [True, False]
     assert verdicts(alone[1].params, scenes) == [False, True]
@@ -103,12 +106,12 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     folder = tmp_path / "scenes"
     folder.mkdir()
     files = [small_scene_file(letter, folder) for letter in "eb"]
-    tune(files, copy, config=TuningConfig.model_validate(CONFIG), budget=40)
+    tune(TuneRequest(tuple(files), config=TuningConfig.model_validate(CONFIG), budget=40), copy)
     doc = yaml.safe_load(files[1].read_text())
     doc["vehicle"]["bumper"]["top"] = 0.8
     files[1].write_text(yaml.safe_dump(doc))
     with pytest.raises(RvmsimError, match="vehicle_b.yaml: the scene changed"):
-        tune(None, copy, resume=True)
+        resume(copy)
 
 
 class _Rows(HTMLParser):
