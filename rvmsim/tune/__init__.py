@@ -96,7 +96,7 @@ from .loop import (
     solver_for,
     strategy_scorer,
 )
-from .solve import EcSolver, SOLVED_PARAMS
+from .solve import EcSolver
 from .lock import (
     FolderLock,
     Writer,
@@ -220,7 +220,6 @@ __all__ = [
     "solver_for",
     "strategy_scorer",
     "EcSolver",
-    "SOLVED_PARAMS",
     "CmaEsSolved",
     "candidate_evaluator",
     "FolderLock",
