@@ -7,9 +7,9 @@ parameters.  So some failures need no search to prove.  Which, is each EC's own 
 an EC definition may carry a feasibility reason
 (:attr:`EcDefinition.infeasibility <rvmsim.criteria.EcDefinition>`, read from the fisheye
 labels and the scene); :func:`infeasible_ecs` asks every enabled EC of the criteria that
-has one.  The paper's ECs' reasons (1-1's patches of F and G out of view, cut off or
-hidden; the labels of 1-2, 1-4, 2-1, 2-2, 3-1, 3-2 and 4-1 absent from the fisheye image)
-are in :mod:`rvmsim.criteria.feasibility`, with :func:`~rvmsim.criteria.patch_view`.
+has one.  The paper's ECs' reasons (the lower patches of F and G out of view, cut off or
+hidden; the measured labels absent from the fisheye image) are in
+:mod:`rvmsim.criteria.feasibility`, with :func:`~rvmsim.criteria.patch_view`.
 """
 
 from __future__ import annotations
