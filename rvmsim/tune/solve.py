@@ -39,12 +39,17 @@ SOLVE_ROUNDS = 2
 
 @dataclass(frozen=True)
 class _Solve:
-    ec: EcDefinition
-    hook: SubSolve
+    ec: EcDefinition  # pickles by reference to its plugin, its hook with it
     target: float
     points: np.ndarray  # fisheye px (N, 2)
     low: float
     high: float
+
+    @property
+    def hook(self) -> SubSolve:
+        hook = self.ec.sub_solve
+        assert hook is not None  # only ECs with a sub-solve are solved
+        return hook
 
 
 class EcSolver:
@@ -83,7 +88,7 @@ class EcSolver:
         for ec, hook, target, r in _applicable(criteria, space):
             pts = outline_points(fisheye_labels, hook.labels)
             if len(pts) >= 3:
-                solves.append(_Solve(ec, hook, target, pts, r.low, r.high))
+                solves.append(_Solve(ec, target, pts, r.low, r.high))
         self._solves = tuple(solves)
         # every solve's points in one array, mapped in one call per candidate
         self._points = (np.concatenate([s.points for s in solves]) if solves

@@ -17,7 +17,6 @@ from rvmsim.criteria import (
     Criteria,
     Criterion,
     EcDefinition,
-    LabelGroup,
     Measurement,
     SubSolve,
     builtin_ecs,
@@ -207,12 +206,14 @@ def test_the_plugin_solve_puts_its_ec_on_target(tmp_path):
 
 # ---------------------------------------------------------------------------- tuned, swept
 def test_cmaes_solved_tunes_the_plugin_ec_onto_its_target(tmp_path):
+    """Two worker processes: the solver reaches them with the plugin's hook (by reference to
+    the plugin file, which is not importable by name)."""
     images = small_render("a")
     crit = _criteria(tmp_path)
     config = TuningConfig.model_validate({"output": {"size": [OUT.width, OUT.height]}})
     store = RunStore(":memory:")
     outcome = search_scene(images, config=config, criteria=crit, strategy="cmaes-solved",
-                           store=store, seed=0, budget=40)
+                           store=store, seed=0, budget=40, workers=2)
     best = outcome.best
     assert best is not None and "adv_v_shift" in outcome.space.names
     _, labels = process(None, images.labels, best.params, OUT)
