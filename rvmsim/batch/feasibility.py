@@ -3,52 +3,27 @@
 The ISP only resamples the fisheye image (:mod:`rvmsim.isp`): every label the RVM image
 shows is a label of the fisheye image, and anything cut off by the sensor border or the
 lens's image circle, or hidden behind the car body, stays cut off or hidden whatever the
-parameters.  So some failures need no search to prove:
-
-- **1-1** (the lower 150 × 150 mm patches of objects F and G wholly visible): the patch's
-  3D surface, sampled on a grid and projected with the camera model, lies (partly)
-  outside the lens's field of view or the sensor, or (partly) behind the car body
-  (bumper, garnish, trunk, extra parts: the pixel there shows the body, not the patch);
-  or the patch faces away from the camera, or the object is not in the scene.
-- **1-2** (F and G stripe area), **1-4** (B's stripe), **2-1**/**2-2** (bumper heights),
-  **3-1**/**3-2** (guidelines 2 and 3), **4-1** (the board): the labels they measure are
-  absent from the fisheye image altogether, so the RVM image cannot show them either and
-  the measurement is 0 or missing, out of range.
-
-Only enabled ECs of the criteria count.  Everything is conservative: a patch that is only
-nicked (a sample less than about a pixel outside, or an occluder seen only next to patch
-pixels) is *not* called infeasible, and the search decides.
-
-Convention
-----------
-Scene frame as in :mod:`rvmsim.camera.mount` (y negative up; heights are −y); pixels as
-in :class:`~rvmsim.camera.FisheyeCamera` (centres at integer (u, v) = (column, row)).
+parameters.  So some failures need no search to prove.  Which, is each EC's own business:
+an EC definition may carry a feasibility reason
+(:attr:`EcDefinition.infeasibility <rvmsim.criteria.EcDefinition>`, read from the fisheye
+labels and the scene); :func:`infeasible_ecs` asks every enabled EC of the criteria that
+has one.  The paper's ECs' reasons (the lower patches of F and G out of view, cut off or
+hidden; the measured labels absent from the fisheye image) are in
+:mod:`rvmsim.criteria.feasibility`, with :func:`~rvmsim.criteria.patch_view`.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
-from .. import labels as L
 from ..camera import FisheyeCamera
-from ..criteria import Criteria
-from ..scene import Scene, stripe_azimuth_deg
+from ..criteria import PATCH_SAMPLES, Criteria, PatchView, SceneContext, patch_view
+from ..errors import CriteriaError
+from ..scene import Scene
 
 __all__ = ["Infeasibility", "PatchView", "patch_view", "infeasible_ecs", "PATCH_SAMPLES"]
-
-#: Samples per side of the grid laid over a patch's surface (azimuth × height).
-PATCH_SAMPLES = 11
-
-#: Labels of the car body: a patch pixel next to one fails EC 1-1, so one in front of the
-#: patch hides it (as the EC's own blockers, without void, which is checked geometrically).
-_BODY_LABELS = (L.BUMPER, L.GARNISH, L.TRUNK, *range(L.EXTRA_PART_BASE, 256))
-
-#: A sample counts as outside the sensor or the image circle only this far beyond it, px.
-_MARGIN_PX = 1.0
 
 
 @dataclass(frozen=True)
@@ -65,159 +40,11 @@ class Infeasibility:
         return {"ec": self.ec, "reason": self.reason, "short": self.short}
 
 
-@dataclass(frozen=True)
-class PatchView:
-    """How the camera sees one lower patch: counts of its surface samples.
-
-    Attributes
-    ----------
-    letter : str
-        F or G.
-    samples : int
-        Samples on the patch (0: the object is not in the scene).
-    facing : int
-        Samples whose surface faces the camera (the rest are behind the object's own body).
-    outside_circle, outside_sensor : int
-        Facing samples beyond the lens's field of view (θ > fov / 2 by more than about a
-        pixel), or projecting more than a pixel outside the sensor.
-    hidden : dict[int, int]
-        Facing, in-view samples whose pixel shows a car-body label (key) with no patch pixel
-        next to it: the body is in front of the patch there.
-    """
-
-    letter: str
-    samples: int
-    facing: int
-    outside_circle: int
-    outside_sensor: int
-    hidden: dict[int, int]
-
-    @property
-    def in_view(self) -> int:
-        """Facing samples inside the field of view and on the sensor."""
-        return self.facing - self.outside_circle - self.outside_sensor
-
-    def problem(self) -> tuple[str, str] | None:
-        """Why the patch cannot be wholly visible: (a phrase after "object F's lower
-        patch", a few words for a map cell), or None when nothing shows it cannot."""
-        if self.samples == 0:
-            return "is not in the scene (the object is disabled)", "not in scene"
-        if self.facing == 0:
-            return "faces away from the camera", "faces away"
-        if self.in_view == 0:
-            return "is outside the lens's field of view at this mount", "out of view"
-        if self.outside_circle:
-            return ("is cut by the edge of the lens's image circle at this mount",
-                    "cut by image circle")
-        if self.outside_sensor:
-            return "is cut by the sensor border at this mount", "cut by sensor border"
-        if self.hidden:
-            names = L.label_names()
-            body = " and ".join(names[k] for k in sorted(self.hidden))
-            whole = sum(self.hidden.values()) == self.in_view
-            return f"is {'' if whole else 'partly '}hidden behind the {body}", f"behind {body}"
-        return None
-
-
-def _patch_samples(scene: Scene, letter: str, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(points, outward normals), both (n·n, 3), metres / unit: a grid over the lower patch
-    of object ``letter`` (azimuth × height, edges included); empty when it is disabled."""
-    site = scene.test_site
-    c = site.object_centre(letter)
-    if c is None:
-        return np.zeros((0, 3)), np.zeros((0, 3))
-    r = site.object_diameter / 2
-    az = math.radians(stripe_azimuth_deg(scene, letter, c))
-    half = site.stripe_width / r / 2
-    a_grid, h_grid = np.meshgrid(np.linspace(az - half, az + half, n),
-                                 np.linspace(0.0, site.lower_patch_height, n))
-    a, h = a_grid.ravel(), h_grid.ravel()
-    normals = np.stack([np.sin(a), np.zeros_like(a), np.cos(a)], axis=1)
-    points = np.stack([c[0] + r * np.sin(a), -h, c[1] + r * np.cos(a)], axis=1)
-    return points, normals
-
-
-def patch_view(scene: Scene, camera: FisheyeCamera, labels: np.ndarray, letter: str, *,
-               samples: int = PATCH_SAMPLES) -> PatchView:
-    """Where the lower patch of object ``letter`` (F or G) lies in the fisheye image.
-
-    Parameters
-    ----------
-    scene : Scene
-        The design point's scene (the patch's geometry).
-    camera : FisheyeCamera
-        The camera the label image was rendered with (pose included).
-    labels : (H, W) uint8
-        The rendered fisheye label image.
-    samples : int
-        Grid samples per side over the patch.
-
-    Convention
-    ----------
-    A sample is outside the image circle when its incidence angle exceeds fov / 2 by more
-    than ``_MARGIN_PX / min(fx, fy)`` rad, outside the sensor when it projects more than
-    ``_MARGIN_PX`` px beyond the outer pixel edges (−0.5 … W − 0.5).
-    """
-    pts, normals = _patch_samples(scene, letter, samples)
-    if len(pts) == 0:
-        return PatchView(letter, 0, 0, 0, 0, {})
-    facing = np.einsum("ij,ij->i", normals, camera.position - pts) > 0
-    pts = pts[facing]
-    cam = camera.scene_to_camera(pts)
-    theta = np.arctan2(np.hypot(cam[:, 0], cam[:, 1]), cam[:, 2])
-    out_circle = theta > camera.theta_max + _MARGIN_PX / min(camera.fx, camera.fy)
-    uv, _ = camera.project_rays(cam)
-    h, w = labels.shape
-    lo = -0.5 - _MARGIN_PX
-    out_sensor = ~out_circle & ((uv[:, 0] < lo) | (uv[:, 1] < lo)
-                                | (uv[:, 0] > w - 0.5 + _MARGIN_PX)
-                                | (uv[:, 1] > h - 0.5 + _MARGIN_PX))
-    hidden = _hidden_by_body(labels, uv[~out_circle & ~out_sensor], L.object_patch(letter))
-    return PatchView(letter, len(facing), int(facing.sum()), int(out_circle.sum()),
-                     int(out_sensor.sum()), hidden)
-
-
-def _hidden_by_body(labels: np.ndarray, uv: np.ndarray, patch: int) -> dict[int, int]:
-    """Car-body label → how many of the points ``uv`` (px) show it with no ``patch`` pixel
-    in the 3 × 3 pixels around (a body pixel next to the patch may be the patch's own
-    rasterised edge, so only clear cases count)."""
-    h, w = labels.shape
-    col = np.clip(np.rint(uv[:, 0]).astype(int), 0, w - 1)
-    row = np.clip(np.rint(uv[:, 1]).astype(int), 0, h - 1)
-    body = np.isin(labels[row, col], _BODY_LABELS)
-    out: dict[int, int] = {}
-    for r, c in zip(row[body], col[body]):
-        near = labels[max(r - 1, 0):r + 2, max(c - 1, 0):c + 2]
-        if not np.any(near == patch):
-            out[int(labels[r, c])] = out.get(int(labels[r, c]), 0) + 1
-    return out
-
-
-#: ECs that fail when every one of their labels is absent from the fisheye image, what the
-#: message calls those labels, and a short name for them.
-_ABSENT: dict[str, tuple[tuple[int, ...], str, str]] = {
-    "1-2": ((L.object_stripe("F"), L.object_patch("F"), L.object_stripe("G"),
-             L.object_patch("G")), "the F and G stripes are", "F, G stripes"),
-    "1-4": ((L.object_stripe("B"),), "object B's stripe is", "B stripe"),
-    "2-1": ((L.BUMPER,), "the bumper is", "bumper"),
-    "2-2": ((L.BUMPER,), "the bumper is", "bumper"),
-    "3-1": ((L.guide_cross(2),), "cross guideline 2 is", "guideline 2"),
-    "3-2": ((L.guide_cross(3),), "cross guideline 3 is", "guideline 3"),
-    "4-1": ((L.BOARD,), "the pattern board is", "board"),
-}
-
-
-def _enabled(criteria: Criteria, ec: str) -> bool:
-    return ec in criteria.items and criteria.items[ec].enabled
-
-
-def _absent(counts: np.ndarray, ids: Iterable[int]) -> bool:
-    return not any(counts[i] for i in ids)
-
-
 def infeasible_ecs(scene: Scene, camera: FisheyeCamera, labels: np.ndarray,
                    criteria: Criteria) -> list[Infeasibility]:
-    """The enabled ECs of ``criteria`` that no ISP setting can pass at this design point.
+    """The enabled ECs of ``criteria`` that no ISP setting can pass at this design point:
+    those whose feasibility reason (:attr:`rvmsim.criteria.EcDefinition.infeasibility`)
+    gives one.
 
     Parameters
     ----------
@@ -234,19 +61,24 @@ def infeasible_ecs(scene: Scene, camera: FisheyeCamera, labels: np.ndarray,
     -------
     list of Infeasibility
         In the criteria's EC order; empty when the search has to decide.
+
+    Raises
+    ------
+    CriteriaError
+        An EC's feasibility reason returned something else than None or two strings.
     """
+    context = SceneContext(scene, camera, np.asarray(labels))
     out = []
-    if _enabled(criteria, "1-1"):
-        for letter in ("F", "G"):
-            problem = patch_view(scene, camera, labels, letter).problem()
-            if problem is not None:
-                out.append(Infeasibility("1-1", f"1-1: object {letter}'s lower patch "
-                                                f"{problem[0]}", f"1-1: {letter} {problem[1]}"))
-                break
-    counts = np.bincount(labels.ravel(), minlength=256)
-    for ec, (ids, what, short) in _ABSENT.items():
-        if _enabled(criteria, ec) and _absent(counts, ids):
-            out.append(Infeasibility(ec, f"{ec}: {what} not in the fisheye image at all",
-                                     f"{ec}: no {short} in view"))
-    order = {ec: i for i, ec in enumerate(criteria.ids)}
-    return sorted(out, key=lambda x: order.get(x.ec, len(order)))
+    for ec in criteria.ecs:
+        criterion = criteria.items[ec.id]
+        if ec.infeasibility is None or not criterion.enabled:
+            continue
+        found = ec.infeasibility(context, criterion, criteria.options)
+        if found is None:
+            continue
+        if not (isinstance(found, tuple) and len(found) == 2
+                and all(isinstance(t, str) for t in found)):
+            raise CriteriaError(ec.plugin or "<ec>", ec.id, f"the feasibility reason returned "
+                                f"{found!r} (expected None or (reason, short) strings)")
+        out.append(Infeasibility(ec.id, f"{ec.id}: {found[0]}", f"{ec.id}: {found[1]}"))
+    return out

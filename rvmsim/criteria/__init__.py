@@ -1,7 +1,9 @@
 """Evaluation criteria (ECs): a registry of ECs, the paper's eleven, their measurement on the
 RVM label image, sigmoid scores, drawings and the fast tuning evaluator.
 
-Modules: :mod:`.registry` (what an EC is, plugins), :mod:`.context` (the scene and ISP map
+Modules: :mod:`.registry` (what an EC is, plugins), :mod:`.hooks` (an EC's optional
+closed-form sub-solve and feasibility reason), :mod:`.solves` and :mod:`.feasibility` (those
+of the paper's ECs, and their helpers), :mod:`.context` (the scene and ISP map
 an EC may read besides the labels), :mod:`.fmvss111` and :mod:`.objects` (ECs 1-5, 1-6,
 6-1: FMVSS 111 beyond the paper, a plugin), :mod:`.groups` (label groups, windows),
 :mod:`.measure` (label sources and helpers for measure functions), :mod:`.builtin` (the
@@ -34,12 +36,24 @@ from .sigmoid import (
     Criterion,
     Sigmoid,
 )
+from .hooks import (
+    InfeasibilityFn,
+    SolveFn,
+    SubSolve,
+    TargetFn,
+    range_middle,
+    range_zero,
+)
+from .solves import (
+    outline_points,
+)
 from .registry import (
     BUILTIN_PLUGIN,
     EC_IDS,
     ENTRY_POINT_GROUP,
     EcDefinition,
     builtin_ecs,
+    checked_solve_value,
     load_plugin,
     resolve_plugin,
 )
@@ -47,6 +61,13 @@ from .context import (
     IspView,
     SceneContext,
     scene_context,
+)
+from .feasibility import (
+    PATCH_SAMPLES,
+    LabelsAbsent,
+    PatchView,
+    label_counts,
+    patch_view,
 )
 from .scoring import (
     Criteria,
@@ -93,6 +114,19 @@ __all__ = [
     "builtin_ecs",
     "load_plugin",
     "resolve_plugin",
+    "SubSolve",
+    "SolveFn",
+    "TargetFn",
+    "InfeasibilityFn",
+    "range_middle",
+    "range_zero",
+    "outline_points",
+    "checked_solve_value",
+    "PATCH_SAMPLES",
+    "PatchView",
+    "patch_view",
+    "LabelsAbsent",
+    "label_counts",
     "LabelGroup",
     "Window",
     "EMPTY_WINDOW",

@@ -1,7 +1,9 @@
 """The paper's eleven EC functions (section V), as a plugin of the EC registry.
 
-Written against the public API of :mod:`rvmsim.criteria` only, exactly as a customer's
-plugin is (docs/criteria.md); nothing else in the package knows these ECs.
+Written against the public API of :mod:`rvmsim.criteria` only (and its public modules
+:mod:`~rvmsim.criteria.solves` and :mod:`~rvmsim.criteria.feasibility`, which hold these ECs'
+closed-form sub-solves and feasibility reasons), exactly as a customer's plugin is
+(docs/criteria.md); nothing else in the package knows these ECs.
 
 ========  =====================================================================  ======
 EC        measurement (on the RVM label image, H × W px)                          unit
@@ -51,14 +53,19 @@ from . import (
     LabelGroup,
     LabelSource,
     Measurement,
+    LabelsAbsent,
     MeasureOptions,
     Sigmoid,
+    SubSolve,
     Window,
     bounding_box,
     count_label,
     label_mask,
     offset,
+    range_zero,
 )
+from .feasibility import fg_patches_reason
+from .solves import board_aspect_scale, guide_centre_shift, guide_height_shift
 
 __all__ = ["ECS", "bumper_spans", "F", "G", "ABC", "GUIDE2", "GUIDE3", "BOARD", "UPPER_BODY"]
 
@@ -343,31 +350,52 @@ def _draw_4_1(canvas: Canvas, item: EcValue, board: tuple[int, int, int, int] | 
                 canvas.status(item))
 
 
+# ---------------------------------------------------------------------------- hooks
+def _absent(labels: tuple[int, ...], what: str, short: str) -> LabelsAbsent:
+    """The feasibility reason of an EC that measures ``labels``: none is in the fisheye
+    image (``what``: the labels, with their verb)."""
+    return LabelsAbsent(labels, f"{what} not in the fisheye image at all", f"no {short} in view")
+
+
+_FG_ABSENT = _absent((L.object_stripe("F"), L.object_patch("F"), L.object_stripe("G"),
+                      L.object_patch("G")), "the F and G stripes are", "F, G stripes")
+_BUMPER_ABSENT = _absent((L.BUMPER,), "the bumper is", "bumper")
+#: The sub-solves run in this order (4-1 does not depend on the shifts; 3-2 reads the
+#: horizontal shift 3-1 sets, and 3-1 the vertical shift 3-2 sets).
+_SOLVE_4_1 = SubSolve("adv_h_scale", (L.BOARD,), board_aspect_scale, order=0)
+_SOLVE_3_2 = SubSolve("adv_v_shift", (L.guide_cross(3),), guide_height_shift, order=1)
+_SOLVE_3_1 = SubSolve("adv_h_shift", (L.guide_cross(2),), guide_centre_shift, range_zero,
+                      order=2)
+
 # ---------------------------------------------------------------------------- the eleven
 _INF = math.inf
 ECS = [
     EcDefinition("1-1", "fg_lower_patches_visible", "", (F, G), _measure_1_1, _draw_1_1,
                  (1, 1), None, binary=True,
-                 description="lower 150 × 150 mm of the F and G stripes wholly visible"),
+                 description="lower 150 × 150 mm of the F and G stripes wholly visible",
+                 infeasibility=fg_patches_reason),
     EcDefinition("1-2", "fg_stripe_area_ratio", "‰", (F, G), _measure_1_2, _draw_1_2,
                  (10, None), Sigmoid(0.5, 10, 0, _INF),  # larger is better; 26.12 ‰ -> 1.00
-                 description="area of the F and G vertical stripes / image area"),
+                 description="area of the F and G vertical stripes / image area",
+                 infeasibility=_FG_ABSENT),
     EcDefinition("1-3", "abc_top_margin_ratio", "%", (ABC,), _measure_1_3, _draw_1_3,
                  (15, None), Sigmoid(0.43, 15, 0, _INF),  # >= 15 %; 25.70 % -> 0.99
                  description="distance d from the image top to the highest point of A, B, C "
                              "/ height"),
     EcDefinition("1-4", "b_stripe_area_ratio", "‰", (ABC,), _measure_1_4, _draw_1_4,
                  (0.1, None), Sigmoid(23.1, 0.1, 0, _INF),  # larger is better; 0.2 ‰ -> 0.91
-                 description="area of the horizontal stripe on B / image area"),
+                 description="area of the horizontal stripe on B / image area",
+                 infeasibility=_absent((L.object_stripe("B"),), "object B's stripe is",
+                                       "B stripe")),
     EcDefinition("2-1", "bumper_center_ratio", "%", (), _measure_2_1, _draw_2_1,
                  (4, 8), Sigmoid(3.0, 4, 3.0, 8),  # 4–8 %; 3.45 % -> 0.16
                  description="bumper height t_c at the horizontal centre / image height",
-                 regions=_bumper_regions),
+                 regions=_bumper_regions, infeasibility=_BUMPER_ABSENT),
     EcDefinition("2-2", "bumper_side_ratio", "%", (), _measure_2_2, _draw_2_2,
                  (8, 16), Sigmoid(2.69, 8, 2.69, 16),  # 8–16 %; 17.75 % -> 0.009
                  description="mean of the bumper heights t_l, t_r at the image edges / image "
                              "height",
-                 regions=_bumper_regions),
+                 regions=_bumper_regions, infeasibility=_BUMPER_ABSENT),
     EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, None,
                  (None, 5), Sigmoid(0, -_INF, 1.17, 5),  # smaller is better; 1.08 px -> 0.99
                  description="|t_l − t_r|", regions=_bumper_regions),
@@ -376,11 +404,19 @@ ECS = [
                  description="no garnish or trunk in the upper part of the image"),
     EcDefinition("3-1", "guide2_center_offset", "px", (GUIDE2,), _measure_3_1, _draw_3_1,
                  (None, 5), Sigmoid(0, -_INF, 0.937, 5),  # smaller is better; 0.09 px -> 0.99
-                 description="|x of the centre of guideline 2 − x of the image centre|"),
+                 description="|x of the centre of guideline 2 − x of the image centre|",
+                 sub_solve=_SOLVE_3_1,
+                 infeasibility=_absent((L.guide_cross(2),), "cross guideline 2 is",
+                                       "guideline 2")),
     EcDefinition("3-2", "guide3_height_ratio", "%", (GUIDE3,), _measure_3_2, _draw_3_2,
                  (45, 55), Sigmoid(1.0, 45, 1.0, 55),  # 45–55 %; 55 % -> 0.5
-                 description="y of the centre of guideline 3 / image height"),
+                 description="y of the centre of guideline 3 / image height",
+                 sub_solve=_SOLVE_3_2,
+                 infeasibility=_absent((L.guide_cross(3),), "cross guideline 3 is",
+                                       "guideline 3")),
     EcDefinition("4-1", "board_aspect_ratio", "", (BOARD,), _measure_4_1, _draw_4_1,
                  (0.9, 1.1), Sigmoid(42.4, 0.9, 42.4, 1.1),  # 0.9–1.1; 1.08 -> 0.7
-                 description="width / height of the calibration pattern board"),
+                 description="width / height of the calibration pattern board",
+                 sub_solve=_SOLVE_4_1,
+                 infeasibility=_absent((L.BOARD,), "the pattern board is", "board")),
 ]

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..errors import CriteriaError
 from .groups import LabelGroup, Window
+from .hooks import InfeasibilityFn, SubSolve
 from .measure import LabelSource, Measurement, MeasureOptions, measure_ecs
 from .sigmoid import Criterion, Sigmoid
 
@@ -40,7 +41,7 @@ if TYPE_CHECKING:
 
 __all__ = ["EcDefinition", "EC_IDS", "BUILTIN_PLUGIN", "ENTRY_POINT_GROUP", "MeasureFn",
            "AnnotateFn", "RegionsFn", "load_plugin", "resolve_plugin", "builtin_ecs",
-           "ec_from_plugin"]
+           "ec_from_plugin", "checked_solve_value"]
 
 #: The paper's eleven ECs, in the paper's order (section V).
 EC_IDS: tuple[str, ...] = ("1-1", "1-2", "1-3", "1-4", "2-1", "2-2", "2-3", "2-4", "3-1",
@@ -104,6 +105,16 @@ class EcDefinition:
         labels, the candidate's ISP map), not only the RVM labels: an evaluation must pass
         them, e.g. ``rvmsim robustness`` evaluates such criteria on each sample's full
         fisheye labels (:attr:`rvmsim.criteria.Criteria.uses_scene`).
+    sub_solve : SubSolve, optional
+        A closed-form sub-solve: the ISP parameter the EC pins for a given view and how to
+        set it (:class:`rvmsim.criteria.SubSolve`); the ``cmaes-solved`` tuning strategy
+        sets it per candidate (:class:`rvmsim.tune.EcSolver`).
+    infeasibility : callable, optional
+        ``infeasibility(context, criterion, options) -> (reason, short) | None``: why no ISP
+        setting can pass the EC, read from the fisheye labels and the scene (``context`` a
+        :class:`rvmsim.criteria.SceneContext`, ``criterion`` the EC's criterion, texts
+        without the EC id); a design sweep then calls the point ``infeasible``
+        (:func:`rvmsim.batch.infeasible_ecs`).
     """
 
     id: str
@@ -120,6 +131,8 @@ class EcDefinition:
     plugin: str = ""
     parameters: Mapping[str, float] | tuple[tuple[str, float], ...] = ()
     uses_scene: bool = False
+    sub_solve: SubSolve | None = None
+    infeasibility: InfeasibilityFn | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id or any(c.isspace() for c in self.id):
@@ -131,10 +144,13 @@ class EcDefinition:
         if groups is None or not all(isinstance(g, LabelGroup) for g in groups):
             raise TypeError(f"EC {self.id!r}: groups must be a tuple of LabelGroup")
         object.__setattr__(self, "groups", groups)
-        for key in ("measure", "annotate", "regions"):
+        for key in ("measure", "annotate", "regions", "infeasibility"):
             fn = getattr(self, key)
             if not callable(fn) and not (fn is None and key != "measure"):
                 raise TypeError(f"EC {self.id!r}: {key} must be a function")
+        if self.sub_solve is not None and not isinstance(self.sub_solve, SubSolve):
+            raise TypeError(f"EC {self.id!r}: sub_solve must be an rvmsim.criteria.SubSolve "
+                            "or None")
         self._check_defaults()
 
     def _check_defaults(self) -> None:
@@ -293,6 +309,42 @@ def _probe(ec: EcDefinition, source: str) -> None:
     except Exception as err:  # noqa: BLE001 - any failure of the plugin's code is reported
         raise CriteriaError(source, ec.id, f"the EC fails on an empty 8x8 image ({_what(err)})"
                             ) from None
+    if ec.sub_solve is not None:
+        _probe_sub_solve(ec, ec.sub_solve, source)
+
+
+def _probe_sub_solve(ec: EcDefinition, hook: SubSolve, source: str) -> None:
+    """Run a sub-solve's target on the EC's default criterion and its solve on a small
+    square of plane points: both must return a finite number or None."""
+    from ..isp import IspParams, OutputSpec
+
+    square = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
+    try:
+        target = hook.target(ec.default_criterion())
+        checked_solve_value(ec, "target", target)
+        value = hook.solve(square, IspParams(), OutputSpec(64, 36),
+                           0.0 if target is None else float(target))
+    except Exception as err:  # noqa: BLE001 - any failure of the plugin's code is reported
+        raise CriteriaError(source, ec.id, f"the EC's sub-solve fails on a square of plane "
+                                           f"points ({_what(err)})") from None
+    checked_solve_value(ec, "solve", value)
+
+
+def checked_solve_value(ec: EcDefinition, what: str, value: object) -> float | None:
+    """A sub-solve's ``target`` or ``solve`` result as a float (None stays None).
+
+    Raises
+    ------
+    CriteriaError
+        It is not a finite number or None (a plugin that breaks the API)."""
+    if value is None:
+        return None
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
+        x = float(value)
+        if math.isfinite(x):
+            return x
+    raise CriteriaError(ec.plugin or "<ec>", ec.id, f"the sub-solve's {what} returned "
+                        f"{value!r} (expected a finite number or None)")
 
 
 def _what(err: BaseException) -> str:

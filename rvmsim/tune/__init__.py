@@ -97,7 +97,7 @@ from .loop import (
     strategy_scorer,
 )
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
-from .solve import EcSolver, SOLVED_PARAMS
+from .solve import EcSolver
 from .lock import (
     FolderLock,
     Writer,
@@ -222,7 +222,6 @@ __all__ = [
     "solver_for",
     "strategy_scorer",
     "EcSolver",
-    "SOLVED_PARAMS",
     "CmaEsSolved",
     "candidate_evaluator",
     "SearchSettings",

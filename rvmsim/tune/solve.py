@@ -1,24 +1,22 @@
 """Closed-form sub-solves: the parameters that one EC each pins, set per candidate (the
 paper's future work 3, dimension reduction).
 
-Three of the paper's ECs each depend, for a given view, on one of the advanced parameters
-alone, because the advanced shifts and scales move and stretch the RVM image as a whole
-(:mod:`rvmsim.isp.exact`, step 2: an output pixel shows the virtual-plane point
-``(x_n / adv_h_scale + adv_h_shift, y_n / adv_v_scale + adv_v_shift)``):
+An EC whose definition has a sub-solve (:attr:`EcDefinition.sub_solve
+<rvmsim.criteria.EcDefinition>`, a :class:`~rvmsim.criteria.SubSolve`) depends, for a given
+view, on one ISP parameter alone, in closed form: among the paper's ECs, the board aspect,
+guideline 2's centre offset and guideline 3's height pin the advanced horizontal scale and
+the two advanced shifts (:mod:`rvmsim.criteria.solves`).  :class:`EcSolver` maps the fisheye
+outline pixels of each such EC's labels onto the virtual plane once per candidate
+(:func:`rvmsim.isp.input_to_plane`: a few hundred points) and sets each parameter so that
+its EC lands on its target (from the EC's acceptable range).  The search then has as many
+dimensions fewer (:class:`~rvmsim.tune.CmaEsSolved`).
 
-- **4-1** (board aspect w/h) scales with ``adv_h_scale`` for a given ``adv_v_scale``;
-- **3-1** (guideline 2's centre offset) is zero when ``adv_h_shift`` is the plane x of the
-  middle of guideline 2;
-- **3-2** (guideline 3's height) is linear in ``adv_v_shift``.
-
-:class:`EcSolver` maps the fisheye pixels of the board and the two guidelines onto the
-virtual plane once per candidate (:func:`rvmsim.isp.input_to_plane`: a few hundred points)
-and sets those parameters so that each EC lands in the middle of its acceptable range (3-1:
-offset 0).  The search then has three dimensions fewer (:class:`~rvmsim.tune.CmaEsSolved`).
-
-A solve applies only where it is sound: its EC is the built-in one, enabled, with a range
-that has a middle; the parameter is tuned; and the object is in the fisheye image.  A solved
-value is clipped to the parameter's search range.
+A solve applies only where it is sound: its EC is selected and enabled and its definition
+(as its plugin defines it: a replacement without a hook does not solve) has a sub-solve;
+its range has a target; the parameter is tuned; and the object is in the fisheye image
+(>= 3 outline points, and >= 3 of them in front of the plane for a candidate).  A solved
+value is clipped to the parameter's search range.  Two ECs that would solve one parameter
+are refused (:class:`~rvmsim.errors.CriteriaError`): which one wins would be arbitrary.
 """
 
 from __future__ import annotations
@@ -27,54 +25,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import labels as L
-from ..criteria import Criteria, builtin_ecs
+from ..criteria import Criteria, EcDefinition, SubSolve, checked_solve_value, outline_points
+from ..errors import CriteriaError
 from ..isp import IspParams, OutputSpec, input_to_plane
-from .space import SearchSpace
+from .space import ParamRange, SearchSpace
 
-__all__ = ["EcSolver", "SOLVED_PARAMS"]
+__all__ = ["EcSolver", "SOLVE_ROUNDS"]
 
-#: EC id → the parameter its sub-solve sets.
-SOLVED_PARAMS = {"4-1": "adv_h_scale", "3-1": "adv_h_shift", "3-2": "adv_v_shift"}
-_LABEL = {"4-1": L.BOARD, "3-1": L.guide_cross(2), "3-2": L.guide_cross(3)}
-_MAX_POINTS = 1500
-
-
-def _outline_points(labels: np.ndarray, label: int) -> np.ndarray:
-    """Fisheye px (u, v) of the outline of ``label``'s pixels (every region), at most
-    :data:`_MAX_POINTS` (evenly thinned): the extremes of a region's image lie on it.
-
-    Convention
-    ----------
-    The corners of the outline's pixels (centre ± 0.5 px), so that the points bound the
-    region's area, whose image the nearest-neighbour remap samples."""
-    import cv2
-
-    mask = (labels == label).astype(np.uint8)
-    if not mask.any():
-        return np.zeros((0, 2))
-    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    pts = np.concatenate([c.reshape(-1, 2) for c in contours]).astype(np.float64)
-    pts = (pts[:, None, :] + np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
-           ).reshape(-1, 2)
-    pts = np.unique(pts, axis=0)
-    if len(pts) > _MAX_POINTS:
-        pts = pts[np.linspace(0, len(pts) - 1, _MAX_POINTS).astype(int)]
-    return pts
+#: Every solve runs this many times per candidate, in order (:attr:`SubSolve.order`): a solve
+#: that reads a parameter another one sets after it sees that solved value the second time.
+SOLVE_ROUNDS = 2
 
 
 @dataclass(frozen=True)
 class _Solve:
-    ec: str
-    param: str
+    ec: EcDefinition  # pickles by reference to its plugin, its hook with it
     target: float
     points: np.ndarray  # fisheye px (N, 2)
     low: float
     high: float
 
+    @property
+    def hook(self) -> SubSolve:
+        hook = self.ec.sub_solve
+        assert hook is not None  # only ECs with a sub-solve are solved
+        return hook
+
 
 class EcSolver:
-    """Sets, per candidate, the parameters that the board and guideline ECs pin.
+    """Sets, per candidate, the parameters that the criteria's ECs with a sub-solve pin.
 
     Parameters
     ----------
@@ -93,6 +72,11 @@ class EcSolver:
     targets : dict
         EC id → the value its solve aims at.
 
+    Raises
+    ------
+    CriteriaError
+        Two enabled ECs of ``criteria`` would solve the same tuned parameter.
+
     Picklable (it goes to tuning's worker processes with the evaluator).
     """
 
@@ -100,80 +84,63 @@ class EcSolver:
                  space: SearchSpace):
         self.input_size = (fisheye_labels.shape[1], fisheye_labels.shape[0])
         self.output = output
-        builtin = {d.id: d for d in builtin_ecs()}
-        ranges = {r.name: r for r in space.ranges}
-        chosen = {d.id: d for d in criteria.ecs}
         solves = []
-        for ec, param in SOLVED_PARAMS.items():
-            c = criteria.items.get(ec)
-            if (c is None or not c.enabled or chosen[ec] != builtin[ec] or param not in ranges
-                    or c.high is None or (ec != "3-1" and c.low is None)):
-                continue
-            target = 0.0 if ec == "3-1" else (c.low + c.high) / 2.0  # type: ignore[operator]
-            if ec == "3-1" and c.low is not None and c.low > 0:
-                continue
-            pts = _outline_points(fisheye_labels, _LABEL[ec])
+        for ec, hook, target, r in _applicable(criteria, space):
+            pts = outline_points(fisheye_labels, hook.labels)
             if len(pts) >= 3:
-                r = ranges[param]
-                solves.append(_Solve(ec, param, target, pts, r.low, r.high))
-        self._solves = {s.ec: s for s in solves}
+                solves.append(_Solve(ec, target, pts, r.low, r.high))
+        self._solves = tuple(solves)
         # every solve's points in one array, mapped in one call per candidate
         self._points = (np.concatenate([s.points for s in solves]) if solves
                         else np.zeros((0, 2)))
         ends = np.cumsum([0] + [len(s.points) for s in solves])
-        self._slices = {s.ec: slice(int(a), int(b)) for s, a, b in zip(solves, ends, ends[1:])}
-        self.names = tuple(s.param for s in solves)
-        self.targets = {s.ec: s.target for s in solves}
+        self._slices = tuple(slice(int(a), int(b)) for a, b in zip(ends, ends[1:]))
+        self.names = tuple(s.hook.param for s in solves)
+        self.targets = {s.ec.id: s.target for s in solves}
 
     def __call__(self, params: IspParams) -> IspParams:
         """``params`` with the solved parameters set (the others unchanged)."""
         if not self._solves:
             return params
-        planes: dict[str, np.ndarray] = {}
+        planes: dict[int, np.ndarray] = {}
         xy_all, ok_all = input_to_plane(params, self._points, self.input_size)
-        for ec, part in self._slices.items():
+        for k, part in enumerate(self._slices):
             xy, ok = xy_all[part], ok_all[part]
             if np.count_nonzero(ok) >= 3:
-                planes[ec] = xy[ok]
-        half = self.output.width / 2.0
-        w, h = self.output.width, self.output.height
-        v = {n: getattr(params, n) for n in ("adv_h_scale", "adv_h_shift", "adv_v_shift")}
-        s_v = params.adv_v_scale
-        if "4-1" in planes and "4-1" in self._solves:
-            # box of w×h px: w = Δx_p·s_h·half + 1, h = Δy_p·s_v·half + 1; aim w/h = target
-            xy = planes["4-1"]
-            dx, dy = float(np.ptp(xy[:, 0])), float(np.ptp(xy[:, 1]))
-            if dx > 0:
-                bh = dy * s_v * half + 1.0
-                v["adv_h_scale"] = self._clip("4-1", (self.targets["4-1"] * bh - 1.0) / (dx * half))
-        for _ in range(2):  # the guides' visible parts depend on each other's shift: iterate
-            if "3-2" in planes and "3-2" in self._solves:
-                y = self._guide_row(planes["3-2"], v, half, w)
-                if y is not None:
-                    row = self.targets["3-2"] / 100.0 * h - 0.5  # the EC: 100·(y + 0.5)/H
-                    v["adv_v_shift"] = self._clip("3-2", y - (row - (h - 1) / 2.0) / (s_v * half))
-            if "3-1" in planes and "3-1" in self._solves:
-                xy = planes["3-1"]
-                yv = (xy[:, 1] - v["adv_v_shift"]) * s_v * half + (h - 1) / 2.0
-                seen = xy[(yv >= -0.5) & (yv <= h - 0.5), 0]
-                if len(seen):
-                    v["adv_h_shift"] = self._clip("3-1", (float(seen.min()) + float(seen.max())) / 2)
-        return params.replace(**{n: v[n] for n in self.names})
+                planes[k] = xy[ok]
+        current = params
+        for _ in range(SOLVE_ROUNDS):
+            for k, s in enumerate(self._solves):
+                if k not in planes:
+                    continue
+                value = checked_solve_value(
+                    s.ec, "solve", s.hook.solve(planes[k], current, self.output, s.target))
+                if value is not None:
+                    current = current.replace(
+                        **{s.hook.param: float(min(max(value, s.low), s.high))})
+        return params.replace(**{n: getattr(current, n) for n in self.names})
 
-    def _clip(self, ec: str, value: float) -> float:
-        s = self._solves[ec]
-        return float(min(max(value, s.low), s.high))
 
-    @staticmethod
-    def _guide_row(xy: np.ndarray, v: dict[str, float], half: float, w: int) -> float | None:
-        """Plane y of a guideline's middle as EC 3-2 measures it: the mean of its pixels
-        in the columns at the middle of its visible width."""
-        u = (xy[:, 0] - v["adv_h_shift"]) * v["adv_h_scale"] * half + (w - 1) / 2.0
-        seen = (u >= -0.5) & (u <= w - 0.5)
-        if not seen.any():
-            return None
-        uc = (float(u[seen].min()) + float(u[seen].max())) / 2.0
-        near = seen & (np.abs(u - uc) <= 1.5)
-        if not near.any():
-            near = seen & (np.abs(u - uc) <= np.sort(np.abs(u[seen] - uc))[min(7, seen.sum() - 1)])
-        return float(xy[near, 1].mean())
+def _applicable(criteria: Criteria, space: SearchSpace
+                ) -> list[tuple[EcDefinition, SubSolve, float, ParamRange]]:
+    """(EC, its sub-solve, target, the parameter's range) of every selected, enabled EC with
+    a sub-solve whose range has a target and whose parameter is tuned, in solve order
+    (:attr:`SubSolve.order`, then the criteria's order).  Independent of the scene."""
+    ranges = {r.name: r for r in space.ranges}
+    found: list[tuple[EcDefinition, SubSolve, float, ParamRange]] = []
+    setter: dict[str, str] = {}
+    for ec in criteria.ecs:
+        hook, criterion = ec.sub_solve, criteria.items[ec.id]
+        if hook is None or not criterion.enabled or hook.param not in ranges:
+            continue
+        target = checked_solve_value(ec, "target", hook.target(criterion))
+        if target is None:
+            continue
+        if hook.param in setter:
+            raise CriteriaError(criteria.source, f"criteria.{ec.id}",
+                                f"ECs {setter[hook.param]} and {ec.id} both solve "
+                                f"{hook.param}: disable one of them or leave {hook.param} "
+                                "untuned")
+        setter[hook.param] = ec.id
+        found.append((ec, hook, target, ranges[hook.param]))
+    return sorted(found, key=lambda x: x[1].order)
