@@ -129,8 +129,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("batch", "validate", "calibrate"),
     ("report",),
     ("console",),
-    ("cli", "cli_params", "cli_calibrate", "cli_console", "cli_robust", "cli_sweep",
-     "cli_validate", "__main__", "__init__"),
+    ("cli", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
 

@@ -57,18 +57,9 @@ def run_variations(scenes: Sequence[Scene], variation_file: str | None) -> list[
     RvmsimError
         One line: a bad variation file, or a scene without a variation section.
     """
-    from ..robust import load_variation, variation_from_scene
+    from ..robust import variation_for
 
-    if variation_file is not None:
-        v = load_variation(variation_file)
-        return [v] * len(scenes)
-    out = []
-    for sc in scenes:
-        if sc.variation is None:
-            raise RvmsimError(f"{sc.source}: --robust: the scene has no variation section; "
-                              "add one (docs/robustness.md) or give --variation FILE")
-        out.append(variation_from_scene(sc))
-    return out
+    return [variation_for(sc, variation_file) for sc in scenes]
 
 
 def variation_key(variations: Sequence[Variation]) -> str:

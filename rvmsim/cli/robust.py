@@ -1,38 +1,20 @@
-"""``rvmsim robustness``: the yield of one ISP setting over production variation.
-
-Its own module (cli.py is at its size limit); cli.py adds the command to
-:data:`rvmsim.cli.cli`.
-"""
+"""``rvmsim robustness``: the yield of one ISP setting over production variation."""
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
 import click
 
-from .cli_params import SEED, FiniteFloat, Integer, OutputFolder, SchedulerAddress
-from .errors import RvmsimError, VariationError
+from .errors import Command
+from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFolder,
+                     SchedulerAddress, check_scale, load_isp, scale_factors)
 
 __all__ = ["robustness"]
 
 
-def _scales(ctx: click.Context, param: click.Parameter, value: str) -> tuple[float, ...]:
-    """``--scales``: comma-separated finite factors in [0, 10], at least one."""
-    out = []
-    for part in str(value).split(","):
-        try:
-            f = float(part)
-        except ValueError:
-            raise click.BadParameter(f"{part.strip()!r} is not a number", ctx, param) from None
-        if not 0 <= f <= 10:  # also refuses nan
-            raise click.BadParameter(f"{part.strip()} is outside [0, 10]", ctx, param)
-        out.append(f)
-    return tuple(dict.fromkeys(out))
-
-
-@click.command()
+@click.command(cls=Command, error_path=("out",))
 @click.argument("scene", type=click.Path(path_type=Path))
 @click.option("--params", "params_file", type=click.Path(path_type=Path), required=True,
               help="ISP params file (YAML/JSON) to sign off.")
@@ -49,13 +31,13 @@ def _scales(ctx: click.Context, param: click.Parameter, value: str) -> tuple[flo
               help="Criteria file (YAML); default: the paper's thresholds.")
 @click.option("--scale", type=FiniteFloat(0.05, 1.0), default=1.0, show_default=True,
               help="Render at this fraction of the sensor (RAD and shifts follow).")
-@click.option("--scales", default="0.5,1,1.5,2", show_default=True, callback=_scales,
+@click.option("--scales", default="0.5,1,1.5,2", show_default=True, callback=scale_factors,
               help="Tolerance scale factors of the yield curve (comma-separated; each other "
                    "than 1 needs its own renders).")
 @click.option("--scale-samples", type=Integer(1, 100000), default=None,
               help="Samples per tolerance scale factor of the yield curve (default: "
                    "min(--samples, 64)).")
-@click.option("--workers", type=Integer(1, 64), default=min(os.cpu_count() or 1, 64),
+@click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
               show_default=True, help="Local processes rendering the viewpoints not yet in "
                                       "the render cache.")
 @click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
@@ -74,39 +56,24 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     robustness.html.  Exit status: 0 the yield is at least --min-yield (or none given),
     1 below it, 2 an error.
     """
-    from .cli_params import fail as _fail
-    from .cli_params import fail_os as _fail_os
-    from .cli_params import load_isp as _load_isp
-    from .batch import make_executor
-    from .cli_params import check_scale
-    from .criteria import load_criteria
-    from .report import write_robustness_outputs
-    from .robust import load_variation, robustness as run_robustness, variation_from_scene
-    from .scene import load_scene
+    from ..batch import make_executor
+    from ..criteria import load_criteria
+    from ..report import write_robustness_outputs
+    from ..robust import robustness as run_robustness
+    from ..robust import variation_for
+    from ..scene import load_scene
 
-    try:
-        params, output = _load_isp(params_file)
-        criteria = load_criteria(criteria_file)
-        sc = load_scene(scene)
-        check_scale(sc, params, scale)
-        if variation_file is not None:
-            variation = load_variation(variation_file)
-        elif sc.variation is None:
-            raise VariationError(str(scene), "variation", "the scene has no variation section "
-                                 "(add one, or give --variation FILE)")
-        else:
-            variation = variation_from_scene(sc)
-        with make_executor(scheduler, workers) as runner:
-            result = run_robustness(sc, params, output, criteria=criteria,
-                                    variation=variation, samples=samples, seed=seed,
-                                    scales=scales, scale_samples=scale_samples,
-                                    render_scale=scale, min_yield=min_yield, runner=runner,
-                                    progress=progress)
-        written = write_robustness_outputs(result, out)
-    except RvmsimError as err:
-        _fail(err)
-    except OSError as err:
-        _fail_os(err, out)
+    params, output = load_isp(params_file)
+    criteria = load_criteria(criteria_file)
+    sc = load_scene(scene)
+    check_scale(sc, params, scale)
+    variation = variation_for(sc, variation_file)
+    with make_executor(scheduler, workers) as runner:
+        result = run_robustness(sc, params, output, criteria=criteria, variation=variation,
+                                samples=samples, seed=seed, scales=scales,
+                                scale_samples=scale_samples, render_scale=scale,
+                                min_yield=min_yield, runner=runner, progress=progress)
+    written = write_robustness_outputs(result, out)
     click.echo(result.summary())
     click.echo(f"wrote {', '.join(p.name for p in written)} in {out} "
                f"({result.timings['total']:.1f} s)")

@@ -1,15 +1,9 @@
-"""The option types of ``rvmsim``'s commands, and the one line a usage error prints.
+"""The option types of ``rvmsim``'s commands, and the defaults and checks of their values.
 
 Click accepts values the pipeline cannot use (``--max-time nan``, an output folder that is a
 file, a scheduler address without a port); the parameter types here refuse them while the
-command line is parsed, so the error names the option before anything is read or written.
-
-A usage error (unknown option, missing argument, bad value, extra argument, no command) is
-one line on stderr, exit status 2::
-
-    rvmsim tune: --budget: 'x' is not a valid integer
-    rvmsim render: --out: blocker is a file, not a folder
-    rvmsim render: SCENE: required argument not given
+command line is parsed, so the error names the option before anything is read or written
+(one line, :func:`rvmsim.cli.errors.usage_error_line`).
 """
 
 from __future__ import annotations
@@ -17,21 +11,20 @@ from __future__ import annotations
 import math
 import os
 import re
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import click
 
-from .errors import RvmsimError
-
 if TYPE_CHECKING:
-    from .isp import IspParams, OutputSpec
-    from .scene import Scene
+    from ..isp import IspParams, OutputSpec
+    from ..scene import Scene
 
-__all__ = ["Command", "FiniteFloat", "Group", "Integer", "OutputFile", "OutputFolder",
-           "SchedulerAddress", "SEED", "check_scale", "usage_error_line", "fail", "fail_os",
-           "load_isp"]
+__all__ = ["FiniteFloat", "Integer", "OutputFile", "OutputFolder", "SchedulerAddress", "SEED",
+           "DEFAULT_WORKERS", "default_folder", "scale_factors", "check_scale", "load_isp"]
+
+#: ``--workers`` of tune, batch and robustness: one per core, at most their limit of 64.
+DEFAULT_WORKERS = min(os.cpu_count() or 1, 64)
 
 
 class Integer(click.IntRange):
@@ -130,31 +123,33 @@ class SchedulerAddress(click.ParamType):
         return str(value)
 
 
-def _parse_in(ctx: click.Context, parse: Any, args: list[str]) -> list[str]:
-    """``parse(ctx, args)``, giving a usage error the context click's parser leaves out (a
-    missing option value), so that its line names the command."""
-    try:
-        return list(parse(ctx, args))
-    except click.UsageError as err:
-        if err.ctx is None:
-            err.ctx = ctx
-        raise
+def default_folder(argument: str, folder: Callable[[Path], Path]
+                   ) -> Callable[[click.Context, click.Parameter, Path | None], Path | None]:
+    """An ``--out`` callback: the folder given, else ``folder(ARGUMENT)`` (``ARGUMENT``, the
+    command's input file, is parsed first when ``--out`` is not given).
+
+    The output folder is then known before the command runs, for its messages as well
+    (:class:`rvmsim.cli.errors.Command`).
+    """
+    def callback(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+        source = ctx.params.get(argument)  # None only while completing a command line
+        return folder(source) if value is None and source is not None else value
+
+    return callback
 
 
-class Command(click.Command):
-    """A command whose every usage error knows the command (see :func:`usage_error_line`)."""
-
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        return _parse_in(ctx, super().parse_args, args)
-
-
-class Group(click.Group):
-    """The ``rvmsim`` group: its commands are :class:`Command`."""
-
-    command_class = Command
-
-    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
-        return _parse_in(ctx, super().parse_args, args)
+def scale_factors(ctx: click.Context, param: click.Parameter, value: str) -> tuple[float, ...]:
+    """``--scales``: comma-separated finite factors in [0, 10], at least one."""
+    out = []
+    for part in str(value).split(","):
+        try:
+            f = float(part)
+        except ValueError:
+            raise click.BadParameter(f"{part.strip()!r} is not a number", ctx, param) from None
+        if not 0 <= f <= 10:  # also refuses nan
+            raise click.BadParameter(f"{part.strip()} is outside [0, 10]", ctx, param)
+        out.append(f)
+    return tuple(dict.fromkeys(out))
 
 
 def check_scale(scene: Scene, params: IspParams, scale: float) -> None:
@@ -170,52 +165,8 @@ def check_scale(scene: Scene, params: IspParams, scale: float) -> None:
                                      click.get_current_context(), param_hint="--scale") from err
 
 
-def _param_name(param: click.Parameter) -> str:
-    """``--long-option`` (the longest of its names) or ``ARGUMENT``."""
-    if isinstance(param, click.Option):
-        return max(param.opts, key=len)
-    return param.human_readable_name
-
-
-def _message(err: click.UsageError) -> str:
-    """What went wrong, starting with the option or argument at fault when click knows it."""
-    if isinstance(err, click.MissingParameter) and err.param is not None:
-        return f"{_param_name(err.param)}: required {err.param.param_type_name} not given"
-    if isinstance(err, click.BadParameter):
-        name = _param_name(err.param) if err.param is not None else err.param_hint
-        if isinstance(name, (list, tuple)):
-            name = " / ".join(name)
-        return f"{name}: {err.message}" if name else err.message
-    if isinstance(err, click.NoSuchOption):
-        hint = " or ".join(sorted(err.possibilities or ()))
-        return f"{err.option_name}: no such option" + (f" (did you mean {hint}?)" if hint else "")
-    return err.format_message()  # BadOptionUsage, extra arguments, no such command: named
-
-
-def usage_error_line(err: click.UsageError, prog: str = "rvmsim") -> str:
-    """The one line rvmsim prints for a usage error: ``PROG [COMMAND]: [OPTION: ]what``."""
-    ctx = err.ctx
-    where = prog if ctx is None or ctx.parent is None else f"{prog} {ctx.info_name}"
-    text = " ".join(_message(err).split()).rstrip(".")
-    if text[:2].istitle():  # click's own sentences ("Got unexpected extra argument (b)")
-        text = text[0].lower() + text[1:]
-    return f"{where}: {text}"
-
-
-def fail(err: Exception) -> None:
-    """Print ``err`` as the one line ``rvmsim: error: …`` on stderr and exit with status 2."""
-    click.echo(f"rvmsim: error: {err}", err=True)
-    sys.exit(2)
-
-
-def fail_os(err: OSError, where: Path | None) -> None:
-    """:func:`fail` for an OS error, naming its file (or ``where``)."""
-    name = getattr(err, "filename", None) or where
-    fail(RvmsimError(f"{name}: {err.strerror or err}" if name else str(err.strerror or err)))
-
-
 def load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
     """The params file's ISP parameters and output (the paper's defaults without one)."""
-    from .isp import IspParams, OutputSpec, load_params
+    from ..isp import IspParams, OutputSpec, load_params
 
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())

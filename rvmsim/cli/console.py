@@ -1,8 +1,4 @@
-"""``rvmsim console``: the expert console, a local web app (:mod:`rvmsim.console`).
-
-Its own module (cli.py is at its size limit); cli.py adds the command to
-:data:`rvmsim.cli.cli`.
-"""
+"""``rvmsim console``: the expert console, a local web app (:mod:`rvmsim.console`)."""
 
 from __future__ import annotations
 
@@ -10,14 +6,13 @@ from pathlib import Path
 
 import click
 
-from .cli_params import Integer
-from .cli_params import fail as _fail
-from .errors import RvmsimError
+from .errors import Command
+from .params import Integer
 
 __all__ = ["console"]
 
 
-@click.command()
+@click.command(cls=Command)
 @click.argument("source", metavar="RUN_OR_SCENE", type=click.Path(path_type=Path))
 @click.option("--port", type=Integer(0, 65535), default=8765, show_default=True,
               help="TCP port (0: any free port).")
@@ -34,18 +29,15 @@ def console(source: Path, port: int, host: str, token: str | None, no_browser: b
     RUN/console/) or a scene file (starts at the paper's defaults, saves into
     out/<scene>/console/).  Stop with Ctrl-C.
     """
-    from .console import check_access, open_session, serve
+    from ..console import check_access, open_session, serve
 
-    try:
-        access = check_access(host, token)
-        session = open_session(source)
+    access = check_access(host, token)
+    session = open_session(source)
 
-        def ready(url: str) -> None:
-            click.echo(f"rvmsim console of {session.scene.name}: {url}")
-            if access.generated:
-                click.echo(f"token (every request needs it): {access.token}")
-            click.echo(f"saves go to {session.save_dir}; Ctrl-C stops")
+    def ready(url: str) -> None:
+        click.echo(f"rvmsim console of {session.scene.name}: {url}")
+        if access.generated:
+            click.echo(f"token (every request needs it): {access.token}")
+        click.echo(f"saves go to {session.save_dir}; Ctrl-C stops")
 
-        serve(session, access, port, on_ready=ready, open_browser=not no_browser)
-    except RvmsimError as err:
-        _fail(err)
+    serve(session, access, port, on_ready=ready, open_browser=not no_browser)
