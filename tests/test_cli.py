@@ -157,7 +157,7 @@ def test_tune_status_select_and_batch(tmp_path):
     params, out = load_params(tmp_path / "p2.yaml")
     assert out.width == 320 and params.zoom > 0
     # The exported file reproduces the stored score through the public pipeline.
-    from rvmsim.tune import RunStore
+    from rvmsim.runs import RunStore
 
     store = RunStore(run / "run.sqlite")
     second = store.top(2)[1]

@@ -22,7 +22,8 @@ import yaml
 from rvmsim.criteria import CandidateEvaluator, default_criteria
 from rvmsim.render import cached_render
 from rvmsim.scene import load_scene
-from rvmsim.tune import COMBINES, SOLVE_MODES, Member, RunStore, TuningConfig, score_params
+from rvmsim.tune import COMBINES, SOLVE_MODES, Member, TuningConfig, score_params
+from rvmsim.runs import RunStore
 from rvmsim.tune import search_members
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -101,7 +101,7 @@ _BY_SCORE = click.option("--by-score", is_flag=True,
 @_BY_SCORE
 def status(run: Path, top_m: int | None, min_distance: float | None, by_score: bool) -> None:
     """Show a run's progress and its diverse top-M candidates (works while it runs)."""
-    from ..tune import status_lines
+    from ..runs import status_lines
 
     click.echo("\n".join(status_lines(run, top_m, by_score=by_score,
                                       min_distance=min_distance)))
@@ -118,7 +118,7 @@ def status(run: Path, top_m: int | None, min_distance: float | None, by_score: b
 def select(run: Path, rank: int, out: Path | None, min_distance: float | None,
            by_score: bool) -> None:
     """Export the rank-K parameter set of a run as a params file."""
-    from ..tune import rank_params_text
+    from ..runs import rank_params_text
 
     text = rank_params_text(run, rank, by_score=by_score, min_distance=min_distance)
     if out is None:

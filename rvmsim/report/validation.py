@@ -17,7 +17,7 @@ import numpy as np
 
 from .._io import make_output_folder
 from ..errors import RvmsimError
-from ..tune import json_default
+from ..storage import json_default
 from ..validate import CaptureOutcome, Validation, write_pictures
 from .page import escape, img_tag, page
 

@@ -22,15 +22,15 @@ from .._procs import spawn_pool, stop_pool
 from ..criteria import CandidateEvaluator, Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams
-from .config import TuningConfig, make_strategy
+from ..search.config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
 from .members import (OBJECTIVE_COMBINE, Aggregate, Member, MembersScorer, MembersSolver, check_members,
                       member_evaluators, parse_aggregate)
-from .records import StopReason, TrialRecord
+from ..runs.records import StopReason, TrialRecord
 from .solve import EcSolver
-from .space import SearchSpace
-from .store import RunStore
-from .strategies import Strategy
+from ..search.space import SearchSpace
+from ..runs.store import RunStore
+from ..search.strategies import Strategy
 
 if TYPE_CHECKING:
     from ..render import FisheyeImages

@@ -40,9 +40,9 @@ from ..criteria import CandidateEvaluator, Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
 from .objective import PASS_WEIGHT, ScoredBatch, check_objective, score_params
-from .records import params_json
+from ..runs.records import params_json
 from .solve import EcSolver
-from .space import SearchSpace
+from ..search.space import SearchSpace
 
 if TYPE_CHECKING:
     from ..camera import FisheyeCamera

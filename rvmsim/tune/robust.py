@@ -33,8 +33,8 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..robust import Variation
     from ..scene import Scene
-    from .records import RunSettings
-    from .store import RunStore
+    from ..runs.records import RunSettings
+    from ..runs.store import RunStore
 
 __all__ = ["ROBUST_AGGREGATE", "DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
            "robust_members", "check_samples",
@@ -120,7 +120,7 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
     (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`)."""
     if settings.robust_samples is None:
         return
-    from .diverse import store_candidates
+    from ..runs.diverse import store_candidates
 
     rows = []
     for cand, rec in store_candidates(store, settings):

@@ -30,7 +30,7 @@ import numpy as np
 from .. import labels as L
 from ..criteria import Criteria, builtin_ecs
 from ..isp import IspParams, OutputSpec, input_to_plane
-from .space import SearchSpace
+from ..search.space import SearchSpace
 
 __all__ = ["EcSolver", "SOLVED_PARAMS"]
 

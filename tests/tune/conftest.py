@@ -6,7 +6,8 @@ import os
 
 import pytest
 
-from rvmsim.tune import RunStore, TuningConfig, tune
+from rvmsim.tune import TuningConfig, tune
+from rvmsim.runs import RunStore
 
 from ..conftest import SCENES
 

@@ -1,4 +1,4 @@
-"""The diverse top-M (rvmsim.tune.diverse) on synthetic record sets: the rule's guarantees
+"""The diverse top-M (rvmsim.runs.diverse) on synthetic record sets: the rule's guarantees
 (minimum distance, pools, rank 1, fewer when the space holds no more, determinism) recomputed
 independently, and the ``differs`` line."""
 
@@ -12,8 +12,8 @@ import pytest
 
 from rvmsim.criteria import default_criteria
 from rvmsim.isp import IspParams
-from rvmsim.tune import (POOLS, EcOutcome, ParamRange, SearchSpace, TrialRecord, differs_text,
-                         select_diverse)
+from rvmsim.tune import ParamRange, SearchSpace
+from rvmsim.runs import POOLS, EcOutcome, TrialRecord, differs_text, select_diverse
 
 SPACE = SearchSpace((ParamRange("fov", 180.0, 150.0, 210.0, 20.0),
                      ParamRange("zoom", 0.7, 0.25, 1.45, 0.3),

@@ -3,7 +3,7 @@
 
 A run folder holds ``run.sqlite`` (the truth: settings, state, trials), ``run.json`` (a
 human-readable export of the settings), ``top/`` (the diverse top-M: ``rank_K.yaml`` and
-``candidates.json``, see :mod:`rvmsim.tune.diverse`) and ``best/``.  Runs written by rvmsim 0.1
+``candidates.json``, see :mod:`rvmsim.runs.diverse`) and ``best/``.  Runs written by rvmsim 0.1
 kept their settings in ``run.json`` only and their status as free text; they are read as they
 are (:func:`run_settings`), and a resumed one is brought to the current format.
 """
@@ -17,16 +17,17 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
-from .lock import FolderLock
+from ..storage import FolderLock, json_default
 from .diverse import Candidate, candidates_json, store_candidates
-from .records import RunSettings, RunState, RunStatus, TrialRecord, json_default
+from .records import RunSettings, RunState, RunStatus, TrialRecord
 from .store import RunStore
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
 
-__all__ = ["recorded_path", "run_inputs", "open_run", "run_settings", "run_state", "run_lock",
-           "find_runs", "is_run_folder", "status_lines", "rank_text", "rank_params_text", "diverse_candidates", "write_top_files"]
+__all__ = ["RUN_DB", "RUN_JSON", "recorded_path", "run_inputs", "open_run", "run_settings",
+           "run_state", "run_lock", "find_runs", "is_run_folder", "status_lines", "rank_text",
+           "rank_params_text", "diverse_candidates", "write_top_files"]
 
 RUN_DB = "run.sqlite"
 RUN_JSON = "run.json"
@@ -34,7 +35,7 @@ RUN_JSON = "run.json"
 
 def run_lock(run_dir: str | Path) -> FolderLock:
     """The writer lock of the run folder ``run_dir`` (``run.lock``, its writer in
-    ``run.pid``; see :mod:`rvmsim.tune.lock`)."""
+    ``run.pid``; see :mod:`rvmsim.storage.lock`)."""
     return FolderLock(run_dir, "run", "run")
 
 
@@ -148,7 +149,7 @@ def run_inputs(run_dir: str | Path, settings: RunSettings) -> tuple[Path, Path |
 def diverse_candidates(run_dir: str | Path, m: int | None = None,
                        min_distance: float | None = None, *, by_score: bool = False
                        ) -> list[Candidate]:
-    """The diverse top-M of the run in ``run_dir`` (:mod:`rvmsim.tune.diverse`): what its
+    """The diverse top-M of the run in ``run_dir`` (:mod:`rvmsim.runs.diverse`): what its
     ``top/`` files, its report's gallery, ``rvmsim status`` and ``rvmsim select`` offer.
     ``m`` and ``min_distance`` default to the run's tuning config; ``by_score``: the M best
     by EC score instead (the plain order).

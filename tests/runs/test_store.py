@@ -10,16 +10,9 @@ import pytest
 
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import IspParams
-from rvmsim.tune import (
-    EcOutcome,
-    RunSettings,
-    RunStatus,
-    RunStore,
-    StopReason,
-    TuningConfig,
-    ec_json,
-    params_json,
-)
+from rvmsim.tune import TuningConfig
+from rvmsim.runs import (EcOutcome, RunSettings, RunStatus, RunStore, StopReason, ec_json,
+                         params_json)
 
 
 def _settings(**changes) -> RunSettings:

@@ -8,18 +8,9 @@ import math
 import pytest
 
 from rvmsim.isp import IspParams
-from rvmsim.tune import (
-    EcOutcome,
-    RunSettings,
-    RunState,
-    RunStatus,
-    StopReason,
-    TrialRecord,
-    TuningConfig,
-    ec_json,
-    ecs_from_json,
-    params_json,
-)
+from rvmsim.tune import TuningConfig
+from rvmsim.runs import (EcOutcome, RunSettings, RunState, RunStatus, StopReason, TrialRecord,
+                         ec_json, ecs_from_json, params_json)
 
 
 def _settings(**changes) -> RunSettings:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from rvmsim.errors import RvmsimError, TuningConfigError
-from rvmsim.tune import (
+from rvmsim.search import (
     STRATEGIES,
     CmaEs,
     CmaEsSolved,

@@ -3,7 +3,7 @@
 A run is its settings (:class:`RunSettings`: what was run), its state (:class:`RunState`:
 :class:`RunStatus` and, once it has stopped, a :class:`StopReason`) and its trials
 (:class:`TrialRecord`, one per evaluated candidate, each EC's outcome an :class:`EcOutcome`).
-:class:`~rvmsim.tune.RunStore` keeps all three in ``run.sqlite``, the single source of truth;
+:class:`~rvmsim.runs.RunStore` keeps all three in ``run.sqlite``, the single source of truth;
 ``run.json`` is a human-readable export of the settings.
 """
 
@@ -16,11 +16,11 @@ from enum import StrEnum
 from typing import Any, Mapping, Sequence
 
 from ..isp import IspParams
-from .config import TuningConfig
+from ..search.config import TuningConfig
 
 __all__ = ["RunStatus", "StopReason", "EcOutcome", "TrialRecord", "RunSettings", "RunState",
            "SceneRef",
-           "params_json", "ec_json", "ecs_from_json", "json_default"]
+           "params_json", "ec_json", "ecs_from_json"]
 
 
 class RunStatus(StrEnum):
@@ -205,7 +205,7 @@ class RunState:
     """A run's status, why it stopped (once it has), its strategy and the evaluations it
     will make (None when the strategy does not know in advance); ``killed``: the run was
     recorded as running but its writer has gone without a word (killed: SIGKILL, a power
-    cut), so it is interrupted, and resumable (:func:`rvmsim.tune.run_state` tells)."""
+    cut), so it is interrupted, and resumable (:func:`rvmsim.runs.run_state` tells)."""
 
     status: RunStatus
     stopped: StopReason | None
@@ -231,16 +231,6 @@ class RunState:
 def params_json(p: IspParams) -> str:
     """The ``params`` column: all 14 ISP parameters as a JSON object."""
     return json.dumps({n: getattr(p, n) for n in IspParams.names()})
-
-
-def json_default(o: Any) -> Any:
-    """``json.dumps(..., default=json_default)``: numpy scalars (float32, integers) as Python
-    numbers.  (Python and float64 NaN never reach ``default``: json writes them itself.)"""
-    import numpy as np
-
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    raise TypeError(f"{type(o).__name__} is not JSON serializable")
 
 
 def ec_json(ids: Sequence[str], values: Sequence[float], scores: Sequence[float],

@@ -10,15 +10,15 @@ import sys
 import pytest
 
 from rvmsim.errors import RvmsimError
-from rvmsim.tune import (diverse_candidates, find_runs, is_run_folder, rank_params_text,
-                         status_lines, tune)
+from rvmsim.tune import tune
+from rvmsim.runs import diverse_candidates, find_runs, is_run_folder, rank_params_text, status_lines
 
-from .common import make_legacy_run
+from ..tune.common import make_legacy_run
 
 
 def test_status_and_params_file_of_a_run(clean, tmp_path):
     from rvmsim.isp import load_params
-    from rvmsim.tune import RunStore
+    from rvmsim.runs import RunStore
 
     # the plain score order (--by-score), as status and select offered it before the
     # diverse top-M

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rvmsim.tune import ParamRange, SearchSpace, default_space
+from rvmsim.search import ParamRange, SearchSpace, default_space
 
 from ..conftest import small_render
 

@@ -28,7 +28,7 @@ Registry
 --------
 :data:`STRATEGIES` maps each strategy's ``name`` to its class; a class registers itself with
 :func:`register_strategy` and names its tuning-config section (``section``, a key of
-:class:`~rvmsim.tune.TuningConfig`) and that section's pydantic model (``Settings``, which
+:class:`~rvmsim.search.TuningConfig`) and that section's pydantic model (``Settings``, which
 forbids keys the strategy does not use).  ``rvmsim tune --strategy``, the tuning config and
 the sweep file all read the registry.
 """
@@ -203,7 +203,7 @@ _T = TypeVar("_T", bound=type[Strategy])
 def register_strategy(cls: _T) -> _T:
     """Class decorator: add a :class:`Strategy` subclass to :data:`STRATEGIES` under its
     ``name`` (which must be new).  Its ``section`` is a key of
-    :class:`~rvmsim.tune.TuningConfig` holding a ``Settings`` (the built-ins), or "" (a
+    :class:`~rvmsim.search.TuningConfig` holding a ``Settings`` (the built-ins), or "" (a
     strategy without config-file settings)."""
     if not cls.name or cls.name in STRATEGIES:
         raise ValueError(f"strategy name {cls.name!r} is empty or taken")

@@ -34,8 +34,8 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 
 from ..isp import PARAM_SPECS, IspParams, OutputSpec
+from ..search.space import SearchSpace
 from .records import TrialRecord
-from .space import SearchSpace
 
 if TYPE_CHECKING:
     from ..criteria import Criteria

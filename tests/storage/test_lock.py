@@ -18,7 +18,8 @@ import pytest
 import yaml
 
 from rvmsim.errors import RvmsimError
-from rvmsim.tune import FolderLock, RunStatus, RunStore, Writer, run_lock, status_lines
+from rvmsim.runs import RunStatus, RunStore, run_lock, status_lines
+from rvmsim.storage import FolderLock, Writer
 
 from ..bad_input.conftest import SMALL_SCENE, write_small_scene
 from ..bad_input.harness import folder_digest

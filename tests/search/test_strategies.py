@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rvmsim.errors import RvmsimError
-from rvmsim.tune import (
+from rvmsim.search import (
     SEED_MAX,
     STRATEGIES,
     CmaEs,
@@ -23,7 +23,7 @@ from rvmsim.tune import (
 )
 
 from ..conftest import small_render
-from .common import search, small_problem
+from ..tune.common import search, small_problem
 
 
 def test_grid_to_random_follows_the_protocol(tmp_path):

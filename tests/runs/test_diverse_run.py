@@ -15,10 +15,10 @@ import pytest
 
 from rvmsim.isp import load_params
 from rvmsim.scene import load_scene
-from rvmsim.tune import (RunStore, TuningConfig, diverse_candidates, rank_params_text,
-                         status_lines, tune)
+from rvmsim.tune import TuningConfig, tune
+from rvmsim.runs import RunStore, diverse_candidates, rank_params_text, status_lines
 
-from .common import small_scene_file
+from ..tune.common import small_scene_file
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 10, "batch": 50,
           "diverse": {"min_distance": 0.08}}

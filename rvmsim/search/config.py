@@ -62,7 +62,7 @@ class _Output(BaseModel):
 
 class DiverseConfig(BaseModel):
     """The ``diverse`` section: how the top-M candidates are chosen (see
-    :mod:`rvmsim.tune.diverse` and docs/tuning.md).
+    :mod:`rvmsim.runs.diverse` and docs/tuning.md).
 
     ``m``: the candidates offered (default: ``top_m``); ``min_distance``: the least distance
     between any two of them in normalised parameter space (each tuned parameter divided by
@@ -82,7 +82,7 @@ class TuningConfig(BaseModel):
 
     ``tuned``: the parameters to search (default: the paper's nine); ``parameters``: per
     parameter ``init``, ``range`` and coarse ``step`` (default: fitted to the camera, see
-    :func:`rvmsim.tune.default_space`); ``fixed``: values of untuned parameters;
+    :func:`rvmsim.search.default_space`); ``fixed``: values of untuned parameters;
     ``output``: the RVM image the ECs are measured on during tuning; ``top_m`` and
     ``diverse``: the candidates offered for the final choice (:class:`DiverseConfig`); one
     section per
