@@ -3,8 +3,10 @@
 Data flows one way: scene (YAML) → meshes → fisheye images (rendered once) → [ISP map →
 RVM image → ECs] per candidate → run store → report.  One subpackage per stage:
 :mod:`rvmsim.camera`, :mod:`rvmsim.scene`, :mod:`rvmsim.render`, :mod:`rvmsim.isp`,
-:mod:`rvmsim.criteria`, :mod:`rvmsim.tune`, :mod:`rvmsim.batch`, :mod:`rvmsim.validate`,
-:mod:`rvmsim.report`; :mod:`rvmsim.pipeline` joins render, ISP and ECs.  The main entry
+:mod:`rvmsim.criteria`, :mod:`rvmsim.robust`, :mod:`rvmsim.search` (space, strategies,
+tuning config), :mod:`rvmsim.runs` (run model, store, folders), :mod:`rvmsim.tune`,
+:mod:`rvmsim.batch`, :mod:`rvmsim.validate`, :mod:`rvmsim.report`; :mod:`rvmsim.pipeline`
+joins render, ISP and ECs, and :mod:`rvmsim.storage` holds what stores and locks share.  The main entry
 points are importable from here (lazily: ``import rvmsim`` starts no OpenGL).
 
 Examples
@@ -109,10 +111,10 @@ _LAZY: dict[str, tuple[str, str]] = {
     "TuneRequest": ("rvmsim.tune", "TuneRequest"),
     "RunOptions": ("rvmsim.tune", "RunOptions"),
     "resume_run": ("rvmsim.tune", "resume"),
-    "TuningConfig": ("rvmsim.tune", "TuningConfig"),
-    "load_tuning_config": ("rvmsim.tune", "load_tuning_config"),
-    "STRATEGIES": ("rvmsim.tune", "STRATEGIES"),
-    "RunStore": ("rvmsim.tune", "RunStore"),
+    "TuningConfig": ("rvmsim.search", "TuningConfig"),
+    "load_tuning_config": ("rvmsim.search", "load_tuning_config"),
+    "STRATEGIES": ("rvmsim.search", "STRATEGIES"),
+    "RunStore": ("rvmsim.runs", "RunStore"),
     # batch and design sweeps
     "load_sweep": ("rvmsim.batch", "load_sweep"),
     "run_sweep": ("rvmsim.batch", "run_sweep"),

@@ -23,7 +23,7 @@ from pydantic import ValidationError
 from .errors import InputFileError, RvmsimError
 
 __all__ = ["read_text", "parse_yaml", "parse_yaml_mapping", "key_lines",
-           "input_error_from_validation", "line_of", "write_png", "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
+           "input_error_from_validation", "line_of", "write_png", "make_output_folder", "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
            "DEFAULT_MAX_IMAGE_PIXELS", "MAX_IMAGE_SIDE_PX", "max_image_pixels",
            "image_size_problem", "env_limit", "safe_load_limited", "yaml_problem"]
 
@@ -260,6 +260,22 @@ def line_of(lines: Mapping[tuple[Any, ...], int], path: tuple[Any, ...]) -> int 
         if path[:n] in lines:
             return lines[path[:n]]
     return None
+
+
+def make_output_folder(path: str | Path) -> Path:
+    """``path`` as a folder, created with its parents when missing.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder that cannot be created.
+    """
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
+    return out
 
 
 def write_png(path: str | Path, image: np.ndarray) -> Path:

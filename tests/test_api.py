@@ -14,8 +14,8 @@ import pytest
 import rvmsim
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("camera", "scene", "render", "isp", "criteria", "robust", "tune", "batch",
-            "validate", "report")
+PACKAGES = ("storage", "camera", "scene", "render", "isp", "criteria", "robust", "search",
+            "runs", "tune", "batch", "validate", "report", "cli")
 
 
 @pytest.mark.parametrize("name", rvmsim.__all__)

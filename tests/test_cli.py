@@ -157,7 +157,7 @@ def test_tune_status_select_and_batch(tmp_path):
     params, out = load_params(tmp_path / "p2.yaml")
     assert out.width == 320 and params.zoom > 0
     # The exported file reproduces the stored score through the public pipeline.
-    from rvmsim.tune import RunStore
+    from rvmsim.runs import RunStore
 
     store = RunStore(run / "run.sqlite")
     second = store.top(2)[1]
@@ -299,3 +299,80 @@ def test_good_invocations_use_existing_outputs(tmp_path, monkeypatch, capsys):
     params.write_text("old\n")
     res2 = CliRunner().invoke(cli, ["select", str(tmp_path / "nothing"), "--out", str(params)])
     assert res2.exit_code == 2 and "--out" not in res2.output  # the run is at fault, not --out
+
+
+def test_every_command_reports_its_errors_through_the_one_hook():
+    """Every command is a :class:`rvmsim.cli.errors.Command` (so none needs an ``except``
+    of its own), and the group holds exactly the commands the modules define."""
+    from rvmsim.cli import COMMANDS, cli
+    from rvmsim.cli.errors import Command
+
+    assert sorted(cli.commands) == sorted(c.name for c in COMMANDS)
+    assert all(isinstance(c, Command) for c in cli.commands.values())
+
+
+def _failing_command(raised: BaseException):
+    """A command of the CLI's kind whose body raises ``raised`` (as a library call would),
+    with ``--out`` defaulting to ``out/<SCENE name>/x``."""
+    from pathlib import Path
+
+    import click
+
+    from rvmsim.cli.errors import Command
+    from rvmsim.cli.params import OutputFolder, default_folder
+
+    @click.command(cls=Command, error_path=("out",))
+    @click.argument("scene", type=click.Path(path_type=Path))
+    @click.option("--out", type=OutputFolder(), default=None,
+                  callback=default_folder("scene", lambda s: Path("out") / s.stem / "x"))
+    def command(scene: Path, out: Path) -> None:
+        click.echo(f"out={out}")
+        raise raised
+
+    return command
+
+
+@pytest.mark.parametrize("raised, line", [
+    (RuntimeError("x"), None),  # not ours: not mapped
+    (FileNotFoundError(2, "No such file or directory", "in.png"),
+     "rvmsim: error: in.png: No such file or directory"),
+    (OSError(28, "No space left on device"), "rvmsim: error: {out}: No space left on device"),
+])
+def test_the_hook_maps_os_errors_naming_their_file_else_the_output_folder(
+        tmp_path, monkeypatch, raised, line):
+    from click.testing import CliRunner
+
+    from rvmsim.errors import SceneError
+
+    monkeypatch.chdir(tmp_path)
+    runner = CliRunner()
+    res = runner.invoke(_failing_command(raised), ["s.yaml"])
+    if line is None:
+        assert res.exit_code == 1 and res.exception is raised
+        return
+    assert res.exit_code == 2 and res.stdout == "out=out/s/x\n"
+    assert res.stderr == line.format(out="out/s/x") + "\n"
+    res = runner.invoke(_failing_command(raised), ["--out", "o", "s.yaml"])  # --out first
+    assert res.exit_code == 2 and res.stderr == line.format(out="o") + "\n"
+    res = runner.invoke(_failing_command(SceneError("s.yaml", "camera.fx", "must be > 0", 3)),
+                        ["s.yaml"])
+    assert res.exit_code == 2 and res.stderr == "rvmsim: error: s.yaml:3: camera.fx: must be > 0\n"
+
+
+def test_main_takes_its_arguments(capsys, tmp_path):
+    """``main(args)`` runs those arguments in this process (``sys.argv`` is not read) and
+    exits with the command's status."""
+    from rvmsim.cli import main
+
+    with pytest.raises(SystemExit) as stop:
+        main(["status", str(tmp_path / "nothing")])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.startswith("rvmsim: error: ")
+    assert "no run database" in err and len(err.splitlines()) == 1
+    with pytest.raises(SystemExit) as stop:
+        main(("render", "--out"))
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == "rvmsim render: option '--out' requires an argument\n"
+    with pytest.raises(SystemExit) as stop:
+        main(["--help"])
+    assert stop.value.code == 0 and "Usage: rvmsim [OPTIONS] COMMAND" in capsys.readouterr().out

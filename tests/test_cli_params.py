@@ -8,8 +8,9 @@ import math
 import click
 import pytest
 
-from rvmsim.cli_params import (SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
-                               SchedulerAddress, usage_error_line)
+from rvmsim.cli.errors import usage_error_line
+from rvmsim.cli.params import (SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
+                               SchedulerAddress)
 
 
 def _convert(ptype: click.ParamType, value: str):

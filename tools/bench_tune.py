@@ -57,7 +57,7 @@ def main() -> None:
         # serialised trials again, a batch (1024, the default) per transaction.
         import sqlite3
 
-        from rvmsim.tune import RunStore
+        from rvmsim.runs import RunStore
 
         src = sqlite3.connect(tmp / "full" / "run.sqlite")
         rows = src.execute("SELECT idx, stage, params, score, objective, passed, ec FROM trials"

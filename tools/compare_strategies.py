@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from rvmsim.tune import RunStore
+from rvmsim.runs import RunStore
 
 
 def main() -> None:

@@ -90,7 +90,7 @@ def scene_file(letter: str, scale: float, out: Path) -> Path:
 
 def _check_run(run_dir: Path, want: dict[str, Any]) -> None:
     """Refuse to resume a run in ``run_dir`` made with other settings than ``want``."""
-    from rvmsim.tune import open_run, run_settings
+    from rvmsim.runs import open_run, run_settings
 
     store = open_run(run_dir)
     try:

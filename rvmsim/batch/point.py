@@ -60,7 +60,8 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from ..render import cached_render
     from ..isp import IspParams
-    from ..tune import RunStore, SearchSettings, candidate_evaluator, search_scene
+    from ..runs import RunStore
+    from ..tune import SearchSettings, candidate_evaluator, search_scene
     from .feasibility import infeasible_ecs
     from .yields import point_yield
 

@@ -39,6 +39,18 @@ class SweepResult:
     out_dir: Path
     rechecked: int = 0
 
+    def summary(self) -> str:
+        """One line: the points, how many ran now, the re-checks run now, and the count of
+        each verdict (and of points that failed to run)."""
+        n_err = sum(1 for r in self.results.values() if "error" in r)
+        kinds = [r.get("verdict") for r in self.results.values() if "error" not in r]
+        n = len(self.points)
+        return (f"sweep {self.spec.name}: {n} design points, {self.ran} run now, "
+                f"{n - self.ran} already done, {self.rechecked} re-checks run now; "
+                f"{kinds.count('pass')} pass every EC, {kinds.count('not found')} not found, "
+                f"{kinds.count('infeasible')} infeasible"
+                + (f", {n_err} failed to run (see sweep.csv)" if n_err else ""))
+
 
 def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
     """Refuse, before anything is written: an output folder that is a file, one that

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import RvmsimError
-from ..tune import FolderLock, SqliteStore
+from ..storage import FolderLock, SqliteStore
 from .spec import DesignPoint
 from .yields import yield_problem
 
@@ -32,7 +32,7 @@ _SCHEMA = ("CREATE TABLE IF NOT EXISTS points (key TEXT PRIMARY KEY, idx INTEGER
 
 def sweep_lock(out_dir: str | Path) -> FolderLock:
     """The writer lock of the sweep folder ``out_dir`` (``sweep.lock``, its writer in
-    ``sweep.pid``; see :mod:`rvmsim.tune.lock`)."""
+    ``sweep.pid``; see :mod:`rvmsim.storage.lock`)."""
     return FolderLock(out_dir, "sweep", "sweep")
 
 

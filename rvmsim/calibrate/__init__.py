@@ -4,7 +4,8 @@ calibrations imported as Kannala-Brandt cameras.
 Modules: :mod:`.board` (``--board`` specs), :mod:`.captures` (image files),
 :mod:`.detect` (corner detection), :mod:`.intrinsics` (``cv2.fisheye.calibrate`` with
 outlier rejection), :mod:`.imports` (OpenCV / Kalibr / OCamCalib / camera-block files),
-:mod:`.outputs` (JSON, coverage picture, camera block, ``--write-scene``).
+:mod:`.outputs` (JSON, coverage picture, camera block, ``--write-scene``), :mod:`.run`
+(a calibration from captures, or imported, into an output folder: ``rvmsim calibrate``).
 See ``docs/calibration.md``.
 """
 
@@ -16,6 +17,7 @@ from .detect import find_board_corners, find_board_view
 from .imports import ImportedCamera, fit_kannala_brandt, import_calibration
 from .intrinsics import BoardView, Calibration, ViewFit, calibrate_fisheye
 from .outputs import camera_block, coverage_image, write_calibration_outputs, write_scene_camera
+from .run import CalibrationSummary, calibrate_captures, import_camera
 
 __all__ = [
     "BoardSpec", "CalibrationInputError", "parse_board_spec",
@@ -23,4 +25,5 @@ __all__ = [
     "ImportedCamera", "fit_kannala_brandt", "import_calibration",
     "BoardView", "Calibration", "ViewFit", "calibrate_fisheye",
     "camera_block", "coverage_image", "write_calibration_outputs", "write_scene_camera",
+    "CalibrationSummary", "calibrate_captures", "import_camera",
 ]

@@ -1,5 +1,5 @@
 """The candidates the console offers to load are the run's diverse top-M
-(:func:`rvmsim.tune.store_candidates`, as its ``top/`` files, ``status`` and ``select``
+(:func:`rvmsim.runs.store_candidates`, as its ``top/`` files, ``status`` and ``select``
 offer them); here, their JSON for the page.
 """
 
@@ -9,7 +9,7 @@ import math
 from typing import Any
 
 from ..isp import params_to_dict
-from ..tune import Candidate
+from ..runs import Candidate
 
 __all__ = ["Candidate", "candidate_json"]
 

@@ -22,8 +22,9 @@ import numpy as np
 
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec, roi_outline
-from ..tune import (DISPLAY_SIZE, TuningConfig, is_run_folder, open_run, run_inputs, run_settings,
-                    store_candidates)
+from ..runs import is_run_folder, open_run, run_inputs, run_settings, store_candidates
+from ..search import TuningConfig
+from ..tune import DISPLAY_SIZE
 from .candidates import Candidate
 
 if TYPE_CHECKING:

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from ..isp import IspParams, OutputSpec
     from ..render import FisheyeImages
     from ..scene import Scene
-    from ..tune import RunSettings, RunStore, TrialRecord
+    from ..runs import RunSettings, RunStore, TrialRecord
 
 __all__ = ["MemberScene", "load_member_scenes", "member_scores", "members_section",
            "member_scores_html", "MEMBER_THUMB_PX", "robust_top", "robust_section"]

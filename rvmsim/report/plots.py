@@ -20,7 +20,7 @@ def convergence_png(curve: list[tuple[int, float, str]]) -> bytes:
     Parameters
     ----------
     curve : list of (idx, best so far, stage)
-        As :meth:`rvmsim.tune.RunStore.best_curve` gives it.
+        As :meth:`rvmsim.runs.RunStore.best_curve` gives it.
 
     Returns
     -------

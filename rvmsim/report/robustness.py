@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import RvmsimError
 from ..robust import EcStats, RobustnessResult
-from ..tune import json_default
+from ..storage import json_default
 from .page import escape, figure_png, img_tag, page, data_uri
 
 __all__ = ["robustness_page", "write_robustness_outputs", "margin_histograms_png",

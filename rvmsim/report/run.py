@@ -4,7 +4,7 @@ A report shows what a tuning run found, for engineers reviewing it with colleagu
 customers: the scene (vehicle, camera, lens, mount, criteria), the fisheye image with the
 ROI of the chosen parameters, the RVM image and the annotated EC image, the EC table, the
 parameter table, the convergence of the search, and the diverse top-M candidates (each with
-how it differs from rank 1, :mod:`rvmsim.tune.diverse`) so the expert can make the final
+how it differs from rank 1, :mod:`rvmsim.runs.diverse`) so the expert can make the final
 choice (``rvmsim select RUN --rank K`` exports any of them).
 
 Everything is embedded (PNG images as ``data:`` URIs, CSS in a ``<style>`` element); the page
@@ -27,7 +27,7 @@ from urllib.parse import quote
 import numpy as np
 
 from ..errors import RvmsimError
-from ..tune import find_runs, is_run_folder
+from ..runs import find_runs, is_run_folder
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
                       members_section, robust_section, robust_top)
 from .page import data_uri, escape, img_tag, page, shrink
@@ -38,10 +38,11 @@ if TYPE_CHECKING:
     from ..isp import OutputSpec
     from ..render import FisheyeImages
     from ..scene import Scene
-    from ..tune import Candidate, RunSettings, RunState, TrialRecord, TuningConfig
+    from ..runs import Candidate, RunSettings, RunState, TrialRecord
+    from ..search import TuningConfig
 
-__all__ = ["write_report", "write_batch_report", "write_any_report", "find_runs",
-           "EC_GROUP_NAMES", "SECTION_IDS", "ec_section"]
+__all__ = ["write_report", "write_batch_report", "write_any_report", "EC_GROUP_NAMES",
+           "SECTION_IDS", "ec_section"]
 
 #: The paper groups the ECs by their first digit.
 EC_GROUP_NAMES: dict[str, str] = {
@@ -91,7 +92,7 @@ def _load_run(run_dir: Path) -> _Run:
     from ..criteria import load_criteria
     from ..render import cached_render, same_scene
     from ..scene import load_scene
-    from ..tune import (open_run, recorded_path, run_inputs, run_settings, run_state,
+    from ..runs import (open_run, recorded_path, run_inputs, run_settings, run_state,
                         store_candidates)
 
     store = open_run(run_dir)

@@ -24,7 +24,7 @@ import numpy as np
 from ..batch import (VERDICTS, DesignPoint, SweepResult, SweepSpec, csv_text, page_columns,
                      point_verdict, sweep_json, sweep_table, yield_cells)
 from ..errors import RvmsimError
-from ..tune import json_default
+from ..storage import json_default
 from .page import data_uri, escape, figure_png, page
 
 __all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "yield_png",

@@ -10,21 +10,19 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .._io import write_png
+from .._io import make_output_folder
 from ..errors import RvmsimError
-from ..tune import json_default
-from ..validate import Validation
+from ..storage import json_default
+from ..validate import CaptureOutcome, Validation, write_pictures
 from .page import escape, img_tag, page
 
-__all__ = ["validation_page", "write_validation_outputs", "PICTURE_CAPTIONS", "write_pictures",
-           "CaptureOutcome", "SUMMARY_COLUMNS", "summary_table", "write_validation_summary",
-           "summary_page"]
+__all__ = ["validation_page", "write_validation_outputs", "PICTURE_CAPTIONS",
+           "SUMMARY_COLUMNS", "summary_table", "write_validation_summary", "summary_page"]
 
 #: Caption of each validation picture, by file stem.
 PICTURE_CAPTIONS: dict[str, str] = {
@@ -113,7 +111,7 @@ def write_validation_outputs(result: Validation, out_dir: str | Path) -> list[Pa
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = _make_folder(out_dir)
+    out = make_output_folder(out_dir)
     paths = write_pictures(result.images, out)
     js = out / "validation.json"
     try:
@@ -123,78 +121,6 @@ def write_validation_outputs(result: Validation, out_dir: str | Path) -> list[Pa
     except OSError as err:
         raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
     return [js, html_path, *paths]
-
-
-def _make_folder(out_dir: str | Path) -> Path:
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
-    return out
-
-
-def write_pictures(images: dict[str, np.ndarray], out_dir: str | Path) -> list[Path]:
-    """Write each picture as ``<key>.png`` into ``out_dir`` (created); also what a failed
-    validation leaves (:attr:`rvmsim.validate.ValidationFailure.images`).
-
-    Raises
-    ------
-    RvmsimError
-        One line naming the folder or file that cannot be created or written.
-    """
-    out = _make_folder(out_dir)
-    return [write_png(out / f"{name}.png", img) for name, img in images.items()]
-
-
-@dataclass(frozen=True)
-class CaptureOutcome:
-    """One capture of a several-capture validation.
-
-    Attributes
-    ----------
-    capture : str
-        The capture's file.
-    out_dir : Path
-        Where its outputs went.
-    result : Validation or None
-        None when the validation stopped with an error.
-    error : str
-        The error's one-line message ("" when it finished).
-    step : str
-        The failed step: ``detection``, ``correspondence``, ``pose fit`` (an error),
-        ``check`` (a failed verdict), ``error`` (another error), "" (passed).
-    images : dict of str to (H, W, 3) uint8
-        The failure's pictures (when ``result`` is None).
-    """
-
-    capture: str
-    out_dir: Path
-    result: Validation | None
-    error: str = ""
-    step: str = ""
-    images: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
-
-    @property
-    def verdict(self) -> str:
-        if self.result is None:
-            return "ERROR"
-        return "PASS" if self.result.passed else "FAIL"
-
-    def row(self) -> dict[str, Any]:
-        """The summary table's row (numbers px, mm, degrees; None where not measured)."""
-        r = self.result
-        c = None if r is None else r.correction
-        return {
-            "capture": self.capture, "verdict": self.verdict, "step_failed": self.step,
-            "inliers": None if r is None else r.n_inliers,
-            "predicted": None if r is None else r.n_predicted,
-            "rms_before_px": None if r is None else r.rms_before_px,
-            "rms_after_px": None if r is None else r.rms_after_px,
-            "d_position_mm": None if c is None else c.d_position_norm_mm,
-            "max_d_angle_deg": None if c is None else c.max_d_angle_deg,
-            "error": self.error, "out_dir": str(self.out_dir),
-        }
 
 
 #: Columns of the summary table, in order.
@@ -227,7 +153,7 @@ def write_validation_summary(outcomes: list[CaptureOutcome], out_dir: str | Path
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = _make_folder(out_dir)
+    out = make_output_folder(out_dir)
     rows = [o.row() for o in outcomes]
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")

@@ -15,6 +15,7 @@ from .variation import (
     load_variation,
     variation_from_scene,
     variation_from_spec,
+    variation_for,
     NOMINAL_LOAD,
     MOUNT_AXES,
 )
@@ -46,6 +47,7 @@ __all__ = [
     "load_variation",
     "variation_from_scene",
     "variation_from_spec",
+    "variation_for",
     "NOMINAL_LOAD",
     "MOUNT_AXES",
     "MountSample",

@@ -1,7 +1,8 @@
 """Production variation as frozen dataclasses: per-axis mount tolerances and load states.
 
 Read from a scene's ``variation`` section (:func:`variation_from_scene`) or a variation file
-of the same keys (:func:`load_variation`); the YAML schema is
+of the same keys (:func:`load_variation`); :func:`variation_for` chooses between them as
+``--variation`` does (``rvmsim robustness``, ``rvmsim tune --robust``).  The YAML schema is
 :class:`rvmsim.scene.VariationSpec`.  Conventions (frames, signs): see
 :mod:`rvmsim.scene.variation`.
 """
@@ -19,7 +20,8 @@ from ..errors import VariationError
 from ..scene import MOUNT_AXES, AxisSpec, Scene, VariationSpec
 
 __all__ = ["AxisDistribution", "LoadState", "Variation", "load_variation",
-           "variation_from_scene", "variation_from_spec", "NOMINAL_LOAD", "MOUNT_AXES"]
+           "variation_from_scene", "variation_from_spec", "variation_for", "NOMINAL_LOAD",
+           "MOUNT_AXES"]
 
 
 @dataclass(frozen=True)
@@ -135,3 +137,21 @@ def variation_from_scene(scene: Scene) -> Variation:
     if scene.variation is None:
         return Variation(source=f"{scene.source} (no variation section)")
     return variation_from_spec(scene.variation, f"{scene.source}: variation")
+
+
+def variation_for(scene: Scene, variation_file: str | Path | None) -> Variation:
+    """The variation ``scene`` is judged on: the variation file's when one is given
+    (``--variation``), else the scene's own ``variation`` section.
+
+    Raises
+    ------
+    VariationError
+        One line naming the file and key: a bad variation file, or no file and a scene
+        without a variation section.
+    """
+    if variation_file is not None:
+        return load_variation(variation_file)
+    if scene.variation is None:
+        raise VariationError(scene.source, "variation", "the scene has no variation section; "
+                             "add one (docs/robustness.md) or give --variation FILE")
+    return variation_from_scene(scene)

@@ -1,25 +1,23 @@
-"""Tuning: search space, strategies (one registry), objective, the search loop, the run model
-and store, and tuning runs in run folders.
+"""Tuning: the search (objective, multi-member evaluation, closed-form sub-solves, the search
+loop) and tuning runs (:func:`tune`: start, resume, shared and robust runs).
 
-Modules: :mod:`~rvmsim.tune.space` (ParamRange, SearchSpace, default_space),
-:mod:`~rvmsim.tune.strategies` (Strategy, the built-ins, STRATEGIES),
-:mod:`~rvmsim.tune.objective` (score_vectors), :mod:`~rvmsim.tune.records` (the run model),
-:mod:`~rvmsim.tune.store` (RunStore), :mod:`~rvmsim.tune.config` (TuningConfig),
-:mod:`~rvmsim.tune.loop` (run_search, search_scene, search_members, the worker pool),
-:mod:`~rvmsim.tune.members` (multi-member evaluation: shared and robust tuning),
-:mod:`~rvmsim.tune.diverse` (the diverse top-M: Candidate, select_diverse),
-:mod:`~rvmsim.tune.folder` (reading run folders, diverse_candidates), :mod:`~rvmsim.tune.lock` (the writer
-lock of run and sweep folders), :mod:`~rvmsim.tune.run` (tune).
+Modules: :mod:`~rvmsim.tune.objective` (score_vectors), :mod:`~rvmsim.tune.members`
+(multi-member evaluation: shared and robust tuning), :mod:`~rvmsim.tune.solve` (closed-form
+sub-solves), :mod:`~rvmsim.tune.loop` (run_search, search_scene, search_members, the worker
+pool), :mod:`~rvmsim.tune.shared` and :mod:`~rvmsim.tune.robust` (shared and robust runs),
+:mod:`~rvmsim.tune.run` (tune).
+
+What is searched and how (the search space, the strategies, the tuning config) is
+:mod:`rvmsim.search`, exported here too as the search API; what a run is and what it found
+(records, ``run.sqlite``, run folders, the diverse top-M) is :mod:`rvmsim.runs`.
 """
 
 from __future__ import annotations
 
-from .space import (
+from ..search import (
     ParamRange,
     SearchSpace,
     default_space,
-)
-from .strategies import (
     Strategy,
     GridToRandom,
     CmaEs,
@@ -34,25 +32,10 @@ from .strategies import (
     SEED_MAX,
     DEFAULT_STRATEGY,
     check_seed,
-)
-from .config import (
     TuningConfig,
     DiverseConfig,
     load_tuning_config,
     make_strategy,
-)
-from .records import (
-    RunStatus,
-    StopReason,
-    EcOutcome,
-    TrialRecord,
-    RunSettings,
-    RunState,
-    SceneRef,
-    params_json,
-    ec_json,
-    ecs_from_json,
-    json_default,
 )
 from .objective import (
     OBJECTIVE_FLOOR,
@@ -80,11 +63,6 @@ from .members import (
     OBJECTIVE_COMBINE,
     COMBINES,
 )
-from .store import (
-    SqliteStore,
-    RunStore,
-    RUN_FORMAT,
-)
 from .loop import (
     SearchOutcome,
     run_search,
@@ -98,36 +76,6 @@ from .loop import (
 )
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .solve import EcSolver
-from .lock import (
-    FolderLock,
-    Writer,
-)
-from .diverse import (
-    Candidate,
-    select_diverse,
-    differs_text,
-    margins_of,
-    normalised,
-    POOLS,
-    candidates_json,
-    run_space,
-    store_candidates,
-)
-from .folder import (
-    recorded_path,
-    run_inputs,
-    open_run,
-    run_settings,
-    run_state,
-    run_lock,
-    find_runs,
-    is_run_folder,
-    status_lines,
-    rank_text,
-    rank_params_text,
-    diverse_candidates,
-    write_top_files,
-)
 from .shared import (
     check_tune_arguments,
     load_shared_scenes,
@@ -150,6 +98,7 @@ __all__ = [
     "Strategy",
     "GridToRandom",
     "CmaEs",
+    "CmaEsSolved",
     "RandomSearch",
     "STRATEGIES",
     "register_strategy",
@@ -162,31 +111,8 @@ __all__ = [
     "check_seed",
     "TuningConfig",
     "DiverseConfig",
-    "Candidate",
-    "select_diverse",
-    "diverse_candidates",
-    "recorded_path",
-    "run_inputs",
-    "differs_text",
-    "margins_of",
-    "normalised",
-    "POOLS",
-    "candidates_json",
-    "run_space",
-    "store_candidates",
-    "write_top_files",
     "load_tuning_config",
     "make_strategy",
-    "RunStatus",
-    "StopReason",
-    "EcOutcome",
-    "TrialRecord",
-    "RunSettings",
-    "RunState",
-    "params_json",
-    "ec_json",
-    "ecs_from_json",
-    "json_default",
     "OBJECTIVE_FLOOR",
     "OBJECTIVES",
     "PASS_WEIGHT",
@@ -209,36 +135,20 @@ __all__ = [
     "SOLVE_MODES",
     "OBJECTIVE_COMBINE",
     "COMBINES",
-    "SceneRef",
-    "search_members",
-    "VectorScorer",
-    "SqliteStore",
-    "RunStore",
-    "RUN_FORMAT",
     "SearchOutcome",
     "run_search",
     "BatchEvaluator",
     "search_scene",
+    "search_members",
+    "VectorScorer",
+    "candidate_evaluator",
     "solver_for",
     "strategy_scorer",
     "EcSolver",
-    "CmaEsSolved",
-    "candidate_evaluator",
     "SearchSettings",
     "SearchOptions",
     "TuneRequest",
     "RunOptions",
-    "FolderLock",
-    "Writer",
-    "open_run",
-    "run_settings",
-    "run_state",
-    "run_lock",
-    "find_runs",
-    "is_run_folder",
-    "status_lines",
-    "rank_text",
-    "rank_params_text",
     "check_tune_arguments",
     "load_shared_scenes",
     "write_member_results",

@@ -23,16 +23,16 @@ from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams
 from ..pipeline import ImageEvaluator, make_evaluator
-from .config import TuningConfig, make_strategy
+from ..search.config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
 from .members import (Member, MembersScorer, MembersSolver, check_members, member_evaluators,
                       parse_aggregate)
-from .records import StopReason, TrialRecord
+from ..runs.records import StopReason, TrialRecord
 from .requests import SearchOptions, SearchSettings
 from .solve import EcSolver
-from .space import SearchSpace
-from .store import RunStore
-from .strategies import Strategy
+from ..search.space import SearchSpace
+from ..runs.store import RunStore
+from ..search.strategies import Strategy
 
 if TYPE_CHECKING:
     from ..render import FisheyeImages

@@ -41,9 +41,9 @@ from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
 from ..pipeline import ImageEvaluator, make_evaluator
 from .objective import PASS_WEIGHT, ScoredBatch, check_objective, score_params
-from .records import params_json
+from ..runs.records import params_json
 from .solve import EcSolver
-from .space import SearchSpace
+from ..search.space import SearchSpace
 
 if TYPE_CHECKING:
     from ..camera import FisheyeCamera

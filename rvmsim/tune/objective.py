@@ -26,8 +26,8 @@ import numpy as np
 from ..criteria import Criteria, score_batch
 from ..isp import IspParams
 from ..pipeline import ImageEvaluator
-from .records import ec_json, params_json
-from .space import SearchSpace
+from ..runs.records import ec_json, params_json
+from ..search.space import SearchSpace
 
 __all__ = ["OBJECTIVE_FLOOR", "OBJECTIVES", "PASS_WEIGHT", "MAX_VIOLATION", "ScoredBatch",
            "score_vectors", "violations", "ParamsScores", "score_params", "check_objective"]
@@ -112,7 +112,7 @@ def check_objective(objective: str) -> None:
 class ParamsScores:
     """One evaluator's verdicts on a batch of parameter sets (n candidates): EC score,
     log-score objective, summed range violation (:func:`violations`), all-pass, and the
-    ``ec`` column of each (:func:`rvmsim.tune.ec_json`)."""
+    ``ec`` column of each (:func:`rvmsim.runs.ec_json`)."""
 
     score: np.ndarray
     log_score: np.ndarray

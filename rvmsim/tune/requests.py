@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING, Union
 
 from ..criteria import Criteria
 from ..isp import IspParams
-from .config import TuningConfig
+from ..search.config import TuningConfig
 from .members import OBJECTIVE_COMBINE, Aggregate
-from .strategies import DEFAULT_STRATEGY, Strategy
+from ..search.strategies import DEFAULT_STRATEGY, Strategy
 
 if TYPE_CHECKING:
     from ..scene import Scene

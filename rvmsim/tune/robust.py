@@ -33,8 +33,8 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..robust import Variation
     from ..scene import Scene
-    from .records import RunSettings
-    from .store import RunStore
+    from ..runs.records import RunSettings
+    from ..runs.store import RunStore
 
 __all__ = ["ROBUST_AGGREGATE", "DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
            "robust_members", "check_samples",
@@ -57,18 +57,9 @@ def run_variations(scenes: Sequence[Scene], variation_file: str | None) -> list[
     RvmsimError
         One line: a bad variation file, or a scene without a variation section.
     """
-    from ..robust import load_variation, variation_from_scene
+    from ..robust import variation_for
 
-    if variation_file is not None:
-        v = load_variation(variation_file)
-        return [v] * len(scenes)
-    out = []
-    for sc in scenes:
-        if sc.variation is None:
-            raise RvmsimError(f"{sc.source}: --robust: the scene has no variation section; "
-                              "add one (docs/robustness.md) or give --variation FILE")
-        out.append(variation_from_scene(sc))
-    return out
+    return [variation_for(sc, variation_file) for sc in scenes]
 
 
 def variation_key(variations: Sequence[Variation]) -> str:
@@ -129,7 +120,7 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
     (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`)."""
     if settings.robust_samples is None:
         return
-    from .diverse import store_candidates
+    from ..runs.diverse import store_candidates
 
     rows = []
     for cand, rec in store_candidates(store, settings):

@@ -1,8 +1,8 @@
 """Tune one vehicle: render once (cached), search, store every candidate, write the results.
 
 A run lives in a folder: ``run.sqlite`` (settings, state and every candidate, see
-:mod:`rvmsim.tune.store`), ``run.json`` (the settings, for people), and at the end
-``top/`` (the diverse top-M, :mod:`rvmsim.tune.diverse`: ``rank_K.yaml`` params files and
+:mod:`rvmsim.runs.store`), ``run.json`` (the settings, for people), and at the end
+``top/`` (the diverse top-M, :mod:`rvmsim.runs.diverse`: ``rank_K.yaml`` params files and
 ``candidates.json``) and ``best/`` (the best candidate's RVM
 image, annotated EC image and EC table).
 """
@@ -17,22 +17,22 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
-from .config import TuningConfig, make_strategy
-from .folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
+from ..search.config import TuningConfig, make_strategy
+from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
 from .loop import SearchOutcome, search_members, search_scene
 from .members import Member, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_variations, variation_key,
                      write_robust_results)
-from .records import RunSettings, RunStatus
+from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
-from .store import RunStore
-from .strategies import Strategy, check_seed
+from ..runs.store import RunStore
+from ..search.strategies import Strategy, check_seed
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
-    from .lock import FolderLock
+    from ..storage import FolderLock
     from ..render import FisheyeImages
     from ..scene import Scene
 
@@ -355,7 +355,7 @@ def remove_run(run_dir: str | Path) -> None:
 
 def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeImages,
                   config: TuningConfig, criteria: Criteria) -> None:
-    """top/: the diverse top-M (:func:`rvmsim.tune.write_top_files`: ``rank_K.yaml`` and
+    """top/: the diverse top-M (:func:`rvmsim.runs.write_top_files`: ``rank_K.yaml`` and
     ``candidates.json``), and best/ (rank 1, the best trial): RVM image (tuning size and
     display size), annotated ECs, EC table."""
     from .._io import write_png

@@ -9,7 +9,7 @@ sensor size (one ISP setting is one camera part), else a one-line error.  The de
 space's ranges (±60 px of H shift, ±160 px of V shift at 1280 px, RAD ×0.55…1.45) cover
 the principal-point and focal-length spread of the bundled vehicles' cameras.
 
-The run settings record every scene with its fingerprint (:class:`~rvmsim.tune.SceneRef`);
+The run settings record every scene with its fingerprint (:class:`~rvmsim.runs.SceneRef`);
 ``--resume`` checks each.  The results are those of a one-scene run for the first scene
 (``best/`` holds its images) plus ``best/members.json`` and ``best/ec_table.txt`` with every
 scene's EC results.
@@ -22,15 +22,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Sequence
 
 from ..errors import RvmsimError
-from .config import TuningConfig
+from ..search.config import TuningConfig
 from .members import Member, check_cameras
-from .records import RunSettings, SceneRef
+from ..runs.records import RunSettings, SceneRef
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
     from ..render import FisheyeImages
     from ..scene import Scene
-    from .store import RunStore
+    from ..runs.store import RunStore
 
 __all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "resumed_scenes", "scene_members",
            "write_member_results"]

@@ -28,7 +28,7 @@ import numpy as np
 from ..criteria import Criteria, EcDefinition, SubSolve, checked_solve_value, outline_points
 from ..errors import CriteriaError
 from ..isp import IspParams, OutputSpec, input_to_plane
-from .space import ParamRange, SearchSpace
+from ..search.space import ParamRange, SearchSpace
 
 __all__ = ["EcSolver", "SOLVE_ROUNDS"]
 

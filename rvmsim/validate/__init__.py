@@ -15,10 +15,13 @@ Modules, in the order :func:`validate` uses them:
 - :mod:`.verdict`: the result records (:class:`Validation`, ...) and the checks.
 - :mod:`.scene_edit`: the scene with the corrected mount (:func:`scene_with_mount`,
   :func:`write_corrected_scene`).
-- :mod:`.outputs`: the pictures (the output folder: :func:`rvmsim.report.write_validation_outputs`).
+- :mod:`.outputs`: the pictures, and writing them (the rest of the output folder:
+  :func:`rvmsim.report.write_validation_outputs`).
 - :mod:`.failure`: :class:`ValidationFailure`, the error naming the step that failed.
 - :mod:`.validation`: :func:`validate`, the steps in order.
 - :mod:`.projection`: scene points to pixels at a corrected pose (shared by the above).
+- :mod:`.captures`: capture files validated one after another (:func:`validate_captures`,
+  one :class:`CaptureOutcome` each: ``rvmsim validate``).
 """
 
 from __future__ import annotations
@@ -26,9 +29,12 @@ from __future__ import annotations
 from .board import BoardLayout, BoardShade, board_layout
 from .board_start import BoardStart, find_board_start, ypr_from_rotation
 from .capture import load_capture
+from .captures import (CAPTURE_SUFFIXES, CaptureOutcome, capture_files, capture_folders,
+                       validate_captures)
 from .edges import CHAMFER_TRUNCATE_PX, compare_edges
 from .failure import ValidationFailure
 from .matching import find_landmarks
+from .outputs import write_pictures
 from .pose import fit_pose
 from .scene_edit import scene_with_mount, write_corrected_scene
 from .validation import validate
@@ -65,4 +71,10 @@ __all__ = [
     "BoardStart",
     "find_board_start",
     "ypr_from_rotation",
+    "write_pictures",
+    "CAPTURE_SUFFIXES",
+    "CaptureOutcome",
+    "capture_files",
+    "capture_folders",
+    "validate_captures",
 ]

@@ -8,13 +8,15 @@ integer coordinates, rounded to the nearest pixel for drawing.
 
 from __future__ import annotations
 
+from pathlib import Path
 
 import numpy as np
 
+from .._io import make_output_folder, write_png
 from .edges import compare_edges, edge_overlay, model_mask
 from .verdict import EdgeComparison, LandmarkMatch
 
-__all__ = ["blend", "compare_with_pictures", "landmark_picture"]
+__all__ = ["blend", "compare_with_pictures", "landmark_picture", "write_pictures"]
 
 
 def blend(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -62,3 +64,16 @@ def landmark_picture(capture: np.ndarray, matches: tuple[LandmarkMatch, ...]) ->
         else:
             cv2.drawMarker(out, _px(f), (255, 150, 0), cv2.MARKER_TILTED_CROSS, 9, 2)
     return out
+
+
+def write_pictures(images: dict[str, np.ndarray], out_dir: str | Path) -> list[Path]:
+    """Write each picture as ``<key>.png`` into ``out_dir`` (created); also what a failed
+    validation leaves (:attr:`rvmsim.validate.ValidationFailure.images`).
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    out = make_output_folder(out_dir)
+    return [write_png(out / f"{name}.png", img) for name, img in images.items()]

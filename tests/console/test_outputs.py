@@ -7,7 +7,7 @@ import pytest
 from rvmsim.console import evaluate_setting, open_session, save_params, write_setting_report
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import load_params
-from rvmsim.tune import rank_params_text
+from rvmsim.runs import rank_params_text
 
 
 def test_a_saved_file_reads_back_as_the_setting(run_copy):

@@ -9,7 +9,7 @@ import pytest
 from rvmsim.console import evaluate_setting, open_session
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import PARAM_SPECS, IspParams, TUNED_BY_DEFAULT
-from rvmsim.tune import open_run
+from rvmsim.runs import open_run
 
 
 def test_a_run_starts_at_rank_1_with_its_candidates(small_run):

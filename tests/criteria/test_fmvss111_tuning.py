@@ -43,7 +43,7 @@ def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):
                          capture_output=True, text=True, timeout=900, env=env, cwd=tmp_path)
     assert rep.returncode == 0, rep.stderr
     # the fast evaluator (in the workers) stored what the whole-image evaluation gives
-    from rvmsim.tune import RunStore
+    from rvmsim.runs import RunStore
 
     store = RunStore(tmp_path / "run" / "run.sqlite")
     top = store.top(1)[0]

@@ -57,7 +57,7 @@ def test_tune_with_workers_stores_a_plugin_ec(tmp_path, monkeypatch):
     from rvmsim.isp import OutputSpec, process
     from rvmsim.render import cached_render
     from rvmsim.scene import load_scene
-    from rvmsim.tune import RunStore
+    from rvmsim.runs import RunStore
 
     store = RunStore(run / "run.sqlite")
     trials = store.trials()

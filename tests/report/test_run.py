@@ -215,7 +215,7 @@ def test_batch_index_links_and_groups(runs, tmp_path):
 
 def _record_scene(run, scene) -> None:
     """Point the run's recorded scene (in run.sqlite, the run's truth) at ``scene``."""
-    from rvmsim.tune import RunStore
+    from rvmsim.runs import RunStore
 
     store = RunStore(run / "run.sqlite")
     store.write_settings(dataclasses.replace(store.settings(), scene=str(scene)))

@@ -7,9 +7,8 @@ import json
 
 import numpy as np
 
-from rvmsim.report.validation import (SUMMARY_COLUMNS, CaptureOutcome, summary_table,
-                                      write_validation_summary)
-from rvmsim.validate import ValidationFailure, validate
+from rvmsim.report.validation import SUMMARY_COLUMNS, summary_table, write_validation_summary
+from rvmsim.validate import CaptureOutcome, ValidationFailure, validate
 
 from ..validate.captures import base
 

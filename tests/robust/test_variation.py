@@ -82,3 +82,22 @@ def test_a_bad_scene_section_is_a_scene_error(tmp_path: Path):
 def test_a_missing_variation_file():
     with pytest.raises(VariationError, match="variation file not found"):
         load_variation("/nonexistent/var.yaml")
+
+
+def test_variation_for_takes_the_file_else_the_scene_section(tmp_path: Path):
+    """``--variation FILE`` wins over the scene's section; without one the section is used;
+    without either, one line naming the scene and its ``variation`` key."""
+    from rvmsim.robust import variation_for
+
+    f = tmp_path / "var.yaml"
+    f.write_text(GOOD)
+    with_section = small_scene(variation={"mount": {"yaw_deg": {"uniform": {"half_width": 2}}}})
+    assert variation_for(with_section, f) == load_variation(f)
+    assert variation_for(with_section, None) == variation_from_scene(with_section)
+    assert variation_for(with_section, None).axis("yaw_deg").bound == 2.0
+    without = small_scene()
+    assert variation_for(without, f) == load_variation(f)
+    with pytest.raises(VariationError) as err:
+        variation_for(without, None)
+    assert err.value.file == "vehicle_a_small.yaml" and err.value.key == "variation"
+    assert "--variation FILE" in err.value.message and "\n" not in str(err.value)

@@ -6,7 +6,8 @@ import os
 
 import pytest
 
-from rvmsim.tune import RunStore, TuneRequest, TuningConfig, tune
+from rvmsim.tune import TuneRequest, TuningConfig, tune
+from rvmsim.runs import RunStore
 
 from ..conftest import SCENES
 

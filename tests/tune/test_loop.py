@@ -37,8 +37,9 @@ def _problem():
 def test_search_scene_is_the_loop_over_the_config_strategy_and_evaluator():
     """search_scene = make_strategy + run_search with score_vectors, on one process or two."""
     from rvmsim.criteria import CandidateEvaluator
-    from rvmsim.tune import (RunStore, SearchOptions, SearchSettings, StopReason, make_strategy,
-                             run_search, score_vectors, search_scene)
+    from rvmsim.tune import (SearchOptions, SearchSettings, make_strategy, run_search,
+                             score_vectors, search_scene)
+    from rvmsim.runs import RunStore, StopReason
 
     images, config, criteria = _problem()
     space = config.space(images.camera)
@@ -63,7 +64,8 @@ def test_search_scene_continues_its_store_and_refuses_other_settings():
     """A search stopped by max_time continues in the same store to the unbroken result; a
     store of other settings is not mixed in."""
     from rvmsim.errors import RvmsimError
-    from rvmsim.tune import RunStore, SearchOptions, SearchSettings, StopReason, search_scene
+    from rvmsim.tune import SearchOptions, SearchSettings, search_scene
+    from rvmsim.runs import RunStore, StopReason
 
     images, config, criteria = _problem()
     how = SearchSettings(config, criteria, "cmaes", seed=1, budget=60)

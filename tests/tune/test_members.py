@@ -11,26 +11,11 @@ import pytest
 from rvmsim.criteria import CandidateEvaluator, default_criteria
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import OutputSpec
-from rvmsim.tune import (
-    Aggregate,
-    EcSolver,
-    Member,
-    MembersScorer,
-    MembersSolver,
-    RunStore,
-    SearchOptions,
-    SearchSettings,
-    TuningConfig,
-    check_members,
-    ec_json,
-    make_strategy,
-    parse_aggregate,
-    score_params,
-    score_vectors,
-    search_members,
-    search_scene,
-    worst_ec_json,
-)
+from rvmsim.tune import (Aggregate, EcSolver, Member, MembersScorer, MembersSolver, SearchOptions,
+                         SearchSettings, TuningConfig, check_members, make_strategy,
+                         parse_aggregate, score_params, score_vectors, search_members,
+                         search_scene, worst_ec_json)
+from rvmsim.runs import RunStore, ec_json
 
 from ..conftest import small_render
 

@@ -9,19 +9,9 @@ import numpy as np
 import pytest
 
 from rvmsim.criteria import default_criteria, score_batch
-from rvmsim.tune import (
-    MAX_VIOLATION,
-    CmaEs,
-    CmaEsSolved,
-    RunStore,
-    TuningConfig,
-    default_space,
-    make_strategy,
-    run_search,
-    solver_for,
-    strategy_scorer,
-    violations,
-)
+from rvmsim.tune import (MAX_VIOLATION, CmaEs, CmaEsSolved, TuningConfig, default_space,
+                         make_strategy, run_search, solver_for, strategy_scorer, violations)
+from rvmsim.runs import RunStore
 
 from ..conftest import small_render
 from .common import small_problem

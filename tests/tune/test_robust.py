@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from rvmsim.scene import load_scene
-from rvmsim.tune import RunStore, TuneRequest, TuningConfig, tune
+from rvmsim.tune import TuneRequest, TuningConfig, tune
+from rvmsim.runs import RunStore
 
 from ..bad_input.conftest import write_small_scene
 

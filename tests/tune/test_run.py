@@ -17,20 +17,9 @@ import pytest
 import yaml
 
 from rvmsim.batch import portable_scene_doc, tune_task
-from rvmsim.tune import (
-    STRATEGIES,
-    RunStatus,
-    RunStore,
-    Strategy,
-    StopReason,
-    TuneRequest,
-    TuningConfig,
-    register_strategy,
-    resume,
-    run_settings,
-    status_lines,
-    tune,
-)
+from rvmsim.tune import (STRATEGIES, Strategy, TuneRequest, TuningConfig, register_strategy,
+                         resume, tune)
+from rvmsim.runs import RunStatus, RunStore, StopReason, run_settings, status_lines
 
 from ..conftest import SCENES
 from .common import make_legacy_run

@@ -22,8 +22,8 @@ from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.report import write_report
 from rvmsim.scene import load_scene
-from rvmsim.tune import (RunStore, TuneRequest, TuningConfig, rank_params_text, resume,
-                         status_lines, tune)
+from rvmsim.tune import TuneRequest, TuningConfig, resume, tune
+from rvmsim.runs import RunStore, rank_params_text, status_lines
 
 from .common import small_scene_file
 
@@ -94,7 +94,7 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     assert lines[2].endswith("[" + ", ".join(f"{m:.4g}" for m in each) + "]")
     assert "rank 1" in rank_params_text(run)
     # the diverse top-M of a shared run: top/, status and select agree
-    from rvmsim.tune import diverse_candidates
+    from rvmsim.runs import diverse_candidates
 
     cands = diverse_candidates(run)
     listed = json.loads((run / "top" / "candidates.json").read_text())["candidates"]

@@ -8,7 +8,7 @@ import json
 import cv2
 import numpy as np
 
-from rvmsim.tune import json_default
+from rvmsim.storage import json_default
 from rvmsim.report import write_validation_outputs as write_outputs
 from rvmsim.validate.outputs import blend, landmark_picture
 

@@ -1,0 +1,120 @@
+"""``rvmsim calibrate`` as one call: a calibration from board captures, or an existing one
+imported, written into an output folder, with the scene's camera block and a summary."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+from ..errors import RvmsimError
+from .intrinsics import BoardView
+
+__all__ = ["CalibrationSummary", "calibrate_captures", "import_camera"]
+
+
+@dataclass(frozen=True)
+class CalibrationSummary:
+    """What a calibration gives the user.
+
+    Attributes
+    ----------
+    camera : dict
+        The scene's ``camera`` keys (:func:`~.outputs.camera_block`), written to
+        ``camera.yaml`` and, on request, into a scene (:func:`~.outputs.write_scene_camera`).
+    text : str
+        For the terminal: what was found or imported, and how well it fits.
+    """
+
+    camera: dict[str, Any]
+    text: str
+
+
+def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str | Path,
+                       fov_deg: float | None = None) -> CalibrationSummary:
+    """Find the board in every capture (images, or folders of them), calibrate the fisheye
+    intrinsics and write ``calibration.json``, ``coverage.png`` and ``camera.yaml`` into
+    ``out`` (:func:`~.outputs.write_calibration_outputs`).
+
+    Parameters
+    ----------
+    captures : sequence of path
+        Image files, or folders standing for their images.
+    board_spec : str
+        The board (:func:`~.board.parse_board_spec`: ``COLSxROWS:SQUARE``, ``charuco:…`` or a
+        scene file).
+    out : path
+        Output folder (created).
+    fov_deg : float, optional
+        The lens's field, degrees, for the camera block.
+
+    Raises
+    ------
+    RvmsimError
+        One line: a bad board spec, an unreadable capture, captures of different sizes, or
+        too few usable views.
+    """
+    from .board import parse_board_spec
+    from .captures import capture_files, load_grey
+    from .detect import find_board_view
+    from .intrinsics import calibrate_fisheye
+    from .outputs import camera_block, write_calibration_outputs
+
+    board = parse_board_spec(board_spec)
+    files = capture_files(list(captures))
+    views: list[BoardView] = []
+    sizes: set[tuple[int, int]] = set()
+    missed: list[str] = []
+    for f in files:
+        grey = load_grey(f)
+        sizes.add((grey.shape[1], grey.shape[0]))
+        view = find_board_view(grey, board, f.name)
+        if view is None:
+            missed.append(f.name)
+        else:
+            views.append(view)
+    if len(sizes) > 1:
+        raise RvmsimError(f"captures differ in size: {sorted(sizes)} (one camera per run)")
+    calib = calibrate_fisheye(views, board, sizes.pop())
+    write_calibration_outputs(calib, views, board, out, fov_deg)
+    used = sum(v.used for v in calib.views)
+    k = calib.K
+    text = (f"board found in {len(views)} of {len(files)} captures"
+            + (f" (not in: {', '.join(missed[:5])}{', …' if len(missed) > 5 else ''})"
+               if missed else "")
+            + f"; {used} views used, {len(views) - used} rejected as outliers\n"
+            f"fx {k[0, 0]:.3f}  fy {k[1, 1]:.3f}  cx {k[0, 2]:.3f}  cy {k[1, 2]:.3f} px; "
+            f"D {', '.join(f'{d:+.6f}' for d in calib.D)}; RMS {calib.rms_px:.3f} px")
+    return CalibrationSummary(camera_block(calib.K, calib.D, calib.image_size, fov_deg), text)
+
+
+def import_camera(file: str | Path, out: str | Path,
+                  fov_deg: float | None = None) -> CalibrationSummary:
+    """Import an existing calibration (:func:`~.imports.import_calibration`: OpenCV, Kalibr,
+    OCamCalib or a camera block) and write its camera block as ``out/camera.yaml``.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the file: unreadable, of no known format, or without an image size.
+    """
+    import yaml
+
+    from .imports import import_calibration
+    from .outputs import camera_block
+
+    file, out = Path(file), Path(out)
+    cam = import_calibration(file)
+    if cam.image_size is None:
+        raise RvmsimError(f"{file}: the calibration gives no image size (resolution)")
+    block = camera_block(cam.K, cam.D, cam.image_size, fov_deg)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "camera.yaml").write_text(f"# rvmsim calibrate --import {file.name} "
+                                     f"({cam.source_format})\n"
+                                     + yaml.safe_dump({"camera": block}, sort_keys=False,
+                                                      default_flow_style=None))
+    text = f"imported {file} ({cam.source_format})"
+    if cam.source_format == "ocamcalib":
+        text += (f"; Kannala-Brandt fit error RMS {cam.fit_rms_px:.3f} px, "
+                 f"max {cam.fit_max_px:.3f} px")
+    return CalibrationSummary(block, text)

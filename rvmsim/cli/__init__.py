@@ -1,0 +1,18 @@
+"""Command-line interface: a thin shell over the library, one module per command group.
+
+Every command parses its options (:mod:`.params`: option types that refuse what the
+pipeline cannot use), calls the library and prints; user errors (bad scene files,
+unreadable images, …) are one line on stderr and exit status 2, never a traceback
+(:mod:`.errors`: one place maps them for every command).
+
+Modules: :mod:`.group` (the ``rvmsim`` group and :func:`main`), :mod:`.render` (render,
+process, evaluate), :mod:`.tune` (tune, status, select, batch), :mod:`.report`,
+:mod:`.validate`, :mod:`.sweep`, :mod:`.robust` (robustness), :mod:`.calibrate`,
+:mod:`.console`.
+"""
+
+from __future__ import annotations
+
+from .group import COMMANDS, cli, main
+
+__all__ = ["cli", "main", "COMMANDS"]

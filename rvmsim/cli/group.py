@@ -1,0 +1,69 @@
+"""The ``rvmsim`` command group and the console-script entry point :func:`main`."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+import click
+
+from ..errors import RvmsimError
+from .calibrate import calibrate
+from .console import console
+from .errors import Group, fail, fail_os, usage_error_line
+from .render import evaluate, process, render
+from .report import report
+from .robust import robustness
+from .sweep import sweep
+from .tune import batch, select, status, tune
+from .validate import validate
+
+__all__ = ["cli", "main", "COMMANDS"]
+
+#: Every command of ``rvmsim``, in the order the modules list them.
+COMMANDS: tuple[click.Command, ...] = (render, process, evaluate, tune, batch, status, select,
+                                       report, validate, sweep, robustness, calibrate, console)
+
+
+@click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},
+             invoke_without_command=True, no_args_is_help=False)
+@click.version_option(package_name="rvmsim")
+@click.pass_context
+def cli(ctx: click.Context) -> None:
+    """rvmsim: automatic ISP tuning for rear-view-monitoring fisheye cameras."""
+    if ctx.invoked_subcommand is None:  # a usage error of one line, not the help page
+        names = ", ".join(cli.list_commands(ctx))
+        raise click.UsageError(f"missing command (one of {names}; see rvmsim --help)", ctx)
+
+
+for _command in COMMANDS:
+    cli.add_command(_command)
+
+
+def main(args: Sequence[str] | None = None) -> NoReturn:
+    """Run ``rvmsim ARGS`` (``sys.argv[1:]`` when ``args`` is None: the console script and
+    ``python -m rvmsim``) and exit with its status.
+
+    A usage error is one line naming the option, exit 2
+    (:func:`~rvmsim.cli.errors.usage_error_line`); so is any error a command did not report
+    itself (:class:`~rvmsim.cli.errors.Command` reports theirs); Ctrl-C exits 130 (a tuning
+    run keeps every finished batch and can be resumed).  Always raises :class:`SystemExit`.
+    """
+    try:
+        code = cli.main(args=None if args is None else list(args),
+                        prog_name=None if args is None else "rvmsim", standalone_mode=False)
+    except (KeyboardInterrupt, click.exceptions.Abort):
+        click.echo("rvmsim: interrupted", err=True)
+        sys.exit(130)
+    except click.UsageError as err:
+        click.echo(usage_error_line(err), err=True)
+        sys.exit(err.exit_code)
+    except click.ClickException as err:
+        click.echo(f"rvmsim: error: {err.format_message()}", err=True)
+        sys.exit(err.exit_code)
+    except RvmsimError as err:
+        fail(err)
+    except OSError as err:
+        fail_os(err, None)
+    sys.exit(code if isinstance(code, int) else 0)

@@ -1,0 +1,209 @@
+"""``rvmsim tune``, ``status``, ``select`` and ``batch``: tuning runs, started, resumed,
+watched, exported from, and several scenes tuned one after another (or on a cluster)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from ..tune import DEFAULT_STRATEGY, STRATEGIES
+from .errors import Command
+from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
+                     SchedulerAddress)
+
+if TYPE_CHECKING:
+    from ..batch import SceneRun
+
+__all__ = ["tune", "status", "select", "batch"]
+
+#: ``--strategy`` choices and help: the strategy registry.
+_STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.items()) + "."
+
+
+@click.command(cls=Command, error_path=("out",))
+@click.argument("scenes", nargs=-1, type=click.Path(path_type=Path))
+@click.option("--out", "-o", type=OutputFolder(), default=None,
+              help="Run folder (default: runs/<scene name>, runs/<name>+<name>… with --shared).")
+@click.option("--shared", is_flag=True, help="One parameter set for all SCENES (the worst "
+              "scene's EC score is maximised, every scene must pass).")
+@click.option("--aggregate", default=None, metavar="min|quantile Q", help="--shared, --robust: "
+              "the EC score is the members' minimum or this quantile [default: min, "
+              "quantile 0.1 with --robust].")
+@click.option("--robust", is_flag=True, help="Judge every candidate on production variation "
+              "samples too (the scene's variation section, or --variation): its EC score is "
+              "the worst sample's.")
+@click.option("--samples", type=Integer(1, 256), default=None,
+              help="With --robust: variation samples per scene [default: 16].")
+@click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
+              help="With --robust: a variation file instead of the scene's section.")
+@click.option("--strategy", type=click.Choice(list(STRATEGIES)),
+              default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
+@click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
+              help="Tuning config (YAML): tuned parameters, ranges, steps, N, T, budgets.")
+@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
+              help="Criteria file (YAML); default: the paper's thresholds.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
+@click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
+              show_default=True, help="Worker processes.")
+@click.option("--budget", type=Integer(1), default=None,
+              help="Evaluations (cmaes-solved, cmaes, random) or fine trials T per seed (grid-random).")
+@click.option("--max-time", type=FiniteFloat(0), default=None,
+              help="Stop after this many seconds (the run can be resumed).")
+@click.option("--target-score", type=FiniteFloat(0, 1), default=None,
+              help="Stop once the EC score reaches this.")
+@click.option("--resume", "resume_dir", type=click.Path(path_type=Path), default=None,
+              help="Continue the run in this folder (same settings, same final result).")
+@click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
+         robust: bool, samples: int | None, variation_file: Path | None, strategy: str,
+         config_file: Path | None, criteria_file: Path | None, seed: int, workers: int,
+         budget: int | None, max_time: float | None, target_score: float | None,
+         resume_dir: Path | None, force: bool, progress: bool) -> None:
+    """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared), or --resume RUN."""
+    from ..tune import (RunOptions, TuneRequest, check_tune_arguments, load_tuning_config,
+                        summary_lines)
+    from ..tune import resume as resume_run
+    from ..tune import tune as run_tune
+    from ..tune.robust import DEFAULT_SAMPLES
+
+    check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None, robust,
+                         samples, variation_file)
+    options = RunOptions(workers, max_time, target_score, progress)
+    if resume_dir is not None:
+        result = resume_run(resume_dir, options=options)
+    else:
+        request = TuneRequest(
+            tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
+            seed=seed, budget=budget, aggregate=aggregate,
+            robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
+            variation_file=variation_file)
+        result = run_tune(request, out or Path("runs") / "+".join(s.stem for s in scenes),
+                          options=options, force=force)
+    click.echo("\n".join(summary_lines(result)))
+
+
+_MIN_DISTANCE = click.option(
+    "--min-distance", type=FiniteFloat(0, 1, min_open=True), default=None,
+    help="Least distance between candidates, in fractions of each tuned parameter's span "
+         "(default: the run's diverse.min_distance).")
+_BY_SCORE = click.option("--by-score", is_flag=True,
+                         help="The plain order by EC score instead of the diverse top-M.")
+
+
+@click.command(cls=Command)
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--top", "top_m", type=Integer(1, 100), default=None,
+              help="Candidates to show (M; default: the run's).")
+@_MIN_DISTANCE
+@_BY_SCORE
+def status(run: Path, top_m: int | None, min_distance: float | None, by_score: bool) -> None:
+    """Show a run's progress and its diverse top-M candidates (works while it runs)."""
+    from ..runs import status_lines
+
+    click.echo("\n".join(status_lines(run, top_m, by_score=by_score,
+                                      min_distance=min_distance)))
+
+
+@click.command(cls=Command, error_path=("out",))
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--rank", type=Integer(1), default=1, show_default=True,
+              help="Rank K in the run's diverse top-M (as status, top/ and the report list it).")
+@click.option("--out", "-o", type=OutputFile(), default=None,
+              help="Params file to write (default: print it).")
+@_MIN_DISTANCE
+@_BY_SCORE
+def select(run: Path, rank: int, out: Path | None, min_distance: float | None,
+           by_score: bool) -> None:
+    """Export the rank-K parameter set of a run as a params file."""
+    from ..runs import rank_params_text
+
+    text = rank_params_text(run, rank, by_score=by_score, min_distance=min_distance)
+    if out is None:
+        click.echo(text, nl=False)
+    else:
+        out.write_text(text)
+        click.echo(f"wrote {out}")
+
+
+class _BatchProgress:
+    """``rvmsim batch``'s terminal: the overall bar on top (each vehicle's tuning bar below
+    it), made once a scene starts, so that an error before that is one line."""
+
+    def __init__(self, n_scenes: int, show: bool) -> None:
+        self.n_scenes = n_scenes
+        self.show = show
+        self.bar: Any = None
+
+    def overall(self) -> Any:
+        if self.show and self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=self.n_scenes, unit="vehicle", desc="batch", position=0)
+        return self.bar
+
+    def say(self, msg: str, err: bool = False) -> None:
+        if (bar := self.overall()) is not None:
+            bar.write(msg, file=sys.stderr if err else sys.stdout)
+        else:
+            click.echo(msg, err=err)
+
+    def done(self, run: SceneRun) -> None:
+        if run.error is not None:
+            self.say(f"rvmsim: error: {run.error} (skipped)", err=True)
+        if (bar := self.overall()) is not None:
+            bar.update(1)
+            if run.ok:
+                bar.set_postfix_str(f"{run.vehicle[:20]}: EC {run.ec_score:.3g}")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+@click.command(cls=Command, error_path=("out",))
+@click.argument("scenes", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--out", "-o", type=OutputFolder(), default=Path("runs"),
+              show_default=True, help="Folder for the runs (one sub-folder per scene).")
+@click.option("--strategy", type=click.Choice(list(STRATEGIES)),
+              default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
+@click.option("--config", "config_file", type=click.Path(path_type=Path), default=None)
+@click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None)
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
+@click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
+              show_default=True)
+@click.option("--budget", type=Integer(1), default=None)
+@click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
+              help="Tune the scenes as tasks on this Dask distributed cluster (one task per "
+                   "scene) instead of one after another here.")
+@click.option("--progress/--no-progress", default=True)
+def batch(scenes: tuple[Path, ...], out: Path, strategy: str, config_file: Path | None,
+          criteria_file: Path | None, seed: int, workers: int, budget: int | None,
+          scheduler: str | None, progress: bool) -> None:
+    """Tune every scene in SCENES; print and write a summary table (summary.json, .txt).
+
+    A scene that cannot be loaded or tuned is reported and skipped; the others still run.
+    Locally the scenes run one after another, each on --workers processes; with --scheduler
+    each scene is one task on the cluster, and its run folder is written here as it finishes.
+    """
+    from ..batch import (BatchSettings, run_batch, summary_ec_ids, summary_table,
+                         write_summary)
+    from ..tune import load_tuning_config
+
+    settings = BatchSettings(strategy, load_tuning_config(config_file), criteria_file,
+                             seed, budget, workers)
+    terminal = _BatchProgress(len(scenes), progress)
+    runs: list[SceneRun] = []
+    for r in run_batch(scenes, out, settings, scheduler=scheduler, progress=progress,
+                       on_start=lambda k, scene: terminal.say(f"[{k}/{len(scenes)}] {scene}")):
+        runs.append(r)
+        terminal.done(r)
+    terminal.close()
+    table = summary_table(runs, summary_ec_ids(runs, criteria_file))
+    click.echo(table)
+    write_summary(out, runs, table)
+    if any(not r.ok for r in runs):
+        sys.exit(1)

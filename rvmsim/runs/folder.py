@@ -1,0 +1,280 @@
+"""Reading a run folder: its store, its settings (also of runs of rvmsim 0.1), what
+``rvmsim status`` and ``rvmsim select`` print.
+
+A run folder holds ``run.sqlite`` (the truth: settings, state, trials), ``run.json`` (a
+human-readable export of the settings), ``top/`` (the diverse top-M: ``rank_K.yaml`` and
+``candidates.json``, see :mod:`rvmsim.runs.diverse`) and ``best/``.  Runs written by rvmsim 0.1
+kept their settings in ``run.json`` only and their status as free text; they are read as they
+are (:func:`run_settings`), and a resumed one is brought to the current format.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ..errors import RvmsimError
+from ..isp import OutputSpec, params_to_dict
+from ..storage import FolderLock, json_default
+from .diverse import Candidate, candidates_json, store_candidates
+from .records import RunSettings, RunState, RunStatus, TrialRecord
+from .store import RunStore
+
+if TYPE_CHECKING:
+    from ..criteria import Criteria
+
+__all__ = ["RUN_DB", "RUN_JSON", "recorded_path", "run_inputs", "open_run", "run_settings",
+           "run_state", "run_lock", "find_runs", "is_run_folder", "status_lines", "rank_text",
+           "rank_params_text", "diverse_candidates", "write_top_files"]
+
+RUN_DB = "run.sqlite"
+RUN_JSON = "run.json"
+
+
+def run_lock(run_dir: str | Path) -> FolderLock:
+    """The writer lock of the run folder ``run_dir`` (``run.lock``, its writer in
+    ``run.pid``; see :mod:`rvmsim.storage.lock`)."""
+    return FolderLock(run_dir, "run", "run")
+
+
+def is_run_folder(path: str | Path) -> bool:
+    """Whether ``path`` holds a run (its ``run.sqlite``)."""
+    return (Path(path) / RUN_DB).is_file()
+
+
+def find_runs(runs_dir: str | Path) -> list[Path]:
+    """The run folders directly inside ``runs_dir``, sorted."""
+    runs_dir = Path(runs_dir)
+    if not runs_dir.is_dir():
+        return []
+    return sorted(p for p in runs_dir.iterdir() if p.is_dir() and is_run_folder(p))
+
+
+def open_run(run_dir: str | Path) -> RunStore:
+    """The store of the run in ``run_dir``, opened read-only (a reader changes nothing in
+    the folder, and never waits for its writer).
+
+    Raises
+    ------
+    RvmsimError
+        One line: no ``run.sqlite`` there, or not a readable one.
+    """
+    run_dir = Path(run_dir)
+    if not is_run_folder(run_dir):
+        raise RvmsimError(f"{run_dir}: no run database ({RUN_DB}) here")
+    return RunStore(run_dir / RUN_DB, readonly=True)
+
+
+def run_state(run_dir: str | Path, store: RunStore) -> RunState:
+    """The state of the run in ``run_dir`` as it is now: the stored one, except that a run
+    stored as running whose writer holds no lock any more (it was killed) is interrupted
+    and resumable (``killed``).  Takes no lock."""
+    state = store.state()
+    if state.status is RunStatus.RUNNING and run_lock(run_dir).writer() is None:
+        return dataclasses.replace(state, status=RunStatus.INTERRUPTED, killed=True)
+    return state
+
+
+def _legacy_config(doc: Any) -> Any:
+    """A tuning config as rvmsim 0.1 dumped it: ``random.sigma0`` existed (and was
+    ignored), so it is dropped."""
+    if isinstance(doc, dict) and isinstance(doc.get("random"), dict):
+        doc = {**doc, "random": {k: v for k, v in doc["random"].items() if k != "sigma0"}}
+    return doc
+
+
+def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
+    """The settings of the run in ``run_dir``: from its store, or, for a run of rvmsim 0.1,
+    from its ``run.json``.
+
+    Raises
+    ------
+    RvmsimError
+        One line saying what to do: an old run without its ``run.json``, or an unreadable one.
+    """
+    settings = store.settings()
+    if settings is not None:
+        return settings
+    run_json = Path(run_dir) / RUN_JSON
+    if not run_json.is_file():
+        raise RvmsimError(f"{run_dir}: a run of rvmsim 0.1 without its {RUN_JSON}: its settings "
+                          "are not known (restore run.json, or start a new run)")
+    try:
+        doc = json.loads(run_json.read_text(encoding="utf-8"))
+        return RunSettings.from_json({**doc, "config": _legacy_config(doc.get("config") or {})})
+    except (ValueError, KeyError, TypeError, AttributeError) as err:
+        msg = f"{run_json}: not a readable {RUN_JSON} ({err}); restore it, or start a new run"
+        raise RvmsimError(" ".join(msg.split())) from None
+
+
+def recorded_path(recorded: str, run_dir: Path) -> Path | None:
+    """A file as ``tune`` recorded it: absolute, or relative to the current folder (where
+    tune usually ran), the run folder or its parent; None when it is not there."""
+    p = Path(recorded).expanduser()
+    if p.is_absolute():
+        return p if p.is_file() else None
+    for cand in (p, run_dir / p, run_dir.parent / p):
+        if cand.is_file():
+            return cand
+    return None
+
+
+def run_inputs(run_dir: str | Path, settings: RunSettings) -> tuple[Path, Path | None]:
+    """The run's scene file and its criteria (a bundled set's name, as a path, or the file;
+    None: the paper's), found as :func:`recorded_path` finds them.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the scene or criteria file that is gone.
+    """
+    from ..criteria import bundled_criteria_text
+
+    run_dir = Path(run_dir)
+    scene_file = recorded_path(settings.scene, run_dir)
+    if scene_file is None:
+        raise RvmsimError(f"{run_dir}: scene file {settings.scene} not found")
+    if not settings.criteria_file:
+        return scene_file, None
+    if bundled_criteria_text(settings.criteria_file) is not None:
+        return scene_file, Path(settings.criteria_file)
+    crit_file = recorded_path(settings.criteria_file, run_dir)
+    if crit_file is None:
+        raise RvmsimError(f"{run_dir}: criteria file {settings.criteria_file} not found")
+    return scene_file, crit_file
+
+
+def diverse_candidates(run_dir: str | Path, m: int | None = None,
+                       min_distance: float | None = None, *, by_score: bool = False
+                       ) -> list[Candidate]:
+    """The diverse top-M of the run in ``run_dir`` (:mod:`rvmsim.runs.diverse`): what its
+    ``top/`` files, its report's gallery, ``rvmsim status`` and ``rvmsim select`` offer.
+    ``m`` and ``min_distance`` default to the run's tuning config; ``by_score``: the M best
+    by EC score instead (the plain order).
+
+    Raises
+    ------
+    RvmsimError
+        One line: not a run, unreadable settings or trials, its criteria file (or, for a
+        run of an earlier version, its scene file) unreadable.
+    """
+    return [c for c, _ in _run_candidates(run_dir, m, min_distance, by_score)]
+
+
+def _run_candidates(run_dir: str | Path, m: int | None, min_distance: float | None,
+                    by_score: bool) -> list[tuple[Candidate, TrialRecord]]:
+    store = open_run(run_dir)
+    try:
+        return store_candidates(store, run_settings(run_dir, store), m, min_distance,
+                                by_score=by_score)
+    finally:
+        store.close()
+
+
+def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: bool = False,
+                 min_distance: float | None = None) -> list[str]:
+    """What ``rvmsim status`` prints: the state and the current top-M (while it runs, too)
+    as :func:`diverse_candidates` chooses them (``by_score``: the M best by score), each
+    after rank 1 with its distance to rank 1 and how it differs; for a shared run also its
+    scenes, and each top candidate's per-scene EC scores.  ``top_m``: M (default: the
+    run's, ``diverse.m`` or ``top_m`` of its tuning config)."""
+    store = open_run(run_dir)
+    try:
+        state = run_state(run_dir, store)
+        n = store.count()
+        meta = store.meta()
+        scenes, aggregate = meta.get("scenes"), meta.get("aggregate")
+        top: list[tuple[int, TrialRecord, str]] = []
+        note = ""
+        try:
+            top = [(c.rank, rec, "" if not c.differs else f"  (d {c.distance:.2f}: "
+                    f"{c.differs})") for c, rec in store_candidates(
+                        store, run_settings(run_dir, store), top_m, min_distance,
+                        by_score=by_score)]
+        except RvmsimError as err:  # status needs only the store: say why, show by score
+            note = f"top candidates by EC score (the diverse top-M needs: {err})"
+            top = [(k, rec, "") for k, rec in enumerate(store.top(top_m or 5), start=1)]
+        members = {rec.idx: [m[0] for m in store.member_results(rec.idx)] for _, rec, _ in top}
+    finally:
+        store.close()
+    total = "" if state.total is None else f" / {state.total}"
+    lines = [f"{run_dir}: {state.text}, strategy {state.strategy}, {n}{total} evaluations"]
+    if isinstance(scenes, list) and scenes:
+        names = ", ".join(str(r.get("vehicle") if isinstance(r, dict) else r) for r in scenes)
+        lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their {aggregate}")
+    if note:
+        lines.append("  " + " ".join(note.split()))
+    for rank, rec, how in top:
+        fails = rec.failing()
+        each = "" if not members[rec.idx] else "  [" + ", ".join(
+            f"{m:.4g}" for m in members[rec.idx]) + "]"
+        lines.append(f"  #{rank}  EC score {rec.score:.4g}  trial {rec.idx:>6} "
+                     f"({rec.stage})  {'all pass' if not fails else 'fails ' + ','.join(fails)}"
+                     f"{each}{how}")
+    return lines
+
+
+def rank_text(rec: TrialRecord, rank: int, output: OutputSpec, vehicle: str | None = None,
+              differs: str = "") -> str:
+    """A trial as a params file (YAML, loadable by :func:`rvmsim.isp.load_params`) with a
+    comment line naming its rank, EC score, trial and stage (and, given ``differs``, a
+    second one saying how it differs from rank 1)."""
+    import yaml
+
+    of = "" if vehicle is None else f" of {vehicle}"
+    how = "" if not differs else f"# differs from rank 1: {' '.join(differs.split())}\n"
+    return (f"# rank {rank}{of}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
+            + how + yaml.safe_dump(params_to_dict(rec.params, output), sort_keys=False))
+
+
+def rank_params_text(run_dir: str | Path, rank: int = 1, *, by_score: bool = False,
+                     min_distance: float | None = None) -> str:
+    """The rank-K parameter set of a run as a params file (what ``rvmsim select`` writes),
+    at the run's tuning output size: rank K of :func:`diverse_candidates` (``by_score``: of
+    the plain score order); ranks beyond the run's M continue the same list.
+
+    Raises
+    ------
+    RvmsimError
+        One line: not a run, unreadable settings, or fewer than ``rank`` candidates.
+    """
+    store = open_run(run_dir)
+    try:
+        settings = run_settings(run_dir, store)
+        top = store_candidates(store, settings, max(rank, settings.config.diverse_m),
+                               min_distance, by_score=by_score)
+    finally:
+        store.close()
+    if len(top) < rank:
+        apart = "" if by_score else (
+            f" at least {min_distance or settings.config.diverse.min_distance:g} apart "
+            "(see --by-score)")
+        raise RvmsimError(f"{run_dir}: only {len(top)} candidates{apart}, no rank {rank}")
+    cand, rec = top[rank - 1]
+    return rank_text(rec, rank, settings.config.output_spec(), differs=cand.differs)
+
+
+def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
+                    vehicle: str | None = None, criteria: Criteria | None = None) -> list[Candidate]:
+    """``top/rank_K.yaml`` (params files, each with its ``differs`` line as a comment) and
+    ``top/candidates.json`` for the run's diverse top-M; any ``rank_K.yaml`` of an earlier
+    top-M beyond them removed.  Returns the candidates."""
+    cfg = settings.config
+    pairs = store_candidates(store, settings, criteria=criteria)
+    top = Path(run_dir) / "top"
+    top.mkdir(parents=True, exist_ok=True)
+    out = cfg.output_spec()
+    for cand, rec in pairs:
+        (top / f"rank_{cand.rank}.yaml").write_text(
+            rank_text(rec, cand.rank, out, vehicle, cand.differs), encoding="utf-8")
+    for old in top.glob("rank_*.yaml"):
+        k = old.stem[len("rank_"):]
+        if not k.isdigit() or not 1 <= int(k) <= len(pairs):
+            old.unlink()
+    cands = [c for c, _ in pairs]
+    (top / "candidates.json").write_text(json.dumps(candidates_json(
+        cands, cfg.diverse_m, cfg.diverse.min_distance, cfg.diverse.score_tolerance),
+        indent=2, default=json_default), encoding="utf-8")
+    return cands
