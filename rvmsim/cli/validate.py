@@ -66,7 +66,8 @@ def validate(scene: Path, capture_paths: tuple[Path, ...], params_file: Path | N
     from ..criteria import load_criteria
     from ..report import write_validation_outputs
     from ..scene import load_scene
-    from ..validate import Tolerances, capture_files, capture_folders, validate_captures
+    from ..validate import (Tolerances, ValidationSettings, capture_files, capture_folders,
+                            validate_captures)
 
     captures = capture_files(capture_paths)
     several = len(captures) != 1 or any(p.is_dir() for p in capture_paths)
@@ -83,10 +84,10 @@ def validate(scene: Path, capture_paths: tuple[Path, ...], params_file: Path | N
         if outcome.result is None:
             click.echo(f"rvmsim: error: {outcome.message}", err=True)
 
+    settings = ValidationSettings(params, output, criteria, tol, search_px)
     outcomes = validate_captures(
         sc, captures, capture_folders(captures, out) if several else [out],
-        write_validation_outputs, params=params, output=output, criteria=criteria,
-        tolerances=tol, search_px=search_px, progress=progress,
+        write_validation_outputs, settings, progress=progress,
         on_outcome=say_error if several else None)
     if several:
         _several(sc.name, outcomes, out)

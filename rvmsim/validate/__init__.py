@@ -37,7 +37,7 @@ from .matching import find_landmarks
 from .outputs import write_pictures
 from .pose import fit_pose
 from .scene_edit import scene_with_mount, write_corrected_scene
-from .validation import validate
+from .validation import ValidationSettings, validate
 from .verdict import (
     Check,
     EdgeComparison,
@@ -61,6 +61,7 @@ __all__ = [
     "fit_pose",
     "compare_edges",
     "validate",
+    "ValidationSettings",
     "write_corrected_scene",
     "scene_with_mount",
     "CHAMFER_TRUNCATE_PX",

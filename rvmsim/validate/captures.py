@@ -20,7 +20,8 @@ import numpy as np
 
 from ..errors import RvmsimError
 from .failure import ValidationFailure
-from .verdict import Tolerances, Validation
+from .validation import ValidationSettings, validate
+from .verdict import Validation
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -138,12 +139,8 @@ def validate_captures(
     captures: Sequence[Path],
     folders: Sequence[Path],
     write_outputs: Callable[[Validation, Path], list[Path]],
+    settings: ValidationSettings = ValidationSettings(),
     *,
-    params: IspParams | None = None,
-    output: OutputSpec | None = None,
-    criteria: Criteria | None = None,
-    tolerances: Tolerances = Tolerances(),
-    search_px: float = 30.0,
     progress: bool = False,
     on_outcome: Callable[[CaptureOutcome], None] | None = None,
 ) -> list[CaptureOutcome]:
@@ -160,9 +157,10 @@ def validate_captures(
     write_outputs : callable
         ``write_outputs(validation, folder)`` writes a finished validation's files and
         returns them (:func:`rvmsim.report.write_validation_outputs`).
-    params, output, criteria, tolerances, search_px, progress
-        As :func:`~.validation.validate` takes them; the synthetic frame comes through the
-        render cache.
+    settings : ValidationSettings
+        How each capture is judged (:func:`~.validation.validate`).
+    progress : bool
+        Progress bars while rendering; the synthetic frame comes through the render cache.
     on_outcome : callable, optional
         Called with each capture's outcome as it is known (to report it at once).
 
@@ -175,17 +173,13 @@ def validate_captures(
     """
     from .capture import load_capture
     from .outputs import write_pictures
-    from .validation import validate
-
     def one(capture_file: Path, out: Path) -> CaptureOutcome:
         name = str(capture_file)
         try:
             capture = load_capture(capture_file, scene.fisheye_camera())
             try:
-                result = validate(scene, capture, use_cache=True, capture_name=name,
-                                  params=params, output=output, criteria=criteria,
-                                  tolerances=tolerances, search_px=search_px,
-                                  progress=progress)
+                result = validate(scene, capture, settings, use_cache=True,
+                                  capture_name=name, progress=progress)
             except ValidationFailure as fail:
                 write_pictures(fail.images, out)
                 return CaptureOutcome(name, out, None, str(fail), fail.step, fail.images)

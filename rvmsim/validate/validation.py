@@ -22,7 +22,7 @@ Pixels are (u, v) = (column, row) with pixel centres at integer coordinates, as 
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -43,42 +43,19 @@ from .rvm import compare_rvm
 from .scene_edit import scene_with_mount
 from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
 
-__all__ = ["validate", "RERENDER_SHIFT_PX"]
+__all__ = ["validate", "ValidationSettings", "RERENDER_SHIFT_PX"]
 
 #: A board start that moves the landmarks' predictions further than this re-renders the
 #: synthetic frame there before matching, px.
 RERENDER_SHIFT_PX = 3.0
 
 
-def validate(
-    scene: Scene,
-    capture: np.ndarray,
-    *,
-    synthetic: FisheyeImages | None = None,
-    use_cache: bool = False,
-    capture_name: str = "<array>",
-    params: IspParams | None = None,
-    output: OutputSpec | None = None,
-    criteria: Criteria | None = None,
-    tolerances: Tolerances = Tolerances(),
-    search_px: float = 30.0,
-    rerender: bool = True,
-    progress: bool = False,
-    global_start: bool = True,
-) -> Validation:
-    """Compare a real capture with the scene's synthetic frame.
+@dataclass(frozen=True)
+class ValidationSettings:
+    """How a capture is judged (``rvmsim validate``'s options).
 
     Parameters
     ----------
-    scene : Scene
-    capture : (H, W, 3) uint8
-        RGB capture of the physical camera (see :func:`~.capture.load_capture`).
-    synthetic : FisheyeImages, optional
-        The scene's rendered frame; rendered when missing, through the render cache
-        (:func:`rvmsim.render.cached_render`, keyed on the scene's content) with
-        ``use_cache``.
-    capture_name : str
-        For messages and the JSON summary.
     params, output, criteria : IspParams, OutputSpec, Criteria, optional
         With ISP parameters, the capture and the synthetic frame are also compared as RVM
         images (of ``output``'s size), and the ECs (``criteria``, default the paper's)
@@ -90,12 +67,43 @@ def validate(
     rerender : bool
         Render the scene again at the corrected pose (for the corrected overlay, the
         edge comparison after correction and the capture's ECs).
-    progress : bool
-        Progress bars while rendering.
     global_start : bool
         Look for the scene's board in the capture with the chessboard detector and start
         the pose search from the pose it gives (:func:`~.board_start.find_board_start`);
         else start from the scene's pose.
+    """
+
+    params: IspParams | None = None
+    output: OutputSpec | None = None
+    criteria: Criteria | None = None
+    tolerances: Tolerances = Tolerances()
+    search_px: float = 30.0
+    rerender: bool = True
+    global_start: bool = True
+
+
+def validate(scene: Scene, capture: np.ndarray,
+             settings: ValidationSettings = ValidationSettings(), *,
+             synthetic: FisheyeImages | None = None, use_cache: bool = False,
+             capture_name: str = "<array>", progress: bool = False) -> Validation:
+    """Compare a real capture with the scene's synthetic frame.
+
+    Parameters
+    ----------
+    scene : Scene
+    capture : (H, W, 3) uint8
+        RGB capture of the physical camera (see :func:`~.capture.load_capture`).
+    synthetic : FisheyeImages, optional
+        The scene's rendered frame; rendered when missing, through the render cache
+        (:func:`rvmsim.render.cached_render`, keyed on the scene's content) with
+        ``use_cache``.
+    settings : ValidationSettings
+        The ISP comparison, the verdict's tolerances, the search radius, the re-render and
+        the board start.
+    capture_name : str
+        For messages and the JSON summary.
+    progress : bool
+        Progress bars while rendering.
 
     Raises
     ------
@@ -110,6 +118,7 @@ def validate(
                      else render_fisheye(scene, progress=progress))
     cam = synthetic.camera
     check_capture_size(capture, cam, capture_name)
+    tolerances, global_start = settings.tolerances, settings.global_start
     ypr0 = _mount_ypr_deg(scene)
     # Few corners in view at the scene's pose is an error only when no board start helps.
     landmarks = visible_landmarks(scene, synthetic, 0 if global_start else tolerances.min_landmarks)
@@ -128,8 +137,8 @@ def validate(
                                                        tolerances.min_landmarks, progress,
                                                        capture_name)
         fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
-                                   float(search_px), tolerances.min_landmarks, capture_name,
-                                   named),
+                                   float(settings.search_px), tolerances.min_landmarks,
+                                   capture_name, named),
                         board, None if layout is None else layout.corner_index.ravel())
     except ValidationFailure as fail:
         raise fail.with_images(_failure_pictures(capture, synthetic, landmarks, fail.found)) \
@@ -145,14 +154,15 @@ def validate(
                                                  "overlay", "edges")
     images["landmarks"] = landmark_picture(capture, matches)
     corrected, edges_after = None, None
-    if rerender:
+    if settings.rerender:
         corrected = _render_corrected(scene, synthetic, correction, pos1, rot1, progress)
         edges_after, corrected_images = compare_with_pictures(
             capture, corrected.color, corrected.labels, "overlay_corrected", "edges_corrected")
         images.update(corrected_images)
     rvm = None
-    if params is not None:
-        rvm, rvm_images = compare_rvm(capture, synthetic, corrected, params, output, criteria)
+    if settings.params is not None:
+        rvm, rvm_images = compare_rvm(capture, synthetic, corrected, settings.params,
+                                      settings.output, settings.criteria)
         images.update(rvm_images)
 
     rms_after = _rms(err_after)

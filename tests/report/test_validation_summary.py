@@ -8,17 +8,19 @@ import json
 import numpy as np
 
 from rvmsim.report.validation import SUMMARY_COLUMNS, summary_table, write_validation_summary
-from rvmsim.validate import CaptureOutcome, ValidationFailure, validate
+from rvmsim.validate import CaptureOutcome, ValidationFailure, ValidationSettings, validate
 
 from ..validate.captures import base
 
 
 def _outcomes(tmp_path):
     sc, syn = base()
-    ok = validate(sc, syn.color, synthetic=syn, rerender=False, capture_name="own.png")
+    ok = validate(sc, syn.color, ValidationSettings(rerender=False), synthetic=syn,
+                  capture_name="own.png")
     noise = np.random.default_rng(0).integers(0, 255, syn.color.shape, np.uint8)
     try:
-        validate(sc, noise, synthetic=syn, rerender=False, capture_name="<noise>")
+        validate(sc, noise, ValidationSettings(rerender=False), synthetic=syn,
+                 capture_name="<noise>")
     except ValidationFailure as fail:
         bad = CaptureOutcome("<noise>", tmp_path / "noise", None, str(fail), fail.step,
                              fail.images)

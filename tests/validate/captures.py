@@ -18,7 +18,7 @@ import yaml
 from rvmsim import labels as L
 from rvmsim.render import FisheyeImages, render_fisheye
 from rvmsim.scene import Scene, checker_corners, load_scene, scene_from_dict
-from rvmsim.validate import Validation, load_capture, validate
+from rvmsim.validate import Validation, ValidationSettings, load_capture, validate
 
 from ..conftest import ROOT, SCENES
 
@@ -150,7 +150,7 @@ def perturbed_validation(tamper: bool = True) -> tuple[Validation, list[str]]:
             patch = cap[y - 7:y + 8, x - 7:x + 8].copy()
             cap[y - 7:y + 8, x - 2:x + 8] = patch[:, :10]
             tampered.append(corners[n].name)
-    res = validate(sc, cap, synthetic=syn, rerender=True)
+    res = validate(sc, cap, ValidationSettings(rerender=True), synthetic=syn)
     return res, tampered
 
 

@@ -9,8 +9,8 @@ import pytest
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.render import render_fisheye
 from rvmsim.scene import checker_corners
-from rvmsim.validate import (BoardShade, board_layout, find_board_start, validate,
-                             ypr_from_rotation)
+from rvmsim.validate import (BoardShade, ValidationSettings, board_layout, find_board_start,
+                             validate, ypr_from_rotation)
 from rvmsim.validate.capture import grey
 from rvmsim.validate.landmarks import visible_landmarks
 from rvmsim.validate.pose import PoseSearch, find_pose
@@ -43,7 +43,7 @@ def test_starts_off_by_10_degrees_and_30_cm_converge_to_the_true_pose(d_pos, d_y
     to the renderer's ~0.2 px); the scene starts ±10° and ±0.3 m off on every axis."""
     capture = base()[1].color
     scene = make_scene(scene_dict(moved_mount(d_pos, d_ypr)))
-    res = validate(scene, capture, rerender=False)
+    res = validate(scene, capture, ValidationSettings(rerender=False))
     assert res.start.startswith("the board found by the chessboard detector"), res.start
     d_mm, d_deg = _pose_error(res, MOUNT)
     assert np.all(np.abs(d_mm) <= 2.0), d_mm
@@ -56,7 +56,7 @@ def test_degraded_capture_from_10_degrees_off_finds_its_pose():
     a scene 10° / 0.3 m off: its true pose within the renderer's floor."""
     truth, capture = perturbed()
     far = validate(make_scene(scene_dict(moved_mount((0.3, 0.3, -0.3), (-10.0, -10.0, 10.0)))),
-                   capture, rerender=False)
+                   capture, ValidationSettings(rerender=False))
     np.testing.assert_allclose(far.correction.position_m, truth.camera.position, atol=3e-3)
     tm = perturbed_mount()
     np.testing.assert_allclose([far.correction.yaw_deg, far.correction.pitch_deg,
@@ -69,7 +69,7 @@ def test_without_the_global_start_such_a_pose_is_a_detection_failure():
 
     scene = make_scene(scene_dict(moved_mount((0.3, -0.3, 0.3), (10.0, -10.0, 10.0))))
     with pytest.raises(ValidationFailure) as err:
-        validate(scene, base()[1].color, rerender=False, global_start=False)
+        validate(scene, base()[1].color, ValidationSettings(rerender=False, global_start=False))
     assert err.value.step == "detection" and "(step failed: detection)" in str(err.value)
     assert {"overlay", "edges", "landmarks"} <= set(err.value.images)
     assert "--search-px" not in str(err.value)
@@ -115,7 +115,8 @@ def test_one_square_diagonal_alias_is_corrected_not_accepted():
     s = BOARD_SQUARE_M
     off = board_scene((s, -s, 0.0))  # the camera one square along a and b (b is up)
     for global_start in (True, False):
-        res = validate(off, board_capture(), rerender=False, global_start=global_start)
+        res = validate(off, board_capture(),
+                       ValidationSettings(rerender=False, global_start=global_start))
         d_mm, d_deg = _pose_error(res, BOARD_MOUNT)
         assert np.all(np.abs(d_mm) <= 3.0), (global_start, d_mm)
         assert np.all(np.abs(d_deg) <= 0.1), (global_start, d_deg)
@@ -233,7 +234,7 @@ def test_no_board_in_the_capture_and_none_in_view_is_a_detection_failure_with_pi
 
     scene = board_scene(d_ypr_deg=(120.0, 0.0, 0.0))
     with pytest.raises(ValidationFailure) as err:
-        validate(scene, board_capture(), rerender=False)
+        validate(scene, board_capture(), ValidationSettings(rerender=False))
     assert err.value.step == "detection"
     assert "did not find the scene's board" in str(err.value)
     assert "checker corners are visible" in str(err.value)

@@ -13,7 +13,7 @@ import yaml
 
 from rvmsim.render import render_fisheye
 from rvmsim.scene import Scene, checker_corners, scene_from_dict
-from rvmsim.validate import BoardShade, board_layout, validate
+from rvmsim.validate import BoardShade, ValidationSettings, board_layout, validate
 from rvmsim.validate.capture import grey
 from rvmsim.validate.charuco import detect_charuco
 
@@ -67,7 +67,7 @@ def test_detected_corners_are_our_inner_corners():
 @pytest.mark.parametrize("d_pos, d_ypr", [((0.3, -0.3, 0.3), (10.0, -10.0, 10.0)),
                                           ((-0.3, 0.3, -0.3), (-10.0, 10.0, -10.0))])
 def test_from_10_degrees_and_30_cm_off_its_markers_give_the_pose(d_pos, d_ypr):
-    res = validate(_scene(d_pos, d_ypr), _capture(), rerender=False)
+    res = validate(_scene(d_pos, d_ypr), _capture(), ValidationSettings(rerender=False))
     assert res.start.startswith("the board found by its ChArUco markers"), res.start
     truth = _scene().camera.mount
     c = res.correction

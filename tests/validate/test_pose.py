@@ -12,7 +12,7 @@ import pytest
 from rvmsim import labels as L
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.scene import pattern_shade
-from rvmsim.validate import fit_pose, validate
+from rvmsim.validate import ValidationSettings, fit_pose, validate
 from rvmsim.validate.landmarks import visible_landmarks
 from rvmsim.validate.pose import GroundShade, dense_align
 from rvmsim.validate.projection import corrected_pose, project
@@ -125,7 +125,7 @@ def test_pose_fit_agrees_with_cv2_fisheye_solvepnp():
 def test_grossly_wrong_pose_fails_the_verdict():
     """A scene whose camera sits 60 mm lower and 3° off in pitch than the capture's."""
     _, cap = perturbed()
-    res = validate(wrong_scene(), cap, rerender=False)
+    res = validate(wrong_scene(), cap, ValidationSettings(rerender=False))
     assert not res.passed
     names = {k.name for k in res.checks if not k.passed}
     assert names == {"pose_position_correction_mm", "pose_angle_correction_deg"}
@@ -140,7 +140,8 @@ def test_real_capture_from_the_rough_pose_finds_the_same_pose():
     """Starting from the capture README's rough pose (0.97 m, 38°, no yaw or roll, centred)
     the search lands on the bundled scene's pose: the periodic checker does not fool it."""
     sc, cap, syn = baic()
-    res = validate(baic_rough_scene(sc), cap, capture_name=str(BAIC), rerender=False)
+    res = validate(baic_rough_scene(sc), cap, ValidationSettings(rerender=False),
+                   capture_name=str(BAIC))
     m = sc.camera.mount
     c = res.correction
     assert res.rms_after_px <= 2.0 and res.n_inliers >= 35

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 from rvmsim.errors import RvmsimError
-from rvmsim.validate import validate
+from rvmsim.validate import ValidationSettings, validate
 
 from .captures import BAIC, baic, base, needs_real, perturbed
 
 
 def test_unperturbed_capture_gives_no_correction():
     sc, syn = base()
-    res = validate(sc, syn.color.copy(), synthetic=syn, rerender=False)
+    res = validate(sc, syn.color.copy(), ValidationSettings(rerender=False), synthetic=syn)
     assert res.passed
     assert res.n_inliers >= 35 and res.n_inliers == res.n_found
     # The renderer puts edges within 0.5 / oversample px of their place: ~0.2 px RMS.
@@ -29,9 +29,9 @@ def test_capture_of_something_else_is_an_error():
     sc, syn = base()
     noise = np.random.default_rng(3).integers(0, 255, syn.color.shape, dtype=np.uint8)
     with pytest.raises(RvmsimError, match="too few landmarks"):
-        validate(sc, noise, synthetic=syn, rerender=False)
+        validate(sc, noise, ValidationSettings(rerender=False), synthetic=syn)
     with pytest.raises(RvmsimError, match="320×240 px but the scene's camera is 640×480"):
-        validate(sc, syn.color[::2, ::2].copy(), synthetic=syn, rerender=False)
+        validate(sc, syn.color[::2, ::2].copy(), ValidationSettings(rerender=False), synthetic=syn)
 
 
 def test_rvm_comparison_and_ecs_follow_the_capture():
@@ -45,7 +45,7 @@ def test_rvm_comparison_and_ecs_follow_the_capture():
     truth, cap = perturbed()
     params = IspParams().for_input_scale(640 / 1280)
     out = OutputSpec(320, 180)
-    res = validate(sc, cap, synthetic=syn, params=params, output=out)
+    res = validate(sc, cap, ValidationSettings(params=params, output=out), synthetic=syn)
     assert res.rvm is not None
     ec_truth = evaluate(process(None, truth.labels, params, out)[1])
     diffs_scene, diffs_capture = [], []
@@ -68,7 +68,8 @@ def test_real_capture_matches_the_bundled_scene():
     """The bundled BAIC EU5 scene explains its real frame: ≥ 35 mat corners matched with
     RMS ≤ 2 px (≈ 0.7 px), and its mount pose needs no correction beyond the tolerances."""
     sc, cap, syn = baic()
-    res = validate(sc, cap, synthetic=syn, capture_name=str(BAIC), rerender=False)
+    res = validate(sc, cap, ValidationSettings(rerender=False), synthetic=syn,
+                   capture_name=str(BAIC))
     assert res.n_inliers >= 35
     assert res.rms_after_px <= 2.0 and res.rms_before_px <= 2.0
     assert res.passed, res.summary()
