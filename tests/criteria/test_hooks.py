@@ -29,7 +29,8 @@ from rvmsim.criteria import (
 
 from rvmsim.errors import CriteriaError
 from rvmsim.isp import OutputSpec, process
-from rvmsim.tune import EcSolver, RunStore, TuningConfig, search_scene
+from rvmsim.runs import RunStore
+from rvmsim.tune import EcSolver, SearchOptions, SearchSettings, TuningConfig, search_scene
 
 from ..batch.conftest import small_scene_text
 from ..conftest import small_render
@@ -212,8 +213,8 @@ def test_cmaes_solved_tunes_the_plugin_ec_onto_its_target(tmp_path):
     crit = _criteria(tmp_path)
     config = TuningConfig.model_validate({"output": {"size": [OUT.width, OUT.height]}})
     store = RunStore(":memory:")
-    outcome = search_scene(images, config=config, criteria=crit, strategy="cmaes-solved",
-                           store=store, seed=0, budget=40, workers=2)
+    outcome = search_scene(images, SearchSettings(config, crit, "cmaes-solved", budget=40),
+                           store, options=SearchOptions(workers=2))
     best = outcome.best
     assert best is not None and "adv_v_shift" in outcome.space.names
     _, labels = process(None, images.labels, best.params, OUT)
