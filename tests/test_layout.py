@@ -118,7 +118,7 @@ def test_the_checks_see_violations(tmp_path: Path) -> None:
 #: The stages from the bottom up: a module may import from its own stage and those below it
 #: (imports under ``if TYPE_CHECKING:`` are for annotations only and do not count).
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "labels", "_io", "_procs"),
+    ("errors", "labels", "_io", "_procs", "_progress"),
     ("camera",),
     ("scene",),
     ("render", "isp"),

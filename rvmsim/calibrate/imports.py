@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import yaml
@@ -34,7 +33,7 @@ def _err(path: Path, key: str, msg: str) -> CalibrationInputError:
     return CalibrationInputError(str(path), key, msg)
 
 
-def _floats(path: Path, key: str, value: Any, n: int) -> np.ndarray:
+def _floats(path: Path, key: str, value: object, n: int) -> np.ndarray:
     try:
         a = np.asarray(value, dtype=np.float64).ravel()
     except (TypeError, ValueError):

@@ -12,7 +12,6 @@ import io
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -181,7 +180,7 @@ class CaptureOutcome:
             return "ERROR"
         return "PASS" if self.result.passed else "FAIL"
 
-    def row(self) -> dict[str, Any]:
+    def row(self) -> dict[str, str | int | float | None]:
         """The summary table's row (numbers px, mm, degrees; None where not measured)."""
         r = self.result
         c = None if r is None else r.correction
@@ -205,7 +204,7 @@ SUMMARY_COLUMNS = ("capture", "verdict", "step_failed", "inliers", "predicted",
 
 def summary_table(outcomes: list[CaptureOutcome]) -> str:
     """The summary as fixed-width text for the terminal, one line per capture."""
-    def num(v: Any, fmt: str) -> str:
+    def num(v: object, fmt: str) -> str:
         return "-" if v is None else format(v, fmt)
 
     lines = [f"{'capture':<40} {'verdict':<7} {'inliers':>7} {'RMS px':>7} {'Δpos mm':>8} "
@@ -260,7 +259,7 @@ def summary_page(outcomes: list[CaptureOutcome]) -> str:
 <table><tr>{head}</tr>{body}</table>{sections}""")
 
 
-def _cell(v: Any) -> str:
+def _cell(v: object) -> str:
     if v is None:
         return "-"
     return f"{v:.3g}" if isinstance(v, float) else str(v)
