@@ -11,8 +11,8 @@ version may lack (a stored result is checked for the required ones when it is re
 :class:`~rvmsim.batch.store.SweepStore`).  The result types are ``@final``: no other key
 is expected, so ``"error" in result`` tells an error from a run.
 
-Documents (scene, tuning config) that come from YAML files stay ``dict[str, Any]``: their
-shape is the scene's and the config's pydantic models, checked where they are loaded.
+Documents (scene, tuning config) that come from YAML files stay plain dicts of YAML values:
+their shape is the scene's and the config's pydantic models, checked where they are loaded.
 """
 
 from __future__ import annotations

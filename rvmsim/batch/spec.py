@@ -124,7 +124,7 @@ class _SweepFile(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str = "sweep"
     base_scene: str
-    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see _axis_values
+    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see _expand
     tune: _Tune = _Tune()
     map: tuple[str, str] | None = None
     sensitivity: bool = True
@@ -139,8 +139,7 @@ class SweepSpec:
     ``robustness``: the yield settings; ``has_variation``: some design point's scene has a
     ``variation`` section (those points get a yield unless ``robustness.samples`` is 0);
     ``lines`` maps the file's key paths to their lines, for error messages.
-    ``base_doc`` and ``config`` are YAML documents (the base scene's, ``tune.config``), and
-    the axis values are as the file gives them (checked where they are applied).
+    ``base_doc``, ``config`` (``tune.config``) and the axis values are as the YAML gives them.
     """
 
     name: str
@@ -201,8 +200,7 @@ class SweepSpec:
 
 
 def _hash_file(update: Callable[[bytes], None], path: Path) -> None:
-    """Feed the bytes of ``path`` to a hash's ``update`` in 1 MiB pieces (a mesh file may be
-    large)."""
+    """Feed ``path``'s bytes to a hash's ``update`` in 1 MiB pieces (a mesh file may be large)."""
     with path.open("rb") as f:
         for piece in iter(lambda: f.read(1 << 20), b""):
             update(piece)
@@ -218,8 +216,7 @@ def _error(source: str, lines: Mapping[KeyPath, int], key: str, message: str,
 
 def _expand(name: str, v: Any, source: str, lines: Mapping[KeyPath, int]
             ) -> tuple[Any, ...]:
-    """An axis's values (``v``: the axis as the YAML file gives it): a list as given, a range
-    expanded (stop included)."""
+    """An axis's values (``v`` from the YAML): a list as given, a range expanded (stop included)."""
     key, at = f"axes.{name}", ("axes", name)
     vals: np.ndarray
     if isinstance(v, dict):
@@ -281,7 +278,7 @@ def _short_repr(value: object) -> str:
     return text if len(text) <= 40 else text[:30] + "…"
 
 
-def _point_count(axes: tuple[tuple[str, tuple[Any, ...]], ...], allow_large: bool,
+def _point_count(axes: tuple[tuple[str, tuple[object, ...]], ...], allow_large: bool,
                  source: str, lines: Mapping[KeyPath, int]) -> int:
     """The number of design points the axes span, refused over :data:`MAX_SWEEP_POINTS`
     unless ``allow_large`` (counted before any point is built)."""
@@ -380,8 +377,7 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
 # ---------------------------------------------------------------------------- points
 @dataclass(frozen=True)
 class DesignPoint:
-    """One combination of axis values (as the sweep file gives them); ``key`` identifies it
-    across runs (its values)."""
+    """One combination of axis values; ``key`` identifies it across runs (its values)."""
 
     index: int
     values: tuple[tuple[str, Any], ...]

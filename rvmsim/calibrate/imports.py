@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -78,7 +79,7 @@ def _opencv(path: Path) -> ImportedCamera:
     return ImportedCamera(k, d, size, "opencv")  # type: ignore[arg-type]
 
 
-def _kalibr(path: Path, doc: dict) -> ImportedCamera:
+def _kalibr(path: Path, doc: dict[Any, Any]) -> ImportedCamera:
     name = sorted(k for k in doc if str(k).startswith("cam"))[0]
     cam = doc[name]
     if not isinstance(cam, dict):
@@ -96,7 +97,7 @@ def _kalibr(path: Path, doc: dict) -> ImportedCamera:
     return ImportedCamera(K, d, size, "kalibr")  # type: ignore[arg-type]
 
 
-def _camera_block(path: Path, doc: dict) -> ImportedCamera:
+def _camera_block(path: Path, doc: dict[Any, Any]) -> ImportedCamera:
     cam = doc.get("camera", doc)
     try:
         K = np.asarray(cam["intrinsics"]["K"], np.float64)

@@ -54,7 +54,7 @@ ENTRY_POINT_GROUP = "rvmsim.criteria"
 #: ``measure(source, options)`` → :class:`Measurement` (or the value alone: a number/None).
 MeasureFn = Callable[[LabelSource, MeasureOptions], "Measurement | float | None"]
 #: ``annotate(canvas, item, detail)``: draw one EC's measurement (``detail`` from measure:
-#: :attr:`Measurement.detail`, of the EC's own type, so ``Any`` here).
+#: :attr:`Measurement.detail`, of each EC's own type, so not typed here).
 AnnotateFn = Callable[["Canvas", "EcValue", Any], None]
 #: ``regions((H, W), options)`` → windows an EC reads besides its groups' windows.
 RegionsFn = Callable[[tuple[int, int], MeasureOptions], Sequence[Window]]
