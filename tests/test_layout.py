@@ -22,7 +22,7 @@ MODULES = sorted(ROOT.rglob("*.py"))
 MAX_MODULE_LINES = 500
 MAX_FUNCTION_LINES = 80
 #: Private top-level modules every package may use (helpers below all the stages).
-_SHARED = ("rvmsim._io", "rvmsim._procs")
+_SHARED = ("rvmsim._io", "rvmsim._procs", "rvmsim._progress")
 
 
 def _package(path: Path) -> str:
