@@ -126,7 +126,7 @@ def _run_point(task: PointTask) -> PointResult:
         best, space = outcome.best, outcome.space
         if best is None:
             raise RvmsimError(f"{task['label']}: the search evaluated no candidate")
-        ecs: dict[str, EcOutcomeDoc] = {
+        ecs: dict[str, EcOutcomeDoc] = {  # as EcOutcome.as_dict gives them, typed
             ec: {"value": o.value, "score": o.score, "passed": o.passed}
             for ec, o in best.ecs.items()}
         failing = [(v["score"], ec) for ec, v in ecs.items()

@@ -12,7 +12,7 @@ from collections.abc import Callable, Generator, Mapping
 from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
@@ -22,6 +22,9 @@ from .recheck import (grid_neighbours, merged_results, recheck_points, recheck_s
                       recheck_task, recheck_task_key)
 from .spec import DesignPoint, SweepSpec, design_points, point_scene_doc
 from .store import SWEEP_DB, SweepStore, sweep_lock
+
+if TYPE_CHECKING:
+    from .._progress import ProgressBar
 
 __all__ = ["SweepResult", "point_task", "run_sweep", "stored_sweep"]
 
@@ -66,9 +69,9 @@ def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
 
 
 def _check_fingerprints(spec: SweepSpec, meta: dict[str, Any], out_dir: Path) -> None:
-    # ``meta``: the store's settings as read back from JSON (SweepStore.meta)
-    """Refuse a stored sweep of other settings (a store from before re-checks or yields
-    existed has no re-check or yield fingerprint, and resumes)."""
+    """Refuse a stored sweep of other settings (``meta``: its settings as stored, JSON; a
+    store from before re-checks or yields existed has no re-check or yield fingerprint, and
+    resumes)."""
     rf, yf = meta.get("recheck_fingerprint"), meta.get("yield_fingerprint")
     if meta.get("fingerprint") != spec.fingerprint() or (
             rf is not None and rf != spec.recheck_fingerprint()) or (
@@ -179,7 +182,7 @@ def _stream(executor: Executor, fn: Callable[[_Task], _Result], tasks: dict[str,
     yielding (task key, result) as each arrives, with a progress bar (``total`` points,
     those not in ``tasks`` already done; the last point's label from ``labels``) when
     ``progress``."""
-    bar = None
+    bar: ProgressBar | None = None
     if progress and tasks:
         from tqdm import tqdm
 
