@@ -22,8 +22,9 @@ from pydantic import ValidationError
 
 from .errors import InputFileError, RvmsimError
 
-__all__ = ["read_text", "parse_yaml", "parse_yaml_mapping", "key_lines",
-           "input_error_from_validation", "line_of", "write_png", "make_output_folder", "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
+__all__ = ["KeyPath", "read_text", "parse_yaml", "parse_yaml_mapping", "key_lines",
+           "input_error_from_validation", "line_of", "write_png", "make_output_folder",
+           "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
            "DEFAULT_MAX_IMAGE_PIXELS", "MAX_IMAGE_SIDE_PX", "max_image_pixels",
            "image_size_problem", "env_limit", "safe_load_limited", "yaml_problem"]
 
@@ -38,6 +39,10 @@ MAX_YAML_ALIAS_NODES = 10_000
 DEFAULT_MAX_IMAGE_PIXELS = 50_000_000
 #: Longest image side, px (the renderer's cube faces and OpenCV's remap stay within it).
 MAX_IMAGE_SIDE_PX = 16384
+
+#: A key's path in a YAML document, from the root: mapping keys (their text) and list
+#: indices, as :func:`key_lines` and pydantic's error locations give them.
+KeyPath = tuple[str | int, ...]
 
 
 def env_limit(name: str, default: int) -> int:
@@ -119,7 +124,7 @@ class _LimitedLoader(yaml.SafeLoader):
         self._alias_nodes = 0
         self._sizes: dict[int, int] = {}
 
-    def compose_node(self, parent: Any, index: Any) -> Any:
+    def compose_node(self, parent: yaml.Node | None, index: object) -> yaml.Node | None:
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent):
             if event.anchor in self._open_anchors:
@@ -140,7 +145,7 @@ class _LimitedLoader(yaml.SafeLoader):
         finally:
             self._open_anchors.pop()
 
-    def _size(self, node: Any) -> int:
+    def _size(self, node: yaml.Node) -> int:
         """Nodes of ``node`` with its aliases expanded (memoized: linear in the document)."""
         known = self._sizes.get(id(node))
         if known is not None:
@@ -198,16 +203,16 @@ def parse_yaml_mapping(text: str, source: str, error: type[InputFileError], what
     return data
 
 
-def key_lines(text: str) -> dict[tuple[Any, ...], int]:
+def key_lines(text: str) -> dict[KeyPath, int]:
     """Map each key path in a YAML document to its 1-based line (best effort; empty for a
     document that :func:`parse_yaml` refuses)."""
-    lines: dict[tuple[Any, ...], int] = {}
+    lines: dict[KeyPath, int] = {}
     try:
         root = yaml.compose(text, Loader=_LimitedLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError:
         return lines  # no line is known; the parse error itself is parse_yaml's to report
 
-    def walk(node: Any, path: tuple[Any, ...]) -> None:
+    def walk(node: yaml.Node, path: KeyPath) -> None:
         if isinstance(node, yaml.MappingNode):
             for k, v in node.value:
                 key = k.value
@@ -226,7 +231,7 @@ def key_lines(text: str) -> dict[tuple[Any, ...], int]:
 def input_error_from_validation(
     err: ValidationError,
     source: str,
-    lines: dict[tuple[Any, ...], int],
+    lines: Mapping[KeyPath, int],
     error: type[InputFileError],
     tags: frozenset[str] = frozenset(),
 ) -> InputFileError:
@@ -253,7 +258,7 @@ def input_error_from_validation(
     return error(source, key, msg, line_of(lines, loc))
 
 
-def line_of(lines: Mapping[tuple[Any, ...], int], path: tuple[Any, ...]) -> int | None:
+def line_of(lines: Mapping[KeyPath, int], path: KeyPath) -> int | None:
     """The line (from :func:`key_lines`) of the longest prefix of the key ``path`` that the
     document has: the key itself, else the nearest enclosing key; None if none is known."""
     for n in range(len(path), 0, -1):

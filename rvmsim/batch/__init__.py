@@ -7,6 +7,7 @@ tuning runs.
 - :mod:`.feasibility`: the ECs no ISP setting can pass at a point (no search needed).
 - :mod:`.recheck`: continuation over the grid, re-checks, and each point's verdict.
 - :mod:`.yields`: each design point's yield over production variation.
+- :mod:`.payloads`: the typed dicts of the tasks and their results (the stored JSON).
 - :mod:`.store`: ``sweep.sqlite``.
 - :mod:`.run`: running or resuming a sweep.
 - :mod:`.outputs`: the sweep table, CSV/JSON and the files of a sweep.
@@ -67,7 +68,20 @@ from .run import (
     stored_sweep,
     point_task,
 )
+from .payloads import (
+    PointTask,
+    YieldTask,
+    BatchTask,
+    PointRun,
+    PointError,
+    PointResult,
+    MergedPoint,
+    MergedResult,
+    YieldDoc,
+    YieldError,
+)
 from .outputs import (
+    Cell,
     sweep_table,
     csv_text,
     sweep_json,
@@ -122,6 +136,17 @@ __all__ = [
     "run_sweep",
     "stored_sweep",
     "point_task",
+    "PointTask",
+    "YieldTask",
+    "BatchTask",
+    "PointRun",
+    "PointError",
+    "PointResult",
+    "MergedPoint",
+    "MergedResult",
+    "YieldDoc",
+    "YieldError",
+    "Cell",
     "sweep_table",
     "csv_text",
     "sweep_json",

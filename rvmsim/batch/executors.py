@@ -20,14 +20,21 @@ import contextlib
 import os
 import sys
 from collections.abc import Callable, Iterator, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
 
 from ..errors import RvmsimError
+
+if TYPE_CHECKING:
+    import distributed
 
 __all__ = ["Executor", "LocalExecutor", "DaskExecutor", "make_executor", "task_malloc"]
 
 #: How often the local executor rebuilds its pool after losing a worker before giving up.
 MAX_POOL_REBUILDS = 3
+
+#: A task's argument and its result (a task function maps one to the other).
+_Arg = TypeVar("_Arg")
+_Result = TypeVar("_Result")
 
 
 class Executor:
@@ -35,7 +42,8 @@ class Executor:
 
     name = "executor"
 
-    def run(self, fn: Callable[[Any], Any], items: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+    def run(self, fn: Callable[[_Arg], _Result], items: Mapping[str, _Arg]
+            ) -> Iterator[tuple[str, _Result]]:
         raise NotImplementedError
 
     def close(self) -> None:
@@ -56,7 +64,8 @@ class LocalExecutor(Executor):
     def __init__(self, workers: int = 1):
         self.workers = max(1, int(workers))
 
-    def run(self, fn: Callable[[Any], Any], items: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+    def run(self, fn: Callable[[_Arg], _Result], items: Mapping[str, _Arg]
+            ) -> Iterator[tuple[str, _Result]]:
         if self.workers == 1:
             for key, arg in items.items():
                 yield key, fn(arg)
@@ -105,8 +114,8 @@ class DaskExecutor(Executor):
 
     name = "dask"
 
-    def __init__(self, address: str | None = None, *, client: Any = None,
-                 timeout_s: float = 10.0):
+    def __init__(self, address: str | None = None, *,
+                 client: distributed.Client | None = None, timeout_s: float = 10.0):
         try:
             import distributed
         except ImportError:
@@ -119,9 +128,13 @@ class DaskExecutor(Executor):
             except (OSError, TimeoutError, ValueError) as err:
                 raise RvmsimError(f"{address}: cannot reach the Dask scheduler ({err})") from None
         self.client = client
-        self.address = address or client.scheduler.address
+        if not address:  # a given client: its scheduler's address, for messages
+            scheduler = client.scheduler  # None once the client is closed
+            address = str(scheduler.address) if scheduler is not None else "?"
+        self.address = address
 
-    def run(self, fn: Callable[[Any], Any], items: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+    def run(self, fn: Callable[[_Arg], _Result], items: Mapping[str, _Arg]
+            ) -> Iterator[tuple[str, _Result]]:
         import uuid
 
         import distributed

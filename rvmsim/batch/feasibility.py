@@ -22,6 +22,7 @@ from ..camera import FisheyeCamera
 from ..criteria import PATCH_SAMPLES, Criteria, PatchView, SceneContext, patch_view
 from ..errors import CriteriaError
 from ..scene import Scene
+from .payloads import InfeasibleDoc
 
 __all__ = ["Infeasibility", "PatchView", "patch_view", "infeasible_ecs", "PATCH_SAMPLES"]
 
@@ -36,7 +37,7 @@ class Infeasibility:
     reason: str
     short: str
 
-    def as_dict(self) -> dict[str, str]:
+    def as_dict(self) -> InfeasibleDoc:
         return {"ec": self.ec, "reason": self.reason, "short": self.short}
 
 

@@ -13,18 +13,22 @@ import io
 import json
 from typing import Any
 
+from .payloads import MergedPoint, MergedResult, PointError, PointRun
 from .run import SweepResult
 from .spec import DesignPoint, SweepSpec
 from .yields import YIELD_COLUMNS, yield_cells
 
-__all__ = ["sweep_table", "csv_text", "sweep_json", "page_columns", "point_verdict"]
+__all__ = ["Cell", "sweep_table", "csv_text", "sweep_json", "page_columns", "point_verdict"]
+
+#: One cell of the design-point table (None: empty).
+Cell = str | int | float | bool | None
 
 #: Table columns between the axes and the EC columns.
 _SCORE_COLUMNS = ("verdict", "ec_score", "passed", "limiting_ec", "reason")
 
 
-def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, dict[str, Any]]
-                ) -> tuple[list[str], list[list[Any]]]:
+def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, MergedResult]
+                ) -> tuple[list[str], list[list[Cell]]]:
     """(header, rows): one row per design point, in point order.
 
     Columns: ``point``, the axes, ``verdict`` (pass, not found, infeasible), ``ec_score``,
@@ -41,7 +45,7 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
     header = ["point", *(n for n, _ in spec.axes), *_SCORE_COLUMNS,
               *[f"ec_{e}" for e in ec_ids], *YIELD_COLUMNS, *param_names, "evaluations",
               "error"]
-    rows = []
+    rows: list[list[Cell]] = []
     for p in points:
         r = results.get(p.key)
         vals = [json.dumps(v) if isinstance(v, list) else v for _, v in p.values]
@@ -57,12 +61,14 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, d
     return header, rows
 
 
-def point_verdict(result: dict[str, Any]) -> str | None:
-    """A finished point's verdict (:data:`~rvmsim.batch.recheck.VERDICTS`); one merged
-    without re-check bookkeeping passes or is ``not found``; None for an error."""
+def point_verdict(result: MergedPoint | PointRun | PointError) -> str | None:
+    """A finished point's verdict (:data:`~rvmsim.batch.recheck.VERDICTS`); a run not
+    merged (no re-check bookkeeping) passes or is ``not found``; None for an error."""
     if "error" in result:
         return None
-    return result.get("verdict") or ("pass" if result["passed"] else "not found")
+    if "verdict" in result:
+        return result["verdict"]
+    return "pass" if result["passed"] else "not found"
 
 
 def page_columns(spec: SweepSpec) -> int:
@@ -73,7 +79,7 @@ def page_columns(spec: SweepSpec) -> int:
     return 1 + len(spec.axes) + len(_SCORE_COLUMNS) + len(spec.criteria().ids) + yields
 
 
-def csv_text(header: list[str], rows: list[list[Any]]) -> str:
+def csv_text(header: list[str], rows: list[list[Cell]]) -> str:
     """The table as CSV: None as an empty cell, floats in full (``repr``)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -84,7 +90,8 @@ def csv_text(header: list[str], rows: list[list[Any]]) -> str:
 
 
 def sweep_json(res: SweepResult) -> dict[str, Any]:
-    """``sweep.json``'s document: the settings and every point's full result (with the
+    """``sweep.json``'s document (JSON, to be dumped): the settings and every point's full
+    result (with the
     :data:`~rvmsim.batch.yields.YIELD_COLUMNS` as keys where it has a yield; the details
     under ``robustness``)."""
     spec = res.spec
@@ -99,13 +106,14 @@ def sweep_json(res: SweepResult) -> dict[str, Any]:
             "points": [_point_json(p, res.results.get(p.key)) for p in res.points]}
 
 
-def _point_json(point: DesignPoint, result: dict[str, Any] | None) -> dict[str, Any]:
-    """One point's entry of ``sweep.json``."""
+def _point_json(point: DesignPoint, result: MergedResult | None) -> dict[str, Any]:
+    """One point's entry of ``sweep.json`` (JSON, to be dumped)."""
     out: dict[str, Any] = {"index": point.index, "values": dict(point.values),
                            **(result if result is not None else {"error": "not run"})}
     if result is not None and "error" not in result and "robustness" in result:
         cells = yield_cells(result)
-        if cells[0] is not None:
+        y = result["robustness"]
+        if cells[0] is not None and "error" not in y:
             out.update(zip(YIELD_COLUMNS, cells))
-            out["yield_limiting_driver"] = result["robustness"].get("limiting_driver")
+            out["yield_limiting_driver"] = y.get("limiting_driver")
     return out

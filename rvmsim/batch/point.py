@@ -3,22 +3,33 @@ tune the ISP, probe the sensitivity.
 
 :func:`run_point` is a pure function of its task dict (the point's scene document, tuning
 config, strategy, budget, seed, criteria text, and for a re-check the parameter sets to
-start from and the budget factor), so it runs the same on a local process or a Dask
-worker; it writes no files except into the worker's render cache.
+start from and the budget factor; :class:`~rvmsim.batch.payloads.PointTask`), so it runs the
+same on a local process or a Dask worker; it writes no files except into the worker's render
+cache.  :func:`run_yield` measures only the yield of a given setting at a point.
 """
 
 from __future__ import annotations
 
 import threading
 import time
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import RvmsimError
 from .executors import task_malloc
+from .payloads import (EcOutcomeDoc, PointError, PointResult, PointRun, PointTask,
+                       SensitivityDoc, ParamSensitivity, YieldOnly, YieldTask)
 
-__all__ = ["run_point", "sensitivity", "SENSITIVITY_STEPS"]
+if TYPE_CHECKING:
+    from ..criteria import Criteria
+    from ..isp import IspParams
+    from ..pipeline import ImageEvaluator
+    from ..render import FisheyeImages
+    from ..scene import Scene
+    from ..tune import SearchSpace, TuningConfig
+
+__all__ = ["run_point", "run_yield", "sensitivity", "SENSITIVITY_STEPS"]
 
 #: Parameter offsets (fractions of its search range) the sensitivity is probed at.
 SENSITIVITY_STEPS = (-0.1, -0.05, -0.02, 0.02, 0.05, 0.1)
@@ -26,25 +37,25 @@ SENSITIVITY_STEPS = (-0.1, -0.05, -0.02, 0.02, 0.05, 0.1)
 _RENDER_LOCK = threading.Lock()
 
 
-def run_point(task: dict[str, Any]) -> dict[str, Any]:
+def run_point(task: PointTask) -> PointResult:
     """Render, tune and probe one design point (runs in a worker; no files but the render
     cache).
 
-    ``task`` holds ``scene`` (document), ``config`` (tuning config document), ``label``,
-    ``strategy``, ``budget``, ``seed``, ``criteria`` (text or None), ``criteria_source``,
-    ``sensitivity``, ``robustness`` (``{"samples", "seed"}`` of the yield, or None: no
-    yield); a re-check adds ``starts`` (parameter dicts, name → value, evaluated first),
-    ``budget_factor`` (the budget, or the strategy's default size when the budget is None,
-    times this), ``beat`` (``[passed, score]`` of the point's best so far: the yield is
-    measured only when this run's best ranks above it, as only then can it be the point's
-    final best).  A task with ``yield_of`` (a parameter dict) only measures that setting's
-    yield: it returns ``{"robustness", "seconds"}``.
+    ``task`` (:class:`~rvmsim.batch.payloads.PointTask`) holds ``scene`` (document),
+    ``config`` (tuning config document), ``label``, ``strategy``, ``budget``, ``seed``,
+    ``criteria`` (text or None), ``criteria_source``, ``sensitivity``, ``robustness``
+    (``{"samples", "seed"}`` of the yield, or None: no yield); a re-check adds ``starts``
+    (parameter dicts, name → value, evaluated first), ``budget_factor`` (the budget, or the
+    strategy's default size when the budget is None, times this), ``beat`` (``(passed,
+    score)`` of the point's best so far: the yield is measured only when this run's best
+    ranks above it, as only then can it be the point's final best).
 
-    Returns a JSON-ready dict: ``score``, ``passed``, ``ecs`` (id → value, score, passed),
-    ``params``, ``tuned``, ``evaluations``, ``budget`` (the budget searched with, None for
-    the strategy's default), ``stopped``, ``limiting_ec`` (the failing enabled EC with the
-    lowest score, or None), ``infeasible`` (the enabled ECs no ISP setting can pass here, as
-    ``{"ec", "reason"}``: :func:`~rvmsim.batch.feasibility.infeasible_ecs`),
+    Returns a JSON-ready dict (:class:`~rvmsim.batch.payloads.PointRun`): ``score``,
+    ``passed``, ``ecs`` (id → value, score, passed), ``params``, ``tuned``,
+    ``evaluations``, ``budget`` (the budget searched with, None for the strategy's
+    default), ``stopped``, ``limiting_ec`` (the failing enabled EC with the lowest score,
+    or None), ``infeasible`` (the enabled ECs no ISP setting can pass here, as
+    ``{"ec", "reason", "short"}``: :func:`~rvmsim.batch.feasibility.infeasible_ecs`),
     ``sensitivity`` (see :func:`sensitivity`), ``robustness`` (the best setting's yield,
     :func:`~rvmsim.batch.yields.point_yield`; only when the task asks for one, the scene
     has a ``variation`` section and the run beats ``beat``) and ``seconds``; a problem
@@ -54,7 +65,36 @@ def run_point(task: dict[str, Any]) -> dict[str, Any]:
         return _run_point(task)
 
 
-def _run_point(task: dict[str, Any]) -> dict[str, Any]:
+def run_yield(task: YieldTask) -> YieldOnly | PointError:
+    """Measure the yield of the task's ``yield_of`` setting at its design point (a result
+    stored before yields existed): ``{"robustness", "seconds"}``, or ``{"error", "seconds"}``
+    when the point's scene cannot be built (runs in a worker)."""
+    with task_malloc():
+        return _run_yield(task)
+
+
+def _run_yield(task: YieldTask) -> YieldOnly | PointError:
+    import os
+
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    from ..isp import IspParams
+    from .yields import point_yield
+
+    t0 = time.perf_counter()
+    try:
+        scene, config, criteria = _task_inputs(task)
+        rob = task["robustness"]
+        if rob is None:
+            raise RvmsimError(f"{task['label']}: a yield task without robustness settings")
+        with _RENDER_LOCK:
+            y = point_yield(scene, IspParams(**task["yield_of"]), config.output_spec(),
+                            criteria, rob["samples"], rob["seed"])
+        return {"robustness": y, "seconds": time.perf_counter() - t0}
+    except RvmsimError as err:
+        return {"error": str(err), "seconds": time.perf_counter() - t0}
+
+
+def _run_point(task: PointTask) -> PointResult:
     import os
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
@@ -68,12 +108,6 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
     t0 = time.perf_counter()
     try:
         scene, config, criteria = _task_inputs(task)
-        if "yield_of" in task:  # a yield only (a result stored before yields existed)
-            rob = task["robustness"]
-            with _RENDER_LOCK:
-                y = point_yield(scene, IspParams(**task["yield_of"]), config.output_spec(),
-                                criteria, rob["samples"], rob["seed"])
-            return {"robustness": y, "seconds": time.perf_counter() - t0}
         # One render at a time per process: a Dask worker with several threads would
         # otherwise open several OpenGL contexts at once.
         with _RENDER_LOCK:
@@ -93,20 +127,23 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         best, space = outcome.best, outcome.space
         if best is None:
             raise RvmsimError(f"{task['label']}: the search evaluated no candidate")
-        result: dict[str, Any] = {
+        ecs: dict[str, EcOutcomeDoc] = {  # as EcOutcome.as_dict gives them, typed
+            ec: {"value": o.value, "score": o.score, "passed": o.passed}
+            for ec, o in best.ecs.items()}
+        failing = [(v["score"], ec) for ec, v in ecs.items()
+                   if not v["passed"] and criteria.items[ec].enabled]
+        result: PointRun = {
             "score": best.score,
             "passed": bool(best.passed),
-            "ecs": {ec: o.as_dict() for ec, o in best.ecs.items()},
+            "ecs": ecs,
             "params": {n: getattr(best.params, n) for n in best.params.names()},
             "tuned": list(space.names),
             "evaluations": n_eval,
             "budget": budget,
             "stopped": outcome.stopped,
             "infeasible": [x.as_dict() for x in infeasible],
+            "limiting_ec": min(failing)[1] if failing else None,
         }
-        failing = [(v["score"], ec) for ec, v in result["ecs"].items()
-                   if not v["passed"] and criteria.items[ec].enabled]
-        result["limiting_ec"] = min(failing)[1] if failing else None
         if task.get("sensitivity", True):
             result["sensitivity"] = sensitivity(evaluator, space, best.params)
         rob = task.get("robustness")
@@ -122,7 +159,7 @@ def _run_point(task: dict[str, Any]) -> dict[str, Any]:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
 
 
-def _task_inputs(task: dict[str, Any]) -> tuple[Any, Any, Any]:
+def _task_inputs(task: PointTask) -> tuple[Scene, TuningConfig, Criteria]:
     """(scene, tuning config, criteria) of a point's task."""
     from ..criteria import criteria_from_text, default_criteria
     from ..scene import scene_from_dict
@@ -131,13 +168,13 @@ def _task_inputs(task: dict[str, Any]) -> tuple[Any, Any, Any]:
     scene = scene_from_dict(task["scene"], source=task["label"])
     config = TuningConfig.model_validate(task["config"])
     # The criteria file's path names it in messages and resolves its plugin paths.
-    criteria = (criteria_from_text(task["criteria"],
-                                   task.get("criteria_source") or "sweep criteria")
-                if task.get("criteria") else default_criteria())
+    text = task.get("criteria")
+    criteria = (criteria_from_text(text, task.get("criteria_source") or "sweep criteria")
+                if text else default_criteria())
     return scene, config, criteria
 
 
-def _task_budget(task: dict[str, Any], images: Any, config: Any) -> int | None:
+def _task_budget(task: PointTask, images: FisheyeImages, config: TuningConfig) -> int | None:
     """The budget to search with: the task's, times its ``budget_factor`` (a re-check); a
     budget of None (the strategy's default) is the strategy's planned size times the factor
     (kept None when the strategy does not know its size in advance)."""
@@ -154,7 +191,8 @@ def _task_budget(task: dict[str, Any], images: Any, config: Any) -> int | None:
     return max(1, int(round(budget * factor)))
 
 
-def sensitivity(evaluator: Any, space: Any, best: Any) -> dict[str, Any]:
+def sensitivity(evaluator: ImageEvaluator, space: SearchSpace, best: IspParams
+                ) -> SensitivityDoc:
     """EC score with each tuned parameter moved off the optimum by ±2, 5, 10 % of its range
     (others at the optimum).
 
@@ -189,7 +227,7 @@ def sensitivity(evaluator: Any, space: Any, best: Any) -> dict[str, Any]:
                 meta.append((name, f))
     scores = score_vectors(evaluator, space, xs).score
     s0 = scores[0]
-    params: dict[str, Any] = {}
+    params: dict[str, ParamSensitivity] = {}
     for name in space.names:
         pts = {f: s for (n, f), s in zip(meta, scores[1:]) if n == name}
         at5 = [pts[f] for f in (-0.05, 0.05) if f in pts]

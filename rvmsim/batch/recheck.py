@@ -30,10 +30,11 @@ from __future__ import annotations
 import hashlib
 import itertools
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
 
+from .payloads import (InfeasibleDoc, MergedPoint, MergedResult, PointResult, PointRun,
+                       PointTask, Verdict)
 from .spec import DesignPoint, SweepSpec
 
 __all__ = ["VERDICTS", "grid_index", "grid_neighbours", "recheck_seed", "merge_point",
@@ -70,12 +71,12 @@ def recheck_seed(seed: int, round_: int) -> int:
     return int.from_bytes(digest[:4], "big") & 0x7FFFFFFF
 
 
-def _rank(r: Mapping[str, Any]) -> tuple[bool, float]:
+def _rank(r: PointRun | MergedPoint) -> tuple[bool, float]:
     return (bool(r["passed"]), float(r["score"]))
 
 
-def merge_point(first: Mapping[str, Any],
-                rechecks: Sequence[tuple[int, Mapping[str, Any]]] = ()) -> dict[str, Any]:
+def merge_point(first: PointResult,
+                rechecks: Sequence[tuple[int, PointResult]] = ()) -> MergedResult:
     """A point's final result from its first-pass result and its re-checks ((round,
     result) pairs, in round order).
 
@@ -88,36 +89,38 @@ def merge_point(first: Mapping[str, Any],
     is returned as it is.
     """
     if "error" in first:
-        return dict(first)
-    runs: list[tuple[int, Mapping[str, Any]]] = [(0, first)]
+        return {**first}
+    runs: list[tuple[int, PointRun]] = [(0, first)]
     runs += [(rnd, r) for rnd, r in rechecks if "error" not in r]
     found_in, best = runs[0]
     for rnd, r in runs[1:]:
         if _rank(r) > _rank(best):
             found_in, best = rnd, r
-    infeasible = next((r["infeasible"] for _, r in reversed(runs) if "infeasible" in r), None)
+    infeasible: list[InfeasibleDoc] | None = next(
+        (r["infeasible"] for _, r in reversed(runs) if "infeasible" in r), None)
+    verdict: Verdict
     if best["passed"]:
         verdict = "pass"
     else:
         verdict = "infeasible" if infeasible else "not found"
-    out = dict(best)
-    out.update(evaluations=sum(int(r["evaluations"]) for _, r in runs), verdict=verdict,
-               reason=("; ".join(x["reason"] for x in infeasible or ())
-                       if verdict == "infeasible" else None),
-               rechecks=len(runs) - 1, found_in=found_in,
-               first_pass={"score": first["score"], "passed": first["passed"],
-                           "evaluations": first["evaluations"]})
+    out: MergedPoint = {
+        **best, "evaluations": sum(int(r["evaluations"]) for _, r in runs), "verdict": verdict,
+        "reason": ("; ".join(x["reason"] for x in infeasible or ())
+                   if verdict == "infeasible" else None),
+        "rechecks": len(runs) - 1, "found_in": found_in,
+        "first_pass": {"score": first["score"], "passed": first["passed"],
+                       "evaluations": first["evaluations"]}}
     if infeasible is not None:
         out["infeasible"] = infeasible
     return out
 
 
-def merged_results(points: Sequence[DesignPoint], done: Mapping[str, Mapping[str, Any]],
-                   rechecks: Mapping[tuple[str, int], Mapping[str, Any]],
-                   upto_round: int | None = None) -> dict[str, dict[str, Any]]:
+def merged_results(points: Sequence[DesignPoint], done: Mapping[str, PointResult],
+                   rechecks: Mapping[tuple[str, int], PointResult],
+                   upto_round: int | None = None) -> dict[str, MergedResult]:
     """Every finished point's :func:`merge_point` by key, counting the re-checks of rounds
     ≤ ``upto_round`` (None: all)."""
-    by_point: dict[str, list[tuple[int, Mapping[str, Any]]]] = {}
+    by_point: dict[str, list[tuple[int, PointResult]]] = {}
     for (key, rnd), r in sorted(rechecks.items(), key=lambda kv: kv[0][1]):
         if upto_round is None or rnd <= upto_round:
             by_point.setdefault(key, []).append((rnd, r))
@@ -127,14 +130,15 @@ def merged_results(points: Sequence[DesignPoint], done: Mapping[str, Mapping[str
 
 def recheck_points(points: Sequence[DesignPoint],
                    neighbours: Mapping[str, Sequence[DesignPoint]],
-                   merged: Mapping[str, Mapping[str, Any]],
+                   merged: Mapping[str, MergedResult],
                    turned: set[str] | None) -> list[DesignPoint]:
     """The points a round re-checks: those whose verdict is ``not found`` and, after the
     first round (``turned`` not None: the keys the previous round turned to pass), that
     neighbour one of ``turned``."""
     out = []
     for p in points:
-        if merged.get(p.key, {}).get("verdict") != "not found":
+        r = merged.get(p.key)
+        if r is None or "error" in r or r["verdict"] != "not found":
             continue
         if turned is None or any(q.key in turned for q in neighbours[p.key]):
             out.append(p)
@@ -142,33 +146,33 @@ def recheck_points(points: Sequence[DesignPoint],
 
 
 def recheck_starts(point: DesignPoint, neighbours: Sequence[DesignPoint],
-                   merged: Mapping[str, Mapping[str, Any]], most: int
+                   merged: Mapping[str, MergedResult], most: int
                    ) -> list[dict[str, float]]:
     """The parameter sets a re-check of ``point`` starts from: its own best, then the best
     of up to ``most`` neighbours (passing first, then by score; ties in point order), each
     once."""
-    ranked = sorted((q for q in neighbours if "params" in merged.get(q.key, {})),
-                    key=lambda q: (not merged[q.key]["passed"], -merged[q.key]["score"],
-                                   q.index))
+    runs = {k: r for k, r in merged.items() if "error" not in r}
+    ranked = sorted((q for q in neighbours if q.key in runs),
+                    key=lambda q: (not runs[q.key]["passed"], -runs[q.key]["score"], q.index))
     out: list[dict[str, float]] = []
     for q in [point, *ranked[:most]]:
-        params = merged.get(q.key, {}).get("params")
-        if params is not None and params not in out:
-            out.append(dict(params))
+        r = runs.get(q.key)
+        if r is not None and r["params"] not in out:
+            out.append(dict(r["params"]))
     return out
 
 
-def recheck_task(base: Mapping[str, Any], spec: SweepSpec, round_: int,
-                 starts: list[dict[str, float]], best: Mapping[str, Any] | None = None
-                 ) -> dict[str, Any]:
+def recheck_task(base: PointTask, spec: SweepSpec, round_: int,
+                 starts: list[dict[str, float]], best: MergedResult | None = None
+                 ) -> PointTask:
     """The :func:`~rvmsim.batch.point.run_point` task of re-check round ``round_`` from the
     point's first-pass task ``base``; ``best``: the point's merged result over the earlier
     rounds (its rank is the task's ``beat``: the re-check measures a yield only when it
     beats it, and only then can it become the point's final best, :func:`merge_point`)."""
-    task = {**base, "seed": recheck_seed(spec.seed, round_),
-            "budget_factor": spec.recheck.budget_factor, "starts": starts}
+    task: PointTask = {**base, "seed": recheck_seed(spec.seed, round_),
+                       "budget_factor": spec.recheck.budget_factor, "starts": starts}
     if best is not None and "error" not in best:
-        task["beat"] = [bool(best["passed"]), float(best["score"])]
+        task["beat"] = (bool(best["passed"]), float(best["score"]))
     return task
 
 

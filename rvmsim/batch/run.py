@@ -12,17 +12,24 @@ from collections.abc import Callable, Generator, Mapping
 from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
-from .point import run_point
+from .payloads import MergedResult, PointResult, PointTask, YieldDoc, YieldError, YieldTask
+from .point import run_point, run_yield
 from .recheck import (grid_neighbours, merged_results, recheck_points, recheck_starts,
                       recheck_task, recheck_task_key)
 from .spec import DesignPoint, SweepSpec, design_points, point_scene_doc
 from .store import SWEEP_DB, SweepStore, sweep_lock
 
+if TYPE_CHECKING:
+    from .._progress import ProgressBar
+
 __all__ = ["SweepResult", "point_task", "run_sweep", "stored_sweep"]
+
+_Task = TypeVar("_Task")
+_Result = TypeVar("_Result")
 
 
 @dataclass(frozen=True)
@@ -34,7 +41,7 @@ class SweepResult:
 
     spec: SweepSpec
     points: list[DesignPoint]
-    results: dict[str, dict[str, Any]]
+    results: dict[str, MergedResult]
     ran: int
     out_dir: Path
     rechecked: int = 0
@@ -74,8 +81,9 @@ def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:
 
 
 def _check_fingerprints(spec: SweepSpec, meta: dict[str, Any], out_dir: Path) -> None:
-    """Refuse a stored sweep of other settings (a store from before re-checks or yields
-    existed has no re-check or yield fingerprint, and resumes)."""
+    """Refuse a stored sweep of other settings (``meta``: its settings as stored, JSON; a
+    store from before re-checks or yields existed has no re-check or yield fingerprint, and
+    resumes)."""
     rf, yf = meta.get("recheck_fingerprint"), meta.get("yield_fingerprint")
     if meta.get("fingerprint") != spec.fingerprint() or (
             rf is not None and rf != spec.recheck_fingerprint()) or (
@@ -107,7 +115,7 @@ def _open_store(spec: SweepSpec, out_dir: Path, force: bool) -> tuple[SweepStore
     return store, session
 
 
-def point_task(spec: SweepSpec, point: DesignPoint) -> dict[str, Any]:
+def point_task(spec: SweepSpec, point: DesignPoint) -> PointTask:
     """The argument of :func:`~rvmsim.batch.point.run_point` for one design point."""
     doc, config = point_scene_doc(spec, point.values)
     return {"scene": doc, "config": config, "label": point.label, "strategy": spec.strategy,
@@ -119,7 +127,7 @@ def point_task(spec: SweepSpec, point: DesignPoint) -> dict[str, Any]:
 
 def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None = None,
               force: bool = False, progress: bool = False,
-              on_result: Callable[[DesignPoint, dict[str, Any]], None] | None = None
+              on_result: Callable[[DesignPoint, PointResult], None] | None = None
               ) -> SweepResult:
     """Run (or resume) a sweep into ``out_dir``: the first pass, then the re-check rounds.
 
@@ -156,8 +164,8 @@ def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None
 
 def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Executor,
                 progress: bool,
-                on_result: Callable[[DesignPoint, dict[str, Any]], None] | None
-                ) -> tuple[list[DesignPoint], int, dict[str, dict[str, Any]]]:
+                on_result: Callable[[DesignPoint, PointResult], None] | None
+                ) -> tuple[list[DesignPoint], int, dict[str, PointResult]]:
     """Run the points not in ``store`` yet, storing each as it arrives; (the sweep's
     points, how many ran now, every finished point by key)."""
     points = design_points(spec)
@@ -166,8 +174,9 @@ def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Exec
     tasks = {key: point_task(spec, p) for key, p in todo.items()}
     ran = 0
     # closing: an exception in on_result stops the executor's tasks at once.
-    with closing(_stream(executor, tasks, progress, len(points), f"sweep {spec.name}",
-                         {k: p.label for k, p in todo.items()})) as arrivals:
+    with closing(_stream(executor, run_point, tasks, progress, len(points),
+                         f"sweep {spec.name}", {k: p.label for k, p in todo.items()})
+                 ) as arrivals:
         for task_key, result in arrivals:
             point = todo[task_key]
             store.add(point, result, session)
@@ -178,19 +187,20 @@ def _run_points(spec: SweepSpec, store: SweepStore, session: int, executor: Exec
     return points, ran, done
 
 
-def _stream(executor: Executor, tasks: dict[str, dict[str, Any]], progress: bool,
-            total: int, desc: str, labels: Mapping[str, str]
-            ) -> Generator[tuple[str, dict[str, Any]], None, None]:
-    """``run_point`` over ``tasks`` on ``executor``, yielding (task key, result) as each
-    arrives, with a progress bar (``total`` points, those not in ``tasks`` already done;
-    the last point's label from ``labels``) when ``progress``."""
-    bar = None
+def _stream(executor: Executor, fn: Callable[[_Task], _Result], tasks: dict[str, _Task],
+            progress: bool, total: int, desc: str, labels: Mapping[str, str]
+            ) -> Generator[tuple[str, _Result], None, None]:
+    """``fn`` (:func:`run_point`, :func:`run_yield`) over ``tasks`` on ``executor``,
+    yielding (task key, result) as each arrives, with a progress bar (``total`` points,
+    those not in ``tasks`` already done; the last point's label from ``labels``) when
+    ``progress``."""
+    bar: ProgressBar | None = None
     if progress and tasks:
         from tqdm import tqdm
 
         bar = tqdm(total=total, initial=total - len(tasks), unit="point", desc=desc)
     try:
-        for task_key, result in executor.run(run_point, tasks):
+        for task_key, result in executor.run(fn, tasks):
             yield task_key, result
             if bar is not None:
                 bar.update(1)
@@ -202,8 +212,8 @@ def _stream(executor: Executor, tasks: dict[str, dict[str, Any]], progress: bool
 
 
 def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Executor,
-                  points: list[DesignPoint], done: dict[str, dict[str, Any]], progress: bool
-                  ) -> tuple[dict[tuple[str, int], dict[str, Any]], int]:
+                  points: list[DesignPoint], done: dict[str, PointResult], progress: bool
+                  ) -> tuple[dict[tuple[str, int], PointResult], int]:
     """The re-check rounds (:mod:`rvmsim.batch.recheck`), each re-check not in ``store``
     yet run and stored as it arrives; (every finished re-check, how many ran now)."""
     rechecks = store.rechecks()
@@ -220,22 +230,23 @@ def _run_rechecks(spec: SweepSpec, store: SweepStore, session: int, executor: Ex
                                  recheck_starts(p, neighbours[p.key], merged,
                                                 spec.recheck.neighbours), merged[p.key])
                  for k, p in todo.items()}
-        with closing(_stream(executor, tasks, progress, len(chosen), f"re-check {rnd}",
-                             {k: p.label for k, p in todo.items()})) as arrivals:
+        with closing(_stream(executor, run_point, tasks, progress, len(chosen),
+                             f"re-check {rnd}", {k: p.label for k, p in todo.items()})
+                     ) as arrivals:
             for task_key, result in arrivals:
                 point = todo[task_key]
                 store.add_recheck(point, rnd, result, session)
                 rechecks[(point.key, rnd)] = result
                 ran += 1
         before, merged = merged, merged_results(points, done, rechecks, upto_round=rnd)
-        turned = {k for k, r in merged.items() if r.get("verdict") == "pass"
-                  and before[k].get("verdict") != "pass"}
+        turned = {k for k, r in merged.items() if _verdict(r) == "pass"
+                  and _verdict(before[k]) != "pass"}
     return rechecks, ran
 
 
 def _run_missing_yields(spec: SweepSpec, store: SweepStore, executor: Executor,
-                        points: list[DesignPoint], done: dict[str, dict[str, Any]],
-                        rechecks: dict[tuple[str, int], dict[str, Any]], progress: bool
+                        points: list[DesignPoint], done: dict[str, PointResult],
+                        rechecks: dict[tuple[str, int], PointResult], progress: bool
                         ) -> None:
     """Measure the yield of each point whose best run has none although its scene has a
     variation section (a result stored before yields existed: every run since measures
@@ -243,7 +254,8 @@ def _run_missing_yields(spec: SweepSpec, store: SweepStore, executor: Executor,
     if not (spec.has_variation and spec.robustness.samples):
         return  # no point's scene varies: nothing to look for (each look builds a scene)
     merged = merged_results(points, done, rechecks)
-    todo, tasks = {}, {}
+    todo: dict[str, tuple[DesignPoint, int]] = {}
+    tasks: dict[str, YieldTask] = {}
     for p in points:
         r = merged.get(p.key)
         if r is None or "error" in r or "robustness" in r:
@@ -253,15 +265,24 @@ def _run_missing_yields(spec: SweepSpec, store: SweepStore, executor: Executor,
             key = f"{p.task_key}-yield"
             todo[key] = (p, int(r["found_in"]))
             tasks[key] = {**task, "yield_of": r["params"]}
-    with closing(_stream(executor, tasks, progress, len(tasks), "yields",
+    with closing(_stream(executor, run_yield, tasks, progress, len(tasks), "yields",
                          {k: p.label for k, (p, _) in todo.items()})) as arrivals:
         for task_key, result in arrivals:
-            (point, rnd), y = todo[task_key], result.get("robustness")
-            if y is None:  # the point's scene failed to load on the worker
-                y = {"error": f"yield: {result.get('error', 'not measured')}"}
+            point, rnd = todo[task_key]
+            y: YieldDoc | YieldError
+            if "error" in result:  # the point's scene failed to load on the worker
+                y = {"error": f"yield: {result['error']}"}
+            else:
+                y = result["robustness"]
             store.set_yield(point, rnd, y)
             run = done[point.key] if rnd == 0 else rechecks[(point.key, rnd)]
-            run["robustness"] = y
+            if "error" not in run:
+                run["robustness"] = y
+
+
+def _verdict(r: MergedResult) -> str | None:
+    """A merged result's verdict; None for an error."""
+    return None if "error" in r else r["verdict"]
 
 
 def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:
@@ -269,8 +290,8 @@ def stored_sweep(spec: SweepSpec, out_dir: str | Path) -> SweepResult:
     the re-checks finished so far, and ``ran`` 0; none before the store was made).  Reads
     only."""
     out_dir = Path(out_dir)
-    done: dict[str, dict[str, Any]] = {}
-    rechecks: dict[tuple[str, int], dict[str, Any]] = {}
+    done: dict[str, PointResult] = {}
+    rechecks: dict[tuple[str, int], PointResult] = {}
     if (out_dir / SWEEP_DB).is_file():
         store = SweepStore(out_dir / SWEEP_DB, readonly=True)
         try:

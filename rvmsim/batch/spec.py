@@ -30,7 +30,7 @@ import hashlib
 import itertools
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -38,8 +38,8 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
-                   parse_yaml_mapping, read_text)
+from .._io import (KeyPath, image_size_problem, input_error_from_validation, key_lines,
+                   line_of, parse_yaml_mapping, read_text)
 from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
@@ -124,7 +124,7 @@ class _SweepFile(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str = "sweep"
     base_scene: str
-    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see _axis_values
+    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see _expand
     tune: _Tune = _Tune()
     map: tuple[str, str] | None = None
     sensitivity: bool = True
@@ -139,17 +139,18 @@ class SweepSpec:
     ``robustness``: the yield settings; ``has_variation``: some design point's scene has a
     ``variation`` section (those points get a yield unless ``robustness.samples`` is 0);
     ``lines`` maps the file's key paths to their lines, for error messages.
+    ``base_doc``, ``config`` (``tune.config``) and the axis values are as the YAML gives them.
     """
 
     name: str
     source: str
     base_scene: Path
-    base_doc: dict
+    base_doc: dict[str, Any]
     axes: tuple[tuple[str, tuple[Any, ...]], ...]
     strategy: str
     budget: int | None
     seed: int
-    config: dict
+    config: dict[str, Any]
     criteria_doc: str | None
     map_axes: tuple[str, str] | None
     sensitivity: bool
@@ -157,8 +158,7 @@ class SweepSpec:
     recheck: RecheckSettings = RecheckSettings()
     robustness: YieldSettings = YieldSettings()
     has_variation: bool = False
-    lines: Mapping[tuple[Any, ...], int] = field(default_factory=dict, compare=False,
-                                                 repr=False)
+    lines: Mapping[KeyPath, int] = field(default_factory=dict, compare=False, repr=False)
 
     def fingerprint(self) -> str:
         """Hash of what a design point's result depends on besides its axis values."""
@@ -168,7 +168,7 @@ class SweepSpec:
                             default=str).encode())
         for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
             if path.is_file():
-                _hash_file(h, path)
+                _hash_file(h.update, path)
             else:
                 h.update(b"?")
         return h.hexdigest()[:20]
@@ -193,31 +193,30 @@ class SweepSpec:
             return default_criteria()
         return criteria_from_text(self.criteria_doc, self.criteria_source)
 
-    def error(self, key: str, message: str, at: tuple[Any, ...] | None = None
-              ) -> SweepFileError:
+    def error(self, key: str, message: str, at: KeyPath | None = None) -> SweepFileError:
         """A :class:`SweepFileError` at ``key`` (dotted) of this sweep file; see
         :func:`_error`."""
         return _error(self.source, self.lines, key, message, at)
 
 
-def _hash_file(h: Any, path: Path) -> None:
-    """Feed the bytes of ``path`` to the hash ``h`` in 1 MiB pieces (a mesh file may be large)."""
+def _hash_file(update: Callable[[bytes], None], path: Path) -> None:
+    """Feed ``path``'s bytes to a hash's ``update`` in 1 MiB pieces (a mesh file may be large)."""
     with path.open("rb") as f:
         for piece in iter(lambda: f.read(1 << 20), b""):
-            h.update(piece)
+            update(piece)
 
 
-def _error(source: str, lines: Mapping[tuple[Any, ...], int], key: str, message: str,
-           at: tuple[Any, ...] | None = None) -> SweepFileError:
+def _error(source: str, lines: Mapping[KeyPath, int], key: str, message: str,
+           at: KeyPath | None = None) -> SweepFileError:
     """A :class:`SweepFileError` naming ``key``, on the line of the longest known prefix of
     the key path ``at`` (default: ``key`` split at its dots)."""
     parts = at if at is not None else (tuple(key.split(".")) if key else ())
     return SweepFileError(source, key, message, line_of(lines, parts))
 
 
-def _expand(name: str, v: Any, source: str, lines: Mapping[tuple[Any, ...], int]
+def _expand(name: str, v: Any, source: str, lines: Mapping[KeyPath, int]
             ) -> tuple[Any, ...]:
-    """An axis's values: a list as given, a range expanded (stop included)."""
+    """An axis's values (``v`` from the YAML): a list as given, a range expanded (stop included)."""
     key, at = f"axes.{name}", ("axes", name)
     vals: np.ndarray
     if isinstance(v, dict):
@@ -256,7 +255,7 @@ def _expand(name: str, v: Any, source: str, lines: Mapping[tuple[Any, ...], int]
     return tuple(v)
 
 
-def _value_problem(axis: str, value: Any) -> str | None:
+def _value_problem(axis: str, value: object) -> str | None:
     """Why ``value`` cannot be a value of the named ``axis`` (one line), or None; values of
     scene-key axes are checked with each point's scene."""
     if axis == "output_size":
@@ -274,13 +273,13 @@ def _value_problem(axis: str, value: Any) -> str | None:
     return None
 
 
-def _short_repr(value: Any) -> str:
+def _short_repr(value: object) -> str:
     text = repr(value)
     return text if len(text) <= 40 else text[:30] + "…"
 
 
-def _point_count(axes: tuple[tuple[str, tuple[Any, ...]], ...], allow_large: bool,
-                 source: str, lines: Mapping[tuple[Any, ...], int]) -> int:
+def _point_count(axes: tuple[tuple[str, tuple[object, ...]], ...], allow_large: bool,
+                 source: str, lines: Mapping[KeyPath, int]) -> int:
     """The number of design points the axes span, refused over :data:`MAX_SWEEP_POINTS`
     unless ``allow_large`` (counted before any point is built)."""
     count = math.prod(len(v) for _, v in axes)
@@ -292,7 +291,7 @@ def _point_count(axes: tuple[tuple[str, tuple[Any, ...]], ...], allow_large: boo
     return count
 
 
-def _check_tuning(f: _SweepFile, source: str, lines: Mapping[tuple[Any, ...], int]) -> None:
+def _check_tuning(f: _SweepFile, source: str, lines: Mapping[KeyPath, int]) -> None:
     """The strategy is known and ``tune.config`` is a valid tuning config."""
     from ..tune import STRATEGIES, TuningConfig
 
@@ -405,15 +404,15 @@ def design_points(spec: SweepSpec) -> list[DesignPoint]:
             for i, combo in enumerate(itertools.product(*(v for _, v in spec.axes)))]
 
 
-def _label(values: tuple[tuple[str, Any], ...]) -> str:
+def _label(values: tuple[tuple[str, object], ...]) -> str:
     return ", ".join(f"{n}={v}" for n, v in values)
 
 
-def _set_path(spec: SweepSpec, doc: dict, path: str, value: Any) -> None:
+def _set_path(spec: SweepSpec, doc: dict[str, Any], path: str, value: object) -> None:
     """Set the scene key at dotted ``path`` (list indices as numbers) to ``value``."""
     key, at = f"axes.{path}", ("axes", path)
-    keys: list[Any] = [int(k) if k.isdigit() else k for k in path.split(".")]
-    node: Any = doc
+    keys: list[str | int] = [int(k) if k.isdigit() else k for k in path.split(".")]
+    node: Any = doc  # a mapping, list or value of the scene's YAML document
     for k in keys[:-1]:
         try:
             node = node[k]
@@ -430,7 +429,7 @@ def _set_path(spec: SweepSpec, doc: dict, path: str, value: Any) -> None:
         raise spec.error(key, f"cannot set a key inside a {type(node).__name__}", at)
 
 
-def _set_intrinsics_fx(base_scene: Scene, doc: dict, fx: float) -> None:
+def _set_intrinsics_fx(base_scene: Scene, doc: dict[str, Any], fx: float) -> None:
     """Intrinsics with focal length ``fx`` px, the base scene's fy/fx, centre and skew."""
     w, h = base_scene.camera.image_size
     base_fx, base_fy, cx, cy, skew = base_scene.camera.intrinsics.resolve(w, h)
@@ -438,8 +437,8 @@ def _set_intrinsics_fx(base_scene: Scene, doc: dict, fx: float) -> None:
                                    "cx": cx, "cy": cy, "skew": skew}
 
 
-def _apply_axis(spec: SweepSpec, doc: dict, config: dict, name: str, value: Any,
-                base_scene: Scene | None) -> Scene | None:
+def _apply_axis(spec: SweepSpec, doc: dict[str, Any], config: dict[str, Any], name: str,
+                value: Any, base_scene: Scene | None) -> Scene | None:
     """Write one axis value into the scene document or the tuning config; returns the base
     scene when it had to be loaded (for ``focal_length_px``)."""
     mount = doc.setdefault("camera", {}).setdefault("mount", {})
@@ -473,7 +472,8 @@ def _apply_axis(spec: SweepSpec, doc: dict, config: dict, name: str, value: Any,
     return base_scene
 
 
-def point_scene_doc(spec: SweepSpec, values: tuple[tuple[str, Any], ...]) -> tuple[dict, dict]:
+def point_scene_doc(spec: SweepSpec, values: tuple[tuple[str, Any], ...]
+                    ) -> tuple[dict[str, Any], dict[str, Any]]:
     """(scene document, tuning config document) of one design point.  Mesh paths become
     absolute, so the document loads from anywhere.
 

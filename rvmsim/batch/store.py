@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from ..errors import RvmsimError
 from ..storage import FolderLock, SqliteStore
+from .payloads import PointResult, YieldDoc, YieldError
 from .spec import DesignPoint
 from .yields import yield_problem
 
@@ -36,18 +38,18 @@ def sweep_lock(out_dir: str | Path) -> FolderLock:
     return FolderLock(out_dir, "sweep", "sweep")
 
 
-def _is_number(v: Any) -> bool:
+def _is_number(v: object) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _result_problem(r: Any) -> str | None:
+def _result_problem(r: object) -> str | None:
     """What is wrong with a stored point result (None: it is one
     :func:`~rvmsim.batch.point.run_point` returns, as far as the outputs read it)."""
     if not isinstance(r, dict):
         return "not a JSON object"
     if "error" in r:
         return None if isinstance(r["error"], str) else "error: not a text"
-    kinds: dict[str, Any] = {"score": _is_number, "passed": lambda v: isinstance(v, bool),
+    kinds: dict[str, Callable[[object], bool]] = {"score": _is_number, "passed": lambda v: isinstance(v, bool),
                              "limiting_ec": lambda v: v is None or isinstance(v, str),
                              "evaluations": lambda v: isinstance(v, int),
                              "ecs": lambda v: isinstance(v, dict) and all(
@@ -90,7 +92,7 @@ class SweepStore(SqliteStore):
     def __init__(self, path: str | Path, *, readonly: bool = False):
         super().__init__(path, _SCHEMA, "sweep", readonly=readonly, tables=("points",))
 
-    def add(self, point: DesignPoint, result: dict[str, Any], session: int) -> None:
+    def add(self, point: DesignPoint, result: PointResult, session: int) -> None:
         """Store one finished point's result (a JSON-ready dict)."""
         self.write("INSERT OR REPLACE INTO points VALUES (?, ?, ?, ?, ?, ?)",
                    [(point.key, point.index, json.dumps(point.values), json.dumps(result),
@@ -109,14 +111,15 @@ class SweepStore(SqliteStore):
             raise RvmsimError(f"{self.path}: meta: sessions: {n!r} is not a number of sessions")
         return n
 
-    def add_recheck(self, point: DesignPoint, round_: int, result: dict[str, Any],
+    def add_recheck(self, point: DesignPoint, round_: int, result: PointResult,
                     session: int) -> None:
         """Store one finished re-check (round ``round_`` ≥ 1) of a point."""
         self.write("INSERT OR REPLACE INTO rechecks VALUES (?, ?, ?, ?, ?, ?)",
                    [(point.key, round_, point.index, json.dumps(result), session,
                      time.time())])
 
-    def set_yield(self, point: DesignPoint, round_: int, robustness: dict[str, Any]) -> None:
+    def set_yield(self, point: DesignPoint, round_: int,
+                  robustness: YieldDoc | YieldError) -> None:
         """Add a yield (``robustness``) to the stored result of the run of ``point`` from
         round ``round_`` (0: the first pass) that is its best; the row's session and time
         stay (for results stored before yields existed: :func:`~rvmsim.batch.run.run_sweep`
@@ -127,7 +130,7 @@ class SweepStore(SqliteStore):
         result = {**json.loads(text), "robustness": robustness}
         self.write(f"UPDATE {table} SET result = ? WHERE {where}", [(json.dumps(result), *args)])
 
-    def done(self) -> dict[str, dict[str, Any]]:
+    def done(self) -> dict[str, PointResult]:
         """Finished points (errors included) by key.
 
         Raises
@@ -138,7 +141,7 @@ class SweepStore(SqliteStore):
         return {str(key): self._result("points", str(key), text)
                 for key, text in self.rows("SELECT key, result FROM points")}
 
-    def rechecks(self) -> dict[tuple[str, int], dict[str, Any]]:
+    def rechecks(self) -> dict[tuple[str, int], PointResult]:
         """Finished re-checks (errors included) by (point key, round); none in a store made
         before re-checks existed.
 
@@ -151,7 +154,7 @@ class SweepStore(SqliteStore):
                          "name = 'rechecks'")
         if not have:
             return {}
-        out = {}
+        out: dict[tuple[str, int], PointResult] = {}
         for key, rnd, text in self.rows("SELECT key, round, result FROM rechecks"):
             if not isinstance(rnd, int) or isinstance(rnd, bool) or rnd < 1:
                 raise RvmsimError(f"{self.path}: rechecks: {key}: round: {rnd!r} is not a "
@@ -159,8 +162,9 @@ class SweepStore(SqliteStore):
             out[(str(key), rnd)] = self._result("rechecks", f"{key} round {rnd}", text)
         return out
 
-    def _result(self, table: str, where: str, text: Any) -> dict[str, Any]:
-        """A stored result, checked (:func:`_result_problem`)."""
+    def _result(self, table: str, where: str, text: Any) -> PointResult:
+        """A stored result (``text``: the SQLite cell, of any type in a damaged file),
+        checked (:func:`_result_problem`)."""
         try:
             result = json.loads(text)
         except (TypeError, ValueError) as err:

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import RvmsimError
+from .payloads import BatchError, BatchRun, BatchTask, SceneSummary, SceneSummaryError
 
 if TYPE_CHECKING:
     from ..tune import TuningConfig
@@ -74,7 +75,7 @@ class SceneRun:
                    passed=doc["passed"], ecs={e["id"]: e["passed"] for e in doc["ecs"]},
                    evaluations=evaluations, seconds=round(seconds, 1))
 
-    def summary_row(self) -> dict[str, Any]:
+    def summary_row(self) -> SceneSummary | SceneSummaryError:
         """This scene's entry of ``summary.json``."""
         if self.error is not None:
             return {"scene": str(self.scene), "error": self.error}
@@ -137,7 +138,8 @@ def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
     from ..criteria import bundled_criteria_text, criteria_reference
     from .executors import DaskExecutor
 
-    tasks, by_key = {}, {}
+    tasks: dict[str, BatchTask] = {}
+    by_key: dict[str, Path] = {}
     for k, scene in enumerate(scenes):
         try:  # a bad scene or criteria file skips the scene, as in local runs
             doc = portable_scene_doc(scene)
@@ -223,8 +225,8 @@ def write_summary(out: Path, runs: Sequence[SceneRun], table: str) -> list[Path]
 
 # ---------------------------------------------------------------------------- cluster tasks
 def portable_scene_doc(scene_file: str | Path) -> dict[str, Any]:
-    """The scene file's document with its mesh paths made absolute, so it loads from any
-    folder (a task on a cluster worker builds its scene from it)."""
+    """The scene file's document (YAML) with its mesh paths made absolute, so it loads from
+    any folder (a task on a cluster worker builds its scene from it)."""
     from ..scene import absolute_mesh_paths, read_scene_document
 
     _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
@@ -232,7 +234,7 @@ def portable_scene_doc(scene_file: str | Path) -> dict[str, Any]:
     return doc
 
 
-def tune_task(task: dict[str, Any]) -> dict[str, Any]:
+def tune_task(task: BatchTask) -> BatchRun | BatchError:
     """One vehicle's tuning run (:func:`rvmsim.tune.tune`) as a task for a cluster worker.
 
     ``task``: ``scene`` (a :func:`portable_scene_doc`), ``config`` (a tuning config
@@ -256,8 +258,8 @@ def tune_task(task: dict[str, Any]) -> dict[str, Any]:
             recorded = task.get("scene_file") or "scene.yaml"
             scene = scene_from_dict(task["scene"], source=str(recorded))
             crit_source = task.get("criteria_file") or "criteria"  # resolves plugin paths
-            criteria = (criteria_from_text(task["criteria"], crit_source)
-                        if task.get("criteria") else None)
+            text = task.get("criteria")
+            criteria = criteria_from_text(text, crit_source) if text else None
             run_dir = Path(tmp) / "run"
             request = TuneRequest((scene,), task["strategy"],
                                   TuningConfig.model_validate(task["config"]), criteria,

@@ -18,11 +18,18 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..errors import RvmsimError
+from .payloads import MergedPoint, PointRun, YieldDoc, YieldError
+
+if TYPE_CHECKING:
+    from ..criteria import Criteria
+    from ..isp import IspParams, OutputSpec
+    from ..robust import RobustnessResult
+    from ..scene import Scene
 
 __all__ = ["YieldSettings", "YieldModel", "MAX_YIELD_SAMPLES", "YIELD_COLUMNS", "point_yield",
            "yield_summary", "yield_cells", "yield_problem"]
@@ -53,8 +60,8 @@ class YieldSettings:
     seed: int = 0
 
 
-def point_yield(scene: Any, params: Any, output: Any, criteria: Any, samples: int, seed: int,
-                render_scale: float = 1.0) -> dict[str, Any]:
+def point_yield(scene: Scene, params: IspParams, output: OutputSpec, criteria: Criteria,
+                samples: int, seed: int, render_scale: float = 1.0) -> YieldDoc | YieldError:
     """The yield of ``params`` at one design point, JSON-ready (:func:`yield_summary`), or
     ``{"error": message}`` when it cannot be measured (the tuning result is kept).
 
@@ -84,7 +91,7 @@ def point_yield(scene: Any, params: Any, output: Any, criteria: Any, samples: in
     return {**yield_summary(res), "seconds": time.perf_counter() - t0}
 
 
-def yield_summary(res: Any) -> dict[str, Any]:
+def yield_summary(res: RobustnessResult) -> YieldDoc:
     """What a sweep keeps of a :class:`~rvmsim.robust.RobustnessResult`: ``yield``,
     ``ci95`` (Wilson, [low, high]), ``n_pass``, ``n``, ``seed``; ``limiting_ec`` (the enabled
     EC failing on most samples, the first in the criteria's order among equals; None when
@@ -106,7 +113,7 @@ def yield_summary(res: Any) -> dict[str, Any]:
             "failure_rates": {e.id: e.failure_rate for e in enabled}}
 
 
-def yield_cells(result: Mapping[str, Any]) -> list[Any]:
+def yield_cells(result: PointRun | MergedPoint) -> list[float | str | None]:
     """A point result's :data:`YIELD_COLUMNS` values (all None without a measured yield)."""
     y = result.get("robustness")
     if not isinstance(y, Mapping) or "error" in y:
@@ -115,11 +122,11 @@ def yield_cells(result: Mapping[str, Any]) -> list[Any]:
             y.get("limiting_fail_rate"), y.get("limiting_axis")]
 
 
-def _num(v: Any) -> bool:
+def _num(v: object) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def yield_problem(y: Any) -> str | None:
+def yield_problem(y: object) -> str | None:
     """What is wrong with a stored point's ``robustness`` entry (None: it is one
     :func:`point_yield` returns, as far as the outputs read it)."""
     if not isinstance(y, dict):

@@ -34,7 +34,7 @@ def _err(path: Path, key: str, msg: str) -> CalibrationInputError:
     return CalibrationInputError(str(path), key, msg)
 
 
-def _floats(path: Path, key: str, value: Any, n: int) -> np.ndarray:
+def _floats(path: Path, key: str, value: object, n: int) -> np.ndarray:
     try:
         a = np.asarray(value, dtype=np.float64).ravel()
     except (TypeError, ValueError):
@@ -79,7 +79,7 @@ def _opencv(path: Path) -> ImportedCamera:
     return ImportedCamera(k, d, size, "opencv")  # type: ignore[arg-type]
 
 
-def _kalibr(path: Path, doc: dict) -> ImportedCamera:
+def _kalibr(path: Path, doc: dict[Any, Any]) -> ImportedCamera:
     name = sorted(k for k in doc if str(k).startswith("cam"))[0]
     cam = doc[name]
     if not isinstance(cam, dict):
@@ -97,7 +97,7 @@ def _kalibr(path: Path, doc: dict) -> ImportedCamera:
     return ImportedCamera(K, d, size, "kalibr")  # type: ignore[arg-type]
 
 
-def _camera_block(path: Path, doc: dict) -> ImportedCamera:
+def _camera_block(path: Path, doc: dict[Any, Any]) -> ImportedCamera:
     cam = doc.get("camera", doc)
     try:
         K = np.asarray(cam["intrinsics"]["K"], np.float64)

@@ -93,7 +93,8 @@ def _flag(name: str) -> int:
 
 
 def _fit(objs: list[np.ndarray], views: list[BoardView],
-         size: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, list, list]:
+         size: tuple[int, int]
+         ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]]:
     """cv2.fisheye.calibrate of the views (board points ``objs``) from its own start and
     from focal lengths of W/8 … W (cv2's start fails on wide views); the lowest RMS wins."""
     import cv2
@@ -104,7 +105,7 @@ def _fit(objs: list[np.ndarray], views: list[BoardView],
     obj_in = [o.reshape(1, -1, 3).astype(np.float64) for o in objs]
     imgs = [v.corners.reshape(1, -1, 2).astype(np.float64) for v in views]
     w, h = size
-    best: tuple | None = None
+    best: tuple[float, np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]] | None = None
     last = ""
     for f0 in [None, *(w * np.geomspace(1 / 8, 1, 10))]:
         K0 = np.array([[f0 or 1.0, 0, (w - 1) / 2], [0, f0 or 1.0, (h - 1) / 2], [0, 0, 1]])

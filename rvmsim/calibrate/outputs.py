@@ -127,14 +127,14 @@ def write_scene_camera(scene_file: str | Path, block: dict[str, Any]) -> Path:
     return path
 
 
-def _dump_block(value: Any, column: int) -> str:
+def _dump_block(value: object, column: int) -> str:
     """``value`` as block YAML (leaf lists in flow style), every line indented by
     ``column``."""
     text = yaml.safe_dump(value, sort_keys=False, default_flow_style=None)
     return "".join(" " * column + ln for ln in text.splitlines(keepends=True))
 
 
-def _dump_flow(value: Any) -> str:
+def _dump_flow(value: object) -> str:
     """``value`` as one line of flow YAML."""
     return yaml.safe_dump(value, default_flow_style=True, sort_keys=False, width=10**6).strip()
 

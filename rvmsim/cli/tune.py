@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import click
 
+from .._progress import ProgressBar
 from ..tune import DEFAULT_STRATEGY, STRATEGIES
 from .errors import Command
 from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
@@ -136,9 +137,9 @@ class _BatchProgress:
     def __init__(self, n_scenes: int, show: bool) -> None:
         self.n_scenes = n_scenes
         self.show = show
-        self.bar: Any = None
+        self.bar: ProgressBar | None = None
 
-    def overall(self) -> Any:
+    def overall(self) -> ProgressBar | None:
         if self.show and self.bar is None:
             from tqdm import tqdm
 

@@ -14,8 +14,8 @@ from ..runs import Candidate
 __all__ = ["Candidate", "candidate_json"]
 
 
-def candidate_json(c: Any) -> dict[str, Any]:
-    """A candidate (any object with :class:`Candidate`'s fields) as the page reads it."""
+def candidate_json(c: Candidate) -> dict[str, Any]:
+    """A candidate as the page reads it (JSON, to be sent)."""
     return {"rank": int(c.rank), "trial": int(c.trial), "score": float(c.score),
             "passed": bool(c.passed), "params": params_to_dict(c.params),
             "distance": float(c.distance), "differs": str(c.differs),

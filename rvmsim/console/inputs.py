@@ -8,7 +8,6 @@ evaluation unchecked.
 from __future__ import annotations
 
 import re
-from typing import Any
 
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams
@@ -29,7 +28,7 @@ class ConsoleInputError(RvmsimError):
         self.status = status
 
 
-def parse_params(doc: Any, base: IspParams) -> IspParams:
+def parse_params(doc: object, base: IspParams) -> IspParams:
     """The parameters of a request body's ``params`` mapping (name → number); names left
     out keep their value in ``base``.
 
@@ -52,7 +51,7 @@ def parse_params(doc: Any, base: IspParams) -> IspParams:
     return base.replace(**changes)
 
 
-def parse_label(value: Any) -> str:
+def parse_label(value: object) -> str:
     """A label for a file name: letters, digits, ``-`` and ``_`` only (anything else
     becomes ``-``), at most :data:`MAX_LABEL` characters; "" for none."""
     if value is None:
@@ -62,7 +61,7 @@ def parse_label(value: Any) -> str:
     return re.sub(r"[^A-Za-z0-9_-]+", "-", value).strip("-_")[:MAX_LABEL]
 
 
-def parse_flag(value: Any, key: str) -> bool:
+def parse_flag(value: object, key: str) -> bool:
     """A true/false option (missing: false)."""
     if value is None:
         return False

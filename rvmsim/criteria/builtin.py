@@ -37,7 +37,6 @@ each is noted with the pair it reproduces.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
@@ -134,7 +133,7 @@ def _measure_1_2(src: LabelSource, options: MeasureOptions) -> Measurement:
     return Measurement(1000.0 * fg / (h * w))
 
 
-def _draw_1_2(canvas: Canvas, item: EcValue, detail: Any) -> None:
+def _draw_1_2(canvas: Canvas, item: EcValue, detail: object) -> None:
     for c in "FG":
         canvas.fill(canvas.labels == L.object_stripe(c), (255, 0, 255))
 
@@ -171,7 +170,7 @@ def _measure_1_4(src: LabelSource, options: MeasureOptions) -> Measurement:
                        / (h * w))
 
 
-def _draw_1_4(canvas: Canvas, item: EcValue, detail: Any) -> None:
+def _draw_1_4(canvas: Canvas, item: EcValue, detail: object) -> None:
     canvas.fill(canvas.labels == L.object_stripe("B"), (255, 120, 0))
 
 

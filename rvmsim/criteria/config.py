@@ -25,11 +25,12 @@ from __future__ import annotations
 import math
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from .._io import input_error_from_validation, key_lines, line_of, parse_yaml_mapping, read_text
+from .._io import (KeyPath, input_error_from_validation, key_lines, line_of, parse_yaml_mapping,
+                   read_text)
 from ..errors import CriteriaError
 from ..scene import Display
 from .registry import EcDefinition, builtin_ecs, load_plugin, resolve_plugin
@@ -104,7 +105,7 @@ class _File:
         self.lines = key_lines(text)
         self.base_dir = base_dir
 
-    def error(self, path: tuple[Any, ...], message: str) -> CriteriaError:
+    def error(self, path: KeyPath, message: str) -> CriteriaError:
         return CriteriaError(self.source, ".".join(str(p) for p in path), message,
                              line_of(self.lines, path))
 

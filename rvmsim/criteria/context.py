@@ -20,7 +20,7 @@ input image, RVM = its output image.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
@@ -59,9 +59,9 @@ class SceneContext:
         self.scene = scene
         self.camera = camera
         self.fisheye_labels = labels
-        self._shared: dict[Any, Any] = {}
+        self._shared: dict[Hashable, Any] = {}  # each value of its caller's own type
 
-    def shared(self, key: Any, compute: Callable[[], T]) -> T:
+    def shared(self, key: Hashable, compute: Callable[[], T]) -> T:
         """``compute()``, once per scene (e.g. an object's silhouette in the fisheye image);
         ``key`` names the work and its options."""
         try:

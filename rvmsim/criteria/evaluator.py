@@ -34,7 +34,6 @@ tests check this on random candidates.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
@@ -141,7 +140,7 @@ class _RemapSource(LabelSource):
         self.shape = shape
         self.boxes = _merge_windows(windows)
         self.images: dict[int, np.ndarray] = {}
-        self._shared: dict[Any, Any] = {}
+        self._shared = {}
 
     def _remap(self, win: Window) -> np.ndarray:
         import cv2

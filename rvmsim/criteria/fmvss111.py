@@ -23,7 +23,7 @@ defaults are named in :mod:`rvmsim.scene.fmvss111` (⚠ values there are unverif
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,12 +36,22 @@ from . import (
     LabelSource,
     Measurement,
     MeasureOptions,
+    SceneContext,
     Sigmoid,
 )
+
+if TYPE_CHECKING:
+    from ..scene import Display
 from .objects import silhouette, width_edges
 
 __all__ = ["ECS", "FULL_VIEW_OBJECTS", "SIZE_OBJECTS", "MAX_MAGNIFICATION",
-           "MIN_PIXELS_PER_DEGREE", "object_widths"]
+           "MIN_PIXELS_PER_DEGREE", "object_widths", "ObjectWidths"]
+
+#: Per object letter: its figures (px, mm, arcmin, magnification, px_per_deg, x, y and the
+#: width's ends x0, y0, x1, y1), as :func:`object_widths` gives them.
+ObjectWidths = dict[str, dict[str, float]]
+#: EC 1-5's detail: per object its visible fraction (%) and fisheye outline, and the ISP view.
+_SilhouetteDetail = tuple[dict[str, float], dict[str, np.ndarray], IspView]
 
 #: S5.5.1(b): objects whose full width and height must be visible.
 FULL_VIEW_OBJECTS = "ABCDE"
@@ -90,7 +100,7 @@ def _measure_1_5(src: LabelSource, options: MeasureOptions) -> Measurement:
     return Measurement(min(fractions.values()), (fractions, outlines, isp))
 
 
-def _draw_1_5(canvas: Canvas, item: EcValue, detail: Any) -> None:
+def _draw_1_5(canvas: Canvas, item: EcValue, detail: _SilhouetteDetail | None) -> None:
     import cv2
 
     if detail is None or item.value is None:
@@ -110,7 +120,7 @@ def _draw_1_5(canvas: Canvas, item: EcValue, detail: Any) -> None:
 
 
 # ---------------------------------------------------------------------------- 1-6 and 6-1
-def object_widths(src: LabelSource, options: MeasureOptions) -> dict[str, dict[str, float]] | None:
+def object_widths(src: LabelSource, options: MeasureOptions) -> ObjectWidths | None:
     """Per object of :data:`SIZE_OBJECTS`: its horizontal width in RVM px (``px``), on the
     display (``mm``), the visual angle from the eye point (``arcmin``), the RVM px per degree
     of the camera's view (``px_per_deg``), the ISP's magnification there (``magnification``,
@@ -128,7 +138,7 @@ def object_widths(src: LabelSource, options: MeasureOptions) -> dict[str, dict[s
                       lambda: _widths(ctx.display(options.display), ctx, isp))
 
 
-def _widths(display: Any, ctx: Any, isp: IspView) -> dict[str, dict[str, float]] | None:
+def _widths(display: Display, ctx: SceneContext, isp: IspView) -> ObjectWidths | None:
     edges = {c: width_edges(ctx, c) for c in SIZE_OBJECTS}
     if any(e is None for e in edges.values()):
         return None
@@ -165,7 +175,8 @@ def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
     return Measurement(margin, widths)
 
 
-def _draw_widths(canvas: Canvas, item: EcValue, widths: Any, keys: tuple[str, ...]) -> None:
+def _draw_widths(canvas: Canvas, item: EcValue, widths: ObjectWidths | None,
+                 keys: tuple[str, ...]) -> None:
     """The objects' figures as a block of lines (1-6 at the top left, 6-1 at the top right)
     and, for 1-6, each measured width as a line across the object."""
     import cv2
@@ -190,7 +201,7 @@ _FORMATS = {("px", "mm", "arcmin"): ("{:.1f}px", "{:.2f}mm", "{:.1f}'"),
             ("magnification", "px_per_deg"): ("x{:.2f}", "{:.1f}px/deg")}
 
 
-def _draw_1_6(canvas: Canvas, item: EcValue, widths: Any) -> None:
+def _draw_1_6(canvas: Canvas, item: EcValue, widths: ObjectWidths | None) -> None:
     _draw_widths(canvas, item, widths, ("px", "mm", "arcmin"))
 
 
@@ -210,7 +221,7 @@ def _measure_6_1(src: LabelSource, options: MeasureOptions) -> Measurement:
     return Measurement(None if math.isinf(value) else float(value), widths)
 
 
-def _draw_6_1(canvas: Canvas, item: EcValue, widths: Any) -> None:
+def _draw_6_1(canvas: Canvas, item: EcValue, widths: ObjectWidths | None) -> None:
     _draw_widths(canvas, item, widths, ("magnification", "px_per_deg"))
 
 

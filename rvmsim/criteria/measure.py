@@ -16,7 +16,7 @@ image (an empty, tiny or single-label one).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, TypeVar
 
@@ -86,7 +86,7 @@ class Measurement(NamedTuple):
     """
 
     value: float | None
-    detail: Any = None
+    detail: object = None
 
 
 @dataclass(frozen=True)
@@ -96,7 +96,7 @@ class Measurements:
 
     values: dict[str, float | None]
     image_size: tuple[int, int]  # (W, H) px
-    details: dict[str, Any] = field(default_factory=dict)
+    details: dict[str, object] = field(default_factory=dict)
 
 
 class LabelSource:
@@ -134,7 +134,7 @@ class LabelSource:
         self.shape: tuple[int, int] = (int(labels.shape[0]), int(labels.shape[1]))
         self._declared = groups is not None
         self._windows = {} if groups is None else group_windows(self.labels, groups)
-        self._shared: dict[Any, Any] = {}
+        self._shared: dict[Hashable, Any] = {}  # each value of its caller's own type
         self.context = context
         self.isp = isp
 
@@ -157,7 +157,7 @@ class LabelSource:
         """Every row of columns [x0, x1): (H, x1 − x0) uint8."""
         return self.pixels((x0, 0, x1, self.shape[0]))
 
-    def shared(self, key: Any, compute: Callable[[], T]) -> T:
+    def shared(self, key: Hashable, compute: Callable[[], T]) -> T:
         """``compute()``, once per source: for work several ECs share (e.g. the bumper
         heights of ECs 2-1 … 2-3).  ``key`` must name the work and its options."""
         try:
@@ -178,7 +178,7 @@ class MeasuredEc(Protocol):
     def plugin(self) -> str: ...
 
     @property
-    def measure(self) -> Callable[[LabelSource, MeasureOptions], Any]: ...
+    def measure(self) -> Callable[[LabelSource, MeasureOptions], object]: ...
 
 
 def measure_ecs(src: LabelSource, ecs: Sequence[MeasuredEc],
@@ -193,7 +193,7 @@ def measure_ecs(src: LabelSource, ecs: Sequence[MeasuredEc],
     """
     h, w = src.shape
     values: dict[str, float | None] = {}
-    details: dict[str, Any] = {}
+    details: dict[str, object] = {}
     for ec in ecs:
         m = ec.measure(src, options)
         value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)

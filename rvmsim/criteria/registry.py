@@ -53,7 +53,8 @@ ENTRY_POINT_GROUP = "rvmsim.criteria"
 
 #: ``measure(source, options)`` → :class:`Measurement` (or the value alone: a number/None).
 MeasureFn = Callable[[LabelSource, MeasureOptions], "Measurement | float | None"]
-#: ``annotate(canvas, item, detail)``: draw one EC's measurement (``detail`` from measure).
+#: ``annotate(canvas, item, detail)``: draw one EC's measurement (``detail`` from measure:
+#: :attr:`Measurement.detail`, of each EC's own type, so not typed here).
 AnnotateFn = Callable[["Canvas", "EcValue", Any], None]
 #: ``regions((H, W), options)`` → windows an EC reads besides its groups' windows.
 RegionsFn = Callable[[tuple[int, int], MeasureOptions], Sequence[Window]]
@@ -179,7 +180,7 @@ class EcDefinition:
         low, high = self.default_range
         return Criterion(self.id, low, high, None if self.binary else self.default_sigmoid)
 
-    def __reduce__(self) -> tuple[Any, ...]:
+    def __reduce__(self) -> tuple[Callable[..., EcDefinition], tuple[object, ...]]:
         # By reference when loaded from a plugin: the functions of a plugin loaded from a file
         # path are not importable by name in another process, the plugin is.
         if self.plugin:

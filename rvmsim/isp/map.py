@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -115,7 +114,9 @@ class RayCache:
 
     def __init__(self, size: int = 256) -> None:
         self.size = size
-        self._entries: OrderedDict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        # key: the ten ray parameters' values, the output, the cell
+        self._entries: OrderedDict[tuple[tuple[float, ...], OutputSpec, int],
+                                   tuple[np.ndarray, np.ndarray]] = OrderedDict()
 
     def planes(self, params: IspParams, output: OutputSpec,
                cell: int) -> tuple[np.ndarray, np.ndarray]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .._io import image_size_problem, key_lines, read_text, safe_load_limited, yaml_problem
+from .._io import (KeyPath, image_size_problem, key_lines, read_text, safe_load_limited,
+                   yaml_problem)
 from ..errors import ParamsFileError
 
 __all__ = [
@@ -187,7 +189,8 @@ class OutputSpec:
 
 # ---------------------------------------------------------------------------- files
 def params_to_dict(params: IspParams, output: OutputSpec | None = None) -> dict[str, Any]:
-    """Plain dict for a params file (the 14 parameters, then ``output``)."""
+    """Plain dict for a params file (the 14 parameters, then ``output``), to be dumped as
+    YAML or JSON."""
     d: dict[str, Any] = {n: getattr(params, n) for n in IspParams.names()}
     if output is not None:
         d["output"] = {"size": [output.width, output.height], "mirror": output.mirror}
@@ -208,7 +211,7 @@ def _parse(text: str, path: Path) -> Any:
         raise ParamsFileError(str(path), "", message, line) from None
 
 
-def _output_spec(out_data: Any, path: Path, lines: dict[tuple[Any, ...], int]) -> OutputSpec:
+def _output_spec(out_data: object, path: Path, lines: Mapping[KeyPath, int]) -> OutputSpec:
     """The ``output`` section of a params file as an :class:`OutputSpec`."""
     def error(key: str, message: str) -> ParamsFileError:
         loc = tuple(key.split("."))

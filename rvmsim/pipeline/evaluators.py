@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Iterator, Sequence
-from typing import Any, Protocol, overload, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, overload, runtime_checkable
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from ..isp import IspParams, OutputSpec, process
 from ..scene import Scene
 from .frame import evaluate_rvm_labels
 from .pixels import RvmPixels, rvm_pixels
+
+if TYPE_CHECKING:
+    from .._progress import ProgressBar
 
 __all__ = ["EvaluationPath", "FisheyeLabels", "FisheyeSet", "ImageEvaluator", "FullEvaluator",
            "SetEvaluator", "make_evaluator"]
@@ -208,8 +211,8 @@ def _runs(per_image: list[IspParams]) -> list[tuple[list[int], IspParams]]:
     return [(rows, p) for p, rows in groups.items()]
 
 
-def _bar(desc: str | None, total: int) -> Any:
-    """A tqdm bar (untyped), or None without a description."""
+def _bar(desc: str | None, total: int) -> ProgressBar | None:
+    """A tqdm bar, or None without a description."""
     if desc is None:
         return None
     from tqdm import tqdm

@@ -17,14 +17,18 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..camera import FisheyeCamera
 from ..scene import Part
 from .cube import CubeLayout, FaceCrop, face_rotation
+
+if TYPE_CHECKING:
+    import pyrender  # no type information: its classes are Any to mypy
 
 __all__ = ["FaceAtlas", "render_faces", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
 
@@ -77,7 +81,7 @@ def _linear_to_srgb(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
-def _primitive(part: Part, texture: Any | None) -> Any:
+def _primitive(part: Part, texture: pyrender.Texture | None) -> pyrender.Primitive:
     """A pyrender primitive with lighting baked into vertex colours (rendered FLAT: the GL
     lighting shader is the slow part on llvmpipe, and the scene's lights never move)."""
     import pyrender
@@ -112,7 +116,8 @@ def _primitive(part: Part, texture: Any | None) -> Any:
     )
 
 
-def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]) -> tuple[Any, dict[Any, np.ndarray]]:
+def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]
+                    ) -> tuple[pyrender.Scene, dict[pyrender.Node, np.ndarray]]:
     """The pyrender scene of ``parts`` (lighting baked, see :func:`_primitive`) under a sky of
     linear colour ``sky``, and the segmentation colour of each mesh node (its label: low
     byte in red, high byte in green)."""
@@ -120,8 +125,8 @@ def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]) -> tuple
 
     sky_srgb = _linear_to_srgb(np.asarray(sky, dtype=np.float64))
     scene = pyrender.Scene(bg_color=[*sky_srgb, 1.0])
-    seg: dict[Any, np.ndarray] = {}
-    textures: dict[str, Any] = {}
+    seg: dict[pyrender.Node, np.ndarray] = {}
+    textures: dict[str, pyrender.Texture] = {}
     for part in parts:
         tex = None
         if part.texture is not None:
@@ -209,7 +214,7 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     atlas_h, atlas_w = layout.atlas_shape
     color_atlas = np.zeros((atlas_h, atlas_w, 3), np.uint8)
     label_atlas = np.zeros((atlas_h, atlas_w), np.uint8)
-    crops: Any = layout.crops
+    crops: Iterable[FaceCrop] = layout.crops
     if progress:
         from tqdm import tqdm
 

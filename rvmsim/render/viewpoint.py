@@ -30,7 +30,7 @@ import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol, TypedDict, TypeVar
 
 import numpy as np
 
@@ -195,23 +195,44 @@ class CubeView:
     body_pose: np.ndarray | None = None
 
 
+#: A task's argument and its result (a task function maps one to the other).
+_Arg = TypeVar("_Arg")
+_Result = TypeVar("_Result")
+
+
 class TaskRunner(Protocol):
     """Anything that runs ``fn(arg)`` for every item of ``items`` and yields ``(key,
     result)`` as tasks finish (``rvmsim.batch.LocalExecutor``, ``DaskExecutor``)."""
 
-    def run(self, fn: Callable[[Any], Any], items: Mapping[str, Any]) -> Iterator[tuple[str, Any]]:
+    def run(self, fn: Callable[[_Arg], _Result], items: Mapping[str, _Arg]
+            ) -> Iterator[tuple[str, _Result]]:
         ...
 
 
-def cube_task(task: dict[str, Any]) -> dict[str, bytes | None]:
+class CubeTask(TypedDict):
+    """:func:`cube_task`'s argument: the scene, the view, and whether to render colour."""
+
+    scene: Scene
+    view: CubeView
+    color: bool
+
+
+class CubePngs(TypedDict):
+    """:func:`cube_task`'s result: the label atlas and the colour atlas (None: not asked
+    for) as PNG bytes."""
+
+    labels: bytes
+    color: bytes | None
+
+
+def cube_task(task: CubeTask) -> CubePngs:
     """Render one viewpoint (a task for a worker process or a cluster worker).
 
     ``task``: ``scene`` (Scene), ``view`` (:class:`CubeView`), ``color`` (bool).  Returns
     ``{"labels": PNG bytes, "color": PNG bytes or None}`` (the atlas, as
     :func:`cached_cube` stores it).
     """
-    scene: Scene = task["scene"]
-    view: CubeView = task["view"]
+    scene, view = task["scene"], task["view"]
     atlas = render_faces(posed_parts(build_parts(scene), view.body_pose), view.layout,
                          view.camera, sky=scene.render.sky_color, color=bool(task["color"]))
     return {"labels": _png(atlas.labels),
@@ -257,7 +278,8 @@ def render_cubes(scene: Scene, views: Sequence[CubeView], *, scale: float = 1.0,
             todo.setdefault(key, v)
     if not todo:
         return 0
-    items = {k: {"scene": scene, "view": v, "color": color} for k, v in todo.items()}
+    items: dict[str, CubeTask] = {k: {"scene": scene, "view": v, "color": color}
+                                  for k, v in todo.items()}
     results = runner.run(cube_task, items) if runner is not None else (
         (k, cube_task(t)) for k, t in items.items())
     bar = None

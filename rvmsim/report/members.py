@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..scene import Scene
     from ..runs import RunSettings, RunStore, TrialRecord
+    from ..tune.robust import RobustSummary
 
 __all__ = ["MemberScene", "load_member_scenes", "member_scores", "members_section",
            "member_scores_html", "MEMBER_THUMB_PX", "robust_top", "robust_section"]
@@ -103,7 +104,7 @@ def member_scores_html(members: Sequence[MemberScene], scores: Sequence[float]) 
 
 
 def robust_top(store: RunStore, top: Sequence[TrialRecord], settings: RunSettings
-               ) -> list[dict | None]:
+               ) -> list[RobustSummary | None]:
     """Each top trial's nominal score, robust score and sample yield (a robust run; empty
     for others), from its stored member results."""
     from ..tune.robust import robust_summary
@@ -114,7 +115,7 @@ def robust_top(store: RunStore, top: Sequence[TrialRecord], settings: RunSetting
     return [robust_summary(store, rec.idx, n_scenes, settings.robust_samples) for rec in top]
 
 
-def robust_section(top: Sequence[TrialRecord], rows: Sequence[dict | None],
+def robust_section(top: Sequence[TrialRecord], rows: Sequence[RobustSummary | None],
                    settings: RunSettings) -> str:
     """The ``robust`` section: the top-M's nominal score, robust score (the worst member's,
     or the run's quantile) and yield over the variation samples, side by side."""

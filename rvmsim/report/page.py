@@ -8,9 +8,12 @@ from __future__ import annotations
 import base64
 import html
 import io
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = ["CSS", "escape", "png_bytes", "shrink", "data_uri", "img_tag", "figure_png", "page"]
 
@@ -38,7 +41,7 @@ pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
 """
 
 
-def escape(value: Any) -> str:
+def escape(value: object) -> str:
     """HTML-escape anything (quotes included)."""
     return html.escape(str(value), quote=True)
 
@@ -74,7 +77,7 @@ def img_tag(image: np.ndarray, alt: str, max_px: int | None = None) -> str:
     return f'<img src="{data_uri(png_bytes(image))}" alt="{escape(alt)}">'
 
 
-def figure_png(fig: Any) -> bytes:
+def figure_png(fig: Figure) -> bytes:
     """A matplotlib figure as PNG bytes (Agg canvas, 100 dpi)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 

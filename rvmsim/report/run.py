@@ -34,6 +34,7 @@ from .page import data_uri, escape, img_tag, page, shrink
 from .plots import convergence_png, histogram_png
 
 if TYPE_CHECKING:
+    from ..tune.robust import RobustSummary
     from ..criteria import Criteria, EcResult, EcValue
     from ..isp import OutputSpec
     from ..render import FisheyeImages
@@ -84,7 +85,7 @@ class _Run:
     scene_changed: bool = False
     members: list[MemberScene] = field(default_factory=list)
     member_top: dict[int, list[float]] = field(default_factory=dict)
-    robust_rows: list[dict | None] = field(default_factory=list)
+    robust_rows: list[RobustSummary | None] = field(default_factory=list)
     candidates: list[Candidate] = field(default_factory=list)
 
 

@@ -15,17 +15,22 @@ integers.
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..batch import (VERDICTS, DesignPoint, SweepResult, SweepSpec, csv_text, page_columns,
-                     point_verdict, sweep_json, sweep_table, yield_cells)
+from ..batch import (VERDICTS, Cell, DesignPoint, MergedPoint, MergedResult, SweepResult,
+                     SweepSpec, csv_text, page_columns, point_verdict, sweep_json, sweep_table,
+                     yield_cells)
 from ..errors import RvmsimError
 from ..storage import json_default
 from .page import data_uri, escape, figure_png, page
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["FeasibilityGrid", "feasibility_grid", "feasibility_png", "yield_png",
            "sensitivity_png", "sweep_html", "write_sweep_outputs"]
@@ -40,7 +45,8 @@ class FeasibilityGrid:
     (NaN without one), the yield's 95 % interval and the EC failing on most samples.
 
     ``y_axis`` is None for a one-axis map (one row, ``ys == [None]``); ``others`` are the
-    other axes with several values, which the map takes the best over.
+    other axes with several values, which the map takes the best over.  ``xs`` and ``ys``
+    are axis values as the sweep file gives them.
     """
 
     x_axis: str
@@ -69,7 +75,7 @@ def _map_axes(spec: SweepSpec) -> tuple[str, str | None]:
 
 
 def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
-                     results: dict[str, dict[str, Any]]) -> FeasibilityGrid:
+                     results: Mapping[str, MergedResult]) -> FeasibilityGrid:
     """Verdict, best score, pass, limiting EC and reason on the map's grid, best over the
     other axes (a passing point beats a failing one with a higher score, and a point not
     found beats an infeasible one)."""
@@ -113,13 +119,14 @@ def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
                            evaluations, yield_, yield_ci, yield_ec)
 
 
-def _short_reason(r: dict[str, Any]) -> str:
+def _short_reason(r: MergedPoint) -> str:
     """A few words on why a point is infeasible (its first reason's short form)."""
-    inf = r.get("infeasible") or [{}]
-    return str(inf[0].get("short") or (r.get("reason") or "")[:24])
+    inf = r.get("infeasible")
+    short = inf[0].get("short") if inf else None
+    return str(short or (r.get("reason") or "")[:24])
 
 
-def _outline_passing(ax: Any, passed: np.ndarray) -> None:
+def _outline_passing(ax: Axes, passed: np.ndarray) -> None:
     """Draw the border of the passing cells: every cell edge with a non-passing (or no)
     neighbour."""
     rows, cols = passed.shape
@@ -151,7 +158,7 @@ def _cell_text(g: FeasibilityGrid, i: int, j: int) -> str:
 
 
 def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
-                    results: dict[str, dict[str, Any]]) -> bytes:
+                    results: Mapping[str, MergedResult]) -> bytes:
     """The feasibility map over the map's two axes (PNG bytes): pass cells green-scaled by
     score, the pass region outlined in black; not-found cells amber with the best score,
     the limiting EC and the evaluations spent; infeasible cells grey and hatched with a
@@ -199,7 +206,7 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
     return figure_png(fig)
 
 
-def _axes_ticks(ax: Any, g: FeasibilityGrid) -> None:
+def _axes_ticks(ax: Axes, g: FeasibilityGrid) -> None:
     """The map's limits, ticks and axis names."""
     ax.set_xlim(-.5, len(g.xs) - .5)
     ax.set_ylim(-.5, len(g.ys) - .5)
@@ -213,7 +220,7 @@ def _axes_ticks(ax: Any, g: FeasibilityGrid) -> None:
 
 
 def yield_png(spec: SweepSpec, points: list[DesignPoint],
-              results: dict[str, dict[str, Any]]) -> bytes | None:
+              results: Mapping[str, MergedResult]) -> bytes | None:
     """The yield map (PNG bytes): per cell of the feasibility map, the yield of the point
     that map shows there (red 0 % to green 100 %), its 95 % interval and the EC failing on
     most samples; the pass region outlined as on the feasibility map.  None when no point
@@ -256,7 +263,7 @@ def yield_png(spec: SweepSpec, points: list[DesignPoint],
     return figure_png(fig)
 
 
-def sensitivity_png(points: list[DesignPoint], results: dict[str, dict[str, Any]]
+def sensitivity_png(points: list[DesignPoint], results: Mapping[str, MergedResult]
                     ) -> bytes | None:
     """Per ISP parameter: the relative EC score drop at ±5 % of its range around each design
     point's optimum (median and maximum over the passing points, or over all scoring points
@@ -267,8 +274,9 @@ def sensitivity_png(points: list[DesignPoint], results: dict[str, dict[str, Any]
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    rs = [results[p.key] for p in points if p.key in results and "sensitivity" in results[p.key]
-          and results[p.key]["score"] > 0]
+    runs = [r for r in (results.get(p.key) for p in points)
+            if r is not None and "error" not in r]
+    rs = [r for r in runs if "sensitivity" in r and r["score"] > 0]
     if not rs:
         return None
     if any(r["passed"] for r in rs):  # where the design works is where tuning matters
@@ -303,7 +311,7 @@ def sensitivity_png(points: list[DesignPoint], results: dict[str, dict[str, Any]
     return figure_png(fig)
 
 
-def _cell_class(v: Any) -> str:
+def _cell_class(v: Cell) -> str:
     """Table cell colour class (the page kit's CSS): pass/True green, FAIL/False and "not
     found" red, "infeasible" grey, anything else plain (the point numbers 0 and 1 too)."""
     if v == "pass" or v is True:
@@ -315,12 +323,12 @@ def _cell_class(v: Any) -> str:
     return ""
 
 
-def _cell(v: Any) -> str:
+def _cell(v: Cell) -> str:
     text = "" if v is None else (f"{v:.4g}" if isinstance(v, float) else v)
     return f'<td class="{_cell_class(v)}">{escape(text)}</td>'
 
 
-def sweep_html(res: SweepResult, header: list[str], rows: list[list[Any]], columns: int,
+def sweep_html(res: SweepResult, header: list[str], rows: list[list[Cell]], columns: int,
                feasibility: bytes, sensitivity: bytes | None,
                yield_map: bytes | None = None) -> str:
     """The sweep page: settings, the feasibility map, the yield map beside it (when given)

@@ -11,7 +11,6 @@ import csv
 import io
 import json
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -131,7 +130,7 @@ SUMMARY_COLUMNS = ("capture", "verdict", "step_failed", "inliers", "predicted",
 
 def summary_table(outcomes: list[CaptureOutcome]) -> str:
     """The summary as fixed-width text for the terminal, one line per capture."""
-    def num(v: Any, fmt: str) -> str:
+    def num(v: object, fmt: str) -> str:
         return "-" if v is None else format(v, fmt)
 
     lines = [f"{'capture':<40} {'verdict':<7} {'inliers':>7} {'RMS px':>7} {'Δpos mm':>8} "
@@ -186,7 +185,7 @@ def summary_page(outcomes: list[CaptureOutcome]) -> str:
 <table><tr>{head}</tr>{body}</table>{sections}""")
 
 
-def _cell(v: Any) -> str:
+def _cell(v: object) -> str:
     if v is None:
         return "-"
     return f"{v:.3g}" if isinstance(v, float) else str(v)

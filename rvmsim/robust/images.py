@@ -31,7 +31,7 @@ import itertools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -44,6 +44,9 @@ from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, TaskRunne
 from ..scene import Scene, build_parts
 from .samples import MountSample
 from .variation import LoadState
+
+if TYPE_CHECKING:
+    from .._progress import ProgressBar
 
 __all__ = ["sample_images", "Refolder", "refolder", "SampleSet", "sample_rvm_labels",
            "viewpoint_groups", "sample_camera", "body_pose", "cover_for", "ANGLE_STEP_DEG",
@@ -222,7 +225,7 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
     return [o for o in out if o is not None]
 
 
-def _bar(progress: bool, total: int, desc: str) -> Any:
+def _bar(progress: bool, total: int, desc: str) -> ProgressBar | None:
     if not progress:
         return None
     from tqdm import tqdm

@@ -134,7 +134,7 @@ class RunStore(SqliteStore):
     def count(self) -> int:
         return int(self.rows("SELECT COUNT(*) FROM trials")[0][0])
 
-    def _params(self, idx: Any, text: Any) -> IspParams:
+    def _params(self, idx: object, text: Any) -> IspParams:  # a raw SQLite cell
         """A ``params`` cell as parameters; RvmsimError naming the trial if it is not the
         JSON of all 14 valid parameters."""
         try:
@@ -148,16 +148,16 @@ class RunStore(SqliteStore):
         except (TypeError, ValueError) as err:
             raise self._bad_cell(idx, "params", err) from None
 
-    def _bad_cell(self, idx: Any, column: str, err: Exception) -> RvmsimError:
+    def _bad_cell(self, idx: object, column: str, err: Exception) -> RvmsimError:
         return RvmsimError(" ".join(f"{self.path}: trials: trial {idx}: {column}: unreadable "
                                     f"({err})".split()))
 
-    def _number(self, idx: Any, column: str, value: Any) -> float:
+    def _number(self, idx: object, column: str, value: object) -> float:
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             return float(value)
         raise self._bad_cell(idx, column, ValueError(f"{str(value)[:40]!r} is not a number"))
 
-    def _record(self, row: tuple[Any, ...]) -> TrialRecord:
+    def _record(self, row: tuple[Any, ...]) -> TrialRecord:  # raw SQLite cells
         idx, stage, params, score, objective, passed, ec = row
         try:
             ecs = ecs_from_json(ec)
@@ -170,7 +170,7 @@ class RunStore(SqliteStore):
     def trials(self, start: int = 0, stop: int | None = None) -> list[TrialRecord]:
         """Trials with ``start <= idx < stop``, in index order."""
         q = "SELECT idx, stage, params, score, objective, passed, ec FROM trials WHERE idx >= ?"
-        args: list[Any] = [start]
+        args: list[int | str] = [start]
         if stop is not None:
             q += " AND idx < ?"
             args.append(stop)
@@ -187,7 +187,7 @@ class RunStore(SqliteStore):
     def top(self, m: int, stage: str | None = None) -> list[TrialRecord]:
         """The ``m`` best trials (highest EC score, then objective, then earliest)."""
         q = "SELECT idx, stage, params, score, objective, passed, ec FROM trials"
-        args: list[Any] = []
+        args: list[int | str] = []
         if stage is not None:
             q += " WHERE stage = ?"
             args.append(stage)

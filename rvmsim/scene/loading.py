@@ -33,7 +33,7 @@ _TAGS = frozenset({"block", "mesh"})
 
 
 def scene_from_dict(
-    data: Any, *, base_dir: str | Path = ".", source: str = "<dict>", text: str | None = None
+    data: object, *, base_dir: str | Path = ".", source: str = "<dict>", text: str | None = None
 ) -> Scene:
     """Validate a parsed scene document.
 
@@ -129,7 +129,7 @@ def mesh_parts(scene: Scene) -> list[tuple[str, MeshPart]]:
     return out
 
 
-def absolute_mesh_paths(doc: Any, base_dir: str | Path) -> list[Path]:
+def absolute_mesh_paths(doc: object, base_dir: str | Path) -> list[Path]:
     """Make every mesh path in a scene *document* (as parsed from YAML) absolute, resolved
     against ``base_dir``, in place, so the document loads from any folder; returns them."""
     out: list[Path] = []
@@ -167,9 +167,10 @@ def load_scene(path: str | Path) -> Scene:
     return read_scene_document(path)[0]
 
 
-def read_scene_document(path: str | Path) -> tuple[Scene, Any]:
+def read_scene_document(path: str | Path) -> tuple[Scene, dict[str, Any]]:
     """:func:`load_scene`, also returning the parsed YAML document (for tools that derive
-    other scenes from it: sweeps, cluster tasks).  Same errors."""
+    other scenes from it: sweeps, cluster tasks; a mapping, as the scene loaded).  Same
+    errors."""
     path = Path(path)
     text = read_text(path, SceneError)
     data = parse_yaml(text, str(path), SceneError)

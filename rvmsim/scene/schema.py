@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Literal, Union
 
 import numpy as np
 from pydantic import Discriminator, Field, Tag, model_validator
@@ -231,7 +231,7 @@ class MeshPart(_Model):
         return t
 
 
-def _part_kind(v: Any) -> str:
+def _part_kind(v: object) -> str:
     if isinstance(v, dict):
         return "mesh" if "mesh" in v else "block"
     return "mesh" if isinstance(v, MeshPart) else "block"

@@ -5,13 +5,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator,
                       model_validator)
 
-from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
+from .._io import (KeyPath, image_size_problem, input_error_from_validation, key_lines, line_of,
                    parse_yaml_mapping, read_text)
 from ..camera import FisheyeCamera
 from ..errors import InputFileError, RvmsimError, TuningConfigError
@@ -106,9 +106,9 @@ class TuningConfig(BaseModel):
     random: RandomSettings = RandomSettings()
     #: The file it was read from and its key lines, for errors (not keys of the file).
     _source: str = PrivateAttr(default="<tuning config>")
-    _lines: Mapping[tuple[Any, ...], int] = PrivateAttr(default_factory=dict)
+    _lines: Mapping[KeyPath, int] = PrivateAttr(default_factory=dict)
 
-    def error(self, path: tuple[Any, ...], message: str) -> TuningConfigError:
+    def error(self, path: KeyPath, message: str) -> TuningConfigError:
         """A :class:`TuningConfigError` at the key path ``path`` of this config's file."""
         return TuningConfigError(self._source, ".".join(str(p) for p in path), message,
                                  line_of(self._lines, path))

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Sequence, TypedDict
 
 from ..errors import RvmsimError
 from .members import Member
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 
 __all__ = ["ROBUST_AGGREGATE", "DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
            "robust_members", "check_samples",
-           "robust_summary", "write_robust_results"]
+           "RobustSummary", "robust_summary", "write_robust_results"]
 
 #: How a robust run combines its members when ``--aggregate`` is not given (see above).
 ROBUST_AGGREGATE = "quantile 0.1"
@@ -93,8 +93,16 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
     return out
 
 
+#: One trial's :func:`robust_summary` (a row of ``best/robust.json``'s ``top``): the worst
+#: nominal score and each scene's, whether every nominal member passes, the yield over the
+#: samples with its 95 % interval, and the number of samples.
+RobustSummary = TypedDict("RobustSummary", {
+    "nominal_score": float, "nominal_scores": list[float], "nominal_passed": bool,
+    "yield": float, "yield_ci": list[float], "samples": int})
+
+
 def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
-                   ) -> dict[str, Any] | None:
+                   ) -> RobustSummary | None:
     """Nominal score(s), robust (aggregate) score and yield over the samples of trial
     ``idx``, from its stored member results (None when the store has none)."""
     from ..robust import yield_estimate

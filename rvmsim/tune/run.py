@@ -13,7 +13,7 @@ import json
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
@@ -31,6 +31,7 @@ from ..runs.store import RunStore
 from ..search.strategies import Strategy, check_seed
 
 if TYPE_CHECKING:
+    from .._progress import ProgressBar
     from ..criteria import Criteria
     from ..storage import FolderLock
     from ..render import FisheyeImages
@@ -183,7 +184,7 @@ def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: b
 
 
 def _progress_bar(on: bool, total: int | None, vehicle: str,
-                  position: int) -> tuple[Any, Callable[[int, float, str], None]]:
+                  position: int) -> tuple[ProgressBar | None, Callable[[int, float, str], None]]:
     """A tqdm bar (or None when ``on`` is false) and the search's ``on_batch`` updating it."""
     bar = None
     if on:
@@ -283,7 +284,7 @@ def _run(run_dir: Path, lock: FolderLock, settings: RunSettings, scenes: list[Sc
 def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[Scene],
             settings: RunSettings, strat: Strategy, crit: Criteria,
             members: Sequence[Member] | None, options: RunOptions,
-            bar: tuple[Any, Callable[[int, float, str], None]]) -> SearchOutcome:
+            bar: tuple[ProgressBar | None, Callable[[int, float, str], None]]) -> SearchOutcome:
     """Search into ``store``, recording the run's state: running, then done, interrupted
     (Ctrl-C) or failed (an error, passed on as it is)."""
     # state first: `rvmsim status` reads a store without settings as one of rvmsim 0.1

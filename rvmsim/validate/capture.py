@@ -7,13 +7,16 @@ import struct
 import warnings
 import zlib
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._io import max_image_pixels
 from ..camera import FisheyeCamera
 from ..errors import InputFileError, RvmsimError
+
+if TYPE_CHECKING:
+    from PIL import Image
 
 __all__ = ["load_capture", "check_capture_size", "grey", "capture_header_size"]
 
@@ -113,7 +116,7 @@ def _decode(path: Path) -> np.ndarray:
         raise InputFileError(str(path), "", f"cannot read capture ({first})") from None
 
 
-def _to_rgb8(im: Any, path: Path) -> np.ndarray:
+def _to_rgb8(im: Image.Image, path: Path) -> np.ndarray:
     """(H, W, 3) uint8 RGB from a loaded PIL image: 16-bit grey scaled to 8 bits (its high
     byte, as PIL keeps of 16-bit colour), grey expanded to three channels, alpha dropped."""
     if im.mode in ("I;16", "I;16B", "I;16L", "I"):

@@ -19,9 +19,12 @@ i = k mod (cols − 1) and j = rows − 2 − k div (cols − 1).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import cv2
 
 __all__ = ["CharucoPattern", "detect_charuco", "UPSAMPLE"]
 
@@ -50,9 +53,9 @@ class CharucoPattern:
     marker_size: float
     dictionary: str
 
-    def cv2_board(self) -> Any:
-        """The ``cv2.aruco.CharucoBoard`` (typed ``Any``: cv2 ships no stubs for it), with
-        cv2's legacy square order when ``rows`` is even, as the scene draws it."""
+    def cv2_board(self) -> cv2.aruco.CharucoBoard:
+        """The ``cv2.aruco.CharucoBoard``, with cv2's legacy square order when ``rows`` is
+        even, as the scene draws it."""
         import cv2
 
         dic = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))

@@ -7,10 +7,10 @@ only the ``camera.mount`` values change.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
-from .._io import key_lines, read_text
+from .._io import KeyPath, key_lines, read_text
 from ..errors import SceneError
 from ..scene import Scene, load_scene
 from .verdict import PoseCorrection
@@ -98,7 +98,7 @@ def _rewrite_mount(text: str, values: dict[str, str], source: str) -> str:
 
 
 def _rewrite_value(lines: list[str], ln: int, key: str, value: str,
-                   where: dict[tuple[Any, ...], int], source: str) -> tuple[str, set[int]]:
+                   where: Mapping[KeyPath, int], source: str) -> tuple[str, set[int]]:
     """Line ``ln`` (1-based) with ``key``'s value replaced by ``value``, and the 0-based
     indices of the block-list item lines to drop (the position as ``- x`` lines)."""
     mt = re.match(_VALUE_LINE.format(key=key), lines[ln - 1])
