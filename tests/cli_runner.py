@@ -101,13 +101,19 @@ def child_env(env: Env | None = None) -> dict[str, str]:
     return out
 
 
-def _cap(memory_cap: int | None) -> Any:
-    if memory_cap is None:
+def _child_setup(memory_cap: int | None, *, default_sigint: bool = False) -> Any:
+    """What a child does before it runs Python: cap its address space; take Ctrl-C as a
+    program started in a terminal does (a shell's background job ignores SIGINT, and
+    children inherit that)."""
+    if memory_cap is None and not default_sigint:
         return None
 
-    def cap() -> None:
-        resource.setrlimit(resource.RLIMIT_AS, (memory_cap, memory_cap))
-    return cap
+    def setup() -> None:
+        if memory_cap is not None:
+            resource.setrlimit(resource.RLIMIT_AS, (memory_cap, memory_cap))
+        if default_sigint:
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+    return setup
 
 
 def run_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
@@ -130,7 +136,7 @@ def run_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
     """
     res = subprocess.run(child_command(*args), cwd=cwd, env=child_env(env),
                          capture_output=True, text=True, timeout=timeout_s,
-                         stdin=subprocess.DEVNULL, preexec_fn=_cap(memory_cap))
+                         stdin=subprocess.DEVNULL, preexec_fn=_child_setup(memory_cap))
     return Outcome(res.returncode, res.stdout, res.stderr)
 
 
@@ -141,10 +147,12 @@ def start_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
                    start_new_session: bool = False) -> subprocess.Popen[str]:
     """``python -m rvmsim ARGS`` started in a child process and not waited for (to be
     signalled, killed, or to hold a lock while another command runs); text mode, stdin
-    from ``/dev/null``; ``stdout``/``stderr`` as for :class:`subprocess.Popen`."""
+    from ``/dev/null``, SIGINT at its default (Ctrl-C interrupts it even when this process
+    runs as a background job); ``stdout``/``stderr`` as for :class:`subprocess.Popen`."""
     return subprocess.Popen(child_command(*args), cwd=cwd, env=child_env(env), text=True,
                             stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr,
-                            preexec_fn=_cap(memory_cap), start_new_session=start_new_session)
+                            preexec_fn=_child_setup(memory_cap, default_sigint=True),
+                            start_new_session=start_new_session)
 
 
 # ---------------------------------------------------------------------------- in process
@@ -246,6 +254,13 @@ def _child_warnings() -> Iterator[None]:
         yield
 
 
+def _start_method() -> str:
+    """The multiprocessing start method in force (the platform's default, the first of
+    ``get_all_start_methods()``, until someone sets or first asks for it)."""
+    return (multiprocessing.get_start_method(allow_none=True)
+            or multiprocessing.get_all_start_methods()[0])
+
+
 @dataclass(frozen=True)
 class _Globals:
     """Process state a command must not change (see the module docstring)."""
@@ -253,7 +268,7 @@ class _Globals:
     threads: frozenset[threading.Thread]
     handlers: tuple[Any, ...]
     plugin_modules: frozenset[str]
-    start_method: str | None
+    start_method: str
     recursion_limit: int
     sys_path: tuple[str, ...]
 
@@ -262,7 +277,7 @@ class _Globals:
         return cls(frozenset(threading.enumerate()),
                    tuple(signal.getsignal(s) for s in WATCHED_SIGNALS),
                    frozenset(m for m in sys.modules if m.startswith(PLUGIN_FILE_MODULE)),
-                   multiprocessing.get_start_method(allow_none=True),
+                   _start_method(),
                    sys.getrecursionlimit(), tuple(sys.path))
 
     def changes(self, before: _Globals) -> list[str]:
@@ -274,8 +289,9 @@ class _Globals:
             if old != new:
                 signal.signal(sig, old)
                 out.append(f"changed the handler of {sig.name}")
-        if self.plugin_modules - before.plugin_modules:
-            out.append(f"imported plugin files {sorted(self.plugin_modules - before.plugin_modules)}")
+        plugins = sorted(self.plugin_modules - before.plugin_modules)
+        if plugins:
+            out.append(f"imported plugin files {plugins}")
         if self.start_method != before.start_method:
             out.append(f"set the multiprocessing start method to {self.start_method}")
         if self.recursion_limit != before.recursion_limit:

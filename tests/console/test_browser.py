@@ -4,18 +4,14 @@ expert does, and check what it shows against ``rvmsim evaluate``."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 from rvmsim.console import check_access, open_session
 from rvmsim.isp import load_params
 
+from ..cli_runner import run_in_child
 from .conftest import serving
-
-REPO_ENV_KEYS = ("PYTHONPATH", "PATH", "HOME", "RVMSIM_CACHE", "PYOPENGL_PLATFORM")
-
 
 @pytest.fixture(scope="module")
 def served_run(small_run, browser, tmp_path_factory):
@@ -75,14 +71,11 @@ def _table(page) -> list[list[str]]:
 
 
 def _evaluate_cli(scene, params_file, out) -> dict:
-    """``rvmsim evaluate SCENE --params FILE`` in a child process; its ec.json."""
-    import os
-
-    env = {k: os.environ[k] for k in REPO_ENV_KEYS if k in os.environ}
-    res = subprocess.run([sys.executable, "-m", "rvmsim", "evaluate", str(scene), "--params",
-                          str(params_file), "--out", str(out), "--no-progress"],
-                         capture_output=True, text=True, env=env, timeout=300)
-    assert res.returncode == 0, res.stderr
+    """``rvmsim evaluate SCENE --params FILE`` in a child process (nothing shared with the
+    console serving in this one); its ec.json."""
+    res = run_in_child(["evaluate", scene, "--params", params_file, "--out", out,
+                        "--no-progress"], timeout_s=300)
+    assert res.code == 0, res.stderr
     return json.loads((out / "ec.json").read_text())
 
 

@@ -5,11 +5,8 @@ status, select and report on it (small real renders, real searches)."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import sqlite3
-import subprocess
-import sys
 import time
 from html.parser import HTMLParser
 
@@ -24,7 +21,8 @@ from rvmsim.report import write_report
 from rvmsim.scene import load_scene
 from rvmsim.tune import (RunStore, TuningConfig, rank_params_text, status_lines, tune)
 
-from .common import small_scene_file
+from ..cli_runner import run_in_process, start_in_child
+from ..scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
 
@@ -33,7 +31,7 @@ CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
 def scenes(cache, tmp_path_factory):
     """Vehicles E and B at 320×240 px, as scene files."""
     folder = tmp_path_factory.mktemp("scenes")
-    return [small_scene_file(letter, folder) for letter in "eb"]
+    return [write_small_scene(folder, letter) for letter in "eb"]
 
 
 def verdicts(params, scene_files):
@@ -102,7 +100,7 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     copy = tmp_path / "copy"
     folder = tmp_path / "scenes"
     folder.mkdir()
-    files = [small_scene_file(letter, folder) for letter in "eb"]
+    files = [write_small_scene(folder, letter) for letter in "eb"]
     tune(files, copy, config=TuningConfig.model_validate(CONFIG), budget=40)
     doc = yaml.safe_load(files[1].read_text())
     doc["vehicle"]["bumper"]["top"] = 0.8
@@ -166,23 +164,19 @@ def test_the_report_has_a_row_per_vehicle(scenes, shared_run, tmp_path):
 
 
 def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_path):
-    env = {**os.environ, "PYTHONPATH": os.environ.get("PYTHONPATH", "")}
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({**CONFIG, "cmaes_solved": {"budget": 3000}}))
 
     def cmd(out, *extra):
         if extra:
-            return [sys.executable, "-m", "rvmsim", "tune", *extra, "--no-progress",
-                    "--workers", "1"]
-        return [sys.executable, "-m", "rvmsim", "tune", *map(str, scenes), "--shared",
-                "--out", str(out), "--config", str(cfg), "--no-progress", "--workers", "1"]
+            return ["tune", *extra, "--no-progress", "--workers", "1"]
+        return ["tune", *scenes, "--shared", "--out", out, "--config", cfg, "--no-progress",
+                "--workers", "1"]
 
-    clean = subprocess.run(cmd(tmp_path / "clean"), env=env, capture_output=True, text=True,
-                           timeout=600)
-    assert clean.returncode == 0, clean.stderr
+    clean = run_in_process(cmd(tmp_path / "clean"))
+    assert clean.code == 0, clean.stderr
     run = tmp_path / "killed"
-    proc = subprocess.Popen(cmd(run), env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = start_in_child(cmd(run))
     db = run / "run.sqlite"
     deadline = time.time() + 300
     while time.time() < deadline:
@@ -201,9 +195,8 @@ def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_p
     con.close()
     assert 200 <= stored < 3000, stored
     assert members == 2 * stored  # each trial's members written with it
-    resumed = subprocess.run(cmd(None, "--resume", str(run)), env=env, capture_output=True,
-                             text=True, timeout=600)
-    assert resumed.returncode == 0, resumed.stderr
+    resumed = run_in_process(cmd(None, "--resume", run))
+    assert resumed.code == 0, resumed.stderr
     assert "replayed" in resumed.stdout
 
     def content(path):
