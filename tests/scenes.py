@@ -4,10 +4,13 @@ Every test that wants a quick render builds its scene here, so every small scene
 bundled one with the sensor resampled the way ``rvmsim render --scale`` resamples it
 (:meth:`rvmsim.camera.FisheyeCamera.scaled`): the image size is rounded, focal lengths
 scale with the side they belong to, the principal point scales about the pixel *edges*
-(``(c + 0.5) · s − 0.5``), the skew by ``s_y / s_x``, a pixel pitch by ``1 / s``; a field
-of view across the width and a focal length in mm need nothing (they are not in pixels).
-A fixed cube face size (``render.face_size_px``) follows the sensor too.  So
-``load_small_scene(L, s).fisheye_camera()`` is the bundled camera ``.scaled(s)``.
+(``(c + 0.5) · s − 0.5``), a pixel pitch by ``1 / s``; the skew (a ratio: ``u = f_x (x +
+skew · y) + c_x``) stays, and ``K[0][1] = f_x · skew`` scales with ``s_x``; a field of view
+across the width and a focal length in mm need nothing (they are not in pixels).  A fixed
+cube face size (``render.face_size_px``) follows the sensor too.  So a scene point seen at
+``(u, v)`` on the full sensor is at ``((u + 0.5) s_x − 0.5, (v + 0.5) s_y − 0.5)`` on the
+small one, and ``load_small_scene(L, s).fisheye_camera()`` is the bundled camera
+``.scaled(s)`` (whose skew agrees while ``s_x = s_y``, as for every bundled sensor).
 
 Relative mesh paths are made absolute (the bundled scenes' folder), so the scene file can be
 written into any folder.
@@ -67,11 +70,9 @@ def scale_intrinsics(intr: dict[str, Any], sx: float, sy: float) -> dict[str, An
     for key, s in (("cx", sx), ("cy", sy)):
         if out.get(key) is not None:
             out[key] = (float(out[key]) + 0.5) * s - 0.5
-    if out.get("skew") is not None:
-        out["skew"] = float(out["skew"]) * sy / sx
-    if out.get("K") is not None:
+    if out.get("K") is not None:  # u = fx·x + fx·skew·y + cx: the first row scales with u
         (fx, skew_fx, cx), (_, fy, cy), _ = out["K"]
-        out["K"] = [[float(fx) * sx, float(skew_fx) * sy, (float(cx) + 0.5) * sx - 0.5],
+        out["K"] = [[float(fx) * sx, float(skew_fx) * sx, (float(cx) + 0.5) * sx - 0.5],
                     [0.0, float(fy) * sy, (float(cy) + 0.5) * sy - 0.5],
                     [0.0, 0.0, 1.0]]
     if out.get("pixel_pitch_um") is not None:
