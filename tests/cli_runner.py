@@ -1,17 +1,21 @@
 """Running ``rvmsim`` commands from tests: in a child process, or in this process.
 
-* :func:`run_in_child` / :func:`start_in_child`: ``python -m rvmsim ARGS`` as a child process
-  (optionally under an address-space cap).  For what needs a process of its own: a memory
-  cap, a timeout of a possible hang, a signal or a kill, a lock held by another process, a
-  server, anything that would leave state behind in this process.
+* :func:`run_in_child`: ``rvmsim ARGS`` in a child process, optionally under an
+  address-space cap, killed at a timeout.  The child is forked from a process that has
+  imported the CLI once (multiprocessing's fork server), so it costs milliseconds rather
+  than the 1–3 s of a new interpreter; ``fresh=True`` runs ``python -m rvmsim`` itself.
+  :func:`start_in_child`: ``python -m rvmsim ARGS`` started and not waited for.  A child is
+  for what needs a process of its own: a memory cap, a timeout of a possible hang, a signal
+  or a kill, a lock held by another process, a server, anything that would leave state
+  behind in this process.
 * :func:`run_in_process`: the console-script entry point (``rvmsim.cli.main``) called here,
   with the process state a child would have had set up and put back afterwards, and the
-  same :class:`Outcome`.  No interpreter start and no re-import: tens of milliseconds
-  instead of one to two seconds per command.
+  same :class:`Outcome`.  No interpreter start and no re-import.
 
 What differs in this process, and how :func:`run_in_process` makes it the same:
 
-* ``sys.argv``, the working folder, the environment (``COLUMNS=200`` as the children get it,
+* ``sys.argv`` and ``__main__`` (as ``python -m rvmsim`` has them: click names the program
+  from them), the working folder, the environment (``COLUMNS=200`` as the children get it,
   so click and tqdm format for a wide terminal), stdin (empty, as ``stdin=DEVNULL``): set
   for the call, restored after it.
 * stdout and stderr: Python's streams are replaced by buffers, and file descriptors 1 and 2
@@ -33,7 +37,9 @@ What differs in this process, and how :func:`run_in_process` makes it the same:
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import importlib.util
 import io
 import logging
 import multiprocessing
@@ -45,6 +51,7 @@ import sys
 import tempfile
 import threading
 import traceback
+import types
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -118,8 +125,8 @@ def _child_setup(memory_cap: int | None, *, default_sigint: bool = False) -> Any
 
 def run_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
                  env: Env | None = None, timeout_s: float = TIMEOUT_S,
-                 memory_cap: int | None = None) -> Outcome:
-    """``python -m rvmsim ARGS`` in a child process, waited for.
+                 memory_cap: int | None = None, fresh: bool = False) -> Outcome:
+    """``rvmsim ARGS`` in a child process, waited for.
 
     Parameters
     ----------
@@ -130,14 +137,73 @@ def run_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
     env : mapping, optional
         Variables set (None: removed) on top of :func:`child_env`.
     timeout_s : float
-        Wall-time limit (s); over it, ``subprocess.TimeoutExpired``.
+        Wall-time limit (s); over it the child is killed and ``subprocess.TimeoutExpired``
+        raised.
     memory_cap : int, optional
         Address-space limit of the child (bytes), e.g. :data:`MEMORY_CAP_BYTES`.
+    fresh : bool
+        ``python -m rvmsim ARGS`` in a new interpreter (1–3 s of imports) instead of a fork of
+        a process that has imported the CLI once (:func:`_forked_child`).
     """
+    if not fresh:
+        return _forked_child([str(a) for a in args], cwd=cwd, env=child_env(env),
+                             timeout_s=timeout_s, memory_cap=memory_cap)
     res = subprocess.run(child_command(*args), cwd=cwd, env=child_env(env),
                          capture_output=True, text=True, timeout=timeout_s,
                          stdin=subprocess.DEVNULL, preexec_fn=_child_setup(memory_cap))
     return Outcome(res.returncode, res.stdout, res.stderr)
+
+
+def _forked_child(args: list[str], *, cwd: Path | str | None, env: dict[str, str],
+                  timeout_s: float, memory_cap: int | None) -> Outcome:
+    """``rvmsim ARGS`` in a child forked from multiprocessing's fork server, which imports
+    ``rvmsim.cli`` once (per test process): a separate process (its own memory, cap,
+    signal handlers, threads; killed at the timeout) without an interpreter start.  The child
+    takes the working folder, the whole environment and argv given, stdin from /dev/null,
+    stdout and stderr into files, and exits as ``python -m rvmsim`` would."""
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["rvmsim.cli"])
+    with tempfile.TemporaryDirectory(prefix="rvmsim-child-") as tmp:
+        out, err = Path(tmp) / "stdout", Path(tmp) / "stderr"
+        proc = ctx.Process(target=_child_main, name="rvmsim",
+                           args=(args, str(cwd or os.getcwd()), env, str(out), str(err),
+                                 memory_cap))
+        proc.start()
+        proc.join(timeout_s)
+        if proc.is_alive():
+            proc.kill()
+            proc.join()
+            raise subprocess.TimeoutExpired(["rvmsim", *args], timeout_s)
+        code = proc.exitcode
+        assert code is not None
+        return Outcome(code, out.read_text(errors="backslashreplace"),
+                       err.read_text(errors="backslashreplace"))
+
+
+def _child_main(args: list[str], cwd: str, env: dict[str, str], out: str, err: str,
+                memory_cap: int | None) -> None:
+    """The forked child: set the process up as ``python -m rvmsim`` finds it, run the entry
+    point, exit with its status (an uncaught exception: its traceback, status 1)."""
+    if memory_cap is not None:
+        resource.setrlimit(resource.RLIMIT_AS, (memory_cap, memory_cap))
+    os.chdir(cwd)
+    os.environ.clear()
+    os.environ.update(env)
+    new_paths = [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p not in sys.path]
+    sys.path[:0] = [p for p in new_paths if p]  # as a new interpreter would put them first
+    for fd, path in ((1, out), (2, err)):
+        target = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        os.dup2(target, fd)
+        os.close(target)
+    sys.stdout = io.TextIOWrapper(open(1, "wb", closefd=False), line_buffering=True)
+    sys.stderr = io.TextIOWrapper(open(2, "wb", closefd=False), line_buffering=True,
+                                  errors="backslashreplace")
+    _python_m_rvmsim(args)
+    code = _call_main()
+    atexit._run_exitfuncs()  # what an interpreter does on its way out (a child skips it)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 def start_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
@@ -319,6 +385,16 @@ def _exit_status(stop: SystemExit, stderr: IO[str]) -> int:
     return 1
 
 
+def _python_m_rvmsim(args: list[str]) -> None:
+    """``sys.argv`` and ``__main__`` as ``python -m rvmsim ARGS`` has them (click names the
+    program from both: "python -m rvmsim")."""
+    spec = importlib.util.find_spec("rvmsim.__main__")
+    sys.argv = [spec.origin if spec is not None and spec.origin else "rvmsim", *args]
+    main = types.ModuleType("__main__")
+    main.__package__ = "rvmsim"
+    sys.modules["__main__"] = main
+
+
 def _call_main() -> int:
     """``rvmsim.cli.main()`` (reading ``sys.argv``) → the exit status; any other exception
     that leaves it (even one not derived from ``Exception``) is printed as the interpreter
@@ -358,15 +434,15 @@ def run_in_process(args: Sequence[object], *, cwd: Path | str | None = None,
         docstring): run it with :func:`run_in_child`.
     """
     before = _Globals.now()
-    saved_argv, saved_cwd = sys.argv, os.getcwd()
+    saved_argv, saved_main, saved_cwd = sys.argv, sys.modules["__main__"], os.getcwd()
     try:
         with _environment(env), _child_warnings(), _captured() as streams:
-            sys.argv = ["rvmsim", *map(str, args)]
+            _python_m_rvmsim([str(a) for a in args])
             if cwd is not None:
                 os.chdir(cwd)
             code = _call_main()
     finally:
-        sys.argv = saved_argv
+        sys.argv, sys.modules["__main__"] = saved_argv, saved_main
         os.chdir(saved_cwd)
     problems = _Globals.now().changes(before)
     left = _threads_left(before.threads)

@@ -43,11 +43,13 @@ def plugin_module(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
 EVALUATE = ("evaluate", "scene.yaml", "--criteria", "c.yaml", "--out", "e", "--no-progress")
 
 
-def test_usage_errors_are_the_same_in_process_and_in_a_child(tmp_path: Path) -> None:
+def test_in_process_a_forked_child_and_python_m_rvmsim_answer_alike(tmp_path: Path) -> None:
     write_small_scene(tmp_path, name="scene.yaml")
     for args in (["tune", "scene.yaml", "--budget", "x"], ["render", "nope.yaml", "--out", "r"],
-                 ["status"], []):
-        assert run_in_process(args, cwd=tmp_path) == run_in_child(args, cwd=tmp_path), args
+                 ["status"], [], ["--version"]):
+        here = run_in_process(args, cwd=tmp_path)
+        assert here == run_in_child(args, cwd=tmp_path), args
+        assert here == run_in_child(args, cwd=tmp_path, fresh=True), args
 
 
 def test_the_process_is_put_back_as_it_was(tmp_path: Path,
