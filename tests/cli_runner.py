@@ -73,6 +73,12 @@ WATCHED_SIGNALS: Final = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.S
 #: Threads that outlive a command by design and do no harm: tqdm's monitor (one per
 #: process, a daemon that only wakes bars up).
 HARMLESS_THREADS: Final = ("TMonitor",)
+#: What the fork server of :func:`run_in_child` imports once: the CLI and what its commands
+#: import when they run (about 400 MB of address space, inside a capped child's cap; no
+#: OpenGL context, no thread of ours).  A module missing here is imported by each child.
+FORK_SERVER_PRELOAD: Final = ("rvmsim.cli", "rvmsim.pipeline", "rvmsim.render", "rvmsim.batch",
+                              "rvmsim.report", "rvmsim.validate", "rvmsim.calibrate",
+                              "rvmsim.robust", "rvmsim.console")
 #: How long a thread a command started may take to end after it returned (s).
 THREAD_GRACE_S: Final = 5.0
 
@@ -157,12 +163,12 @@ def run_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
 def _forked_child(args: list[str], *, cwd: Path | str | None, env: dict[str, str],
                   timeout_s: float, memory_cap: int | None) -> Outcome:
     """``rvmsim ARGS`` in a child forked from multiprocessing's fork server, which imports
-    ``rvmsim.cli`` once (per test process): a separate process (its own memory, cap,
+    :data:`FORK_SERVER_PRELOAD` once (per test process): a separate process (its own memory, cap,
     signal handlers, threads; killed at the timeout) without an interpreter start.  The child
     takes the working folder, the whole environment and argv given, stdin from /dev/null,
     stdout and stderr into files, and exits as ``python -m rvmsim`` would."""
     ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["rvmsim.cli"])
+    ctx.set_forkserver_preload(list(FORK_SERVER_PRELOAD))
     with tempfile.TemporaryDirectory(prefix="rvmsim-child-") as tmp:
         out, err = Path(tmp) / "stdout", Path(tmp) / "stderr"
         proc = ctx.Process(target=_child_main, name="rvmsim",
