@@ -171,10 +171,11 @@ def test_non_loopback_host_needs_the_token(small_run, browser):
 
 
 def test_user_strings_are_shown_as_text(tmp_path, browser):
-    from tests.bad_input.conftest import write_small_scene
+    from ..scenes import write_small_scene
 
     name = '<img src=x id=injected onerror="window.pwned=1">'
-    scene = write_small_scene(tmp_path, {"name": name, "description": "<b>bold</b> & co"})
+    scene = write_small_scene(tmp_path, name="scene.yaml",
+                              edit={"name": name, "description": "<b>bold</b> & co"})
     session = open_session(scene, out_root=tmp_path / "out")
     with serving(session, check_access("127.0.0.1", None)) as url:
         page, errors = _open(browser, url)
