@@ -150,7 +150,7 @@ def test_a_second_sweep_on_the_same_folder_is_refused(tmp_path):
     """Two `rvmsim sweep` processes on one folder: the second (and a --force one) exits 2
     naming the first's PID and writes nothing: the first stores every point once, in its
     own session, as an undisturbed sweep does."""
-    f = write_sweep(tmp_path, SWEEP.replace("budget: 200", "budget: 1500"))
+    f = write_sweep(tmp_path, SWEEP.replace("budget: 200", "budget: 400"))
     out = tmp_path / "out"
     first = start_in_child(_sweep_cmd(f, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:

@@ -27,8 +27,9 @@ from ..scenes import write_small_scene
 SMALL_SCENE = "scene.yaml"
 CONFIG = {"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,
           "output": {"size": [160, 90]}}
-#: Long enough (tens of seconds on a loaded machine) for a second process to start meanwhile.
-BUDGET = 16000
+#: Long enough for the other writers to be tried meanwhile (they run in this process, within
+#: a second) and for a kill after 400 trials to fall mid-run.
+BUDGET = 4000
 
 
 @pytest.fixture(scope="module")
