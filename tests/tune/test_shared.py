@@ -45,10 +45,18 @@ def verdicts(params, scene_files):
     return out
 
 
+#: Evaluations of the shared run.  B's small scene is B's camera resampled (its principal
+#: point where ``render --scale 0.25`` puts it, 0.375 px from where cx/4, cy/4 put it):
+#: after 1,000 evaluations the default seed's best fails B's 1-4 (score 0.275); after 3,000
+#: it passes both (0.352 on E, 0.358 on B).
+SHARED_BUDGET = 3000
+
+
 @pytest.fixture(scope="module")
 def shared_run(scenes, tmp_path_factory):
     run = tmp_path_factory.mktemp("runs") / "shared"
-    res = tune(list(scenes), run, config=TuningConfig.model_validate(CONFIG), budget=1000)
+    res = tune(list(scenes), run, config=TuningConfig.model_validate(CONFIG),
+               budget=SHARED_BUDGET)
     return run, res
 
 
