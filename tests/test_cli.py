@@ -12,6 +12,7 @@ from rvmsim import labels as L
 
 from .cli_runner import run_in_process
 from .conftest import SCENES
+from .scenes import write_small_scene
 
 
 def test_render_writes_color_labels_preview_and_metadata(tmp_path):
@@ -111,12 +112,14 @@ def _rvmsim(*args, env=None):
 
 
 def test_tune_status_select_and_batch(tmp_path):
+    """Vehicles A and B on a quarter of their sensors (the RVM images keep their sizes)."""
     env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
+    scene_a, scene_b = (write_small_scene(tmp_path, letter) for letter in "ab")
     cfg = tmp_path / "t.yaml"
     cfg.write_text("tuned: [zoom, adv_v_shift, adv_v_scale]\noutput: {size: [320, 180]}\n"
                    "top_m: 3\nbatch: 50\n")
     run = tmp_path / "runs" / "a"
-    res = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--out", str(run), "--config",
+    res = _rvmsim("tune", str(scene_a), "--out", str(run), "--config",
                   str(cfg), "--strategy", "random", "--budget", "120", "--workers", "2",
                   "--no-progress", env=env)
     assert res.code == 0, res.stderr
@@ -142,13 +145,13 @@ def test_tune_status_select_and_batch(tmp_path):
     store.close()
     assert params == second.params
     # A second tune into the same folder refuses to overwrite it.
-    again = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--out", str(run), "--no-progress",
+    again = _rvmsim("tune", str(scene_a), "--out", str(run), "--no-progress",
                     env=env)
     assert again.code == 2 and "--resume" in again.stderr
     # Batch: one good scene, one broken one; the broken one is reported and skipped.
     broken = tmp_path / "broken.yaml"
     broken.write_text("name: x\ncamera: {\n")
-    b = _rvmsim("batch", str(SCENES / "vehicle_b.yaml"), str(broken), "--out",
+    b = _rvmsim("batch", str(scene_b), str(broken), "--out",
                 str(tmp_path / "batch"), "--config", str(cfg), "--strategy", "random",
                 "--budget", "60", "--workers", "1", "--no-progress", env=env)
     assert b.code == 1
@@ -158,7 +161,7 @@ def test_tune_status_select_and_batch(tmp_path):
     assert "error" in summary[1]
     assert "Vehicle B" in (tmp_path / "batch" / "summary.txt").read_text()
     # With progress bars: an overall bar over the vehicles besides each vehicle's own bar.
-    b = _rvmsim("batch", str(SCENES / "vehicle_b.yaml"), str(broken), "--out",
+    b = _rvmsim("batch", str(scene_b), str(broken), "--out",
                 str(tmp_path / "batch2"), "--config", str(cfg), "--strategy", "random",
                 "--budget", "60", "--workers", "1", env=env)
     assert b.code == 1 and "skipped" in b.stderr

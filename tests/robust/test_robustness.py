@@ -135,11 +135,18 @@ def _same_evaluation(a, b) -> None:
     assert abs(a.estimate.n_pass - b.estimate.n_pass) <= 1
 
 
-def test_viewpoints_render_up_front_on_local_processes(settings, tmp_path: Path,
+@pytest.fixture(scope="module")
+def here(settings, tmp_path_factory: pytest.TempPathFactory):
+    """The robustness of the small scene rendered as needed, in this process (a cache of
+    its own): what every runner must give."""
+    with pytest.MonkeyPatch.context() as mp:
+        return _runner_case(settings, tmp_path_factory.mktemp("here"), mp, None)
+
+
+def test_viewpoints_render_up_front_on_local_processes(settings, here, tmp_path: Path,
                                                        monkeypatch: pytest.MonkeyPatch):
     from rvmsim.batch import LocalExecutor
 
-    here = _runner_case(settings, tmp_path / "a", monkeypatch, None)
     with LocalExecutor(2) as ex:
         spread = _runner_case(settings, tmp_path / "b", monkeypatch, ex)
     # 1x: 2 x-levels x 2 loads; 0.5x: one level (position_levels_at) x 2; 2x: 2 x 2
@@ -152,12 +159,11 @@ def test_viewpoints_render_up_front_on_local_processes(settings, tmp_path: Path,
     np.testing.assert_array_equal(again.evaluation.values, spread.evaluation.values)
 
 
-def test_viewpoints_render_on_a_dask_cluster(settings, tmp_path: Path,
+def test_viewpoints_render_on_a_dask_cluster(settings, here, tmp_path: Path,
                                              monkeypatch: pytest.MonkeyPatch):
     distributed = pytest.importorskip("distributed")
     from rvmsim.batch import DaskExecutor
 
-    here = _runner_case(settings, tmp_path / "a", monkeypatch, None)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   host="127.0.0.1", dashboard_address=":0") as c, \
             distributed.Client(c) as client:
