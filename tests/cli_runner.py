@@ -53,7 +53,7 @@ import threading
 import traceback
 import types
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Final
@@ -114,7 +114,8 @@ def child_env(env: Env | None = None) -> dict[str, str]:
     return out
 
 
-def _child_setup(memory_cap: int | None, *, default_sigint: bool = False) -> Any:
+def _child_setup(memory_cap: int | None, *,
+                 default_sigint: bool = False) -> Callable[[], None] | None:
     """What a child does before it runs Python: cap its address space; take Ctrl-C as a
     program started in a terminal does (a shell's background job ignores SIGINT, and
     children inherit that)."""
@@ -163,10 +164,10 @@ def run_in_child(args: Sequence[object], *, cwd: Path | str | None = None,
 def _forked_child(args: list[str], *, cwd: Path | str | None, env: dict[str, str],
                   timeout_s: float, memory_cap: int | None) -> Outcome:
     """``rvmsim ARGS`` in a child forked from multiprocessing's fork server, which imports
-    :data:`FORK_SERVER_PRELOAD` once (per test process): a separate process (its own memory, cap,
-    signal handlers, threads; killed at the timeout) without an interpreter start.  The child
-    takes the working folder, the whole environment and argv given, stdin from /dev/null,
-    stdout and stderr into files, and exits as ``python -m rvmsim`` would."""
+    :data:`FORK_SERVER_PRELOAD` once (per test process): a separate process (its own memory,
+    cap, signal handlers, threads; killed at the timeout) without an interpreter start.  The
+    child takes the working folder, the whole environment and argv given, stdin from
+    /dev/null, stdout and stderr into files, and exits as ``python -m rvmsim`` would."""
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(list(FORK_SERVER_PRELOAD))
     with tempfile.TemporaryDirectory(prefix="rvmsim-child-") as tmp:

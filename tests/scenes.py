@@ -153,8 +153,9 @@ def small_scene_doc(letter: str = "a", scale: float = QUARTER, *,
 def small_scene_text(letter: str = "a", scale: float = QUARTER, *,
                      edit: dict[str, Any] | None = None, variation: Variation = KEEP) -> str:
     """:func:`small_scene_doc` as YAML text."""
-    return yaml.safe_dump(small_scene_doc(letter, scale, edit=edit, variation=variation),
-                          sort_keys=False)
+    text: str = yaml.safe_dump(small_scene_doc(letter, scale, edit=edit, variation=variation),
+                               sort_keys=False)
+    return text
 
 
 def write_small_scene(folder: Path, letter: str = "a", scale: float = QUARTER, *,
