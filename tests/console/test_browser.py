@@ -192,7 +192,10 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     _settled(page)
     assert "/display.jpg?v=" in page.get_attribute("#rvm", "src")
     page.check("#annotate")
-    page.wait_for_function("document.getElementById('rvm').src.includes('/annotated.jpg')")
+    # the new picture is in place once it has loaded (naturalWidth is 0 until then)
+    page.wait_for_function("(() => { const img = document.getElementById('rvm'); return "
+                           "img.src.includes('/annotated.jpg') && img.complete && "
+                           "img.naturalWidth > 0; })()")
     width = page.evaluate("document.getElementById('rvm').naturalWidth")
     assert width > session.ec_output.width  # the EC image plus its results panel
     page.click("#pin")
