@@ -13,6 +13,30 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
 
+#: Test folders whose files share fixtures of package or session scope (a sweep run and a
+#: Dask cluster, rendered board views, a tuning run and a browser): under pytest-xdist
+#: (``--dist loadgroup``) each of them runs on one worker, so those fixtures are made once;
+#: every other test file is a group of its own.
+SHARED_FIXTURE_FOLDERS = ("batch", "calibrate", "console")
+
+if os.environ.get("PYTEST_XDIST_WORKER") and "RVMSIM_CACHE" not in os.environ:
+    # A render cache per worker: the cache writes its PNGs in place, so a worker reading an
+    # entry another is writing would find it damaged (a warning, an error under pytest).
+    os.environ["RVMSIM_CACHE"] = str(Path.home() / ".cache" / "rvmsim" /
+                                     f"render-{os.environ['PYTEST_XDIST_WORKER']}")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Under pytest-xdist: each item's group (:data:`SHARED_FIXTURE_FOLDERS`, else its
+    file), for ``--dist loadgroup``."""
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    tests = Path(__file__).resolve().parent
+    for item in items:
+        rel = Path(item.path).resolve().relative_to(tests)
+        group = rel.parts[0] if rel.parts[0] in SHARED_FIXTURE_FOLDERS else rel.as_posix()
+        item.add_marker(pytest.mark.xdist_group(group))
+
 
 @functools.lru_cache(maxsize=None)
 def bundled_scene(letter: str):

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import imageio.v3 as iio
 import pytest
@@ -12,17 +10,16 @@ import numpy as np
 
 from rvmsim import labels as L
 
+from .cli_runner import run_in_process
 from .conftest import SCENES
+from .scenes import write_small_scene
 
 
 def test_render_writes_color_labels_preview_and_metadata(tmp_path):
     out = tmp_path / "a"
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "render", str(SCENES / "vehicle_a.yaml"), "--out",
-         str(out), "--scale", "0.25", "--no-progress"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(["render", str(SCENES / "vehicle_a.yaml"), "--out",
+                          str(out), "--scale", "0.25", "--no-progress"])
+    assert res.code == 0, res.stderr
     color = iio.imread(out / "fisheye_color.png")
     labels = iio.imread(out / "fisheye_labels.png")
     preview = iio.imread(out / "fisheye_labels_preview.png")
@@ -40,12 +37,9 @@ def test_render_writes_color_labels_preview_and_metadata(tmp_path):
 def test_render_unwritable_output_is_one_line(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "render", str(SCENES / "vehicle_a.yaml"), "--out",
-         str(blocker / "sub"), "--scale", "0.1", "--no-progress"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert res.returncode == 2
+    res = run_in_process(["render", str(SCENES / "vehicle_a.yaml"), "--out",
+                          str(blocker / "sub"), "--scale", "0.1", "--no-progress"])
+    assert res.code == 2
     assert len(res.stderr.strip().splitlines()) == 1 and "Traceback" not in res.stderr
 
 
@@ -53,12 +47,9 @@ def test_process_writes_rvm_images_and_roi(tmp_path):
     params = tmp_path / "p.yaml"
     params.write_text("rad: 612\nzoom: 0.6\nadv_v_shift: 0.2\noutput: {size: [320, 180]}\n")
     out = tmp_path / "proc"
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "process", str(SCENES / "vehicle_a.yaml"), "--params",
-         str(params), "--out", str(out), "--scale", "0.25", "--no-progress"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(["process", str(SCENES / "vehicle_a.yaml"), "--params",
+                          str(params), "--out", str(out), "--scale", "0.25", "--no-progress"])
+    assert res.code == 0, res.stderr
     labels = iio.imread(out / "rvm_labels.png")
     color = iio.imread(out / "rvm_color.png")
     roi = iio.imread(out / "fisheye_roi.png")
@@ -73,12 +64,9 @@ def test_process_writes_rvm_images_and_roi(tmp_path):
 def test_process_bad_params_is_one_line(tmp_path):
     params = tmp_path / "p.yaml"
     params.write_text("zoom: 20\n")
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "process", str(SCENES / "vehicle_a.yaml"), "--params",
-         str(params), "--out", str(tmp_path / "o"), "--scale", "0.1", "--no-progress"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert res.returncode == 2
+    res = run_in_process(["process", str(SCENES / "vehicle_a.yaml"), "--params", str(params),
+                          "--out", str(tmp_path / "o"), "--scale", "0.1", "--no-progress"])
+    assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "zoom: 20 is outside" in lines[0] and str(params) in lines[0]
     assert not (tmp_path / "o").exists()
@@ -90,13 +78,10 @@ def test_evaluate_prints_table_writes_json_and_annotated_image(tmp_path):
     crit = tmp_path / "c.yaml"
     crit.write_text("name: OEM test\ncriteria:\n  4-1: {enabled: false}\n")
     out = tmp_path / "ev"
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "evaluate", str(SCENES / "vehicle_a.yaml"), "--params",
-         str(params), "--criteria", str(crit), "--out", str(out), "--scale", "0.25",
-         "--no-progress"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(["evaluate", str(SCENES / "vehicle_a.yaml"), "--params", str(params),
+                          "--criteria", str(crit), "--out", str(out), "--scale", "0.25",
+                          "--no-progress"])
+    assert res.code == 0, res.stderr
     for ec in ("1-1", "2-3", "4-1"):
         assert f"\n{ec} " in res.stdout
     assert "OEM test" in res.stdout and "EC score" in res.stdout
@@ -116,32 +101,28 @@ def test_evaluate_prints_table_writes_json_and_annotated_image(tmp_path):
 def test_evaluate_bad_criteria_is_one_line(tmp_path):
     crit = tmp_path / "c.yaml"
     crit.write_text("criteria:\n  9-9: {}\n")
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "evaluate", str(SCENES / "vehicle_a.yaml"),
-         "--criteria", str(crit), "--out", str(tmp_path / "o"), "--scale", "0.1"],
-        capture_output=True, text=True, timeout=300,
-    )
-    assert res.returncode == 2 and "9-9" in res.stderr and "Traceback" not in res.stderr
+    res = run_in_process(["evaluate", str(SCENES / "vehicle_a.yaml"),
+                          "--criteria", str(crit), "--out", str(tmp_path / "o"), "--scale", "0.1"])
+    assert res.code == 2 and "9-9" in res.stderr and "Traceback" not in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
 
 
-def _rvmsim(*args, env=None, timeout=600):
-    return subprocess.run([sys.executable, "-m", "rvmsim", *args], capture_output=True,
-                          text=True, timeout=timeout, env=env)
+def _rvmsim(*args, env=None):
+    return run_in_process(args, env=env)
 
 
 def test_tune_status_select_and_batch(tmp_path):
-    import os
-
-    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    """Vehicles A and B on a quarter of their sensors (the RVM images keep their sizes)."""
+    env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
+    scene_a, scene_b = (write_small_scene(tmp_path, letter) for letter in "ab")
     cfg = tmp_path / "t.yaml"
     cfg.write_text("tuned: [zoom, adv_v_shift, adv_v_scale]\noutput: {size: [320, 180]}\n"
                    "top_m: 3\nbatch: 50\n")
     run = tmp_path / "runs" / "a"
-    res = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--out", str(run), "--config",
+    res = _rvmsim("tune", str(scene_a), "--out", str(run), "--config",
                   str(cfg), "--strategy", "random", "--budget", "120", "--workers", "2",
                   "--no-progress", env=env)
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     assert "120 evaluated" in res.stdout and "EC score" in res.stdout
     for name in ("run.sqlite", "run.json", "best/rvm_color.png", "best/ec_annotated.png",
                  "best/ec.json", "top/rank_1.yaml", "top/rank_3.yaml"):
@@ -149,9 +130,9 @@ def test_tune_status_select_and_batch(tmp_path):
     assert iio.imread(run / "best" / "rvm_display.png").shape == (720, 1280, 3)
     assert iio.imread(run / "best" / "rvm_color.png").shape == (180, 320, 3)
     st = _rvmsim("status", str(run), env=env)
-    assert st.returncode == 0 and "120 / 120 evaluations" in st.stdout and "#3" in st.stdout
+    assert st.code == 0 and "120 / 120 evaluations" in st.stdout and "#3" in st.stdout
     sel = _rvmsim("select", str(run), "--rank", "2", "--out", str(tmp_path / "p2.yaml"), env=env)
-    assert sel.returncode == 0
+    assert sel.code == 0
     from rvmsim.isp import load_params
 
     params, out = load_params(tmp_path / "p2.yaml")
@@ -164,26 +145,26 @@ def test_tune_status_select_and_batch(tmp_path):
     store.close()
     assert params == second.params
     # A second tune into the same folder refuses to overwrite it.
-    again = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--out", str(run), "--no-progress",
+    again = _rvmsim("tune", str(scene_a), "--out", str(run), "--no-progress",
                     env=env)
-    assert again.returncode == 2 and "--resume" in again.stderr
+    assert again.code == 2 and "--resume" in again.stderr
     # Batch: one good scene, one broken one; the broken one is reported and skipped.
     broken = tmp_path / "broken.yaml"
     broken.write_text("name: x\ncamera: {\n")
-    b = _rvmsim("batch", str(SCENES / "vehicle_b.yaml"), str(broken), "--out",
+    b = _rvmsim("batch", str(scene_b), str(broken), "--out",
                 str(tmp_path / "batch"), "--config", str(cfg), "--strategy", "random",
                 "--budget", "60", "--workers", "1", "--no-progress", env=env)
-    assert b.returncode == 1
+    assert b.code == 1
     assert "broken.yaml" in b.stderr and "skipped" in b.stderr
     summary = json.loads((tmp_path / "batch" / "summary.json").read_text())
     assert summary[0]["vehicle"].startswith("Vehicle B") and summary[0]["evaluations"] == 60
     assert "error" in summary[1]
     assert "Vehicle B" in (tmp_path / "batch" / "summary.txt").read_text()
     # With progress bars: an overall bar over the vehicles besides each vehicle's own bar.
-    b = _rvmsim("batch", str(SCENES / "vehicle_b.yaml"), str(broken), "--out",
+    b = _rvmsim("batch", str(scene_b), str(broken), "--out",
                 str(tmp_path / "batch2"), "--config", str(cfg), "--strategy", "random",
                 "--budget", "60", "--workers", "1", env=env)
-    assert b.returncode == 1 and "skipped" in b.stderr
+    assert b.code == 1 and "skipped" in b.stderr
     assert "batch: 100%" in b.stderr and "2/2" in b.stderr and "vehicle" in b.stderr
     assert "tune Vehicle B" in b.stderr and "eval" in b.stderr
 
@@ -193,12 +174,12 @@ def test_tune_errors_are_one_line(tmp_path):
     bad.write_text("tuned: [zooom]\n")
     res = _rvmsim("tune", str(SCENES / "vehicle_a.yaml"), "--config", str(bad), "--out",
                   str(tmp_path / "r"))
-    assert res.returncode == 2 and "zooom" in res.stderr
+    assert res.code == 2 and "zooom" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
     res = _rvmsim("tune", "--resume", str(tmp_path / "nothing"))
-    assert res.returncode == 2 and "no run to resume" in res.stderr
+    assert res.code == 2 and "no run to resume" in res.stderr
     res = _rvmsim("status", str(tmp_path / "nothing"))
-    assert res.returncode == 2 and "no run database" in res.stderr
+    assert res.code == 2 and "no run database" in res.stderr
 
 
 def test_strategy_choices_come_from_the_registry():
@@ -223,33 +204,28 @@ COMMANDS = ("render", "process", "evaluate", "tune", "batch", "status", "select"
             "validate", "sweep")
 
 
-def _main(monkeypatch, capsys, *args):
+def _main(*args):
     """``rvmsim ARGS`` through the console-script entry point, in this process: (exit status,
     stdout, stderr)."""
-    from rvmsim.cli import main
-
-    monkeypatch.setattr(sys, "argv", ["rvmsim", *args])
-    with pytest.raises(SystemExit) as stop:
-        main()
-    out = capsys.readouterr()
-    return stop.value.code, out.out, out.err
+    res = run_in_process(args)
+    return res.code, res.stdout, res.stderr
 
 
 @pytest.mark.parametrize("command", COMMANDS)
-def test_help_of_every_command_still_works(monkeypatch, capsys, command):
-    code, out, err = _main(monkeypatch, capsys, command, "--help")
+def test_help_of_every_command_still_works(command):
+    code, out, err = _main(command, "--help")
     assert code == 0 and err == ""
     assert f"{command} [OPTIONS]" in out and "--help" in out and "Options:" in out
 
 
-def test_top_level_help_and_version_still_work(monkeypatch, capsys):
+def test_top_level_help_and_version_still_work():
     from importlib.metadata import version
 
-    code, out, err = _main(monkeypatch, capsys, "--help")
+    code, out, err = _main("--help")
     assert code == 0 and err == "" and all(c in out for c in COMMANDS)
-    code, out, err = _main(monkeypatch, capsys, "-h")
+    code, out, err = _main("-h")
     assert code == 0 and "Commands:" in out
-    code, out, err = _main(monkeypatch, capsys, "--version")
+    code, out, err = _main("--version")
     assert code == 0 and version("rvmsim") in out
 
 
@@ -264,32 +240,31 @@ def test_top_level_help_and_version_still_work(monkeypatch, capsys):
     (("tune", "s.yaml", "--max-time", "nan"),
      "rvmsim tune: --max-time: 'nan' is not a finite number"),
 ])
-def test_usage_errors_are_one_line_naming_the_option(monkeypatch, capsys, args, line):
-    code, out, err = _main(monkeypatch, capsys, *args)
+def test_usage_errors_are_one_line_naming_the_option(args, line):
+    code, out, err = _main(*args)
     assert code == 2 and out == "" and err == line + "\n"
 
 
-def test_no_command_is_one_line_listing_the_commands(monkeypatch, capsys):
-    code, out, err = _main(monkeypatch, capsys)
+def test_no_command_is_one_line_listing_the_commands():
+    code, out, err = _main()
     assert code == 2 and len(err.splitlines()) == 1
     assert err.startswith("rvmsim: missing command") and all(c in err for c in COMMANDS)
 
 
-def test_sweep_accepts_allow_large(monkeypatch, capsys):
-    code, out, err = _main(monkeypatch, capsys, "sweep", "--help")
+def test_sweep_accepts_allow_large():
+    code, out, err = _main("sweep", "--help")
     assert code == 0 and "--allow-large" in out
     assert "design points" in " ".join(out.split())
 
 
-def test_good_invocations_use_existing_outputs(tmp_path, monkeypatch, capsys):
+def test_good_invocations_use_existing_outputs(tmp_path):
     """An existing output folder and an existing params file are still fine: the option types
     only refuse a file where a folder goes (and the reverse)."""
     out = tmp_path / "already"
     out.mkdir()
-    res = subprocess.run([sys.executable, "-m", "rvmsim", "render",
-                          str(SCENES / "vehicle_a.yaml"), "--out", str(out), "--scale", "0.1",
-                          "--no-progress"], capture_output=True, text=True, timeout=300)
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(["render", str(SCENES / "vehicle_a.yaml"), "--out", str(out),
+                          "--scale", "0.1", "--no-progress"])
+    assert res.code == 0, res.stderr
     assert (out / "fisheye_labels.png").is_file() and "rendered Vehicle A" in res.stdout
     from click.testing import CliRunner
 

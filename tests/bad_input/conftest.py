@@ -5,52 +5,36 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from .harness import REPO, run_rvmsim
+from ..cli_runner import run_in_process
+from ..scenes import write_small_scene
 
-#: A small scene (320×240 sensor) of vehicle A: quick to render in a case.
+#: The file name of the small scene (vehicle A on a 320×240 sensor) in a case folder.
 SMALL_SCENE = "scene.yaml"
 
 
-def write_small_scene(folder: Path, edit: dict | None = None) -> Path:
-    """Vehicle A at a quarter of its sensor, as ``folder/scene.yaml`` (``edit``: dotted keys
-    set to values, ``None`` deletes the key)."""
-    import yaml
-
-    doc = yaml.safe_load((REPO / "scenes" / "vehicle_a.yaml").read_text())
-    doc["camera"]["image_size"] = [320, 240]
-    intr = doc["camera"]["intrinsics"]
-    for k in ("fx", "fy"):
-        intr[k] = float(intr[k]) / 4
-    for key, value in (edit or {}).items():
-        node = doc
-        *path, last = key.split(".")
-        for p in path:
-            node = node[int(p)] if isinstance(node, list) else node.setdefault(p, {})
-        if value is None:
-            node.pop(last, None)
-        else:
-            node[last] = value
-    path = folder / SMALL_SCENE
-    path.write_text(yaml.safe_dump(doc, sort_keys=False))
-    return path
+def small_scene(folder: Path, edit: dict[str, Any] | None = None) -> Path:
+    """Vehicle A at a quarter of its sensor (:func:`tests.scenes.write_small_scene`) as
+    ``folder/scene.yaml``; ``edit``: dotted keys set to values (None deletes the key)."""
+    return write_small_scene(folder, "a", name=SMALL_SCENE, edit=edit)
 
 
 @pytest.fixture(scope="session")
-def finished_run(tmp_path_factory) -> Path:
+def finished_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished tuning run of the small scene (random search, 40 evaluations)."""
     folder = tmp_path_factory.mktemp("finished")
-    write_small_scene(folder)
-    out = run_rvmsim(["tune", SMALL_SCENE, "--strategy", "random", "--budget", "40",
-                      "--workers", "1", "--out", "run", "--no-progress"], cwd=folder)
+    small_scene(folder)
+    out = run_in_process(["tune", SMALL_SCENE, "--strategy", "random", "--budget", "40",
+                          "--workers", "1", "--out", "run", "--no-progress"], cwd=folder)
     assert out.code == 0, out.stderr
     return folder
 
 
 @pytest.fixture
-def case_dir(tmp_path, finished_run) -> Path:
+def case_dir(tmp_path: Path, finished_run: Path) -> Path:
     """A fresh case folder holding ``scene.yaml`` (valid) and ``run/`` (a finished run)."""
     shutil.copy(finished_run / SMALL_SCENE, tmp_path / SMALL_SCENE)
     shutil.copytree(finished_run / "run", tmp_path / "run")

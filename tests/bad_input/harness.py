@@ -1,31 +1,39 @@
-"""The bad-input harness (issue #14): run one ``rvmsim`` command in a child process under a
-memory cap, and check that it failed cleanly.
+"""The bad-input harness (issue #14): run one ``rvmsim`` command and check that it failed
+cleanly.
 
 A clean failure is: exit status 2, exactly one line on stderr, that line naming the file and
 the key (or the option) at fault, no traceback, and every stored run or sweep folder the case
 was given byte-identical afterwards.  Cases are data (:class:`Case`), so every input kind's
 module lists its cases and hands them to :func:`check_case`.
+
+A case runs in this process (:func:`tests.cli_runner.run_in_process`: the CLI's entry point,
+the process state a child would have, the same exit status and streams) unless its
+:attr:`Case.isolate` gives a reason to run it as a child process of its own under
+:data:`MEMORY_CAP_BYTES` and :data:`TIMEOUT_S`: a regression of the guard it tests would
+allocate past the cap or run for hours (a bomb), or the command starts something that
+outlives it (a Dask client, a server).
 """
 
 from __future__ import annotations
 
 import hashlib
-import os
-import resource
-import subprocess
-import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-#: Address-space cap of each case's child process: a blow-up (a 74 GiB allocation, a
-#: billion-laughs expansion) fails the case with MemoryError, not the machine.  Rendering
-#: a small scene needs well under 1 GiB.
-MEMORY_CAP_BYTES = 2 * 1024**3
-#: Wall-time limit of one case (s): a hang fails the case.
+from ..cli_runner import MEMORY_CAP_BYTES, REPO, Outcome, run_in_child, run_in_process
+
+__all__ = ["Case", "Outcome", "MEMORY_CAP_BYTES", "TIMEOUT_S", "REPO", "MEMORY", "ENDLESS",
+           "DASK", "SERVER", "run_case", "folder_digest", "assert_clean_failure", "check_case"]
+
+#: Wall-time limit of one isolated case (s): a hang fails the case.
 TIMEOUT_S = 120.0
 
-REPO = Path(__file__).resolve().parents[2]
+#: :attr:`Case.isolate` reasons.
+MEMORY = "a regression of the guard would allocate past the memory cap"
+ENDLESS = "a regression of the guard would run for hours or forever: needs the timeout"
+DASK = "connects a Dask client, whose threads outlive the command"
+SERVER = "a regression would serve until killed, under uvicorn's signal handlers"
 
 
 @dataclass(frozen=True)
@@ -33,10 +41,12 @@ class Case:
     """One bad input.
 
     ``args`` are ``rvmsim``'s arguments (paths inside the case folder may be given relative
-    to it: the child runs there).  ``setup(folder)`` writes the bad files into the case
+    to it: the command runs there).  ``setup(folder)`` writes the bad files into the case
     folder before the run.  ``names`` must all appear in the one stderr line (file name,
     key or option).  ``keep`` are folders (relative to the case folder) whose bytes must not
-    change.
+    change.  ``env``: environment variables of the run.  ``isolate``: why the case needs a
+    child process of its own (one of :data:`MEMORY`, :data:`ENDLESS`, :data:`DASK`,
+    :data:`SERVER`); empty: it runs in this process.
     """
 
     id: str
@@ -45,28 +55,16 @@ class Case:
     setup: Callable[[Path], None] | None = None
     keep: tuple[str, ...] = ()
     env: dict[str, str] = field(default_factory=dict)
+    isolate: str = ""
 
 
-@dataclass(frozen=True)
-class Outcome:
-    code: int
-    stdout: str
-    stderr: str
-
-
-def _cap_memory() -> None:
-    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_CAP_BYTES, MEMORY_CAP_BYTES))
-
-
-def run_rvmsim(args: Sequence[str], *, cwd: Path, env: dict[str, str] | None = None,
-               timeout_s: float = TIMEOUT_S) -> Outcome:
-    """``python -m rvmsim ARGS`` in ``cwd`` under :data:`MEMORY_CAP_BYTES`."""
-    child_env = {**os.environ, "PYOPENGL_PLATFORM": "egl", "PYTHONPATH": str(REPO),
-                 "COLUMNS": "200", **(env or {})}
-    res = subprocess.run([sys.executable, "-m", "rvmsim", *args], cwd=cwd, env=child_env,
-                         capture_output=True, text=True, timeout=timeout_s, stdin=subprocess.DEVNULL,
-                         preexec_fn=_cap_memory)
-    return Outcome(res.returncode, res.stdout, res.stderr)
+def run_case(case: Case, folder: Path) -> Outcome:
+    """Run ``case``'s command in ``folder``: in a capped child when it is isolated, else in
+    this process."""
+    if case.isolate:
+        return run_in_child(case.args, cwd=folder, env=case.env, timeout_s=TIMEOUT_S,
+                            memory_cap=MEMORY_CAP_BYTES)
+    return run_in_process(case.args, cwd=folder, env=case.env)
 
 
 def folder_digest(folder: Path) -> dict[str, str]:
@@ -78,7 +76,7 @@ def folder_digest(folder: Path) -> dict[str, str]:
 def assert_clean_failure(out: Outcome, names: Sequence[str]) -> None:
     """Exit 2, one stderr line naming every one of ``names``, no traceback."""
     lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
-    assert "Traceback" not in out.stderr, out.stderr[-3000:]
+    assert "Traceback" not in out.stderr, "a traceback: " + out.stderr[-3000:]
     assert out.code == 2, f"exit {out.code}, stderr: {out.stderr[-2000:]}"
     assert len(lines) == 1, f"{len(lines)} stderr lines: {out.stderr[-2000:]}"
     for name in names:
@@ -91,7 +89,7 @@ def check_case(case: Case, folder: Path) -> Outcome:
     if case.setup is not None:
         case.setup(folder)
     before = {k: folder_digest(folder / k) for k in case.keep}
-    out = run_rvmsim(case.args, cwd=folder, env=case.env)
+    out = run_case(case, folder)
     assert_clean_failure(out, case.names)
     for k in case.keep:
         assert folder_digest(folder / k) == before[k], f"{k} changed"

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from .harness import Case, check_case
+from .harness import MEMORY, Case, check_case
 from .test_captures import png
 
 
@@ -47,7 +47,7 @@ CASES = [
     Case("corrupt-capture", (*CAL, "bad.png", "--board", "7x9:0.05"), ["bad.png"],
          setup=_write("bad.png", b"\x89PNG\r\n\x1a\nnot really")),
     Case("header-bomb-capture", (*CAL, "big.png", "--board", "7x9:0.05"), ["big.png"],
-         setup=_write("big.png", png(100000, 100000))),
+         setup=_write("big.png", png(100000, 100000)), isolate=MEMORY),
     Case("empty-folder", (*CAL, "caps", "--board", "7x9:0.05"), ["caps", "no images"],
          setup=lambda f: (f / "caps").mkdir()),
     Case("no-board", (*CAL, "caps"), ["--board", "required"], setup=_blank_pngs(3)),

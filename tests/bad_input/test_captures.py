@@ -11,7 +11,7 @@ import zlib
 import pytest
 
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case
+from .harness import MEMORY, Case, check_case
 
 VALIDATE = ("validate", SMALL_SCENE, "--out", "v", "--no-progress", "--capture")
 
@@ -75,8 +75,11 @@ FILES = [
     ("text", "cap.png", b"this is not an image\n" * 10),
     ("directory", "cap.png", None),
 ]
-CASES = [Case(f"capture-{i}", VALIDATE + (name,), (name,), _file(name, data), keep=("run",))
-         for i, name, data in FILES]
+#: Cases run in a child of their own: headers of a gigabyte or more of pixels.
+ISOLATED = {"png-100000": MEMORY, "png-20000": MEMORY, "jpeg-65000": MEMORY,
+            "tiff-100000": MEMORY, "bmp-100000": MEMORY}
+CASES = [Case(f"capture-{i}", VALIDATE + (name,), (name,), _file(name, data), keep=("run",),
+              isolate=ISOLATED.get(i, "")) for i, name, data in FILES]
 CASES += [Case("capture-missing", VALIDATE + ("gone.png",), ("gone.png", "not found"),
                keep=("run",))]
 

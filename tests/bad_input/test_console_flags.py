@@ -4,13 +4,16 @@ run given to it byte-identical afterwards."""
 
 from __future__ import annotations
 
+import dataclasses
 import socket
 from pathlib import Path
 
 import pytest
 
-from .conftest import SMALL_SCENE, write_small_scene
-from .harness import Case, assert_clean_failure, check_case, folder_digest, run_rvmsim
+from .conftest import SMALL_SCENE, small_scene
+from ..cli_runner import run_in_process
+from .harness import (MEMORY_CAP_BYTES, SERVER, TIMEOUT_S, Case, assert_clean_failure,
+                      check_case, folder_digest, run_in_child)
 
 RUN = ("run",)
 NO_BROWSER = "--no-browser"
@@ -25,16 +28,16 @@ def _empty_folder(folder: Path) -> None:
 
 
 def _bad_scene(folder: Path) -> None:
-    write_small_scene(folder, {"camera.image_size": "wide"})
+    small_scene(folder, {"camera.image_size": "wide"})
 
 
 def _run_without_its_scene(folder: Path) -> None:
     """A run of its own scene file (``own/scene.yaml``), which is then deleted."""
     own = folder / "own"
     own.mkdir()
-    write_small_scene(own)
-    out = run_rvmsim(["tune", SMALL_SCENE, "--strategy", "random", "--budget", "3",
-                      "--workers", "1", "--out", "run", "--no-progress"], cwd=own)
+    small_scene(own)
+    out = run_in_process(["tune", SMALL_SCENE, "--strategy", "random", "--budget", "3",
+                          "--workers", "1", "--out", "run", "--no-progress"], cwd=own)
     assert out.code == 0, out.stderr
     (own / SMALL_SCENE).unlink()
 
@@ -61,6 +64,8 @@ CASES = [
     Case("token-with-symbols", ("console", "run", "--token", "a" * 20 + "<&>", NO_BROWSER),
          ("--token",), keep=RUN),
 ]
+#: Every console case runs in a child of its own: a regression would serve (forever).
+CASES = [dataclasses.replace(c, isolate=SERVER) for c in CASES]
 
 
 @pytest.mark.parametrize("case", CASES, ids=lambda c: c.id)
@@ -75,6 +80,7 @@ def test_console_port_in_use(case_dir: Path) -> None:
         taken.listen(1)
         port = taken.getsockname()[1]
         before = folder_digest(case_dir / "run")
-        out = run_rvmsim(["console", "run", "--port", str(port), NO_BROWSER], cwd=case_dir)
+        out = run_in_child(["console", "run", "--port", str(port), NO_BROWSER], cwd=case_dir,
+                           timeout_s=TIMEOUT_S, memory_cap=MEMORY_CAP_BYTES)  # SERVER
     assert_clean_failure(out, ("--port", str(port), "in use"))
     assert folder_digest(case_dir / "run") == before

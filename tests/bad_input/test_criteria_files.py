@@ -34,7 +34,7 @@ FILES = [
 CASES = [Case(f"criteria-{i}", EVALUATE, (C, key), _file(text), keep=("run",))
          for i, text, key in FILES]
 CASES += [Case(f"criteria-yaml-{i}", EVALUATE, (C, "limit"), _file("name: x\n" + text),
-               keep=("run",)) for i, text in BOMBS]
+               keep=("run",), isolate=why) for i, text, why in BOMBS]
 CASES += [
     Case("criteria-tune-range-nan", ("tune", SMALL_SCENE, "--criteria", C, "--out", "new",
                                      "--no-progress"),

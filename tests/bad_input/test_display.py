@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from .conftest import SMALL_SCENE, write_small_scene
+from .conftest import SMALL_SCENE, small_scene
 from .harness import Case, check_case
 
 C = "c.yaml"
@@ -16,7 +16,7 @@ def _evaluate(criteria: str) -> tuple[str, ...]:
 
 
 def _scene(key: str, value):
-    return lambda folder: write_small_scene(folder, {f"display.{key}": value})
+    return lambda folder: small_scene(folder, {f"display.{key}": value})
 
 
 def _file(text: str):

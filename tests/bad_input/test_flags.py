@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case, run_rvmsim
+from ..cli_runner import run_in_process
+from .harness import DASK, MEMORY, Case, check_case
 
 RUN = ("run",)
 
@@ -39,7 +40,7 @@ def _capture(folder: Path) -> None:
     if not _CAPTURES:
         made = Path(tempfile.mkdtemp(prefix="rvmsim-capture-"))
         shutil.copy(folder / SMALL_SCENE, made / SMALL_SCENE)
-        out = run_rvmsim(["render", SMALL_SCENE, "--out", "cap", "--no-progress"], cwd=made)
+        out = run_in_process(["render", SMALL_SCENE, "--out", "cap", "--no-progress"], cwd=made)
         assert out.code == 0, out.stderr
         _CAPTURES.append(made / "cap")
     shutil.copytree(_CAPTURES[0], folder / "cap")
@@ -77,7 +78,8 @@ CASES = [
     Case("render-extra-argument", ("render", S, "other.yaml", "--out", "r"), ("other.yaml",)),
     Case("render-scale-nan", ("render", S, "--out", "r", "--scale", "nan"), ("--scale",)),
     Case("render-scale-word", ("render", S, "--out", "r", "--scale", "half"), ("--scale",)),
-    Case("render-scale-big", ("render", S, "--out", "r", "--scale", "40"), ("--scale",)),
+    Case("render-scale-big", ("render", S, "--out", "r", "--scale", "40"), ("--scale",),
+         isolate=MEMORY),
     Case("render-face-size-small", ("render", S, "--out", "r", "--face-size", "2"),
          ("--face-size",)),
     Case("render-face-size-float", ("render", S, "--out", "r", "--face-size", "64.5"),
@@ -89,7 +91,7 @@ CASES = [
     Case("render-scene-missing", ("render", "nope.yaml", "--out", "r"), ("nope.yaml",)),
     Case("render-scene-is-folder", ("render", "run", "--out", "r"), ("run",), keep=RUN),
     Case("render-face-size-big", ("render", S, "--out", "r", "--face-size", "8192"),
-         ("--face-size",)),
+         ("--face-size",), isolate=MEMORY),
     Case("render-out-name-too-long", ("render", S, "--out", LONG, "--no-progress"), (LONG,)),
     Case("render-progress-value", ("render", S, "--out", "r", "--progress=yes"),
          ("--progress",)),
@@ -176,7 +178,8 @@ CASES = [
     Case("batch-out-under-file", ("batch", S, "--out", "blocker/runs"), ("--out", "blocker"),
          setup=NOT_A_FOLDER),
     Case("batch-scheduler-unreachable",  # progress bars on: no bar above the error (10 s)
-         ("batch", S, "--out", "b", "--scheduler", "tcp://127.0.0.1:1"), ("tcp://127.0.0.1:1",)),
+         ("batch", S, "--out", "b", "--scheduler", "tcp://127.0.0.1:1"), ("tcp://127.0.0.1:1",),
+         isolate=DASK),
     Case("batch-strategy-unknown", ("batch", S, "--strategy", "grid"), ("--strategy",)),
     # ---- status
     Case("status-top-zero", ("status", "run", "--top", "0"), ("status", "--top"), keep=RUN),

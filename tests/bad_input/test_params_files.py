@@ -7,7 +7,7 @@ import pytest
 
 from .bombs import BOMBS
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case
+from .harness import MEMORY, Case, check_case
 
 P_YAML, P_JSON = "p.yaml", "p.json"
 
@@ -39,10 +39,13 @@ FILES = [
     ("json-size-huge", P_JSON, '{"output": {"size": [100000, 100000]}}', "output.size"),
     ("json-huge-file", P_JSON, '{"rad": 600' + " " * (5 * 1024**2) + "}", "limit"),
 ]
-CASES = [Case(f"params-{i}", _process(name), (name, key), _file(name, text), keep=("run",))
-         for i, name, text, key in FILES]
+#: Cases run in a child of their own: RVM images over the pixel limit.
+ISOLATED = {"size-huge": MEMORY, "size-pixels": MEMORY, "json-size-huge": MEMORY}
+CASES = [Case(f"params-{i}", _process(name), (name, key), _file(name, text), keep=("run",),
+              isolate=ISOLATED.get(i, "")) for i, name, text, key in FILES]
 CASES += [Case(f"params-yaml-{i}", _process(P_YAML), (P_YAML, "limit"),
-               _file(P_YAML, "rad: 600\n" + text), keep=("run",)) for i, text in BOMBS]
+               _file(P_YAML, "rad: 600\n" + text), keep=("run",), isolate=why)
+          for i, text, why in BOMBS]
 CASES += [
     Case("params-evaluate-rad-400-digits",
          ("evaluate", SMALL_SCENE, "--params", P_YAML, "--out", "e", "--no-progress"),

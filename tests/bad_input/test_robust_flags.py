@@ -5,15 +5,15 @@ from __future__ import annotations
 
 import pytest
 
-from .conftest import SMALL_SCENE, write_small_scene
-from .harness import Case, check_case
+from .conftest import SMALL_SCENE, small_scene
+from .harness import ENDLESS, Case, check_case
 
 S = SMALL_SCENE
 NEW = ("--out", "new", "--no-progress", "--workers", "1", "--budget", "4")
 
 
 def _no_variation(folder):
-    write_small_scene(folder, {"variation": None})
+    small_scene(folder, {"variation": None})
 
 
 def _bad_variation_file(folder):
@@ -28,7 +28,7 @@ CASES = [
     Case("robust-samples-zero", ("tune", S, "--robust", "--samples", "0", *NEW),
          ("--samples",), keep=("run",)),
     Case("robust-samples-too-many", ("tune", S, "--robust", "--samples", "100000", *NEW),
-         ("--samples",), keep=("run",)),
+         ("--samples",), keep=("run",), isolate=ENDLESS),
     Case("robust-with-resume", ("tune", "--robust", "--resume", "run", "--no-progress"),
          ("--resume",), keep=("run",)),
     Case("robust-scene-without-variation", ("tune", S, "--robust", *NEW),

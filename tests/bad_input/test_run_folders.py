@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case, run_rvmsim
+from ..cli_runner import run_in_process
+from .harness import Case, check_case
 
 DB = "run/run.sqlite"
 RUN_JSON = "run/run.json"
@@ -260,8 +261,8 @@ def finished_sweep(tmp_path_factory, finished_run) -> Path:
     folder = tmp_path_factory.mktemp("finished_sweep")
     shutil.copy(finished_run / SMALL_SCENE, folder / SMALL_SCENE)
     (folder / SWEEP_FILE).write_text(SWEEP)
-    out = run_rvmsim(["sweep", SWEEP_FILE, "--out", "sw", "--workers", "1", "--no-progress"],
-                     cwd=folder)
+    out = run_in_process(["sweep", SWEEP_FILE, "--out", "sw", "--workers", "1",
+                          "--no-progress"], cwd=folder)
     assert out.code == 0, out.stderr
     return folder
 

@@ -9,15 +9,15 @@ import math
 import pytest
 
 from .bombs import BOMBS
-from .conftest import SMALL_SCENE, write_small_scene
-from .harness import Case, check_case
+from .conftest import SMALL_SCENE, small_scene
+from .harness import MEMORY, Case, check_case
 
 RENDER = ("render", SMALL_SCENE, "--out", "r", "--no-progress")
 
 
 def _edit(key: str, value, *more) -> object:
     edits = {key: value, **dict(zip(more[::2], more[1::2]))}
-    return lambda folder: write_small_scene(folder, edits)
+    return lambda folder: small_scene(folder, edits)
 
 
 #: (case id, dotted key set, value, key named in the error)
@@ -90,20 +90,26 @@ INTRINSICS = [
 ]
 
 
+#: Cases run in a child of their own (the others run in this process): sensors over the
+#: pixel limit, and focal lengths that would ask for the largest cube faces.
+ISOLATED = {"size-huge": MEMORY, "size-pixels": MEMORY, "fx-1e308": MEMORY, "fy-huge": MEMORY,
+            "K-huge-f": MEMORY}
+
+
 def _yaml_bomb(text: str):
     def setup(folder):
-        scene = write_small_scene(folder)
+        scene = small_scene(folder)
         scene.write_text(scene.read_text() + text)
     return setup
 
 
 CASES = (
-    [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit(k, v), keep=("run",))
-     for i, k, v, key in VALUES]
+    [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit(k, v), keep=("run",),
+          isolate=ISOLATED.get(i, "")) for i, k, v, key in VALUES]
     + [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit("camera.intrinsics", v),
-            keep=("run",)) for i, v, key in INTRINSICS]
-    + [Case(f"scene-yaml-{i}", RENDER, (SMALL_SCENE, "limit"), _yaml_bomb(text), keep=("run",))
-       for i, text in BOMBS]
+            keep=("run",), isolate=ISOLATED.get(i, "")) for i, v, key in INTRINSICS]
+    + [Case(f"scene-yaml-{i}", RENDER, (SMALL_SCENE, "limit"), _yaml_bomb(text), keep=("run",),
+            isolate=why) for i, text, why in BOMBS]
     + [
         Case("process-fx-inf", ("process", SMALL_SCENE, "--out", "p", "--no-progress"),
              (SMALL_SCENE, "camera.intrinsics.fx"), _edit("camera.intrinsics.fx", math.inf),
@@ -114,7 +120,7 @@ CASES = (
         Case("tune-size-huge", ("tune", SMALL_SCENE, "--out", "new", "--budget", "4",
                                 "--strategy", "random", "--workers", "1", "--no-progress"),
              (SMALL_SCENE, "camera.image_size"), _edit("camera.image_size", [100000, 100000]),
-             keep=("run",)),
+             keep=("run",), isolate=MEMORY),
         Case("validate-cx-far", ("validate", SMALL_SCENE, "--capture", "cap.png",
                                  "--no-progress"),
              (SMALL_SCENE, "camera.intrinsics.cx"), _edit("camera.intrinsics.cx", 1.0e6),

@@ -11,19 +11,20 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import SMALL_SCENE, write_small_scene
-from .harness import Case, check_case, run_rvmsim
+from .conftest import SMALL_SCENE, small_scene
+from ..cli_runner import run_in_process
+from .harness import Case, check_case
 
 S = SMALL_SCENE
 NEW = ("--out", "new", "--no-progress", "--workers", "1")
 
 
 def _variant(name: str = "b.yaml", edit: dict | None = None):
-    """A setup writing a second small scene ``name`` (``edit``: as write_small_scene's)."""
+    """A setup writing a second small scene ``name`` (``edit``: as small_scene's)."""
     def setup(folder: Path) -> None:
         sub = folder / "variant"
         sub.mkdir(exist_ok=True)
-        write_small_scene(sub, edit or {"vehicle.bumper.top": 0.8})
+        small_scene(sub, edit or {"vehicle.bumper.top": 0.8})
         shutil.move(sub / SMALL_SCENE, folder / name)
         sub.rmdir()
     return setup
@@ -38,8 +39,9 @@ def _junk(name: str):
 def _shared_run(folder: Path) -> None:
     """A finished shared run of scene.yaml and b.yaml in ``shared/``."""
     _variant()(folder)
-    out = run_rvmsim(["tune", S, "b.yaml", "--shared", "--strategy", "random", "--budget", "20",
-                      "--out", "shared", "--no-progress", "--workers", "1"], cwd=folder)
+    out = run_in_process(["tune", S, "b.yaml", "--shared", "--strategy", "random", "--budget",
+                          "20", "--out", "shared", "--no-progress", "--workers", "1"],
+                         cwd=folder)
     assert out.code == 0, out.stderr
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from .bombs import BOMBS
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case
+from .harness import ENDLESS, MEMORY, Case, check_case
 
 S = "s.yaml"
 SWEEP = ("sweep", S, "--out", "so", "--workers", "1", "--no-progress")
@@ -48,15 +48,20 @@ FILES = [
     ("scene-key-nan", "  vehicle.bumper.width: [.inf]\n", "vehicle.bumper.width"),
     ("scene-size-huge", "  camera.image_size: [[100000, 100000]]\n", "camera.image_size"),
 ]
-CASES = [Case(f"sweep-{i}", SWEEP, (S, key), _file(axes), keep=("run",))
-         for i, axes, key in FILES]
+#: Cases run in a child of their own (the others run in this process).
+ISOLATED = {"step-endless": ENDLESS, "million-points": ENDLESS, "points-over-limit": ENDLESS,
+            "list-too-long": ENDLESS, "output-size-huge": MEMORY, "output-size-pixels": MEMORY,
+            "scene-size-huge": MEMORY}
+CASES = [Case(f"sweep-{i}", SWEEP, (S, key), _file(axes), keep=("run",),
+              isolate=ISOLATED.get(i, "")) for i, axes, key in FILES]
 CASES += [Case(f"sweep-yaml-{i}", SWEEP, (S, "limit"),
-               _file("  pitch_deg: [28]\n" + text), keep=("run",)) for i, text in BOMBS]
+               _file("  pitch_deg: [28]\n" + text), keep=("run",), isolate=why)
+          for i, text, why in BOMBS]
 CASES += [
     Case("sweep-tune-config-size", SWEEP, (S, "tune.config.output.size"),
          _file("  pitch_deg: [28]\n", HEAD.replace("budget: 4", "budget: 4, config: "
                                                    "{output: {size: [8192, 8192]}}")),
-         keep=("run",)),
+         keep=("run",), isolate=MEMORY),
 ]
 
 

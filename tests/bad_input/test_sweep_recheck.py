@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case
+from .harness import ENDLESS, Case, check_case
 
 S = "s.yaml"
 SWEEP = ("sweep", S, "--out", "so", "--workers", "1", "--no-progress")
@@ -38,8 +38,11 @@ FILES = [
     ("not-a-mapping", "5", "tune.recheck"),
     ("a-list", "[1, 2]", "tune.recheck"),
 ]
-CASES = [Case(f"sweep-recheck-{i}", SWEEP, (S, key), _file(value), keep=("run",))
-         for i, value, key in FILES]
+#: Cases run in a child of their own: endless re-check rounds or budgets.
+ISOLATED = {"rounds-huge": ENDLESS, "rounds-400-digits": ENDLESS, "factor-inf": ENDLESS,
+            "factor-huge": ENDLESS}
+CASES = [Case(f"sweep-recheck-{i}", SWEEP, (S, key), _file(value), keep=("run",),
+              isolate=ISOLATED.get(i, "")) for i, value, key in FILES]
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case
+from .harness import ENDLESS, Case, check_case
 
 S = "s.yaml"
 SWEEP = ("sweep", S, "--out", "so", "--workers", "1", "--no-progress")
@@ -39,8 +39,10 @@ FILES = [
     ("not-a-mapping", "64", "robustness"),
     ("a-list", "[64, 0]", "robustness"),
 ]
-CASES = [Case(f"sweep-yield-{i}", SWEEP, (S, key), _file(value), keep=("run",))
-         for i, value, key in FILES]
+#: Cases run in a child of their own: endless sample counts.
+ISOLATED = {"samples-huge": ENDLESS, "samples-400-digits": ENDLESS}
+CASES = [Case(f"sweep-yield-{i}", SWEEP, (S, key), _file(value), keep=("run",),
+              isolate=ISOLATED.get(i, "")) for i, value, key in FILES]
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])

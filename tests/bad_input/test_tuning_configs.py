@@ -8,7 +8,7 @@ import pytest
 
 from .bombs import BOMBS
 from .conftest import SMALL_SCENE
-from .harness import Case, check_case
+from .harness import MEMORY, Case, check_case
 
 T = "t.yaml"
 TUNE = ("tune", SMALL_SCENE, "--config", T, "--out", "new", "--strategy", "random",
@@ -47,10 +47,12 @@ FILES = [
     ("solved-budget-zero", "cmaes_solved: {budget: 0}\n", "cmaes_solved.budget"),
     ("solved-unknown-setting", "cmaes_solved: {popsize: 12}\n", "cmaes_solved.popsize"),
 ]
-CASES = [Case(f"tuning-{i}", TUNE, (T, key), _file(text), keep=("run",))
-         for i, text, key in FILES]
+#: Cases run in a child of their own: RVM images over the pixel limit.
+ISOLATED = {"size-huge": MEMORY, "size-pixels": MEMORY}
+CASES = [Case(f"tuning-{i}", TUNE, (T, key), _file(text), keep=("run",),
+              isolate=ISOLATED.get(i, "")) for i, text, key in FILES]
 CASES += [Case(f"tuning-yaml-{i}", TUNE, (T, "limit"), _file("top_m: 5\n" + text),
-               keep=("run",)) for i, text in BOMBS]
+               keep=("run",), isolate=why) for i, text, why in BOMBS]
 CASES += [
     Case("tuning-init-outside-camera-range", TUNE, (T, "parameters.rad.init"),
          _file("parameters: {rad: {init: 1900}}\n"), keep=("run",)),

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from .bombs import BOMBS
-from .conftest import SMALL_SCENE, write_small_scene
-from .harness import REPO, Case, check_case
+from .conftest import SMALL_SCENE, small_scene
+from .harness import DASK, REPO, Case, check_case
 
 V, P = "v.yaml", "p.yaml"
 BIG = "9" * 400
@@ -23,7 +23,7 @@ def _robustness(*extra: str, params: bool = True) -> tuple[str, ...]:
 def _setup(variation: str | None = None, scene_edit: dict | None = None,
            params: str | None = None):
     def setup(folder: Path) -> None:
-        write_small_scene(folder, scene_edit)
+        small_scene(folder, scene_edit)
         (folder / P).write_text(params if params is not None else
                                 (REPO / "params" / "paper_defaults.yaml").read_text())
         if variation is not None:
@@ -59,7 +59,7 @@ FILES = [
 CASES = [Case(f"variation-{i}", _robustness("--variation", V), (V, key), _setup(text))
          for i, text, key in FILES]
 CASES += [Case(f"variation-yaml-{i}", _robustness("--variation", V), (V, "limit"),
-               _setup("mount: {}\n" + text)) for i, text in BOMBS]
+               _setup("mount: {}\n" + text), isolate=why) for i, text, why in BOMBS]
 CASES += [
     Case("variation-file-missing", _robustness("--variation", "nope.yaml"),
          ("nope.yaml", "not found"), _setup()),
@@ -95,7 +95,8 @@ FLAGS = [
     ("scheduler-no-port", ("--scheduler", "tcp://127.0.0.1"), "--scheduler"),
     ("scheduler-unreachable", ("--scheduler", "tcp://127.0.0.1:9"), "127.0.0.1:9"),
 ]
-CASES += [Case(f"flag-{i}", _robustness(*extra), (opt,), _setup()) for i, extra, opt in FLAGS]
+CASES += [Case(f"flag-{i}", _robustness(*extra), (opt,), _setup(),
+               isolate=DASK if i == "scheduler-unreachable" else "") for i, extra, opt in FLAGS]
 CASES += [
     Case("flag-params-missing", _robustness(params=False), ("--params",), _setup()),
     Case("flag-out-is-a-file", ("robustness", SMALL_SCENE, "--params", P, "--out", P),

@@ -7,11 +7,10 @@ import dataclasses
 from pathlib import Path
 
 import pytest
-import yaml
 
 from rvmsim.batch import LocalExecutor, RecheckSettings, load_sweep, run_sweep
 
-from ..conftest import SCENES
+from ..scenes import small_scene_text
 
 SWEEP = """\
 name: tiny mount study
@@ -27,23 +26,11 @@ tune:
 """
 
 
-def small_scene_text(letter: str, variation: dict | None = None) -> str:
-    """Bundled vehicle ``letter`` at 320 × 240, its lens scaled to match; without the bundled
-    variation section (so its sweeps measure no yield), or with ``variation``."""
-    d = yaml.safe_load((SCENES / f"vehicle_{letter}.yaml").read_text())
-    d.pop("variation", None)
-    if variation is not None:
-        d["variation"] = variation
-    d["camera"]["image_size"] = [320, 240]
-    d["camera"]["intrinsics"] = {"fx": 97.5, "fy": 97.5}
-    return yaml.safe_dump(d, sort_keys=False)
-
-
 def write_sweep(folder: Path, text: str = SWEEP, variation: dict | None = None) -> Path:
-    """Vehicle A at 320 × 240 as the base scene (with ``variation`` if given), and a
-    sweep."""
+    """Vehicle A at 320 × 240 as the base scene (without the bundled variation section, so
+    its sweeps measure no yield; with ``variation`` if given), and a sweep."""
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "base.yaml").write_text(small_scene_text("a", variation))
+    (folder / "base.yaml").write_text(small_scene_text("a", variation=variation))
     (folder / "sweep.yaml").write_text(text)
     return folder / "sweep.yaml"
 

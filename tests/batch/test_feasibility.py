@@ -4,7 +4,6 @@ verdict a sweep gives a mount where F and G are out of view."""
 
 from __future__ import annotations
 
-import copy
 import math
 
 import cv2
@@ -18,19 +17,14 @@ from rvmsim.criteria import criteria_from_text, default_criteria
 from rvmsim.render import cached_render
 from rvmsim.scene import scene_from_dict
 
-from .conftest import small_scene_text, write_sweep
+from ..scenes import small_scene_doc
+from .conftest import write_sweep
 
 
 def _render(mount=None, edit=None):
-    doc = yaml.safe_load(small_scene_text("a"))
-    doc["camera"]["mount"].update(mount or {})
-    for path, value in (edit or {}).items():
-        node = doc
-        *keys, last = path.split(".")
-        for k in keys:
-            node = node.setdefault(k, {})
-        node[last] = value
-    scene = scene_from_dict(copy.deepcopy(doc), source="test")
+    mount_edit = {f"camera.mount.{k}": v for k, v in (mount or {}).items()}
+    doc = small_scene_doc("a", variation=None, edit={**mount_edit, **(edit or {})})
+    scene = scene_from_dict(doc, source="test")
     images, _ = cached_render(scene)
     return scene, images
 

@@ -8,8 +8,6 @@ import json
 import os
 import signal
 import sqlite3
-import subprocess
-import sys
 import time
 
 import pytest
@@ -23,6 +21,7 @@ from rvmsim.render import cached_render
 from rvmsim.scene import scene_from_dict
 from rvmsim.tune import TuningConfig
 
+from ..cli_runner import run_in_process, start_in_child
 from .conftest import write_sweep
 
 #: Heights × pitches close together: with a budget of 600 the cold first pass misses some
@@ -111,8 +110,7 @@ def test_infeasible_points_are_not_rechecked_and_say_why(grid_run):
 
 
 def _sweep_cmd(f, out):
-    return [sys.executable, "-m", "rvmsim", "sweep", str(f), "--out", str(out), "--workers",
-            "1", "--no-progress"]
+    return ["sweep", f, "--out", out, "--workers", "1", "--no-progress"]
 
 
 def _count(db, table):
@@ -126,8 +124,7 @@ def _count(db, table):
 def test_sigkill_during_the_recheck_phase_resumes_to_the_unbroken_results(grid_run, tmp_path):
     f, spec, unbroken = grid_run
     out = tmp_path / "killed"
-    proc = subprocess.Popen(_sweep_cmd(f, out), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL, start_new_session=True)
+    proc = start_in_child(_sweep_cmd(f, out), start_new_session=True)
     db = out / "sweep.sqlite"
     deadline = time.time() + 300
     while time.time() < deadline and proc.poll() is None and _count(db, "rechecks") < 1:
@@ -140,8 +137,8 @@ def test_sigkill_during_the_recheck_phase_resumes_to_the_unbroken_results(grid_r
         rechecks_before = {(k, r): t for k, r, t in
                            con.execute("SELECT key, round, finished FROM rechecks")}
     assert len(points_before) == 9 and rechecks_before
-    res = subprocess.run(_sweep_cmd(f, out), capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(_sweep_cmd(f, out))
+    assert res.code == 0, res.stderr
     assert "0 run now, 9 already done" in res.stdout
     with sqlite3.connect(db) as con:
         assert dict(con.execute("SELECT key, finished FROM points")) == points_before

@@ -9,7 +9,6 @@ import os
 import signal
 import sqlite3
 import subprocess
-import sys
 import threading
 import time
 
@@ -18,6 +17,7 @@ import pytest
 from rvmsim.batch import DaskExecutor, load_sweep, run_sweep, stored_sweep, sweep_table
 from rvmsim.errors import RvmsimError
 
+from ..cli_runner import run_in_process, start_in_child
 from .conftest import SWEEP, write_sweep
 
 distributed = pytest.importorskip("distributed")
@@ -86,10 +86,8 @@ def test_worker_killed_mid_sweep_still_completes_every_point_once(local_run, clu
 def test_cli_interrupt_and_resume_without_rerunning_finished_points(tmp_path):
     f = write_sweep(tmp_path)
     out = tmp_path / "out"
-    cmd = [sys.executable, "-m", "rvmsim", "sweep", str(f), "--out", str(out), "--workers", "1",
-           "--no-progress"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    cmd = _sweep_cmd(f, out)
+    proc = start_in_child(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     db = out / "sweep.sqlite"
     deadline = time.time() + 300
     n = 0
@@ -115,8 +113,8 @@ def test_cli_interrupt_and_resume_without_rerunning_finished_points(tmp_path):
     partial = json.loads((out / "sweep.json").read_text())
     assert sum("error" not in p for p in partial["points"]) == len(first)
     assert sum(p.get("error") == "not run" for p in partial["points"]) == 6 - len(first)
-    res = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(cmd)
+    assert res.code == 0, res.stderr
     assert f"{6 - len(first)} run now, {len(first)} already done" in res.stdout
     with sqlite3.connect(db) as con:
         rows = con.execute("SELECT key, finished, session FROM points").fetchall()
@@ -131,8 +129,7 @@ def test_cli_interrupt_and_resume_without_rerunning_finished_points(tmp_path):
 
 
 def _sweep_cmd(f, out):
-    return [sys.executable, "-m", "rvmsim", "sweep", str(f), "--out", str(out), "--workers", "1",
-            "--no-progress"]
+    return ["sweep", f, "--out", out, "--workers", "1", "--no-progress"]
 
 
 def _wait_for_points(db, n, proc):
@@ -153,14 +150,12 @@ def test_a_second_sweep_on_the_same_folder_is_refused(tmp_path):
     """Two `rvmsim sweep` processes on one folder: the second (and a --force one) exits 2
     naming the first's PID and writes nothing: the first stores every point once, in its
     own session, as an undisturbed sweep does."""
-    f = write_sweep(tmp_path, SWEEP.replace("budget: 200", "budget: 1500"))
+    f = write_sweep(tmp_path, SWEEP.replace("budget: 200", "budget: 400"))
     out = tmp_path / "out"
-    first = subprocess.Popen(_sweep_cmd(f, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True)
+    first = start_in_child(_sweep_cmd(f, out), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         _wait_for_points(out / "sweep.sqlite", 1, first)
-        others = [subprocess.run(_sweep_cmd(f, out) + extra, capture_output=True, text=True,
-                                 timeout=300) for extra in ([], ["--force"])]
+        others = [run_in_process(_sweep_cmd(f, out) + extra) for extra in ([], ["--force"])]
         assert first.poll() is None, "the first sweep ended before the others were tried"
     finally:
         stdout, err = first.communicate(timeout=600)
@@ -168,7 +163,7 @@ def test_a_second_sweep_on_the_same_folder_is_refused(tmp_path):
     assert "6 design points, 6 run now, 0 already done" in stdout
     for res in others:
         lines = res.stderr.strip().splitlines()
-        assert res.returncode == 2 and len(lines) == 1, res.stderr
+        assert res.code == 2 and len(lines) == 1, res.stderr
         assert f"out is in use by process {first.pid}" in lines[0]
     with sqlite3.connect(out / "sweep.sqlite") as con:
         sessions = [s for (s,) in con.execute("SELECT session FROM points")]
@@ -181,14 +176,13 @@ def test_a_killed_sweep_leaves_its_lock_to_the_next_run(tmp_path):
     f = write_sweep(tmp_path, SWEEP.replace("camera_height_m: [0.9, 1.0, 1.1]",
                                             "camera_height_m: [0.9, 1.0]"))
     out = tmp_path / "out"
-    proc = subprocess.Popen(_sweep_cmd(f, out), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = start_in_child(_sweep_cmd(f, out))
     _wait_for_points(out / "sweep.sqlite", 1, proc)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     assert (out / "sweep.pid").read_text().split()[0] == str(proc.pid)  # stale, still there
-    res = subprocess.run(_sweep_cmd(f, out), capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(_sweep_cmd(f, out))
+    assert res.code == 0, res.stderr
     assert "already done" in res.stdout and " 0 already done" not in res.stdout
     assert not (out / "sweep.pid").exists()
 

@@ -3,14 +3,13 @@ SweepFileErrors naming the file, the key and its line."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 
 import pytest
 
 from rvmsim.batch import design_points, load_sweep, point_scene_doc
 from rvmsim.errors import CriteriaError, SweepFileError
 
+from ..cli_runner import run_in_process
 from .conftest import SWEEP, write_sweep
 
 
@@ -65,10 +64,8 @@ def test_bad_sweep_files_are_one_line_errors(tmp_path, edit, message, key, line)
     with pytest.raises(SweepFileError) as info:
         load_sweep(f)
     assert (info.value.file, info.value.key, info.value.line) == (str(f), key, line)
-    res = subprocess.run([sys.executable, "-m", "rvmsim", "sweep", str(f), "--out",
-                          str(tmp_path / "o"), "--no-progress"], capture_output=True, text=True,
-                         timeout=300)
-    assert res.returncode == 2
+    res = run_in_process(["sweep", f, "--out", tmp_path / "o", "--no-progress"])
+    assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
     assert message in lines[0] and f"{f}:{line}: " in lines[0]

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import sqlite3
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -16,12 +14,13 @@ from rvmsim.batch import (BatchSettings, SceneRun, run_batch, summary_ec_ids, su
 from rvmsim.criteria import default_criteria
 from rvmsim.tune import TuningConfig
 
-from .conftest import small_scene_text
+from ..cli_runner import run_in_child, run_in_process
+from ..scenes import small_scene_text
 
 
 def test_local_batch_runs_good_scenes_and_reports_bad_ones(tmp_path):
     good = tmp_path / "small_b.yaml"
-    good.write_text(small_scene_text("b"))
+    good.write_text(small_scene_text("b", variation=None))
     broken = tmp_path / "broken.yaml"
     broken.write_text("name: x\ncamera: {\n")
     settings = BatchSettings("random", TuningConfig.model_validate(
@@ -80,16 +79,16 @@ def test_batch_on_the_dask_cluster_writes_normal_run_folders(cluster, tmp_path):
     scenes = []
     for letter in "ab":
         p = tmp_path / f"small_{letter}.yaml"
-        p.write_text(small_scene_text(letter))
+        p.write_text(small_scene_text(letter, variation=None))
         scenes.append(p)
     cfg = tmp_path / "cfg.yaml"
     cfg.write_text("output: {size: [320, 180]}\n")
     out = tmp_path / "runs"
-    res = subprocess.run([sys.executable, "-m", "rvmsim", "batch", *map(str, scenes), "--out",
-                          str(out), "--strategy", "cmaes", "--budget", "150", "--config",
-                          str(cfg), "--scheduler", c.scheduler_address, "--no-progress"],
-                         capture_output=True, text=True, timeout=600)
-    assert res.returncode in (0, 1), res.stderr  # 1: some vehicle failed an EC, not an error
+    # In a child: a Dask client's threads would outlive the command in this process.
+    res = run_in_child(["batch", *scenes, "--out", out, "--strategy", "cmaes", "--budget",
+                        "150", "--config", cfg, "--scheduler", c.scheduler_address,
+                        "--no-progress"])
+    assert res.code in (0, 1), res.stderr  # 1: some vehicle failed an EC, not an error
     rows = json.loads((out / "summary.json").read_text())
     assert [Path(r["scene"]).name for r in rows if "error" not in r] and len(rows) == 2
     for p in scenes:
@@ -101,7 +100,6 @@ def test_batch_on_the_dask_cluster_writes_normal_run_folders(cluster, tmp_path):
             n = db.execute("SELECT COUNT(*) FROM trials").fetchone()[0]
         assert n == row["evaluations"] and 150 <= n < 150 + 12  # CMA-ES ends a generation
         assert (run / "best" / "ec.json").is_file()
-        rep = subprocess.run([sys.executable, "-m", "rvmsim", "report", str(run)],
-                             capture_output=True, text=True, timeout=300)
-        assert rep.returncode == 0, rep.stderr
+        rep = run_in_process(["report", run])
+        assert rep.code == 0, rep.stderr
         assert "changed since" not in (run / "report.html").read_text()

@@ -10,8 +10,6 @@ import json
 import os
 import signal
 import sqlite3
-import subprocess
-import sys
 import time
 
 import pytest
@@ -27,6 +25,7 @@ from rvmsim.robust import RobustnessSettings, robustness
 from rvmsim.scene import scene_from_dict
 from rvmsim.tune import TuningConfig
 
+from ..cli_runner import run_in_process, start_in_child
 from .conftest import write_sweep
 
 #: A small variation: ±1° on each angle, ±5 mm in height, one rendered position level and
@@ -268,10 +267,8 @@ def test_a_sweep_killed_mid_way_resumes_keeping_the_stored_yields(yield_run, tmp
     yield included) and ends with the unbroken run's table."""
     f, spec, unbroken = yield_run
     out = tmp_path / "killed"
-    cmd = [sys.executable, "-m", "rvmsim", "sweep", str(f), "--out", str(out), "--workers",
-           "1", "--no-progress"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
+    cmd = ["sweep", f, "--out", out, "--workers", "1", "--no-progress"]
+    proc = start_in_child(cmd, start_new_session=True)
     db = out / "sweep.sqlite"
     deadline = time.time() + 300
     while time.time() < deadline and proc.poll() is None and _points(db) < 1:
@@ -282,8 +279,8 @@ def test_a_sweep_killed_mid_way_resumes_keeping_the_stored_yields(yield_run, tmp
     with sqlite3.connect(db) as con:
         before = con.execute("SELECT key, result, session, finished FROM points").fetchall()
     assert before and all("robustness" in json.loads(r[1]) for r in before)
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr
+    done = run_in_process(cmd)
+    assert done.code == 0, done.stderr
     with sqlite3.connect(db) as con:
         after = {r[0]: r for r in
                  con.execute("SELECT key, result, session, finished FROM points")}

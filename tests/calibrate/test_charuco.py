@@ -34,7 +34,7 @@ def test_charuco_views_recover_the_rendered_camera(charuco_views):
 def test_the_command_takes_a_charuco_board(charuco_views, tmp_path):
     res = _rvmsim("calibrate", charuco_views[0].parent, "--board", SPEC, "--out", "cal",
                   cwd=tmp_path)
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     doc = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert doc["board"]["pattern"] == "charuco" and doc["board"]["squares"] == [7, 10]
     check_recovered(np.array(doc["K"]), np.array(doc["D"]))
@@ -50,5 +50,5 @@ def test_bad_charuco_specs_are_one_line_errors(spec, match, tmp_path):
     with pytest.raises(RvmsimError, match=match):
         parse_board_spec(spec)
     res = _rvmsim("calibrate", tmp_path, "--board", spec, "--out", "cal", cwd=tmp_path)
-    assert res.returncode == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert res.code == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
     assert "--board" in res.stderr and "Traceback" not in res.stderr

@@ -4,9 +4,6 @@ camera block and an updated scene out; the camera block imports back to the same
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import imageio.v3 as iio
@@ -15,15 +12,14 @@ import yaml
 
 from rvmsim.scene import load_scene
 
+from ..cli_runner import Outcome, run_in_process
 from ..conftest import ROOT
 from .conftest import SQUARE, SQUARES
 from .test_intrinsics import check_recovered
 
 
-def _rvmsim(*args, cwd: Path) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run([sys.executable, "-m", "rvmsim", *map(str, args)], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=600)
+def _rvmsim(*args, cwd: Path) -> Outcome:
+    return run_in_process(args, cwd=cwd)
 
 
 def test_calibrate_writes_the_camera_and_updates_the_scene(board_views, tmp_path):
@@ -33,7 +29,7 @@ def test_calibrate_writes_the_camera_and_updates_the_scene(board_views, tmp_path
     board = f"{SQUARES[0] - 1}x{SQUARES[1] - 1}:{SQUARE}"
     res = _rvmsim("calibrate", board_views[0].parent, "--board", board, "--out", "cal",
                   "--write-scene", scene_file, cwd=tmp_path)
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     assert "board found in 12 of 12 captures" in res.stdout
     doc = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     check_recovered(np.array(doc["K"]), np.array(doc["D"]))
@@ -52,7 +48,7 @@ def test_calibrate_writes_the_camera_and_updates_the_scene(board_views, tmp_path
     np.testing.assert_allclose(cam.K, np.array(doc["K"]), atol=1e-9)
     # The camera block imports back to the same K and D.
     res = _rvmsim("calibrate", "--import", "cal/camera.yaml", "--out", "again", cwd=tmp_path)
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     again = yaml.safe_load((tmp_path / "again" / "camera.yaml").read_text())["camera"]
     np.testing.assert_allclose(again["intrinsics"]["K"], doc["K"], atol=1e-9)
     np.testing.assert_allclose(again["lens"]["k"], doc["D"], atol=1e-12)

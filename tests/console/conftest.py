@@ -12,7 +12,7 @@ from typing import Iterator
 
 import pytest
 
-from tests.bad_input.conftest import write_small_scene
+from ..scenes import write_small_scene
 
 CHROMIUM = Path("/usr/bin/chromium")
 
@@ -24,7 +24,7 @@ def small_run(tmp_path_factory) -> Path:
     from rvmsim.tune import TuneRequest, tune
 
     folder = tmp_path_factory.mktemp("console_run")
-    scene = write_small_scene(folder)
+    scene = write_small_scene(folder, name="scene.yaml")
     tune(TuneRequest((scene,), "random", seed=3, budget=40), folder / "run")
     return folder
 

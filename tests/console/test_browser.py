@@ -4,18 +4,14 @@ expert does, and check what it shows against ``rvmsim evaluate``."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 from rvmsim.console import check_access, open_session
 from rvmsim.isp import load_params
 
+from ..cli_runner import run_in_child
 from .conftest import serving
-
-REPO_ENV_KEYS = ("PYTHONPATH", "PATH", "HOME", "RVMSIM_CACHE", "PYOPENGL_PLATFORM")
-
 
 @pytest.fixture(scope="module")
 def served_run(small_run, browser, tmp_path_factory):
@@ -75,14 +71,11 @@ def _table(page) -> list[list[str]]:
 
 
 def _evaluate_cli(scene, params_file, out) -> dict:
-    """``rvmsim evaluate SCENE --params FILE`` in a child process; its ec.json."""
-    import os
-
-    env = {k: os.environ[k] for k in REPO_ENV_KEYS if k in os.environ}
-    res = subprocess.run([sys.executable, "-m", "rvmsim", "evaluate", str(scene), "--params",
-                          str(params_file), "--out", str(out), "--no-progress"],
-                         capture_output=True, text=True, env=env, timeout=300)
-    assert res.returncode == 0, res.stderr
+    """``rvmsim evaluate SCENE --params FILE`` in a child process (nothing shared with the
+    console serving in this one); its ec.json."""
+    res = run_in_child(["evaluate", scene, "--params", params_file, "--out", out,
+                        "--no-progress"], timeout_s=300)
+    assert res.code == 0, res.stderr
     return json.loads((out / "ec.json").read_text())
 
 
@@ -178,10 +171,11 @@ def test_non_loopback_host_needs_the_token(small_run, browser):
 
 
 def test_user_strings_are_shown_as_text(tmp_path, browser):
-    from tests.bad_input.conftest import write_small_scene
+    from ..scenes import write_small_scene
 
     name = '<img src=x id=injected onerror="window.pwned=1">'
-    scene = write_small_scene(tmp_path, {"name": name, "description": "<b>bold</b> & co"})
+    scene = write_small_scene(tmp_path, name="scene.yaml",
+                              edit={"name": name, "description": "<b>bold</b> & co"})
     session = open_session(scene, out_root=tmp_path / "out")
     with serving(session, check_access("127.0.0.1", None)) as url:
         page, errors = _open(browser, url)
@@ -198,7 +192,10 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     _settled(page)
     assert "/display.jpg?v=" in page.get_attribute("#rvm", "src")
     page.check("#annotate")
-    page.wait_for_function("document.getElementById('rvm').src.includes('/annotated.jpg')")
+    # the new picture is in place once it has loaded (naturalWidth is 0 until then)
+    page.wait_for_function("(() => { const img = document.getElementById('rvm'); return "
+                           "img.src.includes('/annotated.jpg') && img.complete && "
+                           "img.naturalWidth > 0; })()")
     width = page.evaluate("document.getElementById('rvm').naturalWidth")
     assert width > session.ec_output.width  # the EC image plus its results panel
     page.click("#pin")

@@ -3,24 +3,21 @@ serves the page, refuses requests without the token, and stops on Ctrl-C."""
 
 from __future__ import annotations
 
-import os
 import re
 import signal
 import subprocess
-import sys
 import urllib.error
 import urllib.request
 from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
+from ..cli_runner import start_in_child
 
 
-def _start(args: list[str], cwd: Path) -> tuple[subprocess.Popen, list[str]]:
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen([sys.executable, "-m", "rvmsim", "console", *args], cwd=cwd,
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def _start(args: list[str], cwd: Path) -> tuple[subprocess.Popen[str], list[str]]:
+    proc = start_in_child(["console", *args], cwd=cwd, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE)
     assert proc.stdout is not None
     lines = [proc.stdout.readline()]
     while not lines[-1].startswith("saves go to") and lines[-1]:

@@ -40,10 +40,11 @@ def test_a_console_folder_leading_outside_is_refused(run_copy, tmp_path):
 
 
 def test_the_report_escapes_the_scene_strings(tmp_path):
-    from tests.bad_input.conftest import write_small_scene
+    from ..scenes import write_small_scene
 
-    scene = write_small_scene(tmp_path, {"name": "<script>alert(1)</script>",
-                                         "description": "a & <b>b</b>"})
+    scene = write_small_scene(tmp_path, name="scene.yaml",
+                              edit={"name": "<script>alert(1)</script>",
+                                    "description": "a & <b>b</b>"})
     s = open_session(scene, out_root=tmp_path / "out")
     text = write_setting_report(s, s.start, "r").read_text()
     assert "<script>" not in text and "&lt;script&gt;alert(1)&lt;/script&gt;" in text

@@ -73,14 +73,20 @@ def test_the_url_is_told_only_once_uvicorn_holds_ctrl_c(small_run):
         seen["handler"] = signal.getsignal(signal.SIGINT)
         signal.raise_signal(signal.SIGINT)  # Ctrl-C the instant the URL is shown
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        with pytest.raises(KeyboardInterrupt):
-            serve(session, check_access("127.0.0.1", None), 0, on_ready=ready,
-                  open_browser=False)
-        gc.collect()
+    # Ctrl-C as a program has it (a pytest-xdist worker ignores SIGINT)
+    outer = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            with pytest.raises(KeyboardInterrupt):
+                serve(session, check_access("127.0.0.1", None), 0, on_ready=ready,
+                      open_browser=False)
+            gc.collect()
+        given_back = signal.getsignal(signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, outer)
     assert str(seen["url"]).startswith("http://127.0.0.1:")
     assert seen["handler"] not in (signal.default_int_handler, signal.SIG_DFL), seen
     assert getattr(seen["handler"], "__self__", None).__class__.__name__ == "Server"
     assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], caught
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # given back
+    assert given_back is signal.default_int_handler  # given back

@@ -42,14 +42,14 @@ def test_a_scene_starts_at_the_papers_defaults(small_run, tmp_path):
 
 def test_missing_and_wrong_sources_are_one_line_errors(tmp_path):
     from rvmsim.tune import TuneRequest, tune
-    from tests.bad_input.conftest import write_small_scene
+    from ..scenes import write_small_scene
 
     with pytest.raises(RvmsimError, match="no such run folder or scene file"):
         open_session(tmp_path / "nope")
     (tmp_path / "empty").mkdir()
     with pytest.raises(RvmsimError, match="not a run folder"):
         open_session(tmp_path / "empty")
-    scene = write_small_scene(tmp_path)
+    scene = write_small_scene(tmp_path, name="scene.yaml")
     tune(TuneRequest((scene,), "random", budget=4), tmp_path / "run")
     shutil.move(scene, tmp_path / "elsewhere.yaml")
     with pytest.raises(RvmsimError, match="scene file .* not found"):
@@ -69,9 +69,9 @@ def test_a_run_tuned_with_a_bundled_criteria_set_opens(tmp_path):
     """A run records a bundled set by its name (``fmvss111-full``), not as a file: the
     console finds it as ``report`` does, with the run's 14 ECs."""
     from rvmsim.tune import TuneRequest, tune
-    from tests.bad_input.conftest import write_small_scene
+    from ..scenes import write_small_scene
 
-    scene = write_small_scene(tmp_path)
+    scene = write_small_scene(tmp_path, name="scene.yaml")
     tune(TuneRequest((scene,), "random", criteria_file="fmvss111-full", budget=4),
          tmp_path / "run")
     s = open_session(tmp_path / "run")

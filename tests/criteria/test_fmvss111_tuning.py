@@ -4,31 +4,22 @@ a modest budget), with the new ECs measured by the workers' fast evaluator."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 
 import pytest
-import yaml
 
 from rvmsim.criteria import EC_IDS
 
-from ..conftest import SCENES
+from ..cli_runner import run_in_process
+from ..scenes import write_small_scene
 
 
 def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):
-    doc = yaml.safe_load((SCENES / "vehicle_a.yaml").read_text())
-    doc["camera"]["image_size"] = [640, 480]
-    doc["camera"]["intrinsics"] = {"fx": 195.0, "fy": 195.0}
-    scene = tmp_path / "scene.yaml"
-    scene.write_text(yaml.safe_dump(doc, sort_keys=False))
-    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
-    res = subprocess.run(
-        [sys.executable, "-m", "rvmsim", "tune", str(scene), "--criteria", "fmvss111-full",
-         "--budget", "400", "--workers", "2", "--seed", "0", "--out", str(tmp_path / "run"),
-         "--no-progress"],
-        capture_output=True, text=True, timeout=900, env=env, cwd=tmp_path)
-    assert res.returncode == 0, res.stderr
+    scene = write_small_scene(tmp_path, "a", 0.5, name="scene.yaml")  # 640 × 480
+    env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
+    res = run_in_process(["tune", scene, "--criteria", "fmvss111-full", "--budget", "400",
+                          "--workers", "2", "--seed", "0", "--out", tmp_path / "run",
+                          "--no-progress"], env=env, cwd=tmp_path)
+    assert res.code == 0, res.stderr
     best = json.loads((tmp_path / "run" / "best" / "ec.json").read_text())
     ecs = {e["id"]: e for e in best["ecs"]}
     assert tuple(ecs) == EC_IDS + ("1-5", "1-6", "6-1")
@@ -38,10 +29,9 @@ def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):
     # the run records the set by name: the report finds the same criteria again
     assert json.loads((tmp_path / "run" / "run.json").read_text())["criteria_file"] == \
         "fmvss111-full"
-    rep = subprocess.run([sys.executable, "-m", "rvmsim", "report", str(tmp_path / "run"),
-                          "--out", str(tmp_path / "report.html")],
-                         capture_output=True, text=True, timeout=900, env=env, cwd=tmp_path)
-    assert rep.returncode == 0, rep.stderr
+    rep = run_in_process(["report", tmp_path / "run", "--out", tmp_path / "report.html"],
+                         env=env, cwd=tmp_path)
+    assert rep.code == 0, rep.stderr
     # the fast evaluator (in the workers) stored what the whole-image evaluation gives
     from rvmsim.runs import RunStore
 

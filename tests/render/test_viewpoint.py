@@ -12,7 +12,7 @@ from rvmsim.render import CubeView, cached_cube, cube_key, render_cubes
 from rvmsim.robust import body_pose, cover_for, draw_samples, variation_from_scene
 from rvmsim.robust.images import viewpoint_groups
 
-from ..robust.conftest import small_scene
+from ..scenes import load_small_scene
 
 VARIATION = {"mount": {"x_mm": {"uniform": {"half_width": 5}},
                        "yaw_deg": {"uniform": {"half_width": 1.0}}},
@@ -43,7 +43,7 @@ def empty_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_render_cubes_stores_what_cached_cube_renders(empty_cache: Path, workers: int):
-    scene = small_scene(0.25, variation=VARIATION)
+    scene = load_small_scene("a", 0.25, variation=VARIATION)
     views = _views(scene)
     assert len(views) == 4  # 2 x-levels x 2 load states
     runner = LocalExecutor(workers) if workers > 1 else None
@@ -70,7 +70,7 @@ def test_render_cubes_stores_what_cached_cube_renders(empty_cache: Path, workers
 
 
 def test_colour_is_rendered_when_asked_for_after_labels(empty_cache: Path):
-    scene = small_scene(0.25, variation=VARIATION)
+    scene = load_small_scene("a", 0.25, variation=VARIATION)
     v = _views(scene)[0]
     assert render_cubes(scene, [v]) == 1
     assert render_cubes(scene, [v], color=True) == 1  # labels only were stored
@@ -83,6 +83,6 @@ def test_an_unwritable_cache_only_warns(tmp_path: Path, monkeypatch: pytest.Monk
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     monkeypatch.setenv("RVMSIM_CACHE", str(blocker))
-    scene = small_scene(0.25, variation=VARIATION)
+    scene = load_small_scene("a", 0.25, variation=VARIATION)
     with pytest.warns(RuntimeWarning, match="cannot store the cube"):
         assert render_cubes(scene, _views(scene)[:1]) == 1

@@ -9,7 +9,6 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from html.parser import HTMLParser
 from urllib.parse import unquote
@@ -20,6 +19,7 @@ import pytest
 from rvmsim.errors import RvmsimError
 from rvmsim.report import EC_GROUP_NAMES, SECTION_IDS, write_batch_report, write_report
 
+from ..cli_runner import run_in_process
 from ..conftest import SCENES
 
 EVIL_NAME = 'Evil <script>alert(1)</script> & "Co"'
@@ -277,23 +277,22 @@ def test_report_renders_in_headless_chromium(runs, tmp_path):
 
 
 def _rvmsim(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "rvmsim", *args], capture_output=True,
-                          text=True, timeout=600, env=env)
+    return run_in_process(args, env=env)
 
 
 def test_cli_report_run_batch_and_bad_path(runs, tmp_path):
-    env = {**os.environ, "RVMSIM_CACHE": str(runs["root"] / "cache")}
+    env = {"RVMSIM_CACHE": str(runs["root"] / "cache")}
     out = tmp_path / "r.html"
     res = _rvmsim("report", str(runs["runs_dir"] / "b"), "--out", str(out), env=env)
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     assert str(out) in res.stdout and out.is_file()
     _assert_self_contained(out.read_text(), _parse(out.read_text()))
     res = _rvmsim("report", str(runs["runs_dir"]), "--out", str(tmp_path / "i.html"), env=env)
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     assert (tmp_path / "i.html").is_file() and "i.html" in res.stdout
     for bad in (tmp_path / "nothing", tmp_path):
         res = _rvmsim("report", str(bad), env=env)
-        assert res.returncode == 2
+        assert res.code == 2
         lines = res.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("rvmsim: error:") and str(bad) in lines[0]
         assert "Traceback" not in res.stderr

@@ -15,7 +15,8 @@ from rvmsim.robust import (LoadState, MountSample, body_pose, draw_samples, samp
 from rvmsim.scene import checker_corners
 from rvmsim.validate.landmarks import spacing_px, usable_corners
 
-from .conftest import ANGLES_ONLY, small_scene
+from ..scenes import load_small_scene
+from .conftest import ANGLES_ONLY
 
 
 @pytest.fixture(scope="module")
@@ -24,8 +25,8 @@ def fine_scene():
     its true place, in a re-fold as in a full render) and a board of large squares (its
     checker corners are the landmarks)."""
     board = {"square_size": 0.3, "squares": [4, 4], "position": [0.0, 0.0, 1.8]}
-    return small_scene(0.5, variation=ANGLES_ONLY, render={"oversample": 4.0},
-                       site={"board": board})
+    return load_small_scene("a", 0.5, variation=ANGLES_ONLY,
+                            edit={"render": {"oversample": 4.0}, "test_site.board": board})
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +98,7 @@ def test_label_centroids_match_a_full_render(turned):
 
 
 def test_the_unturned_sample_is_the_scene_render():
-    sc = small_scene(0.25, variation=ANGLES_ONLY)
+    sc = load_small_scene("a", 0.25, variation=ANGLES_ONLY)
     nominal = MountSample(0, (0.0,) * 6, (0.0, 0.0, 0.0), LoadState("curb"))
     im = sample_images(sc, [nominal])[0]
     full = render_fisheye(sc)
@@ -108,7 +109,7 @@ def test_the_unturned_sample_is_the_scene_render():
 def test_a_moved_camera_and_a_lowered_body_are_rendered_from_their_viewpoint():
     """A sample 4 mm to the side under a load that lowers the body 40 mm (no pitch) is the
     render of a scene whose camera and vehicle parts are moved so."""
-    sc = small_scene(0.25)
+    sc = load_small_scene("a", 0.25, variation=None)
     load = LoadState("full", height_mm=-40.0)
     s = MountSample(0, (4.0, 0.0, 0.0, 0.0, 0.0, 0.0), (4.0, 0.0, 0.0), load)
     im = sample_images(sc, [s])[0]
@@ -127,7 +128,7 @@ def test_a_moved_camera_and_a_lowered_body_are_rendered_from_their_viewpoint():
 
 
 def test_body_pose_pitches_about_the_camera_and_lowers_it():
-    sc = small_scene(0.25)
+    sc = load_small_scene("a", 0.25, variation=None)
     pose = body_pose(sc, LoadState("full", height_mm=-50.0, pitch_deg=1.0))
     assert pose is not None
     p0 = np.array([*sc.camera.mount.position, 1.0])
@@ -143,7 +144,7 @@ def test_body_pose_pitches_about_the_camera_and_lowers_it():
 
 
 def test_a_rotation_beyond_the_cover_is_refused():
-    sc = small_scene(0.25)
+    sc = load_small_scene("a", 0.25, variation=None)
     cam = sc.fisheye_camera()
     cover = cover_layout(cam, [], oversample=1.5)
     rays = CameraRays.of(cam)
@@ -156,7 +157,7 @@ def test_a_rotation_beyond_the_cover_is_refused():
 
 def test_viewpoint_cubes_come_from_the_cache(tmp_path, monkeypatch):
     monkeypatch.setenv("RVMSIM_CACHE", str(tmp_path))
-    sc = small_scene(0.25, variation=ANGLES_ONLY)
+    sc = load_small_scene("a", 0.25, variation=ANGLES_ONLY)
     samples = draw_samples(variation_from_scene(sc), 4, seed=0)
     first = sample_images(sc, samples)
     entries = list(tmp_path.iterdir())
@@ -170,7 +171,7 @@ def test_viewpoint_cubes_come_from_the_cache(tmp_path, monkeypatch):
 
 def test_a_labels_only_cube_is_rendered_again_for_colour(tmp_path, monkeypatch):
     monkeypatch.setenv("RVMSIM_CACHE", str(tmp_path))
-    sc = small_scene(0.25, variation=ANGLES_ONLY)
+    sc = load_small_scene("a", 0.25, variation=ANGLES_ONLY)
     samples = draw_samples(variation_from_scene(sc), 2, seed=0)
     labels_only = sample_images(sc, samples, color=False)
     (entry,) = tmp_path.iterdir()
@@ -189,7 +190,7 @@ def test_rvm_labels_of_samples_equal_the_isp_on_their_fisheye_labels():
     from rvmsim.pipeline import rvm_pixels
     from rvmsim.robust import refolder, sample_rvm_labels
 
-    sc = small_scene(0.25, variation={**ANGLES_ONLY, "load_states": [
+    sc = load_small_scene("a", 0.25, variation={**ANGLES_ONLY, "load_states": [
         {"name": "curb"}, {"name": "full", "height_mm": -40, "pitch_deg": 1.0}]})
     samples = draw_samples(variation_from_scene(sc), 6, seed=5)
     assert len({s.load.name for s in samples}) == 2

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from rvmsim.criteria import CandidateEvaluator, Criteria, default_criteria
 from rvmsim.isp import IspParams, OutputSpec
@@ -16,8 +15,9 @@ from rvmsim.render import render_fisheye
 from rvmsim.report import write_robustness_outputs
 from rvmsim.robust import RobustnessSettings, robustness
 
-from ..bad_input.harness import run_rvmsim
-from .conftest import ANGLES_ONLY, ROOT, small_scene
+from ..cli_runner import run_in_process
+from ..scenes import load_small_scene, write_small_scene
+from .conftest import ANGLES_ONLY, ROOT
 
 OUTPUT = OutputSpec(640, 360)
 
@@ -33,7 +33,7 @@ def settings():
     """Two settings of the small scene found on its nominal render by scanning the vertical
     shift: EC 2-1 (bumper centre height, [4, 8] %) in the middle of its range, and just
     inside its upper edge."""
-    sc = small_scene(0.25, variation=ANGLES_ONLY)
+    sc = load_small_scene("a", 0.25, variation=ANGLES_ONLY)
     crit = _only("2-1")
     ev = CandidateEvaluator(render_fisheye(sc).labels, OUTPUT, crit)
     base = IspParams().for_input_scale(0.25)
@@ -89,12 +89,7 @@ def test_the_same_seed_gives_the_same_result(settings):
 
 
 def _cli_case(folder: Path) -> None:
-    doc = yaml.safe_load((ROOT / "scenes" / "vehicle_a.yaml").read_text())
-    doc["camera"]["image_size"] = [320, 240]
-    for k in ("fx", "fy"):
-        doc["camera"]["intrinsics"][k] /= 4
-    doc["variation"] = ANGLES_ONLY
-    (folder / "scene.yaml").write_text(yaml.safe_dump(doc))
+    write_small_scene(folder, "a", name="scene.yaml", variation=ANGLES_ONLY)
     (folder / "params.yaml").write_text((ROOT / "params" / "paper_defaults.yaml").read_text())
 
 
@@ -104,10 +99,10 @@ def test_cli_exit_status_follows_min_yield(tmp_path: Path):
     _cli_case(tmp_path)
     args = ["robustness", "scene.yaml", "--params", "params.yaml", "--samples", "8",
             "--scale-samples", "4", "--no-progress"]
-    low = run_rvmsim([*args, "--out", "a", "--min-yield", "0.5"], cwd=tmp_path)
+    low = run_in_process([*args, "--out", "a", "--min-yield", "0.5"], cwd=tmp_path)
     assert low.code == 1, low.stderr
     assert "yield 0.0 %" in low.stdout
-    ok = run_rvmsim([*args, "--out", "b", "--min-yield", "0"], cwd=tmp_path)
+    ok = run_in_process([*args, "--out", "b", "--min-yield", "0"], cwd=tmp_path)
     assert ok.code == 0, ok.stderr
     for out in ("a", "b"):
         assert (tmp_path / out / "robustness.html").is_file()
@@ -123,7 +118,7 @@ WITH_POSITIONS = {"mount": {**ANGLES_ONLY["mount"], "x_mm": {"uniform": {"half_w
 def _runner_case(settings, cache: Path, monkeypatch: pytest.MonkeyPatch, runner):
     _, crit, mid, _ = settings
     monkeypatch.setenv("RVMSIM_CACHE", str(cache))
-    sc = small_scene(0.25, variation=WITH_POSITIONS)
+    sc = load_small_scene("a", 0.25, variation=WITH_POSITIONS)
     return robustness(sc, mid, RobustnessSettings(OUTPUT, crit, samples=16, seed=2,
                                                   scales=(0.5, 1.0, 2.0), scale_samples=8),
                       runner=runner)
@@ -141,11 +136,18 @@ def _same_evaluation(a, b) -> None:
     assert abs(a.estimate.n_pass - b.estimate.n_pass) <= 1
 
 
-def test_viewpoints_render_up_front_on_local_processes(settings, tmp_path: Path,
+@pytest.fixture(scope="module")
+def here(settings, tmp_path_factory: pytest.TempPathFactory):
+    """The robustness of the small scene rendered as needed, in this process (a cache of
+    its own): what every runner must give."""
+    with pytest.MonkeyPatch.context() as mp:
+        return _runner_case(settings, tmp_path_factory.mktemp("here"), mp, None)
+
+
+def test_viewpoints_render_up_front_on_local_processes(settings, here, tmp_path: Path,
                                                        monkeypatch: pytest.MonkeyPatch):
     from rvmsim.batch import LocalExecutor
 
-    here = _runner_case(settings, tmp_path / "a", monkeypatch, None)
     with LocalExecutor(2) as ex:
         spread = _runner_case(settings, tmp_path / "b", monkeypatch, ex)
     # 1x: 2 x-levels x 2 loads; 0.5x: one level (position_levels_at) x 2; 2x: 2 x 2
@@ -158,12 +160,11 @@ def test_viewpoints_render_up_front_on_local_processes(settings, tmp_path: Path,
     np.testing.assert_array_equal(again.evaluation.values, spread.evaluation.values)
 
 
-def test_viewpoints_render_on_a_dask_cluster(settings, tmp_path: Path,
+def test_viewpoints_render_on_a_dask_cluster(settings, here, tmp_path: Path,
                                              monkeypatch: pytest.MonkeyPatch):
     distributed = pytest.importorskip("distributed")
     from rvmsim.batch import DaskExecutor
 
-    here = _runner_case(settings, tmp_path / "a", monkeypatch, None)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   host="127.0.0.1", dashboard_address=":0") as c, \
             distributed.Client(c) as client:

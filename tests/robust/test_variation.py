@@ -10,7 +10,8 @@ from rvmsim.errors import SceneError, VariationError
 from rvmsim.robust import load_variation, variation_from_scene
 from rvmsim.scene import load_scene
 
-from .conftest import ROOT, small_scene
+from ..scenes import load_small_scene
+from .conftest import ROOT
 
 GOOD = """\
 mount:
@@ -45,7 +46,7 @@ def test_the_bundled_scenes_have_realistic_variation(letter):
 
 
 def test_a_scene_without_a_section_varies_nothing():
-    v = variation_from_scene(small_scene())
+    v = variation_from_scene(load_small_scene("a", variation=None))
     assert not any(a.varies for a in v.axes) and [s.name for s in v.load_states] == ["nominal"]
 
 

@@ -7,8 +7,6 @@ from __future__ import annotations
 import itertools
 import json
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -18,7 +16,8 @@ from rvmsim.scene import load_scene
 from rvmsim.tune import TuneRequest, TuningConfig, tune
 from rvmsim.runs import RunStore, diverse_candidates, rank_params_text, status_lines
 
-from ..tune.common import small_scene_file
+from ..cli_runner import run_in_process
+from ..scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 10, "batch": 50,
           "diverse": {"min_distance": 0.08}}
@@ -27,7 +26,7 @@ CONFIG = {"output": {"size": [320, 180]}, "top_m": 10, "batch": 50,
 @pytest.fixture(scope="module")
 def run(cache, tmp_path_factory):
     folder = tmp_path_factory.mktemp("diverse")
-    scene = small_scene_file("a", folder)
+    scene = write_small_scene(folder, "a")
     out = folder / "run"
     tune(TuneRequest((scene,), config=TuningConfig.model_validate(CONFIG), budget=300), out)
     return out
@@ -114,18 +113,15 @@ def test_top_files_status_select_and_report_offer_the_same_list(run, tmp_path):
     assert all(c.differs in ln for c, ln in zip(cands[1:], ranks[1:]))
     # select --rank K (the CLI) writes rank K's file
     k = min(3, len(cands))
-    sel = subprocess.run([sys.executable, "-m", "rvmsim", "select", str(run), "--rank", str(k),
-                          "--out", str(tmp_path / "k.yaml")], capture_output=True, text=True,
-                         timeout=300)
-    assert sel.returncode == 0, sel.stderr
+    sel = run_in_process(["select", run, "--rank", k, "--out", tmp_path / "k.yaml"])
+    assert sel.code == 0, sel.stderr
     written = (tmp_path / "k.yaml").read_text(encoding="utf-8").splitlines()
     assert written[0].startswith(f"# rank {k}: ")  # the top file names the vehicle too
     assert written[1:] == (run / "top" / f"rank_{k}.yaml").read_text(
         encoding="utf-8").splitlines()[1:]
     assert rank_params_text(run, k) == (tmp_path / "k.yaml").read_text(encoding="utf-8")
-    st = subprocess.run([sys.executable, "-m", "rvmsim", "status", str(run), "--top", "2",
-                         "--by-score"], capture_output=True, text=True, timeout=300)
-    assert st.returncode == 0 and st.stdout.splitlines() == status_lines(run, 2, by_score=True)
+    st = run_in_process(["status", run, "--top", "2", "--by-score"])
+    assert st.code == 0 and st.stdout.splitlines() == status_lines(run, 2, by_score=True)
     # the report's gallery: the same candidates, each card with its differs line
     page = write_report(run, tmp_path / "r.html").read_text(encoding="utf-8")
     gallery = page[page.index('id="gallery"'):]
@@ -142,7 +138,7 @@ def test_the_diverse_section_of_the_config_sets_m_and_the_distance(run, tmp_path
                                        "diverse": {"m": 4, "min_distance": 0.2}})
     assert cfg.diverse_m == 4 and TuningConfig().diverse_m == 10
     small = tmp_path / "small"
-    tune(TuneRequest((small_scene_file("a", tmp_path),), "random", cfg, seed=1, budget=60),
+    tune(TuneRequest((write_small_scene(tmp_path, "a"),), "random", cfg, seed=1, budget=60),
          small)
     cands = diverse_candidates(small)
     assert 2 <= len(cands) <= 4
@@ -152,9 +148,8 @@ def test_the_diverse_section_of_the_config_sets_m_and_the_distance(run, tmp_path
     for a, b in itertools.combinations(cands, 2):
         assert np.linalg.norm((space.vector(a.params) - space.vector(b.params)) / span) >= 0.2
     # M and the distance given on the command line replace the run's
-    five = subprocess.run([sys.executable, "-m", "rvmsim", "status", str(run), "--top", "5",
-                           "--min-distance", "0.2"], capture_output=True, text=True, timeout=300)
-    assert five.returncode == 0, five.stderr
+    five = run_in_process(["status", run, "--top", "5", "--min-distance", "0.2"])
+    assert five.code == 0, five.stderr
     assert five.stdout.splitlines() == status_lines(run, 5, min_distance=0.2)
     assert len([ln for ln in five.stdout.splitlines() if ln.startswith("  #")]) == \
         len(diverse_candidates(run, 5, 0.2))

@@ -4,8 +4,6 @@ rvmsim 0.1 (settings in run.json, free-text status), and refusals that say what 
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
@@ -13,6 +11,7 @@ from rvmsim.errors import RvmsimError
 from rvmsim.tune import resume
 from rvmsim.runs import diverse_candidates, find_runs, is_run_folder, rank_params_text, status_lines
 
+from ..cli_runner import run_in_process
 from ..tune.common import make_legacy_run
 
 
@@ -62,9 +61,8 @@ def test_old_run_folders_are_read_by_status_select_and_report(clean, tmp_path):
     assert rank_params_text(old, 2) == rank_params_text(clean, 2)
     assert "Vehicle A" in write_report(old).read_text(encoding="utf-8")
     # the CLI reads it too
-    st = subprocess.run([sys.executable, "-m", "rvmsim", "status", str(old), "--top", "2"],
-                        capture_output=True, text=True, timeout=300)
-    assert st.returncode == 0 and st.stdout.splitlines() == status_lines(old, 2)
+    st = run_in_process(["status", old, "--top", "2"])
+    assert st.code == 0 and st.stdout.splitlines() == status_lines(old, 2)
     # the report follows the scene path run.json records (as it always did)
     info = json.loads((old / "run.json").read_text())
     info["scene"] = str(tmp_path / "gone.yaml")
@@ -91,7 +89,6 @@ def test_old_runs_that_cannot_be_read_are_refused_with_what_to_do(clean, tmp_pat
                                           "run") as err:
         resume(broken)
     assert "\n" not in str(err.value)
-    sel = subprocess.run([sys.executable, "-m", "rvmsim", "select", str(bare)],
-                         capture_output=True, text=True, timeout=300)
-    assert sel.returncode == 2 and len(sel.stderr.strip().splitlines()) == 1
+    sel = run_in_process(["select", bare])
+    assert sel.code == 2 and len(sel.stderr.strip().splitlines()) == 1
     assert "start a new run" in sel.stderr and "Traceback" not in sel.stderr

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +10,7 @@ import yaml
 from rvmsim.errors import SceneError
 from rvmsim.scene import MeshPart, load_scene, mesh_parts, scene_from_dict
 
+from ..cli_runner import Outcome, run_in_process
 from ..conftest import SCENES, bundled_scene
 from .conftest import minimal_scene as _minimal
 
@@ -61,10 +60,8 @@ def test_bad_scene_library_error(tmp_path, case, data, key, words):
     assert "\n" not in str(err)
 
 
-def _run_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "rvmsim", *args], capture_output=True, text=True, timeout=120
-    )
+def _run_cli(*args: str) -> Outcome:
+    return run_in_process(args)
 
 
 @pytest.mark.parametrize(
@@ -76,7 +73,7 @@ def _run_cli(*args: str) -> subprocess.CompletedProcess:
 def test_bad_scene_cli_one_line_exit_2(tmp_path, case, data, key, words):
     path = _write(tmp_path, data)
     res = _run_cli("render", str(path), "--out", str(tmp_path / "out"), "--no-progress")
-    assert res.returncode == 2
+    assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1, res.stderr
     assert "Traceback" not in res.stderr
@@ -98,7 +95,7 @@ def test_error_names_the_line(tmp_path):
 
 def test_missing_scene_file_cli(tmp_path):
     res = _run_cli("render", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "o"))
-    assert res.returncode == 2 and "nope.yaml: file not found" in res.stderr
+    assert res.code == 2 and "nope.yaml: file not found" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
 
 

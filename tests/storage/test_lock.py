@@ -21,41 +21,43 @@ from rvmsim.errors import RvmsimError
 from rvmsim.runs import RunStatus, RunStore, run_lock, status_lines
 from rvmsim.storage import FolderLock, Writer
 
-from ..bad_input.conftest import SMALL_SCENE, write_small_scene
 from ..bad_input.harness import folder_digest
+from ..cli_runner import Outcome, run_in_process, start_in_child
+from ..scenes import write_small_scene
 
+SMALL_SCENE = "scene.yaml"
 CONFIG = {"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,
           "output": {"size": [160, 90]}}
-#: Long enough (tens of seconds on a loaded machine) for a second process to start meanwhile.
-BUDGET = 16000
+#: Long enough for the other writers to be tried meanwhile (they run in this process, within
+#: a second) and for a kill after 400 trials to fall mid-run.
+BUDGET = 4000
 
 
 @pytest.fixture(scope="module")
 def work(tmp_path_factory) -> Path:
     """A folder with the small scene, a tuning config and a render cache of its own."""
     folder = tmp_path_factory.mktemp("lock")
-    write_small_scene(folder)
+    write_small_scene(folder, name=SMALL_SCENE)
     (folder / "tune.yaml").write_text(yaml.safe_dump(CONFIG))
     (folder / "cache").mkdir()
     return folder
 
 
 def _env(work: Path) -> dict[str, str]:
-    return {**os.environ, "RVMSIM_CACHE": str(work / "cache"), "PYOPENGL_PLATFORM": "egl"}
+    return {"RVMSIM_CACHE": str(work / "cache")}
 
 
 def _tune_args(out: str, *extra: str) -> list[str]:
-    return [sys.executable, "-m", "rvmsim", "tune", SMALL_SCENE, "--out", out, "--config",
-            "tune.yaml", "--strategy", "random", "--budget", str(BUDGET), "--seed", "5",
-            "--workers", "1", "--no-progress", *extra]
+    return ["tune", SMALL_SCENE, "--out", out, "--config", "tune.yaml", "--strategy", "random",
+            "--budget", str(BUDGET), "--seed", "5", "--workers", "1", "--no-progress", *extra]
 
 
-def _rvmsim(work: Path, *args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "rvmsim", *args], cwd=work, env=_env(work),
-                          capture_output=True, text=True, timeout=timeout)
+def _rvmsim(work: Path, *args: str) -> Outcome:
+    """A command in this process (the writer it meets is another process)."""
+    return run_in_process(args, cwd=work, env=_env(work))
 
 
-def _wait_for_trials(db: Path, n: int, proc: subprocess.Popen) -> int:
+def _wait_for_trials(db: Path, n: int, proc: subprocess.Popen[str]) -> int:
     deadline = time.time() + 300
     while time.time() < deadline and proc.poll() is None:
         if db.exists():
@@ -81,19 +83,18 @@ def _result(run: Path):
 
 @pytest.fixture(scope="module")
 def undisturbed(work) -> Path:
-    res = subprocess.run(_tune_args("undisturbed"), cwd=work, env=_env(work),
-                         capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0, res.stderr
+    res = _rvmsim(work, *_tune_args("undisturbed"))
+    assert res.code == 0, res.stderr
     return work / "undisturbed"
 
 
 def test_a_second_writer_is_refused_and_the_first_run_is_undisturbed(work, undisturbed):
-    first = subprocess.Popen(_tune_args("busy"), cwd=work, env=_env(work),
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first = start_in_child(_tune_args("busy"), cwd=work, env=_env(work),
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
         _wait_for_trials(work / "busy" / "run.sqlite", 40, first)
-        second = [_rvmsim(work, *_tune_args("busy")[3:]),
-                  _rvmsim(work, *_tune_args("busy", "--force")[3:]),
+        second = [_rvmsim(work, *_tune_args("busy")),
+                  _rvmsim(work, *_tune_args("busy", "--force")),
                   _rvmsim(work, "tune", "--resume", "busy", "--workers", "1", "--no-progress")]
         status = _rvmsim(work, "status", "busy")
         assert first.poll() is None, "the first run ended before the others were tried"
@@ -102,17 +103,16 @@ def test_a_second_writer_is_refused_and_the_first_run_is_undisturbed(work, undis
     assert first.returncode == 0, err
     for res in second:
         lines = res.stderr.strip().splitlines()
-        assert res.returncode == 2 and len(lines) == 1, res.stderr
+        assert res.code == 2 and len(lines) == 1, res.stderr
         assert f"busy is in use by process {first.pid}" in lines[0]
-    assert status.returncode == 0 and ": running, strategy random" in status.stdout
+    assert status.code == 0 and ": running, strategy random" in status.stdout
     assert _result(work / "busy") == _result(undisturbed)
     assert not (work / "busy" / "run.pid").exists()  # the writer is gone: nothing recorded
     assert (work / "busy" / "top" / "rank_5.yaml").is_file()
 
 
 def test_a_killed_writer_leaves_a_resumable_run_whose_lock_resume_takes_over(work, undisturbed):
-    proc = subprocess.Popen(_tune_args("killed"), cwd=work, env=_env(work),
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = start_in_child(_tune_args("killed"), cwd=work, env=_env(work))
     _wait_for_trials(work / "killed" / "run.sqlite", 400, proc)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
@@ -121,11 +121,11 @@ def test_a_killed_writer_leaves_a_resumable_run_whose_lock_resume_takes_over(wor
     assert Writer.parse((run / "run.pid").read_text()).pid == proc.pid
     assert _result(run)[2].status is RunStatus.RUNNING
     status = _rvmsim(work, "status", "killed")
-    assert status.returncode == 0, status.stderr
+    assert status.code == 0, status.stderr
     assert "killed: interrupted (resumable), strategy random" in status.stdout
     assert run_lock(run).writer() is None
     resumed = _rvmsim(work, "tune", "--resume", "killed", "--workers", "1", "--no-progress")
-    assert resumed.returncode == 0, resumed.stderr
+    assert resumed.code == 0, resumed.stderr
     assert "replayed" in resumed.stdout
     assert _result(run) == _result(undisturbed)
     assert _result(run)[2].status is RunStatus.DONE
@@ -139,12 +139,12 @@ def test_force_with_a_bad_scene_keeps_the_old_run(work, undisturbed, tmp_path):
     before = folder_digest(run)
     (work / "bad.yaml").write_text("camera: {image_size: [320, 240]\n")
     res = _rvmsim(work, "tune", "bad.yaml", "--out", str(run), "--force", "--no-progress")
-    assert res.returncode == 2 and "bad.yaml" in res.stderr, res.stderr
+    assert res.code == 2 and "bad.yaml" in res.stderr, res.stderr
     assert folder_digest(run) == before
     # and with good inputs --force does replace it: a new run, none of the old one's files
     res = _rvmsim(work, "tune", SMALL_SCENE, "--out", str(run), "--force", "--strategy",
                   "random", "--budget", "30", "--workers", "1", "--no-progress")
-    assert res.returncode == 0, res.stderr
+    assert res.code == 0, res.stderr
     assert _result(run)[1] == 30
     assert {p.name for p in (run / "top").iterdir()} == \
         {f"rank_{k}.yaml" for k in range(1, 11)} | {"candidates.json"}  # the diverse top-M

@@ -81,30 +81,3 @@ def make_legacy_run(run: Path, dest: Path, *, status: str = "done", keep: int | 
                                     "budget", "criteria_file")}
         (dest / "run.json").write_text(json.dumps({**doc, "config": config}, indent=2))
     return dest
-
-
-def small_scene_file(letter: str, folder: Path, edit: dict | None = None) -> Path:
-    """Bundled vehicle ``letter`` at a quarter of its sensor (320×240 px; quick to render) as
-    ``folder/vehicle_<letter>.yaml``: intrinsics given as fx/fy (and cx/cy) are divided by 4,
-    a pixel pitch multiplied by 4.  ``edit``: dotted keys set to values."""
-    import yaml
-
-    from ..conftest import SCENES
-
-    doc = yaml.safe_load((SCENES / f"vehicle_{letter}.yaml").read_text())
-    doc["camera"]["image_size"] = [320, 240]
-    intr = doc["camera"]["intrinsics"]
-    for k in ("fx", "fy", "cx", "cy"):
-        if k in intr:
-            intr[k] = float(intr[k]) / 4
-    if "pixel_pitch_um" in intr:
-        intr["pixel_pitch_um"] = float(intr["pixel_pitch_um"]) * 4
-    for key, value in (edit or {}).items():
-        node = doc
-        *path, last = key.split(".")
-        for p in path:
-            node = node[p]
-        node[last] = value
-    out = folder / f"vehicle_{letter}.yaml"
-    out.write_text(yaml.safe_dump(doc, sort_keys=False))
-    return out

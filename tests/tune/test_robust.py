@@ -8,8 +8,6 @@ import json
 import os
 import signal
 import sqlite3
-import subprocess
-import sys
 import time
 
 import numpy as np
@@ -19,7 +17,8 @@ from rvmsim.scene import load_scene
 from rvmsim.tune import TuneRequest, TuningConfig, tune
 from rvmsim.runs import RunStore
 
-from ..bad_input.conftest import write_small_scene
+from ..cli_runner import run_in_process, start_in_child
+from ..scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 3}
 
@@ -29,7 +28,7 @@ def small(tmp_path_factory):
     folder = tmp_path_factory.mktemp("robust")
     old = os.environ.get("RVMSIM_CACHE")
     os.environ["RVMSIM_CACHE"] = str(folder / "cache")
-    yield write_small_scene(folder)
+    yield write_small_scene(folder, name="scene.yaml")
     if old is None:
         os.environ.pop("RVMSIM_CACHE", None)
     else:
@@ -97,24 +96,20 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
 
 
 def test_a_robust_run_resumes_after_sigkill_to_the_unbroken_result(small, tmp_path):
-    env = {**os.environ}
+    env = {"RVMSIM_CACHE": os.environ["RVMSIM_CACHE"]}
     cfg = tmp_path / "tune.yaml"
-    cfg.write_text(json.dumps({**CONFIG, "cmaes_solved": {"budget": 2000}}))
+    cfg.write_text(json.dumps({**CONFIG, "cmaes_solved": {"budget": 700}}))
 
     def cmd(out, *extra):
         if extra:
-            return [sys.executable, "-m", "rvmsim", "tune", "--no-progress", "--workers", "1",
-                    *extra]
-        return [sys.executable, "-m", "rvmsim", "tune", str(small), "--robust", "--samples",
-                "4", "--config", str(cfg), "--out", str(out), "--workers", "1",
-                "--no-progress"]
+            return ["tune", "--no-progress", "--workers", "1", *extra]
+        return ["tune", small, "--robust", "--samples", "4", "--config", cfg, "--out", out,
+                "--workers", "1", "--no-progress"]
 
-    clean = subprocess.run(cmd(tmp_path / "clean"), env=env, capture_output=True, text=True,
-                           timeout=900)
-    assert clean.returncode == 0, clean.stderr
+    clean = run_in_process(cmd(tmp_path / "clean"), env=env)
+    assert clean.code == 0, clean.stderr
     run = tmp_path / "killed"
-    proc = subprocess.Popen(cmd(run), env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = start_in_child(cmd(run), env=env)
     db = run / "run.sqlite"
     deadline = time.time() + 600
     while time.time() < deadline:
@@ -128,10 +123,9 @@ def test_a_robust_run_resumes_after_sigkill_to_the_unbroken_result(small, tmp_pa
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     stored = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-    assert 150 <= stored < 2000
-    resumed = subprocess.run(cmd(None, "--resume", str(run)), env=env, capture_output=True,
-                             text=True, timeout=900)
-    assert resumed.returncode == 0, resumed.stderr
+    assert 150 <= stored < 700
+    resumed = run_in_process(cmd(None, "--resume", run), env=env)
+    assert resumed.code == 0, resumed.stderr
 
     def top(path):
         s = RunStore(path / "run.sqlite", readonly=True)
@@ -151,7 +145,7 @@ def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, 
 
     sub = tmp_path / "variant"
     sub.mkdir()
-    other = write_small_scene(sub, {"vehicle.bumper.top": 0.8})
+    other = write_small_scene(sub, edit={"vehicle.bumper.top": 0.8})
     shutil.copy(other, tmp_path / "b.yaml")
     cfg = TuningConfig.model_validate(CONFIG)
     run = tmp_path / "both"

@@ -6,11 +6,9 @@ to do."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import sqlite3
 import subprocess
-import sys
 import time
 
 import pytest
@@ -21,6 +19,7 @@ from rvmsim.tune import (STRATEGIES, Strategy, TuneRequest, TuningConfig, regist
                          resume, tune)
 from rvmsim.runs import RunStatus, RunStore, StopReason, run_settings, status_lines
 
+from ..cli_runner import run_in_process, start_in_child
 from ..conftest import SCENES
 from .common import make_legacy_run
 from .conftest import CONFIG, top_of
@@ -108,27 +107,24 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
     """A real `rvmsim tune` subprocess is killed with SIGKILL mid-run, resumed, and ends with
     exactly the top-M of an uninterrupted run (the paper's search, and the default one,
     whose stored trials hold solved parameters)."""
-    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({
         "tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,
-        "output": {"size": [320, 180]}, "grid_random": {"top_n": 2, "trials": 3000},
-        "cmaes_solved": {"budget": 3000},
+        "output": {"size": [320, 180]}, "grid_random": {"top_n": 2, "trials": 1000},
+        "cmaes_solved": {"budget": 1000},
     }))
     scene = str(SCENES / "vehicle_d.yaml")
 
     def tune(out, *extra):
-        return [sys.executable, "-m", "rvmsim", "tune", *extra, "--no-progress",
-                "--workers", "1", *([scene, "--out", str(out), "--config", str(cfg),
-                                     "--strategy", strategy]
-                                    if "--resume" not in extra else [])]
+        return ["tune", *extra, "--no-progress", "--workers", "1",
+                *([scene, "--out", out, "--config", cfg, "--strategy", strategy]
+                  if "--resume" not in extra else [])]
 
-    clean = subprocess.run(tune(tmp_path / "clean"), env=env, capture_output=True, text=True,
-                           timeout=600)
-    assert clean.returncode == 0, clean.stderr
+    clean = run_in_process(tune(tmp_path / "clean"), env=env)
+    assert clean.code == 0, clean.stderr
     run = tmp_path / "killed"
-    proc = subprocess.Popen(tune(run), env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = start_in_child(tune(run), env=env)
     db = run / "run.sqlite"
     deadline = time.time() + 300
     count = 0
@@ -144,13 +140,12 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     stored = sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0]
-    total = 81 + 6000 if strategy == "grid-random" else 3000
+    total = 81 + 2 * 1000 if strategy == "grid-random" else 1000  # grid, then top_n × trials
     assert 200 <= stored < total, stored  # killed mid-run, completed batches kept
     if strategy == "grid-random":
         assert stored % 40 in (0, 81 % 40)  # whole batches only
-    resumed = subprocess.run(tune(None, "--resume", str(run)), env=env, capture_output=True,
-                             text=True, timeout=600)
-    assert resumed.returncode == 0, resumed.stderr
+    resumed = run_in_process(tune(None, "--resume", run), env=env)
+    assert resumed.code == 0, resumed.stderr
     assert "replayed" in resumed.stdout
 
     def top(path):
@@ -168,19 +163,16 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
 
 
 def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
-    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40,
                                    "output": {"size": [320, 180]},
-                                   "grid_random": {"top_n": 2, "trials": 6000}}))
+                                   "grid_random": {"top_n": 2, "trials": 1500}}))
     run = tmp_path / "run"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "rvmsim", "tune", str(SCENES / "vehicle_a.yaml"), "--out",
-         str(run), "--config", str(cfg), "--workers", "1", "--no-progress",
-         "--strategy", "grid-random"],
-        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        # a shell's background job ignores SIGINT, and children inherit that: restore it
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = start_in_child(  # with SIGINT at its default, as from a terminal
+        ["tune", SCENES / "vehicle_a.yaml", "--out", run, "--config", cfg, "--workers", "1",
+         "--no-progress", "--strategy", "grid-random"],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     db = run / "run.sqlite"
     deadline = time.time() + 300
     while time.time() < deadline:
@@ -195,13 +187,11 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err
     store = RunStore(db)
-    assert store.state().status is RunStatus.INTERRUPTED and 120 <= store.count() < 12081
+    assert store.state().status is RunStatus.INTERRUPTED and 120 <= store.count() < 81 + 3000
     assert store.state().text == "interrupted (continue with --resume)"
     store.close()
-    res = subprocess.run([sys.executable, "-m", "rvmsim", "tune", "--resume", str(run),
-                          "--workers", "1", "--no-progress"], env=env, capture_output=True,
-                         text=True, timeout=600)
-    assert res.returncode == 0, res.stderr
+    res = run_in_process(["tune", "--resume", run, "--workers", "1", "--no-progress"], env=env)
+    assert res.code == 0, res.stderr
     store = RunStore(db)
-    assert store.count() == 81 + 12000 and store.state().status is RunStatus.DONE
+    assert store.count() == 81 + 2 * 1500 and store.state().status is RunStatus.DONE
     store.close()

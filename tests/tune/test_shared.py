@@ -5,11 +5,8 @@ status, select and report on it (small real renders, real searches)."""
 from __future__ import annotations
 
 import json
-import os
 import signal
 import sqlite3
-import subprocess
-import sys
 import time
 from html.parser import HTMLParser
 
@@ -25,7 +22,8 @@ from rvmsim.scene import load_scene
 from rvmsim.tune import TuneRequest, TuningConfig, resume, tune
 from rvmsim.runs import RunStore, rank_params_text, status_lines
 
-from .common import small_scene_file
+from ..cli_runner import run_in_process, start_in_child
+from ..scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
 
@@ -34,7 +32,7 @@ CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
 def scenes(cache, tmp_path_factory):
     """Vehicles E and B at 320×240 px, as scene files."""
     folder = tmp_path_factory.mktemp("scenes")
-    return [small_scene_file(letter, folder) for letter in "eb"]
+    return [write_small_scene(folder, letter) for letter in "eb"]
 
 
 def verdicts(params, scene_files):
@@ -48,11 +46,18 @@ def verdicts(params, scene_files):
     return out
 
 
+#: Evaluations of the shared run.  B's small scene is B's camera resampled (its principal
+#: point where ``render --scale 0.25`` puts it, 0.375 px from where cx/4, cy/4 put it):
+#: after 1,000 evaluations the default seed's best fails B's 1-4 (score 0.275); after 3,000
+#: it passes both (0.352 on E, 0.358 on B).
+SHARED_BUDGET = 3000
+
+
 @pytest.fixture(scope="module")
 def shared_run(scenes, tmp_path_factory):
     run = tmp_path_factory.mktemp("runs") / "shared"
     res = tune(TuneRequest(tuple(scenes), config=TuningConfig.model_validate(CONFIG),
-                           budget=1000), run)
+                           budget=SHARED_BUDGET), run)
     return run, res
 
 
@@ -105,7 +110,7 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     copy = tmp_path / "copy"
     folder = tmp_path / "scenes"
     folder.mkdir()
-    files = [small_scene_file(letter, folder) for letter in "eb"]
+    files = [write_small_scene(folder, letter) for letter in "eb"]
     tune(TuneRequest(tuple(files), config=TuningConfig.model_validate(CONFIG), budget=40), copy)
     doc = yaml.safe_load(files[1].read_text())
     doc["vehicle"]["bumper"]["top"] = 0.8
@@ -169,23 +174,19 @@ def test_the_report_has_a_row_per_vehicle(scenes, shared_run, tmp_path):
 
 
 def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_path):
-    env = {**os.environ, "PYTHONPATH": os.environ.get("PYTHONPATH", "")}
     cfg = tmp_path / "tune.yaml"
-    cfg.write_text(yaml.safe_dump({**CONFIG, "cmaes_solved": {"budget": 3000}}))
+    cfg.write_text(yaml.safe_dump({**CONFIG, "cmaes_solved": {"budget": 1000}}))
 
     def cmd(out, *extra):
         if extra:
-            return [sys.executable, "-m", "rvmsim", "tune", *extra, "--no-progress",
-                    "--workers", "1"]
-        return [sys.executable, "-m", "rvmsim", "tune", *map(str, scenes), "--shared",
-                "--out", str(out), "--config", str(cfg), "--no-progress", "--workers", "1"]
+            return ["tune", *extra, "--no-progress", "--workers", "1"]
+        return ["tune", *scenes, "--shared", "--out", out, "--config", cfg, "--no-progress",
+                "--workers", "1"]
 
-    clean = subprocess.run(cmd(tmp_path / "clean"), env=env, capture_output=True, text=True,
-                           timeout=600)
-    assert clean.returncode == 0, clean.stderr
+    clean = run_in_process(cmd(tmp_path / "clean"))
+    assert clean.code == 0, clean.stderr
     run = tmp_path / "killed"
-    proc = subprocess.Popen(cmd(run), env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+    proc = start_in_child(cmd(run))
     db = run / "run.sqlite"
     deadline = time.time() + 300
     while time.time() < deadline:
@@ -202,11 +203,10 @@ def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_p
     stored = con.execute("SELECT COUNT(*) FROM trials").fetchone()[0]
     members = con.execute("SELECT COUNT(*) FROM members").fetchone()[0]
     con.close()
-    assert 200 <= stored < 3000, stored
+    assert 200 <= stored < 1000, stored
     assert members == 2 * stored  # each trial's members written with it
-    resumed = subprocess.run(cmd(None, "--resume", str(run)), env=env, capture_output=True,
-                             text=True, timeout=600)
-    assert resumed.returncode == 0, resumed.stderr
+    resumed = run_in_process(cmd(None, "--resume", run))
+    assert resumed.code == 0, resumed.stderr
     assert "replayed" in resumed.stdout
 
     def content(path):

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import cv2
@@ -14,17 +11,17 @@ import pytest
 
 from rvmsim.scene import load_scene
 
+from ..cli_runner import Outcome, run_in_process
 from .captures import perturbed, write_scene
 
 
-def _run(*args: str, env: dict | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "rvmsim", *args], capture_output=True,
-                          text=True, timeout=600, env=env)
+def _run(*args: str, env: dict | None = None) -> Outcome:
+    return run_in_process(args, env=env)
 
 
 @pytest.fixture
 def cache_env(tmp_path):
-    return {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    return {"RVMSIM_CACHE": str(tmp_path / "cache")}
 
 
 def test_cli_writes_outputs_and_a_corrected_scene_that_then_passes(tmp_path, cache_env):
@@ -36,7 +33,7 @@ def test_cli_writes_outputs_and_a_corrected_scene_that_then_passes(tmp_path, cac
     fixed = tmp_path / "fixed" / "mat_fixed.yaml"
     res = _run("validate", str(scene_file), "--capture", str(cap_file), "--out", str(out),
                "--write-scene", str(fixed), "--no-progress", env=cache_env)
-    assert res.returncode == 1, res.stderr  # 0.8° yaw > 0.5°
+    assert res.code == 1, res.stderr  # 0.8° yaw > 0.5°
     assert "verdict: FAIL" in res.stdout and "pose_angle_correction_deg" in res.stdout
     assert any(Path(cache_env["RVMSIM_CACHE"]).iterdir())  # rendered through the cache
     doc = json.loads((out / "validation.json").read_text())
@@ -56,7 +53,7 @@ def test_cli_writes_outputs_and_a_corrected_scene_that_then_passes(tmp_path, cac
     assert sc_fixed.test_site == load_scene(scene_file).test_site
     res2 = _run("validate", str(fixed), "--capture", str(cap_file), "--out",
                 str(tmp_path / "val2"), "--no-progress", env=cache_env)
-    assert res2.returncode == 0, res2.stdout + res2.stderr
+    assert res2.code == 0, res2.stdout + res2.stderr
     assert "verdict: PASS" in res2.stdout
 
 
@@ -67,11 +64,11 @@ def test_cli_tolerances_gate_the_exit_status(tmp_path, cache_env):
     scene_file = write_scene(tmp_path)
     res = _run("validate", str(scene_file), "--capture", str(cap_file), "--out",
                str(tmp_path / "v"), "--max-angle-deg", "1.0", "--no-progress", env=cache_env)
-    assert res.returncode == 0, res.stdout + res.stderr
+    assert res.code == 0, res.stdout + res.stderr
     res = _run("validate", str(scene_file), "--capture", str(cap_file), "--out",
                str(tmp_path / "v"), "--max-angle-deg", "1.0", "--max-rms-px", "0.01",
                "--no-progress", env=cache_env)
-    assert res.returncode == 1
+    assert res.code == 1
     assert "FAIL landmark_rms_after_correction_px" in res.stdout
 
 
@@ -94,7 +91,7 @@ def test_cli_bad_captures_are_one_line_errors(tmp_path, cache_env, case):
               "camera.image_size is 640×480", "unrelated": "too few landmarks"}[case]
     res = _run("validate", str(scene_file), "--capture", str(cap), "--out", str(tmp_path / "v"),
                "--no-progress", env=cache_env)
-    assert res.returncode == 2
+    assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
     assert expect in lines[0] and str(cap) in lines[0]
@@ -107,7 +104,7 @@ def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path, cache_env)
     out = tmp_path / "v"
     res = _run("validate", str(scene_file), "--capture", str(cap), "--out", str(out),
                "--no-progress", env=cache_env)
-    assert res.returncode == 2
+    assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "(step failed: detection)" in lines[0], res.stderr
     assert str(out) in lines[0] and "--search-px" not in lines[0]
@@ -133,7 +130,7 @@ def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
     out = tmp_path / "v"
     res = _run("validate", str(scene_file), "--capture", str(folder), "--capture", str(noise),
                "--out", str(out), "--no-progress", env=cache_env)
-    assert res.returncode == 2, res.stdout + res.stderr  # one capture is an error
+    assert res.code == 2, res.stdout + res.stderr  # one capture is an error
     err = res.stderr.strip().splitlines()
     assert len(err) == 1 and "noise.png" in err[0] and "step failed: detection" in err[0]
     rows = json.loads((out / "summary.json").read_text())
@@ -172,7 +169,7 @@ def test_cli_several_captures_a_failure_whose_pictures_cannot_be_written_is_a_ro
     (out / "noise").write_text("in the way")
     res = _run("validate", str(scene_file), "--capture", str(same), "--capture", str(noise),
                "--out", str(out), "--no-progress", env=cache_env)
-    assert res.returncode == 2, res.stdout + res.stderr
+    assert res.code == 2, res.stdout + res.stderr
     assert "Traceback" not in res.stderr
     err = res.stderr.strip().splitlines()
     assert len(err) == 1 and "noise" in err[0], res.stderr
