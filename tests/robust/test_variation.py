@@ -92,13 +92,14 @@ def test_variation_for_takes_the_file_else_the_scene_section(tmp_path: Path):
 
     f = tmp_path / "var.yaml"
     f.write_text(GOOD)
-    with_section = small_scene(variation={"mount": {"yaw_deg": {"uniform": {"half_width": 2}}}})
+    with_section = load_small_scene(
+        "a", 0.25, variation={"mount": {"yaw_deg": {"uniform": {"half_width": 2}}}})
     assert variation_for(with_section, f) == load_variation(f)
     assert variation_for(with_section, None) == variation_from_scene(with_section)
     assert variation_for(with_section, None).axis("yaw_deg").bound == 2.0
-    without = small_scene()
+    without = load_small_scene("a", 0.25, variation=None)
     assert variation_for(without, f) == load_variation(f)
     with pytest.raises(VariationError) as err:
         variation_for(without, None)
-    assert err.value.file == "vehicle_a_small.yaml" and err.value.key == "variation"
+    assert err.value.file == without.source and err.value.key == "variation"
     assert "--variation FILE" in err.value.message and "\n" not in str(err.value)
