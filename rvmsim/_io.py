@@ -284,13 +284,25 @@ def make_output_folder(path: str | Path) -> Path:
 
 
 def write_png(path: str | Path, image: np.ndarray) -> Path:
-    """Write ``image`` ((H, W) or (H, W, 3) uint8) as PNG, creating the folder."""
+    """Write ``image`` ((H, W) or (H, W, 3) uint8) as PNG, creating the folder.
+
+    The file appears whole or not at all: it is written beside ``path`` under a temporary
+    name and renamed over it, so a reader (another process sharing the render cache, a
+    browser polling a picture) never sees half a file."""
+    import uuid
+
     import imageio.v3 as iio
 
     path = Path(path)
+    # a name of this writer's own (processes and threads may write one path at once); made
+    # by the writer, so the file gets the usual permissions
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        iio.imwrite(path, np.ascontiguousarray(image), extension=".png")
+        iio.imwrite(tmp, np.ascontiguousarray(image), extension=".png")
+        os.replace(tmp, path)
     except OSError as err:
         raise RvmsimError(f"{path}: cannot write image ({err.strerror or err})") from None
+    finally:
+        tmp.unlink(missing_ok=True)  # a failed write leaves nothing behind
     return path

@@ -19,12 +19,6 @@ SCENES = ROOT / "scenes"
 #: every other test file is a group of its own.
 SHARED_FIXTURE_FOLDERS = ("batch", "calibrate", "console")
 
-if os.environ.get("PYTEST_XDIST_WORKER") and "RVMSIM_CACHE" not in os.environ:
-    # A render cache per worker: the cache writes its PNGs in place, so a worker reading an
-    # entry another is writing would find it damaged (a warning, an error under pytest).
-    os.environ["RVMSIM_CACHE"] = str(Path.home() / ".cache" / "rvmsim" /
-                                     f"render-{os.environ['PYTEST_XDIST_WORKER']}")
-
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under pytest-xdist: each item's group (:data:`SHARED_FIXTURE_FOLDERS`, else its
@@ -47,16 +41,20 @@ def bundled_scene(letter: str):
 
 @functools.lru_cache(maxsize=None)
 def small_render(letter: str, scale: float = 0.5, cube_yaw_deg: float = 0.0):
-    """Render bundled vehicle ``letter`` at ``scale`` of its sensor size (cached per session)."""
+    """Render bundled vehicle ``letter`` at ``scale`` of its sensor size (cached per session,
+    and in the render cache, which every test process shares: its entries are written
+    whole, see ``rvmsim._io.write_png``)."""
     import numpy as np
 
     from rvmsim.camera import rotation_from_ypr
-    from rvmsim.render import render_fisheye
+    from rvmsim.render import cached_render, render_fisheye
 
     scene = bundled_scene(letter)
+    if cube_yaw_deg == 0.0:
+        return cached_render(scene, scale=scale)[0]
     cam = scene.fisheye_camera().scaled(scale)
-    rot = None if cube_yaw_deg == 0.0 else rotation_from_ypr(cube_yaw_deg, 20.0, 45.0)
-    return render_fisheye(scene, camera=cam, cube_rotation=rot if rot is None else np.asarray(rot))
+    rot = rotation_from_ypr(cube_yaw_deg, 20.0, 45.0)
+    return render_fisheye(scene, camera=cam, cube_rotation=np.asarray(rot))
 
 
 @pytest.fixture

@@ -64,3 +64,40 @@ def test_image_size_limit_and_its_environment_variable(monkeypatch):
     monkeypatch.setenv("RVMSIM_MAX_IMAGE_PIXELS", "lots")
     with pytest.raises(RvmsimError, match="RVMSIM_MAX_IMAGE_PIXELS"):
         max_image_pixels()
+
+
+def test_write_png_replaces_a_file_whole_or_not_at_all(tmp_path):
+    """A reader (another worker sharing the render cache) never sees half a PNG: the image
+    is written under a temporary name and renamed; a write that fails leaves the old file
+    and no temporary file."""
+    import imageio.v3 as iio
+    import numpy as np
+
+    from rvmsim._io import write_png
+
+    path = tmp_path / "cache" / "fisheye_labels.png"
+    old = np.arange(48, dtype=np.uint8).reshape(6, 8)
+    write_png(path, old)
+    before = path.read_bytes()
+    with pytest.raises(TypeError):
+        write_png(path, np.zeros((6, 8), np.complex128))  # cannot be encoded
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in path.parent.iterdir()) == ["fisheye_labels.png"]
+    inode = path.stat().st_ino
+    held = path.open("rb")  # a reader in the middle of the old file keeps reading it whole
+    new = old[::-1].copy()
+    write_png(path, new)
+    assert path.stat().st_ino != inode  # a new file renamed over the old, not rewritten
+    assert held.read() == before
+    held.close()
+    assert np.array_equal(iio.imread(path), new)
+    assert sorted(p.name for p in path.parent.iterdir()) == ["fisheye_labels.png"]
+    assert oct(path.stat().st_mode & 0o777) == oct(0o666 & ~_umask())
+
+
+def _umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
