@@ -20,6 +20,7 @@ SCENES = ROOT / "scenes"
 SHARED_FIXTURE_FOLDERS = ("batch", "calibrate", "console")
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under pytest-xdist: each item's group (:data:`SHARED_FIXTURE_FOLDERS`, else its
     file), for ``--dist loadgroup``."""
