@@ -9,9 +9,9 @@ built here.  Geometry is in the scene frame (metres, Y toward the ground).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from .. import labels as L
 from .._io import env_limit
@@ -20,6 +20,9 @@ from .primitives import Part, swept_block
 from .fields import MAX_METRES
 from .schema import BlockPart, MeshPart, Rgb, Scene
 from .site import site_parts
+
+if TYPE_CHECKING:
+    import trimesh  # imported where meshes are made: ~1 s, not needed to read a scene
 
 __all__ = ["build_parts", "DEFAULT_MAX_MESH_VERTICES", "MESH_BYTES_PER_VERTEX",
            "max_mesh_vertices"]
@@ -40,6 +43,8 @@ def max_mesh_vertices() -> int:
 def _read_mesh_file(path: Path) -> trimesh.Trimesh:
     """The mesh file at ``path`` as one unprocessed Trimesh, or the reason it is unusable
     (raised as ValueError, one line)."""
+    import trimesh
+
     limit = max_mesh_vertices()
     try:
         size = path.stat().st_size

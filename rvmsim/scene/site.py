@@ -9,14 +9,17 @@ ground is ``y = -h``.  Azimuth on a test object (degrees): 0 faces +Z (away from
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from .. import labels as L
 from ..camera import rotation_from_ypr
 from .primitives import Part, concatenate, cylinder_side, disk, ground_rect, quad
 from .schema import GroundPattern, PatternBoard, Rect, Rgb, Scene
+
+if TYPE_CHECKING:
+    import trimesh  # imported where meshes are made: ~1 s, not needed to read a scene
 
 __all__ = [
     "site_parts",
@@ -374,6 +377,8 @@ def pattern_shade(pattern: GroundPattern, x: np.ndarray, z: np.ndarray) -> np.nd
 
 def _ground(scene: Scene) -> Part:
     """The asphalt ground: a square of ``ground_size`` m, UV-mapped for its texture."""
+    import trimesh
+
     size = scene.test_site.ground_size
     z0 = -min(10.0, size / 4)
     mesh = ground_rect(-size / 2, size / 2, z0, z0 + size, 0.0)
