@@ -30,6 +30,8 @@ tune:
   budget: 20
   seed: 1
   config: {{output: {{size: [160, 90]}}}}
+  recheck: {{rounds: 0}}
+robustness: {{samples: 0}}
 """
 SWEEP_DB = "sw/sweep.sqlite"
 
