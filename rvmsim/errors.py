@@ -17,6 +17,7 @@ __all__ = [
     "SweepFileError",
     "ParamsFileError",
     "VariationError",
+    "CompensationError",
 ]
 
 
@@ -71,3 +72,7 @@ class ParamsFileError(InputFileError):
 
 class VariationError(InputFileError):
     """A variation file (``--variation``), or a scene's ``variation`` section, is unusable."""
+
+
+class CompensationError(InputFileError):
+    """A compensation file (``--compensation``), or a ``compensation`` section, is unusable."""

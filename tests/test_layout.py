@@ -122,6 +122,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("camera",),
     ("scene",),
     ("render", "isp"),
+    ("compensation",),
     ("criteria",),
     ("pipeline",),
     ("robust",),

@@ -37,6 +37,7 @@ from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measure
                         default_criteria, measure_labels, scene_context, score, score_batch,
                         values_array)
 from ..isp import IspParams, OutputSpec, process
+from ..render import CameraRays
 from ..scene import Scene
 from .frame import evaluate_rvm_labels
 from .pixels import RvmPixels, rvm_pixels
@@ -155,6 +156,7 @@ class SetEvaluator:
         self.output = output
         self.criteria = criteria
         self.path = path
+        self._camera_rays: CameraRays | None = None
 
     def __call__(self, params: IspParams | Sequence[IspParams], *,
                  indices: Sequence[int] | None = None, progress: str | None = None) -> EcBatch:
@@ -180,20 +182,26 @@ class SetEvaluator:
             raise ValueError(f"{len(per_image)} parameter sets for {len(idx)} images")
         values = np.full((len(idx), len(self.criteria.ids)), np.nan)
         bar = _bar(progress, len(idx))
-        for rows, p in _runs(per_image):
+        runs = _runs(per_image)
+        for rows, p in runs:
             for start in range(0, len(rows), _CHUNK):
                 chunk = rows[start:start + _CHUNK]
-                values[chunk] = self._values(p, [idx[r] for r in chunk])
+                values[chunk] = self._values(p, [idx[r] for r in chunk], many=len(runs) > 1)
                 if bar is not None:
                     bar.update(len(chunk))
         if bar is not None:
             bar.close()
         return score_batch(values, self.criteria)
 
-    def _values(self, params: IspParams, indices: list[int]) -> np.ndarray:
+    def _values(self, params: IspParams, indices: list[int], *, many: bool = False) -> np.ndarray:
+        """The values of one setting on ``indices``; ``many``: one of many settings (per-car
+        values), whose shown pixels' rays are looked up in the camera's, made once."""
         crit = self.criteria
         if self.path is EvaluationPath.RVM_PIXELS:
-            pixels = rvm_pixels(self.images.camera, params, self.output)
+            if many and self._camera_rays is None:
+                self._camera_rays = CameraRays.of(self.images.camera)
+            pixels = rvm_pixels(self.images.camera, params, self.output,
+                                camera_rays=self._camera_rays if many else None)
             results = (measure_labels(labels, crit)
                        for labels in self.images.rvm_labels(pixels, indices))
         else:

@@ -53,8 +53,19 @@ class RvmPixels:
         return out
 
 
-def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec) -> RvmPixels:
+def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec, *,
+               camera_rays: CameraRays | None = None) -> RvmPixels:
     """:class:`RvmPixels` of ``params`` (for ``camera``'s sensor size) on ``camera``'s lens.
+
+    Parameters
+    ----------
+    camera : FisheyeCamera
+    params : IspParams
+    output : OutputSpec
+    camera_rays : CameraRays, optional
+        ``CameraRays.of(camera)``: the rays of every in-field pixel, made once for many
+        settings (per-car values).  The shown pixels' rays are then looked up in it rather
+        than computed, and not made distinct (an RVM pixel per entry): cheaper per setting.
 
     Convention
     ----------
@@ -65,6 +76,20 @@ def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec) -> 
     index = np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w)  # exact below 2^24
     src = np.rint(apply_map(index, build_map(params, (w, h), output), labels=True))
     source = src.astype(np.intp) - 1
-    pixels, inverse = np.unique(source[source >= 0], return_inverse=True)
-    rays = CameraRays.of(camera, pixels)
-    return RvmPixels(source, pixels, inverse.ravel(), rays, rays.in_fov.ravel()[pixels])
+    if camera_rays is None:
+        pixels, inverse = np.unique(source[source >= 0], return_inverse=True)
+        rays = CameraRays.of(camera, pixels)
+        return RvmPixels(source, pixels, inverse.ravel(), rays, rays.in_fov.ravel()[pixels])
+    pixels = source[source >= 0]
+    in_field = camera_rays.in_fov.ravel()[pixels]
+    position = _ray_positions(camera_rays)[pixels[in_field]]
+    rays = CameraRays(camera_rays.x[position], camera_rays.y[position], camera_rays.z[position],
+                      pixels[in_field], camera_rays.in_fov)
+    return RvmPixels(source, pixels, np.arange(pixels.size), rays, in_field)
+
+
+def _ray_positions(camera_rays: CameraRays) -> np.ndarray:
+    """Each fisheye pixel's entry in ``camera_rays`` (−1 outside the field)."""
+    lut = np.full(camera_rays.in_fov.size, -1, np.intp)
+    lut[camera_rays.index] = np.arange(camera_rays.index.size)
+    return lut

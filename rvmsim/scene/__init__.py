@@ -33,6 +33,7 @@ from .variation import (
     LoadStateSpec,
     MOUNT_AXES,
 )
+from .compensation import CompensationSpec, StationSpec, COMPENSABLE_PARAMS, DEFAULT_RANGES
 from .loading import (
     load_scene,
     read_scene_document,
@@ -76,6 +77,10 @@ __all__ = [
     "AxisSpec",
     "LoadStateSpec",
     "MOUNT_AXES",
+    "CompensationSpec",
+    "StationSpec",
+    "COMPENSABLE_PARAMS",
+    "DEFAULT_RANGES",
     "load_scene",
     "read_scene_document",
     "scene_from_dict",

@@ -29,6 +29,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
+from .compensation import CompensationSpec
+
 __all__ = ["VariationSpec", "MountTolerance", "AxisSpec", "UniformSpec", "NormalSpec",
            "LoadStateSpec", "MOUNT_AXES"]
 
@@ -114,10 +116,12 @@ class LoadStateSpec(_Model):
 
 
 class VariationSpec(_Model):
-    """Production variation: mount tolerances and load states (both optional)."""
+    """Production variation: mount tolerances and load states (both optional), and the
+    end-of-line compensation that meets it (optional; used with ``--compensation``)."""
 
     mount: MountTolerance = MountTolerance()
     load_states: Annotated[list[LoadStateSpec], Field(max_length=20)] = []
+    compensation: CompensationSpec | None = None
 
     @field_validator("load_states")
     @classmethod
