@@ -43,20 +43,28 @@ __all__ = ["robustness"]
 @click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
               help="Render those viewpoints on this Dask distributed cluster instead (the "
                    "scene's mesh files must be readable there at the same paths).")
+@click.option("--compensation", default=None, metavar="FILE|default",
+              help="Judge every sample after end-of-line compensation: a compensation file "
+                   "(or a variation file with a compensation section), or 'default' "
+                   "(docs/compensation.md).  The yield is then the yield after it; the "
+                   "yield before is reported beside it.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Path,
                min_yield: float | None, variation_file: Path | None,
                criteria_file: Path | None, scale: float, scales: tuple[float, ...],
                scale_samples: int | None, workers: int, scheduler: str | None,
-               progress: bool) -> None:
+               compensation: str | None, progress: bool) -> None:
     """Yield of the ISP setting in --params over SCENE's production variation.
 
     Draws mount-tolerance and load-state samples (the scene's variation section, or
     --variation), evaluates every EC on each, and writes robustness.json and
-    robustness.html.  Exit status: 0 the yield is at least --min-yield (or none given),
-    1 below it, 2 an error.
+    robustness.html.  With --compensation each car is first corrected at the end of the
+    line (its measured deviation turned into per-car ISP values) and the yield is the yield
+    after that.  Exit status: 0 the yield is at least --min-yield (or none given), 1 below
+    it, 2 an error.
     """
     from ..batch import make_executor
+    from ..compensation import compensation_for
     from ..criteria import load_criteria
     from ..report import write_robustness_outputs
     from ..robust import RobustnessSettings, variation_for
@@ -68,7 +76,8 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     sc = load_scene(scene)
     check_scale(sc, params, scale)
     settings = RobustnessSettings(output, criteria, variation_for(sc, variation_file), samples,
-                                  seed, scales, scale_samples, scale, min_yield)
+                                  seed, scales, scale_samples, scale, min_yield,
+                                  compensation_for(compensation))
     with make_executor(scheduler, workers) as runner:
         result = run_robustness(sc, params, settings, runner=runner, progress=progress)
     written = write_robustness_outputs(result, out)

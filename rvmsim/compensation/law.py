@@ -35,14 +35,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import FisheyeCamera, rotation_from_ypr
+from ..camera import FisheyeCamera, rotation_from_ypr, ypr_from_rotation
 from ..isp import IspParams, OutputSpec, input_to_output
 from ..isp.exact import map_points
 from ..scene import Scene
 from .model import CompensationModel
 
 __all__ = ["Deviation", "Correction", "CompensationLaw", "reference_points", "deviated_camera",
-           "MIN_REFERENCE_POINTS"]
+           "loaded_deviation", "MIN_REFERENCE_POINTS"]
 
 #: The law needs at least this many reference points in the nominal RVM image.
 MIN_REFERENCE_POINTS = 4
@@ -88,6 +88,26 @@ def deviated_camera(scene: Scene, deviation: Deviation) -> FisheyeCamera:
     pos = np.asarray(m.position, dtype=np.float64) + np.array([d.x_mm, d.y_mm, d.z_mm]) / 1000.0
     return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
                          cam.skew, cam.fov_deg, rot, pos)
+
+
+def loaded_deviation(scene: Scene, deviation: Deviation, height_mm: float,
+                     pitch_deg: float) -> Deviation:
+    """The camera's deviation from the nominal mount as seen from the ground when the body
+    stands in a load state: the body pitched by ``pitch_deg`` (rear down > 0) about the
+    camera's nominal centre, the camera lowered by ``-height_mm`` (as
+    :func:`rvmsim.robust.body_pose` moves it).  What a station that compares the camera's
+    pose with the design pose reads for a car in that load state."""
+    if height_mm == 0.0 and pitch_deg == 0.0:
+        return deviation
+    m = scene.camera.mount
+    rb = rotation_from_ypr(0.0, pitch_deg, 0.0)
+    rot = rb @ rotation_from_ypr(m.yaw_deg + deviation.yaw_deg, m.pitch_deg + deviation.pitch_deg,
+                                 m.roll_deg + deviation.roll_deg)
+    ypr = ypr_from_rotation(rot) - np.array([m.yaw_deg, m.pitch_deg, m.roll_deg])
+    ypr = (ypr + 180.0) % 360.0 - 180.0
+    d = rb @ np.array([deviation.x_mm, deviation.y_mm, deviation.z_mm]) + np.array(
+        [0.0, -height_mm, 0.0])
+    return Deviation.from_offsets((*d, *ypr))
 
 
 def _site_points(scene: Scene) -> np.ndarray:

@@ -90,7 +90,7 @@ def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>") -> Co
     params = tuple(spec.params)
     ranges = tuple((n, *spec.ranges.get(n, DEFAULT_RANGES[n])) for n in params if n != "v_pan")
     st = spec.station
-    return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,  # type: ignore[arg-type]
+    return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,
                              st.measured_at, spec.reference, source)
 
 

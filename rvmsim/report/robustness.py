@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -91,11 +92,79 @@ def _ec_rows(result: RobustnessResult) -> str:
     return "".join(rows)
 
 
+def compensation_values_png(result: RobustnessResult) -> bytes:
+    """Histograms of the per-car offsets the EOL step wrote (one per written parameter; the
+    red lines are the allowed range)."""
+    from matplotlib.figure import Figure
+
+    comp = result.compensated
+    assert comp is not None
+    names = list(comp.corrections[0].offsets) if comp.corrections else []
+    fig = Figure(figsize=(3.4 * max(1, len(names)), 2.6))
+    for k, name in enumerate(names):
+        ax = fig.add_subplot(1, max(1, len(names)), k + 1)
+        ax.hist([c.offsets[name] for c in comp.corrections], bins=30, color="C0")
+        for edge in comp.model.range_of(name):
+            if math.isfinite(edge) and not (name == "h_pan" and edge == 0):
+                ax.axvline(edge, color="red", lw=1)
+        ax.set_title("pan turn (°)" if name == "h_pan" else name, fontsize=9)
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    return figure_png(fig)
+
+
+def _pct(est: dict[str, Any]) -> str:
+    """A yield estimate's dict (:meth:`~rvmsim.robust.YieldEstimate.as_dict`) as a cell."""
+    lo, hi = (float(v) for v in est["ci95"])
+    return (f'{100 * float(est["yield"]):.1f} % <small>({100 * lo:.1f}–{100 * hi:.1f} %, '
+            f'n {est["n"]})</small>')
+
+
+def _compensation_section(result: RobustnessResult) -> str:
+    """Before and after end-of-line compensation, side by side ("" without it)."""
+    comp, before = result.compensated, result.before_estimate
+    if comp is None or before is None or result.before is None:
+        return ""
+    d = result.as_dict()
+    by_before, by_after = d["yield_before_compensation"]["by_load"], d["yield_by_load"]
+    rows = [f'<tr><td><b>every car</b></td><td class="num">{_pct(before.as_dict())}</td>'
+            f'<td class="num">{_pct(result.estimate.as_dict())}</td></tr>']
+    rows += [f'<tr><td>load: {escape(name)}</td><td class="num">{_pct(by_before[name])}</td>'
+             f'<td class="num">{_pct(by_after[name])}</td></tr>' for name in by_after]
+    rows += [f'<tr><td>EC {escape(b.id)} fails</td><td class="num">{100 * b.failure_rate:.1f} %'
+             f'</td><td class="num">{100 * a.failure_rate:.1f} %</td></tr>'
+             for b, a in zip(result.ecs_before, result.ecs) if a.enabled
+             and (a.n_fail or b.n_fail)]
+    n_out = int((~comp.within_range).sum())
+    if n_out:
+        first = next(c for c in comp.corrections if c.exceeded)
+        rows.append(f'<tr class="fail"><td>EOL range exceeded</td><td></td><td class="num">'
+                    f'{n_out} cars (e.g. {escape(first.exceeded[0])})</td></tr>')
+    m = comp.model
+    values = data_uri(compensation_values_png(result))
+    return f"""
+<h2>End-of-line compensation: before and after</h2>
+<p>Each car's camera deviation is measured at the end of the line (station σ
+{m.angle_sigma_deg:g}° and {m.position_sigma_mm:g} mm per axis, in load state
+{escape(m.measured_at or result.variation.load_states[0].name)}) and the EOL step writes
+{escape(", ".join(m.params))} so that {result.reference_points} reference ground points
+land where the nominal car shows them. Model: {escape(m.source)}.</p>
+<table><tr><th></th><th>before compensation</th><th>after compensation</th></tr>
+{"".join(rows)}</table>
+<figure><img src="{values}" alt="per-car values"><figcaption>Per-car offsets from the
+platform setting (red: the allowed range).</figcaption></figure>"""
+
+
 def _sample_text(result: RobustnessResult) -> str:
     s = result.samples[result.worst_index]
     parts = [f"{n} {v:+.3g}" for n, v in zip(("x", "y", "z"), s.position_mm)]
     parts += [f"{n} {v:+.3g}°" for n, v in zip(("yaw", "pitch", "roll"), s.angles_deg)]
-    return f"sample {s.index}: {', '.join(parts)} (mm, degrees), load {s.load.name}"
+    text = f"sample {s.index}: {', '.join(parts)} (mm, degrees), load {s.load.name}"
+    if result.compensated is not None:
+        c = result.compensated.corrections[result.worst_index]
+        text += "; per-car " + ", ".join(f"{n} {v:.3g}" for n, v in c.values.items())
+        text += "".join(f"; {e}" for e in c.exceeded)
+    return text
 
 
 def robustness_page(result: RobustnessResult) -> str:
@@ -113,11 +182,12 @@ def robustness_page(result: RobustnessResult) -> str:
     nominal = "PASS" if result.nominal.ec.passed else "FAIL"
     return page(f"Robustness: {result.scene_name}", f"""
 <h1>Robustness of {escape(result.scene_name)}</h1>
-<p>Yield <b>{100 * result.yield_:.1f} %</b> (95 % Wilson interval {100 * lo:.1f}–{100 * hi:.1f} %):
+<p>Yield{"" if result.compensated is None else " after end-of-line compensation"} <b>{100 * result.yield_:.1f} %</b> (95 % Wilson interval {100 * lo:.1f}–{100 * hi:.1f} %):
 {result.estimate.n_pass} of {result.estimate.n} samples pass every enabled EC{badge}.
 Criteria: {escape(result.criteria_name)}. Variation: {escape(result.variation.source)};
 seed {result.seed}. The nominal car: {nominal} (EC score {result.nominal.ec.score:.3g}).</p>
-<h2>Evaluation criteria over the samples</h2>
+{_compensation_section(result)}
+<h2>Evaluation criteria over the samples{"" if result.compensated is None else " (after compensation)"}</h2>
 <table><tr><th>EC</th><th>measurement</th><th>range</th><th>fails</th><th>worst value</th>
 <th>worst margin</th><th>driven by (failure rate per tercile of the axis)</th></tr>
 {_ec_rows(result)}</table>

@@ -22,11 +22,13 @@ from typing import Any
 
 import numpy as np
 
+from ..compensation import CompensationLaw, CompensationModel, measured_load_index
 from ..criteria import Criteria, EcBatch, default_criteria, score_batch
 from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params, make_evaluator
 from ..scene import Scene
 from ..render import TaskRunner
+from .compensated import CompensatedSamples, compensate_samples
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
@@ -39,8 +41,8 @@ __all__ = ["EcStats", "ScalePoint", "RobustnessResult", "RobustnessSettings", "e
 DEFAULT_SCALES = (0.5, 1.0, 1.5, 2.0)
 
 
-def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspParams,
-                     output: OutputSpec, criteria: Criteria | None = None, *,
+def evaluate_samples(scene: Scene, samples: Sequence[MountSample],
+                     params: IspParams | Sequence[IspParams], output: OutputSpec, criteria: Criteria | None = None, *,
                      scale: float = 1.0, shared: Refolder | None = None,
                      progress: bool = False) -> EcBatch:
     """Every EC of one ISP setting on every sample, through
@@ -50,8 +52,9 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
     ----------
     scene, samples
         The scene and its variation samples.
-    params : IspParams
-        For the full sensor (RAD and shifts follow ``scale``).
+    params : IspParams or sequence of IspParams
+        For the full sensor (RAD and shifts follow ``scale``): one setting for every sample,
+        or one per sample (per-car values after compensation).
     output : OutputSpec
     criteria : Criteria, optional
         Default: the paper's.
@@ -73,7 +76,9 @@ def evaluate_samples(scene: Scene, samples: Sequence[MountSample], params: IspPa
     evaluator = make_evaluator(SampleSet.of(scene, samples, scale=scale, shared=shared),
                                output, crit)
     desc = f"samples (tolerance x{samples[0].scale:g})" if progress else None
-    return evaluator(_scaled_params(scene, params, scale), progress=desc)
+    if isinstance(params, IspParams):
+        return evaluator(_scaled_params(scene, params, scale), progress=desc)
+    return evaluator([_scaled_params(scene, p, scale) for p in params], progress=desc)
 
 
 def _scaled_params(scene: Scene, params: IspParams, scale: float) -> IspParams:
@@ -155,6 +160,22 @@ class RobustnessResult:
     worst_index: int
     min_yield: float | None = None
     timings: dict[str, float] = field(default_factory=dict)
+    compensated: CompensatedSamples | None = None
+    before: EcBatch | None = None
+    ecs_before: tuple[EcStats, ...] = ()
+    reference_points: int = 0
+
+    @property
+    def passed(self) -> np.ndarray:
+        """(n,) bool: the sample passes every EC (after compensation: with its per-car
+        values, which fit the allowed ranges)."""
+        ok = self.evaluation.all_passed
+        return ok if self.compensated is None else ok & self.compensated.within_range
+
+    @property
+    def before_estimate(self) -> YieldEstimate | None:
+        """The yield before compensation (None without compensation)."""
+        return None if self.before is None else yield_estimate(self.before.all_passed)
 
     @property
     def yield_(self) -> float:
@@ -179,20 +200,60 @@ class RobustnessResult:
             "nominal": None if self.nominal is None else self.nominal.ec.as_dict(),
             "worst_sample": self.worst_index,
             "ecs": [e.as_dict() for e in self.ecs],
+            "yield_by_load": _by_load(self.passed, self.samples),
             "scale_curve": [{"scale": p.scale, **p.estimate.as_dict()} for p in self.scale_curve],
-            "samples": [{**s.as_dict(), "ec_score": float(ev.score[i]),
-                         "passed": bool(ev.all_passed[i]),
-                         "failed": [e for e, ok in zip(ev.ids, ev.passed[i]) if not ok]}
-                        for i, s in enumerate(self.samples)],
+            **self._compensation_dict(),
+            "samples": [self._sample_dict(i) for i in range(len(self.samples))],
             "timings_s": {k: round(v, 3) for k, v in self.timings.items()},
         }
+
+    def _compensation_dict(self) -> dict[str, Any]:
+        """robustness.json's ``compensation`` and ``yield_before_compensation`` (None
+        without compensation)."""
+        comp, before, est = self.compensated, self.before, self.before_estimate
+        if comp is None or before is None or est is None:
+            return {"compensation": None, "yield_before_compensation": None}
+        return {
+            "compensation": {**comp.model.as_dict(), "reference_points": self.reference_points,
+                             **comp.distribution()},
+            "yield_before_compensation": {
+                **est.as_dict(), "by_load": _by_load(before.all_passed, self.samples),
+                "ecs": [{"id": e.id, "n_fail": e.n_fail, "failure_rate": e.failure_rate,
+                         "worst_value": e.worst_value, "worst_margin": e.worst_margin}
+                        for e in self.ecs_before]},
+        }
+
+    def _sample_dict(self, i: int) -> dict[str, Any]:
+        """One sample's row of robustness.json."""
+        ev, s = self.evaluation, self.samples[i]
+        failed = [e for e, ok in zip(ev.ids, ev.passed[i]) if not ok]
+        row: dict[str, Any] = {**s.as_dict(), "ec_score": float(ev.score[i]),
+                               "passed": bool(self.passed[i]), "failed": failed}
+        if self.compensated is not None and self.before is not None:
+            c = self.compensated.corrections[i]
+            row["failed"] = failed + list(c.exceeded)
+            row["passed_before_compensation"] = bool(self.before.all_passed[i])
+            row["measured_deviation"] = self.compensated.measured[i].as_dict()
+            row["correction"] = c.as_dict()
+        return row
 
     def summary(self) -> str:
         """A few lines for the terminal."""
         lo, hi = self.ci
-        lines = [f"{self.scene_name}: yield {100 * self.yield_:.1f} % "
+        after = "" if self.compensated is None else " after EOL compensation"
+        lines = [f"{self.scene_name}: yield{after} {100 * self.yield_:.1f} % "
                  f"(95 % CI {100 * lo:.1f}–{100 * hi:.1f} %, {self.estimate.n_pass} of "
                  f"{self.estimate.n} samples pass every EC)"]
+        est = self.before_estimate
+        if est is not None and self.compensated is not None:
+            blo, bhi = est.ci
+            lines.append(f"  before compensation: {100 * est.yield_:.1f} % (95 % CI "
+                         f"{100 * blo:.1f}–{100 * bhi:.1f} %)")
+            n_out = int((~self.compensated.within_range).sum())
+            if n_out:
+                first = next(c for c in self.compensated.corrections if c.exceeded)
+                lines.append(f"  {n_out} cars fail the EOL step itself (e.g. "
+                             f"{first.exceeded[0]})")
         for e in self.ecs:
             if e.enabled and e.n_fail:
                 d = e.driver
@@ -204,6 +265,13 @@ class RobustnessResult:
         lines.append("  yield by tolerance scale: " + ", ".join(
             f"{p.scale:g}x {100 * p.estimate.yield_:.0f} %" for p in self.scale_curve))
         return "\n".join(lines)
+
+
+def _by_load(passed: np.ndarray, samples: Sequence[MountSample]) -> dict[str, Any]:
+    """The yield in each load state (JSON-ready)."""
+    names = np.array([s.load.name for s in samples])
+    return {name: yield_estimate(passed[names == name]).as_dict()
+            for name in dict.fromkeys(names.tolist())}
 
 
 def _num(x: float | None) -> str:
@@ -263,6 +331,9 @@ class RobustnessSettings:
         Fraction of the sensor rendered (small renders for tests).
     min_yield : float, optional
         Recorded with the result (``meets_min_yield``).
+    compensation : CompensationModel, optional
+        Judge every sample after end-of-line compensation (:mod:`.compensated`): the yield
+        is then the yield after it, and the result also holds the yield before.
     """
 
     output: OutputSpec = OutputSpec()
@@ -274,6 +345,7 @@ class RobustnessSettings:
     scale_samples: int | None = None
     render_scale: float = 1.0
     min_yield: float | None = None
+    compensation: CompensationModel | None = None
 
 
 def robustness(scene: Scene, params: IspParams,
@@ -306,6 +378,7 @@ def robustness(scene: Scene, params: IspParams,
     crit = settings.criteria if settings.criteria is not None else default_criteria()
     var = settings.variation if settings.variation is not None else variation_from_scene(scene)
     seed, output, render_scale = settings.seed, settings.output, settings.render_scale
+    law = _law(scene, params, settings, var)
     drawn = draw_samples(var, settings.samples, seed)
     n_extra = settings.scale_samples or min(settings.samples, 64)
     extra = {float(s): draw_samples(var, n_extra, seed, s)
@@ -320,26 +393,56 @@ def robustness(scene: Scene, params: IspParams,
                                      runner=runner, shared=list(folds.values()),
                                      progress=progress)
     t_render = time.perf_counter()
-    ev = evaluate_samples(scene, drawn, params, output, crit, scale=render_scale,
-                          shared=folds[1.0], progress=progress)
+
+    def judge(samples: list[MountSample], fold: Refolder
+              ) -> tuple[EcBatch, np.ndarray, CompensatedSamples | None]:
+        """The samples' ECs (after compensation with a law), and who passes."""
+        if law is None:
+            e = evaluate_samples(scene, samples, params, output, crit, scale=render_scale,
+                                 shared=fold, progress=progress)
+            return e, e.all_passed, None
+        fixed = compensate_samples(law, samples, seed, var.load_states[law_load])
+        e = evaluate_samples(scene, samples, fixed.params, output, crit, scale=render_scale,
+                             shared=fold, progress=progress)
+        return e, e.all_passed & fixed.within_range, fixed
+
+    law_load = 0 if law is None else measured_load_index(
+        law.model, [s.name for s in var.load_states])
+    before = None
+    if law is not None:
+        before = evaluate_samples(scene, drawn, params, output, crit, scale=render_scale,
+                                  shared=folds[1.0], progress=progress)
+    ev, passed, fixed = judge(drawn, folds[1.0])
     t1 = time.perf_counter()
-    curve = []
-    for s in settings.scales:
-        e = ev if s == 1.0 else evaluate_samples(scene, extra[float(s)], params, output, crit,
-                                                 scale=render_scale, shared=folds[float(s)],
-                                                 progress=progress)
-        curve.append(ScalePoint(float(s), yield_estimate(e.all_passed)))
+    curve = [ScalePoint(float(s), yield_estimate(
+        passed if s == 1.0 else judge(extra[float(s)], folds[float(s)])[1]))
+        for s in settings.scales]
     t2 = time.perf_counter()
     n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
+    if fixed is not None:  # a car the EOL step cannot correct is worse than any EC failure
+        n_fail = n_fail + len(crit.ids) * ~fixed.within_range
     worst = int(np.lexsort((ev.score, -n_fail))[0])
     nominal = worst_frame = None
     if frames:
         nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale, base)
-        worst_frame = _frame(scene, drawn[worst], params, output, crit, render_scale, base)
+        worst_params = params if fixed is None else fixed.corrections[worst].params
+        worst_frame = _frame(scene, drawn[worst], worst_params, output, crit, render_scale,
+                             base)
     t3 = time.perf_counter()
     return RobustnessResult(
         scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,
-        yield_estimate(ev.all_passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
+        yield_estimate(passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
         worst_frame, worst, settings.min_yield,
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
-         "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)})
+         "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)},
+        fixed, before, () if before is None else _ec_stats(crit, drawn, before, var),
+        0 if law is None else len(law.points))
+
+
+def _law(scene: Scene, params: IspParams, settings: RobustnessSettings,
+         var: Variation) -> CompensationLaw | None:
+    """The compensation law of ``settings`` for ``params`` (None without compensation)."""
+    if settings.compensation is None:
+        return None
+    measured_load_index(settings.compensation, [s.name for s in var.load_states])
+    return CompensationLaw(scene, params, settings.output, settings.compensation)
