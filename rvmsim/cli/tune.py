@@ -40,6 +40,10 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
               help="With --robust: variation samples per scene [default: 16].")
 @click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
               help="With --robust: a variation file instead of the scene's section.")
+@click.option("--compensation", default=None, metavar="FILE|default",
+              help="With --robust: tune for the yield after end-of-line compensation (each "
+                   "sample judged with its per-car values): a compensation file, or "
+                   "'default' (docs/compensation.md).")
 @click.option("--strategy", type=click.Choice(list(STRATEGIES)),
               default=DEFAULT_STRATEGY, show_default=True, help=_STRATEGY_HELP)
 @click.option("--config", "config_file", type=click.Path(path_type=Path), default=None,
@@ -60,11 +64,13 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
-         robust: bool, samples: int | None, variation_file: Path | None, strategy: str,
+         robust: bool, samples: int | None, variation_file: Path | None,
+         compensation: str | None, strategy: str,
          config_file: Path | None, criteria_file: Path | None, seed: int, workers: int,
          budget: int | None, max_time: float | None, target_score: float | None,
          resume_dir: Path | None, force: bool, progress: bool) -> None:
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared), or --resume RUN."""
+    from ..compensation import compensation_for
     from ..tune import (RunOptions, TuneRequest, check_tune_arguments, load_tuning_config,
                         summary_lines)
     from ..tune import resume as resume_run
@@ -72,7 +78,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     from ..tune.robust import DEFAULT_SAMPLES
 
     check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None, robust,
-                         samples, variation_file)
+                         samples, variation_file, compensation)
     options = RunOptions(workers, max_time, target_score, progress)
     if resume_dir is not None:
         result = resume_run(resume_dir, options=options)
@@ -81,7 +87,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
             seed=seed, budget=budget, aggregate=aggregate,
             robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
-            variation_file=variation_file)
+            variation_file=variation_file, compensation=compensation_for(compensation))
         result = run_tune(request, out or Path("runs") / "+".join(s.stem for s in scenes),
                           options=options, force=force)
     click.echo("\n".join(summary_lines(result)))

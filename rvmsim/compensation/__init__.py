@@ -9,7 +9,7 @@ Modules: :mod:`.model` (what is written, its ranges, the station's accuracy; fil
 from __future__ import annotations
 
 from .model import (CompensationModel, DEFAULT_COMPENSATION, compensation_for,
-                    compensation_from_spec, load_compensation, measured_load_index)
+                    compensation_from_dict, compensation_from_spec, load_compensation, measured_load_index)
 from .law import (Correction, CompensationLaw, Deviation, MIN_REFERENCE_POINTS, deviated_camera,
                   loaded_deviation, reference_points)
 from .station import measured_deviation, station_error
@@ -18,6 +18,7 @@ __all__ = [
     "CompensationModel",
     "DEFAULT_COMPENSATION",
     "compensation_for",
+    "compensation_from_dict",
     "compensation_from_spec",
     "load_compensation",
     "measured_load_index",

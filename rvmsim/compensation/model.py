@@ -11,6 +11,7 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from pydantic import ValidationError
 
@@ -19,7 +20,8 @@ from ..errors import CompensationError
 from ..scene import DEFAULT_RANGES, CompensationSpec
 
 __all__ = ["CompensationModel", "DEFAULT_COMPENSATION", "compensation_from_spec",
-           "load_compensation", "compensation_for", "measured_load_index"]
+           "compensation_from_dict", "load_compensation", "compensation_for",
+           "measured_load_index"]
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,19 @@ def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>") -> Co
     st = spec.station
     return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,
                              st.measured_at, spec.reference, source)
+
+
+def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
+    """The model :meth:`CompensationModel.as_dict` described (a run's stored settings).
+
+    Raises
+    ------
+    ValueError
+        ``doc`` is not such a description (pydantic's ValidationError names the key).
+    """
+    spec = CompensationSpec.model_validate({k: doc[k] for k in ("params", "ranges", "station",
+                                                                "reference") if k in doc})
+    return compensation_from_spec(spec, str(doc.get("source", "<run>")))
 
 
 def load_compensation(path: str | Path) -> CompensationModel:

@@ -30,6 +30,8 @@ from .stats import (
     failure_drivers,
     ec_margins,
 )
+from .compensated import (CompensatedSamples, compensate_samples, station_readings,
+                          true_deviation)
 from .robustness import (
     EcStats,
     ScalePoint,
@@ -70,6 +72,10 @@ __all__ = [
     "AxisEffect",
     "failure_drivers",
     "ec_margins",
+    "CompensatedSamples",
+    "compensate_samples",
+    "station_readings",
+    "true_deviation",
     "EcStats",
     "ScalePoint",
     "RobustnessResult",

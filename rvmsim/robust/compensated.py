@@ -20,10 +20,11 @@ import numpy as np
 from ..compensation import (CompensationLaw, CompensationModel, Correction, Deviation,
                             loaded_deviation, measured_deviation)
 from ..isp import IspParams
+from ..scene import Scene
 from .samples import MountSample
 from .variation import LoadState
 
-__all__ = ["CompensatedSamples", "compensate_samples", "true_deviation"]
+__all__ = ["CompensatedSamples", "compensate_samples", "true_deviation", "station_readings"]
 
 
 def true_deviation(sample: MountSample) -> Deviation:
@@ -84,9 +85,13 @@ def compensate_samples(law: CompensationLaw, samples: Sequence[MountSample], see
         pose then with the design pose (:func:`rvmsim.compensation.loaded_deviation`), so a
         load state other than the scene's own attitude reads as a deviation too.
     """
-    model = law.model
-    measured = tuple(measured_deviation(
-        loaded_deviation(law.scene, true_deviation(s), measured_at.height_mm,
-                         measured_at.pitch_deg), model, seed, s.index, s.scale)
-        for s in samples)
-    return CompensatedSamples(model, measured, tuple(law.correct(m) for m in measured))
+    measured = station_readings(law.scene, samples, law.model, seed, measured_at)
+    return CompensatedSamples(law.model, measured, tuple(law.correct(m) for m in measured))
+
+
+def station_readings(scene: Scene, samples: Sequence[MountSample], model: CompensationModel,
+                     seed: int, measured_at: LoadState) -> tuple[Deviation, ...]:
+    """What the station reads for each sample (see :func:`compensate_samples`)."""
+    return tuple(measured_deviation(
+        loaded_deviation(scene, true_deviation(s), measured_at.height_mm, measured_at.pitch_deg),
+        model, seed, s.index, s.scale) for s in samples)

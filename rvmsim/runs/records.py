@@ -116,6 +116,9 @@ class RunSettings:
     variation_file: str | None = None
     #: Fingerprint of the variations the samples were drawn from (``--resume`` checks it).
     variation_key: str | None = None
+    #: A robust run for the yield after end-of-line compensation: the compensation model
+    #: (:meth:`rvmsim.compensation.CompensationModel.as_dict`); None: no compensation.
+    compensation: dict[str, Any] | None = None
 
     @property
     def shared(self) -> bool:
@@ -141,6 +144,8 @@ class RunSettings:
             doc["robust"] = {"samples": self.robust_samples,
                              "variation_file": self.variation_file,
                              "variation_key": self.variation_key}
+            if self.compensation is not None:
+                doc["robust"]["compensation"] = self.compensation
             doc["aggregate"] = self.aggregate
         return doc
 
@@ -197,7 +202,16 @@ class RunSettings:
                    None if robust is None else text("robust: variation_file",
                                                     robust.get("variation_file")),
                    None if robust is None else text("robust: variation_key",
-                                                    robust.get("variation_key")))
+                                                    robust.get("variation_key")),
+                   None if robust is None else _mapping("robust: compensation",
+                                                        robust.get("compensation")))
+
+
+def _mapping(key: str, value: Any) -> dict[str, Any] | None:
+    """``value`` if it is None or an object (a JSON mapping)."""
+    if value is not None and not isinstance(value, Mapping):
+        raise ValueError(f"{key}: {str(value)[:40]!r} is not an object")
+    return None if value is None else dict(value)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import numpy as np
 from .._procs import spawn_pool, stop_pool
 from ..criteria import Criteria
 from ..errors import RvmsimError
-from ..isp import IspParams
+from ..isp import IspParams, OutputSpec
 from ..pipeline import ImageEvaluator, make_evaluator
 from ..search.config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
@@ -36,6 +36,7 @@ from ..search.strategies import Strategy
 
 if TYPE_CHECKING:
     from ..render import FisheyeImages
+    from .compensated import MembersCompensation
 
 __all__ = ["SearchOutcome", "run_search", "BatchEvaluator", "search_scene", "search_members",
            "VectorScorer",
@@ -311,6 +312,18 @@ def _drive(strat: Strategy, batch_eval: BatchEvaluator, store: RunStore,
         batch_eval.close()
 
 
+def _members_compensation(members: Sequence[Member], settings: SearchSettings,
+                          output: OutputSpec) -> MembersCompensation | None:
+    """The per-car values of ``members`` under ``settings.compensation`` (None without)."""
+    if settings.compensation is None:
+        return None
+    from .compensated import MembersCompensation as Compensation
+
+    return Compensation(settings.compensation, output,
+                               tuple(m.scene for m in members),
+                               tuple(m.measured for m in members))
+
+
 def search_members(members: Sequence[Member], settings: SearchSettings, store: RunStore, *,
                    options: SearchOptions = SearchOptions()) -> SearchOutcome:
     """Search one ISP parameter set for several members at once (shared tuning: one member
@@ -345,11 +358,14 @@ def search_members(members: Sequence[Member], settings: SearchSettings, store: R
         batch_eval = _one_scene(strat, evaluators[0], options.workers)
     else:
         solver = None
+        comp = _members_compensation(members, settings, output)
         if strat.solves:
+            # with compensation every car is corrected toward the nominal one: solve there
             solver = MembersSolver([EcSolver(ev.fisheye, output, criteria, strat.space)
-                                    for ev in evaluators], settings.solve)
+                                    for ev in evaluators],
+                                   "first" if comp is not None else settings.solve)
             strat.solved = solver.names
         scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg,
-                               settings.combine)
+                               settings.combine, comp)
         batch_eval = BatchEvaluator(None, strat.space, options.workers, scorer=scorer)
     return _drive(strat, batch_eval, store, options)

@@ -40,14 +40,16 @@ from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
 from ..pipeline import ImageEvaluator, make_evaluator
-from .objective import PASS_WEIGHT, ScoredBatch, check_objective, score_params
+from .objective import PASS_WEIGHT, ParamsScores, ScoredBatch, check_objective, score_params
 from ..runs.records import params_json
 from .solve import EcSolver
 from ..search.space import SearchSpace
 
 if TYPE_CHECKING:
     from ..camera import FisheyeCamera
+    from ..compensation import Deviation
     from ..scene import Scene
+    from .compensated import MembersCompensation
 
 __all__ = ["Member", "Aggregate", "parse_aggregate", "MembersSolver", "MembersScorer",
            "check_members", "check_cameras", "worst_ec_json", "member_evaluators", "SOLVE_MODES", "OBJECTIVE_COMBINE", "COMBINES"]
@@ -65,13 +67,15 @@ COMBINES = ("sum-violation", "min")
 @dataclass(frozen=True)
 class Member:
     """One label image a candidate is judged on: its name (the vehicle, or a sample's
-    label), the fisheye label image (H_i, W_i) uint8, the camera that saw it and the scene
-    (for ECs that read its geometry; None when unknown)."""
+    label), the fisheye label image (H_i, W_i) uint8, the camera that saw it, the scene
+    (for ECs that read its geometry; None when unknown) and, for a sample of a robust run
+    with compensation, the deviation the end-of-line station reads for it."""
 
     name: str
     labels: np.ndarray
     camera: FisheyeCamera
     scene: Scene | None = None
+    measured: Deviation | None = None
 
 
 @dataclass(frozen=True)
@@ -199,7 +203,8 @@ class MembersScorer:
     def __init__(self, evaluators: Sequence[ImageEvaluator], space: SearchSpace,
                  solver: Callable[[IspParams], IspParams] | None = None,
                  objective: str = "log-score", aggregate: Aggregate = Aggregate(),
-                 combine: str = OBJECTIVE_COMBINE):
+                 combine: str = OBJECTIVE_COMBINE,
+                 compensation: MembersCompensation | None = None):
         check_objective(objective)
         if combine not in COMBINES:
             raise ValueError(f"unknown combine {combine!r} (known: {', '.join(COMBINES)})")
@@ -209,12 +214,13 @@ class MembersScorer:
         self.objective = objective
         self.aggregate = aggregate
         self.combine = combine
+        self.compensation = compensation
 
     def __call__(self, xs: Sequence[np.ndarray]) -> ScoredBatch:
         params = [self.space.params(x) for x in xs]
         if self.solver is not None:
             params = [self.solver(p) for p in params]
-        per = [score_params(ev, params) for ev in self.evaluators]
+        per = self._per_member(params)
         weight = PASS_WEIGHT if self.objective == "pass-first" else 0.0
         member_obj = np.array([m.log_score - weight * m.violation for m in per])
         score = self.aggregate.reduce(np.array([m.score for m in per]))
@@ -229,6 +235,22 @@ class MembersScorer:
         return ScoredBatch(score.tolist(), objective.tolist(), passed.tolist(),
                            [params_json(p) for p in params],
                            [worst_ec_json([row[3] for row in r]) for r in members], members)
+
+
+    def _per_member(self, params: list[IspParams]) -> list[ParamsScores]:
+        """Each member's scores of the candidates: with compensation, each sample member
+        judged with its per-car values, failing where they leave the allowed range."""
+        if self.compensation is None:
+            return [score_params(ev, params) for ev in self.evaluators]
+        per = []
+        for ev, row in zip(self.evaluators, self.compensation.corrections(params)):
+            m = score_params(ev, [p if c is None else c.params for p, c in zip(params, row)])
+            out_of_range = np.array([c is not None and not c.within_range for c in row])
+            if out_of_range.any():
+                m = ParamsScores(m.score, m.log_score, m.violation + out_of_range,
+                                 m.passed & ~out_of_range, m.ec_json)
+            per.append(m)
+        return per
 
 
 def member_evaluators(members: Sequence[Member], output: OutputSpec,

@@ -20,6 +20,7 @@ from .members import OBJECTIVE_COMBINE, Aggregate
 from ..search.strategies import DEFAULT_STRATEGY, Strategy
 
 if TYPE_CHECKING:
+    from ..compensation import CompensationModel
     from ..scene import Scene
 
 __all__ = ["SearchSettings", "SearchOptions", "TuneRequest", "RunOptions", "SceneArg"]
@@ -56,6 +57,10 @@ class SearchSettings:
     combine : str
         Several members: how the ``min`` aggregate combines the members' objectives
         (:data:`rvmsim.tune.OBJECTIVE_COMBINE`: ``sum-violation`` or ``min``).
+    compensation : CompensationModel, optional
+        Several members: judge each member that carries a station reading
+        (:attr:`rvmsim.tune.Member.measured`) with its per-car values
+        (:mod:`rvmsim.tune.compensated`).
     """
 
     config: TuningConfig
@@ -67,6 +72,7 @@ class SearchSettings:
     aggregate: str | Aggregate = "min"
     solve: str = "mean"
     combine: str = OBJECTIVE_COMBINE
+    compensation: CompensationModel | None = None
 
 
 @dataclass(frozen=True)
@@ -124,6 +130,9 @@ class TuneRequest:
         nominal image and this many variation samples of it (``--robust --samples K``).
     variation_file : path, optional
         The variation to draw them from (default: each scene's ``variation`` section).
+    compensation : CompensationModel, optional
+        A robust run for the yield after end-of-line compensation: each sample is judged
+        with its per-car values (``--robust --compensation``, :mod:`rvmsim.tune.compensated`).
     scene_file : path, optional
         The path recorded for a loaded Scene given alone.
     """
@@ -139,6 +148,7 @@ class TuneRequest:
     robust_samples: int | None = None
     variation_file: str | Path | None = None
     scene_file: str | Path | None = None
+    compensation: CompensationModel | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.scenes, (tuple, list)) or not self.scenes:

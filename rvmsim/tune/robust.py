@@ -30,6 +30,7 @@ from ..errors import RvmsimError
 from .members import Member
 
 if TYPE_CHECKING:
+    from ..compensation import CompensationModel, Deviation
     from ..render import FisheyeImages
     from ..robust import Variation
     from ..scene import Scene
@@ -37,7 +38,7 @@ if TYPE_CHECKING:
     from ..runs.store import RunStore
 
 __all__ = ["ROBUST_AGGREGATE", "DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
-           "robust_members", "check_samples",
+           "robust_members", "run_compensation", "check_samples",
            "RobustSummary", "robust_summary", "write_robust_results"]
 
 #: How a robust run combines its members when ``--aggregate`` is not given (see above).
@@ -78,19 +79,36 @@ def variation_key(variations: Sequence[Variation]) -> str:
 
 def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
                    settings: RunSettings, *, progress: bool = False) -> list[Member]:
-    """The members of a robust run: per scene its nominal image, then its samples'."""
-    from ..robust import draw_samples, sample_images
+    """The members of a robust run: per scene its nominal image, then its samples' (with
+    the station's reading of each when the run tunes for the yield after compensation)."""
+    from ..compensation import measured_load_index
+    from ..robust import draw_samples, sample_images, station_readings
 
     k = settings.robust_samples
     if k is None:
         raise ValueError("not a robust run")
+    comp = run_compensation(settings)
     out: list[Member] = []
     for sc, im, var in zip(scenes, renders, run_variations(scenes, settings.variation_file)):
         out.append(Member(f"{sc.name} nominal", im.labels, im.camera, sc))
         samples = draw_samples(var, k, settings.seed)
+        readings: Sequence[Deviation | None] = [None] * len(samples)
+        if comp is not None:
+            load = var.load_states[measured_load_index(comp, [s.name for s in var.load_states])]
+            readings = station_readings(sc, samples, comp, settings.seed, load)
         for i, s_im in enumerate(sample_images(sc, samples, progress=progress, color=False)):
-            out.append(Member(f"{sc.name} sample {i + 1}", s_im.labels, s_im.camera, sc))
+            out.append(Member(f"{sc.name} sample {i + 1}", s_im.labels, s_im.camera, sc,
+                              readings[i]))
     return out
+
+
+def run_compensation(settings: RunSettings) -> CompensationModel | None:
+    """The compensation model a robust run tunes for (None: the yield before compensation)."""
+    if settings.compensation is None:
+        return None
+    from ..compensation import compensation_from_dict
+
+    return compensation_from_dict(settings.compensation)
 
 
 #: One trial's :func:`robust_summary` (a row of ``best/robust.json``'s ``top``): the worst
@@ -131,6 +149,7 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
     from ..runs.diverse import store_candidates
 
     rows = []
+    compensation = settings.compensation
     for cand, rec in store_candidates(store, settings):
         rank = cand.rank
         s = robust_summary(store, rec.idx, n_scenes, settings.robust_samples)
@@ -141,7 +160,7 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
     (run_dir / "best" / "robust.json").write_text(json.dumps(
         {"samples_per_scene": settings.robust_samples, "seed": settings.seed,
          "variation_file": settings.variation_file, "aggregate": settings.aggregate,
-         "top": rows}, indent=2))
+         "compensation": compensation, "top": rows}, indent=2))
 
 
 def check_samples(samples: int) -> int:

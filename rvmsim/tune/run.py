@@ -21,7 +21,8 @@ from ..search.config import TuningConfig, make_strategy
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
 from .loop import SearchOutcome, search_members, search_scene
 from .members import Member, parse_aggregate
-from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_variations, variation_key,
+from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compensation,
+                     run_variations, variation_key,
                      write_robust_results)
 from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
     from ..criteria import Criteria
     from ..storage import FolderLock
     from ..render import FisheyeImages
+    from ..compensation import CompensationModel
     from ..scene import Scene
 
 __all__ = ["tune", "resume", "TuneResult", "write_results",
@@ -81,13 +83,16 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
                                           else "min")).text
     robust = None if r.robust_samples is None else (
         r.robust_samples, None if r.variation_file is None else str(r.variation_file))
+    if r.compensation is not None and robust is None:
+        raise RvmsimError("--compensation: tuning for the yield after compensation needs "
+                          "--robust")
     crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
     if r.shared:  # one parameter set for every scene
         scenes = load_shared_scenes(r.scenes)
         settings = shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
                                    r.config, agg)
-        return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg),
-                [sc for _, sc in scenes], crit)
+        return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg,
+                                 r.compensation), [sc for _, sc in scenes], crit)
     scene = r.scenes[0]
     recorded: str | Path
     if isinstance(scene, Scene):
@@ -99,23 +104,33 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
         strategy=r.strategy, seed=r.seed, budget=r.budget,
         criteria_file=None if r.criteria_file is None else criteria_reference(r.criteria_file),
         config=r.config or TuningConfig())
-    return _robust_settings(settings, [sc], robust, agg), [sc], crit
+    return _robust_settings(settings, [sc], robust, agg, r.compensation), [sc], crit
 
 
 def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
-                     robust: tuple[int, str | None] | None, aggregate: str) -> RunSettings:
+                     robust: tuple[int, str | None] | None, aggregate: str,
+                     compensation: CompensationModel | None = None) -> RunSettings:
     """``settings`` made robust (``robust`` = (samples, variation file or None)), with the
-    variations checked and fingerprinted; as they are without ``robust``."""
+    variations checked and fingerprinted, and the compensation model recorded (its load
+    state checked against every variation); as they are without ``robust``."""
     import dataclasses
+
+    from ..compensation import measured_load_index
 
     if robust is None:
         return settings
     samples, variation_file = robust
     check_samples(samples)
     vfile = None if variation_file is None else str(Path(variation_file).resolve())
-    key = variation_key(run_variations(scenes, vfile))
+    variations = run_variations(scenes, vfile)
+    key = variation_key(variations)
+    if compensation is not None:
+        for v in variations:
+            measured_load_index(compensation, [s.name for s in v.load_states])
     return dataclasses.replace(settings, robust_samples=samples, variation_file=vfile,
-                               variation_key=key, aggregate=aggregate)
+                               variation_key=key, aggregate=aggregate,
+                               compensation=None if compensation is None
+                               else compensation.as_dict())
 
 
 def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
@@ -294,7 +309,8 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
     progress, on_batch = bar
     try:
         how = SearchSettings(settings.config, crit, strat,
-                             aggregate=settings.aggregate or "min")
+                             aggregate=settings.aggregate or "min",
+                             compensation=run_compensation(settings))
         opts = SearchOptions(options.workers, options.max_time, options.target_score,
                              on_batch)
         if settings.shared or members is not None:

@@ -38,7 +38,7 @@ __all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "res
 
 def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
                          resume: bool, robust: bool = False, samples: int | None = None,
-                         variation: object = None) -> None:
+                         variation: object = None, compensation: object = None) -> None:
     """``rvmsim tune``'s scene arguments against its flags (``--shared``, ``--aggregate``,
     ``--resume``).
 
@@ -47,9 +47,12 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
     RvmsimError
         One line for a bad combination.
     """
-    if not robust and (samples is not None or variation is not None):
-        raise RvmsimError(f"--{'samples' if samples is not None else 'variation'}: only with "
-                          "--robust (tune on production variation samples)")
+    if not robust and (samples is not None or variation is not None
+                       or compensation is not None):
+        flag = ("samples" if samples is not None else "variation" if variation is not None
+                else "compensation")
+        raise RvmsimError(f"--{flag}: only with --robust (tune on production variation "
+                          "samples)")
     if resume:
         if robust:
             raise RvmsimError("--resume: give no --robust (a run resumes with its own "
