@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import CompensationError
 from ..camera import FisheyeCamera, rotation_from_ypr, ypr_from_rotation
 from ..isp import IspParams, OutputSpec, input_to_output
 from ..isp.exact import map_points
@@ -236,8 +237,9 @@ class CompensationLaw:
 
     Raises
     ------
-    ValueError
-        Fewer than :data:`MIN_REFERENCE_POINTS` reference points in the nominal RVM image.
+    CompensationError
+        Fewer than :data:`MIN_REFERENCE_POINTS` reference points in the nominal RVM image
+        (one line naming the model's file and ``reference``).
     """
 
     def __init__(self, scene: Scene, platform: IspParams, output: OutputSpec,
@@ -249,8 +251,10 @@ class CompensationLaw:
         pts = reference_points(scene, platform, output, model.reference) if points is None \
             else np.asarray(points, dtype=np.float64).reshape(-1, 3)
         if len(pts) < MIN_REFERENCE_POINTS:
-            raise ValueError(f"only {len(pts)} reference points in the RVM image; the law "
-                             f"needs {MIN_REFERENCE_POINTS}")
+            raise CompensationError(model.source, "reference", (
+                f"{scene.source}: only {len(pts)} reference ground points are in the RVM "
+                f"image of this setting; the law needs {MIN_REFERENCE_POINTS} (does the view "
+                "show the ground behind the car?)"))
         self.points = pts
         cam = scene.fisheye_camera()
         self._size = (cam.width, cam.height)

@@ -53,7 +53,7 @@ class CompensationModel:
     position_sigma_mm: float = 1.0
     measured_at: str | None = None
     reference: str = "site"
-    source: str = "default"
+    source: str = "built-in default"
 
     def range_of(self, name: str) -> tuple[float, float]:
         """The allowed offset of parameter ``name`` (±inf for ``v_pan``)."""

@@ -1,0 +1,131 @@
+"""Robustness after end-of-line compensation (``rvmsim robustness --compensation``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw
+from rvmsim.criteria import CandidateEvaluator
+from rvmsim.isp import IspParams, OutputSpec
+from rvmsim.pipeline import make_evaluator
+from rvmsim.render import render_fisheye
+from rvmsim.report import write_robustness_outputs
+from rvmsim.robust import (RobustnessSettings, SampleSet, draw_samples, robustness,
+                           station_readings, variation_from_scene)
+
+from ..cli_runner import run_in_process
+from ..scenes import load_small_scene, write_small_scene
+from .conftest import ANGLES_ONLY
+from .test_robustness import _only
+
+OUTPUT = OutputSpec(640, 360)
+PERFECT = DEFAULT_COMPENSATION.with_station(0.0, 0.0)
+#: ±2.5° on every angle: EC 2-1 in the middle of its range still fails on many samples.
+WIDE_ANGLES = {"mount": {a: {"uniform": {"half_width": 2.5}}
+                         for a in ("yaw_deg", "pitch_deg", "roll_deg")}}
+
+
+@pytest.fixture(scope="module")
+def edge():
+    """The small scene and a setting with EC 2-1 (bumper centre height, [4, 8] %) in the
+    middle of its range: ±2.5° of mount pitch still makes many samples fail it."""
+    sc = load_small_scene("a", 0.25, variation=WIDE_ANGLES)
+    crit = _only("2-1")
+    ev = CandidateEvaluator(render_fisheye(sc).labels, OUTPUT, crit)
+    base = IspParams().for_input_scale(0.25)
+    shifts = np.arange(10.0, 25.0, 0.25)
+    values = np.array([ev(dataclasses.replace(base, v_shift=float(s)))["2-1"].value or 0.0
+                       for s in shifts])
+    return sc, crit, dataclasses.replace(base, v_shift=float(shifts[np.argmin(
+        np.abs(values - 6.0))]))
+
+
+def test_a_perfect_station_recovers_every_car_an_edge_setting_loses(edge, tmp_path: Path):
+    sc, crit, params = edge
+    wide = dataclasses.replace(PERFECT, ranges=(("h_pan", 0.0, 5.0), ("tilt", -5.0, 5.0)))
+    how = RobustnessSettings(OUTPUT, crit, samples=24, seed=2, scales=(1.0, 0.5),
+                             scale_samples=8, compensation=wide)
+    r = robustness(sc, params, how)
+    assert r.before_estimate is not None and r.before_estimate.yield_ < 0.8
+    assert r.yield_ == 1.0 and r.compensated is not None
+    # every corrected car measures what the car as designed measures, to about a pixel (EC
+    # 2-1 is a height in % of the image's 360 px: the bumper's edge in whole rows)
+    nominal = r.nominal.ec["2-1"].value
+    j = list(crit.ids).index("2-1")
+    row_pct = 100 / OUTPUT.height
+    assert np.abs(r.before.values[:, j] - nominal).max() > 6 * row_pct
+    assert np.abs(r.evaluation.values[:, j] - nominal).max() <= 2 * row_pct + 1e-9
+    assert r.compensated.within_range.all()
+    assert r.scale_curve[1].estimate.yield_ == 1.0  # the curve is after compensation too
+    # the cars the law corrected most are those the pitch moved most
+    pitch = np.array([s.angles_deg[1] for s in r.samples])
+    turn = np.array([c.offsets["h_pan"] for c in r.compensated.corrections])
+    assert np.corrcoef(np.abs(pitch), turn)[0, 1] > 0.8
+    doc = json.loads(write_robustness_outputs(r, tmp_path)[0].read_text())
+    before = doc["yield_before_compensation"]
+    assert before["n_pass"] == r.before_estimate.n_pass and before["n"] == 24
+    assert [e["id"] for e in before["ecs"]] == list(crit.ids)
+    assert doc["yield"] == 1.0 and set(doc["compensation"]["offsets"]) == {"pan_turn", "tilt"}
+    assert doc["compensation"]["n_out_of_range"] == 0
+    row = doc["samples"][int(np.argmax(turn))]
+    assert not row["passed_before_compensation"] and row["passed"]
+    assert set(row["correction"]["values"]) == {"h_pan", "v_pan", "tilt"}
+    html = (tmp_path / "robustness.html").read_text()
+    assert "before compensation" in html and "after compensation" in html
+    assert html.count("data:image/png;base64,") == 5
+
+
+def test_per_car_values_take_the_fast_path_to_the_full_paths_values(edge):
+    """The per-car RVM pixels (rays looked up, not recomputed) give what the full remap of
+    each sample's fisheye labels gives."""
+    sc, crit, params = edge
+    from rvmsim.criteria import default_criteria
+
+    samples = draw_samples(variation_from_scene(sc), 6, seed=4)
+    law = CompensationLaw(sc, params, OUTPUT, DEFAULT_COMPENSATION)
+    readings = station_readings(sc, samples, DEFAULT_COMPENSATION, 4,
+                                variation_from_scene(sc).load_states[0])
+    per_car = [law.correct(d).params for d in readings]
+    assert len(set(per_car)) == 6
+    images = SampleSet.of(sc, samples)
+    fast = make_evaluator(images, OUTPUT, default_criteria())
+    full = make_evaluator(images, OUTPUT, default_criteria(), path="full")
+    np.testing.assert_array_equal(fast(per_car).values, full(per_car).values)
+
+
+def test_cars_out_of_the_eol_range_fail_and_are_named(edge):
+    sc, crit, params = edge
+    narrow = dataclasses.replace(PERFECT, ranges=(("h_pan", 0.0, 1.5), ("tilt", -3.0, 3.0)))
+    r = robustness(sc, params, RobustnessSettings(OUTPUT, crit, samples=16, seed=2,
+                                                  scales=(1.0,), compensation=narrow),
+                   frames=False)
+    assert r.compensated is not None
+    out = ~r.compensated.within_range
+    assert 0 < out.sum() < 16
+    assert not r.passed[out].any()  # whatever their ECs say
+    doc = r.as_dict()
+    rows = [doc["samples"][i] for i in np.flatnonzero(out)]
+    assert all(any(f.startswith("EOL range exceeded: ") for f in row["failed"])
+               for row in rows)
+    assert doc["compensation"]["n_out_of_range"] == int(out.sum())
+    assert "fail the EOL step itself" in r.summary()
+
+
+def test_cli_compensation_writes_before_and_after(tmp_path: Path):
+    scene = write_small_scene(tmp_path, "a", variation=ANGLES_ONLY)  # ±1°
+    (tmp_path / "p.yaml").write_text("rad: 160\nv_shift: 12\n")
+    (tmp_path / "c.yaml").write_text("compensation:\n  station: {angle_sigma_deg: 0}\n")
+    res = run_in_process(["robustness", str(scene), "--params", str(tmp_path / "p.yaml"),
+                          "--samples", "8", "--scales", "1", "--out", str(tmp_path / "o"),
+                          "--compensation", str(tmp_path / "c.yaml"), "--no-progress"])
+    assert res.code in (0, 1), res.stderr
+    assert "yield after EOL compensation" in res.stdout and "before compensation" in res.stdout
+    doc = json.loads((tmp_path / "o" / "robustness.json").read_text())
+    assert doc["compensation"]["station"]["angle_sigma_deg"] == 0.0
+    assert doc["compensation"]["source"].endswith("c.yaml")
+    assert doc["yield_before_compensation"] is not None
