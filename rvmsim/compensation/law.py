@@ -38,7 +38,7 @@ import numpy as np
 from ..errors import CompensationError
 from ..camera import FisheyeCamera, rotation_from_ypr, ypr_from_rotation
 from ..isp import IspParams, OutputSpec, input_to_output
-from ..isp.exact import map_points
+from ..isp.exact import isp_rays, map_points, pixel_to_ray_matrix, plane_and_view, view_rotation
 from ..scene import Scene
 from .model import CompensationModel
 
@@ -265,6 +265,12 @@ class CompensationLaw:
                                 for v in self._vars])
         a0 = math.radians(platform.v_pan)
         self._pan0 = (platform.h_pan * math.cos(a0), platform.h_pan * math.sin(a0))
+        # Writing the view's rotation only, the output pixel of an ISP ray d is
+        # dehomog(M(x)⁻¹ d) with M(x) = R_view(x)·R_view(0)ᵀ·M(0): the fit then needs one
+        # 3×3 product per step, not the ISP's inverse map.
+        self._rotation_only = set(model.params) <= {"h_pan", "v_pan", "tilt"}
+        m0 = pixel_to_ray_matrix(platform, output)
+        self._unview = np.linalg.inv(plane_and_view(platform)[1].T @ m0)
 
     def _rvm(self, params: IspParams, camera: FisheyeCamera,
              uv: np.ndarray | None = None) -> np.ndarray:
@@ -273,6 +279,23 @@ class CompensationLaw:
             uv, _ = camera.project(self.points)
         q, ahead = input_to_output(params, uv, self._size, self.output)
         return np.where(ahead[:, None], q, np.nan)
+
+    def _rotated_px(self, x: np.ndarray, rays: np.ndarray) -> np.ndarray:
+        """RVM positions (N, 2) of ISP ``rays`` (3, N) with the view turned by the fit's
+        variables ``x`` (the rotation-only case; NaN where not ahead)."""
+        p = self.platform
+        h_pan, v_pan, tilt = p.h_pan, p.v_pan, p.tilt
+        k = 0
+        if self.model.pans:
+            ax, ay = self._pan0[0] + x[0], self._pan0[1] + x[1]
+            h_pan = math.hypot(ax, ay)
+            v_pan = math.degrees(math.atan2(ay, ax)) if h_pan > 1e-12 else p.v_pan
+            k = 2
+        if "tilt" in self.model.params:
+            tilt = p.tilt + float(x[k])
+        h = self._unview @ (view_rotation(h_pan, v_pan, tilt).T @ rays)
+        w = np.where(h[2] > 1e-12, h[2], np.nan)
+        return np.stack([h[0] / w, h[1] / w], axis=1)
 
     def params_at(self, x: np.ndarray) -> IspParams:
         """The platform setting with the fit's variables ``x`` (pan turn 2-vector offset,
@@ -299,9 +322,13 @@ class CompensationLaw:
         cam = deviated_camera(self.scene, deviation)
         uv, _ = cam.project(self.points)
         target = self.nominal_px
+        rays = isp_rays(self.platform, uv, self._size)
 
         def residual(x: np.ndarray) -> np.ndarray:
-            q = self._rvm(self.params_at(x), cam, uv) - target
+            if self._rotation_only:
+                q = self._rotated_px(x, rays) - target
+            else:
+                q = self._rvm(self.params_at(x), cam, uv) - target
             return np.nan_to_num(q, nan=1e4).ravel()
 
         fit = least_squares(residual, np.zeros(len(self._vars)), method="lm",

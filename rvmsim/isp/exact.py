@@ -52,7 +52,8 @@ import numpy as np
 
 from .params import IspParams, OutputSpec
 
-__all__ = ["IspMap", "build_map_exact", "map_points", "plane_and_view", "pixel_to_ray_matrix"]
+__all__ = ["IspMap", "build_map_exact", "map_points", "plane_and_view", "pixel_to_ray_matrix",
+           "view_rotation", "isp_rays"]
 
 
 @dataclass(frozen=True)
@@ -113,12 +114,46 @@ def _plane_and_view_lists(p: IspParams) -> tuple[list[list[float]], list[list[fl
     r_plane = [[c + x * x * k, x * y * k, s * y],
                [x * y * k, c + y * y * k, -s * x],
                [-s * y, s * x, c]]
-    a, b, g = math.radians(p.v_pan), math.radians(p.h_pan), math.radians(p.tilt - p.v_pan)
+    return r_plane, _view_lists(p.h_pan, p.v_pan, p.tilt)
+
+
+def _view_lists(h_pan: float, v_pan: float, tilt: float) -> list[list[float]]:
+    """R_view = Rz(φ_cv)·Ry(θ_cv)·Rz(α_sz − φ_cv) of pans and tilt in degrees, as lists."""
+    a, b, g = math.radians(v_pan), math.radians(h_pan), math.radians(tilt - v_pan)
     ca, sa, cb, sb, cg, sg = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(g), math.sin(g)
-    r_view = [[ca * cb * cg - sa * sg, -ca * cb * sg - sa * cg, ca * sb],
-              [sa * cb * cg + ca * sg, -sa * cb * sg + ca * cg, sa * sb],
-              [-sb * cg, sb * sg, cb]]
-    return r_plane, r_view
+    return [[ca * cb * cg - sa * sg, -ca * cb * sg - sa * cg, ca * sb],
+            [sa * cb * cg + ca * sg, -sa * cb * sg + ca * cg, sa * sb],
+            [-sb * cg, sb * sg, cb]]
+
+
+def view_rotation(h_pan: float, v_pan: float, tilt: float) -> np.ndarray:
+    """The V camera → A camera rotation of pans and tilt (degrees; step 4 of the module
+    docstring): (3, 3) float64, as :func:`plane_and_view` gives it.
+
+    Convention
+    ----------
+    Both camera frames are OpenCV's (x right, y down, z the optical axis).
+    """
+    return np.array(_view_lists(h_pan, v_pan, tilt))
+
+
+def isp_rays(p: IspParams, uv: np.ndarray, input_size: tuple[int, int]) -> np.ndarray:
+    """The rays the ISP's lens (step 5: equidistance, RAD over FOV/2, centred at the input
+    image centre moved by the H/V shifts) gives input pixels: (3, N) unit vectors in the A
+    camera frame.
+
+    Convention
+    ----------
+    ``uv`` (N, 2) input px, pixel centres at integer coordinates.
+    """
+    pts = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+    w_in, h_in = input_size
+    dx = pts[:, 0] - ((w_in - 1) / 2.0 + p.h_shift)
+    dy = pts[:, 1] - ((h_in - 1) / 2.0 + p.v_shift)
+    r = np.hypot(dx, dy)
+    theta = r / (p.rad / math.radians(p.fov / 2.0))
+    s = np.where(r > 0, np.sin(theta) / np.where(r > 0, r, 1.0), 0.0)
+    return np.stack([s * dx, s * dy, np.cos(theta)])
 
 
 def pixel_to_ray_matrix(p: IspParams, out: OutputSpec) -> np.ndarray:

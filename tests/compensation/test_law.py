@@ -158,3 +158,22 @@ def test_the_station_error_has_the_models_sigma_and_repeats_per_car():
     perfect = model.with_station(0.0, 0.0)
     d = Deviation(yaw_deg=0.3)
     assert measured_deviation(d, perfect, 3, 17) == d
+
+
+def test_the_fits_turned_view_is_the_isps_inverse_map(nominal):
+    """The rotation-only fit's shortcut (one 3×3 product per step) gives the positions the
+    ISP's exact inverse map gives for the same per-car values."""
+    from rvmsim.isp import input_to_output
+    from rvmsim.isp.exact import isp_rays
+
+    sc, p, _ = nominal
+    p = dataclasses.replace(p, h_pan=4.0, v_pan=30.0, tilt=2.0)  # a platform with pans
+    law = CompensationLaw(sc, p, OUTPUT, DEFAULT_COMPENSATION)
+    cam = deviated_camera(sc, Deviation(yaw_deg=0.7, roll_deg=-0.4))
+    uv, _ = cam.project(law.points)
+    size = (cam.width, cam.height)
+    rng = np.random.default_rng(1)
+    for x in rng.uniform(-2.0, 2.0, (5, 3)):
+        q, ahead = input_to_output(law.params_at(x), uv, size, OUTPUT)
+        got = law._rotated_px(x, isp_rays(p, uv, size))
+        np.testing.assert_allclose(got[ahead], q[ahead], atol=1e-6)

@@ -1,0 +1,169 @@
+"""Benchmark: the yield after end-of-line compensation against the station's accuracy, for
+every bundled vehicle's nominal-tuned setting (not a test; issue #25's README table).
+
+    PYTHONPATH=$PWD python3 tools/bench_compensation.py [--vehicles a,b,c,d,e,f]
+        [--samples 400] [--seed 0] [--eval-seed 1] [--sigmas 0,0.02,0.05,0.1]
+        [--mm-per-deg 10] [--budget N] [--workers 2] [--out out/yield_table]
+        [--law-cars 200] [--no-progress]
+
+For every vehicle:
+
+1. its nominal-tuned setting (``tools/yield_table.py``'s run folders under ``--out``: tuned
+   once, then read back);
+2. :func:`rvmsim.robust.robustness` without compensation and with the default compensation
+   model at each station accuracy σ of ``--sigmas`` (angles, degrees; positions
+   ``--mm-per-deg`` × σ mm: 0.1° with 1 mm, the documented default), ``--samples`` samples
+   (Sobol seed ``--eval-seed``), tolerance scale 1 only, renders cached;
+3. the σ at which the yield after compensation reaches 99 % (linear between the measured
+   points; "< smallest" or "> largest" when outside them);
+4. the cost: robustness with compensation (σ = the default) over robustness without, both
+   with the renders cached; and the law's time per car (``--law-cars`` cars, median and
+   95th percentile, after one warm-up).
+
+Prints a markdown table and the machine, and writes ``OUT/compensation.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+
+from _bench_common import cpu_model  # noqa: E402
+from yield_table import say, scene_file, tuned  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _robustness(scene: Any, params: Any, output: Any, args: argparse.Namespace,
+                model: Any) -> tuple[Any, float]:
+    from rvmsim.robust import RobustnessSettings, robustness
+
+    t0 = time.perf_counter()
+    r = robustness(scene, params, RobustnessSettings(output, samples=args.samples,
+                                                     seed=args.eval_seed, scales=(1.0,),
+                                                     compensation=model),
+                   frames=False, progress=args.progress)
+    return r, time.perf_counter() - t0
+
+
+def sigma_for(curve: list[tuple[float, float]], target: float = 0.99) -> str:
+    """The station σ (degrees) up to which the yield stays at ``target`` or above, by linear
+    interpolation between the measured (σ, yield) points (sorted by σ)."""
+    pts = sorted(curve)
+    if pts[0][1] < target:
+        return f"not even at {pts[0][0]:g}°"
+    for (s0, y0), (s1, y1) in zip(pts, pts[1:]):
+        if y1 < target:
+            return f"{s0 + (s1 - s0) * (y0 - target) / (y0 - y1):.3f}°"
+    return f"≥ {pts[-1][0]:g}°"
+
+
+def law_timing(scene: Any, params: Any, output: Any, n: int) -> dict[str, float]:
+    """The law's seconds per car on ``n`` cars of random deviations (±1°, ±5 mm)."""
+    import numpy as np
+
+    from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw, Deviation
+
+    law = CompensationLaw(scene, params, output, DEFAULT_COMPENSATION)
+    rng = np.random.default_rng(0)
+    devs = [Deviation.from_offsets(np.r_[rng.uniform(-5, 5, 3), rng.uniform(-1, 1, 3)])
+            for _ in range(n + 1)]
+    law.correct(devs[0])  # warm-up (imports)
+    times = []
+    for d in devs[1:]:
+        t0 = time.perf_counter()
+        law.correct(d)
+        times.append(time.perf_counter() - t0)
+    return {"median_ms": 1e3 * float(np.median(times)),
+            "p95_ms": 1e3 * float(np.percentile(times, 95))}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--vehicles", default="abcdef")
+    ap.add_argument("--samples", type=int, default=400)
+    ap.add_argument("--seed", type=int, default=0, help="tuning seed")
+    ap.add_argument("--eval-seed", type=int, default=1, help="Sobol seed of the samples")
+    ap.add_argument("--sigmas", default="0,0.02,0.05,0.1")
+    ap.add_argument("--mm-per-deg", type=float, default=10.0)
+    ap.add_argument("--budget", type=int, default=None)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--law-cars", type=int, default=200)
+    ap.add_argument("--out", type=Path, default=ROOT / "out" / "yield_table")
+    ap.add_argument("--no-progress", dest="progress", action="store_false")
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    from rvmsim.compensation import DEFAULT_COMPENSATION
+    from rvmsim.isp import load_params
+    from rvmsim.scene import load_scene
+
+    sigmas = [float(s) for s in args.sigmas.split(",")]
+    rows, docs = [], {}
+    for letter in args.vehicles.replace(",", ""):
+        path = scene_file(letter, 1.0, args.out)
+        say(f"vehicle {letter.upper()}")
+        setting = tuned(path, args.out / letter / f"nominal-s{args.seed}", None, args)
+        params_file = args.out / letter / "nominal.params.yaml"
+        import yaml
+
+        params_file.write_text(yaml.safe_dump(setting["isp"], sort_keys=False))
+        params, output = load_params(params_file)
+        scene = load_scene(path)
+        # the first run renders what is not cached; time the second
+        _robustness(scene, params, output, args, None)
+        before, t_before = _robustness(scene, params, output, args, None)
+        curve, after_docs, t_after = [], {}, None
+        for s in sigmas:
+            model = DEFAULT_COMPENSATION.with_station(s, s * args.mm_per_deg)
+            r, t = _robustness(scene, params, output, args, model)
+            if abs(s - DEFAULT_COMPENSATION.angle_sigma_deg) < 1e-12:
+                t_after = t
+            curve.append((s, r.yield_))
+            fails = {e.id: e.failure_rate for e in r.ecs if e.enabled and e.n_fail}
+            assert r.compensated is not None
+            after_docs[f"{s:g}"] = {"yield": r.yield_, "ci95": list(r.ci),
+                                    "failing_ecs": fails,
+                                    "out_of_range": int((~r.compensated.within_range).sum())}
+        timing = law_timing(scene, params, output, args.law_cars)
+        docs[letter] = {"name": scene.name, "isp": setting["isp"],
+                        "before": {"yield": before.yield_, "ci95": list(before.ci)},
+                        "after": after_docs, "sigma_for_99": sigma_for(curve),
+                        "seconds_without": t_before, "seconds_with_default": t_after,
+                        "law": timing}
+        lo, hi = before.ci
+        cells = [f"{100 * after_docs[f'{s:g}']['yield']:.1f} %" for s in sigmas]
+        rows.append(f"| {scene.name} | {100 * before.yield_:.1f} % ({100 * lo:.1f}–"
+                    f"{100 * hi:.1f}) | " + " | ".join(cells) + f" | {sigma_for(curve)} |")
+        say(rows[-1])
+    head = ("| vehicle | before (95 % CI) | " + " | ".join(
+        f"after, σ {s:g}° / {s * args.mm_per_deg:g} mm" for s in sigmas)
+        + " | σ for 99 % |")
+    print(head)
+    print("|" + "---|" * (3 + len(sigmas)))
+    print("\n".join(rows))
+    print()
+    for letter, d in docs.items():
+        ratio = (d["seconds_with_default"] / d["seconds_without"]
+                 if d["seconds_with_default"] else float("nan"))
+        print(f"{d['name']}: robustness {d['seconds_without']:.1f} s without, "
+              f"{d['seconds_with_default'] or float('nan'):.1f} s with compensation "
+              f"({ratio:.2f}x); law {d['law']['median_ms']:.2f} ms per car "
+              f"(p95 {d['law']['p95_ms']:.2f} ms)")
+    machine = f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    print(f"\nmachine: {machine}; {args.samples} samples, Sobol seed {args.eval_seed}")
+    (args.out / "compensation.json").write_text(json.dumps(
+        {"machine": machine, "samples": args.samples, "eval_seed": args.eval_seed,
+         "sigmas_deg": sigmas, "mm_per_deg": args.mm_per_deg, "vehicles": docs}, indent=1))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
