@@ -3,7 +3,8 @@ their fisheye images (rotations re-folded, few renders) and the yield of an ISP 
 
 Modules: :mod:`.variation` (the variation model), :mod:`.samples` (Sobol draws),
 :mod:`.images` (sample images), :mod:`.stats` (yield, confidence interval, what drives
-failures), :mod:`.robustness` (:func:`robustness`).  See docs/robustness.md.
+failures), :mod:`.sensitivity` (each EC's value as a formula of the offsets and load),
+:mod:`.robustness` (:func:`robustness`).  See docs/robustness.md.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from .stats import (
     failure_drivers,
     ec_margins,
 )
+from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes, GOOD_R2
 from .robustness import (
     EcStats,
     ScalePoint,
@@ -70,6 +72,10 @@ __all__ = [
     "AxisEffect",
     "failure_drivers",
     "ec_margins",
+    "Sensitivity",
+    "fit_sensitivity",
+    "sensitivity_axes",
+    "GOOD_R2",
     "EcStats",
     "ScalePoint",
     "RobustnessResult",
