@@ -11,12 +11,13 @@ from .kannala_brandt import (
     distort_theta_derivative,
     undistort_theta,
 )
-from .mount import rotation_from_ypr
+from .mount import rotation_from_ypr, ypr_from_rotation
 from .fisheye import FisheyeCamera
 
 __all__ = [
     "FisheyeCamera",
     "rotation_from_ypr",
+    "ypr_from_rotation",
     "LensModel",
     "newton_undistort",
     "Equidistance",

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["rotation_from_ypr"]
+__all__ = ["rotation_from_ypr", "ypr_from_rotation"]
 
 
 def _rot_x(a: float) -> np.ndarray:
@@ -56,3 +56,13 @@ def rotation_from_ypr(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.n
     return (
         _rot_y(np.radians(yaw_deg)) @ _rot_x(-np.radians(pitch_deg)) @ _rot_z(np.radians(roll_deg))
     )
+
+
+def ypr_from_rotation(rotation: np.ndarray) -> np.ndarray:
+    """Mount yaw, pitch, roll (degrees) of a camera-to-scene rotation: the inverse of
+    :func:`rotation_from_ypr` (``Ry(yaw) @ Rx(-pitch) @ Rz(roll)``; pitch in [−90°, 90°])."""
+    r = np.asarray(rotation, dtype=np.float64)
+    pitch = np.arcsin(np.clip(r[1, 2], -1.0, 1.0))
+    yaw = np.arctan2(r[0, 2], r[2, 2])
+    roll = np.arctan2(r[1, 0], r[1, 1])
+    return np.degrees([yaw, pitch, roll])

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..camera import FisheyeCamera
+from ..camera import FisheyeCamera, ypr_from_rotation
 from .board import BoardLayout, BoardShade
 from .capture import grey
 from .charuco import detect_charuco
@@ -93,16 +93,6 @@ class BoardStart:
     rms_px: float
     colour_score: float
     ambiguous: bool
-
-
-def ypr_from_rotation(rotation: np.ndarray) -> np.ndarray:
-    """Mount yaw, pitch, roll (degrees) of a camera-to-scene rotation: the inverse of
-    :func:`rvmsim.camera.rotation_from_ypr` (``Ry(yaw) @ Rx(-pitch) @ Rz(roll)``)."""
-    r = np.asarray(rotation, dtype=np.float64)
-    pitch = np.arcsin(np.clip(r[1, 2], -1.0, 1.0))
-    yaw = np.arctan2(r[0, 2], r[2, 2])
-    roll = np.arctan2(r[1, 0], r[1, 1])
-    return np.degrees([yaw, pitch, roll])
 
 
 def _view_basis(direction: np.ndarray) -> np.ndarray:
