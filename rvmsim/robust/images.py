@@ -123,6 +123,7 @@ def _viewpoint_camera(scene: Scene, sample: MountSample, scale: float) -> Fishey
 def cover_for(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0) -> CubeLayout:
     """The covering layout for ``samples``' rotations: a 5-level grid over each angle's
     range (the samples' largest offset rounded up to :data:`ANGLE_STEP_DEG`, plus a step)."""
+    _unloaded(scene)
     m = scene.camera.mount
     cam = scene.fisheye_camera()
     cam = cam.scaled(scale) if scale != 1.0 else cam
