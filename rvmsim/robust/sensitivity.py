@@ -11,9 +11,10 @@ than the reference (the variation's first):
   of a difference (EC 2-3, the bumper's left/right difference, is ``|16.0·yaw + 16.5·roll|``
   px on vehicle A).  Fitted by alternating signs: with the signs of the linear part fixed,
   the model is linear in the sign-flipped values; the signs are re-chosen from the fit until
-  they stop changing.  The starts are the linear fit and the rank-one part of a quadratic
-  fit of ``v²`` (whose leading eigenvector is the direction of ``b``), so a symmetric EC,
-  which a linear fit sees as flat, is found.
+  they stop changing.  The starts are the linear fit, the rank-one part of a quadratic fit
+  of ``v²`` (whose leading eigenvector is the direction of ``b``; when there are samples
+  enough for it) and the signs of each axis and of each sum and difference of two, so a
+  symmetric EC, which a linear fit sees as flat, is found.
 
 The model with the higher R² is kept (the abs model only when its linear part changes sign
 within the samples: otherwise it is the linear one).  The columns are standardised for the
@@ -264,21 +265,40 @@ def _abs_start(d: _Design, y: np.ndarray) -> np.ndarray | None:
     return g
 
 
+def _axis_starts(d: _Design) -> list[np.ndarray]:
+    """Starts for the abs model that need no more samples than it has terms: each axis
+    alone and each pair of axes, both ways (the signs of its inside follow one axis, or a
+    sum or difference of two)."""
+    k = d.n_axes
+    out = []
+    for i in range(k):
+        for j in range(i, k):
+            for sign in ((1.0,) if i == j else (1.0, -1.0)):
+                g = np.zeros(d.x.shape[1])
+                g[1 + i] += 1.0
+                g[1 + j] += sign if i != j else 0.0
+                out.append(g)
+    return out
+
+
 def _abs(x: np.ndarray, y: np.ndarray, starts: Sequence[np.ndarray]) -> np.ndarray:
     """The abs model's standardised coefficients: alternate signs and linear fits of the
     sign-flipped values from each start; the least residual wins."""
+    pinv = np.linalg.pinv(x)  # every sign pattern's least squares: one product
     best, best_ss = starts[0], math.inf
+    seen: set[bytes] = set()  # sign patterns already followed (the path from one is known)
     for g in starts:
-        signs: np.ndarray | None = None
         for _ in range(_MAX_FLIPS):
-            ss = float(np.sum((np.abs(x @ g) - y) ** 2))
+            pred = x @ g
+            ss = float(np.sum((np.abs(pred) - y) ** 2))
             if ss < best_ss:
                 best, best_ss = g, ss
-            s = np.where(x @ g >= 0.0, 1.0, -1.0)
-            if signs is not None and np.array_equal(s, signs):
+            s = pred >= 0.0
+            key = np.packbits(s).tobytes()
+            if key in seen:
                 break
-            signs = s
-            g = _linear(x, s * y)
+            seen.add(key)
+            g = pinv @ (np.where(s, 1.0, -1.0) * y)
     return best
 
 
@@ -297,7 +317,7 @@ def _fit(d: _Design, y: np.ndarray, model: str,
     if model == "abs":
         starts = [g] + ([start] if start is not None else [])
         quad = _abs_start(d, y)
-        g = _abs(d.x, y, starts + ([quad] if quad is not None else []))
+        g = _abs(d.x, y, starts + ([quad] if quad is not None else []) + _axis_starts(d))
         return g, np.abs(d.x @ g)
     return g, d.x @ g
 

@@ -125,3 +125,17 @@ def test_a_constant_value_has_no_terms():
     assert s.describe() == "1-4 = 5.00 px on every sample"
     d = s.as_dict()
     assert d["model"] == "linear" and d["coefficients"] == {} and d["good"]
+
+
+def test_the_absolute_value_is_found_with_few_samples():
+    """With fewer samples than the quadratic start has terms (30 for six axes and three
+    load states), the starts from each axis and each sum or difference of two find it."""
+    axes, loads = _samples(n=24, seed=11)
+    rng = np.random.default_rng(12)
+    v = np.abs(16.0 * axes["yaw_deg"] - 16.5 * axes["roll_deg"]) + rng.normal(0, 0.6, 24)
+    s = fit_sensitivity(v, axes, loads, states=STATES, unit="px")
+    assert s is not None and s.model == "abs" and s.good
+    coef = dict(s.coefficients)
+    assert set(coef) == {"yaw_deg", "roll_deg"}
+    assert abs(coef["yaw_deg"]) == pytest.approx(16.0, rel=0.1)
+    assert coef["roll_deg"] == pytest.approx(-16.5 * np.sign(coef["yaw_deg"]), rel=0.1)
