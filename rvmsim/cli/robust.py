@@ -48,32 +48,44 @@ __all__ = ["robustness"]
                    "(or a variation file with a compensation section), or 'default' "
                    "(docs/compensation.md).  The yield is then the yield after it; the "
                    "yield before is reported beside it.")
+@click.option("--export-sample", "export_samples", type=Integer(0, 99999), multiple=True,
+              metavar="N", help="Also write sample N's scene (its mount offsets and load "
+                                "state; repeatable) as OUT/sample_N.yaml, with what was "
+                                "measured on it in OUT/sample_N.json.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Path,
                min_yield: float | None, variation_file: Path | None,
                criteria_file: Path | None, scale: float, scales: tuple[float, ...],
                scale_samples: int | None, workers: int, scheduler: str | None,
-               compensation: str | None, progress: bool) -> None:
+               compensation: str | None, export_samples: tuple[int, ...],
+               progress: bool) -> None:
     """Yield of the ISP setting in --params over SCENE's production variation.
 
     Draws mount-tolerance and load-state samples (the scene's variation section, or
     --variation), evaluates every EC on each, and writes robustness.json and
     robustness.html.  With --compensation each car is first corrected at the end of the
     line (its measured deviation turned into per-car ISP values) and the yield is the yield
-    after that.  Exit status: 0 the yield is at least --min-yield (or none given), 1 below
-    it, 2 an error.
+    after that.  With --export-sample N, also sample N as a scene file (``rvmsim evaluate``
+    renders it in full: docs/robustness.md).  Exit status: 0 the yield is at least
+    --min-yield (or none given), 1 below it, 2 an error.
     """
     from ..batch import make_executor
     from ..compensation import compensation_for
     from ..criteria import load_criteria
     from ..report import write_robustness_outputs
     from ..robust import RobustnessSettings, variation_for
+    from ..robust import SampleExport, write_sample_scenes
     from ..robust import robustness as run_robustness
-    from ..scene import load_scene
+    from ..scene import read_scene_document
 
+    for n in export_samples:
+        if n >= samples:
+            raise click.BadParameter(f"no sample {n}: --samples {samples} draws samples 0 to "
+                                     f"{samples - 1}", click.get_current_context(),
+                                     param_hint="--export-sample")
     params, output = load_isp(params_file)
     criteria = load_criteria(criteria_file)
-    sc = load_scene(scene)
+    sc, document = read_scene_document(scene)
     check_scale(sc, params, scale)
     settings = RobustnessSettings(output, criteria, variation_for(sc, variation_file), samples,
                                   seed, scales, scale_samples, scale, min_yield,
@@ -81,6 +93,8 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     with make_executor(scheduler, workers) as runner:
         result = run_robustness(sc, params, settings, runner=runner, progress=progress)
     written = write_robustness_outputs(result, out)
+    written += write_sample_scenes(result, document, sc, export_samples, out,
+                                   SampleExport(params_file, criteria_file, scale))
     click.echo(result.summary())
     click.echo(f"wrote {', '.join(p.name for p in written)} in {out} "
                f"({result.timings['total']:.1f} s)")

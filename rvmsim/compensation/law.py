@@ -80,15 +80,19 @@ class Deviation:
 
 
 def deviated_camera(scene: Scene, deviation: Deviation) -> FisheyeCamera:
-    """The scene's camera (full sensor) at its mount moved by ``deviation``."""
+    """The scene's camera (full sensor) at its mount moved by ``deviation`` (on the body:
+    a scene's ``load_state`` then moves it with the body, as it moves the nominal one)."""
     m = scene.camera.mount
-    cam = scene.fisheye_camera()
+    cam = scene.camera.to_camera()
     d = deviation
     rot = rotation_from_ypr(m.yaw_deg + d.yaw_deg, m.pitch_deg + d.pitch_deg,
                             m.roll_deg + d.roll_deg)
     pos = np.asarray(m.position, dtype=np.float64) + np.array([d.x_mm, d.y_mm, d.z_mm]) / 1000.0
-    return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
-                         cam.skew, cam.fov_deg, rot, pos)
+    moved = FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
+                          cam.skew, cam.fov_deg, rot, pos)
+    if scene.load_state is None:
+        return moved
+    return scene.load_state.camera(moved, m.position)
 
 
 def loaded_deviation(scene: Scene, deviation: Deviation, height_mm: float,

@@ -2,7 +2,7 @@
 
 A tuning run renders its scene once; re-runs (and resumed runs) read the images back.  The
 key (:func:`scene_key`) hashes the validated scene's content (every key, with defaults filled
-in, so comments and formatting do not count), the bytes of every mesh file it names (not
+in, so comments and formatting do not count; the ``load_state`` too), the bytes of every mesh file it names (not
 their paths: the same scene loaded from another folder hits the same entry), the render scale
 and the renderer's version, so changing any of them renders again.  Images are PNGs (no
 pickle): ``<cache>/<key>/fisheye_color.png``, ``fisheye_labels.png``, ``camera.json``.
@@ -57,6 +57,8 @@ def scene_key(scene: Scene, scale: float = 1.0) -> str:
         24 hex digits.
     """
     doc = scene.model_dump(mode="json")
+    if scene.load_state is not None:  # not dumped (unloaded scenes keep their keys)
+        doc["load_state"] = scene.load_state.model_dump(mode="json")
     for key, part in mesh_parts(scene):
         node = doc
         *path, last = key.split(".")

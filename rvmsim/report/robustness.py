@@ -1,10 +1,11 @@
 """The robustness page: one self-contained HTML page for an ISP setting's yield over
 production variation (``rvmsim robustness``).
 
-Yield with its 95 % interval, a table per EC (failure rate, worst value and margin, the
-axis driving its failures), per-EC margin histograms, the yield against the tolerance scale
-factor, and the worst sample's annotated RVM image next to the nominal one (PNG data URIs,
-built with the page kit :mod:`.page`).  Every string from a user's files is HTML-escaped.
+Yield with its 95 % interval, a table per EC (failure rate, worst value and margin, its
+value as a fitted formula of the offsets and load, and the axis whose terciles differ
+most), per-EC margin histograms, the yield against the tolerance scale factor, and the
+worst sample's annotated RVM image next to the nominal one (PNG data URIs, built with the
+page kit :mod:`.page`).  Every string from a user's files is HTML-escaped.
 """
 
 from __future__ import annotations
@@ -78,9 +79,7 @@ def _ec_rows(result: RobustnessResult) -> str:
     rows = []
     for e in result.ecs:
         cls = "off" if not e.enabled else ("fail" if e.n_fail else "pass")
-        d = e.driver
-        why = escape(d.describe()) if d is not None else (
-            "every sample fails" if e.n_fail == result.estimate.n else "")
+        why = _why(e, result.estimate.n)
         rng = f"[{'–' if e.low is None else f'{e.low:g}'}, {'–' if e.high is None else f'{e.high:g}'}]"
         rows.append(
             f'<tr class="{cls}"><td>{escape(e.id)}</td><td>{escape(e.name)}</td>'
@@ -155,6 +154,19 @@ land where the nominal car shows them. Model: {escape(m.source)}.</p>
 platform setting (red: the allowed range).</figcaption></figure>"""
 
 
+def _why(e: EcStats, n: int) -> str:
+    """The EC's sensitivity fit (when it fails, or the fit explains it), then its failure
+    rate per tercile of the strongest axis in small print."""
+    d = e.driver
+    terciles = escape(d.describe()) if d is not None else (
+        "every sample fails" if e.n_fail and e.n_fail == n else "")
+    s = e.sensitivity
+    fit = "" if s is None or not (e.n_fail or s.good) else escape(s.describe())
+    if fit and terciles:
+        return f'{fit}<br><small>terciles: {terciles}</small>'
+    return fit or terciles
+
+
 def _sample_text(result: RobustnessResult) -> str:
     s = result.samples[result.worst_index]
     parts = [f"{n} {v:+.3g}" for n, v in zip(("x", "y", "z"), s.position_mm)]
@@ -189,7 +201,8 @@ seed {result.seed}. The nominal car: {nominal} (EC score {result.nominal.ec.scor
 {_compensation_section(result)}
 <h2>Evaluation criteria over the samples{"" if result.compensated is None else " (after compensation)"}</h2>
 <table><tr><th>EC</th><th>measurement</th><th>range</th><th>fails</th><th>worst value</th>
-<th>worst margin</th><th>driven by (failure rate per tercile of the axis)</th></tr>
+<th>worst margin</th><th>what drives it: fitted formula (EC unit per mm or degree; [state]:
+1 in that load state) and the failure rate per tercile of the strongest axis</th></tr>
 {_ec_rows(result)}</table>
 <h2>Margins</h2><figure><img src="{hist}" alt="margin histograms"><figcaption>Margin of
 each sample per EC (distance to the nearer end of its range; below 0 fails).</figcaption></figure>

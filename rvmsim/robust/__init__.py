@@ -3,7 +3,9 @@ their fisheye images (rotations re-folded, few renders) and the yield of an ISP 
 
 Modules: :mod:`.variation` (the variation model), :mod:`.samples` (Sobol draws),
 :mod:`.images` (sample images), :mod:`.stats` (yield, confidence interval, what drives
-failures), :mod:`.robustness` (:func:`robustness`).  See docs/robustness.md.
+failures), :mod:`.sensitivity` (each EC's value as a formula of the offsets and load),
+:mod:`.robustness` (:func:`robustness`), :mod:`.export` (a sample as a scene file).
+See docs/robustness.md.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ from .stats import (
 )
 from .compensated import (CompensatedSamples, compensate_samples, station_readings,
                           true_deviation)
+from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes, GOOD_R2
+from .export import SampleExport, sample_scene_document, write_sample_scenes
 from .robustness import (
     EcStats,
     ScalePoint,
@@ -76,6 +80,13 @@ __all__ = [
     "compensate_samples",
     "station_readings",
     "true_deviation",
+    "Sensitivity",
+    "fit_sensitivity",
+    "sensitivity_axes",
+    "GOOD_R2",
+    "SampleExport",
+    "sample_scene_document",
+    "write_sample_scenes",
     "EcStats",
     "ScalePoint",
     "RobustnessResult",

@@ -41,7 +41,8 @@ from ..pipeline import FisheyeLabels, RvmPixels
 from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, TaskRunner, cached_cube,
                       cover_layout, fold, fold_labels, nearest_labels, read_cube,
                       refold_coords, refold_layout, render_cubes)
-from ..scene import Scene, build_parts
+from ..errors import SceneError
+from ..scene import Scene, body_motion, build_parts
 from .samples import MountSample
 from .variation import LoadState
 
@@ -61,23 +62,43 @@ def _body_rotation(load: LoadState) -> np.ndarray:
     return rotation_from_ypr(0.0, load.pitch_deg, 0.0)
 
 
+def _unloaded(scene: Scene) -> None:
+    """Samples carry their own load states: a scene with one (a single loaded car, e.g. an
+    exported sample) is refused rather than loaded twice."""
+    if scene.load_state is not None:
+        raise SceneError(scene.source, "load_state",
+                         "a scene with a load state is one loaded car; production variation "
+                         "draws the load states of its variation (remove load_state)")
+
+
 def body_pose(scene: Scene, load: LoadState) -> np.ndarray | None:
     """The (4, 4) rigid motion of the vehicle's parts under ``load`` (None: unmoved): the
-    body pitched about the camera's nominal centre, then lowered by the camera's drop."""
+    body pitched about the camera's nominal centre, then lowered by the camera's drop
+    (:func:`rvmsim.scene.body_motion`, as a scene's ``load_state`` moves it).
+
+    Raises
+    ------
+    SceneError
+        When ``scene`` has a ``load_state`` of its own.
+    """
+    _unloaded(scene)
     if load.height_mm == 0.0 and load.pitch_deg == 0.0:
         return None
-    p0 = np.asarray(scene.camera.mount.position, dtype=np.float64)
-    rb = _body_rotation(load)
-    pose = np.eye(4)
-    pose[:3, :3] = rb
-    pose[:3, 3] = p0 - rb @ p0 + np.array([0.0, -load.height_mm / 1000.0, 0.0])
-    return pose
+    return body_motion(load.height_mm, load.pitch_deg,
+                       np.asarray(scene.camera.mount.position, dtype=np.float64))
 
 
 def sample_camera(scene: Scene, sample: MountSample, *, scale: float = 1.0,
                   rendered: bool = True) -> FisheyeCamera:
     """The camera of ``sample``: its pose per the module's convention, the scene's lens at
-    ``scale`` of the sensor; at the rendered position (``rendered``) or the drawn one."""
+    ``scale`` of the sensor; at the rendered position (``rendered``) or the drawn one.
+
+    Raises
+    ------
+    SceneError
+        When ``scene`` has a ``load_state`` of its own.
+    """
+    _unloaded(scene)
     m = scene.camera.mount
     cam = scene.fisheye_camera()
     cam = cam.scaled(scale) if scale != 1.0 else cam
@@ -102,6 +123,7 @@ def _viewpoint_camera(scene: Scene, sample: MountSample, scale: float) -> Fishey
 def cover_for(scene: Scene, samples: Sequence[MountSample], *, scale: float = 1.0) -> CubeLayout:
     """The covering layout for ``samples``' rotations: a 5-level grid over each angle's
     range (the samples' largest offset rounded up to :data:`ANGLE_STEP_DEG`, plus a step)."""
+    _unloaded(scene)
     m = scene.camera.mount
     cam = scene.fisheye_camera()
     cam = cam.scaled(scale) if scale != 1.0 else cam

@@ -31,6 +31,7 @@ from ..render import TaskRunner
 from .compensated import CompensatedSamples, compensate_samples
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
+from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
 from .variation import MOUNT_AXES, Variation, variation_from_scene
 
@@ -91,8 +92,10 @@ def _scaled_params(scene: Scene, params: IspParams, scale: float) -> IspParams:
 @dataclass(frozen=True)
 class EcStats:
     """One EC over the samples: failure rate, worst value and margin (signed distance to
-    the nearer end of the range, EC unit; < 0 fails), the margins (histograms) and the axes
-    driving its failures (strongest first; :func:`~rvmsim.robust.stats.failure_drivers`)."""
+    the nearer end of the range, EC unit; < 0 fails), the margins (histograms), the axes
+    driving its failures (strongest first; :func:`~rvmsim.robust.stats.failure_drivers`)
+    and its value as a formula of the offsets and load
+    (:func:`~rvmsim.robust.sensitivity.fit_sensitivity`; None: too few measured)."""
 
     id: str
     name: str
@@ -107,6 +110,7 @@ class EcStats:
     worst_sample: int
     margins: tuple[float, ...]
     drivers: tuple[AxisEffect, ...] = ()
+    sensitivity: Sensitivity | None = None
 
     @property
     def driver(self) -> AxisEffect | None:
@@ -123,7 +127,8 @@ class EcStats:
                 "worst_value": self.worst_value, "worst_margin": self.worst_margin,
                 "worst_sample": self.worst_sample,
                 "driver": None if d is None else d.describe(),
-                "axes": [e.as_dict() for e in self.drivers]}
+                "axes": [e.as_dict() for e in self.drivers],
+                "sensitivity": None if self.sensitivity is None else self.sensitivity.as_dict()}
 
 
 @dataclass(frozen=True)
@@ -256,12 +261,9 @@ class RobustnessResult:
                              f"{first.exceeded[0]})")
         for e in self.ecs:
             if e.enabled and e.n_fail:
-                d = e.driver
                 lines.append(f"  EC {e.id} fails on {100 * e.failure_rate:.1f} % (worst "
                              f"{_num(e.worst_value)} {e.unit}, margin {_num(e.worst_margin)})"
-                             + (f"; driven by {d.describe()}" if d is not None else
-                                "; on every sample: no axis drives it"
-                                if e.n_fail == self.estimate.n else ""))
+                             + _driver_text(e, self.estimate.n))
         lines.append("  yield by tolerance scale: " + ", ".join(
             f"{p.scale:g}x {100 * p.estimate.yield_:.0f} %" for p in self.scale_curve))
         return "\n".join(lines)
@@ -278,11 +280,24 @@ def _num(x: float | None) -> str:
     return "—" if x is None else f"{x:.3g}"
 
 
+def _driver_text(e: EcStats, n: int) -> str:
+    """``; 2-3 ≈ |16.0·yaw + 16.5·roll| px, R² 0.99 (terciles: roll_deg …)``."""
+    d = e.driver
+    terciles = (d.describe() if d is not None else
+                "on every sample: no axis drives it" if e.n_fail == n else "")
+    if e.sensitivity is None:
+        return f"; driven by {terciles}" if d is not None else (
+            f"; {terciles}" if terciles else "")
+    return f"; {e.sensitivity.describe()}" + (f" (terciles: {terciles})" if terciles else "")
+
+
 def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: EcBatch,
               variation: Variation) -> tuple[EcStats, ...]:
     axes = {n: np.array([s.offsets[i] for s in samples])
             for i, n in enumerate(MOUNT_AXES) if variation.axes[i].varies}
     loads = np.array([s.load.name for s in samples])
+    seen = sensitivity_axes(samples, variation)
+    states = [s.name for s in variation.load_states]
     out = []
     for j, d in enumerate(crit.ecs):
         c = crit.items[d.id]
@@ -296,7 +311,9 @@ def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: EcBatch,
             float(failed.mean()), None if np.isnan(worst_value) else float(worst_value),
             None if np.isnan(margins[w]) else float(margins[w]), w,
             tuple(float(m) for m in margins),
-            tuple(failure_drivers(failed, axes, loads)) if failed.any() else ()))
+            tuple(failure_drivers(failed, axes, loads)) if failed.any() else (),
+            fit_sensitivity(ev.values[:, j], seen, loads, states=states, ec_id=d.id,
+                            unit=d.unit)))
     return tuple(out)
 
 

@@ -2,9 +2,10 @@
 landmarks.
 
 Modules: :mod:`.schema` (pydantic models), :mod:`.loading` (scene files → Scene),
-:mod:`.primitives` (mesh primitives, :class:`Part`), :mod:`.site` (the test site's surfaces),
-:mod:`.meshes` (:func:`build_parts`: every labelled surface), :mod:`.landmarks` (known 3D
-points), :mod:`.fmvss111` (the standard's dimensions).
+:mod:`.load_state` (the body under a load), :mod:`.primitives` (mesh primitives,
+:class:`Part`), :mod:`.site` (the test site's surfaces), :mod:`.meshes`
+(:func:`build_parts`: every labelled surface), :mod:`.landmarks` (known 3D points),
+:mod:`.fmvss111` (the standard's dimensions).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from .schema import (
     RenderSettings,
 )
 from .display import Display
+from .load_state import SceneLoadState, body_motion, MAX_LOAD_HEIGHT_MM, MAX_LOAD_PITCH_DEG
 from .variation import (
     VariationSpec,
     MountTolerance,
@@ -72,6 +74,10 @@ __all__ = [
     "GroundPattern",
     "RenderSettings",
     "Display",
+    "SceneLoadState",
+    "body_motion",
+    "MAX_LOAD_HEIGHT_MM",
+    "MAX_LOAD_PITCH_DEG",
     "VariationSpec",
     "MountTolerance",
     "AxisSpec",

@@ -168,7 +168,7 @@ def _object_landmarks(scene: Scene, letter: str, c: tuple[float, float]) -> list
     out = [Landmark(f"{letter}_top_centre", (c[0], -hgt, c[1]), L.object_body(letter),
                     "interior")]
     if letter in "ABCDE":
-        cam = scene.camera.mount.position
+        cam = scene.fisheye_camera().position  # under a load_state, the loaded camera
         az = math.degrees(math.atan2(cam[0] - c[0], cam[2] - c[1]))
         band0 = hgt - site.stripe_width
         lab = L.object_stripe(letter)

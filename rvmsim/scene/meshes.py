@@ -108,7 +108,8 @@ def _body_part(scene: Scene, name: str, label: int, default_color: Rgb) -> list[
 
 
 def build_parts(scene: Scene) -> list[Part]:
-    """Every labelled surface of ``scene``: ground, test objects, guidelines, board, body.
+    """Every labelled surface of ``scene``: ground, test objects, guidelines, board, body
+    (moved with the scene's ``load_state``, when it has one).
 
     Raises
     ------
@@ -116,9 +117,10 @@ def build_parts(scene: Scene) -> list[Part]:
         When a mesh file cannot be loaded.
     """
     v = scene.vehicle
-    parts = site_parts(scene)
+    site = site_parts(scene)
     if v is None:
-        return parts
+        return site
+    parts = list(site)
     parts += _body_part(scene, "bumper", L.BUMPER, v.paint)
     parts += _body_part(scene, "garnish", L.GARNISH, GARNISH_COLOR)
     parts += _body_part(scene, "trunk", L.TRUNK, v.paint)
@@ -126,4 +128,8 @@ def build_parts(scene: Scene) -> list[Part]:
         mesh = _load_mesh_part(scene, f"vehicle.extra.{i}.mesh", extra)
         color = extra.color if extra.color is not None else EXTRA_COLOR
         parts.append(Part(f"extra_{i}", L.EXTRA_PART_BASE + i, mesh, color))
+    motion = scene.body_motion()
+    if motion is not None:  # the body under the scene's load: every vehicle part moves
+        for p in parts[len(site):]:
+            p.mesh.apply_transform(motion)
     return parts

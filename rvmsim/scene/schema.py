@@ -26,6 +26,7 @@ from pydantic import Discriminator, Field, Tag, model_validator
 from . import fmvss111
 from ..camera import FisheyeCamera, rotation_from_ypr
 from .display import Display
+from .load_state import SceneLoadState
 from .variation import VariationSpec
 
 __all__ = [
@@ -428,6 +429,10 @@ class Scene(_Model):
     display: Display | None = Field(default=None, exclude=True)
     #: Production variation (:mod:`rvmsim.robust`); not part of the render cache's key.
     variation: VariationSpec | None = Field(default=None, exclude=True)
+    #: The body under a load (:mod:`rvmsim.scene.load_state`); None: unloaded.  Left out of
+    #: dumps so that unloaded scenes keep their render keys; the render key adds it
+    #: (:func:`rvmsim.render.scene_key`).
+    load_state: SceneLoadState | None = Field(default=None, exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).
     base_dir: str = Field(default=".", exclude=True)
     #: The file the scene was read from, for messages (not a YAML key).
@@ -439,8 +444,19 @@ class Scene(_Model):
         return self.test_site.fmvss and self.test_site.guidelines.enabled
 
     def fisheye_camera(self) -> FisheyeCamera:
-        """The rear-view camera as a :class:`~rvmsim.camera.FisheyeCamera`."""
-        return self.camera.to_camera()
+        """The rear-view camera as a :class:`~rvmsim.camera.FisheyeCamera`: at its mount
+        pose, moved with the body under ``load_state`` when there is one."""
+        cam = self.camera.to_camera()
+        if self.load_state is None:
+            return cam
+        return self.load_state.camera(cam, self.camera.mount.position)
+
+    def body_motion(self) -> np.ndarray | None:
+        """The (4, 4) rigid motion of the vehicle's parts under ``load_state`` (scene frame,
+        m; :func:`~rvmsim.scene.load_state.body_motion`), or None when unloaded."""
+        if self.load_state is None:
+            return None
+        return self.load_state.motion(self.camera.mount.position)
 
     def resolve_path(self, path: str) -> Path:
         """A path from the scene file, made absolute relative to the scene file's folder."""

@@ -8,14 +8,18 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
 from .._io import KeyPath, key_lines, read_text
+from ..camera import rotation_from_ypr
 from ..errors import SceneError
 from ..scene import Scene, load_scene
 from .verdict import PoseCorrection
 
-__all__ = ["scene_with_mount", "write_corrected_scene"]
+__all__ = ["scene_with_mount", "write_corrected_scene", "mount_correction"]
 
 _MOUNT_KEYS = ("position", "yaw_deg", "pitch_deg", "roll_deg")
 #: ``key: value  # comment`` on one line; groups: head, value, comment (with its leading
@@ -26,12 +30,38 @@ _BLOCK_ITEM = r"^[ \t]*-[ \t]*[-+.\deE]+[ \t]*(#.*)?\r?\n?$"
 
 
 def scene_with_mount(scene: Scene, correction: PoseCorrection) -> Scene:
-    """A copy of ``scene`` with the corrected mount pose (position m, angles degrees)."""
-    mount = scene.camera.mount.model_copy(update={
+    """A copy of ``scene`` with the corrected mount pose (position m, angles degrees; on the
+    unloaded body, :func:`mount_correction`).  Under a ``load_state`` the body stays where
+    it was: its pivot is pinned to the old mount position when the scene left it to the
+    mount."""
+    old = scene.camera.mount
+    mount = old.model_copy(update={
         "position": correction.position_m, "yaw_deg": correction.yaw_deg,
         "pitch_deg": correction.pitch_deg, "roll_deg": correction.roll_deg})
     camera = scene.camera.model_copy(update={"mount": mount})
-    return scene.model_copy(update={"camera": camera})
+    load = scene.load_state
+    if load is not None and load.pivot_m is None:
+        load = load.model_copy(update={"pivot_m": old.position})
+    return scene.model_copy(update={"camera": camera, "load_state": load})
+
+
+def mount_correction(scene: Scene, correction: PoseCorrection) -> PoseCorrection:
+    """``correction`` with its corrected pose as the scene's mount values.
+
+    The pose search works on the camera as the scene shows it; under a ``load_state`` that
+    is the camera moved with the body, so its corrected pose (``position_m`` and the
+    angles, scene frame) is taken back to the unloaded body (what ``camera.mount`` holds).
+    The changes (``d_*``) stay those of the camera in the scene frame.  Without a load
+    state, ``correction`` itself.
+    """
+    load = scene.load_state
+    if load is None:
+        return correction
+    rot = rotation_from_ypr(correction.yaw_deg, correction.pitch_deg, correction.roll_deg)
+    pos, ypr = load.mount_of(np.asarray(correction.position_m), rot,
+                             scene.camera.mount.position)
+    return replace(correction, position_m=pos, yaw_deg=float(ypr[0]),
+                   pitch_deg=float(ypr[1]), roll_deg=float(ypr[2]))
 
 
 def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,
@@ -42,7 +72,10 @@ def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,
     written as ``[x, y, z]`` with 4 decimals (m), the angles with 3 (degrees); a block-style
     position list becomes a flow list, and missing angle keys are added after the position.
     Mesh paths stay valid when ``out_file`` is in another folder only if they are absolute,
-    so the file is checked by loading it again.
+    so the file is checked by loading it again.  A ``load_state`` stays as it is: without a
+    ``pivot_m`` of its own its body then pitches about the corrected mount position (the
+    body shifts by about the pitch in radians times the position correction: 0.26 mm at
+    1.5° and 10 mm).
 
     Raises
     ------

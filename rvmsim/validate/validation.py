@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..camera import ypr_from_rotation
 from ..criteria import Criteria
 from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
@@ -40,7 +41,7 @@ from .outputs import compare_with_pictures, landmark_picture
 from .pose import PoseFit, PoseSearch, find_pose, pose_correction
 from .projection import corrected_pose, project
 from .rvm import compare_rvm
-from .scene_edit import scene_with_mount
+from .scene_edit import mount_correction, scene_with_mount
 from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
 
 __all__ = ["validate", "ValidationSettings", "RERENDER_SHIFT_PX"]
@@ -145,7 +146,7 @@ def validate(scene: Scene, capture: np.ndarray,
             from None
     fit = replace(fit, x=fit.x + x_start)
     landmarks = replace(search_lm, predicted_px=landmarks.predicted_px)
-    correction = pose_correction(cam, ypr0, fit.x, fit.sigma)
+    correction = mount_correction(scene, pose_correction(cam, ypr0, fit.x, fit.sigma))
     pos1, rot1 = corrected_pose(cam, ypr0, fit.x)
     matches = _landmark_matches(landmarks, fit, project(cam, pos1, rot1, landmarks.points))
     err_before, err_after = _inlier_errors(matches)
@@ -200,7 +201,8 @@ def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLand
         return np.zeros(6), synthetic, landmarks
     pos, rot = corrected_pose(synthetic.camera, ypr0, start.x)
     frame = _render_corrected(scene, synthetic,
-                              pose_correction(synthetic.camera, ypr0, start.x, np.zeros(6)),
+                              mount_correction(scene, pose_correction(
+                                  synthetic.camera, ypr0, start.x, np.zeros(6))),
                               pos, rot, progress)
     return start.x, frame, visible_landmarks(scene, frame, min_landmarks)
 
@@ -281,6 +283,9 @@ def _render_corrected(scene: Scene, synthetic: FisheyeImages, correction: PoseCo
 
 
 def _mount_ypr_deg(scene: Scene) -> np.ndarray:
-    """The scene's mount yaw, pitch, roll, degrees."""
+    """The yaw, pitch, roll (degrees) of the scene's camera: its mount angles, or under a
+    ``load_state`` those of the camera moved with the body (where the pose search starts)."""
+    if scene.load_state is not None:
+        return ypr_from_rotation(scene.fisheye_camera().rotation)
     m = scene.camera.mount
     return np.array([m.yaw_deg, m.pitch_deg, m.roll_deg], dtype=np.float64)

@@ -192,3 +192,27 @@ def test_ecs_that_read_the_scene_are_measured_on_every_sample(settings):
     same = [ev.ids.index(e) for e in paper.ids]
     np.testing.assert_allclose(ev.values[:, same], paper.values, rtol=1e-9, equal_nan=True)
     np.testing.assert_array_equal(ev.passed[:, same], paper.passed)
+
+
+def test_each_ec_gets_a_sensitivity_fit(settings):
+    """EC 2-1 (the bumper centre's height) is a linear function of the pitch over ±1°: the
+    fit names pitch first, its slope agrees with two cars pitched to the ends of the range,
+    and the summary and robustness.json carry it."""
+    from rvmsim.robust import NOMINAL_LOAD, MountSample, evaluate_samples
+
+    sc, crit, _, edge = settings
+    r = robustness(sc, edge, RobustnessSettings(OUTPUT, crit, samples=32, seed=3,
+                                                scales=(1.0,)), frames=False)
+    j = list(crit.ids).index("2-1")
+    e = r.ecs[j]
+    s = e.sensitivity
+    assert s is not None and s.good and s.model == "linear" and s.n == 32
+    assert s.coefficients[0][0] == "pitch_deg"
+    probes = [MountSample(k, (0.0, 0.0, 0.0, 0.0, p, 0.0), (0.0, 0.0, 0.0), NOMINAL_LOAD)
+              for k, p in enumerate((-1.0, 1.0))]
+    ends = evaluate_samples(sc, probes, edge, OUTPUT, crit).values[:, j]
+    assert s.coefficients[0][1] == pytest.approx((ends[1] - ends[0]) / 2.0, rel=0.25)
+    assert e.n_fail and s.describe() in r.summary()
+    doc = r.as_dict()["ecs"][j]["sensitivity"]
+    assert doc["model"] == "linear" and doc["description"] == s.describe()
+    assert doc["coefficients"]["pitch_deg"] == s.coefficients[0][1] and doc["r2"] == s.r2
