@@ -4,7 +4,7 @@ every bundled vehicle's nominal-tuned setting (not a test; issue #25's README ta
     PYTHONPATH=$PWD python3 tools/bench_compensation.py [--vehicles a,b,c,d,e,f]
         [--samples 400] [--seed 0] [--eval-seed 1] [--sigmas 0,0.02,0.05,0.1]
         [--mm-per-deg 10] [--budget N] [--workers 2] [--out out/yield_table]
-        [--law-cars 200] [--no-progress]
+        [--law-cars 200] [--robust-samples K] [--no-progress]
 
 For every vehicle:
 
@@ -20,7 +20,12 @@ For every vehicle:
    with the renders cached; and the law's time per car (``--law-cars`` cars, median and
    95th percentile, after one warm-up).
 
-Prints a markdown table and the machine, and writes ``OUT/compensation.json``.
+With ``--robust-samples K`` each vehicle is also tuned with ``--robust --samples K
+--compensation default`` (the run folder ``OUT/<vehicle>/robust-comp-k<K>-s<seed>``) and
+that setting gets a row of its own.
+
+Prints a markdown table and the machine, and writes ``OUT/compensation.json`` (or
+``compensation_<vehicles>.json`` for a subset).
 """
 
 from __future__ import annotations
@@ -86,6 +91,56 @@ def law_timing(scene: Any, params: Any, output: Any, n: int) -> dict[str, float]
             "p95_ms": 1e3 * float(np.percentile(times, 95))}
 
 
+def _vehicle(letter: str, label: str, path: Path, setting: dict[str, Any],
+             sigmas: list[float], args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
+    """One tuned setting's yields before and after compensation, its costs."""
+    import yaml
+
+    from rvmsim.compensation import DEFAULT_COMPENSATION
+    from rvmsim.isp import load_params
+    from rvmsim.scene import load_scene
+
+    params_file = args.out / letter / f"{label.split(',')[0]}.params.yaml"
+    params_file.write_text(yaml.safe_dump(setting["isp"], sort_keys=False))
+    params, output = load_params(params_file)
+    scene = load_scene(path)
+    # the first run renders what is not cached; time the second
+    _robustness(scene, params, output, args, None)
+    before, t_before = _robustness(scene, params, output, args, None)
+    curve, after_docs, t_after = [], {}, None
+    for s in sigmas:
+        model = DEFAULT_COMPENSATION.with_station(s, s * args.mm_per_deg)
+        r, t = _robustness(scene, params, output, args, model)
+        if abs(s - DEFAULT_COMPENSATION.angle_sigma_deg) < 1e-12:
+            t_after = t
+        curve.append((s, r.yield_))
+        assert r.compensated is not None
+        after_docs[f"{s:g}"] = {
+            "yield": r.yield_, "ci95": list(r.ci),
+            "failing_ecs": {e.id: e.failure_rate for e in r.ecs if e.enabled and e.n_fail},
+            "out_of_range": int((~r.compensated.within_range).sum())}
+    return f"{letter} {label}", {
+        "name": f"{scene.name}, {label}-tuned", "isp": setting["isp"],
+        "best_score": setting.get("best_score"),
+        "before": {"yield": before.yield_, "ci95": list(before.ci),
+                   "failing_ecs": {e.id: e.failure_rate for e in before.ecs
+                                   if e.enabled and e.n_fail}},
+        "after": after_docs, "sigma_for_99": sigma_for(curve),
+        "seconds_without": t_before, "seconds_with_default": t_after,
+        "law": law_timing(scene, params, output, args.law_cars)}
+
+
+def _row(d: dict[str, Any], sigmas: list[float]) -> str:
+    lo, hi = d["before"]["ci95"]
+    cells = []
+    for s in sigmas:
+        a = d["after"][f"{s:g}"]
+        cells.append(f"{100 * a['yield']:.1f} %" + (
+            f" ({100 * a['ci95'][0]:.1f})" if s == sigmas[-1] else ""))
+    return (f"| {d['name']} | {100 * d['before']['yield']:.1f} % ({100 * lo:.1f}–"
+            f"{100 * hi:.1f}) | " + " | ".join(cells) + f" | {d['sigma_for_99']} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vehicles", default="abcdef")
@@ -97,55 +152,32 @@ def main() -> None:
     ap.add_argument("--budget", type=int, default=None)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--law-cars", type=int, default=200)
+    ap.add_argument("--robust-samples", type=int, default=None)
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "yield_table")
     ap.add_argument("--no-progress", dest="progress", action="store_false")
     args = ap.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
 
     from rvmsim.compensation import DEFAULT_COMPENSATION
-    from rvmsim.isp import load_params
-    from rvmsim.scene import load_scene
 
     sigmas = [float(s) for s in args.sigmas.split(",")]
     rows, docs = [], {}
     for letter in args.vehicles.replace(",", ""):
         path = scene_file(letter, 1.0, args.out)
         say(f"vehicle {letter.upper()}")
-        setting = tuned(path, args.out / letter / f"nominal-s{args.seed}", None, args)
-        params_file = args.out / letter / "nominal.params.yaml"
-        import yaml
-
-        params_file.write_text(yaml.safe_dump(setting["isp"], sort_keys=False))
-        params, output = load_params(params_file)
-        scene = load_scene(path)
-        # the first run renders what is not cached; time the second
-        _robustness(scene, params, output, args, None)
-        before, t_before = _robustness(scene, params, output, args, None)
-        curve, after_docs, t_after = [], {}, None
-        for s in sigmas:
-            model = DEFAULT_COMPENSATION.with_station(s, s * args.mm_per_deg)
-            r, t = _robustness(scene, params, output, args, model)
-            if abs(s - DEFAULT_COMPENSATION.angle_sigma_deg) < 1e-12:
-                t_after = t
-            curve.append((s, r.yield_))
-            fails = {e.id: e.failure_rate for e in r.ecs if e.enabled and e.n_fail}
-            assert r.compensated is not None
-            after_docs[f"{s:g}"] = {"yield": r.yield_, "ci95": list(r.ci),
-                                    "failing_ecs": fails,
-                                    "out_of_range": int((~r.compensated.within_range).sum())}
-        timing = law_timing(scene, params, output, args.law_cars)
-        docs[letter] = {"name": scene.name, "isp": setting["isp"],
-                        "before": {"yield": before.yield_, "ci95": list(before.ci)},
-                        "after": after_docs, "sigma_for_99": sigma_for(curve),
-                        "seconds_without": t_before, "seconds_with_default": t_after,
-                        "law": timing}
-        lo, hi = before.ci
-        cells = [f"{100 * after_docs[f'{s:g}']['yield']:.1f} %" for s in sigmas]
-        rows.append(f"| {scene.name} | {100 * before.yield_:.1f} % ({100 * lo:.1f}–"
-                    f"{100 * hi:.1f}) | " + " | ".join(cells) + f" | {sigma_for(curve)} |")
-        say(rows[-1])
+        runs = [("nominal", f"nominal-s{args.seed}", None, None)]
+        if args.robust_samples:
+            runs.append(("robust, compensated", f"robust-comp-k{args.robust_samples}-"
+                         f"s{args.seed}", args.robust_samples, DEFAULT_COMPENSATION))
+        for label, folder, k, comp in runs:
+            setting = tuned(path, args.out / letter / folder, k, args, comp)
+            key, doc = _vehicle(letter, label, path, setting, sigmas, args)
+            docs[key] = doc
+            rows.append(_row(doc, sigmas))
+            say(rows[-1])
     head = ("| vehicle | before (95 % CI) | " + " | ".join(
         f"after, σ {s:g}° / {s * args.mm_per_deg:g} mm" for s in sigmas)
+        + " (lower 95 % bound)"
         + " | σ for 99 % |")
     print(head)
     print("|" + "---|" * (3 + len(sigmas)))
@@ -160,7 +192,10 @@ def main() -> None:
               f"(p95 {d['law']['p95_ms']:.2f} ms)")
     machine = f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     print(f"\nmachine: {machine}; {args.samples} samples, Sobol seed {args.eval_seed}")
-    (args.out / "compensation.json").write_text(json.dumps(
+    name = ("compensation.json" if sorted(args.vehicles.replace(",", "")) == list("abcdef")
+            and not args.robust_samples else f"compensation_{args.vehicles.replace(',', '')}"
+            f"{'_k' + str(args.robust_samples) if args.robust_samples else ''}.json")
+    (args.out / name).write_text(json.dumps(
         {"machine": machine, "samples": args.samples, "eval_seed": args.eval_seed,
          "sigmas_deg": sigmas, "mm_per_deg": args.mm_per_deg, "vehicles": docs}, indent=1))
 

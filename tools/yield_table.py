@@ -100,16 +100,19 @@ def _check_run(run_dir: Path, want: dict[str, Any]) -> None:
     have = {"scene": s.scene, "scene_key": s.scene_key, "strategy": s.strategy,
             "seed": s.seed, "budget": s.budget, "robust_samples": s.robust_samples,
             "variation_key": s.variation_key}
+    if s.compensation is not None:
+        have["compensation"] = s.compensation
     if have != want:
         raise SystemExit(f"{run_dir}: holds a run with other settings ({have}, wanted {want});"
                          " delete it or give another --out")
 
 
 def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
-          args: argparse.Namespace) -> dict[str, Any]:
+          args: argparse.Namespace, compensation: Any = None) -> dict[str, Any]:
     """The best setting of one tuning run in ``run_dir`` (run, resumed, or read back when a
     finished run's record ``<run_dir>.json`` is there and the scene and its variation are
-    as they were)."""
+    as they were); ``compensation``: a robust run for the yield after end-of-line
+    compensation (:class:`rvmsim.compensation.CompensationModel`)."""
     from rvmsim.isp import load_params, params_to_dict
     from rvmsim.render import scene_key
     from rvmsim.scene import load_scene
@@ -123,6 +126,8 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
             "robust_samples": robust_samples,
             "variation_key": None if robust_samples is None else variation_key(
                 run_variations([scene], None))}
+    if compensation is not None:
+        want["compensation"] = compensation.as_dict()
     rank_1 = run_dir / "top" / "rank_1.yaml"
     if record.is_file() and rank_1.is_file():
         doc = json.loads(record.read_text())
@@ -137,7 +142,8 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
     else:
         say(f"  tuning into {run_dir}")
         result = tune(TuneRequest((scene_path,), DEFAULT_STRATEGY, seed=args.seed,
-                                  budget=args.budget, robust_samples=robust_samples), run_dir,
+                                  budget=args.budget, robust_samples=robust_samples,
+                                  compensation=compensation), run_dir,
                       options=RunOptions(args.workers, progress=args.progress))
     seconds = time.perf_counter() - t0
     params, output = load_params(rank_1)
