@@ -5,7 +5,8 @@ Modules: :mod:`.schema` (pydantic models), :mod:`.loading` (scene files → Scen
 :mod:`.load_state` (the body under a load), :mod:`.primitives` (mesh primitives,
 :class:`Part`), :mod:`.site` (the test site's surfaces), :mod:`.meshes`
 (:func:`build_parts`: every labelled surface), :mod:`.landmarks` (known 3D points),
-:mod:`.fmvss111` (the standard's dimensions).
+:mod:`.fmvss111` (the standard's dimensions), :mod:`.eol` and :mod:`.station` (the
+end-of-line station's target and the station as a scene).
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ from .variation import (
     LoadStateSpec,
     MOUNT_AXES,
 )
+from .eol import EolSpec, EolPose, BOARD_TARGET
+from .station import station_scene, station_target, eol_problem
 from .compensation import CompensationSpec, StationSpec, COMPENSABLE_PARAMS, DEFAULT_RANGES
 from .loading import (
     load_scene,
@@ -83,6 +86,12 @@ __all__ = [
     "AxisSpec",
     "LoadStateSpec",
     "MOUNT_AXES",
+    "EolSpec",
+    "EolPose",
+    "BOARD_TARGET",
+    "station_scene",
+    "station_target",
+    "eol_problem",
     "CompensationSpec",
     "StationSpec",
     "COMPENSABLE_PARAMS",

@@ -17,6 +17,7 @@ from .._io import (image_size_problem, input_error_from_validation, key_lines, l
                    parse_yaml, read_text)
 from ..errors import SceneError
 from .schema import CameraSpec, MeshPart, Scene
+from .station import eol_problem
 
 __all__ = [
     "load_scene",
@@ -71,6 +72,10 @@ def scene_from_dict(
         scene.fisheye_camera()
     except ValueError as err:
         raise SceneError(source, "camera", str(err), lines.get(("camera",))) from None
+    bad = eol_problem(scene)
+    if bad is not None:
+        key, message = bad
+        raise SceneError(source, key, message, line_of(lines, tuple(key.split("."))))
     for key, part in mesh_parts(scene):
         path = scene.resolve_path(part.mesh)
         if not path.is_file():

@@ -26,6 +26,7 @@ from pydantic import Discriminator, Field, Tag, model_validator
 from . import fmvss111
 from ..camera import FisheyeCamera, rotation_from_ypr
 from .display import Display
+from .eol import EolSpec
 from .load_state import SceneLoadState
 from .variation import VariationSpec
 
@@ -47,6 +48,7 @@ __all__ = [
 ]
 
 from .board import PatternBoard
+from .pattern import GroundPattern
 from .fields import (Angle180, Metres, NonNegFloat, PositiveFloat, PositivePx, Px,
                      Rect, Rgb, Vec3, _Model)
 
@@ -292,46 +294,6 @@ class Guidelines(_Model):
         return self
 
 
-class GroundPattern(_Model):
-    """A flat black-and-white pattern lying on the ground: a calibration mat, painted squares.
-
-    The pattern has its own frame on the ground: ``u`` along the scene's +X and ``v`` along
-    +Z when ``yaw_deg`` is 0, in metres from ``origin`` (an (x, z) point of the scene).  A
-    checker of ``square_size`` squares covers the ``checker`` rectangles ``[u0, v0, u1, v1]``;
-    its squares start at the origin and the square ``[0, s] × [0, s]`` is black.  Squares cut
-    by a rectangle's border are cut there.  ``white`` rectangles are plain white and lie over
-    the checker (a mat's circle squares); ``circles`` ``[u, v, diameter]`` are black discs
-    over everything.  Every corner where four whole checker squares meet (and no white
-    rectangle or circle touches them) is a landmark for ``rvmsim validate``.
-    """
-
-    name: str = "ground pattern"
-    origin: tuple[Metres, Metres] = (0.0, 0.0)
-    yaw_deg: Angle180 = 0.0
-    square_size: PositiveFloat
-    checker: Annotated[list[Rect], Field(min_length=1)]
-    white: list[Rect] = []
-    circles: list[tuple[Metres, Metres, PositiveFloat]] = []
-    black_color: Rgb = (0.03, 0.03, 0.03)
-    white_color: Rgb = (0.92, 0.92, 0.92)
-
-    @model_validator(mode="after")
-    def _check(self) -> GroundPattern:
-        for key in ("checker", "white"):
-            for i, (u0, v0, u1, v1) in enumerate(getattr(self, key)):
-                if not (u1 > u0 and v1 > v0):
-                    raise ValueError(f"{key}[{i}]: a rectangle is [u0, v0, u1, v1] with "
-                                     f"u1 > u0 and v1 > v0, got {[u0, v0, u1, v1]}")
-        cells = sum(
-            math.ceil((u1 - u0) / self.square_size + 1) * math.ceil((v1 - v0) / self.square_size + 1)
-            for u0, v0, u1, v1 in self.checker
-        )
-        if cells > 20000:
-            raise ValueError(f"the checker has about {cells} squares (at most 20000): "
-                             "is square_size in metres?")
-        return self
-
-
 class TestSite(_Model):
     """The FMVSS 111 layout (defaults in :mod:`rvmsim.scene.fmvss111`) plus customer fixtures.
 
@@ -433,6 +395,9 @@ class Scene(_Model):
     #: dumps so that unloaded scenes keep their render keys; the render key adds it
     #: (:func:`rvmsim.render.scene_key`).
     load_state: SceneLoadState | None = Field(default=None, exclude=True)
+    #: The end-of-line station's target (:mod:`rvmsim.scene.eol`, ``rvmsim eol``); not part
+    #: of the render cache's key.
+    eol: EolSpec | None = Field(default=None, exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).
     base_dir: str = Field(default=".", exclude=True)
     #: The file the scene was read from, for messages (not a YAML key).

@@ -305,7 +305,7 @@ def dense_align(shade: GroundShade, cam: FisheyeCamera, ypr0_deg: np.ndarray) ->
 
 
 def find_pose(search: PoseSearch, board: BoardShade | None = None,
-              board_index: np.ndarray | None = None) -> PoseFit:
+              board_index: np.ndarray | None = None, *, dense: bool = True) -> PoseFit:
     """The matched landmarks and fitted pose, from the search's pose or near it.
 
     With ground patterns, the pose whose ground-pattern shade best fits the capture
@@ -324,6 +324,9 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
         The scene's board, when it has one.
     board_index : (K,) int, optional
         The board's inner corners among the landmarks.
+    dense : bool
+        Run the dense pre-alignment on the ground patterns (else the matching starts at
+        the search's pose; the shade still decides among the checker shifts).
 
     Raises
     ------
@@ -338,7 +341,8 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
     if search.scene.test_site.ground_patterns:
         ground = GroundShade.sample(search.scene, cam, search.synthetic.labels, search.capture)
         shades.append(ground)
-        x0 = dense_align(ground, cam, search.ypr0_deg)
+        if dense:
+            x0 = dense_align(ground, cam, search.ypr0_deg)
     if board is not None:
         shades.append(board)
     fit = search.match_and_fit(x0)

@@ -72,6 +72,12 @@ class ValidationSettings:
         Look for the scene's board in the capture with the chessboard detector and start
         the pose search from the pose it gives (:func:`~.board_start.find_board_start`);
         else start from the scene's pose.
+    dense_align : bool
+        With ground patterns, start the corner matching from the dense pre-alignment on
+        their shade (:func:`~.pose.dense_align`: for a scene pose tens of px off; ~1 s at
+        1280 × 960); without it, from the scene's pose (or the board start), which must
+        then be within the search radius (a station's car within ±1° and a few mm of its
+        nominal pose is).  The checker-shift disambiguation runs either way.
     """
 
     params: IspParams | None = None
@@ -81,6 +87,7 @@ class ValidationSettings:
     search_px: float = 30.0
     rerender: bool = True
     global_start: bool = True
+    dense_align: bool = True
 
 
 def validate(scene: Scene, capture: np.ndarray,
@@ -140,7 +147,8 @@ def validate(scene: Scene, capture: np.ndarray,
         fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
                                    float(settings.search_px), tolerances.min_landmarks,
                                    capture_name, named),
-                        board, None if layout is None else layout.corner_index.ravel())
+                        board, None if layout is None else layout.corner_index.ravel(),
+                        dense=settings.dense_align)
     except ValidationFailure as fail:
         raise fail.with_images(_failure_pictures(capture, synthetic, landmarks, fail.found)) \
             from None

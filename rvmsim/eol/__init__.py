@@ -1,0 +1,29 @@
+"""The end-of-line (EOL) station: each car's camera pose from a capture of the station's
+target, its per-car ISP values, and every EC on its corrected picture (``rvmsim eol``).
+
+Modules: :mod:`.geometry` (load states, the deviation of a measured pose from the nominal
+mount), :mod:`.frames` (frames of a scene from any pose), :mod:`.station` (:class:`Station`:
+one car's step), :mod:`.records` (:class:`CarResult`, :class:`StationResult`),
+:mod:`.outputs` (the per-car parameter files, eol.json, eol.csv, pictures), :mod:`.run`
+(:func:`run_station`: capture files in, an output folder out), :mod:`.synthetic` (captures
+of the scene rendered at a deviated pose).  See docs/eol.md.
+"""
+
+from __future__ import annotations
+
+from .geometry import car_camera, deviation_of, moved_camera, station_load
+from .records import CarResult, StationResult
+from .station import Station, StationSettings
+from .synthetic import synthetic_capture
+
+__all__ = [
+    "car_camera",
+    "deviation_of",
+    "moved_camera",
+    "station_load",
+    "CarResult",
+    "StationResult",
+    "Station",
+    "StationSettings",
+    "synthetic_capture",
+]

@@ -1,0 +1,81 @@
+"""Fisheye frames of a scene from any camera pose, with the body at a load state.
+
+:class:`PoseRenderer` renders one scene from many poses of one camera: the cube layout
+depends only on the lens (it is made once), the meshes are built once, and each pose renders
+the needed cube faces and folds them (:mod:`rvmsim.render`).  The station renders the
+labels at each car's measured pose this way (:meth:`PoseRenderer.labels`: not cached, a pose
+is seen once), and its nominal frame and synthetic captures through the render cache
+(:meth:`PoseRenderer.frame`, keyed on the scene, pose and body pose).
+
+Conventions
+-----------
+Images are (H, W) of the camera, pixel centres at integer coordinates; a body pose is a
+(4, 4) rigid motion of the scene frame applied to the vehicle's parts
+(:func:`rvmsim.robust.body_pose`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera import FisheyeCamera
+from ..render import (CubeLayout, FisheyeImages, cached_cube, cube_layout, fold, fold_labels,
+                      posed_parts, render_faces)
+from ..scene import Part, Scene, build_parts
+
+__all__ = ["PoseRenderer"]
+
+
+class PoseRenderer:
+    """Renders ``scene`` from poses of ``camera`` (its lens and sensor; its own pose is not
+    used), with the vehicle's parts at ``body_pose``.
+
+    Parameters
+    ----------
+    scene : Scene
+    camera : FisheyeCamera
+        Lens, intrinsics and image size (px) of every frame.
+    body_pose : (4, 4) float, optional
+        Rigid motion of the vehicle's parts (None: as modelled).
+    """
+
+    def __init__(self, scene: Scene, camera: FisheyeCamera,
+                 body_pose: np.ndarray | None = None):
+        r = scene.render
+        self.scene = scene
+        self.camera = camera
+        self.body_pose = body_pose
+        self.layout: CubeLayout = cube_layout(camera, face_size=r.face_size_px,
+                                              oversample=r.oversample,
+                                              max_face_size=r.max_face_size_px)
+        self._parts: list[Part] | None = None
+
+    def parts(self) -> list[Part]:
+        """The scene's meshes (built on first use), the vehicle's at the body pose."""
+        if self._parts is None:
+            self._parts = posed_parts(build_parts(self.scene), self.body_pose)
+        return self._parts
+
+    def _at(self, pose: FisheyeCamera) -> FisheyeCamera:
+        cam = self.camera
+        return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
+                             cam.skew, cam.fov_deg, pose.rotation, pose.position)
+
+    def frame(self, pose: FisheyeCamera, *, progress: bool = False) -> FisheyeImages:
+        """Colour and labels from ``pose``'s position and rotation, through the render
+        cache (:func:`rvmsim.render.cached_cube`)."""
+        cam = self._at(pose)
+        color, labels, _ = cached_cube(self.scene, cam, self.layout, body_pose=self.body_pose,
+                                       parts=lambda: build_parts(self.scene), progress=progress)
+        assert color is not None  # asked for
+        c, lab = fold(self.layout, color, labels, self.scene.render.color_filter)
+        return FisheyeImages(color=c, labels=lab, camera=cam, face_size=self.layout.face_size,
+                             scene=self.scene)
+
+    def labels(self, pose: FisheyeCamera) -> np.ndarray:
+        """Only the label image ((H, W) uint8) from ``pose``'s position and rotation,
+        rendered now (not cached)."""
+        cam = self._at(pose)
+        atlas = render_faces(self.parts(), self.layout, cam, sky=self.scene.render.sky_color,
+                             color=False)
+        return fold_labels(self.layout, atlas.labels)

@@ -1,0 +1,167 @@
+"""What the station found for each car, and for all of them: frozen records.
+
+Lengths in the scene are mm (deviations) or m (poses), angles degrees, image lengths px.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..compensation import Correction, Deviation
+from ..criteria import EcResult
+from ..scene import MOUNT_AXES
+
+__all__ = ["CarResult", "StationResult", "PASS", "FAIL"]
+
+PASS, FAIL = "PASS", "FAIL"
+
+
+@dataclass(frozen=True)
+class CarResult:
+    """One car at the station.
+
+    Attributes
+    ----------
+    capture : str
+        The capture's file (or the name it was given).
+    name : str
+        The stem of the car's output files (``<name>.yaml``, ``<name>_rvm.png``, …).
+    reasons : tuple of str
+        Why the car fails (empty: it passes): ``pose not recovered …``, ``EOL range
+        exceeded: …``, ``EC 2-3 fails``.
+    deviation : Deviation or None
+        The camera's measured deviation from the nominal mount (body frame, mm and degrees);
+        None when the pose was not recovered.
+    sigma : (6,) tuple of float or None
+        One standard error of each deviation axis, from the pose fit (mm, degrees).
+    landmarks : int
+        Target corners the pose was fitted to (inliers).
+    rms_px : float or None
+        Their reprojection RMS at the measured pose, px.
+    correction : Correction or None
+        The per-car values (:meth:`rvmsim.compensation.CompensationLaw.correct`).
+    ec : EcResult or None
+        Every EC on the car's corrected RVM image.
+    images : dict of str to (H, W, 3) uint8
+        ``rvm`` (the capture through the car's ISP parameters), ``annotated`` (the ECs
+        drawn on it); a car whose pose was not recovered: the validation's pictures
+        (``landmarks``, ``overlay``, ``edges``).
+    seconds : float
+        Time spent on the car, s.
+    """
+
+    capture: str
+    name: str
+    reasons: tuple[str, ...]
+    deviation: Deviation | None = None
+    sigma: tuple[float, ...] | None = None
+    landmarks: int = 0
+    rms_px: float | None = None
+    correction: Correction | None = None
+    ec: EcResult | None = None
+    images: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+    seconds: float = 0.0
+
+    @property
+    def passed(self) -> bool:
+        return not self.reasons
+
+    @property
+    def verdict(self) -> str:
+        return PASS if self.passed else FAIL
+
+    @property
+    def reason(self) -> str:
+        """The reasons as one line ("" when the car passes)."""
+        return "; ".join(self.reasons)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready (numbers mm, degrees, px; None where not measured)."""
+        dev = self.deviation
+        return {
+            "capture": self.capture, "name": self.name, "verdict": self.verdict,
+            "reasons": list(self.reasons),
+            "deviation": None if dev is None else dev.as_dict(),
+            "deviation_sigma": None if self.sigma is None else {
+                n: round(s, 4) for n, s in zip(MOUNT_AXES, self.sigma)},
+            "landmarks": self.landmarks, "rms_px": self.rms_px,
+            "correction": None if self.correction is None else self.correction.as_dict(),
+            "ecs": None if self.ec is None else self.ec.as_dict(),
+            "seconds": round(self.seconds, 3),
+        }
+
+
+@dataclass(frozen=True)
+class StationResult:
+    """Every car of one station run, with what they were judged by.
+
+    Attributes
+    ----------
+    scene_name, scene_file : str
+    target : str
+        The station's target (``board`` or a ground pattern's name).
+    load_state : dict
+        The load state the cars stand at (name, height_mm, pitch_deg).
+    params_file : str
+        The platform setting's file.
+    output : (int, int)
+        The RVM image the ECs are measured on, px.
+    compensation : dict
+        The compensation model (:meth:`rvmsim.compensation.CompensationModel.as_dict`).
+    criteria : str
+        The criteria's name.
+    written : tuple of str
+        The ISP parameters the EOL step writes per car.
+    cars : tuple of CarResult
+    timings : dict
+        Seconds: ``setup`` (the station's frame, the law), ``cars`` (all cars), ``total``.
+    """
+
+    scene_name: str
+    scene_file: str
+    target: str
+    load_state: dict[str, Any]
+    params_file: str
+    output: tuple[int, int]
+    compensation: dict[str, Any]
+    criteria: str
+    written: tuple[str, ...]
+    cars: tuple[CarResult, ...]
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def n_pass(self) -> int:
+        return sum(c.passed for c in self.cars)
+
+    @property
+    def passed(self) -> bool:
+        """Whether every car passes."""
+        return self.n_pass == len(self.cars)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready: the run's inputs, the counts and one entry per car."""
+        return {
+            "scene": self.scene_name, "scene_file": self.scene_file, "target": self.target,
+            "load_state": self.load_state, "params_file": self.params_file,
+            "output": list(self.output), "compensation": self.compensation,
+            "criteria": self.criteria, "written_params": list(self.written),
+            "cars": len(self.cars), "passed": self.n_pass,
+            "failed": len(self.cars) - self.n_pass, "all_pass": self.passed,
+            "timings": {k: round(v, 3) for k, v in self.timings.items()},
+            "results": [c.as_dict() for c in self.cars],
+        }
+
+    def summary(self) -> str:
+        """A fixed-width table for the terminal, one line per car, and the count."""
+        lines = [f"{'car':<28} {'verdict':<7} {'Δx,y,z mm':>20} {'Δyaw,pitch,roll °':>21}  "
+                 "reason"]
+        for c in self.cars:
+            d = c.deviation
+            pos = "-" if d is None else f"{d.x_mm:+.1f},{d.y_mm:+.1f},{d.z_mm:+.1f}"
+            ang = "-" if d is None else f"{d.yaw_deg:+.2f},{d.pitch_deg:+.2f},{d.roll_deg:+.2f}"
+            lines.append(f"{c.name[-28:]:<28} {c.verdict:<7} {pos:>20} {ang:>21}  {c.reason}")
+        lines.append(f"{self.n_pass} of {len(self.cars)} cars pass")
+        return "\n".join(lines)

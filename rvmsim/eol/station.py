@@ -1,0 +1,180 @@
+"""The station's step for one car: its camera's pose from the target, its deviation, its
+per-car ISP values and the ECs on its corrected picture.
+
+For each capture (:meth:`Station.car`):
+
+1. **Pose.** ``rvmsim validate``'s pose recovery (:func:`rvmsim.validate.validate`) on the
+   station scene (:func:`rvmsim.scene.station_scene`: the car in front of the target) with
+   the camera at its nominal pose at the station's load state: the target's checker corners
+   matched and the mount pose fitted (fisheye PnP).  A car is within a few px of its nominal
+   pose, so the dense pre-alignment is skipped.
+2. **Deviation.** The measured pose relative to the nominal mount, in the body frame (the
+   load undone, :func:`~.geometry.deviation_of`).
+3. **Per-car values.** :meth:`rvmsim.compensation.CompensationLaw.correct`: the platform
+   setting with the written parameters set so that the reference ground points land where
+   the nominal car shows them, clipped to the allowed ranges.
+4. **ECs.** The capture has no labels, so the scene (its full test site) is rendered at the
+   measured pose (labels only): the synthetic frame that explains the capture.  The
+   capture's colour and those labels go through the car's ISP parameters and every EC is
+   evaluated (:func:`rvmsim.pipeline.evaluate_params`), as ``rvmsim validate --params`` does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..camera import rotation_from_ypr
+from ..compensation import DEFAULT_COMPENSATION, CompensationLaw, CompensationModel
+from ..criteria import Criteria, default_criteria
+from ..errors import RvmsimError, SceneError
+from ..isp import IspParams, OutputSpec
+from ..pipeline import evaluate_params
+from ..render import FisheyeImages
+from ..robust import Variation, body_pose
+from ..scene import Scene, station_scene
+from ..validate import Tolerances, ValidationFailure, ValidationSettings, validate
+from ..validate.landmarks import visible_landmarks
+from .frames import PoseRenderer
+from .geometry import deviation_of, mount_at, moved_camera, station_load
+from .records import CarResult
+
+__all__ = ["StationSettings", "Station"]
+
+
+@dataclass(frozen=True)
+class StationSettings:
+    """What the station judges cars by (``rvmsim eol``'s options).
+
+    Parameters
+    ----------
+    params : IspParams
+        The platform setting (full sensor).
+    output : OutputSpec
+        The RVM image the law keeps the reference points on and the ECs are measured on.
+    compensation : CompensationModel
+        What the EOL step writes, within which ranges, and the load state it measures at.
+    criteria : Criteria, optional
+        The ECs (default: the paper's).
+    variation : Variation, optional
+        The load states ``compensation.measured_at`` names (default: the scene's variation
+        section).
+    min_landmarks : int
+        Fewer target corners matched: the pose is not recovered.
+    search_px : float
+        How far from its nominal place a corner is first searched for, px.
+    max_rms_px : float
+        A pose whose corners fit worse than this (RMS, px) is not believed.
+    """
+
+    params: IspParams
+    output: OutputSpec
+    compensation: CompensationModel = DEFAULT_COMPENSATION
+    criteria: Criteria | None = None
+    variation: Variation | None = None
+    min_landmarks: int = 8
+    search_px: float = 30.0
+    max_rms_px: float = 2.0
+
+
+class Station:
+    """One scene's EOL station, set up once for many cars.
+
+    Parameters
+    ----------
+    scene : Scene
+        The car as designed, with its test site (the ECs) and ``eol`` section (the target).
+    settings : StationSettings
+    progress : bool
+        Progress bars while rendering the station's nominal frame.
+
+    Raises
+    ------
+    SceneError
+        No ``eol`` section, an unusable one, or a target the camera does not see well enough
+        at its nominal pose (fewer than ``min_landmarks`` usable corners).
+    CompensationError
+        ``measured_at`` names no load state.
+    RvmsimError
+        The law has too few reference points in the RVM image.
+    """
+
+    def __init__(self, scene: Scene, settings: StationSettings, *, progress: bool = False):
+        self.scene = scene
+        self.settings = settings
+        self.criteria = settings.criteria or default_criteria()
+        station = station_scene(scene)
+        self.load = station_load(scene, settings.compensation, settings.variation)
+        self.body_pose = body_pose(scene, self.load)
+        cam = scene.fisheye_camera()
+        self.nominal_camera = moved_camera(cam, self.body_pose)
+        #: The station with the camera at its nominal pose at the load state.
+        self.station = mount_at(station, self.nominal_camera)
+        self._station_renderer = PoseRenderer(self.station, cam, self.body_pose)
+        self.frame: FisheyeImages = self._station_renderer.frame(self.nominal_camera,
+                                                                 progress=progress)
+        self._check_target_in_view()
+        try:
+            self.law = CompensationLaw(scene, settings.params, settings.output,
+                                       settings.compensation)
+        except ValueError as err:  # too few reference points in the RVM image
+            raise RvmsimError(f"{scene.source}: compensation law: {err}") from None
+        self._renderer = PoseRenderer(scene, cam, self.body_pose)
+
+    def _check_target_in_view(self) -> None:
+        spec = self.scene.eol
+        assert spec is not None  # station_scene checked it
+        need = self.settings.min_landmarks
+        try:
+            seen = visible_landmarks(self.station, self.frame, 0).n_usable
+        except RvmsimError:  # the target has no inner checker corners at all
+            seen = 0
+        if seen < need:
+            key = "eol.pose" if spec.pose is not None else "eol.target"
+            raise SceneError(self.scene.source, key, f"the target ({spec.target}) is not in "
+                             f"the camera's view: {seen} of its checker corners are usable at "
+                             f"the nominal pose (load state {self.load.name}; need {need}: "
+                             "unoccluded, inside the lens's field, ≥ 8 px apart)")
+
+    def car(self, capture: np.ndarray, capture_name: str, name: str) -> CarResult:
+        """One car's station step on its ``capture`` ((H, W, 3) uint8 RGB, the camera's
+        size); ``name`` is the stem of its output files.  A pose that cannot be recovered
+        is a failing car, not an error."""
+        t0 = time.perf_counter()
+        s = self.settings
+        vs = ValidationSettings(tolerances=Tolerances(min_landmarks=s.min_landmarks),
+                                search_px=s.search_px, rerender=False, dense_align=False)
+        try:
+            v = validate(self.station, capture, vs, synthetic=self.frame,
+                         capture_name=capture_name)
+        except ValidationFailure as fail:
+            return CarResult(capture_name, name, (f"pose not recovered ({fail.step}): "
+                                                  f"{fail.detail}",),
+                             images=fail.images, seconds=time.perf_counter() - t0)
+        c = v.correction
+        sigma = (*c.sigma_position_mm, *c.sigma_angles_deg)
+        if v.rms_after_px > s.max_rms_px:
+            return CarResult(capture_name, name, (
+                f"pose not recovered: the target's corners fit it with RMS "
+                f"{v.rms_after_px:.2f} px > {s.max_rms_px:g} px",), landmarks=v.n_inliers,
+                rms_px=v.rms_after_px, images=v.images, seconds=time.perf_counter() - t0)
+        rotation = rotation_from_ypr(c.yaw_deg, c.pitch_deg, c.roll_deg)
+        position = np.asarray(c.position_m, dtype=np.float64)
+        deviation = deviation_of(self.scene, position, rotation, self.body_pose)
+        correction = self.law.correct(deviation)
+        pose = dataclasses.replace(self.nominal_camera, rotation=rotation, position=position)
+        labels = self._renderer.labels(pose)
+        images = FisheyeImages(color=capture, labels=labels, camera=pose, scene=self.scene)
+        frame = evaluate_params(images, correction.params, s.output, self.criteria)
+        failing = [i.id for i in frame.ec.items if i.enabled and not i.passed]
+        reasons = list(correction.exceeded)
+        if failing:
+            reasons.append(f"EC {', '.join(failing)} fail{'s' if len(failing) == 1 else ''}")
+        assert frame.annotated is not None  # asked for
+        return CarResult(capture_name, name, tuple(reasons), deviation, sigma, v.n_inliers,
+                         v.rms_after_px, correction, frame.ec,
+                         {"rvm": frame.color, "annotated": frame.annotated},
+                         time.perf_counter() - t0)
