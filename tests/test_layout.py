@@ -129,7 +129,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("search",),
     ("runs",),
     ("tune",),
-    ("batch", "validate", "calibrate"),
+    ("batch", "validate", "calibrate", "eol"),
     ("report",),
     ("console",),
     ("cli", "__main__", "__init__"),

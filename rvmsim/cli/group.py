@@ -11,6 +11,7 @@ import click
 from ..errors import RvmsimError
 from .calibrate import calibrate
 from .console import console
+from .eol import eol
 from .errors import Group, fail, fail_os, usage_error_line
 from .render import evaluate, process, render
 from .report import report
@@ -23,7 +24,7 @@ __all__ = ["cli", "main", "COMMANDS"]
 
 #: Every command of ``rvmsim``, in the order the modules list them.
 COMMANDS: tuple[click.Command, ...] = (render, process, evaluate, tune, batch, status, select,
-                                       report, validate, sweep, robustness, calibrate, console)
+                                       report, validate, sweep, robustness, calibrate, console, eol)
 
 
 @click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},

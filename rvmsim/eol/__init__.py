@@ -14,6 +14,8 @@ from __future__ import annotations
 from .geometry import car_camera, deviation_of, moved_camera, station_load
 from .records import CarResult, StationResult
 from .station import Station, StationSettings
+from .run import car_names, run_station
+from .outputs import RESULT_FILES, Staging, csv_rows, write_car, write_tables
 from .synthetic import synthetic_capture
 
 __all__ = [
@@ -26,4 +28,11 @@ __all__ = [
     "Station",
     "StationSettings",
     "synthetic_capture",
+    "run_station",
+    "car_names",
+    "RESULT_FILES",
+    "Staging",
+    "csv_rows",
+    "write_car",
+    "write_tables",
 ]

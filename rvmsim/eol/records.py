@@ -51,6 +51,9 @@ class CarResult:
         (``landmarks``, ``overlay``, ``edges``).
     seconds : float
         Time spent on the car, s.
+    files : dict of str to str
+        The car's files in the output folder by kind (``params``, ``rvm``, ``annotated``,
+        ``landmarks``, ``overlay``), once written.
     """
 
     capture: str
@@ -64,6 +67,7 @@ class CarResult:
     ec: EcResult | None = None
     images: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
     seconds: float = 0.0
+    files: dict[str, str] = field(default_factory=dict, compare=False)
 
     @property
     def passed(self) -> bool:
@@ -90,7 +94,7 @@ class CarResult:
             "landmarks": self.landmarks, "rms_px": self.rms_px,
             "correction": None if self.correction is None else self.correction.as_dict(),
             "ecs": None if self.ec is None else self.ec.as_dict(),
-            "seconds": round(self.seconds, 3),
+            "seconds": round(self.seconds, 3), "files": dict(self.files),
         }
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,7 +41,7 @@ from ..validate import Tolerances, ValidationFailure, ValidationSettings, valida
 from ..validate.landmarks import visible_landmarks
 from .frames import PoseRenderer
 from .geometry import deviation_of, mount_at, moved_camera, station_load
-from .records import CarResult
+from .records import CarResult, StationResult
 
 __all__ = ["StationSettings", "Station"]
 
@@ -123,6 +124,24 @@ class Station:
         except ValueError as err:  # too few reference points in the RVM image
             raise RvmsimError(f"{scene.source}: compensation law: {err}") from None
         self._renderer = PoseRenderer(scene, cam, self.body_pose)
+
+    def prepare(self) -> None:
+        """Build the scene's meshes now (else the first car does, ~1 s)."""
+        self._renderer.parts()
+
+    def result(self, cars: Sequence[CarResult], params_file: str = "",
+               timings: dict[str, float] | None = None) -> StationResult:
+        """The record of a run of this station over ``cars``."""
+        s, load = self.settings, self.load
+        assert self.scene.eol is not None
+        return StationResult(
+            scene_name=self.scene.name, scene_file=self.scene.source,
+            target=self.scene.eol.target,
+            load_state={"name": load.name, "height_mm": load.height_mm,
+                        "pitch_deg": load.pitch_deg},
+            params_file=params_file, output=(s.output.width, s.output.height),
+            compensation=s.compensation.as_dict(), criteria=self.criteria.name,
+            written=tuple(s.compensation.params), cars=tuple(cars), timings=dict(timings or {}))
 
     def _check_target_in_view(self) -> None:
         spec = self.scene.eol

@@ -1,4 +1,5 @@
-"""HTML review pages: the page kit, the run report, the sweep page and the validation page."""
+"""HTML review pages: the page kit, the run report, the sweep page, the validation page, the
+robustness page and the EOL station's page."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from .sweep import (
 )
 from .validation import validation_page, write_validation_outputs, PICTURE_CAPTIONS
 from .robustness import robustness_page, write_robustness_outputs
+from .eol import eol_page, write_eol_page
 from .plots import (
     convergence_png,
     histogram_png,
@@ -45,6 +47,8 @@ __all__ = [
     "PICTURE_CAPTIONS",
     "robustness_page",
     "write_robustness_outputs",
+    "eol_page",
+    "write_eol_page",
     "convergence_png",
     "histogram_png",
 ]
