@@ -1,17 +1,18 @@
-"""The station's geometry: the load state a car stands at, its camera there, and the
-deviation of a measured camera pose from the nominal mount.
+"""The station's geometry: the load state a car stands in, its camera there, and the
+deviation of a measured camera pose from the design pose.
 
 Conventions
 -----------
-A load state moves the body relative to the ground (:func:`rvmsim.robust.body_pose`: the
-body pitched about the camera's nominal centre, then lowered), and the camera with it.  A
-:class:`~rvmsim.compensation.Deviation` is the camera's pose relative to its nominal mount
-in the *body* frame (angles add to the mount's yaw, pitch, roll, degrees; the position
-offset, mm, adds to its position), as :class:`rvmsim.robust.MountSample`'s offsets.  So a
-car whose camera deviates by ``d`` and which stands at load ``L`` has the camera
-``body_pose(L) ∘ deviated_camera(d)`` in the scene (ground) frame, and the station, which
-measures that camera in the ground frame, undoes the load before it computes ``d``
-(:func:`deviation_of`).
+A :class:`~rvmsim.compensation.Deviation` is a camera pose relative to the scene's mount
+(angles add to its yaw, pitch, roll, degrees; the position offset, mm, adds to its
+position).  A load state moves the body relative to the ground (:func:`rvmsim.robust.body_pose`:
+the body pitched about the camera's nominal centre, then lowered), and the camera with it:
+a car whose mount deviates by ``d`` and which stands in load state ``L`` has the camera
+``body_pose(L) ∘ deviated_camera(d)`` in the scene (ground) frame (:func:`car_camera`).
+The station measures that camera against the ground and compares it with the design pose
+(:func:`deviation_of`): it reads ``loaded_deviation(d, L)``
+(:func:`rvmsim.compensation.loaded_deviation`), and the law corrects that, as
+``rvmsim robustness --compensation`` models the station.
 """
 
 from __future__ import annotations
@@ -20,11 +21,10 @@ import dataclasses
 
 import numpy as np
 
-from ..camera import FisheyeCamera
+from ..camera import FisheyeCamera, ypr_from_rotation
 from ..compensation import CompensationModel, Deviation, deviated_camera, measured_load_index
 from ..robust import LoadState, Variation, body_pose, variation_from_scene
 from ..scene import Scene
-from ..validate import ypr_from_rotation
 
 __all__ = ["station_load", "moved_camera", "car_camera", "deviation_of", "mount_at"]
 
@@ -63,21 +63,17 @@ def car_camera(scene: Scene, deviation: Deviation, load: LoadState | None = None
     return cam if load is None else moved_camera(cam, body_pose(scene, load))
 
 
-def deviation_of(scene: Scene, position: np.ndarray, rotation: np.ndarray,
-                 pose: np.ndarray | None = None) -> Deviation:
-    """The deviation from the nominal mount of a camera measured at ``position`` (m) with
-    ``rotation`` (camera-to-scene) on a car whose body stands at ``pose`` ((4, 4), None:
-    unmoved): the inverse of :func:`car_camera`.
+def deviation_of(scene: Scene, position: np.ndarray, rotation: np.ndarray) -> Deviation:
+    """The deviation from the design pose (the scene's mount) of a camera measured at
+    ``position`` (m, scene frame) with ``rotation`` (camera-to-scene): what the station
+    reads (see the module's conventions).
 
     Returns
     -------
     Deviation
-        mm and degrees, in the body frame (see the module's conventions).
+        mm and degrees.
     """
     rot, pos = np.asarray(rotation, np.float64), np.asarray(position, np.float64)
-    if pose is not None:
-        r_b, t = pose[:3, :3], pose[:3, 3]
-        rot, pos = r_b.T @ rot, r_b.T @ (pos - t)
     m = scene.camera.mount
     angles = ypr_from_rotation(rot) - np.array([m.yaw_deg, m.pitch_deg, m.roll_deg])
     angles = (angles + 180.0) % 360.0 - 180.0
@@ -87,7 +83,7 @@ def deviation_of(scene: Scene, position: np.ndarray, rotation: np.ndarray,
 
 def mount_at(scene: Scene, camera: FisheyeCamera) -> Scene:
     """``scene`` with its camera mounted at ``camera``'s pose (position m; the angles that
-    make its rotation, :func:`rvmsim.validate.ypr_from_rotation`)."""
+    make its rotation, :func:`rvmsim.camera.ypr_from_rotation`)."""
     yaw, pitch, roll = (float(a) for a in ypr_from_rotation(camera.rotation))
     mount = scene.camera.mount.model_copy(update={
         "position": tuple(float(p) for p in camera.position), "yaw_deg": yaw,

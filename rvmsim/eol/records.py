@@ -33,7 +33,8 @@ class CarResult:
         Why the car fails (empty: it passes): ``pose not recovered …``, ``EOL range
         exceeded: …``, ``EC 2-3 fails``.
     deviation : Deviation or None
-        The camera's measured deviation from the nominal mount (body frame, mm and degrees);
+        The camera's measured deviation from the design pose (mm and degrees), as the
+        station reads it in its load state (what the law corrects);
         None when the pose was not recovered.
     sigma : (6,) tuple of float or None
         One standard error of each deviation axis, from the pose fit (mm, degrees).

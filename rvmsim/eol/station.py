@@ -8,8 +8,10 @@ For each capture (:meth:`Station.car`):
    the camera at its nominal pose at the station's load state: the target's checker corners
    matched and the mount pose fitted (fisheye PnP).  A car is within a few px of its nominal
    pose, so the dense pre-alignment is skipped.
-2. **Deviation.** The measured pose relative to the nominal mount, in the body frame (the
-   load undone, :func:`~.geometry.deviation_of`).
+2. **Deviation.** The measured pose relative to the design pose (the scene's mount), as
+   the station reads it in its load state (:func:`~.geometry.deviation_of`; a load state
+   that moves the body reads as a deviation too, as ``rvmsim robustness --compensation``
+   models the station).
 3. **Per-car values.** :meth:`rvmsim.compensation.CompensationLaw.correct`: the platform
    setting with the written parameters set so that the reference ground points land where
    the nominal car shows them, clipped to the allowed ranges.
@@ -182,7 +184,7 @@ class Station:
                 rms_px=v.rms_after_px, images=v.images, seconds=time.perf_counter() - t0)
         rotation = rotation_from_ypr(c.yaw_deg, c.pitch_deg, c.roll_deg)
         position = np.asarray(c.position_m, dtype=np.float64)
-        deviation = deviation_of(self.scene, position, rotation, self.body_pose)
+        deviation = deviation_of(self.scene, position, rotation)
         correction = self.law.correct(deviation)
         pose = dataclasses.replace(self.nominal_camera, rotation=rotation, position=position)
         labels = self._renderer.labels(pose)
