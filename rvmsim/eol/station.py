@@ -6,8 +6,10 @@ For each capture (:meth:`Station.car`):
 1. **Pose.** ``rvmsim validate``'s pose recovery (:func:`rvmsim.validate.validate`) on the
    station scene (:func:`rvmsim.scene.station_scene`: the car in front of the target) with
    the camera at its nominal pose at the station's load state: the target's checker corners
-   matched and the mount pose fitted (fisheye PnP).  A car is within a few px of its nominal
-   pose, so the dense pre-alignment is skipped.
+   matched and the mount pose fitted (fisheye PnP).  A car is usually within a few px of its
+   nominal pose, so the dense pre-alignment on a ground target is skipped; when the pose
+   is then not found (too few corners, or corners matched to their neighbours: a fit worse
+   than ``max_rms_px``), it runs again with it (a camera several degrees off).
 2. **Deviation.** The measured pose relative to the design pose (the scene's mount), as
    the station reads it in its load state (:func:`~.geometry.deviation_of`; a load state
    that moves the body reads as a deviation too, as ``rvmsim robustness --compensation``
@@ -39,7 +41,8 @@ from ..pipeline import evaluate_params
 from ..render import FisheyeImages
 from ..robust import Variation, body_pose
 from ..scene import Scene, station_scene
-from ..validate import Tolerances, ValidationFailure, ValidationSettings, validate
+from ..validate import (Tolerances, Validation, ValidationFailure, ValidationSettings,
+                        validate)
 from ..validate.landmarks import visible_landmarks
 from .frames import PoseRenderer
 from .geometry import deviation_of, mount_at, moved_camera, station_load
@@ -160,28 +163,39 @@ class Station:
                              f"the nominal pose (load state {self.load.name}; need {need}: "
                              "unoccluded, inside the lens's field, ≥ 8 px apart)")
 
+    def _pose(self, capture: np.ndarray, capture_name: str, *, dense: bool
+              ) -> Validation | tuple[str, int, float | None, dict[str, np.ndarray]]:
+        """The validation that recovers the car's pose, or why it does not (reason,
+        landmarks, RMS px, pictures): too few corners found, or a fit worse than
+        ``max_rms_px`` (corners matched to their neighbours)."""
+        s = self.settings
+        vs = ValidationSettings(tolerances=Tolerances(min_landmarks=s.min_landmarks),
+                                search_px=s.search_px, rerender=False, dense_align=dense)
+        try:
+            v = validate(self.station, capture, vs, synthetic=self.frame,
+                         capture_name=capture_name)
+        except ValidationFailure as fail:
+            return (f"pose not recovered ({fail.step}): {fail.detail}", 0, None, fail.images)
+        if v.rms_after_px > s.max_rms_px:
+            return (f"pose not recovered: the target's corners fit it with RMS "
+                    f"{v.rms_after_px:.2f} px > {s.max_rms_px:g} px", v.n_inliers,
+                    v.rms_after_px, v.images)
+        return v
+
     def car(self, capture: np.ndarray, capture_name: str, name: str) -> CarResult:
         """One car's station step on its ``capture`` ((H, W, 3) uint8 RGB, the camera's
         size); ``name`` is the stem of its output files.  A pose that cannot be recovered
         is a failing car, not an error."""
         t0 = time.perf_counter()
         s = self.settings
-        vs = ValidationSettings(tolerances=Tolerances(min_landmarks=s.min_landmarks),
-                                search_px=s.search_px, rerender=False, dense_align=False)
-        try:
-            v = validate(self.station, capture, vs, synthetic=self.frame,
-                         capture_name=capture_name)
-        except ValidationFailure as fail:
-            return CarResult(capture_name, name, (f"pose not recovered ({fail.step}): "
-                                                  f"{fail.detail}",),
-                             images=fail.images, seconds=time.perf_counter() - t0)
+        v = self._pose(capture, capture_name, dense=False)
+        if isinstance(v, tuple) and self.station.test_site.ground_patterns:
+            v = self._pose(capture, capture_name, dense=True)  # a car far off: align first
+        if isinstance(v, tuple):
+            return CarResult(capture_name, name, (v[0],), landmarks=v[1], rms_px=v[2],
+                             images=v[3], seconds=time.perf_counter() - t0)
         c = v.correction
         sigma = (*c.sigma_position_mm, *c.sigma_angles_deg)
-        if v.rms_after_px > s.max_rms_px:
-            return CarResult(capture_name, name, (
-                f"pose not recovered: the target's corners fit it with RMS "
-                f"{v.rms_after_px:.2f} px > {s.max_rms_px:g} px",), landmarks=v.n_inliers,
-                rms_px=v.rms_after_px, images=v.images, seconds=time.perf_counter() - t0)
         rotation = rotation_from_ypr(c.yaw_deg, c.pitch_deg, c.roll_deg)
         position = np.asarray(c.position_m, dtype=np.float64)
         deviation = deviation_of(self.scene, position, rotation)

@@ -1,0 +1,131 @@
+"""The EOL station on synthetic cars: deviations recovered, per-car outputs, exit status."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rvmsim.compensation import Deviation
+from rvmsim.eol import Station, StationSettings
+from rvmsim.isp import load_params
+
+from ..cli_runner import run_in_process
+from .stations import capture, platform, station_scene, write_capture, write_inputs
+
+#: Cars at the corners of the tolerance box (±5 mm, ±1° on every axis).
+CORNERS = [Deviation(5, 5, 5, 1, 1, 1), Deviation(5, -5, 5, -1, 1, -1),
+           Deviation(-5, -5, -5, -1, -1, -1), Deviation(-5, 5, -5, 1, -1, 1)]
+#: Two cars whose corrected pictures pass every EC with the tuned setting.
+GOOD = [Deviation(2, -3, 4, 0.5, -0.4, 0.3), Deviation(-5, 5, 0, -1, 1, -1)]
+#: A camera turned 6° in yaw: beyond the default ±3° of pan and tilt.
+TURNED = Deviation(0, 0, 0, 6.0, 0, 0)
+
+
+@pytest.fixture
+def env(tmp_path: Path) -> dict[str, str]:
+    return {"RVMSIM_CACHE": str(tmp_path / "cache")}
+
+
+@pytest.fixture(scope="module")
+def station() -> Station:
+    params, output = platform()
+    return Station(station_scene(), StationSettings(params, output))
+
+
+@pytest.mark.parametrize("truth", CORNERS, ids=lambda d: "{:+g},{:+g},{:+g}mm".format(
+    d.x_mm, d.y_mm, d.z_mm))
+def test_a_synthetic_cars_deviation_is_recovered(station: Station, truth: Deviation):
+    """Within 1 mm and 0.05° on every axis (the station's own corners only, 640 × 480)."""
+    car = station.car(capture(truth), "car", "car")
+    assert car.deviation is not None, car.reason
+    err = np.array(car.deviation.as_offsets()) - np.array(truth.as_offsets())
+    assert np.abs(err[:3]).max() <= 1.0, err
+    assert np.abs(err[3:]).max() <= 0.05, err
+    assert car.landmarks >= 60 and car.rms_px is not None and car.rms_px < 0.5
+    assert car.sigma is not None and max(car.sigma[3:]) < 0.05
+    # The law corrected what was measured, within its range, and the ECs were measured.
+    assert car.correction is not None and car.correction.within_range
+    assert car.ec is not None and len(car.ec.items) == 11
+    assert car.images["rvm"].shape == (360, 640, 3)
+
+
+def _run(folder: Path, *captures: Path, env: dict[str, str], extra: tuple[str, ...] = ()):
+    scene, params = write_inputs(folder)
+    args = ["eol", scene, "--params", params, *[a for c in captures for a in ("--capture", c)],
+            "--out", folder / "out", "--no-progress", *extra]
+    return run_in_process(args, env=env)
+
+
+def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
+    caps = tmp_path / "caps"
+    for k, d in enumerate(GOOD):
+        write_capture(caps / f"car{k}.png", d)
+    res = _run(tmp_path, caps, env=env)
+    assert res.code == 0, res.stdout + res.stderr
+    assert res.stderr == ""
+    assert "2 of 2 cars pass" in res.stdout
+    out = tmp_path / "out"
+    assert sorted(p.name for p in out.iterdir()) == [
+        "car0.yaml", "car0_annotated.png", "car0_rvm.png", "car1.yaml", "car1_annotated.png",
+        "car1_rvm.png", "eol.csv", "eol.html", "eol.json"]
+    doc = json.loads((out / "eol.json").read_text())
+    assert doc["all_pass"] and doc["cars"] == 2 and doc["target"] == "station mat"
+    assert doc["load_state"]["name"] == "curb" and doc["written_params"] == ["h_pan", "v_pan",
+                                                                              "tilt"]
+    for k, (row, truth) in enumerate(zip(doc["results"], GOOD)):
+        assert row["verdict"] == "PASS" and row["reasons"] == []
+        got = [row["deviation"][a] for a in ("x_mm", "y_mm", "z_mm")]
+        assert got == pytest.approx([truth.x_mm, truth.y_mm, truth.z_mm], abs=1.0)
+        assert row["deviation"]["yaw_deg"] == pytest.approx(truth.yaw_deg, abs=0.05)
+        assert all(e["passed"] for e in row["ecs"]["ecs"])
+        # The car's parameter file is a params file with the per-car values written.
+        params, output = load_params(out / f"car{k}.yaml")
+        assert (output.width, output.height) == (640, 360)
+        for name, value in row["correction"]["values"].items():
+            assert getattr(params, name) == pytest.approx(value, abs=1e-5)
+        assert params.rad == pytest.approx(platform()[0].rad)
+    with (out / "eol.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [r["name"] for r in rows] == ["car0", "car1"]
+    assert rows[0]["verdict"] == "PASS" and rows[0]["ec_2-3_pass"] == "pass"
+    assert float(rows[1]["roll_deg"]) == pytest.approx(-1.0, abs=0.05)
+    assert float(rows[1]["tilt"]) == doc["results"][1]["correction"]["values"]["tilt"]
+    html = (out / "eol.html").read_text()
+    assert "2 of 2 cars pass" in html and 'src="car1_annotated.png"' in html
+
+
+def test_a_car_beyond_the_range_or_without_a_pose_fails_exit_1(tmp_path: Path, env):
+    """A camera turned 6° needs more pan and tilt than the EOL step may write: the car fails,
+    named; a capture of something else fails as a car whose pose was not recovered; the
+    good car still passes."""
+    caps = tmp_path / "caps"
+    write_capture(caps / "a_good.png", GOOD[0])
+    write_capture(caps / "b_turned.png", TURNED)
+    noise = np.random.default_rng(5).integers(0, 255, capture(GOOD[0]).shape, dtype=np.uint8)
+    from rvmsim._io import write_png
+    write_png(caps / "c_noise.png", noise)
+    res = _run(tmp_path, caps, env=env)
+    assert res.code == 1, res.stdout + res.stderr
+    assert "1 of 3 cars pass" in res.stdout
+    doc = json.loads((tmp_path / "out" / "eol.json").read_text())
+    good, turned, lost = doc["results"]
+    assert good["verdict"] == "PASS"
+    assert turned["verdict"] == "FAIL"
+    assert turned["deviation"]["yaw_deg"] == pytest.approx(6.0, abs=0.05)
+    assert any(r.startswith("EOL range exceeded: pan ") and r.endswith("> 3°")
+               for r in turned["reasons"]), turned["reasons"]
+    assert "EOL range exceeded: pan" in res.stdout
+    assert turned["correction"]["within_range"] is False
+    assert lost["verdict"] == "FAIL" and lost["deviation"] is None
+    assert lost["reasons"][0].startswith("pose not recovered (detection)")
+    out = tmp_path / "out"
+    assert (out / "b_turned.yaml").is_file() and not (out / "c_noise.yaml").exists()
+    assert (out / "c_noise_landmarks.png").is_file()
+    with (out / "eol.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert rows[1]["reason"].startswith("EOL range exceeded: pan")
+    assert rows[2]["x_mm"] == "" and rows[2]["verdict"] == "FAIL"
