@@ -28,10 +28,12 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
+from pathlib import Path
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._io import key_lines, line_of
 from ..camera import rotation_from_ypr
 from ..compensation import DEFAULT_COMPENSATION, CompensationLaw, CompensationModel
 from ..criteria import Criteria, default_criteria
@@ -84,6 +86,16 @@ class StationSettings:
     min_landmarks: int = 8
     search_px: float = 30.0
     max_rms_px: float = 2.0
+
+
+def _line(scene: Scene, key: str) -> int | None:
+    """The line of the dotted ``key`` in the scene's file, when it is one (for messages)."""
+    path = Path(scene.source)
+    try:
+        text = path.read_text() if path.is_file() else ""
+    except OSError:  # the line number is a nicety; the message names the file anyway
+        return None
+    return line_of(key_lines(text), tuple(key.split("."))) if text else None
 
 
 class Station:
@@ -161,7 +173,8 @@ class Station:
             raise SceneError(self.scene.source, key, f"the target ({spec.target}) is not in "
                              f"the camera's view: {seen} of its checker corners are usable at "
                              f"the nominal pose (load state {self.load.name}; need {need}: "
-                             "unoccluded, inside the lens's field, ≥ 8 px apart)")
+                             "unoccluded, inside the lens's field, ≥ 8 px apart)",
+                             _line(self.scene, key))
 
     def _pose(self, capture: np.ndarray, capture_name: str, *, dense: bool
               ) -> Validation | tuple[str, int, float | None, dict[str, np.ndarray]]:

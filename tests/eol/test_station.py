@@ -129,3 +129,26 @@ def test_a_car_beyond_the_range_or_without_a_pose_fails_exit_1(tmp_path: Path, e
         rows = list(csv.DictReader(f))
     assert rows[1]["reason"].startswith("EOL range exceeded: pan")
     assert rows[2]["x_mm"] == "" and rows[2]["verdict"] == "FAIL"
+
+
+def test_a_car_measured_in_a_load_state_reads_the_load_too():
+    """At ``measured_at: full load`` (45 mm lower, 0.9° rear down) the station renders its
+    nominal frame with the body there, and reads the camera against the design pose: the
+    mount's deviation plus the load's (rvmsim.compensation.loaded_deviation)."""
+    import dataclasses
+
+    from rvmsim.compensation import DEFAULT_COMPENSATION, loaded_deviation
+    from rvmsim.eol import synthetic_capture
+
+    params, output = platform()
+    model = dataclasses.replace(DEFAULT_COMPENSATION, measured_at="full load")
+    st = Station(station_scene(), StationSettings(params, output, model))
+    assert st.load.name == "full load" and st.body_pose is not None
+    truth = Deviation(2, -3, 4, 0.5, -0.4, 0.3)
+    cap = synthetic_capture(station_scene(), truth, st.load).color
+    car = st.car(cap, "loaded", "loaded")
+    want = loaded_deviation(station_scene(), truth, -45.0, 0.9)
+    assert car.deviation is not None, car.reason
+    err = np.array(car.deviation.as_offsets()) - np.array(want.as_offsets())
+    assert np.abs(err[:3]).max() <= 1.0 and np.abs(err[3:]).max() <= 0.05, err
+    assert car.deviation.pitch_deg == pytest.approx(-0.4 + 0.9, abs=0.05)

@@ -1,0 +1,127 @@
+"""`rvmsim eol` on bad input: one line naming the file (and key), exit 2, nothing written
+over in the output folder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from rvmsim.compensation import Deviation
+
+from ..cli_runner import run_in_process
+from .stations import STATION_MAT, capture, write_capture, write_inputs
+
+#: What a previous run left in the output folder: must stay as it is.
+OLD = {"eol.json": '{"old": true}\n', "eol.csv": "old\n", "car.yaml": "# old\n",
+       "car_rvm.png": "not a png"}
+
+
+def _old_out(folder: Path) -> Path:
+    out = folder / "out"
+    out.mkdir(parents=True)
+    for name, text in OLD.items():
+        (out / name).write_text(text)
+    return out
+
+
+def _unchanged(out: Path) -> None:
+    assert sorted(p.name for p in out.iterdir()) == sorted(OLD)
+    for name, text in OLD.items():
+        assert (out / name).read_text() == text
+
+
+def _eol(tmp_path: Path, cap: Path, *, eol: dict[str, Any] | None = None):
+    scene, params = write_inputs(tmp_path, eol=eol)
+    out = _old_out(tmp_path)
+    res = run_in_process(["eol", scene, "--params", params, "--capture", cap, "--out", out,
+                          "--no-progress"], env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    return res, out, scene
+
+
+def _one_line(res, *parts: str) -> None:
+    assert res.code == 2, res.stdout + res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("rvmsim: error: "), res.stderr
+    assert "Traceback" not in res.stderr
+    for p in parts:
+        assert p in lines[0], (p, lines[0])
+
+
+@pytest.fixture
+def good_capture(tmp_path: Path) -> Path:
+    return write_capture(tmp_path / "caps" / "car.png", Deviation(1, 0, 0, 0.2, 0, 0))
+
+
+@pytest.mark.parametrize("eol, key, words", [
+    ({"target": "no such mat", "ground_patterns": [STATION_MAT]}, "eol.target",
+     "neither 'board' nor the name of a ground pattern ('station mat')"),
+    ({"target": "station mat", "ground_patterns": [STATION_MAT], "pose": {"position": [0, 0, 1]}},
+     "eol.pose", "position cannot place a ground pattern"),
+    ({"target": "board", "pose": {"pitch_deg": 20}}, "eol.pose", "need placement: free"),
+    ({"target": "station mat", "ground_patterns": [STATION_MAT, STATION_MAT]}, "eol.target",
+     "names 2 ground patterns"),
+    ({"target": "station mat"}, "eol.target", "(the scene has none)"),
+], ids=["unknown target", "pattern placed like a board", "board pitched", "two mats",
+        "pattern not defined"])
+def test_a_bad_eol_section_is_one_line(tmp_path: Path, good_capture: Path, eol, key, words):
+    res, out, scene = _eol(tmp_path, good_capture, eol=eol)
+    _one_line(res, str(scene), key, words)
+    _unchanged(out)
+
+
+@pytest.mark.parametrize("pose, where", [
+    ({"origin": [-3.0, 60.0]}, "60 m behind the car: its squares are too small"),
+    ({"origin": [-3.0, -9.0]}, "under the car"),
+])
+def test_a_target_out_of_view_is_one_line(tmp_path: Path, good_capture: Path, pose, where):
+    res, out, scene = _eol(tmp_path, good_capture,
+                           eol={"target": "station mat", "ground_patterns": [STATION_MAT],
+                                "pose": pose})
+    _one_line(res, str(scene), "eol.pose", "the target (station mat) is not in the camera's view")
+    _unchanged(out)
+
+
+def test_a_corrupt_capture_is_one_line(tmp_path: Path, good_capture: Path):
+    bad = tmp_path / "caps" / "broken.png"
+    bad.write_bytes(good_capture.read_bytes()[:5000])
+    res, out, _ = _eol(tmp_path, tmp_path / "caps")  # the folder: good car, then the broken
+    _one_line(res, str(bad), "cannot read capture")
+    _unchanged(out)
+
+
+def test_a_capture_of_another_size_is_one_line(tmp_path: Path, good_capture: Path):
+    from rvmsim._io import write_png
+
+    small = write_png(tmp_path / "caps" / "small.png", capture(Deviation())[::2, ::2].copy())
+    res, out, _ = _eol(tmp_path, tmp_path / "caps")
+    _one_line(res, str(small), "capture is 320×240 px but the scene's camera.image_size is "
+                               "640×480 px")
+    _unchanged(out)
+
+
+def test_a_missing_capture_and_a_bad_compensation_file_are_one_line(tmp_path: Path,
+                                                                     good_capture: Path):
+    res, out, _ = _eol(tmp_path, tmp_path / "caps" / "nope.png")
+    _one_line(res, "nope.png", "capture not found")
+    _unchanged(out)
+    comp = tmp_path / "comp.yaml"
+    comp.write_text("station:\n  measured_at: trailer\n")
+    scene, params = write_inputs(tmp_path)
+    res = run_in_process(["eol", scene, "--params", params, "--capture", good_capture, "--out",
+                          out, "--compensation", comp, "--no-progress"],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    _one_line(res, str(comp), "station.measured_at", "'trailer' is not a load state")
+    _unchanged(out)
+
+
+def test_help_and_usage_errors(tmp_path: Path):
+    res = run_in_process(["eol", "--help"])
+    assert res.code == 0 and "eol [OPTIONS] SCENE" in res.stdout and "--compensation" in res.stdout
+    res = run_in_process(["eol", "s.yaml", "--capture", "c.png", "--out", tmp_path / "o"])
+    assert res.code == 2 and res.stderr == "rvmsim eol: --params: required option not given\n"
+    res = run_in_process(["eol", "s.yaml", "--params", "p.yaml", "--capture", "c.png",
+                          "--out", tmp_path / "o", "--min-landmarks", "3"])
+    assert res.code == 2 and res.stderr.startswith("rvmsim eol: --min-landmarks: 3 is not")
+    assert not (tmp_path / "o").exists()
