@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from .errors import Command
-from .params import FiniteFloat, Integer, OutputFolder, load_isp
+from .params import DEFAULT_WORKERS, FiniteFloat, Integer, OutputFolder, load_isp
 
 __all__ = ["eol"]
 
@@ -34,10 +34,13 @@ __all__ = ["eol"]
               help="Fewer target corners matched: the car's pose is not recovered (it fails).")
 @click.option("--search-px", type=FiniteFloat(2.0, 200.0), default=30.0, show_default=True,
               help="How far from its nominal place a target corner is first searched for, px.")
+@click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS, show_default=True,
+              help="Processes the cars are shared out to (each sets up its own station; at "
+                   "most one per two cars).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Path,
         compensation: str, criteria_file: Path | None, variation_file: Path | None,
-        min_landmarks: int, search_px: float, progress: bool) -> None:
+        min_landmarks: int, search_px: float, workers: int, progress: bool) -> None:
     """The end-of-line station: each car's per-car ISP values from a capture of the
     target SCENE's eol section names.
 
@@ -66,7 +69,7 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
         load_variation(variation_file) if variation_file is not None else None,
         min_landmarks, search_px)
     result = run_station(sc, captures, out, settings, params_file=str(params_file),
-                         write_page=write_eol_page, progress=progress)
+                         write_page=write_eol_page, workers=workers, progress=progress)
     click.echo(f"{sc.name}: EOL station, target {result.target}, load state "
                f"{result.load_state['name']}")
     click.echo(result.summary())

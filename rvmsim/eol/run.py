@@ -10,12 +10,16 @@ it was (a failing car is not an error: it is a row).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Generator, Sequence
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from .._procs import spawn_pool, stop_pool
+from ..errors import RvmsimError
 from ..scene import Scene
 from ..validate import capture_folders, load_capture
 from .outputs import Staging, write_car, write_tables
@@ -42,6 +46,48 @@ def _check_captures(scene: Scene, captures: Sequence[Path]) -> None:
         load_capture(path, cam)
 
 
+#: The station of a worker process (made once per worker by :func:`_init_worker`).
+_WORKER: Station | None = None
+
+
+def _init_worker(scene: Scene, settings: StationSettings) -> None:
+    global _WORKER
+    _WORKER = Station(scene, settings)
+    _WORKER.prepare()
+
+
+def _work(path: Path, name: str) -> CarResult:
+    """One car in a worker process."""
+    assert _WORKER is not None  # set by the pool's initializer
+    return _WORKER.car(load_capture(path, _WORKER.scene.fisheye_camera()), str(path), name)
+
+
+def _cars(station: Station, captures: Sequence[Path], names: Sequence[str],
+          workers: int) -> Generator[CarResult, None, None]:
+    """Each car's result, in order: in this process, or on ``workers`` spawned processes
+    (each sets up its own station)."""
+    if workers <= 1:
+        station.prepare()
+        cam = station.scene.fisheye_camera()
+        for path, name in zip(captures, names):
+            yield station.car(load_capture(path, cam), str(path), name)
+        return
+    pool = spawn_pool(workers, initializer=_init_worker, initargs=(station.scene,
+                                                                  station.settings))
+    done = False
+    try:
+        futures = [pool.submit(_work, p, n) for p, n in zip(captures, names)]
+        for fut in futures:
+            try:
+                yield fut.result()
+            except BrokenProcessPool as err:  # a worker died, or its state did not unpickle
+                raise RvmsimError(f"station worker processes failed ({err}); run with "
+                                  "--workers 1 to see the error in this process") from None
+        done = True
+    finally:
+        stop_pool(pool, now=not done)
+
+
 def _bar(total: int, progress: bool) -> ProgressBar | None:
     if not progress:
         return None
@@ -54,7 +100,7 @@ def _bar(total: int, progress: bool) -> ProgressBar | None:
 def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
                 settings: StationSettings, *, params_file: str = "",
                 write_page: Callable[[StationResult, Path], Path] | None = None,
-                progress: bool = False,
+                workers: int = 1, progress: bool = False,
                 on_car: Callable[[CarResult], None] | None = None) -> StationResult:
     """Run the EOL station on each car's capture and write the results into ``out``.
 
@@ -75,6 +121,9 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
     write_page : callable, optional
         ``write_page(result, folder)`` writes the HTML page into ``folder`` and returns its
         path (:func:`rvmsim.report.write_eol_page`).
+    workers : int
+        Processes the cars are shared out to (spawned; each sets up its own station, ~2 s,
+        so at most one per two cars is used); 1: in this process.
     progress : bool
         A progress bar over the cars.
     on_car : callable, optional
@@ -97,23 +146,22 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
     captures = [Path(p) for p in captures]
     _check_captures(scene, captures)
     station = Station(scene, settings, progress=progress)
-    station.prepare()
     t_setup = time.perf_counter() - t0
     names = car_names(captures)
-    cam = scene.fisheye_camera()
     staging = Staging(out)
     bar = _bar(len(captures), progress)
     cars: list[CarResult] = []
     try:
-        for path, name in zip(captures, names):
-            car = station.car(load_capture(path, cam), str(path), name)
-            files = write_car(car, staging.dir, settings.output)
-            cars.append(dataclasses.replace(car, images={}, files=files))
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix_str(f"{sum(c.passed for c in cars)} pass")
-            if on_car is not None:
-                on_car(cars[-1])
+        with contextlib.closing(_cars(station, captures, names,
+                                      min(workers, len(captures) // 2))) as results:
+            for car in results:
+                files = write_car(car, staging.dir, settings.output)
+                cars.append(dataclasses.replace(car, images={}, files=files))
+                if bar is not None:
+                    bar.update(1)
+                    bar.set_postfix_str(f"{sum(c.passed for c in cars)} pass")
+                if on_car is not None:
+                    on_car(cars[-1])
         t_cars = time.perf_counter() - t0 - t_setup
         result = station.result(cars, params_file,
                                 {"setup": t_setup, "cars": t_cars,

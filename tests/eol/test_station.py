@@ -152,3 +152,21 @@ def test_a_car_measured_in_a_load_state_reads_the_load_too():
     err = np.array(car.deviation.as_offsets()) - np.array(want.as_offsets())
     assert np.abs(err[:3]).max() <= 1.0 and np.abs(err[3:]).max() <= 0.05, err
     assert car.deviation.pitch_deg == pytest.approx(-0.4 + 0.9, abs=0.05)
+
+
+def test_cars_shared_out_to_workers_give_the_same_results(tmp_path: Path, station: Station,
+                                                          env):
+    caps = tmp_path / "caps"
+    for k, d in enumerate(CORNERS):
+        write_capture(caps / f"car{k}.png", d)
+    res = _run(tmp_path, caps, env=env, extra=("--workers", "2"))
+    assert res.code in (0, 1), res.stdout + res.stderr
+    doc = json.loads((tmp_path / "out" / "eol.json").read_text())
+    assert [r["name"] for r in doc["results"]] == [f"car{k}" for k in range(4)]
+    for row, truth in zip(doc["results"], CORNERS):
+        here = station.car(capture(truth), "car", "car")
+        assert here.deviation is not None and here.correction is not None
+        assert row["deviation"] == pytest.approx(here.deviation.as_dict(), abs=1e-4)
+        assert row["correction"]["values"] == pytest.approx(
+            {k: round(v, 6) for k, v in here.correction.values.items()}, abs=1e-5)
+        assert row["verdict"] == here.verdict
