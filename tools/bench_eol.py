@@ -8,8 +8,9 @@ whose camera mount deviates uniformly within ±1° and ±5 mm on every axis (see
 car's capture is the station rendered from its camera (through the render cache).  Then:
 
 1. a warm-up station run on one car (the station's nominal frame into the render cache,
-   OpenGL and the imports started), and the timed run on every car (``run_station``, as the
-   command runs it: captures read, outputs written);
+   OpenGL and the imports started), and the timed runs on every car (``run_station``, as
+   the command runs it: captures read, outputs written), in this process and with
+   ``--workers`` processes (default 2);
 2. per car: the recovered deviation minus the truth, the seconds of its station step, its
    verdict;
 3. what robustness predicts for the same cars: each car's values from its true deviation
@@ -71,6 +72,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--cars", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--keep", type=Path, default=None, help="write the captures and outputs here")
     args = ap.parse_args()
     print(f"Python {platform.python_version()} on {cpu_model()} ({os.cpu_count()} cores)")
@@ -92,9 +94,17 @@ def main() -> None:
     result = run_station(scene, files, work / "out", settings)
     wall = time.perf_counter() - t
     t = time.perf_counter()
+    par = run_station(scene, files, work / "out_workers", settings, workers=args.workers)
+    wall_par = time.perf_counter() - t
+    same = all(a.deviation == b.deviation and a.verdict == b.verdict
+               for a, b in zip(result.cars, par.cars))
+    t = time.perf_counter()
     predicted, fails = _predicted(devs)
     t_pred = time.perf_counter() - t
     _report(result, devs, predicted, fails, wall)
+    print(f"with {args.workers} worker processes: {wall_par:.1f} s = "
+          f"{wall_par / len(files):.2f} s per car (each worker sets up its own station); "
+          f"results {'identical' if same else 'DIFFERENT'}")
     print(f"(robustness's prediction: {t_pred:.1f} s; outputs in {work / 'out'})")
 
 

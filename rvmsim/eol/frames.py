@@ -21,11 +21,11 @@ import dataclasses
 import numpy as np
 
 from ..camera import FisheyeCamera
-from ..render import (CubeLayout, FisheyeImages, cached_cube, cube_layout, fold, fold_labels,
-                      posed_parts, render_faces)
+from ..render import (CubeLayout, FaceCrop, FisheyeImages, cached_cube, cube_layout, fold,
+                      fold_labels, posed_parts, render_faces)
 from ..scene import Part, Scene, build_parts
 
-__all__ = ["PoseRenderer"]
+__all__ = ["PoseRenderer", "restricted_layout"]
 
 
 class PoseRenderer:
@@ -76,10 +76,58 @@ class PoseRenderer:
         return FisheyeImages(color=c, labels=lab, camera=cam, face_size=self.layout.face_size,
                              scene=self.scene)
 
-    def labels(self, pose: FisheyeCamera) -> np.ndarray:
+    def labels(self, pose: FisheyeCamera, pixels: np.ndarray | None = None) -> np.ndarray:
         """Only the label image ((H, W) uint8) from ``pose``'s position and rotation,
-        rendered now (not cached)."""
+        rendered now (not cached).
+
+        Parameters
+        ----------
+        pose : FisheyeCamera
+            Its position and rotation place the cube.
+        pixels : (H, W) bool, optional
+            Render only these fisheye pixels (the others are ``VOID``): each face only
+            over the rectangle they need (:func:`restricted_layout`), at the same face size,
+            so their labels are the whole render's.
+        """
         cam = self._at(pose)
-        atlas = render_faces(self.parts(), self.layout, cam, sky=self.scene.render.sky_color,
+        layout = self.layout if pixels is None else restricted_layout(self.layout, pixels)
+        atlas = render_faces(self.parts(), layout, cam, sky=self.scene.render.sky_color,
                              color=False)
-        return fold_labels(self.layout, atlas.labels)
+        return fold_labels(layout, atlas.labels)
+
+
+def restricted_layout(layout: CubeLayout, pixels: np.ndarray) -> CubeLayout:
+    """``layout`` for only some of its fisheye pixels: each face's crop shrunk to the
+    rectangle those pixels sample (plus a pixel's guard), at the same face size and face
+    pixel grid, so every kept pixel samples the same face pixel as before; the other
+    pixels are outside the field (``VOID`` when folded).
+
+    Parameters
+    ----------
+    layout : CubeLayout
+    pixels : (H, W) bool
+        The fisheye pixels to keep.
+    """
+    keep = np.asarray(pixels, dtype=bool) & layout.in_fov
+    atlas_x = np.full(keep.shape, -1.0, np.float32)
+    atlas_y = np.full(keep.shape, -1.0, np.float32)
+    crops: list[FaceCrop] = []
+    offset = 0
+    for c in layout.crops:
+        sel = keep & (layout.atlas_x >= c.atlas_x0) & (layout.atlas_x < c.atlas_x0 + c.width)
+        if not sel.any():
+            continue
+        fx = layout.atlas_x[sel] - c.atlas_x0 + c.x0  # face pixel grid
+        fy = layout.atlas_y[sel] + c.y0
+        x0 = max(int(np.floor(fx.min())) - 1, c.x0)
+        x1 = min(int(np.ceil(fx.max())) + 2, c.x0 + c.width)
+        y0 = max(int(np.floor(fy.min())) - 1, c.y0)
+        y1 = min(int(np.ceil(fy.max())) + 2, c.y0 + c.height)
+        crops.append(FaceCrop(c.face, x0, y0, x1 - x0, y1 - y0, offset))
+        atlas_x[sel] = fx - x0 + offset
+        atlas_y[sel] = fy - y0
+        offset += x1 - x0
+    if not crops:
+        raise ValueError("none of the pixels to keep is inside the lens's field")
+    return CubeLayout(layout.face_size, tuple(crops), atlas_x, atlas_y, keep,
+                      layout.cube_rotation)

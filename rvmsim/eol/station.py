@@ -18,7 +18,9 @@ For each capture (:meth:`Station.car`):
    setting with the written parameters set so that the reference ground points land where
    the nominal car shows them, clipped to the allowed ranges.
 4. **ECs.** The capture has no labels, so the scene (its full test site) is rendered at the
-   measured pose (labels only): the synthetic frame that explains the capture.  The
+   measured pose (labels only, and only of the fisheye pixels the car's RVM image shows
+   when no EC reads the fisheye labels elsewhere): the synthetic frame that explains the
+   capture.  The
    capture's colour and those labels go through the car's ISP parameters and every EC is
    evaluated (:func:`rvmsim.pipeline.evaluate_params`), as ``rvmsim validate --params`` does.
 """
@@ -34,12 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._io import key_lines, line_of
-from ..camera import rotation_from_ypr
+from ..camera import FisheyeCamera, rotation_from_ypr
 from ..compensation import DEFAULT_COMPENSATION, CompensationLaw, CompensationModel
 from ..criteria import Criteria, default_criteria
 from ..errors import RvmsimError, SceneError
 from ..isp import IspParams, OutputSpec
-from ..pipeline import evaluate_params
+from ..pipeline import evaluate_params, rvm_pixels
 from ..render import FisheyeImages
 from ..robust import Variation, body_pose
 from ..scene import Scene, station_scene
@@ -176,6 +178,15 @@ class Station:
                              "unoccluded, inside the lens's field, ≥ 8 px apart)",
                              _line(self.scene, key))
 
+    def _shown(self, camera: FisheyeCamera, params: IspParams) -> np.ndarray | None:
+        """The fisheye pixels the car's RVM image shows ((H, W) bool): only their labels
+        are rendered, unless an EC reads the scene's fisheye labels elsewhere (None)."""
+        if self.criteria.uses_scene:
+            return None
+        mask = np.zeros(camera.width * camera.height, bool)
+        mask[rvm_pixels(camera, params, self.settings.output).pixels] = True
+        return mask.reshape(camera.height, camera.width)
+
     def _pose(self, capture: np.ndarray, capture_name: str, *, dense: bool
               ) -> Validation | tuple[str, int, float | None, dict[str, np.ndarray]]:
         """The validation that recovers the car's pose, or why it does not (reason,
@@ -214,7 +225,7 @@ class Station:
         deviation = deviation_of(self.scene, position, rotation)
         correction = self.law.correct(deviation)
         pose = dataclasses.replace(self.nominal_camera, rotation=rotation, position=position)
-        labels = self._renderer.labels(pose)
+        labels = self._renderer.labels(pose, self._shown(pose, correction.params))
         images = FisheyeImages(color=capture, labels=labels, camera=pose, scene=self.scene)
         frame = evaluate_params(images, correction.params, s.output, self.criteria)
         failing = [i.id for i in frame.ec.items if i.enabled and not i.passed]
