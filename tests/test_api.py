@@ -15,7 +15,7 @@ import rvmsim
 
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("storage", "camera", "scene", "render", "isp", "criteria", "robust", "search",
-            "runs", "tune", "batch", "validate", "report", "cli")
+            "runs", "tune", "batch", "validate", "eol", "report", "cli")
 
 
 @pytest.mark.parametrize("name", rvmsim.__all__)

@@ -42,6 +42,7 @@ from rvmsim.compensation import (DEFAULT_COMPENSATION, CompensationLaw, Deviatio
 from rvmsim.criteria import default_criteria  # noqa: E402
 from rvmsim.eol import (StationSettings, run_station, station_load,  # noqa: E402
                         synthetic_capture)
+from rvmsim.report import write_eol_page  # noqa: E402
 from rvmsim.robust import MountSample, evaluate_samples  # noqa: E402
 from tests.eol import stations as S  # noqa: E402
 
@@ -91,10 +92,11 @@ def main() -> None:
     run_station(scene, files[:1], work / "warm", settings)
     print(f"warm-up run (1 car, station set up): {time.perf_counter() - t:.1f} s")
     t = time.perf_counter()
-    result = run_station(scene, files, work / "out", settings)
+    result = run_station(scene, files, work / "out", settings, write_page=write_eol_page)
     wall = time.perf_counter() - t
     t = time.perf_counter()
-    par = run_station(scene, files, work / "out_workers", settings, workers=args.workers)
+    par = run_station(scene, files, work / "out_workers", settings, workers=args.workers,
+                      write_page=write_eol_page)
     wall_par = time.perf_counter() - t
     same = all(a.deviation == b.deviation and a.verdict == b.verdict
                for a, b in zip(result.cars, par.cars))

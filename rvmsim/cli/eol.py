@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from .errors import Command
-from .params import DEFAULT_WORKERS, FiniteFloat, Integer, OutputFolder, load_isp
+from .params import FiniteFloat, Integer, OutputFolder, load_isp
 
 __all__ = ["eol"]
 
@@ -34,9 +34,9 @@ __all__ = ["eol"]
               help="Fewer target corners matched: the car's pose is not recovered (it fails).")
 @click.option("--search-px", type=FiniteFloat(2.0, 200.0), default=30.0, show_default=True,
               help="How far from its nominal place a target corner is first searched for, px.")
-@click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS, show_default=True,
+@click.option("--workers", type=Integer(1, 64), default=1, show_default=True,
               help="Processes the cars are shared out to (each sets up its own station; at "
-                   "most one per two cars).")
+                   "most one per two cars). Helps only on idle cores.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Path,
         compensation: str, criteria_file: Path | None, variation_file: Path | None,
