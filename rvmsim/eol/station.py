@@ -114,8 +114,9 @@ class Station:
     Raises
     ------
     SceneError
-        No ``eol`` section, an unusable one, or a target the camera does not see well enough
-        at its nominal pose (fewer than ``min_landmarks`` usable corners).
+        No ``eol`` section, an unusable one, a target the camera does not see well enough at
+        its nominal pose (fewer than ``min_landmarks`` usable corners), or a scene with a
+        ``load_state`` of its own (the station's load state is ``measured_at``).
     CompensationError
         ``measured_at`` names no load state.
     RvmsimError
@@ -126,6 +127,11 @@ class Station:
         self.scene = scene
         self.settings = settings
         self.criteria = settings.criteria or default_criteria()
+        if scene.load_state is not None:
+            raise SceneError(scene.source, "load_state", "a scene with a load state is one "
+                             "loaded car; the station stands every car in the compensation "
+                             "model's station.measured_at (a load state of the variation): "
+                             "remove load_state", _line(scene, "load_state"))
         station = station_scene(scene)
         self.load = station_load(scene, settings.compensation, settings.variation)
         self.body_pose = body_pose(scene, self.load)

@@ -83,6 +83,19 @@ def test_a_target_out_of_view_is_one_line(tmp_path: Path, good_capture: Path, po
     _unchanged(out)
 
 
+def test_a_scene_of_one_loaded_car_is_one_line(tmp_path: Path, good_capture: Path):
+    """The station stands every car in the compensation's measured_at; a scene with a
+    load_state of its own (an exported robustness sample) is refused, named."""
+    scene, params = write_inputs(tmp_path, edit={"load_state": {"name": "full load",
+                                                                "height_mm": -45}})
+    out = _old_out(tmp_path)
+    res = run_in_process(["eol", scene, "--params", params, "--capture", good_capture,
+                          "--out", out, "--no-progress"],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    _one_line(res, str(scene), "load_state: a scene with a load state is one loaded car")
+    _unchanged(out)
+
+
 def test_a_corrupt_capture_is_one_line(tmp_path: Path, good_capture: Path):
     bad = tmp_path / "caps" / "broken.png"
     bad.write_bytes(good_capture.read_bytes()[:5000])
