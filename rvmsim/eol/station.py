@@ -118,9 +118,8 @@ class Station:
         its nominal pose (fewer than ``min_landmarks`` usable corners), or a scene with a
         ``load_state`` of its own (the station's load state is ``measured_at``).
     CompensationError
-        ``measured_at`` names no load state.
-    RvmsimError
-        The law has too few reference points in the RVM image.
+        ``measured_at`` names no load state, or the law has too few reference points in
+        the platform setting's RVM image.
     """
 
     def __init__(self, scene: Scene, settings: StationSettings, *, progress: bool = False):
@@ -143,11 +142,8 @@ class Station:
         self.frame: FisheyeImages = self._station_renderer.frame(self.nominal_camera,
                                                                  progress=progress)
         self._check_target_in_view()
-        try:
-            self.law = CompensationLaw(scene, settings.params, settings.output,
-                                       settings.compensation)
-        except ValueError as err:  # too few reference points in the RVM image
-            raise RvmsimError(f"{scene.source}: compensation law: {err}") from None
+        self.law = CompensationLaw(scene, settings.params, settings.output,
+                                   settings.compensation)
         self._renderer = PoseRenderer(scene, cam, self.body_pose)
 
     def prepare(self) -> None:

@@ -138,3 +138,19 @@ def test_help_and_usage_errors(tmp_path: Path):
                           "--out", tmp_path / "o", "--min-landmarks", "3"])
     assert res.code == 2 and res.stderr.startswith("rvmsim eol: --min-landmarks: 3 is not")
     assert not (tmp_path / "o").exists()
+
+
+def test_a_setting_whose_view_shows_no_ground_is_one_line(tmp_path: Path, good_capture: Path):
+    """The law needs reference ground points in the platform setting's RVM image."""
+    import yaml
+
+    scene, params = write_inputs(tmp_path)
+    doc = yaml.safe_load(params.read_text())
+    doc.update(h_pan=80.0, v_pan=-90.0)  # the view turned up into the sky
+    params.write_text(yaml.safe_dump(doc))
+    out = _old_out(tmp_path)
+    res = run_in_process(["eol", scene, "--params", params, "--capture", good_capture,
+                          "--out", out, "--no-progress"],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    _one_line(res, "reference", "only 0 reference ground points are in the RVM image")
+    _unchanged(out)
