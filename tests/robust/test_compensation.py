@@ -10,10 +10,8 @@ import numpy as np
 import pytest
 
 from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw
-from rvmsim.criteria import CandidateEvaluator
-from rvmsim.isp import IspParams, OutputSpec
+from rvmsim.isp import OutputSpec
 from rvmsim.pipeline import make_evaluator
-from rvmsim.render import render_fisheye
 from rvmsim.report import write_robustness_outputs
 from rvmsim.robust import (RobustnessSettings, SampleSet, draw_samples, robustness,
                            station_readings, variation_from_scene)
@@ -21,7 +19,7 @@ from rvmsim.robust import (RobustnessSettings, SampleSet, draw_samples, robustne
 from ..cli_runner import run_in_process
 from ..scenes import load_small_scene, write_small_scene
 from .conftest import ANGLES_ONLY
-from .test_robustness import _only
+from .test_robustness import settings  # noqa: F401 - the fixture
 
 OUTPUT = OutputSpec(640, 360)
 PERFECT = DEFAULT_COMPENSATION.with_station(0.0, 0.0)
@@ -31,18 +29,12 @@ WIDE_ANGLES = {"mount": {a: {"uniform": {"half_width": 2.5}}
 
 
 @pytest.fixture(scope="module")
-def edge():
-    """The small scene and a setting with EC 2-1 (bumper centre height, [4, 8] %) in the
-    middle of its range: ±2.5° of mount pitch still makes many samples fail it."""
-    sc = load_small_scene("a", 0.25, variation=WIDE_ANGLES)
-    crit = _only("2-1")
-    ev = CandidateEvaluator(render_fisheye(sc).labels, OUTPUT, crit)
-    base = IspParams().for_input_scale(0.25)
-    shifts = np.arange(10.0, 25.0, 0.25)
-    values = np.array([ev(dataclasses.replace(base, v_shift=float(s)))["2-1"].value or 0.0
-                       for s in shifts])
-    return sc, crit, dataclasses.replace(base, v_shift=float(shifts[np.argmin(
-        np.abs(values - 6.0))]))
+def edge(settings):
+    """The small scene with ±2.5° on every angle, and the setting with EC 2-1 (bumper
+    centre height, [4, 8] %) in the middle of its range (test_robustness's): mount pitch
+    still makes many samples fail it."""
+    _, crit, mid, _ = settings
+    return load_small_scene("a", 0.25, variation=WIDE_ANGLES), crit, mid
 
 
 def test_a_perfect_station_recovers_every_car_an_edge_setting_loses(edge, tmp_path: Path):

@@ -5,8 +5,6 @@ of the run's settings."""
 from __future__ import annotations
 
 import json
-import os
-
 import numpy as np
 import pytest
 
@@ -19,21 +17,9 @@ from rvmsim.scene import load_scene
 from rvmsim.tune import TuneRequest, TuningConfig, tune
 
 from ..cli_runner import run_in_process
-from ..scenes import write_small_scene
+from .test_robust import small  # noqa: F401 - the fixture (a small scene, its own cache)
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 2}
-
-
-@pytest.fixture(scope="module")
-def small(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("compensated")
-    old = os.environ.get("RVMSIM_CACHE")
-    os.environ["RVMSIM_CACHE"] = str(folder / "cache")
-    yield write_small_scene(folder, name="scene.yaml")
-    if old is None:
-        os.environ.pop("RVMSIM_CACHE", None)
-    else:
-        os.environ["RVMSIM_CACHE"] = old
 
 
 def test_each_sample_is_judged_with_its_per_car_values(small, tmp_path):
