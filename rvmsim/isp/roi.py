@@ -7,7 +7,6 @@ output → input (:mod:`rvmsim.isp.map`), :func:`input_to_output` is its inverse
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from .exact import isp_rays, map_points, plane_and_view
