@@ -4,7 +4,7 @@ every bundled vehicle's nominal-tuned setting (not a test; issue #25's README ta
     PYTHONPATH=$PWD python3 tools/bench_compensation.py [--vehicles a,b,c,d,e,f]
         [--samples 400] [--seed 0] [--eval-seed 1] [--sigmas 0,0.02,0.05,0.1]
         [--mm-per-deg 10] [--budget N] [--workers 2] [--out out/yield_table]
-        [--law-cars 200] [--robust-samples K] [--no-progress]
+        [--law-cars 200] [--robust-samples K [--skip-nominal]] [--no-progress]
 
 For every vehicle:
 
@@ -153,6 +153,8 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--law-cars", type=int, default=200)
     ap.add_argument("--robust-samples", type=int, default=None)
+    ap.add_argument("--skip-nominal", action="store_true",
+                    help="with --robust-samples: only the robust-tuned settings' rows")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "yield_table")
     ap.add_argument("--no-progress", dest="progress", action="store_false")
     args = ap.parse_args()
@@ -165,7 +167,8 @@ def main() -> None:
     for letter in args.vehicles.replace(",", ""):
         path = scene_file(letter, 1.0, args.out)
         say(f"vehicle {letter.upper()}")
-        runs = [("nominal", f"nominal-s{args.seed}", None, None)]
+        runs = [] if args.skip_nominal and args.robust_samples else [
+            ("nominal", f"nominal-s{args.seed}", None, None)]
         if args.robust_samples:
             runs.append(("robust, compensated", f"robust-comp-k{args.robust_samples}-"
                          f"s{args.seed}", args.robust_samples, DEFAULT_COMPENSATION))
