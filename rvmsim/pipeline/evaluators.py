@@ -27,7 +27,7 @@ scene: those ECs would come out "not measured" and fail every candidate.
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Protocol, overload, runtime_checkable
 
 import numpy as np
@@ -50,6 +50,8 @@ __all__ = ["EvaluationPath", "FisheyeLabels", "FisheyeSet", "ImageEvaluator", "F
 
 #: Images of a batch held at once (bounds the memory of label images in flight).
 _CHUNK = 32
+#: The same with one setting per image on the RVM-pixel path (RVM label images only).
+_CHUNK_EACH = 256
 
 
 class EvaluationPath(str, enum.Enum):
@@ -83,6 +85,9 @@ class FisheyeSet(Protocol):
     ``rvm_labels(pixels, indices)`` yields their RVM label images under the setting of
     ``pixels``, reading only the fisheye pixels it lists — equal to
     ``process(None, image.labels, params, output)[1]`` (implementations test this).
+    ``pixels`` may instead be a function of the position ``k`` in ``indices`` giving that
+    image's own :class:`RvmPixels` (one setting per image: per-car values), called as each
+    image is reached (so that images sharing a render are made together).
     """
 
     @property
@@ -95,7 +100,8 @@ class FisheyeSet(Protocol):
 
     def fisheye(self, indices: Sequence[int]) -> Iterator[FisheyeLabels]: ...
 
-    def rvm_labels(self, pixels: RvmPixels, indices: Sequence[int]) -> Iterator[np.ndarray]: ...
+    def rvm_labels(self, pixels: RvmPixels | Callable[[int], RvmPixels],
+                   indices: Sequence[int]) -> Iterator[np.ndarray]: ...
 
 
 class ImageEvaluator(Protocol):
@@ -183,25 +189,50 @@ class SetEvaluator:
         values = np.full((len(idx), len(self.criteria.ids)), np.nan)
         bar = _bar(progress, len(idx))
         runs = _runs(per_image)
-        for rows, p in runs:
-            for start in range(0, len(rows), _CHUNK):
-                chunk = rows[start:start + _CHUNK]
-                values[chunk] = self._values(p, [idx[r] for r in chunk], many=len(runs) > 1)
-                if bar is not None:
-                    bar.update(len(chunk))
+        chunks: list[tuple[list[int], IspParams | None]]
+        if len(runs) * 4 <= max(len(idx), 4):  # few settings: one map for each one's images
+            chunks = [(rows[a:a + _CHUNK], p) for rows, p in runs
+                      for a in range(0, len(rows), _CHUNK)]
+        else:  # one setting per image: in image order, so images sharing a render go together
+            step = _CHUNK_EACH if self.path is EvaluationPath.RVM_PIXELS else _CHUNK
+            chunks = [(list(range(a, min(a + step, len(idx)))), None)
+                      for a in range(0, len(idx), step)]
+        for chunk, setting in chunks:
+            at = [idx[r] for r in chunk]
+            values[chunk] = (self._values(setting, at) if setting is not None else
+                             self._values_each([per_image[r] for r in chunk], at))
+            if bar is not None:
+                bar.update(len(chunk))
         if bar is not None:
             bar.close()
         return score_batch(values, self.criteria)
 
-    def _values(self, params: IspParams, indices: list[int], *, many: bool = False) -> np.ndarray:
-        """The values of one setting on ``indices``; ``many``: one of many settings (per-car
-        values), whose shown pixels' rays are looked up in the camera's, made once."""
+    def _values_each(self, params: list[IspParams], indices: list[int]) -> np.ndarray:
+        """The values of ``params[k]`` on image ``indices[k]`` (per-car values).  On the
+        RVM-pixel path each image's pixels are made as the set reaches it, their rays
+        looked up in the camera's (made once)."""
         crit = self.criteria
         if self.path is EvaluationPath.RVM_PIXELS:
-            if many and self._camera_rays is None:
+            if self._camera_rays is None:
                 self._camera_rays = CameraRays.of(self.images.camera)
-            pixels = rvm_pixels(self.images.camera, params, self.output,
-                                camera_rays=self._camera_rays if many else None)
+            rays = self._camera_rays
+
+            def pixels(k: int) -> RvmPixels:
+                return rvm_pixels(self.images.camera, params[k], self.output, camera_rays=rays)
+
+            results = (measure_labels(labels, crit)
+                       for labels in self.images.rvm_labels(pixels, indices))
+        else:
+            results = (FullEvaluator(im, self.output, crit).measure(params[k])
+                       for k, im in enumerate(self.images.fisheye(indices)))
+        return np.array([values_array(m, crit.ids) for m in results]).reshape(
+            len(indices), len(crit.ids))
+
+    def _values(self, params: IspParams, indices: list[int]) -> np.ndarray:
+        """The values of one setting on ``indices``."""
+        crit = self.criteria
+        if self.path is EvaluationPath.RVM_PIXELS:
+            pixels = rvm_pixels(self.images.camera, params, self.output)
             results = (measure_labels(labels, crit)
                        for labels in self.images.rvm_labels(pixels, indices))
         else:

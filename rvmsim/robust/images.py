@@ -29,7 +29,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -286,12 +286,15 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
             yield idx, cams[k], atlas_c, atlas_l
 
 
-def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixels, *,
+def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample],
+                      rvm: RvmPixels | Callable[[int], RvmPixels], *,
                       scale: float = 1.0, shared: Refolder | None = None,
                       progress: bool = False) -> list[np.ndarray]:
     """The RVM label image of every sample under the ISP setting of ``rvm``: equal to
     ``process(None, sample_images(...)[i].labels, params, output)`` (the tests check it), at
-    the cost of re-folding only the fisheye pixels the RVM image shows.
+    the cost of re-folding only the fisheye pixels the RVM image shows.  ``rvm`` may be a
+    function of the sample's position in ``samples`` giving its own setting's pixels
+    (per-car values), called when its viewpoint's cube is at hand.
 
     Returns
     -------
@@ -306,10 +309,11 @@ def sample_rvm_labels(scene: Scene, samples: Sequence[MountSample], rvm: RvmPixe
     for idx, view_cam, _, atlas_l in _viewpoints(scene, samples, shared, scale, False):
         for i in idx:
             cam = sample_camera(scene, samples[i], scale=scale)
-            ax, ay = refold_coords(shared.cover, cam.rotation.T @ view_cam.rotation, rvm.rays)
-            at_pixels = np.full(rvm.pixels.size, L.VOID, np.uint8)
-            at_pixels[rvm.in_field] = nearest_labels(atlas_l, ax, ay)
-            out[i] = rvm.labels(at_pixels)
+            px = rvm(i) if callable(rvm) else rvm
+            ax, ay = refold_coords(shared.cover, cam.rotation.T @ view_cam.rotation, px.rays)
+            at_pixels = np.full(px.pixels.size, L.VOID, np.uint8)
+            at_pixels[px.in_field] = nearest_labels(atlas_l, ax, ay)
+            out[i] = px.labels(at_pixels)
             if bar is not None:
                 bar.update(1)
     if bar is not None:
@@ -359,8 +363,9 @@ class SampleSet:
         yield from sample_images(self.scene, [self.samples[i] for i in indices],
                                  scale=self.scale, color=False, shared=self.shared)
 
-    def rvm_labels(self, pixels: RvmPixels, indices: Sequence[int]) -> Iterator[np.ndarray]:
-        """The samples' RVM label images under ``pixels``' setting
-        (:func:`sample_rvm_labels`)."""
+    def rvm_labels(self, pixels: RvmPixels | Callable[[int], RvmPixels],
+                   indices: Sequence[int]) -> Iterator[np.ndarray]:
+        """The samples' RVM label images under ``pixels``' setting, or each under its own
+        (``pixels(k)`` for ``indices[k]``; :func:`sample_rvm_labels`)."""
         yield from sample_rvm_labels(self.scene, [self.samples[i] for i in indices], pixels,
                                      scale=self.scale, shared=self.shared)

@@ -244,7 +244,8 @@ sensitivity: false
 
 
 def test_a_sweep_reports_the_plugin_ec_infeasible_where_its_object_is_out_of_view(tmp_path):
-    (tmp_path / "base.yaml").write_text(small_scene_text("a"))
+    # no variation section: the verdicts are the point, not the yields
+    (tmp_path / "base.yaml").write_text(small_scene_text("a", variation=None))
     (tmp_path / "criteria.yaml").write_text(
         f"name: hooks\nplugins: [{PLUGIN}]\ncriteria:\n  3-2: {{enabled: false}}\n")
     (tmp_path / "sweep.yaml").write_text(SWEEP)
