@@ -37,10 +37,9 @@ from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measure
                         default_criteria, measure_labels, scene_context, score, score_batch,
                         values_array)
 from ..isp import IspParams, OutputSpec, process
-from ..render import CameraRays
 from ..scene import Scene
 from .frame import evaluate_rvm_labels
-from .pixels import RvmPixels, rvm_pixels
+from .pixels import RayTable, RvmPixels, ray_table, rvm_pixels
 
 if TYPE_CHECKING:
     from .._progress import ProgressBar
@@ -162,7 +161,7 @@ class SetEvaluator:
         self.output = output
         self.criteria = criteria
         self.path = path
-        self._camera_rays: CameraRays | None = None
+        self._table: RayTable | None = None
 
     def __call__(self, params: IspParams | Sequence[IspParams], *,
                  indices: Sequence[int] | None = None, progress: str | None = None) -> EcBatch:
@@ -213,12 +212,12 @@ class SetEvaluator:
         looked up in the camera's (made once)."""
         crit = self.criteria
         if self.path is EvaluationPath.RVM_PIXELS:
-            if self._camera_rays is None:
-                self._camera_rays = CameraRays.of(self.images.camera)
-            rays = self._camera_rays
+            if self._table is None:
+                self._table = ray_table(self.images.camera)
+            table = self._table
 
             def pixels(k: int) -> RvmPixels:
-                return rvm_pixels(self.images.camera, params[k], self.output, camera_rays=rays)
+                return rvm_pixels(self.images.camera, params[k], self.output, table=table)
 
             results = (measure_labels(labels, crit)
                        for labels in self.images.rvm_labels(pixels, indices))

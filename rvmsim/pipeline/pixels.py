@@ -17,7 +17,7 @@ from ..camera import FisheyeCamera
 from ..isp import IspParams, OutputSpec, apply_map, build_map
 from ..render import CameraRays
 
-__all__ = ["RvmPixels", "rvm_pixels"]
+__all__ = ["RvmPixels", "rvm_pixels", "RayTable", "ray_table"]
 
 
 @dataclass(frozen=True)
@@ -53,8 +53,28 @@ class RvmPixels:
         return out
 
 
+@dataclass(frozen=True)
+class RayTable:
+    """What every setting's :class:`RvmPixels` on one camera shares (:func:`ray_table`):
+    the rays of every in-field pixel, each pixel's entry among them (−1 outside the field)
+    and the image of flat pixel indices + 1 (float32, exact below 2^24) the map samples."""
+
+    rays: CameraRays
+    entry: np.ndarray
+    index_image: np.ndarray
+
+
+def ray_table(camera: FisheyeCamera) -> RayTable:
+    """The :class:`RayTable` of ``camera`` (made once for many settings: per-car values)."""
+    rays = CameraRays.of(camera)
+    entry = np.full(rays.in_fov.size, -1, np.intp)
+    entry[rays.index] = np.arange(rays.index.size)
+    w, h = camera.width, camera.height
+    return RayTable(rays, entry, np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w))
+
+
 def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec, *,
-               camera_rays: CameraRays | None = None) -> RvmPixels:
+               table: RayTable | None = None) -> RvmPixels:
     """:class:`RvmPixels` of ``params`` (for ``camera``'s sensor size) on ``camera``'s lens.
 
     Parameters
@@ -62,10 +82,10 @@ def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec, *,
     camera : FisheyeCamera
     params : IspParams
     output : OutputSpec
-    camera_rays : CameraRays, optional
-        ``CameraRays.of(camera)``: the rays of every in-field pixel, made once for many
-        settings (per-car values).  The shown pixels' rays are then looked up in it rather
-        than computed, and not made distinct (an RVM pixel per entry): cheaper per setting.
+    table : RayTable, optional
+        :func:`ray_table` of ``camera``, made once for many settings (per-car values): the
+        shown pixels' rays are then looked up rather than computed, and made distinct by
+        marking them (linear time) rather than by sorting.
 
     Convention
     ----------
@@ -73,23 +93,21 @@ def rvm_pixels(camera: FisheyeCamera, params: IspParams, output: OutputSpec, *,
     :func:`rvmsim.isp.apply_map` samples labels (nearest, pixel centres at integers).
     """
     w, h = camera.width, camera.height
-    index = np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w)  # exact below 2^24
-    src = np.rint(apply_map(index, build_map(params, (w, h), output), labels=True))
-    source = src.astype(np.intp) - 1
-    if camera_rays is None:
-        pixels, inverse = np.unique(source[source >= 0], return_inverse=True)
+    index = (table.index_image if table is not None else
+             np.arange(1, w * h + 1, dtype=np.float32).reshape(h, w))  # exact below 2^24
+    src = apply_map(index, build_map(params, (w, h), output), labels=True)
+    source = src.astype(np.intp) - 1  # the values are whole numbers: exact
+    shown = source[source >= 0]
+    if table is None:
+        pixels, inverse = np.unique(shown, return_inverse=True)
         rays = CameraRays.of(camera, pixels)
         return RvmPixels(source, pixels, inverse.ravel(), rays, rays.in_fov.ravel()[pixels])
-    pixels = source[source >= 0]
-    in_field = camera_rays.in_fov.ravel()[pixels]
-    position = _ray_positions(camera_rays)[pixels[in_field]]
-    rays = CameraRays(camera_rays.x[position], camera_rays.y[position], camera_rays.z[position],
-                      pixels[in_field], camera_rays.in_fov)
-    return RvmPixels(source, pixels, np.arange(pixels.size), rays, in_field)
-
-
-def _ray_positions(camera_rays: CameraRays) -> np.ndarray:
-    """Each fisheye pixel's entry in ``camera_rays`` (−1 outside the field)."""
-    lut = np.full(camera_rays.in_fov.size, -1, np.intp)
-    lut[camera_rays.index] = np.arange(camera_rays.index.size)
-    return lut
+    mark = np.zeros(w * h, bool)
+    mark[shown] = True
+    pixels = np.flatnonzero(mark)
+    rank = np.cumsum(mark, dtype=np.intp) - 1
+    in_field = table.rays.in_fov.ravel()[pixels]
+    entry = table.entry[pixels[in_field]]
+    r = table.rays
+    rays = CameraRays(r.x[entry], r.y[entry], r.z[entry], pixels[in_field], r.in_fov)
+    return RvmPixels(source, pixels, rank[shown], rays, in_field)
