@@ -33,7 +33,7 @@ from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints,
 from .samples import MountSample, draw_samples, nominal_sample
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
 from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
-from .variation import MOUNT_AXES, Variation, variation_from_scene
+from .variation import MOUNT_AXES, LoadState, Variation, variation_from_scene
 
 __all__ = ["EcStats", "ScalePoint", "RobustnessResult", "RobustnessSettings", "evaluate_samples",
            "robustness", "DEFAULT_SCALES"]
@@ -395,7 +395,7 @@ def robustness(scene: Scene, params: IspParams,
     crit = settings.criteria if settings.criteria is not None else default_criteria()
     var = settings.variation if settings.variation is not None else variation_from_scene(scene)
     seed, output, render_scale = settings.seed, settings.output, settings.render_scale
-    law = _law(scene, params, settings, var)
+    law, measured_at = _law(scene, params, settings, var)
     drawn = draw_samples(var, settings.samples, seed)
     n_extra = settings.scale_samples or min(settings.samples, 64)
     extra = {float(s): draw_samples(var, n_extra, seed, s)
@@ -418,13 +418,11 @@ def robustness(scene: Scene, params: IspParams,
             e = evaluate_samples(scene, samples, params, output, crit, scale=render_scale,
                                  shared=fold, progress=progress)
             return e, e.all_passed, None
-        fixed = compensate_samples(law, samples, seed, var.load_states[law_load])
+        fixed = compensate_samples(law, samples, seed, measured_at)
         e = evaluate_samples(scene, samples, fixed.params, output, crit, scale=render_scale,
                              shared=fold, progress=progress)
         return e, e.all_passed & fixed.within_range, fixed
 
-    law_load = 0 if law is None else measured_load_index(
-        law.model, [s.name for s in var.load_states])
     before = None
     if law is not None:
         before = evaluate_samples(scene, drawn, params, output, crit, scale=render_scale,
@@ -457,9 +455,11 @@ def robustness(scene: Scene, params: IspParams,
 
 
 def _law(scene: Scene, params: IspParams, settings: RobustnessSettings,
-         var: Variation) -> CompensationLaw | None:
-    """The compensation law of ``settings`` for ``params`` (None without compensation)."""
-    if settings.compensation is None:
-        return None
-    measured_load_index(settings.compensation, [s.name for s in var.load_states])
-    return CompensationLaw(scene, params, settings.output, settings.compensation)
+         var: Variation) -> tuple[CompensationLaw | None, LoadState]:
+    """The compensation law of ``settings`` for ``params`` (None without compensation) and
+    the load state its station measures in."""
+    comp = settings.compensation
+    if comp is None:
+        return None, var.load_states[0]
+    load = var.load_states[measured_load_index(comp, [s.name for s in var.load_states])]
+    return CompensationLaw(scene, params, settings.output, comp), load
