@@ -7,9 +7,11 @@ output → input (:mod:`rvmsim.isp.map`), :func:`input_to_output` is its inverse
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .exact import isp_rays, map_points, plane_and_view
+from .exact import map_points, plane_and_view
 from .params import IspParams, OutputSpec
 
 __all__ = ["roi_outline", "draw_roi", "input_to_output", "input_to_plane"]
@@ -44,12 +46,23 @@ def input_to_plane(
     Input → output (src → dst); pixel centres at integer coordinates.
     """
     p = params
-    ray = isp_rays(p, points, input_size).T
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    w_in, h_in = input_size
+    dx = pts[:, 0] - ((w_in - 1) / 2.0 + p.h_shift)
+    dy = pts[:, 1] - ((h_in - 1) / 2.0 + p.v_shift)
+    r = np.hypot(dx, dy)
+    theta = r / (p.rad / math.radians(p.fov / 2.0))
+    safe = np.where(r > 0, r, 1.0)
     if p.h_pan == p.tilt == p.theta == 0.0:  # both rotations are the identity (the
         # paper's setting; any v_pan and phi then rotate nothing): the plane point is
         # zoom·tan θ along the ray's azimuth, as the general case below gives
-        valid = ray[:, 2] > 1e-12
-        return p.zoom * ray[:, :2] / np.where(valid, ray[:, 2], 1e-12)[:, None], valid
+        cos = np.cos(theta)
+        valid = cos > 1e-12
+        scale = p.zoom * np.sin(theta) / np.where(valid, cos, 1e-12) / safe
+        return np.stack([scale * dx, scale * dy], axis=1), valid
+    s = np.sin(theta)
+    ray = np.stack([np.where(r > 0, s * dx / safe, 0.0), np.where(r > 0, s * dy / safe, 0.0),
+                    np.cos(theta)], axis=1)
     r_plane, r_view = plane_and_view(p)
     rv = ray @ r_view  # = (R_view^T · ray) per row
     t = np.array([0.0, 0.0, p.zoom])
