@@ -11,7 +11,7 @@ from __future__ import annotations
 from .model import (CompensationModel, DEFAULT_COMPENSATION, compensation_for,
                     compensation_from_dict, compensation_from_spec, load_compensation, measured_load_index)
 from .law import (Correction, CompensationLaw, Deviation, MIN_REFERENCE_POINTS, deviated_camera,
-                  loaded_deviation, reference_points)
+                  deviated_pose, loaded_deviation, reference_points)
 from .station import measured_deviation, station_error
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "Deviation",
     "MIN_REFERENCE_POINTS",
     "deviated_camera",
+    "deviated_pose",
     "loaded_deviation",
     "reference_points",
     "measured_deviation",

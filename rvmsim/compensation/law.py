@@ -43,7 +43,7 @@ from ..scene import Scene
 from .model import CompensationModel
 
 __all__ = ["Deviation", "Correction", "CompensationLaw", "reference_points", "deviated_camera",
-           "loaded_deviation", "MIN_REFERENCE_POINTS"]
+           "deviated_pose", "loaded_deviation", "MIN_REFERENCE_POINTS"]
 
 #: The law needs at least this many reference points in the nominal RVM image.
 MIN_REFERENCE_POINTS = 4
@@ -79,20 +79,27 @@ class Deviation:
         return {n: round(v, digits) for n, v in zip(_DEVIATION_AXES, self.as_offsets())}
 
 
-def deviated_camera(scene: Scene, deviation: Deviation) -> FisheyeCamera:
-    """The scene's camera (full sensor) at its mount moved by ``deviation`` (on the body:
-    a scene's ``load_state`` then moves it with the body, as it moves the nominal one)."""
+def deviated_pose(scene: Scene, deviation: Deviation) -> tuple[np.ndarray, np.ndarray]:
+    """The camera-to-scene rotation (3, 3) and the position (3,), metres, of the scene's
+    camera at its mount moved by ``deviation`` (on the body: a scene's ``load_state`` then
+    moves it with the body, as it moves the nominal one)."""
     m = scene.camera.mount
-    cam = scene.camera.to_camera()
     d = deviation
     rot = rotation_from_ypr(m.yaw_deg + d.yaw_deg, m.pitch_deg + d.pitch_deg,
                             m.roll_deg + d.roll_deg)
     pos = np.asarray(m.position, dtype=np.float64) + np.array([d.x_mm, d.y_mm, d.z_mm]) / 1000.0
-    moved = FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
-                          cam.skew, cam.fov_deg, rot, pos)
-    if scene.load_state is None:
-        return moved
-    return scene.load_state.camera(moved, m.position)
+    if scene.load_state is not None:
+        body = scene.load_state.motion(m.position)
+        rot, pos = body[:3, :3] @ rot, body[:3, :3] @ pos + body[:3, 3]
+    return rot, pos
+
+
+def deviated_camera(scene: Scene, deviation: Deviation) -> FisheyeCamera:
+    """The scene's camera (full sensor) at the pose :func:`deviated_pose` gives."""
+    cam = scene.camera.to_camera()
+    rot, pos = deviated_pose(scene, deviation)
+    return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
+                         cam.skew, cam.fov_deg, rot, pos)
 
 
 def loaded_deviation(scene: Scene, deviation: Deviation, height_mm: float,
@@ -261,8 +268,9 @@ class CompensationLaw:
                 "show the ground behind the car?)"))
         self.points = pts
         cam = scene.fisheye_camera()
+        self._camera = cam  # its lens projects every car's points (the pose is theirs)
         self._size = (cam.width, cam.height)
-        self.nominal_px = self._rvm(platform, cam)
+        self.nominal_px = self._rvm(platform, cam.project(pts)[0])
         self._vars = (["pan_x", "pan_y"] if model.pans else []) + [
             n for n in model.params if n not in ("h_pan", "v_pan")]
         self._scale = np.array([_TYPICAL["pan" if v.startswith("pan") else v]
@@ -276,11 +284,9 @@ class CompensationLaw:
         m0 = pixel_to_ray_matrix(platform, output)
         self._unview = np.linalg.inv(plane_and_view(platform)[1].T @ m0)
 
-    def _rvm(self, params: IspParams, camera: FisheyeCamera,
-             uv: np.ndarray | None = None) -> np.ndarray:
-        """The reference points' RVM positions (N, 2), px (NaN where not ahead)."""
-        if uv is None:
-            uv, _ = camera.project(self.points)
+    def _rvm(self, params: IspParams, uv: np.ndarray) -> np.ndarray:
+        """RVM positions (N, 2), px, of the reference points seen at fisheye ``uv`` (NaN
+        where not ahead)."""
         q, ahead = input_to_output(params, uv, self._size, self.output)
         return np.where(ahead[:, None], q, np.nan)
 
@@ -323,8 +329,8 @@ class CompensationLaw:
         station measured it)."""
         from scipy.optimize import least_squares
 
-        cam = deviated_camera(self.scene, deviation)
-        uv, _ = cam.project(self.points)
+        rot, pos = deviated_pose(self.scene, deviation)
+        uv, _ = self._camera.project_rays((self.points - pos) @ rot)
         target = self.nominal_px
         rays = isp_rays(self.platform, uv, self._size)
 
@@ -332,7 +338,7 @@ class CompensationLaw:
             if self._rotation_only:
                 q = self._rotated_px(x, rays) - target
             else:
-                q = self._rvm(self.params_at(x), cam, uv) - target
+                q = self._rvm(self.params_at(x), uv) - target
             return np.nan_to_num(q, nan=1e4).ravel()
 
         fit = least_squares(residual, np.zeros(len(self._vars)), method="lm",
