@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -210,7 +210,6 @@ class Correction:
     exceeded: tuple[str, ...] = ()
     residual_rms_px: float = 0.0
     residual_max_px: float = 0.0
-    unclipped: IspParams | None = field(default=None, compare=False)
 
     @property
     def within_range(self) -> bool:
@@ -374,5 +373,4 @@ class CompensationLaw:
             k += 1
         params = self.params_at(clipped)
         values = {n: float(getattr(params, n)) for n in self.model.params}
-        return Correction(params, values, offsets, tuple(exceeded), rms, worst,
-                          unclipped=self.params_at(x) if exceeded else params)
+        return Correction(params, values, offsets, tuple(exceeded), rms, worst)
