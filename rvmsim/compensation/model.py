@@ -111,7 +111,8 @@ def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
 
 def load_compensation(path: str | Path) -> CompensationModel:
     """Read a compensation file: the keys of :class:`~rvmsim.scene.CompensationSpec` at its
-    top level, or under a ``compensation`` key (a variation file with that section).
+    top level, or under a ``compensation`` key (a variation file with that section), or
+    under ``variation.compensation`` (a scene file with one).
 
     Raises
     ------
@@ -124,12 +125,16 @@ def load_compensation(path: str | Path) -> CompensationModel:
                               empty_ok=True)
     lines = key_lines(text)
     prefix: tuple[str, ...] = ()
+    variation = data.get("variation")
+    if isinstance(variation, dict) and "compensation" in variation:  # a scene file
+        data, prefix = variation, ("variation",)
     if "compensation" in data:
         section = data["compensation"]
+        prefix += ("compensation",)
         if not isinstance(section, dict):
-            raise CompensationError(str(path), "compensation", "must be a mapping",
-                                    lines.get(("compensation",)))
-        data, prefix = section, ("compensation",)
+            raise CompensationError(str(path), ".".join(prefix), "must be a mapping",
+                                    lines.get(prefix))
+        data = section
     try:
         spec = CompensationSpec.model_validate(data)
     except ValidationError as err:
