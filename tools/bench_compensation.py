@@ -141,6 +141,32 @@ def _row(d: dict[str, Any], sigmas: list[float]) -> str:
             f"{100 * hi:.1f}) | " + " | ".join(cells) + f" | {d['sigma_for_99']} |")
 
 
+def plot_curves(doc: dict[str, Any], path: Path) -> None:
+    """The yield after compensation against the station's σ, one line per setting (its
+    yield before as a dotted line at the left), as a PNG."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.4, 3.8))
+    ax = fig.add_subplot()
+    for k, (key, d) in enumerate(doc["vehicles"].items()):
+        sig = sorted(float(s) for s in d["after"])
+        y = [100 * d["after"][f"{s:g}"]["yield"] for s in sig]
+        colour = f"C{k % 10}"
+        ax.plot(sig, y, "o-", color=colour, label=d["name"].replace(", nominal-tuned", ""))
+        ax.plot([0.0], [100 * d["before"]["yield"]], "x", color=colour)
+    ax.axhline(99.0, color="red", lw=1, ls="--", label="99 %")
+    ax.set_xlabel(f"station σ per angle, degrees (position: {doc['mm_per_deg']:g} mm per "
+                  "degree)")
+    ax.set_ylabel("yield after compensation (%)")
+    ax.set_title(f"{doc['samples']} samples per point; x: the yield before compensation",
+                 fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.set_ylim(0, 102)
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vehicles", default="abcdef")
@@ -198,9 +224,10 @@ def main() -> None:
     name = ("compensation.json" if sorted(args.vehicles.replace(",", "")) == list("abcdef")
             and not args.robust_samples else f"compensation_{args.vehicles.replace(',', '')}"
             f"{'_k' + str(args.robust_samples) if args.robust_samples else ''}.json")
-    (args.out / name).write_text(json.dumps(
-        {"machine": machine, "samples": args.samples, "eval_seed": args.eval_seed,
-         "sigmas_deg": sigmas, "mm_per_deg": args.mm_per_deg, "vehicles": docs}, indent=1))
+    doc = {"machine": machine, "samples": args.samples, "eval_seed": args.eval_seed,
+           "sigmas_deg": sigmas, "mm_per_deg": args.mm_per_deg, "vehicles": docs}
+    (args.out / name).write_text(json.dumps(doc, indent=1))
+    plot_curves(doc, (args.out / name).with_suffix(".png"))
 
 
 if __name__ == "__main__":
