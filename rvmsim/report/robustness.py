@@ -124,8 +124,7 @@ def _compensation_section(result: RobustnessResult) -> str:
     comp, before = result.compensated, result.before_estimate
     if comp is None or before is None or result.before is None:
         return ""
-    d = result.as_dict()
-    by_before, by_after = d["yield_before_compensation"]["by_load"], d["yield_by_load"]
+    by_before, by_after = result.yield_by_load(before=True), result.yield_by_load()
     rows = [f'<tr><td><b>every car</b></td><td class="num">{_pct(before.as_dict())}</td>'
             f'<td class="num">{_pct(result.estimate.as_dict())}</td></tr>']
     rows += [f'<tr><td>load: {escape(name)}</td><td class="num">{_pct(by_before[name])}</td>'

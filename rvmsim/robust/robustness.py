@@ -177,6 +177,14 @@ class RobustnessResult:
         ok = self.evaluation.all_passed
         return ok if self.compensated is None else ok & self.compensated.within_range
 
+    def yield_by_load(self, *, before: bool = False) -> dict[str, Any]:
+        """The yield in each load state (JSON-ready), after compensation (or without one),
+        or ``before`` it."""
+        if before and self.before is None:
+            raise ValueError("no compensation: there is no yield before it")
+        passed = self.before.all_passed if before and self.before is not None else self.passed
+        return _by_load(passed, self.samples)
+
     @property
     def before_estimate(self) -> YieldEstimate | None:
         """The yield before compensation (None without compensation)."""
@@ -205,7 +213,7 @@ class RobustnessResult:
             "nominal": None if self.nominal is None else self.nominal.ec.as_dict(),
             "worst_sample": self.worst_index,
             "ecs": [e.as_dict() for e in self.ecs],
-            "yield_by_load": _by_load(self.passed, self.samples),
+            "yield_by_load": self.yield_by_load(),
             "scale_curve": [{"scale": p.scale, **p.estimate.as_dict()} for p in self.scale_curve],
             **self._compensation_dict(),
             "samples": [self._sample_dict(i) for i in range(len(self.samples))],
@@ -222,7 +230,7 @@ class RobustnessResult:
             "compensation": {**comp.model.as_dict(), "reference_points": self.reference_points,
                              **comp.distribution()},
             "yield_before_compensation": {
-                **est.as_dict(), "by_load": _by_load(before.all_passed, self.samples),
+                **est.as_dict(), "by_load": self.yield_by_load(before=True),
                 "ecs": [{"id": e.id, "n_fail": e.n_fail, "failure_rate": e.failure_rate,
                          "worst_value": e.worst_value, "worst_margin": e.worst_margin}
                         for e in self.ecs_before]},
