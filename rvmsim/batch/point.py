@@ -161,7 +161,7 @@ def _run_point(task: PointTask) -> PointResult:
 
 def _task_inputs(task: PointTask) -> tuple[Scene, TuningConfig, Criteria]:
     """(scene, tuning config, criteria) of a point's task."""
-    from ..criteria import criteria_from_text, default_criteria
+    from ..criteria import criteria_from_text, default_criteria, record_size
     from ..scene import scene_from_dict
     from ..tune import TuningConfig
 
@@ -171,7 +171,7 @@ def _task_inputs(task: PointTask) -> tuple[Scene, TuningConfig, Criteria]:
     text = task.get("criteria")
     criteria = (criteria_from_text(text, task.get("criteria_source") or "sweep criteria")
                 if text else default_criteria())
-    return scene, config, criteria
+    return scene, config.at_record(record_size(criteria, scene)), criteria
 
 
 def _task_budget(task: PointTask, images: FisheyeImages, config: TuningConfig) -> int | None:

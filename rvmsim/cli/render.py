@@ -85,23 +85,28 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
              out: Path, scale: float, progress: bool) -> None:
-    """Evaluate the RVM image of SCENE under ISP parameters: the eleven ECs and the EC score.
+    """Evaluate the RVM image of SCENE under ISP parameters: the eleven ECs and the EC score,
+    judged at the RVM image of record (the scene's or criteria's display.rvm_image_px,
+    default 1280x720) whatever output size the params file names.
 
     Prints the EC table and writes ec.json, ec_annotated.png (the measurements drawn on the RVM
     image), rvm_color.png and rvm_labels.png.
     """
     from ..criteria import load_criteria
-    from ..pipeline import render_rvm, write_evaluation
+    from ..pipeline import record_output, render_rvm, write_evaluation
     from ..scene import load_scene
 
     params, output = load_isp(params_file)
     criteria = load_criteria(criteria_file)
     sc = load_scene(scene)
     check_scale(sc, params, scale)
-    frame = render_rvm(sc, params, output, criteria=criteria, scale=scale, annotate=True,
+    # Judged at the RVM image of record, whatever size the params file was searched at.
+    record = record_output(criteria, sc, output.mirror)
+    frame = render_rvm(sc, params, record, criteria=criteria, scale=scale, annotate=True,
                        progress=progress)
     write_evaluation(frame, out, params, scene_file=scene, vehicle=sc.name,
                      criteria_file=criteria_file)
-    click.echo(f"{sc.name} — criteria: {criteria.name}")
+    click.echo(f"{sc.name} — criteria: {criteria.name} — judged at the RVM image of record, "
+               f"{record.width}x{record.height} px")
     click.echo(frame.ec.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")

@@ -103,6 +103,14 @@ from .annotate import (
 from .evaluator import (
     CandidateEvaluator,
 )
+from .record import (
+    NEAR_SCORE,
+    could_pass,
+    pixel_scales,
+    record_display,
+    record_size,
+    to_record_units,
+)
 
 __all__ = [
     "EC_IDS",
@@ -168,6 +176,12 @@ __all__ = [
     "OFF",
     "INK",
     "CandidateEvaluator",
+    "NEAR_SCORE",
+    "record_display",
+    "record_size",
+    "pixel_scales",
+    "to_record_units",
+    "could_pass",
 ]
 
 

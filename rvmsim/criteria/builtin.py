@@ -397,14 +397,14 @@ ECS = [
                  regions=_bumper_regions, infeasibility=_BUMPER_ABSENT),
     EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, None,
                  (None, 5), Sigmoid(0, -_INF, 1.17, 5),  # smaller is better; 1.08 px -> 0.99
-                 description="|t_l − t_r|", regions=_bumper_regions),
+                 description="|t_l − t_r|", regions=_bumper_regions, pixel_axis="y"),
     EcDefinition("2-4", "no_body_in_upper_region", "", (UPPER_BODY,), _measure_2_4, _draw_2_4,
                  (1, 1), None, binary=True,
                  description="no garnish or trunk in the upper part of the image"),
     EcDefinition("3-1", "guide2_center_offset", "px", (GUIDE2,), _measure_3_1, _draw_3_1,
                  (None, 5), Sigmoid(0, -_INF, 0.937, 5),  # smaller is better; 0.09 px -> 0.99
                  description="|x of the centre of guideline 2 − x of the image centre|",
-                 sub_solve=_SOLVE_3_1,
+                 sub_solve=_SOLVE_3_1, pixel_axis="x",
                  infeasibility=_absent((L.guide_cross(2),), "cross guideline 2 is",
                                        "guideline 2")),
     EcDefinition("3-2", "guide3_height_ratio", "%", (GUIDE3,), _measure_3_2, _draw_3_2,

@@ -116,6 +116,11 @@ class EcDefinition:
         :class:`rvmsim.criteria.SceneContext`, ``criterion`` the EC's criterion, texts
         without the EC id); a design sweep then calls the point ``infeasible``
         (:func:`rvmsim.batch.infeasible_ecs`).
+    pixel_axis : {"x", "y", ""}
+        For a ``"px"`` EC: the image axis its value is a length along (``"x"``: a width or
+        column offset, ``"y"``: a height); ``""``: both (a length in any direction).  A value
+        measured at a search size is converted to the RVM image of record with that axis's
+        scale (:mod:`rvmsim.criteria.record`).  Ignored for other units.
     """
 
     id: str
@@ -134,6 +139,7 @@ class EcDefinition:
     uses_scene: bool = False
     sub_solve: SubSolve | None = None
     infeasibility: InfeasibilityFn | None = None
+    pixel_axis: str = ""
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id or any(c.isspace() for c in self.id):
@@ -149,6 +155,9 @@ class EcDefinition:
             fn = getattr(self, key)
             if not callable(fn) and not (fn is None and key != "measure"):
                 raise TypeError(f"EC {self.id!r}: {key} must be a function")
+        if self.pixel_axis not in ("x", "y", ""):
+            raise ValueError(f"EC {self.id!r}: pixel_axis must be 'x', 'y' or '', got "
+                             f"{self.pixel_axis!r}")
         if self.sub_solve is not None and not isinstance(self.sub_solve, SubSolve):
             raise TypeError(f"EC {self.id!r}: sub_solve must be an rvmsim.criteria.SubSolve "
                             "or None")

@@ -188,12 +188,16 @@ class OutputSpec:
 
 
 # ---------------------------------------------------------------------------- files
-def params_to_dict(params: IspParams, output: OutputSpec | None = None) -> dict[str, Any]:
+def params_to_dict(params: IspParams, output: OutputSpec | None = None, *,
+                   judged_at: OutputSpec | None = None) -> dict[str, Any]:
     """Plain dict for a params file (the 14 parameters, then ``output``), to be dumped as
-    YAML or JSON."""
+    YAML or JSON.  ``judged_at``: the RVM image of record the setting's ECs were judged at
+    (written as ``output.judged_at: [W, H]``; :mod:`rvmsim.criteria.record`)."""
     d: dict[str, Any] = {n: getattr(params, n) for n in IspParams.names()}
     if output is not None:
         d["output"] = {"size": [output.width, output.height], "mirror": output.mirror}
+        if judged_at is not None:
+            d["output"]["judged_at"] = [judged_at.width, judged_at.height]
     return d
 
 
@@ -218,8 +222,15 @@ def _output_spec(out_data: object, path: Path, lines: Mapping[KeyPath, int]) -> 
         return ParamsFileError(str(path), key, message, lines.get(loc, lines.get(("output",))))
 
     output = OutputSpec()
-    if not isinstance(out_data, dict) or set(out_data) - {"size", "mirror"}:
-        raise error("output", "expected {size: [W, H], mirror: true|false}")
+    if not isinstance(out_data, dict) or set(out_data) - {"size", "mirror", "judged_at"}:
+        raise error("output", "expected {size: [W, H], mirror: true|false, judged_at: [W, H]}")
+    judged = out_data.get("judged_at")
+    if judged is not None and (
+            not isinstance(judged, list) or len(judged) != 2
+            or not all(isinstance(x, int) and not isinstance(x, bool) and 16 <= x <= 8192
+                       for x in judged)):
+        raise error("output.judged_at", "expected [width, height] in px (16..8192), the RVM "
+                    "image of record the ECs were judged at")
     size = out_data.get("size", [output.width, output.height])
     mirror = out_data.get("mirror", output.mirror)
     if (not isinstance(size, list) or len(size) != 2
@@ -238,7 +249,9 @@ def _output_spec(out_data: object, path: Path, lines: Mapping[KeyPath, int]) -> 
 
 def load_params(path: str | Path) -> tuple[IspParams, OutputSpec]:
     """Read a params file (YAML or JSON): any of the 14 parameter names (missing ones take
-    the paper's defaults) and an optional ``output: {size: [W, H], mirror: bool}``.
+    the paper's defaults) and an optional ``output: {size: [W, H], mirror: bool}`` (its
+    ``judged_at: [W, H]``, the RVM image of record the ECs were judged at, is checked and
+    otherwise informational: every verdict is at the reader's image of record).
 
     Raises
     ------

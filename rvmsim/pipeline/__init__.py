@@ -19,8 +19,10 @@ from .evaluators import (
     FisheyeSet,
     FullEvaluator,
     ImageEvaluator,
+    RecordEvaluator,
     SetEvaluator,
     make_evaluator,
+    record_output,
 )
 from .files import write_evaluation, write_fisheye, write_frame, write_processed
 
@@ -37,8 +39,10 @@ __all__ = [
     "FisheyeSet",
     "FullEvaluator",
     "ImageEvaluator",
+    "RecordEvaluator",
     "SetEvaluator",
     "make_evaluator",
+    "record_output",
     "write_evaluation",
     "write_fisheye",
     "write_frame",

@@ -22,6 +22,12 @@ reference the fast paths are tested against, EC value for EC value.
 
 Criteria whose ECs read the scene (1-5, 1-6, 6-1) are refused for images that carry no
 scene: those ECs would come out "not measured" and fail every candidate.
+
+Every evaluator judges at the RVM image of record (:mod:`rvmsim.criteria.record`: the
+display output, default 1280 × 720).  Asked to measure at another size, it converts the
+pixel-unit values to pixels of record and measures again at the size of record every
+candidate (or image) that passes or fails only near its limits: a pass is a pass on the
+display, whatever size the search measures at.
 """
 
 from __future__ import annotations
@@ -34,8 +40,8 @@ import numpy as np
 
 from ..camera import FisheyeCamera
 from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measurements,
-                        default_criteria, measure_labels, scene_context, score, score_batch,
-                        values_array)
+                        could_pass, default_criteria, measure_labels, pixel_scales,
+                        record_size, scene_context, score, score_batch, values_array)
 from ..isp import IspParams, OutputSpec, process
 from ..scene import Scene
 from .frame import evaluate_rvm_labels
@@ -45,7 +51,7 @@ if TYPE_CHECKING:
     from .._progress import ProgressBar
 
 __all__ = ["EvaluationPath", "FisheyeLabels", "FisheyeSet", "ImageEvaluator", "FullEvaluator",
-           "SetEvaluator", "make_evaluator"]
+           "RecordEvaluator", "SetEvaluator", "make_evaluator", "record_output"]
 
 #: Images of a batch held at once (bounds the memory of label images in flight).
 _CHUNK = 32
@@ -151,16 +157,62 @@ class FullEvaluator:
         return score(self.measure(params), self.criteria)
 
 
+class RecordEvaluator:
+    """One image judged at the RVM image of record while measuring at a search size: the
+    values of ``search`` in units of record, or — for a candidate that passes or fails only
+    near its limits (:func:`rvmsim.criteria.could_pass`) — the measurement of ``record``.
+    Made by :func:`make_evaluator`; picklable.
+
+    Convention: :attr:`output` is the search size (what sub-solves and windows use); the
+    values, scores and pass flags are those of :attr:`record_output`.
+    """
+
+    def __init__(self, search: ImageEvaluator, record: ImageEvaluator):
+        self.search, self.record = search, record
+        self.criteria = search.criteria
+        self.output = search.output
+        self.record_output = record.output
+        self.fisheye = search.fisheye
+        self.path = getattr(search, "path", EvaluationPath.WINDOWED)
+        self._scales = pixel_scales(self.criteria, (search.output.width, search.output.height),
+                                    (record.output.width, record.output.height))
+
+    def _decided(self, values: np.ndarray) -> bool:
+        """Whether the converted ``values`` decide the verdict (a clear fail)."""
+        return not bool(could_pass(score_batch(values[None, :], self.criteria))[0])
+
+    def values(self, params: IspParams) -> np.ndarray:
+        """The values of record, (k,) in ``criteria.ids`` order, NaN where not measured."""
+        v = self.search.values(params) * self._scales
+        return v if self._decided(v) else self.record.values(params)
+
+    def measure(self, params: IspParams) -> Measurements:
+        """The measurements of record (a clear fail: the search size's, values converted)."""
+        m = self.search.measure(params)
+        v = values_array(m, self.criteria.ids) * self._scales
+        if not self._decided(v):
+            return self.record.measure(params)
+        converted = {ec: None if np.isnan(x) else float(x) for ec, x in zip(self.criteria.ids, v)}
+        return Measurements(converted, m.image_size, m.details)
+
+    def __call__(self, params: IspParams) -> EcResult:
+        return score(self.measure(params), self.criteria)
+
+
 class SetEvaluator:
     """One ISP setting's ECs on every image of a :class:`FisheyeSet` (see the module
     docstring for :attr:`path`).  Made by :func:`make_evaluator`."""
 
     def __init__(self, images: FisheyeSet, output: OutputSpec, criteria: Criteria,
-                 path: EvaluationPath):
+                 path: EvaluationPath, record: OutputSpec | None = None):
         self.images = images
         self.output = output
         self.criteria = criteria
         self.path = path
+        #: The RVM image of record the verdicts refer to (default: ``output``).
+        self.record_output = record or output
+        self._scales = pixel_scales(criteria, (output.width, output.height),
+                                    (self.record_output.width, self.record_output.height))
         self._table: RayTable | None = None
 
     def __call__(self, params: IspParams | Sequence[IspParams], *,
@@ -196,17 +248,36 @@ class SetEvaluator:
             step = _CHUNK_EACH if self.path is EvaluationPath.RVM_PIXELS else _CHUNK
             chunks = [(list(range(a, min(a + step, len(idx)))), None)
                       for a in range(0, len(idx), step)]
+        at_record = (self.output.width, self.output.height) == (self.record_output.width,
+                                                                  self.record_output.height)
         for chunk, setting in chunks:
             at = [idx[r] for r in chunk]
-            values[chunk] = (self._values(setting, at) if setting is not None else
-                             self._values_each([per_image[r] for r in chunk], at))
+            values[chunk] = (self._values(setting, at, self.output) if setting is not None else
+                             self._values_each([per_image[r] for r in chunk], at, self.output))
+            if not at_record:  # in units of record; near ones measured there
+                values[chunk] = self._judged(values[chunk], setting,
+                                             [per_image[r] for r in chunk], at)
             if bar is not None:
                 bar.update(len(chunk))
         if bar is not None:
             bar.close()
         return score_batch(values, self.criteria)
 
-    def _values_each(self, params: list[IspParams], indices: list[int]) -> np.ndarray:
+    def _judged(self, values: np.ndarray, setting: IspParams | None, params: list[IspParams],
+                indices: list[int]) -> np.ndarray:
+        """Values of a chunk measured at the search size → the values of record (``setting``:
+        the chunk's one setting, else one per image in ``params``)."""
+        values = values * self._scales
+        near = np.flatnonzero(could_pass(score_batch(values, self.criteria)))
+        if len(near):
+            at = [indices[r] for r in near]
+            values[near] = (self._values(setting, at, self.record_output) if setting is not None
+                            else self._values_each([params[r] for r in near], at,
+                                                   self.record_output))
+        return values
+
+    def _values_each(self, params: list[IspParams], indices: list[int], output: OutputSpec
+                     ) -> np.ndarray:
         """The values of ``params[k]`` on image ``indices[k]`` (per-car values).  On the
         RVM-pixel path each image's pixels are made as the set reaches it, their rays
         looked up in the camera's (made once)."""
@@ -217,25 +288,25 @@ class SetEvaluator:
             table = self._table
 
             def pixels(k: int) -> RvmPixels:
-                return rvm_pixels(self.images.camera, params[k], self.output, table=table)
+                return rvm_pixels(self.images.camera, params[k], output, table=table)
 
             results = (measure_labels(labels, crit)
                        for labels in self.images.rvm_labels(pixels, indices))
         else:
-            results = (FullEvaluator(im, self.output, crit).measure(params[k])
+            results = (FullEvaluator(im, output, crit).measure(params[k])
                        for k, im in enumerate(self.images.fisheye(indices)))
         return np.array([values_array(m, crit.ids) for m in results]).reshape(
             len(indices), len(crit.ids))
 
-    def _values(self, params: IspParams, indices: list[int]) -> np.ndarray:
+    def _values(self, params: IspParams, indices: list[int], output: OutputSpec) -> np.ndarray:
         """The values of one setting on ``indices``."""
         crit = self.criteria
         if self.path is EvaluationPath.RVM_PIXELS:
-            pixels = rvm_pixels(self.images.camera, params, self.output)
+            pixels = rvm_pixels(self.images.camera, params, output)
             results = (measure_labels(labels, crit)
                        for labels in self.images.rvm_labels(pixels, indices))
         else:
-            results = (FullEvaluator(im, self.output, crit).measure(params)
+            results = (FullEvaluator(im, output, crit).measure(params)
                        for im in self.images.fisheye(indices))
         return np.array([values_array(m, crit.ids) for m in results]).reshape(
             len(indices), len(crit.ids))
@@ -260,17 +331,20 @@ def _bar(desc: str | None, total: int) -> ProgressBar | None:
 
 @overload
 def make_evaluator(source: FisheyeSet, output: OutputSpec, criteria: Criteria | None = ...,
-                   *, path: EvaluationPath | str | None = ...) -> SetEvaluator: ...
+                   *, path: EvaluationPath | str | None = ...,
+                   record: OutputSpec | None = ...) -> SetEvaluator: ...
 
 
 @overload
 def make_evaluator(source: FisheyeLabels, output: OutputSpec, criteria: Criteria | None = ...,
-                   *, path: EvaluationPath | str | None = ...) -> ImageEvaluator: ...
+                   *, path: EvaluationPath | str | None = ...,
+                   record: OutputSpec | None = ...) -> ImageEvaluator: ...
 
 
 def make_evaluator(source: FisheyeLabels | FisheyeSet, output: OutputSpec,
                    criteria: Criteria | None = None, *,
-                   path: EvaluationPath | str | None = None) -> ImageEvaluator | SetEvaluator:
+                   path: EvaluationPath | str | None = None,
+                   record: OutputSpec | None = None) -> ImageEvaluator | SetEvaluator:
     """The evaluator of ``criteria`` on ``source``, on the path the criteria allow.
 
     Parameters
@@ -279,13 +353,17 @@ def make_evaluator(source: FisheyeLabels | FisheyeSet, output: OutputSpec,
         One fisheye label image (e.g. :class:`rvmsim.render.FisheyeImages`), judged for many
         candidates, or a batch of images judged for one setting at a time.
     output : OutputSpec
-        The RVM image size (px) and mirroring the ECs are measured at.
+        The RVM image size (px) and mirroring the ECs are measured at (the search size).
     criteria : Criteria, optional
         Default: the paper's (:func:`rvmsim.criteria.default_criteria`).
     path : EvaluationPath or str, optional
         Default: the fastest exact path (the module docstring's table); ``"full"`` for the
         reference.  One image takes ``windowed`` or ``full``; a batch ``rvm-pixels`` (only
         when no EC reads the scene) or ``full``.
+    record : OutputSpec, optional
+        The RVM image of record the verdicts refer to (default: :func:`record_output` of the
+        criteria and ``source``'s scene, mirrored as ``output``).  When its size differs from
+        ``output``'s, the evaluator converts and re-measures (the module docstring).
 
     Returns
     -------
@@ -308,11 +386,27 @@ def make_evaluator(source: FisheyeLabels | FisheyeSet, output: OutputSpec,
                                                  and crit.uses_scene):
             raise ValueError(f"a batch of images cannot take the {chosen.value} path"
                              + (" with ECs that read the scene" if crit.uses_scene else ""))
-        return SetEvaluator(source, output, crit, chosen)
+        rec = record or record_output(crit, source.scene, output.mirror)
+        return SetEvaluator(source, output, crit, chosen, rec)
     chosen = chosen or EvaluationPath.WINDOWED
     if chosen is EvaluationPath.RVM_PIXELS:
         raise ValueError("one image takes the windowed or the full path")
-    if chosen is EvaluationPath.FULL:
-        return FullEvaluator(source, output, crit)
-    return CandidateEvaluator(source.labels, output, crit, scene=source.scene,
-                              camera=source.camera)
+    rec = record or record_output(crit, source.scene, output.mirror)
+
+    def at(out: OutputSpec) -> ImageEvaluator:
+        if chosen is EvaluationPath.FULL:
+            return FullEvaluator(source, out, crit)
+        return CandidateEvaluator(source.labels, out, crit, scene=source.scene,
+                                  camera=source.camera)
+
+    if (rec.width, rec.height) == (output.width, output.height):
+        return at(output)
+    return RecordEvaluator(at(output), at(OutputSpec(rec.width, rec.height, output.mirror)))
+
+
+def record_output(criteria: Criteria, scene: Scene | None = None, mirror: bool = True
+                  ) -> OutputSpec:
+    """The RVM image of record (:func:`rvmsim.criteria.record_size`: the scene's or criteria
+    file's ``display.rvm_image_px``, default 1280 × 720), mirrored as given."""
+    w, h = record_size(criteria, scene)
+    return OutputSpec(w, h, mirror)

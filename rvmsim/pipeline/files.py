@@ -45,11 +45,14 @@ def write_evaluation(frame: RvmFrame, folder: str | Path, params: IspParams, *,
                      scene_file: str | Path, vehicle: str,
                      criteria_file: str | Path | None) -> list[Path]:
     """What ``rvmsim evaluate`` writes: :func:`write_frame`'s images and ``ec.json`` (the
-    scene and criteria files, ``params`` as given for the full sensor, the ECs)."""
+    scene and criteria files, ``params`` as given for the full sensor, the ECs, judged at
+    ``frame.output``: the caller passes the RVM image of record)."""
     folder = Path(folder)
     written = write_frame(frame, folder)
     doc = {"scene": str(scene_file), "vehicle": vehicle, "criteria_file": str(criteria_file or ""),
-           "isp": params_to_dict(params, frame.output), **frame.ec.as_dict()}
+           "judged_at": [frame.output.width, frame.output.height],
+           "isp": params_to_dict(params, frame.output, judged_at=frame.output),
+           **frame.ec.as_dict()}
     (folder / "ec.json").write_text(json.dumps(doc, indent=2))
     return written + [folder / "ec.json"]
 

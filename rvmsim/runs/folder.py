@@ -217,16 +217,21 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
 
 
 def rank_text(rec: TrialRecord, rank: int, output: OutputSpec, vehicle: str | None = None,
-              differs: str = "") -> str:
+              differs: str = "", judged_at: OutputSpec | None = None) -> str:
     """A trial as a params file (YAML, loadable by :func:`rvmsim.isp.load_params`) with a
     comment line naming its rank, EC score, trial and stage (and, given ``differs``, a
-    second one saying how it differs from rank 1)."""
+    second one saying how it differs from rank 1; given ``judged_at``, the RVM image of
+    record its verdict refers to, also as ``output.judged_at``)."""
     import yaml
 
     of = "" if vehicle is None else f" of {vehicle}"
     how = "" if not differs else f"# differs from rank 1: {' '.join(differs.split())}\n"
+    judged = ("" if judged_at is None else
+              f"# judged at the RVM image of record, {judged_at.width}x{judged_at.height} px\n")
     return (f"# rank {rank}{of}: EC score {rec.score:.6g} (trial {rec.idx}, {rec.stage})\n"
-            + how + yaml.safe_dump(params_to_dict(rec.params, output), sort_keys=False))
+            + how + judged + yaml.safe_dump(params_to_dict(rec.params, output,
+                                                           judged_at=judged_at),
+                                            sort_keys=False))
 
 
 def rank_params_text(run_dir: str | Path, rank: int = 1, *, by_score: bool = False,
@@ -253,7 +258,14 @@ def rank_params_text(run_dir: str | Path, rank: int = 1, *, by_score: bool = Fal
             "(see --by-score)")
         raise RvmsimError(f"{run_dir}: only {len(top)} candidates{apart}, no rank {rank}")
     cand, rec = top[rank - 1]
-    return rank_text(rec, rank, settings.config.output_spec(), differs=cand.differs)
+    return rank_text(rec, rank, settings.config.output_spec(), differs=cand.differs,
+                     judged_at=_judged_at(settings))
+
+
+def _judged_at(settings: RunSettings) -> OutputSpec:
+    """The run's RVM image of record, mirrored as its search."""
+    w, h = settings.record_px
+    return OutputSpec(w, h, settings.config.output.mirror)
 
 
 def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
@@ -268,7 +280,8 @@ def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
     out = cfg.output_spec()
     for cand, rec in pairs:
         (top / f"rank_{cand.rank}.yaml").write_text(
-            rank_text(rec, cand.rank, out, vehicle, cand.differs), encoding="utf-8")
+            rank_text(rec, cand.rank, out, vehicle, cand.differs, _judged_at(settings)),
+            encoding="utf-8")
     for old in top.glob("rank_*.yaml"):
         k = old.stem[len("rank_"):]
         if not k.isdigit() or not 1 <= int(k) <= len(pairs):

@@ -119,6 +119,17 @@ class RunSettings:
     #: A robust run for the yield after end-of-line compensation: the compensation model
     #: (:meth:`rvmsim.compensation.CompensationModel.as_dict`); None: no compensation.
     compensation: dict[str, Any] | None = None
+    #: The RVM image of record (W, H px) the run's verdicts refer to
+    #: (:mod:`rvmsim.criteria.record`); None: a run from before it was recorded.
+    judged_at: tuple[int, int] | None = None
+
+    @property
+    def record_px(self) -> tuple[int, int]:
+        """(W, H) px of the RVM image of record (a run from before it was recorded: the
+        default, :data:`rvmsim.scene.RVM_IMAGE_OF_RECORD_PX`)."""
+        from ..scene.display import RVM_IMAGE_OF_RECORD_PX
+
+        return self.judged_at or RVM_IMAGE_OF_RECORD_PX
 
     @property
     def shared(self) -> bool:
@@ -147,6 +158,8 @@ class RunSettings:
             if self.compensation is not None:
                 doc["robust"]["compensation"] = self.compensation
             doc["aggregate"] = self.aggregate
+        if self.judged_at is not None:
+            doc["judged_at"] = list(self.judged_at)
         return doc
 
     @classmethod
@@ -204,7 +217,18 @@ class RunSettings:
                    None if robust is None else text("robust: variation_key",
                                                     robust.get("variation_key")),
                    None if robust is None else _mapping("robust: compensation",
-                                                        robust.get("compensation")))
+                                                        robust.get("compensation")),
+                   _size("judged_at", doc.get("judged_at")))
+
+
+def _size(key: str, value: Any) -> tuple[int, int] | None:
+    """``value`` as (W, H) px, or None."""
+    if value is None:
+        return None
+    if (not isinstance(value, list) or len(value) != 2 or not all(
+            isinstance(x, int) and not isinstance(x, bool) and 16 <= x <= 8192 for x in value)):
+        raise ValueError(f"{key}: {str(value)[:40]!r} is not [width, height] in px")
+    return int(value[0]), int(value[1])
 
 
 def _mapping(key: str, value: Any) -> dict[str, Any] | None:

@@ -27,7 +27,7 @@ from .schema import (
     GroundPattern,
     RenderSettings,
 )
-from .display import Display
+from .display import RVM_IMAGE_OF_RECORD_PX, Display
 from .load_state import SceneLoadState, body_motion, MAX_LOAD_HEIGHT_MM, MAX_LOAD_PITCH_DEG
 from .variation import (
     VariationSpec,
@@ -77,6 +77,7 @@ __all__ = [
     "GroundPattern",
     "RenderSettings",
     "Display",
+    "RVM_IMAGE_OF_RECORD_PX",
     "SceneLoadState",
     "body_motion",
     "MAX_LOAD_HEIGHT_MM",

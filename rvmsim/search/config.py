@@ -48,12 +48,16 @@ class _Range(BaseModel):
 
 class _Output(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    size: tuple[Annotated[int, Field(ge=16, le=8192)], Annotated[int, Field(ge=16, le=8192)]] = (640, 360)
+    #: The size the search measures at; None: the RVM image of record (the display's
+    #: ``rvm_image_px``, :mod:`rvmsim.criteria.record`).
+    size: tuple[Annotated[int, Field(ge=16, le=8192)], Annotated[int, Field(ge=16, le=8192)]] | None = None
     mirror: bool = True
 
     @field_validator("size")
     @classmethod
-    def _pixels(cls, size: tuple[int, int]) -> tuple[int, int]:
+    def _pixels(cls, size: tuple[int, int] | None) -> tuple[int, int] | None:
+        if size is None:
+            return None
         problem = image_size_problem(*size, min_side=16)
         if problem is not None:
             raise ValueError(problem)
@@ -83,7 +87,9 @@ class TuningConfig(BaseModel):
     ``tuned``: the parameters to search (default: the paper's nine); ``parameters``: per
     parameter ``init``, ``range`` and coarse ``step`` (default: fitted to the camera, see
     :func:`rvmsim.search.default_space`); ``fixed``: values of untuned parameters;
-    ``output``: the RVM image the ECs are measured on during tuning; ``top_m`` and
+    ``output``: the RVM image the ECs are measured on during tuning (default: the RVM
+    image of record; a smaller size is faster on some paths and is judged at the size of record
+    all the same, :mod:`rvmsim.criteria.record`); ``top_m`` and
     ``diverse``: the candidates offered for the final choice (:class:`DiverseConfig`); one
     section per
     registered strategy (``grid_random``, ``cmaes``, ``random``: each strategy's
@@ -171,8 +177,23 @@ class TuningConfig(BaseModel):
         return self.diverse.m if self.diverse.m is not None else self.top_m
 
     def output_spec(self) -> OutputSpec:
-        """The RVM image the ECs are measured on while tuning."""
-        return OutputSpec(self.output.size[0], self.output.size[1], self.output.mirror)
+        """The RVM image the ECs are measured on while tuning (the search size; without
+        ``output.size``: the default RVM image of record, :meth:`at_record` sets a scene's)."""
+        from ..scene import RVM_IMAGE_OF_RECORD_PX
+
+        w, h = self.output.size or RVM_IMAGE_OF_RECORD_PX
+        return OutputSpec(w, h, self.output.mirror)
+
+    def at_record(self, size: tuple[int, int]) -> TuningConfig:
+        """This config with the search size set to ``size`` (the RVM image of record, W × H
+        px) when the file sets none; a run records the result, so resuming measures where it
+        started."""
+        if self.output.size is not None:
+            return self
+        out = self.output.model_copy(update={"size": (int(size[0]), int(size[1]))})
+        done = self.model_copy(update={"output": out})
+        done._source, done._lines = self._source, self._lines
+        return done
 
     def strategy_settings(self, name: str) -> BaseModel:
         """The settings of registered strategy ``name``: its section of this config, or the

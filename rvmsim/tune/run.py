@@ -9,6 +9,7 @@ image, annotated EC image and EC table).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 from dataclasses import dataclass
@@ -16,7 +17,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Sequence
 
 from ..errors import RvmsimError
-from ..isp import OutputSpec, params_to_dict
+from ..isp import params_to_dict
+from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 from ..search.config import TuningConfig, make_strategy
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
 from .loop import SearchOutcome, search_members, search_scene
@@ -42,9 +44,9 @@ if TYPE_CHECKING:
 __all__ = ["tune", "resume", "TuneResult", "write_results",
            "DISPLAY_SIZE", "summary_lines", "remove_run"]
 
-#: Size of the RVM display image written for the best candidate (the ECs are measured at the
-#: tuning config's ``output`` size).
-DISPLAY_SIZE = (1280, 720)
+#: The default RVM image of record (:data:`rvmsim.scene.RVM_IMAGE_OF_RECORD_PX`), under its
+#: old name; a scene's or criteria file's ``display.rvm_image_px`` sets a car's own.
+DISPLAY_SIZE = RVM_IMAGE_OF_RECORD_PX
 
 
 @dataclass(frozen=True)
@@ -67,7 +69,7 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
              ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
     every input is checked here, before anything in ``run_dir`` changes)."""
-    from ..criteria import criteria_reference, load_criteria
+    from ..criteria import criteria_reference, load_criteria, record_size
     from ..render import scene_key
     from ..scene import Scene, load_scene
 
@@ -89,8 +91,11 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
     crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
     if r.shared:  # one parameter set for every scene
         scenes = load_shared_scenes(r.scenes)
-        settings = shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
-                                   r.config, agg)
+        record = record_size(crit, scenes[0][1])
+        settings = dataclasses.replace(
+            shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
+                            (r.config or TuningConfig()).at_record(record), agg),
+            judged_at=record)
         return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg,
                                  r.compensation), [sc for _, sc in scenes], crit)
     scene = r.scenes[0]
@@ -103,7 +108,8 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
         scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
         strategy=r.strategy, seed=r.seed, budget=r.budget,
         criteria_file=None if r.criteria_file is None else criteria_reference(r.criteria_file),
-        config=r.config or TuningConfig())
+        config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
+        judged_at=record_size(crit, sc))
     return _robust_settings(settings, [sc], robust, agg, r.compensation), [sc], crit
 
 
@@ -373,10 +379,11 @@ def remove_run(run_dir: str | Path) -> None:
 def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeImages,
                   config: TuningConfig, criteria: Criteria) -> None:
     """top/: the diverse top-M (:func:`rvmsim.runs.write_top_files`: ``rank_K.yaml`` and
-    ``candidates.json``), and best/ (rank 1, the best trial): RVM image (tuning size and
-    display size), annotated ECs, EC table."""
+    ``candidates.json``), and best/ (rank 1, the best trial): RVM image, annotated ECs and EC
+    table at the RVM image of record (:func:`rvmsim.pipeline.record_output`), the verdict the
+    run stored."""
     from .._io import write_png
-    from ..pipeline import evaluate_params, rvm_color, write_frame
+    from ..pipeline import evaluate_params, record_output, write_frame
 
     settings = store.settings()
     if settings is None:
@@ -386,14 +393,15 @@ def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeI
         return
     top = store.trials_at([cands[0].trial])
     out = config.output_spec()
+    record = record_output(criteria, scene, out.mirror)
     best = top[0]
-    frame = evaluate_params(images, best.params, out, criteria)
+    frame = evaluate_params(images, best.params, record, criteria)
     write_frame(frame, run_dir / "best")
     (run_dir / "best" / "ec.json").write_text(json.dumps(
         {"vehicle": scene.name, "trial": best.idx, **frame.ec.as_dict(),
-         "isp": params_to_dict(best.params, out)}, indent=2))
+         "judged_at": [record.width, record.height],
+         "isp": params_to_dict(best.params, out, judged_at=record)}, indent=2))
     (run_dir / "best" / "ec_table.txt").write_text(frame.ec.table() + "\n")
-    # The same view at the display's size (the view is defined in normalised coordinates, so
-    # only the pixel count changes; aspect ratios differing from 16:9 crop or extend it).
-    display = OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], out.mirror)
-    write_png(run_dir / "best" / "rvm_display.png", rvm_color(images, best.params, display))
+    # The display's picture (the view is defined in normalised coordinates, so only the pixel
+    # count differs from the search size's; aspect ratios differing crop or extend it).
+    write_png(run_dir / "best" / "rvm_display.png", frame.color)

@@ -14,7 +14,10 @@ from ..scenes import write_small_scene
 
 
 def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):
-    scene = write_small_scene(tmp_path, "a", 0.5, name="scene.yaml")  # 640 × 480
+    # A 640 × 480 sensor shown at 640 × 360: at the default 1280 × 720 of record 6-1 would
+    # rightly fail (an RVM px showing less than half a sensor px).
+    scene = write_small_scene(tmp_path, "a", 0.5, name="scene.yaml",
+                              edit={"display": {"rvm_image_px": [640, 360]}})
     env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
     res = run_in_process(["tune", scene, "--criteria", "fmvss111-full", "--budget", "400",
                           "--workers", "2", "--seed", "0", "--out", tmp_path / "run",
@@ -23,7 +26,7 @@ def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):
     best = json.loads((tmp_path / "run" / "best" / "ec.json").read_text())
     ecs = {e["id"]: e for e in best["ecs"]}
     assert tuple(ecs) == EC_IDS + ("1-5", "1-6", "6-1")
-    assert best["passed"], {k: (e["value"], e["passed"]) for k, e in ecs.items()}
+    assert best["passed"], [(k, e["value"]) for k, e in ecs.items() if not e["passed"]]
     assert ecs["1-5"]["value"] == 100.0
     assert ecs["1-6"]["value"] >= 1.0 and ecs["6-1"]["value"] >= 1.0
     # the run records the set by name: the report finds the same criteria again

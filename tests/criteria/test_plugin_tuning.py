@@ -70,15 +70,27 @@ def test_tune_with_workers_stores_a_plugin_ec(tmp_path, monkeypatch):
     # independently of the plugin.
     monkeypatch.setenv("RVMSIM_CACHE", str(tmp_path / "cache"))
     images, _ = cached_render(load_scene(SCENES / "vehicle_a.yaml"))
-    _, labels = process(None, images.labels, best.params, OutputSpec(320, 180))
-    assert labels is not None
-    expected = _board_centre_offset(labels)
-    assert expected is not None and best.ecs[EC].value == pytest.approx(expected, abs=1e-9)
-    # Its stored score is the sigmoid the criteria file gives it.
+
+    def offset_at(size: tuple[int, int]) -> float | None:
+        _, labels = process(None, images.labels, best.params, OutputSpec(*size))
+        assert labels is not None
+        return _board_centre_offset(labels)
+
+    # The search measured at 320 × 180; what could pass was judged again at 1280 × 720.
+    at_search, at_record = offset_at((320, 180)), offset_at((1280, 720))
+    assert at_record is not None
     sig = load_criteria(crit).items[EC].sigmoid
-    assert sig is not None and best.ecs[EC].score == pytest.approx(sig(expected), rel=1e-12)
+    assert sig is not None
+    # (the value of record when the whole candidate could pass, else the search's)
+    expected = best.ecs[EC].value
+    assert expected is not None and (math.isclose(expected, at_record, abs_tol=1e-9) or (
+        not best.passed and at_search is not None
+        and math.isclose(expected, at_search, abs_tol=1e-9)))
+    # Its stored score is the sigmoid the criteria file gives it.
+    assert best.ecs[EC].score == pytest.approx(sig(expected), rel=1e-12)
     assert best.ecs[EC].passed == (expected <= 4)
-    # The best candidate's written results name the EC too.
+    # The best candidate's written results (at the RVM image of record) name the EC too.
     doc = json.loads((run / "best" / "ec.json").read_text())
     item = next(e for e in doc["ecs"] if e["id"] == EC)
-    assert math.isclose(item["value"], expected, abs_tol=1e-9)
+    assert doc["judged_at"] == [1280, 720]
+    assert math.isclose(item["value"], at_record, abs_tol=1e-9)

@@ -7,6 +7,9 @@ value exactly (all six bundled vehicles, the paper's criteria and fmvss111-full)
 - one image, many candidates: the windowed path (tuning);
 - a batch of images, one setting: the RVM-pixel path (variation samples: only the fisheye
   pixels the RVM image shows are re-folded).
+
+Here every evaluator measures at its size of record (``record=OUT``): the paths themselves;
+tests/pipeline/test_record.py checks the judging at another size of record.
 """
 
 from __future__ import annotations
@@ -54,8 +57,8 @@ def _assert_same_values(fast: np.ndarray, full: np.ndarray, ids) -> None:
 def test_windowed_path_equals_the_full_path(letter, criteria):
     images = small_render(letter)
     crit = CRITERIA[criteria]()
-    fast = make_evaluator(images, OUT, crit)
-    full = make_evaluator(images, OUT, crit, path="full")
+    fast = make_evaluator(images, OUT, crit, record=OUT)
+    full = make_evaluator(images, OUT, crit, path="full", record=OUT)
     assert isinstance(fast, CandidateEvaluator) and fast.windowed
     assert isinstance(full, FullEvaluator)
     params = _candidates(images.camera, 12, seed=ord(letter))
@@ -81,8 +84,8 @@ def test_rvm_pixel_path_equals_the_full_path(letter):
     samples = draw_samples(_rotations_only(), 6, seed=ord(letter))
     images = SampleSet.of(scene, samples, scale=0.25)
     crit = default_criteria()
-    fast = make_evaluator(images, OUT, crit)
-    full = make_evaluator(images, OUT, crit, path=EvaluationPath.FULL)
+    fast = make_evaluator(images, OUT, crit, record=OUT)
+    full = make_evaluator(images, OUT, crit, path=EvaluationPath.FULL, record=OUT)
     assert isinstance(fast, SetEvaluator) and fast.path is EvaluationPath.RVM_PIXELS
     assert full.path is EvaluationPath.FULL
     space = default_space(images.camera)
@@ -104,10 +107,10 @@ def test_criteria_that_read_the_scene_take_the_full_path_on_a_batch():
     samples = draw_samples(_rotations_only(), 3, seed=1)
     images = SampleSet.of(scene, samples, scale=0.25)
     crit = load_criteria("fmvss111-full")
-    ev = make_evaluator(images, OUT, crit)
+    ev = make_evaluator(images, OUT, crit, record=OUT)
     assert ev.path is EvaluationPath.FULL
     with pytest.raises(ValueError, match="read the scene"):
-        make_evaluator(images, OUT, crit, path="rvm-pixels")
+        make_evaluator(images, OUT, crit, path="rvm-pixels", record=OUT)
     space = default_space(images.camera)
     params = space.params([r.init for r in space.ranges])
     got = ev(params)
@@ -122,7 +125,7 @@ def test_per_image_parameters_and_indices():
     scene = bundled_scene("a")
     samples = draw_samples(_rotations_only(), 4, seed=2)
     images = SampleSet.of(scene, samples, scale=0.25)
-    ev = make_evaluator(images, OUT)
+    ev = make_evaluator(images, OUT, record=OUT)
     space = default_space(images.camera)
     base = space.params([r.init for r in space.ranges])
     other = base.replace(adv_v_shift=base.adv_v_shift + 0.1)
@@ -140,10 +143,10 @@ def test_the_factory_refuses_what_cannot_be_measured():
     crit = load_criteria("fmvss111-full")
     bare = type(images)(color=images.color, labels=images.labels, camera=images.camera)
     with pytest.raises(ValueError, match="1-5, 1-6, 6-1 read the scene"):
-        make_evaluator(bare, OUT, crit)
+        make_evaluator(bare, OUT, crit, record=OUT)
     with pytest.raises(ValueError, match="windowed or the full path"):
-        make_evaluator(images, OUT, crit, path="rvm-pixels")
+        make_evaluator(images, OUT, crit, path="rvm-pixels", record=OUT)
     with pytest.raises(ValueError):
-        make_evaluator(images, OUT, crit, path="fastest")
+        make_evaluator(images, OUT, crit, path="fastest", record=OUT)
     # the paper's criteria need no scene
-    assert isinstance(make_evaluator(bare, OUT), CandidateEvaluator)
+    assert isinstance(make_evaluator(bare, OUT, record=OUT), CandidateEvaluator)
