@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import yaml
+
 import imageio.v3 as iio
 import pytest
 import numpy as np
@@ -127,8 +129,11 @@ def test_tune_status_select_and_batch(tmp_path):
     for name in ("run.sqlite", "run.json", "best/rvm_color.png", "best/ec_annotated.png",
                  "best/ec.json", "top/rank_1.yaml", "top/rank_3.yaml"):
         assert (run / name).is_file(), name
+    # searched at 320 × 180, judged (and shown) at the RVM image of record
     assert iio.imread(run / "best" / "rvm_display.png").shape == (720, 1280, 3)
-    assert iio.imread(run / "best" / "rvm_color.png").shape == (180, 320, 3)
+    assert iio.imread(run / "best" / "rvm_color.png").shape == (720, 1280, 3)
+    assert json.loads((run / "best" / "ec.json").read_text())["judged_at"] == [1280, 720]
+    assert json.loads((run / "run.json").read_text())["judged_at"] == [1280, 720]
     st = _rvmsim("status", str(run), env=env)
     assert st.code == 0 and "120 / 120 evaluations" in st.stdout and "#3" in st.stdout
     sel = _rvmsim("select", str(run), "--rank", "2", "--out", str(tmp_path / "p2.yaml"), env=env)
@@ -137,6 +142,9 @@ def test_tune_status_select_and_batch(tmp_path):
 
     params, out = load_params(tmp_path / "p2.yaml")
     assert out.width == 320 and params.zoom > 0
+    exported = yaml.safe_load((tmp_path / "p2.yaml").read_text())
+    assert exported["output"]["judged_at"] == [1280, 720]
+    assert "judged at the RVM image of record, 1280x720" in (tmp_path / "p2.yaml").read_text()
     # The exported file reproduces the stored score through the public pipeline.
     from rvmsim.runs import RunStore
 

@@ -54,6 +54,7 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
     from ..compensation import compensation_for
     from ..criteria import load_criteria
     from ..eol import StationSettings, run_station
+    from ..pipeline import record_output
     from ..report import write_eol_page
     from ..robust import load_variation
     from ..scene import load_scene
@@ -64,8 +65,11 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
     params, output = load_isp(params_file)
     model = compensation_for(compensation)
     assert model is not None  # a value is always given
+    criteria = load_criteria(criteria_file)
+    # every car's verdict at the RVM image of record, whatever size the file was searched at
+    output = record_output(criteria, sc, output.mirror)
     settings = StationSettings(
-        params, output, model, load_criteria(criteria_file),
+        params, output, model, criteria,
         load_variation(variation_file) if variation_file is not None else None,
         min_landmarks, search_px)
     result = run_station(sc, captures, out, settings, params_file=str(params_file),

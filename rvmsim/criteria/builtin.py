@@ -22,6 +22,9 @@ EC        measurement (on the RVM label image, H × W px)                       
 4-1       width / height of the pattern board's bounding box                        –
 ========  =====================================================================  ======
 
+The px ECs (2-3 along y, 3-1 along x: :attr:`EcDefinition.pixel_axis`) are pixels of the RVM
+image of record whatever size they are measured at (:mod:`rvmsim.criteria.record`).
+
 Conventions: pixel centres at integer (column, row); distances from the top of the image are
 measured to pixel edges (a pixel in row r starts r px below the top).  Bumper heights are
 counts of bumper pixels per column, averaged over ``edge_columns`` columns (at each edge,

@@ -49,6 +49,11 @@ def test_params_file_round_trip(tmp_path):
     ypath.write_text("zoom: 1.3\nadv_v_shift: 0.2\n")
     q, o = load_params(ypath)
     assert q == IspParams(zoom=1.3, adv_v_shift=0.2) and o == OutputSpec()
+    # where the verdict was judged rides along in the output section
+    judged = params_to_dict(p, out, judged_at=OutputSpec(1280, 720))
+    assert judged["output"]["judged_at"] == [1280, 720]
+    path.write_text(json.dumps(judged))
+    assert load_params(path) == (p, out)
 
 
 @pytest.mark.parametrize("text, key, line, words", [
@@ -60,6 +65,8 @@ def test_params_file_round_trip(tmp_path):
     ("output: {size: [0, 480]}\n", "output.size", 1, "output.size"),
     ("zoom: 1\noutput:\n  mirror: maybe\n", "output.mirror", 3, "output.mirror"),
     ("output: 3\n", "output", 1, "output: expected {size"),
+    ("output: {judged_at: [1280]}\n", "output.judged_at", 1, "RVM image of record"),
+    ("output: {judged_at: [0, 720]}\n", "output.judged_at", 1, "16..8192"),
 ])
 def test_bad_params_file(tmp_path, text, key, line, words):
     path = tmp_path / "p.yaml"
