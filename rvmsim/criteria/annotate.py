@@ -21,6 +21,7 @@ no wider than :data:`DISPLAY_WIDTH_PX` shows it at its own size.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -33,7 +34,8 @@ from .values import EcValue
 
 __all__ = ["annotate", "annotation", "Annotation", "PlacedLabel", "place_labels", "Canvas",
            "Colour", "Label", "PASS", "FAIL", "OFF", "INK", "TEXT_PX", "MIN_TEXT_PX",
-           "DISPLAY_WIDTH_PX", "MIN_PICTURE_PX", "panel_rows"]
+           "DISPLAY_WIDTH_PX", "MIN_PICTURE_PX", "panel_rows", "spelled_name",
+           "picture_scale"]
 
 #: Font size (px per em) of every text of the annotated image, at the size it is made.
 TEXT_PX = 14
@@ -354,55 +356,74 @@ def panel_rows(result: EcResult, definitions: Sequence[EcDefinition | None] | No
         m = item.margin
         margin = "—" if binary or m is None else ("+" if m >= 0 else "−") + _num(abs(m)) + u
         result_text = "off" if not item.enabled else ("pass" if item.passed else "fail")
-        rows.append((item.id, item.name.replace("_", " "), value, _range_text(item, binary),
+        rows.append((item.id, spelled_name(item.name), value, _range_text(item, binary),
                      margin, result_text))
     return rows
 
 
-_HEAD = ("EC", "criterion", "value", "limit", "margin", "")
+def spelled_name(name: str) -> str:
+    """An EC's snake_case name in words: ``_`` as spaces, runs of the scene's object
+    letters A–G as letters (``fg`` → ``F, G``, ``b`` → ``B``), ``guideN`` → ``guideline N``
+    (``fg_stripe_area_ratio`` → ``F, G stripe area ratio``)."""
+    words = []
+    for token in name.split("_"):
+        if token and set(token) <= set("abcdefg") and list(token) == sorted(set(token)):
+            token = ", ".join(token.upper())
+        elif re.fullmatch(r"guide\d+", token):
+            token = "guideline " + token[5:]
+        words.append(token)
+    return " ".join(w for w in words if w)
+
+
+_HEAD = ("EC", "criterion", "value", "limit", "margin", "result")
 
 
 def _panel_image(rows: Sequence[tuple[str, ...]], result: EcResult, size_px: int,
                  width: int | None) -> np.ndarray:
-    """The panel as an RGB image exactly as tall as its text (and ``width`` wide when
-    given: the criterion column is shortened with … to fit)."""
+    """The panel as an RGB image exactly as tall as its text.  With ``width`` (under the
+    picture) it is that wide: the rows go in two blocks side by side when they fit, else
+    the criterion column is shortened with … to fit."""
     from PIL import Image, ImageDraw
 
     f, fb = font(size_px), font(size_px, True)
     line = _text_size("Ag", size_px)[1] + 4
-    gap = size_px  # between columns
-    cols = [max([_text_size(r[c], size_px)[0] for r in rows] + [_text_size(_HEAD[c],
-                                                                            size_px, True)[0]])
-            for c in range(6)]
-    total = 2 * gap + sum(cols) + gap * 5
-    if width is not None and total > width:
-        cols[1] = max(size_px * 4, cols[1] - (total - width))
-        total = 2 * gap + sum(cols) + gap * 5
+    gap = max(8, round(0.7 * size_px))  # between columns, and the panel's margin
+    cols = [max([_text_size(r[c], size_px)[0] for r in rows]
+                + [_text_size(_HEAD[c], size_px, True)[0]]) for c in range(6)]
+    block = sum(cols) + gap * 5
+    blocks = 2 if width is not None and len(rows) > 4 and 2 * block + 4 * gap <= width else 1
+    if width is not None and blocks == 1 and block + 2 * gap > width:
+        cols[1] = max(size_px * 4, cols[1] - (block + 2 * gap - width))
+        block = sum(cols) + gap * 5
     footer = (f"EC score {result.score:.4g} · "
               + ("all ECs pass" if result.passed else "not all pass"))
-    pw = max(total, _text_size(footer, size_px, True)[0] + 2 * gap) if width is None else width
-    ph = line * (len(rows) + 2) + 2 * (size_px // 2) + 4
+    pw = (max(block + 2 * gap, _text_size(footer, size_px, True)[0] + 2 * gap)
+          if width is None else width)
+    per_block = math.ceil(len(rows) / blocks)
+    ph = line * (per_block + 2) + 2 * (size_px // 2) + 4
     img = Image.new("RGB", (pw, ph), _PANEL_BG)
     draw = ImageDraw.Draw(img)
-    xs = [gap]
-    for c in cols[:-1]:
-        xs.append(xs[-1] + c + gap)
     right = {2, 3, 4}  # numbers right-aligned
-    y = size_px // 2
-    for c, text in enumerate(_HEAD):
-        x = xs[c] + cols[c] if c in right else xs[c]
-        draw.text((x, y), text, font=fb, fill=(200, 200, 200), anchor="ra" if c in right
-                  else "la")
-    for item, row in zip(result.items, rows):
-        y += line
-        colour = _tint(Canvas.status(item))
-        for c, text in enumerate(row):
-            if c == 1:
-                text = _fit(text, cols[1], size_px)
+    for b in range(blocks):
+        xs = [gap + b * (block + 2 * gap)]
+        for c in cols[:-1]:
+            xs.append(xs[-1] + c + gap)
+        y = size_px // 2
+        for c, text in enumerate(_HEAD):
             x = xs[c] + cols[c] if c in right else xs[c]
-            draw.text((x, y), text, font=f, fill=colour if c != 1 else (235, 235, 235),
+            draw.text((x, y), text, font=fb, fill=(200, 200, 200),
                       anchor="ra" if c in right else "la")
-    y += line + 4
+        part = slice(b * per_block, (b + 1) * per_block)
+        for item, row in zip(result.items[part], rows[part]):
+            y += line
+            colour = _tint(Canvas.status(item))
+            for c, text in enumerate(row):
+                if c == 1:
+                    text = _fit(text, cols[1], size_px)
+                x = xs[c] + cols[c] if c in right else xs[c]
+                draw.text((x, y), text, font=f, fill=colour if c != 1 else (235, 235, 235),
+                          anchor="ra" if c in right else "la")
+    y = size_px // 2 + line * (per_block + 1) + 4
     draw.text((gap, y), footer, font=fb, fill=_tint(PASS if result.passed else FAIL),
               anchor="la")
     return np.asarray(img)

@@ -197,8 +197,7 @@ def _draw_widths(canvas: Canvas, item: EcValue, widths: ObjectWidths | None,
         canvas.text(text, at, colour)
 
 
-_FORMATS = {("px", "mm", "arcmin"): "width {px:.1f} px = {mm:.2f} mm, {arcmin:.1f}′ on the "
-                                    "display",
+_FORMATS = {("px", "mm", "arcmin"): "{arcmin:.1f}′ wide on the display ({px:.1f} px)",
             ("magnification", "px_per_deg"): "magnification ×{magnification:.2f}, "
                                              "{px_per_deg:.1f} px/°"}
 
