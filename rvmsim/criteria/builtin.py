@@ -245,6 +245,13 @@ def _draw_2_2(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
     _draw_bumper(canvas, item, cols, ("t_l", "t_r"))
 
 
+def _draw_2_3(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
+    """The difference of the edge bumper heights, labelled between their tops."""
+    (xl, top_l, _), (xr, top_r, _) = cols["t_l"], cols["t_r"]
+    canvas.text(f"bumper heights, left − right {canvas.value_text(item)}",
+                ((xl + xr) / 2.0, max(top_l, top_r)), canvas.status(item))
+
+
 def _measure_2_4(src: LabelSource, options: MeasureOptions) -> Measurement:
     """No garnish/trunk in the upper region."""
     import cv2
@@ -398,7 +405,7 @@ ECS = [
                  description="mean of the bumper heights t_l, t_r at the image edges / image "
                              "height",
                  regions=_bumper_regions, infeasibility=_BUMPER_ABSENT),
-    EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, None,
+    EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, _draw_2_3,
                  (None, 5), Sigmoid(0, -_INF, 1.17, 5),  # smaller is better; 1.08 px -> 0.99
                  description="|t_l − t_r|", regions=_bumper_regions),
     EcDefinition("2-4", "no_body_in_upper_region", "", (UPPER_BODY,), _measure_2_4, _draw_2_4,
