@@ -164,7 +164,7 @@ def _draw_1_3(canvas: Canvas, item: EcValue, top_row: int | None) -> None:
     colour = canvas.status(item)
     cv2.arrowedLine(canvas.image, (x, 0), (x, top_row), colour, canvas.line_width,
                     tipLength=0.15)
-    canvas.text(f"d {canvas.value_text(item)}", (x + 6, max(14, top_row // 2)), colour)
+    canvas.text(f"top margin d {canvas.value_text(item)}", (x, top_row / 2.0), colour)
 
 
 def _measure_1_4(src: LabelSource, options: MeasureOptions) -> Measurement:
@@ -221,19 +221,23 @@ def _measure_2_3(src: LabelSource, options: MeasureOptions) -> Measurement:
     return Measurement(abs(cols["t_l"][2] - cols["t_r"][2]), cols)
 
 
+#: The bumper heights' names as the labels spell them out.
+_BUMPER_NAMES = {"t_l": "bumper height, left edge", "t_r": "bumper height, right edge",
+                 "t_c": "bumper height, centre"}
+
+
 def _draw_bumper(canvas: Canvas, item: EcValue, cols: BumperColumns, names: tuple[str, ...]
                  ) -> None:
+    """Each bumper height as a thick line up from the bottom, labelled at its top."""
     import cv2
 
     h, w = canvas.shape
-    s = canvas.text_scale
     for name in names:
         xc, top, t = cols[name]
         x = int(round(xc))
         cv2.line(canvas.image, (x, h - 1), (x, int(round(top))), canvas.status(item),
                  canvas.line_width * 2)
-        tx = min(max(2, x - int(40 * s)), w - int(120 * s))
-        canvas.text(f"{name} {t:.1f}px", (tx, max(12, int(top) - 6)), canvas.status(item))
+        canvas.text(f"{_BUMPER_NAMES[name]} {t:.1f} px", (xc, top), canvas.status(item))
 
 
 def _draw_2_1(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
@@ -242,6 +246,13 @@ def _draw_2_1(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
 
 def _draw_2_2(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
     _draw_bumper(canvas, item, cols, ("t_l", "t_r"))
+
+
+def _draw_2_3(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
+    """The difference of the edge bumper heights, labelled between their tops."""
+    (xl, top_l, _), (xr, top_r, _) = cols["t_l"], cols["t_r"]
+    canvas.text(f"bumper heights, left − right {canvas.value_text(item)}",
+                ((xl + xr) / 2.0, max(top_l, top_r)), canvas.status(item))
 
 
 def _measure_2_4(src: LabelSource, options: MeasureOptions) -> Measurement:
@@ -262,7 +273,8 @@ def _draw_2_4(canvas: Canvas, item: EcValue, rows: int) -> None:
 
     cv2.line(canvas.image, (0, rows), (canvas.shape[1] - 1, rows), canvas.status(item),
              canvas.line_width)
-    canvas.text("2-4 upper region", (4, max(12, rows - 4)), canvas.status(item))
+    canvas.text("upper region free of body ✓" if item.value == 1 else "body in upper region ✗",
+                (canvas.shape[1] / 4.0, rows), canvas.status(item))
 
 
 # ---------------------------------------------------------------------------- EC 3: guidelines
@@ -293,7 +305,7 @@ def _measure_3_2(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_guide(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None,
-                marker: int, label: str, dy: int) -> None:
+                marker: int, label: str) -> None:
     import cv2
 
     if centre is None:
@@ -302,8 +314,7 @@ def _draw_guide(canvas: Canvas, item: EcValue, centre: tuple[float, float] | Non
     s = canvas.text_scale
     cv2.drawMarker(canvas.image, (int(round(gx)), int(round(gy))), canvas.status(item), marker,
                    int(20 * s) + 6, canvas.line_width)
-    canvas.text(f"{label} {canvas.value_text(item)}", (int(gx) + 8, int(gy) + dy),
-                canvas.status(item))
+    canvas.text(f"{label} {canvas.value_text(item)}", (gx, gy), canvas.status(item))
 
 
 def _draw_3_1(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None) -> None:
@@ -314,7 +325,7 @@ def _draw_3_1(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None)
     cx = int((w - 1) / 2.0)
     for yy in range(0, h, max(6, h // 60)):
         cv2.line(canvas.image, (cx, yy), (cx, min(h - 1, yy + max(3, h // 120))), INK, 1)
-    _draw_guide(canvas, item, centre, cv2.MARKER_CROSS, "3-1 dx", -6)
+    _draw_guide(canvas, item, centre, cv2.MARKER_CROSS, "guideline 2 off centre")
 
 
 def _draw_3_2(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None) -> None:
@@ -327,8 +338,7 @@ def _draw_3_2(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None)
         for xx in range(0, w, max(6, w // 80)):
             cv2.line(canvas.image, (xx, yy), (min(w - 1, xx + max(3, w // 160)), yy),
                      (200, 200, 0), 1)
-    _draw_guide(canvas, item, centre, cv2.MARKER_TILTED_CROSS, "3-2 y",
-                int(18 * canvas.text_scale))
+    _draw_guide(canvas, item, centre, cv2.MARKER_TILTED_CROSS, "guideline 3 height")
 
 
 # ---------------------------------------------------------------------------- EC 4: board
@@ -348,7 +358,7 @@ def _draw_4_1(canvas: Canvas, item: EcValue, board: tuple[int, int, int, int] | 
     bx, by, bw, bh = board
     cv2.rectangle(canvas.image, (bx, by), (bx + bw - 1, by + bh - 1), canvas.status(item),
                   canvas.line_width)
-    canvas.text(f"4-1 w/h {canvas.value_text(item, '{:.3f}')}", (bx, max(12, by - 6)),
+    canvas.text(f"board width/height {canvas.value_text(item, '{:.3f}')}", (bx, by),
                 canvas.status(item))
 
 
@@ -398,7 +408,7 @@ ECS = [
                  description="mean of the bumper heights t_l, t_r at the image edges / image "
                              "height",
                  regions=_bumper_regions, infeasibility=_BUMPER_ABSENT),
-    EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, None,
+    EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, _draw_2_3,
                  (None, 5), Sigmoid(0, -_INF, 1.17, 5),  # smaller is better; 1.08 px -> 0.99
                  description="|t_l − t_r|", regions=_bumper_regions, pixel_axis="y"),
     EcDefinition("2-4", "no_body_in_upper_region", "", (UPPER_BODY,), _measure_2_4, _draw_2_4,

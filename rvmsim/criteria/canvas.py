@@ -1,15 +1,30 @@
-"""What an EC's annotate function draws on (:class:`Canvas`), its colours and outlined text;
-on its own so that EC definitions can name it without importing the annotation."""
+"""What an EC's annotate function draws on (:class:`Canvas`), its colours, the labels it asks
+for (:class:`Label`) and the font they are written in; on its own so that EC definitions can
+name it without importing the annotation.
+
+Shapes (lines, markers, fills) are drawn on the RVM image straight away, in RVM px.  Text is
+not: :meth:`Canvas.text` queues a :class:`Label` at a point, and :func:`rvmsim.criteria.annotate`
+places every label afterwards without overlap (moving it, with a leader line, where its first
+place is taken) and writes it with a TrueType font (real ‰, °, ×, ≥ glyphs) on a dark box, at
+a size that reads on the page that shows the picture.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .values import EcValue
 
-__all__ = ["Canvas", "Colour", "PASS", "FAIL", "OFF", "INK", "draw_text"]
+if TYPE_CHECKING:
+    from PIL import ImageFont
+
+__all__ = ["Canvas", "Colour", "Label", "PASS", "FAIL", "OFF", "INK", "font", "font_path",
+           "unit_text"]
 
 #: RGB colour.
 Colour = tuple[int, int, int]
@@ -17,6 +32,27 @@ PASS: Colour = (40, 170, 60)
 FAIL: Colour = (220, 40, 40)
 OFF: Colour = (140, 140, 140)
 INK: Colour = (255, 255, 255)
+
+
+@dataclass(frozen=True)
+class Label:
+    """A text an EC asks for, written later by the annotation's label layout.
+
+    Parameters
+    ----------
+    text : str
+        Any Unicode text (one line).
+    at : (x, y)
+        RVM px: the point the text belongs to.  Its first choice of place is to the upper
+        right of it (the baseline starting there); if taken, a free place around it, else
+        anywhere free in the image with a leader line back to it.
+    colour : Colour
+        Usually the EC's status colour (:meth:`Canvas.status`).
+    """
+
+    text: str
+    at: tuple[float, float]
+    colour: Colour = INK
 
 
 @dataclass(frozen=True)
@@ -30,9 +66,12 @@ class Canvas:
     labels : (H, W) uint8
         The RVM label image the measurements were made on.
     text_scale : float
-        OpenCV font scale that suits the image size.
+        A size factor that suits the image (≈ image size / 900; kept for plugins that
+        space their drawings by it).
     line_width : int
         Line width (px) that suits the image size.
+    texts : list of Label
+        The labels asked for so far (:meth:`text`), in order.
 
     Convention: pixel centres at integer (column, row), as in the measurements.
     """
@@ -41,6 +80,7 @@ class Canvas:
     labels: np.ndarray
     text_scale: float
     line_width: int
+    texts: list[Label] = field(default_factory=list)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -49,9 +89,10 @@ class Canvas:
 
     def text(self, text: str, org: tuple[float, float], colour: Colour = INK,
              scale: float | None = None, thick: int = 1) -> None:
-        """Outlined text with its baseline starting at ``org`` (px)."""
-        draw_text(self.image, text, org, self.text_scale if scale is None else scale, colour,
-                  thick)
+        """Ask for a label ``text`` at the point ``org`` (RVM px): written after every EC
+        has drawn, where it overlaps no other label (:class:`Label`).  ``scale`` and
+        ``thick`` are ignored (the annotation sizes all text alike)."""
+        self.texts.append(Label(str(text), (float(org[0]), float(org[1])), colour))
 
     def fill(self, mask: np.ndarray, colour: Colour, alpha: float = 0.55) -> None:
         """Blend ``colour`` into the pixels where ``mask`` (H, W) is true."""
@@ -68,18 +109,33 @@ class Canvas:
 
     @staticmethod
     def value_text(item: EcValue, fmt: str = "{:.2f}") -> str:
-        """The value with its unit, ``n/a`` when it was not measured."""
-        return "n/a" if item.value is None else fmt.format(item.value) + item.unit
+        """The value with its unit (``26.12 ‰``, ``1.08 px``), ``n/a`` when not measured."""
+        return "n/a" if item.value is None else fmt.format(item.value) + unit_text(item.unit)
 
 
-def draw_text(img: np.ndarray, text: str, org: tuple[float, float], scale: float,
-              colour: Colour = INK, thick: int = 1) -> None:
-    """Outlined text on an RGB image (the Hershey fonts have no per-mille sign: o/oo)."""
-    import cv2
+def unit_text(unit: str) -> str:
+    """A unit as written after a number: ``" ‰"``, ``" px"``, ``"×"`` for ``x``, ``""``."""
+    if not unit:
+        return ""
+    if unit in ("x", "×"):
+        return "×"
+    return " " + unit
 
-    x, y = int(org[0]), int(org[1])
-    text = text.replace("‰", " o/oo")
-    for dx, dy in ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (1, 1)):  # dark outline
-        cv2.putText(img, text, (x + dx, y + dy), cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0),
-                    thick, cv2.LINE_AA)
-    cv2.putText(img, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, scale, colour, thick, cv2.LINE_AA)
+
+def font_path() -> Path:
+    """The TrueType font the annotation writes with: DejaVu Sans as matplotlib (a
+    dependency) ships it, so every machine draws the same pixels; it has ‰, °, ×, ≥, ′."""
+    import matplotlib
+
+    return Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
+
+
+@functools.lru_cache(maxsize=16)
+def font(size_px: int, bold: bool = False) -> ImageFont.FreeTypeFont:
+    """DejaVu Sans (Bold) at ``size_px`` px per em (Pillow)."""
+    from PIL import ImageFont
+
+    path = font_path()
+    if bold:
+        path = path.with_name("DejaVuSans-Bold.ttf")
+    return ImageFont.truetype(str(path), int(size_px))

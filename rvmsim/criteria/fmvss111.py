@@ -116,7 +116,7 @@ def _draw_1_5(canvas: Canvas, item: EcValue, detail: _SilhouetteDetail | None) -
                               cv2.LINE_AA, shift=4)
                 if frac < 100.0:  # (whole ones: the outline's colour says so)
                     x, y = uv.min(axis=0)
-                    canvas.text(f"{letter} {frac:.0f}%", (x, max(10.0, y - 4)), colour)
+                    canvas.text(f"{letter} {frac:.0f} % visible", (x, y), colour)
 
 
 # ---------------------------------------------------------------------------- 1-6 and 6-1
@@ -177,28 +177,29 @@ def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 def _draw_widths(canvas: Canvas, item: EcValue, widths: ObjectWidths | None,
                  keys: tuple[str, ...]) -> None:
-    """The objects' figures as a block of lines (1-6 at the top left, 6-1 at the top right)
-    and, for 1-6, each measured width as a line across the object."""
+    """Each object's figures as a label at the object (1-6: at the middle of its width,
+    drawn as a line across it; 6-1: at its axis)."""
     import cv2
 
     if not widths:
         return
     colour = canvas.status(item)
-    row = 16 * canvas.text_scale / 0.35
-    left = keys[0] == "px"
-    x = 4.0 if left else canvas.shape[1] - 150 * canvas.text_scale / 0.35
-    for n, (letter, w) in enumerate(widths.items()):
-        text = f"{item.id} {letter} " + " ".join(f.format(w[k]) for f, k in
-                                                zip(_FORMATS[keys], keys))
-        canvas.text(text, (x, row * (n + 1)), colour)
-        if left:
+    sizes = keys[0] == "px"
+    for letter, w in widths.items():
+        text = f"{letter} {_FORMATS[keys].format(**{k: w[k] for k in keys})}"
+        if sizes:
             ends = [(int(round(w["x0"])), int(round(w["y0"]))),
                     (int(round(w["x1"])), int(round(w["y1"])))]
             cv2.line(canvas.image, ends[0], ends[1], colour, canvas.line_width)
+            at = ((w["x0"] + w["x1"]) / 2.0, (w["y0"] + w["y1"]) / 2.0)
+        else:
+            at = (w["x"], w["y"])
+        canvas.text(text, at, colour)
 
 
-_FORMATS = {("px", "mm", "arcmin"): ("{:.1f}px", "{:.2f}mm", "{:.1f}'"),
-            ("magnification", "px_per_deg"): ("x{:.2f}", "{:.1f}px/deg")}
+_FORMATS = {("px", "mm", "arcmin"): "{arcmin:.1f}′ wide on the display ({px:.1f} px)",
+            ("magnification", "px_per_deg"): "magnification ×{magnification:.2f}, "
+                                             "{px_per_deg:.1f} px/°"}
 
 
 def _draw_1_6(canvas: Canvas, item: EcValue, widths: ObjectWidths | None) -> None:

@@ -3,6 +3,7 @@ annotation can all name it without importing each other."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,6 +24,17 @@ class EcValue:
     score: float
     passed: bool
     enabled: bool
+
+    @property
+    def margin(self) -> float | None:
+        """Signed distance of the value inside its acceptable range, in the EC's unit:
+        > 0 inside, < 0 outside, 0 on a limit; for a two-sided range the distance to the
+        nearer limit (as :func:`rvmsim.robust.ec_margins`).  None when not measured or the
+        range is open on both sides."""
+        if self.value is None or (self.low is None and self.high is None):
+            return None
+        return min(self.value - self.low if self.low is not None else math.inf,
+                   self.high - self.value if self.high is not None else math.inf)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready: id, name, value, unit, range, score, passed, enabled."""

@@ -35,6 +35,9 @@ img{max-width:100%;border:1px solid #999}
 .gallery{display:flex;flex-wrap:wrap;gap:1em}
 .card{border:1px solid #bbb;border-radius:.4em;padding:.6em;width:340px;background:#fafafa}
 .card.rank1{border:2px solid #2a8a3a}
+.margins{display:flex;flex-wrap:wrap;gap:.25em;font-size:.85em;margin:.4em 0}
+.margins span{padding:.05em .35em;border-radius:.25em;white-space:nowrap}
+.margins .pass{background:#d8f0d8}.margins .fail{background:#f6d0d0;color:#8a1010}
 code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
 .muted{color:#666;font-size:.9em}
 pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,11 +22,23 @@ from ..robust import EcStats, RobustnessResult
 from ..storage import json_default
 from .page import escape, figure_png, img_tag, page, data_uri
 
+if TYPE_CHECKING:
+    from ..pipeline import RvmFrame
+
 __all__ = ["robustness_page", "write_robustness_outputs", "margin_histograms_png",
            "yield_curve_png"]
 
-#: Longest side of the embedded RVM images, px.
+#: Longest side of an embedded RVM image without its ECs drawn, px.  The annotated image is
+#: embedded at its own size: :func:`rvmsim.criteria.annotate` makes it as wide as the page
+#: shows it, so its text keeps its size (≥ 11 px) on the page.
 PICTURE_MAX_PX = 640
+
+
+def _picture(frame: RvmFrame, alt: str) -> str:
+    """``frame``'s annotated image at its own size, else its RVM image."""
+    if frame.annotated is not None:
+        return img_tag(frame.annotated, alt)
+    return img_tag(frame.color, alt, PICTURE_MAX_PX)
 
 
 def margin_histograms_png(ecs: tuple[EcStats, ...]) -> bytes:
@@ -208,9 +220,9 @@ each sample per EC (distance to the nearer end of its range; below 0 fails).</fi
 <h2>Yield against the tolerance scale</h2><figure><img src="{curve}" alt="yield curve">
 <figcaption>Mount tolerances times the factor (load states unchanged).</figcaption></figure>
 <h2>Worst sample and nominal</h2><div class="gallery">
-<figure>{img_tag(result.nominal.annotated if result.nominal.annotated is not None else result.nominal.color, "nominal", PICTURE_MAX_PX)}
+<figure>{_picture(result.nominal, "nominal")}
 <figcaption>Nominal (as designed)</figcaption></figure>
-<figure>{img_tag(result.worst.annotated if result.worst.annotated is not None else result.worst.color, "worst sample", PICTURE_MAX_PX)}
+<figure>{_picture(result.worst, "worst sample")}
 <figcaption>Worst: {escape(_sample_text(result))}</figcaption></figure></div>
 <pre>{escape(result.summary())}</pre>
 """)

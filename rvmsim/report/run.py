@@ -17,6 +17,7 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 
 from __future__ import annotations
 
+import math
 import os
 import shlex
 from dataclasses import dataclass, field
@@ -261,6 +262,41 @@ def _differences(rec: TrialRecord, first: TrialRecord, criteria: Criteria) -> li
     return out
 
 
+def _margin_chip(margin: float) -> str:
+    """A margin in two significant digits with its sign (whole numbers from 10 on)."""
+    if abs(margin) >= 10:
+        return f"{margin:+.0f}"
+    return f"{margin:+.2g}"
+
+
+def margins_html(margins: dict[str, float], rec: TrialRecord, criteria: Criteria) -> str:
+    """A gallery card's row of EC margins: per enabled EC its id and margin (signed
+    distance of its value inside the acceptable range, EC unit; ✓/✗ for binary ECs, n/a
+    when not measured), coloured by pass/fail; the name, margin and unit on hover."""
+    from ..criteria.canvas import unit_text
+
+    defs = {d.id: d for d in criteria.ecs}
+    chips = []
+    for ec in criteria.ids:
+        crit, outcome, d = criteria.items[ec], rec.ecs.get(ec), defs.get(ec)
+        if not crit.enabled or outcome is None or d is None:
+            continue
+        m = margins.get(ec, math.nan)
+        if d.binary:
+            shown = "✓" if outcome.passed else "✗"
+        elif math.isnan(m):
+            shown = "n/a"
+        else:
+            shown = _margin_chip(m) + unit_text(d.unit).strip()
+        st = "pass" if outcome.passed else "fail"
+        tip = (f"{ec} {d.name.replace('_', ' ')}: "
+               + ("not measured" if math.isnan(m) and not d.binary else
+                  st if d.binary else f"margin {m:+.4g}{unit_text(d.unit)}") + f" ({st})")
+        chips.append(f'<span class="{st}" title="{escape(tip)}"><b>{escape(ec)}</b> '
+                     f"{escape(shown)}</span>")
+    return f'<p class="margins">{"".join(chips)}</p>'
+
+
 def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
     from ..pipeline import rvm_color
@@ -276,8 +312,8 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
         else:
             diff_html = (f'<p class="differs">{escape(cand.differs)} <span class="muted">'
                          f'(distance {cand.distance:.2f})</span></p>')
-            diff_html += ("<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
-                          if diffs else "<p class='muted'>same pass/fail as #1 on every EC</p>")
+            if diffs:
+                diff_html += "<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
         badge = "pass" if rec.passed else "fail"
         cmd = f"rvmsim select {shlex.quote(run_arg)} --rank {k}"
         cards.append(
@@ -286,6 +322,7 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             f'{img_tag(color, f"rank {k} RVM image", GALLERY_MAX_PX)}'
             f'<p>EC score <b>{rec.score:.4g}</b> <span class="muted">trial {rec.idx} '
             f'({escape(rec.stage)})</span></p>'
+            f'{margins_html(cand.margins, rec, r.criteria)}'
             f'{member_scores_html(r.members, r.member_top.get(rec.idx, []))}{diff_html}'
             f'<p>Export: <code>{escape(cmd)}</code></p></div>')
     dmin = r.config.diverse.min_distance
@@ -293,8 +330,9 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             '<p class="muted">Genuinely different candidates for the final choice: after #1 '
             '(the best trial), the all-pass trials farthest from those already shown, each '
             f'at least {dmin:g} of the search span from every other (docs/tuning.md, "The '
-            'diverse top-M"). Each card says how it differs from #1 and which ECs change '
-            'result; choose one and export it with the command shown.</p>'
+            'diverse top-M"). Each card shows every EC\'s margin (how far its value is '
+            'inside its range, in the EC\'s unit; red: outside), how it differs from #1 and '
+            'which ECs change result; choose one and export it with the command shown.</p>'
             f'<div class="gallery">{"".join(cards)}</div></section>')
 
 

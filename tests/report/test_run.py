@@ -296,3 +296,99 @@ def test_cli_report_run_batch_and_bad_path(runs, tmp_path):
         lines = res.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("rvmsim: error:") and str(bad) in lines[0]
         assert "Traceback" not in res.stderr
+
+
+def _margin_cards(text: str) -> dict[int, list[tuple[str, str, str]]]:
+    """Per gallery card (rank): its margin chips as (class, EC id, shown text)."""
+    import re
+
+    cards = {}
+    for rank, body in re.findall(r'id="rank-(\d+)">(.*?)</div>', text, re.S):
+        row = re.search(r'<p class="margins">(.*?)</p>', body, re.S)
+        assert row is not None, f"card {rank} has no margins"
+        cards[int(rank)] = [(c, html.unescape(e), html.unescape(s)) for c, e, s in re.findall(
+            r'<span class="(pass|fail)" title="[^"]*"><b>([^<]*)</b> ([^<]*)</span>',
+            row.group(1))]
+    return cards
+
+
+def test_gallery_cards_show_every_ecs_margin(runs):
+    """Each top-M card has a row of EC margins (the enabled ECs: 4-1 is off), coloured by
+    pass/fail, whose numbers are the signed distances of the stored values inside their
+    ranges; no card says "same pass/fail as #1" any more."""
+    import re
+
+    from rvmsim.criteria import EcValue, load_criteria
+    from rvmsim.runs import open_run, run_settings, store_candidates
+
+    text = runs["report"].read_text(encoding="utf-8")
+    assert "same pass/fail" not in text
+    cards = _margin_cards(text)
+    assert sorted(cards) == list(range(1, TOP_M + 1))
+    criteria = load_criteria(runs["crit"])
+    enabled = [e for e in criteria.ids if criteria.items[e].enabled]
+    assert "4-1" not in enabled and len(enabled) == 10
+    store = open_run(runs["evil_run"])
+    try:
+        pairs = store_candidates(store, run_settings(runs["evil_run"], store),
+                                 criteria=criteria)
+    finally:
+        store.close()
+    binary = {d.id for d in criteria.ecs if d.binary}
+    for cand, rec in pairs:
+        chips = cards[cand.rank]
+        assert [e for _, e, _ in chips] == enabled
+        for cls, ec, shown in chips:
+            outcome, crit = rec.ecs[ec], criteria.items[ec]
+            assert cls == ("pass" if outcome.passed else "fail"), (cand.rank, ec)
+            if ec in binary:
+                assert shown == ("✓" if outcome.passed else "✗")
+                continue
+            margin = EcValue(ec, ec, outcome.value, "", crit.low, crit.high, outcome.score,
+                             outcome.passed, True).margin
+            if margin is None:
+                assert shown == "n/a"
+                continue
+            number = float(re.match(r"[+-][0-9.e+-]+?(?=[^0-9.e]|$)", shown).group(0))
+            assert abs(number - margin) <= (0.5 if abs(margin) >= 10 else 0.05 * abs(margin)
+                                            + 1e-12), (cand.rank, ec, shown, margin)
+            assert (margin >= 0) == outcome.passed
+
+
+def shown_text_px(page_file, alts: tuple[str, ...], viewport_width: int = 1280
+                  ) -> dict[str, float]:
+    """Open ``page_file`` in Chromium (Playwright) at ``viewport_width``: per image alt
+    text, the annotation's text size (px per em) as the page shows it (the font size times
+    the image's shown width over its own width)."""
+    from playwright.sync_api import sync_playwright
+
+    from rvmsim.criteria.annotate import TEXT_PX
+
+    chromium = shutil.which("chromium")
+    if chromium is None:
+        pytest.skip("Chromium is not installed (tools/setup.sh --test installs it)")
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=["--no-sandbox"])
+        try:
+            page = browser.new_page(viewport={"width": viewport_width, "height": 900})
+            page.goto(page_file.resolve().as_uri())
+            sizes = page.evaluate("""alts => alts.map(alt => {
+                const img = [...document.images].find(i => i.alt === alt);
+                return img ? [img.naturalWidth, img.getBoundingClientRect().width] : null; })""",
+                                  list(alts))
+        finally:
+            browser.close()
+    out = {}
+    for alt, size in zip(alts, sizes):
+        assert size is not None, f"no image {alt!r} on {page_file}"
+        natural, shown = size
+        assert natural > 0
+        out[alt] = TEXT_PX * shown / natural
+    return out
+
+
+def test_annotated_text_is_legible_on_the_report_page(runs):
+    from rvmsim.criteria.annotate import MIN_TEXT_PX
+
+    px = shown_text_px(runs["report"], ("annotated EC image",))
+    assert px["annotated EC image"] >= MIN_TEXT_PX, px
