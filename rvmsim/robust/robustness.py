@@ -25,7 +25,7 @@ import numpy as np
 from ..compensation import CompensationLaw, CompensationModel, measured_load_index
 from ..criteria import Criteria, EcBatch, default_criteria, score_batch
 from ..isp import IspParams, OutputSpec, params_to_dict
-from ..pipeline import RvmFrame, evaluate_params, make_evaluator
+from ..pipeline import RvmFrame, evaluate_params, make_evaluator, record_output
 from ..scene import Scene
 from ..render import TaskRunner
 from .compensated import CompensatedSamples, compensate_samples
@@ -169,6 +169,9 @@ class RobustnessResult:
     before: EcBatch | None = None
     ecs_before: tuple[EcStats, ...] = ()
     reference_points: int = 0
+    #: The RVM image of record every verdict refers to (:mod:`rvmsim.criteria.record`;
+    #: None: ``output``).
+    judged_at: OutputSpec | None = None
 
     @property
     def passed(self) -> np.ndarray:
@@ -207,7 +210,11 @@ class RobustnessResult:
         ev = self.evaluation
         return {
             "scene": self.scene_file, "vehicle": self.scene_name, "criteria": self.criteria_name,
-            "isp": params_to_dict(self.params, self.output), "seed": self.seed,
+            "isp": params_to_dict(self.params, self.output,
+                                  judged_at=self.judged_at or self.output),
+            "judged_at": [(self.judged_at or self.output).width,
+                          (self.judged_at or self.output).height],
+            "seed": self.seed,
             "variation": self.variation.as_dict(), **self.estimate.as_dict(),
             "min_yield": self.min_yield, "meets_min_yield": self.meets_min_yield,
             "nominal": None if self.nominal is None else self.nominal.ec.as_dict(),
@@ -446,10 +453,11 @@ def robustness(scene: Scene, params: IspParams,
         n_fail = n_fail + len(crit.ids) * ~fixed.within_range
     worst = int(np.lexsort((ev.score, -n_fail))[0])
     nominal = worst_frame = None
+    record = record_output(crit, scene, output.mirror)  # the frames show the verdicts' size
     if frames:
-        nominal = _frame(scene, nominal_sample(var), params, output, crit, render_scale, base)
+        nominal = _frame(scene, nominal_sample(var), params, record, crit, render_scale, base)
         worst_params = params if fixed is None else fixed.corrections[worst].params
-        worst_frame = _frame(scene, drawn[worst], worst_params, output, crit, render_scale,
+        worst_frame = _frame(scene, drawn[worst], worst_params, record, crit, render_scale,
                              base)
     t3 = time.perf_counter()
     return RobustnessResult(
@@ -459,7 +467,7 @@ def robustness(scene: Scene, params: IspParams,
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
          "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)},
         fixed, before, () if before is None else _ec_stats(crit, drawn, before, var),
-        0 if law is None else len(law.points))
+        0 if law is None else len(law.points), record)
 
 
 def _law(scene: Scene, params: IspParams, settings: RobustnessSettings,
