@@ -170,8 +170,14 @@ def validate(scene: Scene, capture: np.ndarray,
         images.update(corrected_images)
     rvm = None
     if settings.params is not None:
+        # the ECs judged at the RVM image of record, whatever size the params were searched at
+        from ..criteria import default_criteria
+        from ..pipeline import record_output
+
+        mirror = settings.output.mirror if settings.output is not None else True
+        record = record_output(settings.criteria or default_criteria(), scene, mirror)
         rvm, rvm_images = compare_rvm(capture, synthetic, corrected, settings.params,
-                                      settings.output, settings.criteria)
+                                      record, settings.criteria)
         images.update(rvm_images)
 
     rms_after = _rms(err_after)
