@@ -147,11 +147,13 @@ def provenance_html(p: Provenance) -> str:
 
 def files_table(records: list[FileRecord]) -> str:
     """The files with their SHA-256 as an HTML table."""
+    def note(r: FileRecord) -> str:
+        return "" if not r.note else f' <span class="muted">{escape(r.note)}</span>'
+
     rows = "".join(
         f'<tr class="{"" if r.sha256 else "fail"}"><td>{escape(r.role)}</td>'
         f"<td><code>{escape(r.path)}</code></td>"
-        f"<td><code>{escape(r.sha256 or '—')}</code>"
-        f"{'' if not r.note else ' <span class="muted">' + escape(r.note) + '</span>'}</td></tr>"
+        f"<td><code>{escape(r.sha256 or '—')}</code>{note(r)}</td></tr>"
         for r in records)
     return f"<table><tr><th>file</th><th>path</th><th>SHA-256</th></tr>{rows}</table>"
 
