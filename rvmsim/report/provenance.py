@@ -151,7 +151,8 @@ def files_table(records: list[FileRecord]) -> str:
         return "" if not r.note else f' <span class="muted">{escape(r.note)}</span>'
 
     rows = "".join(
-        f'<tr class="{"" if r.sha256 else "fail"}"><td>{escape(r.role)}</td>'
+        f'<tr class="{"fail" if r.note.startswith("not readable") else ""}">'
+        f"<td>{escape(r.role)}</td>"
         f"<td><code>{escape(r.path)}</code></td>"
         f"<td><code>{escape(r.sha256 or '—')}</code>{note(r)}</td></tr>"
         for r in records)

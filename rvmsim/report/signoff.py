@@ -203,13 +203,15 @@ def _repro_commands(rob: RobustnessRecord | None, r: _Run, setting: SettingRecor
               ("--compensation", inputs.get("compensation")),
               ("--scale", None if scale == 1.0 else f"{scale:g}")]
     opts = "".join(f" {k} {shlex.quote(str(v))}" for k, v in common if v)
+    scene = next((str(f.get("path")) for f in inputs.get("files") or []
+                  if isinstance(f, dict) and f.get("role") == "scene"), str(doc["scene"]))
     q = shlex.quote
     cmds = {}
     for s in rob.failing:
         n = int(s["index"])
         folder = out.resolve() / f"sample_{n}"
         cmds[str(n)] = (
-            f"rvmsim robustness {q(str(doc['scene']))} --params {q(params)} --samples "
+            f"rvmsim robustness {q(scene)} --params {q(params)} --samples "
             f"{int(doc['n'])} --seed {int(doc['seed'])}{opts} --scales 1 --out {q(str(folder))}"
             f" --export-sample {n} && rvmsim evaluate {q(str(folder / f'sample_{n}.yaml'))} "
             f"--params {q(params)}" + (f" --criteria {q(str(crit))}" if crit else "")
@@ -272,7 +274,7 @@ def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any
         d = res.robustness.doc
         rob = {k: d.get(k) for k in ("yield", "ci95", "n_pass", "n", "isp", "seed",
                                      "yield_by_load", "yield_before_compensation")}
-        rob["path"] = str(res.robustness.path)
+        rob["path"] = str(res.robustness.path.resolve())
         rob["same_setting"] = res.robustness_same_setting
     return {"run": res.run_dir, "html": str(html), "pdf": None if pdf is None else str(pdf),
             "params_file": res.setting.file.path, "params_sha256": res.setting.file.sha256,
@@ -281,8 +283,9 @@ def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any
             "ecs": res.ec.as_dict(), "files": [f.as_dict() for f in res.files],
             "changed_files": res.changed_files, "tool": res.provenance.as_dict(),
             "robustness": rob,
-            "validation": None if res.validation is None else str(res.validation.path),
-            "eol": None if res.eol is None else str(res.eol.path), "reviewer": res.reviewer}
+            "validation": None if res.validation is None else str(res.validation.path.resolve()),
+            "eol": None if res.eol is None else str(res.eol.path.resolve()),
+            "reviewer": res.reviewer}
 
 
 def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | None = None,
