@@ -216,7 +216,12 @@ def _failing(c: SignoffContent) -> str:
     return ('<section id="failing-samples"><h2>Failing samples</h2>'
             f"<p>{len(failing)} of {len(r.doc['samples'])} samples fail. Each command writes "
             "the sample's car as a scene file and renders it in full (docs/robustness.md, "
-            '"Any sample as a scene").</p><table><tr><th>sample</th><th>load</th>'
+            '"Any sample as a scene").'
+            + ("" if not r.doc.get("compensation") else
+               " The exported car is the car before compensation: <code>rvmsim evaluate"
+               "</code> judges it with the platform setting; its per-car values are the "
+               "sample's <code>correction</code> in robustness.json.")
+            + '</p><table><tr><th>sample</th><th>load</th>'
             "<th>offsets (mm, °)</th><th>failing</th><th>reproduce</th></tr>"
             f"{''.join(rows)}</table></section>")
 
