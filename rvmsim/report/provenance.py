@@ -64,8 +64,9 @@ def _version() -> str:
     """rvmsim's version: the installed package's metadata, else ``rvmsim.__version__``."""
     from importlib.metadata import PackageNotFoundError, version
 
-    from .. import __version__
+    import rvmsim
 
+    __version__ = rvmsim.__version__
     try:
         installed = version("rvmsim")
     except PackageNotFoundError:
