@@ -330,11 +330,11 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     eol_rec = None if eol is None else load_eol(eol)
     if not run_dir.is_dir():
         raise RvmsimError(f"{run_dir}: no such run folder")
-    bar = tqdm(total=5 if pdf else 4, desc="signoff", unit="step", leave=False,
+    run = _load_run(run_dir)  # every input checked before the bar starts
+    bar = tqdm(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
                disable=not progress)
     try:
-        bar.set_postfix_str("reading the run")
-        content = _content(_load_run(run_dir), out, rob, val, eol_rec, reviewer, bar)
+        content = _content(run, out, rob, val, eol_rec, reviewer, bar)
         html, js = out / "signoff.html", out / SIGNOFF_JSON
         bar.set_postfix_str("writing the page")
         html.write_text(signoff_html(content), encoding="utf-8")
@@ -361,7 +361,6 @@ def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRe
     """Everything the page shows: the setting, its ECs of record, the files, the commands."""
     from ..isp import params_to_dict
 
-    bar.update()
     out.mkdir(exist_ok=True)
     best = r.top[0]
     setting = SettingRecord(best.params, r.output, file_record("params", _params_file(r, out)))
