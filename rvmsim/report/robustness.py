@@ -223,13 +223,12 @@ def _setting_section(setting: SettingRecord | None, records: list[FileRecord],
                      result: RobustnessResult) -> str:
     """The setting judged, the files read, the tolerances and load states, the yield per
     load state."""
-    if setting is None:
-        return ""
     by_load = "" if result.compensated is not None else (
         "<h3>Yield per load state</h3>" + by_load_html(result.yield_by_load()))
-    return (f'<h2 id="setting">The setting judged</h2>{setting_html(setting)}'
-            f'<h2 id="inputs">Input files</h2>{files_table(records)}'
-            f'<h2 id="tolerances">Tolerances and load states</h2>'
+    judged = "" if setting is None else (
+        f'<h2 id="setting">The setting judged</h2>{setting_html(setting)}'
+        f'<h2 id="inputs">Input files</h2>{files_table(records)}')
+    return (f'{judged}<h2 id="tolerances">Tolerances and load states</h2>'
             f"{variation_html(result.variation.as_dict())}{by_load}")
 
 

@@ -348,7 +348,8 @@ def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary
               f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
               f"</span> at the nominal pose, {r.output.width} × {r.output.height} px"
               f"{' (first vehicle; all vehicles below)' if r.members else ''}</p>"
-              + yield_note(r.run_dir, r.top[0].params, result.passed)
+              + yield_note(r.run_dir, r.top[0].params, result.passed,
+                           robust=bool(r.robust_rows))
               + signoff_note(r.run_dir, report_dir) + provenance_line(provenance())
               + "<nav><p>" + " · ".join(
                   f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in sections)

@@ -36,19 +36,23 @@ def _pct(est: dict[str, Any]) -> str:
             f"{est.get('n_pass', '?')} of {est.get('n', '?')} samples)")
 
 
-def yield_note(run_dir: Path, params: IspParams, nominal_passed: bool) -> str:
+def yield_note(run_dir: Path, params: IspParams, nominal_passed: bool, *,
+               robust: bool = False) -> str:
     """The yield of ``params`` when a sign-off or robustness result beside the run judged
-    exactly them, else a neutral note that the verdict is the nominal one."""
+    exactly them, else a neutral note that the verdict is the nominal one (``robust``: the
+    run's own samples give a tuning yield, shown in its robust section)."""
     from ..isp import params_to_dict
 
     known = known_yield(run_dir, params_to_dict(params))
     verdict = "all ECs pass" if nominal_passed else "not all ECs pass"
     if known is None:
+        own = ("; the robust tuning's yield on its own samples is in the section below"
+               if robust else "")
         return (f'<p class="muted" id="yield-note">"{escape(verdict)}" is the verdict at the '
                 "nominal pose (the camera exactly as designed, unloaded); the production "
                 "yield over mount tolerances and load states is not measured for this "
-                "setting (<code>rvmsim robustness</code>, then <code>rvmsim signoff</code>)."
-                "</p>")
+                f"setting{own} (<code>rvmsim robustness</code>, then <code>rvmsim signoff"
+                "</code>).</p>")
     est = known.estimate
     cls = "warn" if float(est["yield"]) < 1.0 else ""
     before = ("" if known.before is None else
