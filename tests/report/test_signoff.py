@@ -281,3 +281,30 @@ def test_the_run_report_gains_margins_tool_display_picture_and_yield(made, tmp_p
     note = re.search(r'id="yield-note".*?</p>', bare, re.S).group(0)
     assert "nominal pose" in note and "not measured" in note
     assert "rvmsim signoff" in re.search(r'id="signoff-link".*?</p>', bare).group(0)
+
+
+def test_a_robustness_result_of_other_values_or_changed_files_is_flagged(made, tmp_path):
+    """A robustness.json whose setting is not the run's rank 1, or whose recorded scene hash
+    is not the scene's now: red boxes naming them, and the report ignores that yield."""
+    rob = tmp_path / "rob"
+    shutil.copytree(made["root"] / "rob", rob)
+    doc = json.loads((rob / "robustness.json").read_text())
+    doc["isp"]["zoom"] += 0.01
+    scene_rec = next(f for f in doc["inputs"]["files"] if f["role"] == "scene")
+    scene_rec["sha256"] = "0" * 64
+    (rob / "robustness.json").write_text(json.dumps(doc))
+    res = signoff(made["run"], tmp_path / "so", robustness=rob, pdf=False)
+    text = res.html.read_text()
+    assert "judged a different setting" in _section(text, "yield")
+    changed = re.search(r'<p class="redbox">Changed since.*?</p>', _section(text, "inputs"))
+    assert changed and html_escape(str(made["scene"].resolve())) in changed.group(0)
+    assert str(made["params"].resolve()) not in changed.group(0)
+    js = json.loads((tmp_path / "so" / "signoff.json").read_text())
+    assert js["robustness"]["same_setting"] is False
+    assert js["changed_files"] == [str(made["scene"].resolve())]
+
+
+def html_escape(s: str) -> str:
+    import html
+
+    return html.escape(s, quote=True)
