@@ -373,7 +373,7 @@ def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRe
     same = rob is None or same_setting(rob.doc["isp"], params_to_dict(best.params))
     bar.update()
     return SignoffContent(
-        title=r.scene.name, run_dir=str(r.run_dir), setting=setting, files=files,
+        title=r.scene.name, run_dir=str(r.run_dir.resolve()), setting=setting, files=files,
         provenance=provenance(), record_output=record, tuning_output=r.output, ec=ec,
         display=color, annotated=annotated, ec_pictures=each, robustness=rob,
         robustness_same_setting=same, changed_files=changed, validation=val, eol=eol,

@@ -188,7 +188,7 @@ def _yield(c: SignoffContent) -> str:
             + ("" if not before else f"; before end-of-line compensation "
                f"<b>{escape(_pct(before))}</b>")
             + f". Seed {escape(doc['seed'])}; criteria {escape(doc.get('criteria', ''))}; "
-            f"from <code>{escape(r.path)}</code>.</p>")
+            f"from <code>{escape(r.path.resolve())}</code>.</p>")
     by_load = by_load_html(doc["yield_by_load"], before.get("by_load") if before else None)
     return (f'<section id="yield"><h2>Production yield</h2>{warn}{line}'
             f"<h3>Per load state</h3>{by_load}<h3>Per EC</h3>{_yield_ec_rows(doc)}"
@@ -250,7 +250,7 @@ def _validation(c: SignoffContent) -> str:
                        "</tr>" for r in v.rows)
         body = f"<table><tr><th>capture</th><th>verdict</th><th>error</th></tr>{rows}</table>"
     return ('<section id="validation"><h2>Validation against a real capture</h2>'
-            f"<p>From <code>{escape(v.path)}</code>.</p>{body}</section>")
+            f"<p>From <code>{escape(v.path.resolve())}</code>.</p>{body}</section>")
 
 
 def _eol(c: SignoffContent) -> str:
@@ -267,7 +267,8 @@ def _eol(c: SignoffContent) -> str:
         for r in d["results"] if isinstance(r, dict))
     return ('<section id="eol"><h2>End-of-line station</h2>'
             f"<p>{escape(d['passed'])} of {escape(d['cars'])} cars pass; platform setting "
-            f"<code>{escape(d['params_file'])}</code>; from <code>{escape(e.path)}</code>.</p>"
+            f"<code>{escape(d['params_file'])}</code>; from "
+            f"<code>{escape(e.path.resolve())}</code>.</p>"
             f"<table><tr><th>car</th><th>verdict</th><th>reasons</th></tr>{rows}</table>"
             "</section>")
 
