@@ -8,7 +8,7 @@ unreadable images, …) are one line on stderr and exit status 2, never a traceb
 Modules: :mod:`.group` (the ``rvmsim`` group and :func:`main`), :mod:`.render` (render,
 process, evaluate), :mod:`.tune` (tune, status, select, batch), :mod:`.report`,
 :mod:`.validate`, :mod:`.sweep`, :mod:`.robust` (robustness), :mod:`.calibrate`,
-:mod:`.console`, :mod:`.eol`.
+:mod:`.console`, :mod:`.eol`, :mod:`.signoff`.
 """
 
 from __future__ import annotations

@@ -16,6 +16,7 @@ from .errors import Group, fail, fail_os, usage_error_line
 from .render import evaluate, process, render
 from .report import report
 from .robust import robustness
+from .signoff import signoff
 from .sweep import sweep
 from .tune import batch, select, status, tune
 from .validate import validate
@@ -24,7 +25,8 @@ __all__ = ["cli", "main", "COMMANDS"]
 
 #: Every command of ``rvmsim``, in the order the modules list them.
 COMMANDS: tuple[click.Command, ...] = (render, process, evaluate, tune, batch, status, select,
-                                       report, validate, sweep, robustness, calibrate, console, eol)
+                                       report, validate, sweep, robustness, calibrate, console, eol,
+                                       signoff)
 
 
 @click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},

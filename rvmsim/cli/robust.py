@@ -72,7 +72,7 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     from ..batch import make_executor
     from ..compensation import compensation_for
     from ..criteria import load_criteria
-    from ..report import write_robustness_outputs
+    from ..report import RobustnessInputs, write_robustness_outputs
     from ..robust import RobustnessSettings, variation_for
     from ..robust import SampleExport, write_sample_scenes
     from ..robust import robustness as run_robustness
@@ -92,7 +92,8 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
                                   compensation_for(compensation))
     with make_executor(scheduler, workers) as runner:
         result = run_robustness(sc, params, settings, runner=runner, progress=progress)
-    written = write_robustness_outputs(result, out)
+    written = write_robustness_outputs(result, out, RobustnessInputs(
+        params_file, criteria_file, variation_file, compensation, scale))
     written += write_sample_scenes(result, document, sc, export_samples, out,
                                    SampleExport(params_file, criteria_file, scale))
     click.echo(result.summary())

@@ -1,5 +1,5 @@
 """HTML review pages: the page kit, the run report, the sweep page, the validation page, the
-robustness page and the EOL station's page."""
+robustness page, the EOL station's page and the sign-off sheet."""
 
 from __future__ import annotations
 
@@ -21,8 +21,9 @@ from .sweep import (
     write_sweep_outputs,
 )
 from .validation import validation_page, write_validation_outputs, PICTURE_CAPTIONS
-from .robustness import robustness_page, write_robustness_outputs
+from .robustness import RobustnessInputs, robustness_page, write_robustness_outputs
 from .eol import eol_page, write_eol_page
+from .signoff import SignoffResult, signoff
 from .plots import (
     convergence_png,
     histogram_png,
@@ -47,8 +48,11 @@ __all__ = [
     "PICTURE_CAPTIONS",
     "robustness_page",
     "write_robustness_outputs",
+    "RobustnessInputs",
     "eol_page",
     "write_eol_page",
+    "signoff",
+    "SignoffResult",
     "convergence_png",
     "histogram_png",
 ]

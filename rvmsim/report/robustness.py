@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,12 +22,32 @@ from ..errors import RvmsimError
 from ..robust import EcStats, RobustnessResult
 from ..storage import json_default
 from .page import escape, figure_png, img_tag, page, data_uri
+from .provenance import FileRecord, file_record, files_table, scene_records
+from .setting import SettingRecord, by_load_html, setting_html, variation_html
 
 if TYPE_CHECKING:
     from ..pipeline import RvmFrame
 
 __all__ = ["robustness_page", "write_robustness_outputs", "margin_histograms_png",
-           "yield_curve_png"]
+           "yield_curve_png", "RobustnessInputs", "SETTING_FILE"]
+
+#: The params file written beside robustness.json when the setting came from no file.
+SETTING_FILE = "setting.yaml"
+
+
+@dataclass(frozen=True)
+class RobustnessInputs:
+    """The files a robustness run read, as the command line gave them (None: the scene's
+    own section or the built-in default); recorded in robustness.json (``inputs``), shown
+    on the page and used to write the commands that reproduce a sample.
+
+    ``compensation`` is a file or ``"default"``; ``render_scale`` is ``--scale``."""
+
+    params_file: Path | None = None
+    criteria_file: Path | None = None
+    variation_file: Path | None = None
+    compensation: str | None = None
+    render_scale: float = 1.0
 
 #: Longest side of an embedded RVM image without its ECs drawn, px.  The annotated image is
 #: embedded at its own size: :func:`rvmsim.criteria.annotate` makes it as wide as the page
@@ -190,8 +211,43 @@ def _sample_text(result: RobustnessResult) -> str:
     return text
 
 
-def robustness_page(result: RobustnessResult) -> str:
-    """The whole HTML document for ``result``."""
+def _input_records(result: RobustnessResult, inputs: RobustnessInputs,
+                   setting: SettingRecord) -> list[FileRecord]:
+    """Every file the run read: params, scene and meshes, criteria, variation, compensation."""
+    from ..criteria import bundled_criteria_text
+
+    records = [setting.file, *scene_records(result.scene_file)]
+    crit = inputs.criteria_file
+    if crit is not None:
+        records.append(FileRecord("criteria", str(crit), None, "bundled criteria set")
+                       if bundled_criteria_text(str(crit)) is not None
+                       else file_record("criteria", crit))
+    if inputs.variation_file is not None:
+        records.append(file_record("variation", inputs.variation_file))
+    if inputs.compensation is not None:
+        records.append(FileRecord("compensation", "default", None, "built-in default model")
+                       if inputs.compensation == "default"
+                       else file_record("compensation", inputs.compensation))
+    return records
+
+
+def _setting_section(setting: SettingRecord | None, records: list[FileRecord],
+                     result: RobustnessResult) -> str:
+    """The setting judged, the files read, the tolerances and load states, the yield per
+    load state."""
+    by_load = "" if result.compensated is not None else (
+        "<h3>Yield per load state</h3>" + by_load_html(result.yield_by_load()))
+    judged = "" if setting is None else (
+        f'<h2 id="setting">The setting judged</h2>{setting_html(setting)}'
+        f'<h2 id="inputs">Input files</h2>{files_table(records)}')
+    return (f'{judged}<h2 id="tolerances">Tolerances and load states</h2>'
+            f"{variation_html(result.variation.as_dict())}{by_load}")
+
+
+def robustness_page(result: RobustnessResult, setting: SettingRecord | None = None,
+                    records: list[FileRecord] | None = None) -> str:
+    """The whole HTML document for ``result``; given the ``setting`` (its file and hash)
+    and the input ``records``, also those, the tolerance figures and the load states."""
     lo, hi = result.ci
     ok = result.meets_min_yield
     badge = "" if result.min_yield is None else (
@@ -209,6 +265,7 @@ def robustness_page(result: RobustnessResult) -> str:
 {result.estimate.n_pass} of {result.estimate.n} samples pass every enabled EC{badge}.
 Criteria: {escape(result.criteria_name)}. Variation: {escape(result.variation.source)};
 seed {result.seed}. The nominal car: {nominal} (EC score {result.nominal.ec.score:.3g}).</p>
+{_setting_section(setting, records or [], result)}
 {_compensation_section(result)}
 <h2>Evaluation criteria over the samples{"" if result.compensated is None else " (after compensation)"}</h2>
 <table><tr><th>EC</th><th>measurement</th><th>range</th><th>fails</th><th>worst value</th>
@@ -228,8 +285,29 @@ each sample per EC (distance to the nearer end of its range; below 0 fails).</fi
 """)
 
 
-def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path) -> list[Path]:
+def _setting_file(result: RobustnessResult, inputs: RobustnessInputs, out: Path) -> Path:
+    """The params file of the setting: the one given, else :data:`SETTING_FILE` written
+    into ``out`` (the setting's values and output size)."""
+    import yaml
+
+    from ..isp import params_to_dict
+
+    if inputs.params_file is not None:
+        return inputs.params_file
+    path = out / SETTING_FILE
+    path.write_text(f"# the setting rvmsim robustness judged ({result.scene_name})\n"
+                    + yaml.safe_dump(params_to_dict(result.params, result.output),
+                                     sort_keys=False))
+    return path
+
+
+def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path,
+                             inputs: RobustnessInputs | None = None) -> list[Path]:
     """Write ``robustness.json`` and ``robustness.html`` into ``out_dir``.
+
+    ``inputs``: the files the run read (default: none given, so the setting is written as
+    :data:`SETTING_FILE` beside them).  robustness.json records them under ``inputs``
+    (each file's path and SHA-256) with the ``render_scale``.
 
     Raises
     ------
@@ -237,12 +315,22 @@ def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path) -> l
         One line naming the folder or file that cannot be created or written.
     """
     out = Path(out_dir)
+    how = inputs or RobustnessInputs()
     try:
         out.mkdir(parents=True, exist_ok=True)
+        setting = SettingRecord(result.params, result.output,
+                                file_record("params", _setting_file(result, how, out)))
+        records = _input_records(result, how, setting)
+        doc = {**result.as_dict(), "inputs": {
+            "files": [r.as_dict() for r in records], "render_scale": how.render_scale,
+            "params_file": setting.file.path,
+            "criteria_file": None if how.criteria_file is None else str(how.criteria_file),
+            "variation_file": None if how.variation_file is None else str(how.variation_file),
+            "compensation": how.compensation}}
         js = out / "robustness.json"
-        js.write_text(json.dumps(result.as_dict(), indent=2, default=json_default) + "\n")
+        js.write_text(json.dumps(doc, indent=2, default=json_default) + "\n")
         html_path = out / "robustness.html"
-        html_path.write_text(robustness_page(result))
+        html_path.write_text(robustness_page(result, setting, records))
     except OSError as err:
         raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
     return [js, html_path]

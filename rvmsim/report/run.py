@@ -33,6 +33,9 @@ from .members import (MemberScene, load_member_scenes, member_scores, member_sco
                       members_section, robust_section, robust_top)
 from .page import data_uri, escape, img_tag, page, shrink
 from .plots import convergence_png, histogram_png
+from .provenance import provenance
+from .run_notes import display_figure, provenance_line, signoff_note, yield_note
+from .setting import ec_margin, fmt_margin
 
 if TYPE_CHECKING:
     from ..tune.robust import RobustSummary
@@ -163,6 +166,8 @@ def _scene_section(r: _Run) -> str:
 
 
 def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
+    """The fisheye with the ROI, the RVM picture at the tuning size and at the display's,
+    and the annotated EC image."""
     from ..isp import draw_roi
 
     roi = draw_roi(r.images.color, r.top[0].params, r.output, thickness=3)
@@ -178,12 +183,13 @@ def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
     ]
     body = "".join(f"<figure>{img}<figcaption>{escape(cap)}</figcaption></figure>"
                    for img, cap in figs)
-    return f'<section id="images"><h2>Images</h2>{body}</section>'
+    display = display_figure(r.images, r.top[0].params, r.output)
+    return f'<section id="images"><h2>Images</h2>{body}{display}</section>'
 
 
 def _ec_section(result: EcResult) -> str:
     head = ("<tr><th>EC</th><th>measurement</th><th>value</th><th>unit</th>"
-            "<th>acceptable range</th><th>score</th><th>result</th></tr>")
+            "<th>acceptable range</th><th>margin</th><th>score</th><th>result</th></tr>")
     rows = []
     for i in result.items:
         st = _status(i)
@@ -192,14 +198,18 @@ def _ec_section(result: EcResult) -> str:
         rows.append(
             f'<tr class="{st}"><td>{escape(i.id)}</td><td>{escape(i.name)}</td>'
             f'<td class="num">{escape(_fmt(i.value))}</td><td>{escape(i.unit)}</td>'
-            f'<td class="num">{escape(rng)}</td><td class="num">{i.score:.4f}</td>'
+            f'<td class="num">{escape(rng)}</td>'
+            f'<td class="num">{escape(fmt_margin(ec_margin(i), i.unit))}</td>'
+            f'<td class="num">{i.score:.4f}</td>'
             f'<td>{escape(st)}</td></tr>')
     badge = "pass" if result.passed else "fail"
     summary = (f'<p>EC score <b>{result.score:.4g}</b> '
                f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
                f'</span> <span class="muted">criteria: {escape(result.criteria_name)}</span></p>')
     return (f'<section id="ec-table"><h2>Evaluation criteria</h2>{summary}'
-            f'<table>{head}{"".join(rows)}</table></section>')
+            f'<table>{head}{"".join(rows)}</table><p class="muted">Margin: the signed '
+            "distance of the value inside its range, in the EC's unit (below 0 fails).</p>"
+            "</section>")
 
 
 #: The EC table section, public for the console's setting report.
@@ -356,11 +366,13 @@ class _Summary:
     thumb: np.ndarray
 
 
-def _build(run_dir: Path) -> tuple[str, _Summary]:
-    """The report page of one run, and the summary the batch index shows."""
+def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary]:
+    """The report page of one run (to be written into ``report_dir``, default the run
+    folder: links are relative to it), and the summary the batch index shows."""
     from ..pipeline import evaluate_params
 
     r = _load_run(run_dir)
+    report_dir = report_dir if report_dir is not None else run_dir
     frame = evaluate_params(r.images, r.top[0].params, r.output, r.criteria)
     result, color, annotated = frame.ec, frame.color, frame.annotated
     assert annotated is not None
@@ -372,8 +384,12 @@ def _build(run_dir: Path) -> tuple[str, _Summary]:
     header = (f"<h1>{escape(title)}</h1>"
               f'<p>RVM tuning review — EC score <b>{result.score:.4g}</b> '
               f'<span class="badge {badge}">{"all ECs pass" if result.passed else "not all pass"}'
-              f"</span>{' (first vehicle; all vehicles below)' if r.members else ''}</p>"
-              "<nav><p>" + " · ".join(
+              f"</span> at the nominal pose, {r.output.width} × {r.output.height} px"
+              f"{' (first vehicle; all vehicles below)' if r.members else ''}</p>"
+              + yield_note(r.run_dir, r.top[0].params, result.passed,
+                           robust=bool(r.robust_rows))
+              + signoff_note(r.run_dir, report_dir) + provenance_line(provenance())
+              + "<nav><p>" + " · ".join(
                   f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in sections)
               + "</p></nav>")
     if r.scene_changed:
@@ -424,8 +440,8 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
         unwritable output.
     """
     run_dir = Path(run_dir)
-    text, _ = _build(run_dir)
     path = Path(out) if out is not None else run_dir / "report.html"
+    text, _ = _build(run_dir, path.parent)
     _write(path, text)
     return path
 

@@ -143,9 +143,11 @@ def test_report_has_every_section_and_decodable_images(runs):
                  str(runs["crit"]), str(runs["scene"])):
         assert fact in words, fact
     _assert_self_contained(text, doc)
-    # fisheye+ROI, RVM, annotated, convergence, histogram, and one per top-M candidate
+    # fisheye+ROI, RVM, annotated, RVM at the display size, convergence, histogram, and one
+    # per top-M candidate
     imgs = doc.find("img")
-    assert len(imgs) == 5 + TOP_M
+    assert len(imgs) == 6 + TOP_M
+    assert _decode_data_png(imgs[3]["src"]).shape[:2] == (720, 1280)
     fisheye = _decode_data_png(imgs[0]["src"])
     assert fisheye.shape[1] <= 640 and fisheye.shape[0] > 100
     assert _decode_data_png(imgs[1]["src"]).shape[:2] == (180, 320)

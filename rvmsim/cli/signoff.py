@@ -1,0 +1,44 @@
+"""``rvmsim signoff``: the sign-off sheet (HTML and PDF) of a run's best ISP setting."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from .errors import Command
+
+__all__ = ["signoff"]
+
+
+@click.command(cls=Command, error_path=("out",))
+@click.argument("run", type=click.Path(path_type=Path))
+@click.option("--out", "-o", type=click.Path(path_type=Path), required=True,
+              help="Folder to write signoff.html, signoff.pdf and signoff.json into (its "
+                   "parent must exist).")
+@click.option("--robustness", "robustness_dir", type=click.Path(path_type=Path), default=None,
+              help="Folder written by rvmsim robustness for this setting (the yield).")
+@click.option("--validation", "validation_dir", type=click.Path(path_type=Path), default=None,
+              help="Folder written by rvmsim validate (the real capture's validation).")
+@click.option("--eol", "eol_dir", type=click.Path(path_type=Path), default=None,
+              help="Folder written by rvmsim eol (the end-of-line record).")
+@click.option("--reviewer", default="", help="The reviewer's name, for the signature block.")
+@click.option("--pdf/--no-pdf", default=True, show_default=True,
+              help="Also print the page to signoff.pdf with headless Chromium.")
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: Path | None,
+            eol_dir: Path | None, reviewer: str, pdf: bool, progress: bool) -> None:
+    """Write the sign-off sheet of RUN's best setting: its 14 values, params file and
+    SHA-256, the input files with theirs, the tool's version and commit, every EC at the
+    display output of record with its margin, the yield (--robustness), validation and EOL
+    records, the failing samples with the commands that reproduce them, and a signature
+    block.  One self-contained HTML page and its PDF."""
+    from ..report import signoff as write_signoff
+
+    result = write_signoff(run, out, robustness=robustness_dir, validation=validation_dir,
+                           eol=eol_dir, reviewer=reviewer, pdf=pdf, progress=progress)
+    yield_text = ("robustness not run" if result.yield_ is None
+                  else f"yield {100 * result.yield_:.1f} %")
+    click.echo(f"ECs at the display: {'all pass' if result.nominal_passed else 'not all pass'}"
+               f"; {yield_text}; params {result.params_file} sha256 {result.params_sha256}")
+    click.echo(f"wrote {result.html}" + ("" if result.pdf is None else f", {result.pdf}"))

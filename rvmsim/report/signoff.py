@@ -1,0 +1,380 @@
+"""The sign-off sheet of an ISP setting: one self-contained HTML page and its PDF, for a
+reviewer to sign (``rvmsim signoff RUN --out DIR``).
+
+It gathers, for the best candidate (rank 1) of a tuning run:
+
+- the setting: its 14 values, its params file and that file's SHA-256 (the run's
+  ``top/rank_1.yaml`` when it holds exactly these values, else ``params.yaml`` written into
+  the output folder; the hash is of exactly the file named);
+- the input files (scene, meshes, criteria, variation, compensation, and the result files
+  read) with their SHA-256, flagging any whose hash differs from the robustness run's record;
+- the tool: version, commit of its source checkout, date (UTC), machine;
+- every EC at the display output of record (:func:`_record_output`) on the full evaluation
+  path, with value, limit, margin and its annotated picture;
+- the yield before and after compensation, per EC and per load state
+  (``--robustness DIR``), or a red "robustness not run" line;
+- the validation against a real capture (``--validation DIR``) and the end-of-line
+  record (``--eol DIR``), or that they were not given;
+- each failing sample with the command that reproduces it;
+- a signature block.
+
+``signoff.json`` beside the page records the figures (the run report reads the yield from
+it).  The PDF is printed from the page by headless Chromium (Playwright driving Debian's
+``chromium``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import shlex
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import RvmsimError
+from ..storage import json_default
+from .page import shrink
+from .provenance import FileRecord, file_record, provenance, scene_records
+from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,
+                      load_robustness, load_validation, same_setting)
+from .run import _load_run, _Run
+from .setting import SettingRecord
+from .signoff_page import SignoffContent, signoff_html
+
+if TYPE_CHECKING:
+    from ..criteria import Criteria, EcResult
+    from ..isp import IspParams, OutputSpec
+    from ..render import FisheyeImages
+
+__all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FILE"]
+
+#: The params file written into the output folder when the run has none for its best.
+PARAMS_FILE = "params.yaml"
+
+#: Longest side of each EC's own annotated picture on the page, px.
+EC_PICTURE_PX = 480
+
+
+@dataclass(frozen=True)
+class SignoffResult:
+    """What :func:`signoff` wrote: the page, its PDF (None: not asked for), signoff.json,
+    the params file named on the page with its SHA-256, and the headline figures."""
+
+    html: Path
+    pdf: Path | None
+    json: Path
+    params_file: Path
+    params_sha256: str
+    nominal_passed: bool
+    yield_: float | None
+
+
+def _record_output(output: OutputSpec) -> OutputSpec:
+    """The RVM output the ECs of record are judged at: the display, 1280 × 720
+    (:data:`rvmsim.tune.DISPLAY_SIZE`), mirrored as the tuning output is."""
+    from ..isp import OutputSpec
+    from ..tune import DISPLAY_SIZE
+
+    return OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], output.mirror)
+
+
+def _record_ecs(images: FisheyeImages, params: IspParams, output: OutputSpec,
+                criteria: Criteria) -> tuple[EcResult, np.ndarray, np.ndarray,
+                                             dict[str, np.ndarray]]:
+    """The ECs at ``output`` on the full path, the RVM picture, every EC drawn on it, and
+    each EC drawn alone (cropped to the picture, shrunk to :data:`EC_PICTURE_PX`)."""
+    from ..criteria import annotate
+    from ..isp import process
+    from ..pipeline import make_evaluator
+
+    ec = make_evaluator(images, output, criteria, path="full")(params)
+    color, labels = process(images.color, images.labels, params, output)
+    assert color is not None and labels is not None
+    h, w = labels.shape
+    each = {}
+    for k, item in enumerate(ec.items):
+        if not item.enabled:
+            continue
+        one = dataclasses.replace(ec, items=(item,), definitions=(
+            (ec.definitions[k],) if ec.definitions else ()))
+        each[item.id] = shrink(annotate(color, labels, one)[:h, :w], EC_PICTURE_PX)
+    return ec, color, annotate(color, labels, ec), each
+
+
+def _params_file(r: _Run, out: Path) -> Path:
+    """The run's ``top/rank_1.yaml`` when it holds rank 1's values and output, else
+    :data:`PARAMS_FILE` written into ``out``."""
+    from ..errors import ParamsFileError
+    from ..isp import load_params
+    from ..runs import rank_text
+
+    best = r.top[0]
+    ranked = r.run_dir / "top" / "rank_1.yaml"
+    try:
+        params, output = load_params(ranked)
+        if params == best.params and output == r.output:
+            return ranked
+    except (ParamsFileError, OSError):  # absent or stale: the sign-off writes its own
+        pass
+    path = out / PARAMS_FILE
+    path.write_text(rank_text(best, 1, r.output, r.scene.name), encoding="utf-8")
+    return path
+
+
+def _dedupe(records: list[FileRecord]) -> list[FileRecord]:
+    seen: set[str] = set()
+    out = []
+    for rec in records:
+        if rec.path not in seen:
+            seen.add(rec.path)
+            out.append(rec)
+    return out
+
+
+def _criteria_record(path: Path | str | None, role: str = "criteria") -> list[FileRecord]:
+    from ..criteria import bundled_criteria_text
+
+    if path is None:
+        return [FileRecord(role, "built-in (the paper's thresholds)", None, "no file")]
+    if bundled_criteria_text(str(path)) is not None:
+        return [FileRecord(role, str(path), None, "bundled criteria set")]
+    return [file_record(role, path)]
+
+
+def _robustness_files(rob: RobustnessRecord) -> tuple[list[FileRecord], list[str]]:
+    """The robustness run's input files hashed now, and those whose hash differs from the
+    one it recorded."""
+    recorded = rob.inputs.get("files")
+    if not isinstance(recorded, list):  # a robustness.json of an earlier rvmsim
+        return scene_records(str(rob.doc["scene"]), "scene (robustness)"), []
+    now, changed = [], []
+    for rec in recorded:
+        if not isinstance(rec, dict) or not rec.get("sha256"):
+            continue
+        cur = file_record(f"{rec.get('role', 'file')} (robustness)", str(rec.get("path")))
+        now.append(cur)
+        if cur.sha256 != rec.get("sha256"):
+            changed.append(cur.path)
+    return now, changed
+
+
+def _files(r: _Run, setting: SettingRecord, rob: RobustnessRecord | None,
+           val: ValidationRecord | None, eol: EolRecord | None) -> tuple[list[FileRecord],
+                                                                       list[str]]:
+    """Every input file with its SHA-256 (see the module docstring), and the changed ones."""
+    files = [setting.file, *scene_records(r.scene_file), *_criteria_record(r.criteria_file)]
+    if r.settings.variation_file:
+        files.append(file_record("variation (robust tuning)", r.settings.variation_file))
+    comp = r.settings.compensation
+    if comp and Path(str(comp.get("source", ""))).is_file():
+        files.append(file_record("compensation (robust tuning)", str(comp["source"])))
+    changed: list[str] = []
+    if rob is not None:
+        more, changed = _robustness_files(rob)
+        files += [*more, file_record("robustness result", rob.path)]
+    if val is not None:
+        files.append(file_record("validation result", val.path))
+        capture = (val.single or {}).get("capture")
+        if capture and Path(capture).is_file():
+            files.append(file_record("capture (validation)", capture))
+    if eol is not None:
+        files += [file_record("EOL result", eol.path),
+                  file_record("params (EOL platform setting)", eol.doc["params_file"])]
+    return _dedupe(files), changed
+
+
+def _repro_commands(rob: RobustnessRecord | None, r: _Run, setting: SettingRecord,
+                    out: Path) -> dict[str, str]:
+    """Per failing sample (its index as text): the commands that write its car as a scene
+    (``rvmsim robustness … --export-sample N``) and render it in full (``rvmsim
+    evaluate``)."""
+    if rob is None:
+        return {}
+    inputs, doc = rob.inputs, rob.doc
+    params = str(inputs.get("params_file") or setting.file.path)
+    crit = inputs.get("criteria_file") if inputs else (
+        None if r.criteria_file is None else str(r.criteria_file))
+    scale = float(inputs.get("render_scale") or 1.0)
+    common = [("--criteria", crit), ("--variation", inputs.get("variation_file")),
+              ("--compensation", inputs.get("compensation")),
+              ("--scale", None if scale == 1.0 else f"{scale:g}")]
+    opts = "".join(f" {k} {shlex.quote(str(v))}" for k, v in common if v)
+    scene = next((str(f.get("path")) for f in inputs.get("files") or []
+                  if isinstance(f, dict) and f.get("role") == "scene"), str(doc["scene"]))
+    q = shlex.quote
+    cmds = {}
+    for s in rob.failing:
+        n = int(s["index"])
+        folder = out.resolve() / f"sample_{n}"
+        cmds[str(n)] = (
+            f"rvmsim robustness {q(scene)} --params {q(params)} --samples "
+            f"{int(doc['n'])} --seed {int(doc['seed'])}{opts} --scales 1 --out {q(str(folder))}"
+            f" --export-sample {n} && rvmsim evaluate {q(str(folder / f'sample_{n}.yaml'))} "
+            f"--params {q(params)}" + (f" --criteria {q(str(crit))}" if crit else "")
+            + ("" if scale == 1.0 else f" --scale {scale:g}"))
+    return cmds
+
+
+def find_chromium() -> str | None:
+    """The Chromium binary (Debian's ``chromium`` first), None when there is none."""
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        if path := shutil.which(name):
+            return path
+    return None
+
+
+def print_pdf(html: Path, pdf: Path, browser: str) -> Path:
+    """Print ``html`` to ``pdf`` (A4, backgrounds) with headless Chromium at ``browser``,
+    driven by Playwright; the browser is closed before this returns.
+
+    Raises
+    ------
+    RvmsimError
+        Chromium did not start or print (one line).
+    """
+    from playwright.sync_api import Error as PlaywrightError
+    from playwright.sync_api import sync_playwright
+
+    try:
+        with sync_playwright() as p:
+            b = p.chromium.launch(executable_path=browser, args=["--no-sandbox"])
+            try:
+                page = b.new_page()
+                page.goto(html.resolve().as_uri(), wait_until="load")
+                page.pdf(path=str(pdf), format="A4", print_background=True,
+                         margin={"top": "14mm", "bottom": "14mm", "left": "12mm",
+                                 "right": "12mm"})
+            finally:
+                b.close()
+    except PlaywrightError as err:
+        first = (str(err).strip().splitlines() or ["failed"])[0]
+        raise RvmsimError(f"{pdf}: Chromium ({browser}) could not print the PDF: "
+                          f"{first}") from None
+    return pdf
+
+
+def _check_out(out: Path) -> None:
+    """``out`` must be a folder or a new one in an existing folder."""
+    if out.exists() and not out.is_dir():
+        raise RvmsimError(f"{out}: is a file, not a folder")
+    if not out.exists() and not out.parent.is_dir():
+        raise RvmsimError(f"{out.parent}: no such folder (the parent of --out)")
+
+
+def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any]:
+    """signoff.json's document."""
+    from ..isp import params_to_dict
+
+    rob: dict[str, Any] | None = None
+    if res.robustness is not None:
+        d = res.robustness.doc
+        rob = {k: d.get(k) for k in ("yield", "ci95", "n_pass", "n", "isp", "seed",
+                                     "yield_by_load", "yield_before_compensation")}
+        rob["path"] = str(res.robustness.path.resolve())
+        rob["same_setting"] = res.robustness_same_setting
+    return {"run": res.run_dir, "html": str(html), "pdf": None if pdf is None else str(pdf),
+            "params_file": res.setting.file.path, "params_sha256": res.setting.file.sha256,
+            "isp": params_to_dict(res.setting.params, res.setting.output),
+            "record_output": [res.record_output.width, res.record_output.height],
+            "ecs": res.ec.as_dict(), "files": [f.as_dict() for f in res.files],
+            "changed_files": res.changed_files, "tool": res.provenance.as_dict(),
+            "robustness": rob,
+            "validation": None if res.validation is None else str(res.validation.path.resolve()),
+            "eol": None if res.eol is None else str(res.eol.path.resolve()),
+            "reviewer": res.reviewer}
+
+
+def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | None = None,
+            validation: str | Path | None = None, eol: str | Path | None = None,
+            reviewer: str = "", pdf: bool = True, progress: bool = False) -> SignoffResult:
+    """Write the sign-off sheet of a run's best setting (see the module docstring).
+
+    Parameters
+    ----------
+    run_dir : path
+        A tuning run folder (``rvmsim tune``).
+    out : path
+        The folder to write ``signoff.html``, ``signoff.json``, ``signoff.pdf`` (and
+        ``params.yaml`` when the run has no params file of its best) into; created if its
+        parent exists.
+    robustness, validation, eol : path, optional
+        Folders written by ``rvmsim robustness``, ``rvmsim validate`` and ``rvmsim eol``.
+    reviewer : str
+        The reviewer's name, printed in the signature block.
+    pdf : bool
+        Also print the page to PDF with headless Chromium.
+    progress : bool
+        Show a progress bar on stderr.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the file: a missing or unreadable run folder, a folder without
+        its result file, a corrupt result file, an output folder whose parent is missing,
+        no Chromium for the PDF.
+    """
+    from tqdm import tqdm
+
+    run_dir, out = Path(run_dir), Path(out)
+    _check_out(out)
+    browser = find_chromium() if pdf else None
+    if pdf and browser is None:
+        raise RvmsimError("chromium: not found on PATH, so no PDF can be printed (install "
+                          "Debian's chromium, or give --no-pdf)")
+    rob = None if robustness is None else load_robustness(robustness)
+    val = None if validation is None else load_validation(validation)
+    eol_rec = None if eol is None else load_eol(eol)
+    if not run_dir.is_dir():
+        raise RvmsimError(f"{run_dir}: no such run folder")
+    run = _load_run(run_dir)  # every input checked before the bar starts
+    bar = tqdm(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
+               disable=not progress)
+    try:
+        content = _content(run, out, rob, val, eol_rec, reviewer, bar)
+        html, js = out / "signoff.html", out / SIGNOFF_JSON
+        bar.set_postfix_str("writing the page")
+        html.write_text(signoff_html(content), encoding="utf-8")
+        bar.update()
+        pdf_path = None
+        if browser is not None:
+            bar.set_postfix_str("printing the PDF")
+            pdf_path = print_pdf(html, out / "signoff.pdf", browser)
+            bar.update()
+        js.write_text(json.dumps(_summary(content, html, pdf_path), indent=2,
+                                 default=json_default) + "\n", encoding="utf-8")
+    except OSError as err:
+        raise RvmsimError(f"{getattr(err, 'filename', None) or out}: cannot write "
+                          f"({err.strerror or err})") from None
+    finally:
+        bar.close()
+    f = content.setting.file
+    return SignoffResult(html, pdf_path, js, Path(f.path), f.sha256 or "", content.ec.passed,
+                         None if rob is None else rob.yield_)
+
+
+def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRecord | None,
+             eol: EolRecord | None, reviewer: str, bar: Any) -> SignoffContent:
+    """Everything the page shows: the setting, its ECs of record, the files, the commands."""
+    from ..isp import params_to_dict
+
+    out.mkdir(exist_ok=True)
+    best = r.top[0]
+    setting = SettingRecord(best.params, r.output, file_record("params", _params_file(r, out)))
+    record = _record_output(r.output)
+    bar.set_postfix_str(f"ECs at {record.width}x{record.height}")
+    ec, color, annotated, each = _record_ecs(r.images, best.params, record, r.criteria)
+    bar.update()
+    bar.set_postfix_str("hashing the inputs")
+    files, changed = _files(r, setting, rob, val, eol)
+    same = rob is None or same_setting(rob.doc["isp"], params_to_dict(best.params))
+    bar.update()
+    return SignoffContent(
+        title=r.scene.name, run_dir=str(r.run_dir.resolve()), setting=setting, files=files,
+        provenance=provenance(), record_output=record, tuning_output=r.output, ec=ec,
+        display=color, annotated=annotated, ec_pictures=each, robustness=rob,
+        robustness_same_setting=same, changed_files=changed, validation=val, eol=eol,
+        reviewer=reviewer, repro=_repro_commands(rob, r, setting, out))

@@ -1,0 +1,293 @@
+"""The sections of the sign-off page (:mod:`rvmsim.report.signoff` gathers what they show).
+
+Every string from a user's files (scene, file and capture names, the reviewer) is
+HTML-escaped; pictures are PNG ``data:`` URIs; the page has no scripts and no external
+assets, and prints on A4 (``@media print`` rules keep rows and figures whole).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .page import escape, img_tag, page
+from .provenance import FileRecord, Provenance, files_table, provenance_html
+from .records import EolRecord, RobustnessRecord, ValidationRecord
+from .setting import (SettingRecord, by_load_html, ec_margin, fmt_margin, setting_html,
+                      variation_html)
+
+if TYPE_CHECKING:
+    from ..criteria import EcResult
+    from ..isp import OutputSpec
+
+__all__ = ["SignoffContent", "signoff_html", "SECTION_IDS", "NO_ROBUSTNESS"]
+
+#: The page's sections, in order (each an element id).
+SECTION_IDS: tuple[str, ...] = ("verdict", "setting", "inputs", "tool", "ecs", "yield",
+                                "failing-samples", "validation", "eol", "signature")
+
+#: The red line of a sign-off without a robustness result.
+NO_ROBUSTNESS = ("Robustness not run: the yield over mount tolerances and load states is not "
+                 "known, so this setting is judged at the nominal pose only.")
+
+_CSS = """<style>
+.red{color:#c02828;font-weight:bold}.redbox{border:2px solid #c02828;padding:.5em .8em}
+code.sha{font-size:.85em}table.sign td{height:2.6em;min-width:16em}
+@media print{body{max-width:none;margin:0;font-size:10pt}h2{page-break-after:avoid}
+tr,figure,img,table.sign{page-break-inside:avoid}nav{display:none}}
+@page{size:A4;margin:14mm}
+</style>"""
+
+
+@dataclass(frozen=True)
+class SignoffContent:
+    """Everything the page shows."""
+
+    title: str
+    run_dir: str
+    setting: SettingRecord
+    files: list[FileRecord]
+    provenance: Provenance
+    record_output: OutputSpec
+    tuning_output: OutputSpec
+    ec: EcResult
+    display: np.ndarray
+    annotated: np.ndarray
+    ec_pictures: dict[str, np.ndarray]
+    robustness: RobustnessRecord | None = None
+    robustness_same_setting: bool = True
+    changed_files: list[str] = field(default_factory=list)
+    validation: ValidationRecord | None = None
+    eol: EolRecord | None = None
+    reviewer: str = ""
+    repro: dict[str, str] = field(default_factory=dict)
+
+
+def _pct(est: dict[str, Any]) -> str:
+    lo, hi = (float(v) for v in est["ci95"])
+    return (f'{100 * float(est["yield"]):.1f} % (95 % CI {100 * lo:.1f}–{100 * hi:.1f} %, '
+            f'{est.get("n_pass", "?")} of {est.get("n", "?")} samples)')
+
+
+def _verdict(c: SignoffContent) -> str:
+    nominal = "pass" if c.ec.passed else "fail"
+    rows = [("ECs at the display output of record (nominal pose)",
+             f'<span class="badge {nominal}">{"every EC passes" if c.ec.passed else "not all pass"}'
+             f"</span> {c.record_output.width} × {c.record_output.height} px")]
+    r = c.robustness
+    if r is None:
+        rows.append(("Production yield", f'<span class="red">{escape(NO_ROBUSTNESS)}</span>'))
+    else:
+        cls = "red" if not c.robustness_same_setting else ""
+        rows.append(("Production yield" + (" after EOL compensation"
+                                           if r.doc.get("compensation") else ""),
+                     f'<span class="{cls}">{escape(_pct(r.doc))}</span>'))
+    v = c.validation
+    rows.append(("Validation against a real capture", "not given" if v is None else escape(
+        ("PASS" if v.single["passed"] else "FAIL") if v.single is not None else
+        f"{sum(r['verdict'] == 'PASS' for r in v.rows)} of {len(v.rows)} captures pass")))
+    e = c.eol
+    rows.append(("End-of-line station", "not given" if e is None else escape(
+        f"{e.doc['passed']} of {e.doc['cars']} cars pass")))
+    body = "".join(f"<tr><th>{escape(a)}</th><td>{b}</td></tr>" for a, b in rows)
+    return (f'<section id="verdict"><h2>Summary</h2><table>{body}</table>'
+            '<p class="muted">The figures below are what the tool measured; the decision is '
+            "the reviewer's (signature block at the end).</p></section>")
+
+
+def _setting(c: SignoffContent) -> str:
+    return ('<section id="setting"><h2>The setting</h2>'
+            f'<p>Rank 1 of the run <code>{escape(c.run_dir)}</code>, for tuning output '
+            f"{c.tuning_output.width} × {c.tuning_output.height} px.</p>"
+            f"{setting_html(c.setting)}</section>")
+
+
+def _inputs(c: SignoffContent) -> str:
+    warn = "" if not c.changed_files else (
+        '<p class="redbox">Changed since the robustness run (its recorded SHA-256 differs): '
+        + ", ".join(f"<code>{escape(p)}</code>" for p in c.changed_files) + "</p>")
+    return (f'<section id="inputs"><h2>Input files</h2>{warn}{files_table(c.files)}'
+            "</section>")
+
+
+def _tool(c: SignoffContent) -> str:
+    return f'<section id="tool"><h2>Tool</h2>{provenance_html(c.provenance)}</section>'
+
+
+def _ec_rows(c: SignoffContent) -> str:
+    rows = []
+    for item in c.ec.items:
+        st = "off" if not item.enabled else ("pass" if item.passed else "fail")
+        rng = (f"[{'–' if item.low is None else f'{item.low:g}'}, "
+               f"{'–' if item.high is None else f'{item.high:g}'}]")
+        value = "—" if item.value is None else f"{item.value:.4g}"
+        pic = c.ec_pictures.get(item.id)
+        cell = "" if pic is None else img_tag(pic, f"EC {item.id}")
+        rows.append(
+            f'<tr class="{st}"><td>{escape(item.id)}</td><td>{escape(item.name)}</td>'
+            f'<td class="num">{escape(value)} {escape(item.unit)}</td>'
+            f'<td class="num">{escape(rng)} {escape(item.unit)}</td>'
+            f'<td class="num">{escape(fmt_margin(ec_margin(item), item.unit))}</td>'
+            f"<td>{escape(st)}</td><td>{cell}</td></tr>")
+    return "".join(rows)
+
+
+def _ecs(c: SignoffContent) -> str:
+    o = c.record_output
+    return (f'<section id="ecs"><h2>Evaluation criteria at the display output of record '
+            f"({o.width} × {o.height} px)</h2>"
+            f"<p>EC score <b>{c.ec.score:.4g}</b>; criteria {escape(c.ec.criteria_name)}; "
+            "full evaluation path (the whole fisheye label image through the ISP). Margin: "
+            "signed distance of the value inside its range, in the EC's unit (below 0 "
+            "fails).</p><table><tr><th>EC</th><th>measurement</th><th>value</th>"
+            "<th>limit</th><th>margin</th><th>result</th><th>annotated</th></tr>"
+            f"{_ec_rows(c)}</table>"
+            f"<figure>{img_tag(c.display, 'display picture')}<figcaption>The RVM picture at "
+            f"{o.width} × {o.height} px.</figcaption></figure>"
+            f"<figure>{img_tag(c.annotated, 'annotated EC image')}<figcaption>Every EC drawn "
+            "on it, with the results panel.</figcaption></figure></section>")
+
+
+def _yield_ec_rows(doc: dict[str, Any]) -> str:
+    before = {e.get("id"): e for e in (doc.get("yield_before_compensation") or {}).get("ecs")
+              or []}
+    rows = []
+    for e in doc["ecs"]:
+        if not e.get("enabled", True):
+            continue
+        b = before.get(e["id"])
+        cls = "fail" if e.get("n_fail") else "pass"
+        rows.append(
+            f'<tr class="{cls}"><td>{escape(e["id"])}</td><td>{escape(e.get("name", ""))}</td>'
+            + ("" if not before else
+               f'<td class="num">{100 * float((b or {}).get("failure_rate", 0)):.1f} %</td>')
+            + f'<td class="num">{100 * float(e.get("failure_rate", 0)):.1f} %</td>'
+            f'<td class="num">{escape(fmt_margin(e.get("worst_margin"), e.get("unit", "")))}'
+            "</td></tr>")
+    head = ("<tr><th>EC</th><th>measurement</th>" + ("<th>fails before compensation</th>"
+                                                     if before else "")
+            + "<th>fails</th><th>worst margin</th></tr>")
+    return f"<table>{head}{''.join(rows)}</table>"
+
+
+def _yield(c: SignoffContent) -> str:
+    r = c.robustness
+    if r is None:
+        return (f'<section id="yield"><h2>Production yield</h2><p class="red">'
+                f"{escape(NO_ROBUSTNESS)}</p><p>Make it with <code>rvmsim robustness SCENE "
+                "--params PARAMS --out DIR</code> and pass <code>--robustness DIR</code>."
+                "</p></section>")
+    doc = r.doc
+    warn = "" if c.robustness_same_setting else (
+        '<p class="redbox">This robustness result judged a different setting than the one '
+        "signed here: its yield is not this setting's.</p>")
+    before = doc.get("yield_before_compensation")
+    line = (f"<p>Yield <b>{escape(_pct(doc))}</b>"
+            + ("" if not before else f"; before end-of-line compensation "
+               f"<b>{escape(_pct(before))}</b>")
+            + f". Seed {escape(doc['seed'])}; criteria {escape(doc.get('criteria', ''))}; "
+            f"from <code>{escape(r.path.resolve())}</code>.</p>")
+    by_load = by_load_html(doc["yield_by_load"], before.get("by_load") if before else None)
+    return (f'<section id="yield"><h2>Production yield</h2>{warn}{line}'
+            f"<h3>Per load state</h3>{by_load}<h3>Per EC</h3>{_yield_ec_rows(doc)}"
+            f"<h3>Tolerances and load states</h3>{variation_html(doc['variation'])}"
+            "</section>")
+
+
+def _failing(c: SignoffContent) -> str:
+    r = c.robustness
+    if r is None:
+        return ('<section id="failing-samples"><h2>Failing samples</h2><p class="red">'
+                "Robustness not run: no samples.</p></section>")
+    failing = r.failing
+    if not failing:
+        return ('<section id="failing-samples"><h2>Failing samples</h2><p>None of the '
+                f"{len(r.doc['samples'])} samples fails.</p></section>")
+    rows = []
+    for s in failing:
+        offsets = ", ".join(f"{k.split('_')[0]} {float(s.get(k, 0.0)):+.3g}" for k in (
+            "x_mm", "y_mm", "z_mm", "yaw_deg", "pitch_deg", "roll_deg"))
+        rows.append(f"<tr><td class=\"num\">{escape(s['index'])}</td>"
+                    f"<td>{escape(s.get('load', ''))}</td><td>{escape(offsets)}</td>"
+                    f"<td>{escape(', '.join(map(str, s.get('failed', []))))}</td>"
+                    f"<td><code>{escape(c.repro.get(str(s['index']), ''))}</code></td></tr>")
+    return ('<section id="failing-samples"><h2>Failing samples</h2>'
+            f"<p>{len(failing)} of {len(r.doc['samples'])} samples fail. Each command writes "
+            "the sample's car as a scene file and renders it in full (docs/robustness.md, "
+            '"Any sample as a scene").'
+            + ("" if not r.doc.get("compensation") else
+               " The exported car is the car before compensation: <code>rvmsim evaluate"
+               "</code> judges it with the platform setting; its per-car values are the "
+               "sample's <code>correction</code> in robustness.json.")
+            + '</p><table><tr><th>sample</th><th>load</th>'
+            "<th>offsets (mm, °)</th><th>failing</th><th>reproduce</th></tr>"
+            f"{''.join(rows)}</table></section>")
+
+
+def _validation(c: SignoffContent) -> str:
+    v = c.validation
+    if v is None:
+        return ('<section id="validation"><h2>Validation against a real capture</h2>'
+                "<p>Not given (<code>--validation DIR</code>, the folder "
+                "<code>rvmsim validate</code> writes).</p></section>")
+    if v.single is not None:
+        d = v.single
+        rows = "".join(
+            f'<tr class="{"pass" if k.get("passed") else "fail"}"><td>{escape(k.get("name"))}'
+            f'</td><td class="num">{escape(k.get("value"))}</td><td class="num">≤ '
+            f'{escape(k.get("limit"))}</td><td>{"pass" if k.get("passed") else "FAIL"}</td></tr>'
+            for k in d["checks"] if isinstance(k, dict))
+        body = (f"<p>Capture <code>{escape(d['capture'])}</code> of "
+                f"{escape(d.get('scene', ''))}: <b>{'PASS' if d['passed'] else 'FAIL'}</b>."
+                f"</p><table><tr><th>check</th><th>value</th><th>limit</th><th></th></tr>"
+                f"{rows}</table>")
+    else:
+        rows = "".join(f"<tr class=\"{'pass' if r['verdict'] == 'PASS' else 'fail'}\">"
+                       f"<td><code>{escape(r.get('capture'))}</code></td>"
+                       f"<td>{escape(r['verdict'])}</td><td>{escape(r.get('error') or '')}</td>"
+                       "</tr>" for r in v.rows)
+        body = f"<table><tr><th>capture</th><th>verdict</th><th>error</th></tr>{rows}</table>"
+    return ('<section id="validation"><h2>Validation against a real capture</h2>'
+            f"<p>From <code>{escape(v.path.resolve())}</code>.</p>{body}</section>")
+
+
+def _eol(c: SignoffContent) -> str:
+    e = c.eol
+    if e is None:
+        return ('<section id="eol"><h2>End-of-line station</h2><p>Not given '
+                "(<code>--eol DIR</code>, the folder <code>rvmsim eol</code> writes).</p>"
+                "</section>")
+    d = e.doc
+    rows = "".join(
+        f"<tr class=\"{'pass' if r['verdict'] == 'PASS' else 'fail'}\">"
+        f"<td>{escape(r.get('name', r.get('capture', '')))}</td><td>{escape(r['verdict'])}</td>"
+        f"<td>{escape('; '.join(map(str, r.get('reasons') or [])))}</td></tr>"
+        for r in d["results"] if isinstance(r, dict))
+    return ('<section id="eol"><h2>End-of-line station</h2>'
+            f"<p>{escape(d['passed'])} of {escape(d['cars'])} cars pass; platform setting "
+            f"<code>{escape(d['params_file'])}</code>; from "
+            f"<code>{escape(e.path.resolve())}</code>.</p>"
+            f"<table><tr><th>car</th><th>verdict</th><th>reasons</th></tr>{rows}</table>"
+            "</section>")
+
+
+def _signature(c: SignoffContent) -> str:
+    name = escape(c.reviewer) if c.reviewer else ""
+    return ('<section id="signature"><h2>Signature</h2><table class="sign">'
+            f"<tr><th>Reviewer</th><td>{name}</td></tr><tr><th>Date</th><td></td></tr>"
+            "<tr><th>Decision (approved / rejected)</th><td></td></tr>"
+            "<tr><th>Signature</th><td></td></tr></table></section>")
+
+
+def signoff_html(c: SignoffContent) -> str:
+    """The whole sign-off document."""
+    nav = " · ".join(f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in SECTION_IDS)
+    head = (f"{_CSS}<h1>Sign-off: {escape(c.title)}</h1><p class=\"muted\">ISP setting "
+            f"sign-off sheet, made {escape(c.provenance.date)} by rvmsim "
+            f"{escape(c.provenance.version)} from the run <code>{escape(c.run_dir)}</code>."
+            f"</p><nav><p>{nav}</p></nav>")
+    body = (head + _verdict(c) + _setting(c) + _inputs(c) + _tool(c) + _ecs(c) + _yield(c)
+            + _failing(c) + _validation(c) + _eol(c) + _signature(c))
+    return page(f"Sign-off: {c.title}", body)

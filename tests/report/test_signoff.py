@@ -1,0 +1,310 @@
+"""The sign-off sheet (`rvmsim signoff`), with the run report's and the robustness page's
+new contents: a real small tuning run, a real robustness run of its best setting (with
+end-of-line compensation), real validation and EOL folders, and the sheet made from them."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import shlex
+import shutil
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from rvmsim.compensation import Deviation
+from rvmsim.isp import OutputSpec, load_params
+from rvmsim.pipeline import evaluate_params
+from rvmsim.render import cached_render
+from rvmsim.report import signoff, write_report
+from rvmsim.report.signoff_page import NO_ROBUSTNESS, SECTION_IDS
+from rvmsim.scene import load_scene
+from rvmsim.tune import DISPLAY_SIZE, TuneRequest, TuningConfig, tune
+
+from ..cli_runner import run_in_process
+from ..eol.stations import write_capture, write_inputs
+from ..scenes import write_small_scene
+from .test_run import _assert_self_contained, _decode_data_png, _parse
+
+#: A scene file name and vehicle name a page must escape.
+SCENE_NAME = "scene <script>alert(1) & co.yaml"
+VEHICLE = 'Evil <script>alert(2)</script> & "Co"'
+LOAD = "full <load> & co"
+REVIEWER = "Jane <b>Doe</b> & Co"
+#: ±1° on every angle, two load states (two viewpoints: a quick robustness run).
+VARIATION = {"mount": {a: {"uniform": {"half_width": 1.0}}
+                       for a in ("yaw_deg", "pitch_deg", "roll_deg")},
+             "load_states": [{"name": "curb", "height_mm": 0, "pitch_deg": 0, "weight": 1},
+                             {"name": LOAD, "height_mm": -45, "pitch_deg": 0.9, "weight": 1}]}
+SAMPLES = 8
+
+
+def _rvmsim(*args: object, env: dict[str, str] | None = None, cwd: Path | None = None):
+    return run_in_process(args, env=env, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    """A tuned run of an evil-named quarter-size vehicle A, robustness of its rank 1 with
+    compensation, an EOL folder (one car), a validation folder (two captures the scene's
+    board cannot be found in: two ERROR rows), and the sign-off of all of it (CLI)."""
+    root = tmp_path_factory.mktemp("signoff")
+    env = {"RVMSIM_CACHE": str(root / "cache")}
+    old = os.environ.get("RVMSIM_CACHE")
+    os.environ["RVMSIM_CACHE"] = env["RVMSIM_CACHE"]
+    try:
+        scene = write_small_scene(root, "a", name=SCENE_NAME, edit={"name": VEHICLE},
+                                  variation=VARIATION)
+        cfg = TuningConfig.model_validate({"output": {"size": [320, 180]}, "top_m": 2,
+                                           "batch": 20})
+        run = root / "run"
+        tune(TuneRequest((scene,), "cmaes-solved", cfg, budget=60), run)
+        params = run / "top" / "rank_1.yaml"
+        res = _rvmsim("robustness", scene, "--params", params, "--samples", SAMPLES,
+                      "--scales", "1", "--workers", "1", "--compensation", "default",
+                      "--out", root / "rob", "--no-progress", env=env)
+        assert res.code in (0, 1), res.stderr
+        eol_scene, eol_params = write_inputs(root / "eol_in")
+        car = write_capture(root / "eol_in" / "car <1> & co.png", Deviation())
+        res = _rvmsim("eol", eol_scene, "--params", eol_params, "--capture", car, "--out",
+                      root / "eol", "--no-progress", env=env)
+        assert res.code in (0, 1), res.stderr
+        fisheye = cached_render(load_scene(scene))[0].color
+        for k in (1, 2):
+            cv2.imwrite(str(root / f"capture_{k}.png"), np.roll(fisheye, k, axis=1)[..., ::-1])
+        res = _rvmsim("validate", scene, "--capture", root / "capture_1.png", "--capture",
+                      root / "capture_2.png", "--out", root / "val", "--no-progress", env=env)
+        assert (root / "val" / "summary.json").is_file(), res.stderr
+        out = run / "signoff"
+        res = _rvmsim("signoff", run, "--robustness", root / "rob", "--validation",
+                      root / "val", "--eol", root / "eol", "--reviewer", REVIEWER, "--out",
+                      out, "--no-progress", env=env)
+        assert res.code == 0, res.stderr
+        yield {"root": root, "env": env, "scene": scene, "run": run, "params": params,
+               "out": out, "stdout": res.stdout}
+    finally:
+        if old is None:
+            os.environ.pop("RVMSIM_CACHE", None)
+        else:
+            os.environ["RVMSIM_CACHE"] = old
+
+
+def _page(made) -> str:
+    return (made["out"] / "signoff.html").read_text(encoding="utf-8")
+
+
+def _section(text: str, sid: str) -> str:
+    start = text.index(f'<section id="{sid}">')
+    return text[start: text.index("</section>", start)]
+
+
+def test_every_section_is_there_and_the_page_is_self_contained(made):
+    text = _page(made)
+    doc = _parse(text)
+    ids = [a.get("id") for _, a in doc.tags if a.get("id")]
+    assert [s for s in ids if s in SECTION_IDS] == list(SECTION_IDS)
+    _assert_self_contained(text, doc)
+    words = doc.all_text()
+    for heading in ("The setting", "Input files", "Tool", "Evaluation criteria at the display",
+                    "Production yield", "Failing samples", "Validation against a real capture",
+                    "End-of-line station", "Signature"):
+        assert heading in words, heading
+    assert "0 of 2 captures pass" in words and "ERROR" in words
+    assert "1 of 1 cars pass" in words or "0 of 1 cars pass" in words
+    js = json.loads((made["out"] / "signoff.json").read_text())
+    tool = js["tool"]
+    assert tool["version"] and re.fullmatch(r"[0-9a-f]{40}|not a git checkout", tool["commit"])
+    assert tool["date"].endswith("+00:00") and tool["cpu_count"] >= 1
+    for value in (tool["version"], tool["commit"], tool["date"]):
+        assert value in _section(text, "tool")
+
+
+def test_the_ecs_are_judged_at_the_display_size_with_margins(made):
+    text = _page(made)
+    settings = json.loads((made["run"] / "run.json").read_text())
+    mirror = settings["config"]["output"]["mirror"]
+    params, _ = load_params(made["params"])
+    images, _ = cached_render(load_scene(made["scene"]))
+    frame = evaluate_params(images, params, OutputSpec(*DISPLAY_SIZE, mirror))
+    js = json.loads((made["out"] / "signoff.json").read_text())
+    assert js["record_output"] == list(DISPLAY_SIZE)
+    assert [e["value"] for e in js["ecs"]["ecs"]] == pytest.approx(
+        [i.value for i in frame.ec.items])
+    section = _section(text, "ecs")
+    rows = re.findall(r'<tr class="(pass|fail|off)"><td>([^<]+)</td>.*?</tr>', section, re.S)
+    assert [r[1] for r in rows] == [i.id for i in frame.ec.items]
+    for item in frame.ec.items:
+        assert item.low is not None or item.high is not None
+        margin = min(item.value - item.low if item.low is not None else np.inf,
+                     item.high - item.value if item.high is not None else np.inf)
+        assert f"{margin:+.4g}" in section, item.id
+    imgs = _parse(section).find("img")
+    shapes = [_decode_data_png(a["src"]).shape for a in imgs]
+    assert (DISPLAY_SIZE[1], DISPLAY_SIZE[0], 3) in shapes  # the display picture
+    assert len(imgs) == len(frame.ec.items) + 2  # one per EC, the picture, all ECs drawn
+
+
+def test_the_hash_on_the_page_is_that_of_the_params_file(made, tmp_path):
+    text = _page(made)
+    shas = re.findall(r'<code class="sha">([0-9a-f]{64})</code>', text)
+    params = made["params"]
+    assert shas == [hashlib.sha256(params.read_bytes()).hexdigest()]
+    assert str(params.resolve()) in _section(text, "setting")
+    values, _ = load_params(params)
+    for name in values.names():
+        assert repr(getattr(values, name)) in _section(text, "setting")
+    # A run whose top/ is gone: the sheet writes the params file itself and hashes that.
+    run = tmp_path / "run"
+    shutil.copytree(made["run"], run, ignore=shutil.ignore_patterns("signoff"))
+    shutil.rmtree(run / "top")
+    res = signoff(run, tmp_path / "so", pdf=False)
+    assert res.params_file == tmp_path / "so" / "params.yaml"
+    assert load_params(res.params_file) == load_params(params)
+    page = res.html.read_text()
+    assert re.findall(r'<code class="sha">([0-9a-f]{64})</code>', page) == [
+        hashlib.sha256(res.params_file.read_bytes()).hexdigest()] == [res.params_sha256]
+
+
+def test_the_input_files_carry_their_hashes(made):
+    section = _section(_page(made), "inputs")
+    for path in (made["scene"], made["params"], made["root"] / "rob" / "robustness.json",
+                 made["root"] / "eol" / "eol.json", made["root"] / "val" / "summary.json"):
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        assert digest in section, path
+    assert "redbox" not in section  # nothing changed since the robustness run
+
+
+def test_the_yield_before_and_after_compensation_per_ec_and_load(made):
+    section = _section(_page(made), "yield")
+    rob = json.loads((made["root"] / "rob" / "robustness.json").read_text())
+    before = rob["yield_before_compensation"]
+    for est in (rob, before, *rob["yield_by_load"].values(), *before["by_load"].values()):
+        assert f"{100 * est['yield']:.1f} %" in section
+    assert "full &lt;load&gt; &amp; co" in section and LOAD not in section
+    for e in rob["ecs"]:
+        assert f"<td>{e['id']}</td>" in section
+        assert f"{100 * e['failure_rate']:.1f} %" in section
+    assert "uniform ±1" in section  # the tolerance figures
+
+
+def test_each_failing_sample_has_a_command_that_reproduces_it(made, tmp_path):
+    rob = json.loads((made["root"] / "rob" / "robustness.json").read_text())
+    failing = [s for s in rob["samples"] if not s["passed"]]
+    section = _section(_page(made), "failing-samples")
+    if not failing:
+        assert "None of the" in section
+        return
+    import html as html_lib
+
+    commands = [html_lib.unescape(c) for c in re.findall(r"<code>(rvmsim robustness.*?)</code>",
+                                                         section)]
+    assert len(commands) == len(failing)
+    first = failing[0]
+    cmd = next(c for c in commands if f"--export-sample {first['index']} " in c)
+    produce, evaluate = cmd.split(" && ")
+    res = _rvmsim(*shlex.split(produce)[1:], env=made["env"], cwd=tmp_path)
+    assert res.code in (0, 1), res.stderr
+    exported = json.loads(Path(shlex.split(evaluate)[2]).with_suffix(".json").read_text())
+    # The same car, measured the same: the ECs that failed fail again, and only they.
+    ids = {e["id"] for e in rob["ecs"]}
+    assert {e for e, v in exported["ecs"].items() if not v["passed"]} == \
+        {f for f in first["failed"] if f in ids}
+    res = _rvmsim(*shlex.split(evaluate)[1:], env=made["env"], cwd=tmp_path)
+    assert res.code == 0, res.stderr
+
+
+def test_the_pdf_is_printed(made):
+    if shutil.which("chromium") is None:
+        pytest.skip("chromium is not installed (tools/setup.sh --test installs it)")
+    pdf = made["out"] / "signoff.pdf"
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF") and len(data) > 20_000
+    assert data.rstrip().endswith(b"%%EOF")
+
+
+def test_without_robustness_the_page_says_so_in_red(made, tmp_path):
+    res = signoff(made["run"], tmp_path / "so", pdf=False)
+    assert res.yield_ is None
+    text = res.html.read_text()
+    assert f'<span class="red">{NO_ROBUSTNESS}</span>' in _section(text, "verdict")
+    assert "Robustness not run" in _section(text, "yield")
+    assert "Not given" in _section(text, "validation") and "Not given" in _section(text, "eol")
+
+
+def test_names_from_files_are_escaped(made):
+    text = _page(made)
+    for raw in (SCENE_NAME, VEHICLE, REVIEWER, LOAD):
+        assert raw not in text
+    assert "scene &lt;script&gt;alert(1) &amp; co.yaml" in text
+    assert "Evil &lt;script&gt;alert(2)&lt;/script&gt; &amp; &quot;Co&quot;" in text
+    assert "Jane &lt;b&gt;Doe&lt;/b&gt; &amp; Co" in _section(text, "signature")
+    assert "car &lt;1&gt; &amp; co" in _section(text, "eol")
+    rob = (made["root"] / "rob" / "robustness.html").read_text()
+    assert SCENE_NAME not in rob and "scene &lt;script&gt;" in rob
+
+
+def test_the_robustness_page_shows_the_setting_tolerances_and_load_states(made):
+    text = (made["root"] / "rob" / "robustness.html").read_text()
+    setting = text[text.index('<h2 id="setting">'): text.index('<h2 id="inputs">')]
+    digest = hashlib.sha256(made["params"].read_bytes()).hexdigest()
+    assert digest in setting and str(made["params"].resolve()) in setting
+    values, _ = load_params(made["params"])
+    for name in values.names():
+        assert repr(getattr(values, name)) in text
+    assert "uniform ±1" in text and "full &lt;load&gt; &amp; co" in text and "-45" in text
+    rob = json.loads((made["root"] / "rob" / "robustness.json").read_text())
+    files = {f["role"]: f for f in rob["inputs"]["files"]}
+    assert files["params"]["sha256"] == digest
+    assert files["scene"]["sha256"] == hashlib.sha256(made["scene"].read_bytes()).hexdigest()
+
+
+def test_the_run_report_gains_margins_tool_display_picture_and_yield(made, tmp_path):
+    report = write_report(made["run"]).read_text()
+    doc = _parse(report)
+    assert "<th>margin</th>" in report
+    assert re.search(r'<figure id="display"><img src="([^"]+)"', report)
+    src = re.search(r'<figure id="display"><img src="([^"]+)"', report).group(1)
+    assert _decode_data_png(src).shape[:2] == (DISPLAY_SIZE[1], DISPLAY_SIZE[0])
+    tool = json.loads((made["out"] / "signoff.json").read_text())["tool"]
+    assert tool["version"] in doc.all_text() and "commit" in doc.all_text()
+    rob = json.loads((made["root"] / "rob" / "robustness.json").read_text())
+    assert f"{100 * rob['yield']:.1f} %" in re.search(r'id="yield-note".*?</p>', report).group(0)
+    assert 'href="signoff/signoff.html"' in report
+    # The same run without a sign-off or robustness result: a neutral note, and how to make one.
+    run = tmp_path / "run"
+    shutil.copytree(made["run"], run, ignore=shutil.ignore_patterns("signoff"))
+    bare = write_report(run).read_text()
+    note = re.search(r'id="yield-note".*?</p>', bare, re.S).group(0)
+    assert "nominal pose" in note and "not measured" in note
+    assert "rvmsim signoff" in re.search(r'id="signoff-link".*?</p>', bare).group(0)
+
+
+def test_a_robustness_result_of_other_values_or_changed_files_is_flagged(made, tmp_path):
+    """A robustness.json whose setting is not the run's rank 1, or whose recorded scene hash
+    is not the scene's now: red boxes naming them, and the report ignores that yield."""
+    rob = tmp_path / "rob"
+    shutil.copytree(made["root"] / "rob", rob)
+    doc = json.loads((rob / "robustness.json").read_text())
+    doc["isp"]["zoom"] += 0.01
+    scene_rec = next(f for f in doc["inputs"]["files"] if f["role"] == "scene")
+    scene_rec["sha256"] = "0" * 64
+    (rob / "robustness.json").write_text(json.dumps(doc))
+    res = signoff(made["run"], tmp_path / "so", robustness=rob, pdf=False)
+    text = res.html.read_text()
+    assert "judged a different setting" in _section(text, "yield")
+    changed = re.search(r'<p class="redbox">Changed since.*?</p>', _section(text, "inputs"))
+    assert changed and html_escape(str(made["scene"].resolve())) in changed.group(0)
+    assert str(made["params"].resolve()) not in changed.group(0)
+    js = json.loads((tmp_path / "so" / "signoff.json").read_text())
+    assert js["robustness"]["same_setting"] is False
+    assert js["changed_files"] == [str(made["scene"].resolve())]
+
+
+def html_escape(s: str) -> str:
+    import html
+
+    return html.escape(s, quote=True)
