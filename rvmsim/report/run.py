@@ -32,6 +32,7 @@ from ..runs import find_runs, is_run_folder
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
                       members_section, robust_section, robust_top)
 from .page import data_uri, escape, img_tag, page, shrink
+from .gallery import differences, margins_html
 from .plots import convergence_png, histogram_png
 from .provenance import provenance
 from .run_notes import display_figure, provenance_line, signoff_note, yield_note
@@ -122,9 +123,17 @@ def _load_run(run_dir: Path) -> _Run:
     recorded_key = settings.scene_key
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
-                crit_file, settings.config.output_spec(), top, curve, scores, count,
+                crit_file, _judged_at(settings), top, curve, scores, count,
                 scene_changed, load_member_scenes(settings, run_dir, recorded_path), member_top,
                 robust_rows, [c for c, _ in pairs])
+
+
+def _judged_at(settings: RunSettings) -> OutputSpec:
+    """The RVM image of record the run's verdicts refer to: what the report shows."""
+    from ..isp import OutputSpec
+
+    w, h = settings.record_px
+    return OutputSpec(w, h, settings.config.output.mirror)
 
 
 # ---------------------------------------------------------------------------- sections
@@ -256,57 +265,6 @@ def _convergence_section(r: _Run) -> str:
             'trials (log-spaced bins).</figcaption></figure></section>')
 
 
-def _differences(rec: TrialRecord, first: TrialRecord, criteria: Criteria) -> list[str]:
-    """ECs (enabled ones) whose pass/fail differs from rank 1, as 'EC: pass → fail'."""
-    out = []
-    for ec, item in first.ecs.items():
-        crit = criteria.items.get(ec)
-        if crit is not None and not crit.enabled:
-            continue
-        mine = rec.ecs.get(ec)
-        if mine is None:
-            continue
-        if mine.passed != item.passed:
-            out.append(f"{ec}: {'pass' if mine.passed else 'fail'} "
-                       f"(#1 {'passes' if item.passed else 'fails'})")
-    return out
-
-
-def _margin_chip(margin: float) -> str:
-    """A margin in two significant digits with its sign (whole numbers from 10 on)."""
-    if abs(margin) >= 10:
-        return f"{margin:+.0f}"
-    return f"{margin:+.2g}"
-
-
-def margins_html(margins: dict[str, float], rec: TrialRecord, criteria: Criteria) -> str:
-    """A gallery card's row of EC margins: per enabled EC its id and margin (signed
-    distance of its value inside the acceptable range, EC unit; ✓/✗ for binary ECs, n/a
-    when not measured), coloured by pass/fail; the name, margin and unit on hover."""
-    from ..criteria.canvas import unit_text
-
-    defs = {d.id: d for d in criteria.ecs}
-    chips = []
-    for ec in criteria.ids:
-        crit, outcome, d = criteria.items[ec], rec.ecs.get(ec), defs.get(ec)
-        if not crit.enabled or outcome is None or d is None:
-            continue
-        m = margins.get(ec, math.nan)
-        if d.binary:
-            shown = "✓" if outcome.passed else "✗"
-        elif math.isnan(m):
-            shown = "n/a"
-        else:
-            shown = _margin_chip(m) + unit_text(d.unit).strip()
-        st = "pass" if outcome.passed else "fail"
-        tip = (f"{ec} {d.name.replace('_', ' ')}: "
-               + ("not measured" if math.isnan(m) and not d.binary else
-                  st if d.binary else f"margin {m:+.4g}{unit_text(d.unit)}") + f" ({st})")
-        chips.append(f'<span class="{st}" title="{escape(tip)}"><b>{escape(ec)}</b> '
-                     f"{escape(shown)}</span>")
-    return f'<p class="margins">{"".join(chips)}</p>'
-
-
 def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
     from ..pipeline import rvm_color
@@ -316,7 +274,7 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     for cand, rec in zip(r.candidates, r.top):
         k = cand.rank
         color = best_color if k == 1 else rvm_color(r.images, rec.params, r.output)
-        diffs = _differences(rec, first, r.criteria)
+        diffs = differences(rec, first, r.criteria)
         if k == 1:
             diff_html = "<p class='muted'>reference (rank 1)</p>"
         else:

@@ -49,6 +49,7 @@ if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
     from ..isp import IspParams, OutputSpec
     from ..render import FisheyeImages
+    from ..scene import Scene
 
 __all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FILE"]
 
@@ -73,13 +74,13 @@ class SignoffResult:
     yield_: float | None
 
 
-def _record_output(output: OutputSpec) -> OutputSpec:
-    """The RVM output the ECs of record are judged at: the display, 1280 × 720
-    (:data:`rvmsim.tune.DISPLAY_SIZE`), mirrored as the tuning output is."""
-    from ..isp import OutputSpec
-    from ..tune import DISPLAY_SIZE
+def _record_output(criteria: Criteria, scene: Scene, output: OutputSpec) -> OutputSpec:
+    """The RVM output the ECs of record are judged at (:func:`rvmsim.pipeline.record_output`:
+    the scene's or criteria's ``display.rvm_image_px``, default 1280 × 720), mirrored as the
+    tuning output is."""
+    from ..pipeline import record_output
 
-    return OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], output.mirror)
+    return record_output(criteria, scene, output.mirror)
 
 
 def _record_ecs(images: FisheyeImages, params: IspParams, output: OutputSpec,
@@ -364,7 +365,7 @@ def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRe
     out.mkdir(exist_ok=True)
     best = r.top[0]
     setting = SettingRecord(best.params, r.output, file_record("params", _params_file(r, out)))
-    record = _record_output(r.output)
+    record = _record_output(r.criteria, r.scene, r.output)
     bar.set_postfix_str(f"ECs at {record.width}x{record.height}")
     ec, color, annotated, each = _record_ecs(r.images, best.params, record, r.criteria)
     bar.update()
