@@ -17,7 +17,6 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 
 from __future__ import annotations
 
-import math
 import os
 import shlex
 from dataclasses import dataclass, field
