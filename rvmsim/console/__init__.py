@@ -18,7 +18,11 @@ from .session import (
     evaluate_setting,
     jpeg_bytes,
     open_session,
+    ec_margin,
+    human_name,
 )
+from .pictures import Pictures, params_key, parse_params_key
+from .guard import Guard, MAX_BODY_BYTES, MAX_TARGET_BYTES
 from .inputs import ConsoleInputError, parse_params, parse_label
 from .outputs import save_params, write_setting_report, params_text
 from .app import create_app, session_json, TOKEN_HEADER, LOOPBACK_HOSTS
@@ -34,6 +38,14 @@ __all__ = [
     "evaluate_setting",
     "jpeg_bytes",
     "open_session",
+    "ec_margin",
+    "human_name",
+    "Pictures",
+    "params_key",
+    "parse_params_key",
+    "Guard",
+    "MAX_BODY_BYTES",
+    "MAX_TARGET_BYTES",
     "ConsoleInputError",
     "parse_params",
     "parse_label",

@@ -46,8 +46,9 @@ def _open(browser, url):
 def _settled(page, timeout: float = 30000) -> None:
     """Wait until the newest value has been shown (nothing in flight, nothing pending)."""
     page.wait_for_function("(() => { const s = window.rvmConsole; return !s.inflight && "
-                           "!s.pending && s.last && Object.keys(s.current).every("
-                           "k => s.last.params[k] === s.current[k]); })()", timeout=timeout)
+                           "!s.pending && s.last && s.shown && !s.shown.draft && "
+                           "Object.keys(s.current).every(k => s.last.params[k] === s.current[k]);"
+                           " })()", timeout=timeout)
 
 
 def _drag(page, selector: str, fraction: float) -> None:
@@ -96,7 +97,7 @@ def test_zoom_slider_updates_the_picture_and_the_ecs_as_evaluate(served_run, bro
     # what the page shows is the evaluation it got, EC by EC
     assert [row[0] for row in after_table] == [e["id"] for e in state["ecs"]]
     for row, ec in zip(after_table, state["ecs"]):
-        assert row[5] == f"{ec['score']:.4f}"
+        assert row[6] == f"{ec['score']:.4f}"
         assert row[2] == ("—" if ec["value"] is None else f"{ec['value']:.3f}")
     # save it, and evaluate the saved file as `rvmsim evaluate` does: the same ECs
     page.click("#save")
