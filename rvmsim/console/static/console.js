@@ -388,6 +388,7 @@
         const typed = box.value;
         fieldError(spec.name, `${p.replace(/^[^:]*: /, "")}${typed.trim() === "" || Number.isFinite(Number(typed)) ? "" : ` (${JSON.stringify(typed)})`}; kept ${Number(state.current[spec.name].toPrecision(7))}`);
         say(p, "error");
+        state.evalError = true;  // cleared by the next frame shown
         box.value = String(Number(state.current[spec.name].toPrecision(7)));
         return;
       }
