@@ -2,8 +2,8 @@
 
 Routes: ``GET /`` (the page), ``/static/…`` (its JS and CSS, from the package),
 ``GET /api/session`` (scene, controls, start values, candidates), ``GET /api/fisheye.jpg``,
-``GET /api/evaluate?q=JSON`` (a parameter set → its ECs, margins, ROI and picture URLs; a
-GET: it changes nothing), ``GET /api/picture/{display|draft|annotated}.jpg?p=VALUES`` (the
+``GET /api/evaluate?q=JSON`` (a parameter set → its ECs, margins, ROI and picture URLs, and
+with ``draft`` and ``inline`` the draft picture itself, base64; a GET: it changes nothing), ``GET /api/picture/{display|draft|annotated}.jpg?p=VALUES`` (the
 picture of a parameter set, :mod:`.pictures`), ``POST /api/save``, ``POST /api/report``.
 
 Every request passes :class:`~.guard.Guard` first (token or loopback ``Host``, the origin,
@@ -16,6 +16,7 @@ at most one evaluation and one picture in flight), so three pages on two cores s
 
 from __future__ import annotations
 
+import base64
 import itertools
 import json
 import logging
@@ -145,12 +146,12 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
         params = parse_params(doc.get("params", {}), session.start)
         annotate = parse_flag(doc.get("annotate"), "annotate")
         draft = parse_flag(doc.get("draft"), "draft")
+        inline = parse_flag(doc.get("inline"), "inline")
         t0 = time.perf_counter()
         frame = evaluate_params(session.images, params, session.ec_output, session.criteria,
                                 annotate=annotate)
         t1 = time.perf_counter()
-        if draft:
-            pictures.draft(params, frame.color)
+        draft_jpeg = pictures.draft(params, frame.color) if draft else b""
         if annotate:
             pictures.annotated(params, frame.annotated)
         t2 = time.perf_counter()
@@ -164,6 +165,9 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
                 "image": picture_url("display", params),
                 "draft": picture_url("draft", params) if draft else None,
                 "annotated": picture_url("annotated", params) if annotate else None,
+                # the draft itself, when asked: one round trip per frame while dragging
+                **({"draft_jpeg": base64.b64encode(draft_jpeg).decode()} if draft and inline
+                   else {}),
                 "timings_ms": {k: round(1e3 * v, 2) for k, v in ms.items()}}
 
     @app.get("/")

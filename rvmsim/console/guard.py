@@ -45,7 +45,7 @@ MAX_BODY_BYTES = 64 * 1024
 MAX_TARGET_BYTES = 8 * 1024
 #: Methods that change nothing.
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
-_CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self'; "
+_CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
         "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
 _EXTRA = [(b"content-security-policy", _CSP.encode()), (b"x-content-type-options", b"nosniff"),
           (b"referrer-policy", b"no-referrer")]

@@ -124,12 +124,12 @@
         img = new Image();
         img.src = pictureUrl("display", job.params);
       }
-      const doc = await api("/api/evaluate", null,
-                            {params: job.params, annotate: job.annotate, draft: job.draft});
+      const doc = await api("/api/evaluate", null, {params: job.params, annotate: job.annotate,
+                                                    draft: job.draft, inline: job.draft});
       const tJson = performance.now();
       if (!img) {
         img = new Image();
-        img.src = job.annotate ? doc.annotated : doc.draft;
+        img.src = job.annotate ? doc.annotated : `data:image/jpeg;base64,${doc.draft_jpeg}`;
       }
       await img.decode();
       const tImage = performance.now();
