@@ -59,7 +59,8 @@ def chromium_page(width: int, height: int) -> Iterator[tuple[object, str]]:
 SETTLED = ("(() => { const s = window.rvmConsole; return s && !s.inflight && !s.pending && "
            "s.last && Object.keys(s.current).every(k => s.last.params[k] === s.current[k]); })()")
 #: Settled, and the picture shown is the full one (not a drag's draft).
-SETTLED_FULL = SETTLED.replace("s.last &&", "s.last && s.shown && !s.shown.draft &&")
+SETTLED_FULL = SETTLED.replace("s.last &&", "s.last && (!('shown' in s) || (s.shown && "
+                                             "!s.shown.draft)) &&")
 
 
 def open_console(page, url: str) -> None:

@@ -80,6 +80,8 @@ def _line(name: str, ms: list[float]) -> str:
 def _collect(page, draft: bool | None = None) -> tuple[list[float], list[dict], int]:
     samples = page.evaluate("window.rvmConsole.samples")
     server = page.evaluate("window.rvmConsole.server")
+    if samples is None:  # a page without drafts (before they came): every frame is full
+        samples = [{"ms": ms, "draft": draft} for ms in page.evaluate("window.rvmConsole.timings")]
     keep = [k for k, s in enumerate(samples) if draft is None or s["draft"] == draft]
     return ([samples[k]["ms"] for k in keep], [server[k] for k in keep],
             page.evaluate("window.rvmConsole.inputs"))
@@ -182,7 +184,8 @@ def main() -> None:
           f"{'/'.join(f'{x:.2f}' for x in load_after)}")
     for mode, (ms, server, inputs) in results.items():
         print(_line(mode, ms) + (f"  ({inputs} inputs)" if "drag" in mode or "3" in mode else ""))
-        for step in ("ecs", "pictures", "roi", "page_json", "page_image", "page_table"):
+        for step in ("ecs", "pictures", "display", "roi", "page_json", "page_image",
+                     "page_table"):
             vals = [s[step] for s in server if step in s]
             if vals:
                 print(f"           {step:14s} median {statistics.median(vals):6.1f} ms")

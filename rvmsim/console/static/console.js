@@ -461,7 +461,7 @@
     state.session = s;
     document.title = `rvmsim console: ${s.vehicle}`;
     $("title").textContent = s.vehicle;
-    const sub = `${s.description ? s.description + " — " : ""}${s.kind} ${s.source}; scene ${s.scene_file}; criteria ${s.criteria}; ECs at ${s.ec_output.width}×${s.ec_output.height} px; saves into ${s.save_dir}`;
+    const sub = `${s.description ? s.description + " — " : ""}${s.kind} ${s.source}; ${s.kind === "run" ? `scene ${s.scene_file}; ` : ""}criteria ${s.criteria}; ECs at ${s.ec_output.width}×${s.ec_output.height} px; saves into ${s.save_dir}`;
     $("subtitle").textContent = sub;
     $("subtitle").title = sub;
     $("rvm-size").textContent = `(${s.display.width}×${s.display.height} px)`;
