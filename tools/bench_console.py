@@ -45,15 +45,16 @@ from _console_driver import (REPO, SETTLED, SETTLED_FULL, chromium_page,  # noqa
 _RESET = ("window.rvmConsole.timings = []; window.rvmConsole.samples = []; "
           "window.rvmConsole.server = []; window.rvmConsole.inputs = 0")
 #: In-page stepping for the three-page runs: move the zoom slider ``n`` times, as a drag
-#: (pointerdown first: drafts) or as keys (full pictures), waiting for each frame.
-_STEPS_JS = """async ([n, drag]) => {
+#: (pointerdown first: drafts) or as keys (full pictures), waiting for each frame; ``shift``
+#: (a fraction of the range) keeps the pages' values apart (no page reuses another's picture).
+_STEPS_JS = """async ([n, drag, shift]) => {
   const s = window.rvmConsole, el = document.getElementById("slider-zoom");
   const settled = () => new Promise((ok) => { const f = () => (!s.inflight && !s.pending
       && s.last && s.last.params.zoom === s.current.zoom) ? ok() : setTimeout(f, 2); f(); });
   const lo = Number(el.min), hi = Number(el.max);
   if (drag) el.dispatchEvent(new PointerEvent("pointerdown", {bubbles: true}));
   for (let k = 0; k < n; k++) {
-    el.value = String(lo + (hi - lo) * (0.2 + 0.6 * ((k * 7) % n) / n));
+    el.value = String(lo + (hi - lo) * (0.2 + shift + 0.6 * ((k * 7) % n) / n));
     el.dispatchEvent(new Event("input", {bubbles: true}));
     if (!drag) el.dispatchEvent(new Event("change", {bubbles: true}));
     await settled();
@@ -129,8 +130,8 @@ def _run_single(page, mode: str, moves: int, interval_ms: float) -> tuple[list[f
 def _run_three(pages, drag: bool, moves: int) -> tuple[list[float], list[dict], int]:
     for p in pages:
         p.evaluate(_RESET + "; window.rvmConsoleDone = false")
-    for p in pages:  # started together, not waited for
-        p.evaluate(f"(() => {{ ({_STEPS_JS})([{moves}, {str(drag).lower()}]); }})()")
+    for i, p in enumerate(pages):  # started together, not waited for; values of their own
+        p.evaluate(f"(() => {{ ({_STEPS_JS})([{moves}, {str(drag).lower()}, {0.013 * i}]); }})()")
     for p in pages:
         p.wait_for_function("window.rvmConsoleDone === true", timeout=300000)
         p.wait_for_function(SETTLED_FULL, timeout=60000)
