@@ -78,17 +78,19 @@ def _line(name: str, ms: list[float]) -> str:
             f"p95 {_pct(ms, 0.95):6.1f} ms  max {max(ms):6.1f} ms")
 
 
-def _collect(page, draft: bool | None = None) -> tuple[list[float], list[dict], int]:
+def _collect(page, draft: bool | None = None) -> tuple[list[float], list[dict], int, list[float]]:
     samples = page.evaluate("window.rvmConsole.samples")
     server = page.evaluate("window.rvmConsole.server")
-    if samples is None:  # a page without drafts (before they came): every frame is full
+    if not samples:  # a page without drafts (before they came): every frame is full
         samples = [{"ms": ms, "draft": draft} for ms in page.evaluate("window.rvmConsole.timings")]
     keep = [k for k, s in enumerate(samples) if draft is None or s["draft"] == draft]
     return ([samples[k]["ms"] for k in keep], [server[k] for k in keep],
-            page.evaluate("window.rvmConsole.inputs"))
+            page.evaluate("window.rvmConsole.inputs"),
+            [samples[k].get("full_ms", samples[k]["ms"]) for k in keep])
 
 
-def _run_single(page, mode: str, moves: int, interval_ms: float) -> tuple[list[float], list[dict], int]:
+def _run_single(page, mode: str, moves: int, interval_ms: float
+                ) -> tuple[list[float], list[dict], int, list[float]]:
     page.evaluate(_RESET)
     fractions = [0.2 + 0.6 * ((k * 7) % moves) / moves for k in range(moves)]
     sel = "#slider-zoom"
@@ -127,7 +129,8 @@ def _run_single(page, mode: str, moves: int, interval_ms: float) -> tuple[list[f
     return _collect(page, draft=False)
 
 
-def _run_three(pages, drag: bool, moves: int) -> tuple[list[float], list[dict], int]:
+def _run_three(pages, drag: bool, moves: int
+               ) -> tuple[list[float], list[dict], int, list[float]]:
     for p in pages:
         p.evaluate(_RESET + "; window.rvmConsoleDone = false")
     for i, p in enumerate(pages):  # started together, not waited for; values of their own
@@ -137,13 +140,15 @@ def _run_three(pages, drag: bool, moves: int) -> tuple[list[float], list[dict], 
         p.wait_for_function(SETTLED_FULL, timeout=60000)
     ms: list[float] = []
     server: list[dict] = []
+    full: list[float] = []
     inputs = 0
     for p in pages:
-        a, b, c = _collect(p, draft=True if drag else None)
+        a, b, c, d = _collect(p, draft=True if drag else None)
         ms += a
         server += b
         inputs += c
-    return ms, server, inputs
+        full += d
+    return ms, server, inputs, full
 
 
 def main() -> None:
@@ -183,13 +188,22 @@ def main() -> None:
           f"Chromium {ver}; load average (1/5/15 min) before "
           f"{'/'.join(f'{x:.2f}' for x in load_before)}, after "
           f"{'/'.join(f'{x:.2f}' for x in load_after)}")
-    for mode, (ms, server, inputs) in results.items():
+    print("latency: from the input event to picture and EC table shown (first picture: the "
+          "draft or the full one, whichever is ready first); full: to the full picture")
+    for mode, (ms, server, inputs, full) in results.items():
         print(_line(mode, ms) + (f"  ({inputs} inputs)" if "drag" in mode or "3" in mode else ""))
-        for step in ("ecs", "pictures", "display", "roi", "page_json", "page_image",
+        if full != ms:
+            print(_line("full", full))
+        for step in ("ecs", "pictures", "display", "roi", "render", "page_json", "page_image",
                      "page_table"):
             vals = [s[step] for s in server if step in s]
             if vals:
                 print(f"           {step:14s} median {statistics.median(vals):6.1f} ms")
+        own = [sum(s.get(k, 0.0) for k in ("ecs", "pictures", "display", "roi")) for s in server]
+        if own and ms:
+            print(f"           server (evaluation request) median {statistics.median(own):.1f} ms"
+                  f" = {100 * statistics.median(own) / statistics.median(ms):.0f} % of the "
+                  f"median latency")
     for mode, target in (("step", 100), ("keys", 100), ("drag", 150), ("release", 150),
                          ("3 step", 250), ("3 keys", 250)):
         if mode in results and results[mode][0]:

@@ -113,31 +113,56 @@
     if (state.lastDraft) request({t0});
   }
 
+  // The picture's server time (its Server-Timing), once it has loaded; 0 if unknown.
+  function renderMs(url) {
+    const e = performance.getEntriesByName(new URL(url, location.href).href).pop();
+    return e && e.serverTiming && e.serverTiming.length ? e.serverTiming[0].duration : 0;
+  }
+
   async function pump() {
     const job = state.pending;
     state.pending = null;
     if (!job) return;
     state.inflight = true;
     try {
-      let img = null;
-      if (!job.draft && !job.annotate) {  // the full picture, in parallel with the ECs
-        img = new Image();
-        img.src = pictureUrl("display", job.params);
+      // A full job asks for the full picture at once, in parallel with the ECs, and for
+      // the draft with them: whichever picture is ready first is shown with the ECs; the
+      // full one replaces a draft as soon as it is decoded (before any newer value).
+      const full = !job.draft && !job.annotate;
+      let fullImg = null, fullReady = null, fullDone = false;
+      if (full) {
+        fullImg = new Image();
+        fullImg.src = pictureUrl("display", job.params);
+        fullReady = fullImg.decode().then(() => { fullDone = true; });
+        fullReady.catch(() => {});  // awaited below
       }
       const doc = await api("/api/evaluate", null, {params: job.params, annotate: job.annotate,
-                                                    draft: job.draft, inline: job.draft});
+                                                    draft: job.draft || full,
+                                                    inline: job.draft || full});
       const tJson = performance.now();
-      if (!img) {
+      let img = fullImg;
+      let quick = false;
+      if (!full || !fullDone) {
         img = new Image();
         img.src = job.annotate ? doc.annotated : `data:image/jpeg;base64,${doc.draft_jpeg}`;
+        quick = full;
       }
       await img.decode();
       const tImage = performance.now();
-      show(doc, img, job);
-      state.timings.push(performance.now() - job.t0);
-      state.samples.push({ms: performance.now() - job.t0, draft: job.draft});
-      state.server.push({...doc.timings_ms, page_json: tJson - job.t0, page_image: tImage - tJson,
-                         page_table: performance.now() - tImage});
+      show(doc, img, {...job, draft: job.draft || quick});
+      const first = performance.now() - job.t0;
+      const sample = {ms: first, draft: job.draft, full_ms: first, first: quick ? "draft" : "full"};
+      const times = {...doc.timings_ms, page_json: tJson - job.t0, page_image: tImage - tJson,
+                     page_table: performance.now() - tImage};
+      if (quick) {
+        await fullReady;
+        showPicture(fullImg, job);
+        sample.full_ms = performance.now() - job.t0;
+      }
+      if (full) times.render = renderMs(fullImg.src);
+      state.timings.push(first);
+      state.samples.push(sample);
+      state.server.push(times);
       if (state.evalError) { say("", ""); state.evalError = false; }
     } catch (e) {
       rejected(e, job);
@@ -164,18 +189,24 @@
     markStale();
   }
 
-  function show(doc, img, job) {
+  // The picture of `job` in place (its ECs are shown already).
+  function showPicture(img, job) {
     const old = $("rvm");
     img.id = "rvm";
     img.alt = old.alt;
     img.dataset.quality = job.draft ? "draft" : "full";
     old.replaceWith(img);
-    showEcs(doc);
-    showRoi(doc.roi);
     const a = $("ab-a");
     a.src = img.src;
     a.hidden = false;
     $("ab-a-empty").hidden = true;
+    if (state.shown) state.shown.draft = job.draft;
+  }
+
+  function show(doc, img, job) {
+    showPicture(img, job);
+    showEcs(doc);
+    showRoi(doc.roi);
     $("ab-a-cap").textContent = `A: current — EC score ${fmt(doc.ec_score)}, ${doc.passed ? "all pass" : "not all pass"}`;
     state.last = doc;
     state.shown = {params: {...job.params}, annotate: job.annotate, draft: job.draft};
