@@ -3,7 +3,9 @@
 
 Modules: :mod:`.session` (what it works on, one setting's evaluation), :mod:`.candidates`
 (the run's candidates), :mod:`.inputs` (checking the browser's values), :mod:`.outputs`
-(params files and setting reports, inside the run folder), :mod:`.app` (the FastAPI app),
+(params files and setting reports, inside the run folder), :mod:`.pictures` (the pictures,
+named by their parameters), :mod:`.guard` (the gate in front of every request: access,
+origin, JSON writes, size limits), :mod:`.app` (the FastAPI app),
 :mod:`.server` (access rule, socket, uvicorn); the page's HTML, JS and CSS in ``static/``.
 """
 

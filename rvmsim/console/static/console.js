@@ -116,6 +116,7 @@
   // The picture's server time (its Server-Timing), once it has loaded; 0 if unknown.
   function renderMs(url) {
     const e = performance.getEntriesByName(new URL(url, location.href).href).pop();
+    performance.clearResourceTimings();  // its buffer holds 250 entries
     return e && e.serverTiming && e.serverTiming.length ? e.serverTiming[0].duration : 0;
   }
 
