@@ -49,8 +49,12 @@ _RESET = ("window.rvmConsole.timings = []; window.rvmConsole.samples = []; "
 #: (a fraction of the range) keeps the pages' values apart (no page reuses another's picture).
 _STEPS_JS = """async ([n, drag, shift]) => {
   const s = window.rvmConsole, el = document.getElementById("slider-zoom");
-  const settled = () => new Promise((ok) => { const f = () => (!s.inflight && !s.pending
-      && s.last && s.last.params.zoom === s.current.zoom) ? ok() : setTimeout(f, 2); f(); });
+  // waits for the page's "rvm-idle" event (no polling: three pages polling every few ms
+  // would load the machine they are measured on); a timer as a fallback
+  const done = () => !s.inflight && !s.pending && s.last && s.last.params.zoom === s.current.zoom;
+  const settled = () => new Promise((ok) => {
+    const f = () => { if (done()) { window.removeEventListener("rvm-idle", f); ok(); } };
+    window.addEventListener("rvm-idle", f); setTimeout(function g() { done() ? f() : setTimeout(g, 50); }, 50); });
   const lo = Number(el.min), hi = Number(el.max);
   if (drag) el.dispatchEvent(new PointerEvent("pointerdown", {bubbles: true}));
   for (let k = 0; k < n; k++) {

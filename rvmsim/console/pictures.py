@@ -101,6 +101,9 @@ class Pictures:
         self._bgr = cv2.cvtColor(session.images.color, cv2.COLOR_RGB2BGR)
         self._rays = _SharedRays(64)
         self._lock = threading.Lock()
+        # one full-size render at a time: with several pages, renders queue here and leave
+        # the other core to the evaluations (whose answers, with their drafts, come first)
+        self._rendering = threading.Lock()
         self._kept: OrderedDict[tuple[str, IspParams], bytes] = OrderedDict()
         d, e = session.display, session.ec_output
         #: the EC image is the draft when it is the display's view at a lower resolution
@@ -142,8 +145,11 @@ class Pictures:
         """The full-quality picture (display size, JPEG)."""
         data = self.cached("display", params)
         if data is None:
-            data = self.keep("display", params,
-                             _jpeg(self.render_bgr(params, self.session.display), FULL_QUALITY))
+            with self._rendering:
+                data = self.cached("display", params)  # made while this one waited?
+                if data is None:
+                    data = self.keep("display", params, _jpeg(
+                        self.render_bgr(params, self.session.display), FULL_QUALITY))
         return data
 
     def draft(self, params: IspParams, ec_color: np.ndarray | None = None) -> bytes:

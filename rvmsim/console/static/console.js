@@ -170,6 +170,7 @@
     } finally {
       state.inflight = false;
       if (state.pending) pump();
+      else window.dispatchEvent(new Event("rvm-idle"));  // for tools that wait for frames
     }
   }
 
