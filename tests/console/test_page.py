@@ -157,10 +157,22 @@ def test_the_setting_lives_in_the_url(served, browser):
 
 def test_ab_side_by_side_above_the_fold_and_never_a_broken_image(served, browser):
     folder, session, url = served
-    page, errors = _open(browser, url)  # 1400 × 900
-    _settled(page)
+    page = _new_page(browser)  # 1400 × 900
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
     broken = ("[...document.images].filter(i => i.checkVisibility() && "
               "(!i.complete || i.naturalWidth === 0)).map(i => i.id)")
+    held = []
+    page.route("**/api/evaluate*", lambda route: held.append(route))
+    page.goto(url)
+    page.wait_for_function("document.body.dataset.ready === '1'")
+    page.wait_for_function("document.getElementById('fisheye').complete")
+    assert page.evaluate(broken) == []  # before any frame: placeholders, no empty picture
+    assert page.locator("#ab-a-empty").is_visible() and page.locator("#ab-b-empty").is_visible()
+    for route in held:
+        route.continue_()
+    page.unroute("**/api/evaluate*")
+    _settled(page)
     assert page.evaluate(broken) == []
     assert not page.locator("#ab-b").is_visible()
     assert page.locator("#ab-b-empty").is_visible()
