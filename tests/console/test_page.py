@@ -273,7 +273,7 @@ def test_number_boxes_show_7_digit_values_whole(served, browser):
     folder, session, url = served
     page, errors = _open(browser, url)
     for name in page.eval_on_selector_all("input[type=number]", "els => els.map(e => e.name)"):
-        for text in ("-1234.567", "1234567", "0.1234567", "-0.1234567"):
+        for text in ("-1234.567", "1234567", "-0.1234567", "-0.001234567", "0.005214949"):
             fits = page.eval_on_selector(f"#box-{name}", """(e, text) => {
                 e.value = text;
                 const cs = getComputedStyle(e), c = document.createElement('canvas').getContext('2d');
