@@ -58,13 +58,16 @@ def chromium_page(width: int, height: int) -> Iterator[tuple[object, str]]:
 
 SETTLED = ("(() => { const s = window.rvmConsole; return s && !s.inflight && !s.pending && "
            "s.last && Object.keys(s.current).every(k => s.last.params[k] === s.current[k]); })()")
+#: Settled, and the picture shown is the full one (not a drag's draft).
+SETTLED_FULL = SETTLED.replace("s.last &&", "s.last && (!('shown' in s) || (s.shown && "
+                                             "!s.shown.draft)) &&")
 
 
 def open_console(page, url: str) -> None:
     """Load the page and wait for its first frame."""
     page.goto(url)
     page.wait_for_function("window.rvmConsole && window.rvmConsole.frames >= 1", timeout=60000)
-    page.wait_for_function(SETTLED, timeout=60000)
+    page.wait_for_function(SETTLED_FULL, timeout=60000)
 
 
 def drag_slider(page, name: str, fractions: list[float], settle: bool) -> None:
@@ -83,4 +86,4 @@ def drag_slider(page, name: str, fractions: list[float], settle: bool) -> None:
         if settle:
             page.wait_for_function(SETTLED, timeout=60000)
     page.mouse.up()
-    page.wait_for_function(SETTLED, timeout=60000)
+    page.wait_for_function(SETTLED_FULL, timeout=60000)

@@ -3,7 +3,9 @@
 
 Modules: :mod:`.session` (what it works on, one setting's evaluation), :mod:`.candidates`
 (the run's candidates), :mod:`.inputs` (checking the browser's values), :mod:`.outputs`
-(params files and setting reports, inside the run folder), :mod:`.app` (the FastAPI app),
+(params files and setting reports, inside the run folder), :mod:`.pictures` (the pictures,
+named by their parameters), :mod:`.guard` (the gate in front of every request: access,
+origin, JSON writes, size limits), :mod:`.app` (the FastAPI app),
 :mod:`.server` (access rule, socket, uvicorn); the page's HTML, JS and CSS in ``static/``.
 """
 
@@ -18,7 +20,11 @@ from .session import (
     evaluate_setting,
     jpeg_bytes,
     open_session,
+    ec_margin,
+    human_name,
 )
+from .pictures import Pictures, params_key, parse_params_key
+from .guard import Guard, MAX_BODY_BYTES, MAX_TARGET_BYTES
 from .inputs import ConsoleInputError, parse_params, parse_label
 from .outputs import save_params, write_setting_report, params_text
 from .app import create_app, session_json, TOKEN_HEADER, LOOPBACK_HOSTS
@@ -34,6 +40,14 @@ __all__ = [
     "evaluate_setting",
     "jpeg_bytes",
     "open_session",
+    "ec_margin",
+    "human_name",
+    "Pictures",
+    "params_key",
+    "parse_params_key",
+    "Guard",
+    "MAX_BODY_BYTES",
+    "MAX_TARGET_BYTES",
     "ConsoleInputError",
     "parse_params",
     "parse_label",

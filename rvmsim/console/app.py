@@ -2,26 +2,31 @@
 
 Routes: ``GET /`` (the page), ``/static/…`` (its JS and CSS, from the package),
 ``GET /api/session`` (scene, controls, start values, candidates), ``GET /api/fisheye.jpg``,
-``GET /api/evaluate?q=JSON`` (a parameter set → its ECs, ROI and picture URLs; a GET:
-it changes nothing),
-``GET /api/frame/{id}/{display|annotated}.jpg``, ``POST /api/save``, ``POST /api/report``.
+``GET /api/evaluate?q=JSON`` (a parameter set → its ECs, margins, ROI and picture URLs, and
+with ``draft`` and ``inline`` the draft picture itself, base64; a GET: it changes nothing), ``GET /api/picture/{display|draft|annotated}.jpg?p=VALUES`` (the
+picture of a parameter set, :mod:`.pictures`), ``POST /api/save``, ``POST /api/report``.
 
-Access: with a token, every request must carry it (``X-Rvm-Token`` header, ``token`` query
-parameter, or the cookie the page gets when opened with ``?token=``), else 403.  Without one
-(loopback only) the ``Host`` header must name a loopback address, which stops DNS-rebinding
-pages.  Every error is a JSON ``{"error": "…"}`` (4xx for bad input), never a traceback.
+Every request passes :class:`~.guard.Guard` first (token or loopback ``Host``, the origin,
+JSON bodies for writes, size limits).  Every error is a JSON ``{"error": "…", "key": "…"}``
+(4xx for bad input), never a traceback.
+
+Evaluations run in worker threads, several at once (one per request: the pages each keep
+at most one evaluation and one picture in flight), so three pages on two cores share them.
 """
 
 from __future__ import annotations
 
+import base64
+import itertools
 import json
 import logging
 import secrets
-import threading
-from collections import OrderedDict
+import shlex
+import time
 from pathlib import Path
-from typing import Any, Awaitable, Callable
+from typing import Any
 
+import numpy as np
 from fastapi import FastAPI, Request
 from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
@@ -29,25 +34,18 @@ from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from ..errors import RvmsimError
-from ..isp import params_to_dict
+from ..isp import IspParams, params_to_dict, roi_outline
 from .candidates import candidate_json
+from .guard import LOOPBACK_HOSTS, MAX_BODY_BYTES, MAX_TARGET_BYTES, TOKEN_HEADER, Guard
 from .inputs import ConsoleInputError, parse_flag, parse_label, parse_params
 from .outputs import save_params, write_setting_report
-from .session import ConsoleFrame, ConsoleSession, evaluate_setting
+from .pictures import PICTURE_KINDS, Pictures, params_key, parse_params_key
+from .session import ConsoleFrame, ConsoleSession, ec_margin, human_name
 
-__all__ = ["create_app", "session_json", "TOKEN_HEADER", "LOOPBACK_HOSTS", "MAX_BODY_BYTES"]
+__all__ = ["create_app", "session_json", "TOKEN_HEADER", "LOOPBACK_HOSTS", "MAX_BODY_BYTES",
+           "MAX_TARGET_BYTES", "evaluate_command"]
 
 STATIC = Path(__file__).resolve().parent / "static"
-TOKEN_HEADER = "X-Rvm-Token"
-_COOKIE = "rvm_token"
-#: ``Host`` names accepted when the console runs without a token (loopback only).
-LOOPBACK_HOSTS = frozenset({"127.0.0.1", "localhost", "::1"})
-#: Largest request body (bytes): a parameter set is a few hundred.
-MAX_BODY_BYTES = 64 * 1024
-#: Frames kept for their picture requests (the page asks for the newest at once).
-_FRAMES_KEPT = 8
-_CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self'; "
-        "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'")
 _log = logging.getLogger("rvmsim.console")
 
 
@@ -56,60 +54,31 @@ def _error(status: int, message: str, key: str = "") -> JSONResponse:
                         headers={"Cache-Control": "no-store"})
 
 
-def _host_name(host_header: str) -> str:
-    """The host of a ``Host`` header, without its port (``[::1]:8000`` → ``::1``)."""
-    if host_header.startswith("["):
-        return host_header[1:].split("]", 1)[0]
-    return host_header.rsplit(":", 1)[0] if host_header.count(":") == 1 else host_header
-
-
-class _Frames:
-    """The last few evaluated frames by id (thread-safe), for their picture requests."""
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._frames: OrderedDict[int, ConsoleFrame] = OrderedDict()
-        self._next = 1
-
-    def add(self, frame: ConsoleFrame) -> int:
-        with self._lock:
-            fid, self._next = self._next, self._next + 1
-            self._frames[fid] = frame
-            while len(self._frames) > _FRAMES_KEPT:
-                self._frames.popitem(last=False)
-            return fid
-
-    def get(self, fid: int) -> ConsoleFrame | None:
-        with self._lock:
-            return self._frames.get(fid)
-
-
-def _frame_json(fid: int, frame: ConsoleFrame, server: str) -> dict[str, Any]:
-    """A frame as the page reads it; its picture URLs carry ``server`` (made per app), so a
-    browser's cached frame 1 of an earlier console is never taken for this one's."""
-    return {"frame": fid, "params": params_to_dict(frame.params), **frame.ec.as_dict(),
-            "roi": frame.roi, "image": f"/api/frame/{fid}/display.jpg?v={server}",
-            "annotated": (None if frame.annotated_jpeg is None
-                          else f"/api/frame/{fid}/annotated.jpg?v={server}"),
-            "timings_ms": frame.timings_ms}
-
-
 def session_json(session: ConsoleSession) -> dict[str, Any]:
     """What the page is built from (every string is set as text by the page, never HTML)."""
     sc, im = session.scene, session.images.color
     return {
         "vehicle": sc.name, "description": sc.description, "kind": session.kind,
-        "source": str(session.source), "save_dir": str(session.save_dir),
+        "source": str(session.source), "save_dir": str(session.save_dir.resolve()),
+        "scene_file": str(session.scene_file.resolve()),
         "criteria": session.criteria.name,
         "ec_output": {"width": session.ec_output.width, "height": session.ec_output.height,
                       "mirror": session.ec_output.mirror},
         "display": {"width": session.display.width, "height": session.display.height},
         "fisheye": {"width": int(im.shape[1]), "height": int(im.shape[0]),
                     "url": "/api/fisheye.jpg"},
-        "controls": [c.as_json() for c in session.controls],
+        "controls": [{**c.as_json(), "human": human_name(c.name)} for c in session.controls],
+        "order": list(IspParams.names()),
         "start": params_to_dict(session.start),
         "candidates": [candidate_json(c) for c in session.candidates],
     }
+
+
+def evaluate_command(session: ConsoleSession, params_file: Path) -> str:
+    """The shell command that reproduces a saved file's ECs: ``rvmsim evaluate SCENE
+    --params FILE`` (absolute paths, quoted for a POSIX shell)."""
+    return shlex.join(["rvmsim", "evaluate", str(session.scene_file.resolve()), "--params",
+                       str(params_file.resolve())])
 
 
 def _json_object(raw: bytes | str) -> dict[str, Any]:
@@ -126,31 +95,9 @@ def _json_object(raw: bytes | str) -> dict[str, Any]:
 
 
 async def _body(request: Request) -> dict[str, Any]:
-    """The request body's JSON object (:func:`_json_object`)."""
+    """The request body's JSON object (:func:`_json_object`; the guard has already cut it
+    off at the limit)."""
     return _json_object(await request.body())
-
-
-def _guard(app: FastAPI, token: str | None) -> None:
-    """The access check in front of every route (see the module docstring)."""
-    @app.middleware("http")
-    async def check(request: Request, call_next: Callable[[Request], Awaitable[Response]]
-                    ) -> Response:
-        if token is None:
-            if _host_name(request.headers.get("host", "")) not in LOOPBACK_HOSTS:
-                return _error(403, "forbidden: this console answers loopback host names only")
-        else:
-            given = (request.headers.get(TOKEN_HEADER) or request.query_params.get("token")
-                     or request.cookies.get(_COOKIE) or "")
-            if not secrets.compare_digest(given.encode(), token.encode()):
-                return _error(403, "forbidden: a valid token is required (open the URL the "
-                                   "console printed at start)")
-        response = await call_next(request)
-        response.headers["Content-Security-Policy"] = _CSP
-        response.headers["X-Content-Type-Options"] = "nosniff"
-        response.headers["Referrer-Policy"] = "no-referrer"
-        if token is not None and request.query_params.get("token") == token:
-            response.set_cookie(_COOKIE, token, httponly=True, samesite="strict")
-        return response
 
 
 def _errors(app: FastAPI) -> None:
@@ -172,22 +119,56 @@ def _errors(app: FastAPI) -> None:
         return _error(500, f"internal error ({type(err).__name__}); see the console's terminal")
 
 
-def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:  # long: routes
-    """The console app of ``session``; ``token``: required on every request (None: no
-    token, and loopback ``Host`` names only)."""
+def _roi(session: ConsoleSession, params: IspParams) -> list[list[float]]:
+    poly = roi_outline(params, (session.images.color.shape[1], session.images.color.shape[0]),
+                       session.ec_output, samples_per_side=32)
+    return [[round(float(x), 2), round(float(y), 2)] for x, y in poly[np.isfinite(poly).all(1)]]
+
+
+def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
+    """The console app of ``session`` behind its :class:`~.guard.Guard`; ``token``:
+    required on every request (None: no token, and loopback ``Host`` names only)."""
     app = FastAPI(title="rvmsim console", docs_url=None, redoc_url=None, openapi_url=None)
-    frames = _Frames()
-    server = secrets.token_hex(6)
-    evaluating = threading.Lock()  # one evaluation at a time: the page sends one at a time
-    _guard(app, token)
+    pictures = Pictures(session)
+    server = secrets.token_hex(6)  # in picture URLs: no browser cache of another console
+    frames = itertools.count(1)
     _errors(app)
     app.mount("/static", StaticFiles(directory=STATIC), name="static")
 
-    def evaluate(doc: dict[str, Any]) -> ConsoleFrame:
+    def picture_url(kind: str, params: IspParams) -> str:
+        return f"/api/picture/{kind}.jpg?v={server}&p={params_key(params)}"
+
+    def evaluate(doc: dict[str, Any]) -> dict[str, Any]:
+        """The ECs at the EC size (the one evaluation path), the ROI, and the draft or
+        annotated picture when asked (both come from the EC image just made)."""
+        from ..pipeline import evaluate_params
+
         params = parse_params(doc.get("params", {}), session.start)
         annotate = parse_flag(doc.get("annotate"), "annotate")
-        with evaluating:
-            return evaluate_setting(session, params, annotate=annotate)
+        draft = parse_flag(doc.get("draft"), "draft")
+        inline = parse_flag(doc.get("inline"), "inline")
+        t0 = time.perf_counter()
+        frame = evaluate_params(session.images, params, session.ec_output, session.criteria,
+                                annotate=annotate)
+        t1 = time.perf_counter()
+        draft_jpeg = pictures.draft(params, frame.color) if draft else b""
+        if annotate:
+            pictures.annotated(params, frame.annotated)
+        t2 = time.perf_counter()
+        roi = _roi(session, params)
+        t3 = time.perf_counter()
+        ec = frame.ec.as_dict()
+        for item in ec["ecs"]:
+            item["margin"] = ec_margin(item["value"], *item["range"])
+        ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2}
+        return {"frame": next(frames), "params": params_to_dict(params), **ec, "roi": roi,
+                "image": picture_url("display", params),
+                "draft": picture_url("draft", params) if draft else None,
+                "annotated": picture_url("annotated", params) if annotate else None,
+                # the draft itself, when asked: one round trip per frame while dragging
+                **({"draft_jpeg": base64.b64encode(draft_jpeg).decode()} if draft and inline
+                   else {}),
+                "timings_ms": {k: round(1e3 * v, 2) for k, v in ms.items()}}
 
     @app.get("/")
     async def index() -> FileResponse:
@@ -199,7 +180,8 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
 
     @app.get("/api/session")
     async def get_session() -> JSONResponse:
-        return JSONResponse(session_json(session), headers={"Cache-Control": "no-store"})
+        return JSONResponse({**session_json(session), "server": server},
+                            headers={"Cache-Control": "no-store"})
 
     @app.get("/api/fisheye.jpg")
     async def fisheye() -> Response:
@@ -208,29 +190,33 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
     @app.get("/api/evaluate")
     async def get_evaluate(q: str = "{}") -> JSONResponse:
         doc = _json_object(q)
-        frame = await run_in_threadpool(evaluate, doc)
-        return JSONResponse(_frame_json(frames.add(frame), frame, server),
+        return JSONResponse(await run_in_threadpool(evaluate, doc),
                             headers={"Cache-Control": "no-store"})
 
-    @app.get("/api/frame/{fid}/{kind}.jpg")
-    async def frame_picture(fid: int, kind: str) -> Response:
-        frame = frames.get(fid)
-        data = None if frame is None else {"display": frame.display_jpeg,
-                                           "annotated": frame.annotated_jpeg}.get(kind)
-        if data is None:
-            return _error(404, f"no picture {kind} of frame {fid} (superseded)")
-        # a frame's pictures never change: the A/B view reuses the one just shown
+    @app.get("/api/picture/{kind}.jpg")
+    async def picture(kind: str, p: str = "") -> Response:
+        if kind not in PICTURE_KINDS:
+            return _error(404, f"no picture {kind!r} (one of {', '.join(PICTURE_KINDS)})")
+        params = parse_params_key(p)
+        t0 = time.perf_counter()
+        data = await run_in_threadpool(pictures.picture, kind, params)
+        # a picture of given parameters never changes (v: this server's id)
         return Response(data, media_type="image/jpeg",
-                        headers={"Cache-Control": "private, max-age=600, immutable"})
+                        headers={"Cache-Control": "private, max-age=600, immutable",
+                                 "Server-Timing": f"render;dur={1e3 * (time.perf_counter() - t0):.2f}"})
 
     @app.post("/api/save")
     async def post_save(request: Request) -> JSONResponse:
         doc = await _body(request)
         label = parse_label(doc.get("label"))
-        frame = await run_in_threadpool(evaluate, {"params": doc.get("params", {})})
+        params = parse_params(doc.get("params", {}), session.start)
+        frame = await run_in_threadpool(_frame, session, params)
         path = await run_in_threadpool(save_params, session, frame, label)
         return JSONResponse({"file": str(path.relative_to(session.root.resolve())),
-                             "path": str(path), "ec_score": frame.ec.score})
+                             "path": str(path.resolve()),
+                             "scene": str(session.scene_file.resolve()),
+                             "command": evaluate_command(session, path),
+                             "ec_score": frame.ec.score})
 
     @app.post("/api/report")
     async def post_report(request: Request) -> JSONResponse:
@@ -239,6 +225,15 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> FastAPI:
         params = parse_params(doc.get("params", {}), session.start)
         path = await run_in_threadpool(write_setting_report, session, params, label)
         return JSONResponse({"file": str(path.relative_to(session.root.resolve())),
-                             "path": str(path)})
+                             "path": str(path.resolve())})
 
-    return app
+    return Guard(app, token)
+
+
+def _frame(session: ConsoleSession, params: IspParams) -> ConsoleFrame:
+    """The ECs of ``params`` as a frame to save (no pictures)."""
+    from ..pipeline import evaluate_params
+
+    ec = evaluate_params(session.images, params, session.ec_output, session.criteria,
+                         annotate=False).ec
+    return ConsoleFrame(params, ec, b"", None, [], {})

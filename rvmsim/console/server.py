@@ -124,6 +124,12 @@ def serve(session: ConsoleSession, access: Access, port: int, *,
     ``on_ready`` runs only after uvicorn has taken over Ctrl-C, so a Ctrl-C any time after
     the URL is printed is a clean shutdown (KeyboardInterrupt, nothing on stderr).
     """
+    import cv2
+
+    # Requests are evaluated in parallel threads (a page's ECs and its picture, several
+    # pages); OpenCV's own thread pool on top of that oversubscribes the cores, and under
+    # load one late helper thread holds up a whole remap: one OpenCV thread per request.
+    cv2.setNumThreads(1)
     sock = listen(access.host, port)
     url = console_url(access.host, sock.getsockname()[1], access.token)
     server = make_server(session, access)

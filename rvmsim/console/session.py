@@ -33,13 +33,44 @@ if TYPE_CHECKING:
     from ..scene import Scene
 
 __all__ = ["ParamControl", "ConsoleSession", "ConsoleFrame", "open_session", "evaluate_setting",
-           "jpeg_bytes", "CONSOLE_DIR"]
+           "jpeg_bytes", "CONSOLE_DIR", "human_name", "ec_margin", "HUMAN_NAMES"]
 
 #: The folder, inside the run folder (or the scene's ``out/<scene>/``), that the console
 #: writes its params files and reports into.
 CONSOLE_DIR = "console"
 #: JPEG quality of the pictures sent to the page.
 JPEG_QUALITY = 85
+#: What the page calls each parameter (its sliders' accessible names add the short name).
+HUMAN_NAMES = {
+    "fov": "Field of view", "rad": "Image-circle radius", "h_shift": "Horizontal shift",
+    "v_shift": "Vertical shift", "h_pan": "Horizontal pan", "v_pan": "Vertical pan",
+    "zoom": "Zoom", "tilt": "Tilt", "adv_h_shift": "Advanced horizontal shift",
+    "adv_v_shift": "Advanced vertical shift", "adv_h_scale": "Advanced horizontal scale",
+    "adv_v_scale": "Advanced vertical scale", "theta": "Image-plane tilt theta",
+    "phi": "Image-plane tilt azimuth phi",
+}
+
+
+def human_name(name: str) -> str:
+    """A parameter's name for people ("Advanced vertical shift" for ``adv_v_shift``)."""
+    return HUMAN_NAMES.get(name, name.replace("_", " ").capitalize())
+
+
+def ec_margin(value: float | None, low: float | None, high: float | None) -> float | None:
+    """How far inside (> 0) or outside (< 0) its acceptable range an EC's value is, as a
+    fraction of the range's scale: the half-width of a two-sided range (1 at its middle,
+    0 at a bound), the bound's magnitude for a one-sided one (1 when that is 0); ±1 for a
+    single acceptable value (met or not).  None without a value or a range."""
+    if value is None or not np.isfinite(value) or (low is None and high is None):
+        return None
+    if low is not None and high is not None:
+        if high <= low:
+            return 1.0 if value == low else -1.0
+        return float(min(value - low, high - value) / ((high - low) / 2.0))
+    if low is not None:
+        return float((value - low) / (abs(low) or 1.0))
+    assert high is not None
+    return float((high - value) / (abs(high) or 1.0))
 
 
 @dataclass(frozen=True)
@@ -111,7 +142,7 @@ def jpeg_bytes(image: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
     """``image`` ((H, W, 3) RGB uint8) encoded as JPEG."""
     import cv2
 
-    ok, buf = cv2.imencode(".jpg", np.ascontiguousarray(image[:, :, ::-1]),
+    ok, buf = cv2.imencode(".jpg", cv2.cvtColor(image, cv2.COLOR_RGB2BGR),
                            [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
     if not ok:
         raise RvmsimError("console: JPEG encoding failed")

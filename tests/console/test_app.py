@@ -8,8 +8,8 @@ import re
 import pytest
 from fastapi.testclient import TestClient
 
-from rvmsim.console import create_app, evaluate_setting, open_session
-from rvmsim.console.app import MAX_BODY_BYTES, STATIC, TOKEN_HEADER
+from rvmsim.console import create_app, ec_margin, evaluate_setting, open_session
+from rvmsim.console.app import MAX_BODY_BYTES, MAX_TARGET_BYTES, STATIC, TOKEN_HEADER
 from rvmsim.isp import IspParams, load_params
 
 LOCAL = "http://127.0.0.1"
@@ -51,7 +51,10 @@ def test_evaluate_gives_the_ecs_of_the_one_evaluation_path(session):
     doc = r.json()
     want = evaluate_params(session.images, session.start.replace(zoom=0.9), session.ec_output,
                            session.criteria, annotate=False).ec.as_dict()
+    margins = [ec.pop("margin") for ec in doc["ecs"]]
     assert doc["ecs"] == want["ecs"] and doc["ec_score"] == want["ec_score"]
+    assert margins == [ec_margin(ec["value"], *ec["range"]) for ec in want["ecs"]]
+    assert any(m is not None for m in margins)
     pic = client.get(doc["image"])
     assert pic.status_code == 200 and pic.headers["content-type"] == "image/jpeg"
     import cv2
@@ -63,13 +66,61 @@ def test_evaluate_gives_the_ecs_of_the_one_evaluation_path(session):
     assert len(doc["roi"]) > 8
 
 
-def test_old_frames_are_dropped(session):
+def test_pictures_are_named_by_their_parameters_and_never_go_stale(session):
+    """A picture URL names its parameters, so an early one (B's, the A/B view's) still
+    answers after many newer evaluations, with the picture of those parameters."""
+    import cv2
+    import numpy as np
+
+    from rvmsim.pipeline import rvm_color
+
     client = TestClient(create_app(session), base_url=LOCAL)
-    first = _evaluate(client, {"params": {}}).json()
-    for k in range(10):
-        _evaluate(client, {"params": {"zoom": 0.5 + 0.01 * k}})
-    r = client.get(first["image"])
-    assert r.status_code == 404 and "superseded" in r.json()["error"]
+    first = _evaluate(client, {"params": {"zoom": 0.7}, "draft": True}).json()
+    for k in range(60):  # more than the server keeps
+        _evaluate(client, {"params": {"zoom": 0.5 + 0.01 * k}, "draft": True})
+    for kind, url, size in (("display", first["image"], session.display),
+                            ("draft", first["draft"], session.ec_output)):
+        r = client.get(url)
+        assert r.status_code == 200 and r.headers["content-type"] == "image/jpeg", kind
+        got = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR)[:, :, ::-1]
+        want = rvm_color(session.images, session.start.replace(zoom=0.7), size)
+        assert got.shape == want.shape, kind
+        other = rvm_color(session.images, session.start.replace(zoom=1.0), size)
+        err = np.abs(got.astype(int) - want).mean()
+        assert err < 4 and err < np.abs(got.astype(int) - other).mean() / 3, kind
+    bad = first["image"].replace("p=", "p=999,")
+    assert client.get(bad).status_code == 422
+    assert client.get("/api/picture/other.jpg?p=1").status_code == 404
+
+
+@pytest.mark.parametrize("zoom, fov, v_pan", [(1.0, 180.0, 0.0), (0.4, 200.0, 90.0),
+                                               (2.5, 150.0, -30.0)])
+def test_pictures_have_the_pixels_of_rvm_color(session, zoom, fov, v_pan):
+    """The console's own remap (a BGR copy of the fisheye, shared ray planes) gives the
+    pixels of the pipeline's ``rvm_color``, exactly; twice (the second from the ray cache)."""
+    import numpy as np
+
+    from rvmsim.console import Pictures
+    from rvmsim.pipeline import rvm_color
+
+    pictures = Pictures(session)
+    params = session.start.replace(zoom=zoom, fov=fov, v_pan=v_pan)
+    want = rvm_color(session.images, params, session.display)
+    for _ in range(2):
+        got = pictures.render_bgr(params, session.display)
+        assert np.array_equal(got[:, :, ::-1], want)
+    near = params.replace(fov=fov - 5.0, rad=params.rad * 1.1)  # same rays, cached
+    assert np.array_equal(pictures.render_bgr(near, session.display)[:, :, ::-1],
+                          rvm_color(session.images, near, session.display))
+
+
+@pytest.mark.parametrize("value, low, high, want", [
+    (6.0, 4.0, 8.0, 1.0), (4.0, 4.0, 8.0, 0.0), (3.0, 4.0, 8.0, -0.5), (9.0, 4.0, 8.0, -0.5),
+    (15.0, 10.0, None, 0.5), (5.0, 10.0, None, -0.5), (2.5, None, 5.0, 0.5),
+    (1.0, 1.0, 1.0, 1.0), (0.0, 1.0, 1.0, -1.0), (None, 1.0, 2.0, None),
+    (3.0, None, None, None), (1.0, 0.0, None, 1.0)])
+def test_ec_margin(value, low, high, want):
+    assert ec_margin(value, low, high) == want
 
 
 @pytest.mark.parametrize("body, status, words", [
@@ -97,7 +148,8 @@ def test_bad_bodies_get_a_json_message(session, raw, status):
     client = TestClient(create_app(session), base_url=LOCAL)
     if len(raw) < 20000:  # longer URLs (3 bytes a bracket) are refused by the client
         r = client.get("/api/evaluate", params={"q": raw.decode()})
-        assert r.status_code == status and r.json()["error"]
+        long_url = len(r.request.url.raw_path) > MAX_TARGET_BYTES
+        assert r.status_code == (414 if long_url else status) and r.json()["error"]
     r = client.post("/api/save", content=raw, headers={"content-type": "application/json"})
     assert r.status_code == status and r.json()["error"]
 

@@ -4,6 +4,8 @@ expert does, and check what it shows against ``rvmsim evaluate``."""
 from __future__ import annotations
 
 import json
+import shlex
+from pathlib import Path
 
 import pytest
 
@@ -46,8 +48,9 @@ def _open(browser, url):
 def _settled(page, timeout: float = 30000) -> None:
     """Wait until the newest value has been shown (nothing in flight, nothing pending)."""
     page.wait_for_function("(() => { const s = window.rvmConsole; return !s.inflight && "
-                           "!s.pending && s.last && Object.keys(s.current).every("
-                           "k => s.last.params[k] === s.current[k]); })()", timeout=timeout)
+                           "!s.pending && s.last && s.shown && !s.shown.draft && "
+                           "Object.keys(s.current).every(k => s.last.params[k] === s.current[k]);"
+                           " })()", timeout=timeout)
 
 
 def _drag(page, selector: str, fraction: float) -> None:
@@ -70,15 +73,6 @@ def _table(page) -> list[list[str]]:
         "#ec-table tbody tr", "rows => rows.map(r => [...r.cells].map(c => c.textContent))")
 
 
-def _evaluate_cli(scene, params_file, out) -> dict:
-    """``rvmsim evaluate SCENE --params FILE`` in a child process (nothing shared with the
-    console serving in this one); its ec.json."""
-    res = run_in_child(["evaluate", scene, "--params", params_file, "--out", out,
-                        "--no-progress"], timeout_s=300)
-    assert res.code == 0, res.stderr
-    return json.loads((out / "ec.json").read_text())
-
-
 def test_zoom_slider_updates_the_picture_and_the_ecs_as_evaluate(served_run, browser, tmp_path):
     folder, session, url = served_run
     page, errors = _open(browser, url)
@@ -96,13 +90,23 @@ def test_zoom_slider_updates_the_picture_and_the_ecs_as_evaluate(served_run, bro
     # what the page shows is the evaluation it got, EC by EC
     assert [row[0] for row in after_table] == [e["id"] for e in state["ecs"]]
     for row, ec in zip(after_table, state["ecs"]):
-        assert row[5] == f"{ec['score']:.4f}"
+        assert row[6] == f"{ec['score']:.4f}"
         assert row[2] == ("—" if ec["value"] is None else f"{ec['value']:.3f}")
-    # save it, and evaluate the saved file as `rvmsim evaluate` does: the same ECs
+    # save it: the page shows the file's absolute path and the command that checks it;
+    # run that very command: the same ECs
     page.click("#save")
     page.wait_for_function("window.rvmConsole.lastWrite !== undefined")
     saved = page.evaluate("window.rvmConsole.lastWrite")
-    doc = _evaluate_cli(folder / "scene.yaml", saved["path"], tmp_path / "ev")
+    command = shlex.split(saved["command"])
+    assert command == ["rvmsim", "evaluate", str(session.scene_file.resolve()), "--params",
+                       saved["path"]]
+    assert Path(saved["path"]).is_absolute() and Path(saved["path"]).is_file()
+    assert page.text_content("#saved-command") == saved["command"]
+    assert page.text_content("#saved-path") == saved["path"]
+    assert saved["path"] in page.text_content("#message")
+    res = run_in_child([*command[1:], "--out", tmp_path / "ev", "--no-progress"], timeout_s=300)
+    assert res.code == 0, res.stderr
+    doc = json.loads((tmp_path / "ev" / "ec.json").read_text())
     assert doc["ec_score"] == pytest.approx(state["ec_score"], rel=1e-9, abs=1e-300)
     for mine, theirs in zip(state["ecs"], doc["ecs"]):
         assert mine["id"] == theirs["id"]
@@ -133,7 +137,7 @@ def test_load_candidate_3_and_save_it(served_run, browser):
     params, output = load_params(path)
     assert params == third
     assert (output.width, output.height) == (session.ec_output.width, session.ec_output.height)
-    assert saved["file"] in page.text_content("#message")
+    assert saved["path"] in page.text_content("#message")
     # undo goes back to rank 1, reset too
     page.click("#undo")
     _settled(page)
