@@ -148,16 +148,20 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
         draft = parse_flag(doc.get("draft"), "draft")
         inline = parse_flag(doc.get("inline"), "inline")
         t0 = time.perf_counter()
-        frame = evaluate_params(session.images, params, session.ec_output, session.criteria,
-                                annotate=annotate)
-        t1 = time.perf_counter()
-        draft_jpeg = pictures.draft(params, frame.color) if draft else b""
-        if annotate:
+        color = None
+        if annotate:  # the whole EC image of record, drawn
+            frame = evaluate_params(session.images, params, session.ec_output,
+                                    session.criteria, annotate=True)
+            ec_result, color = frame.ec, frame.color
             pictures.annotated(params, frame.annotated)
+        else:  # the windowed evaluator at the size of record: the same values, faster
+            ec_result = session.ecs(params)
+        t1 = time.perf_counter()
+        draft_jpeg = pictures.draft(params, color) if draft else b""
         t2 = time.perf_counter()
         roi = _roi(session, params)
         t3 = time.perf_counter()
-        ec = frame.ec.as_dict()
+        ec = ec_result.as_dict()
         for item in ec["ecs"]:
             item["margin"] = ec_margin(item["value"], *item["range"])
         ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2}
@@ -234,6 +238,4 @@ def _frame(session: ConsoleSession, params: IspParams) -> ConsoleFrame:
     """The ECs of ``params`` as a frame to save (no pictures)."""
     from ..pipeline import evaluate_params
 
-    ec = evaluate_params(session.images, params, session.ec_output, session.criteria,
-                         annotate=False).ec
-    return ConsoleFrame(params, ec, b"", None, [], {})
+    return ConsoleFrame(params, session.ecs(params), b"", None, [], {})

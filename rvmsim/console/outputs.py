@@ -58,7 +58,7 @@ def params_text(session: ConsoleSession, frame: ConsoleFrame, label: str) -> str
     result = "all pass" if frame.ec.passed else "not all pass"
     return (f"# console setting{what} of {session.scene.name}: EC score {frame.ec.score:.6g} "
             f"({result}; from {session.kind} {session.source})\n"
-            + yaml.safe_dump(params_to_dict(frame.params, session.ec_output), sort_keys=False))
+            + yaml.safe_dump(params_to_dict(frame.params, session.ec_output, judged_at=session.ec_output), sort_keys=False))
 
 
 def save_params(session: ConsoleSession, frame: ConsoleFrame, label: str = "") -> Path:

@@ -107,7 +107,7 @@ class Pictures:
         self._kept: OrderedDict[tuple[str, IspParams], bytes] = OrderedDict()
         d, e = session.display, session.ec_output
         #: the EC image is the draft when it is the display's view at a lower resolution
-        self.ec_is_draft = (e.width <= d.width and e.mirror == d.mirror
+        self.ec_is_draft = (e.width < d.width and e.mirror == d.mirror
                             and math.isclose(e.width / e.height, d.width / d.height,
                                              rel_tol=1e-3))
         self.draft_output = (e if self.ec_is_draft

@@ -3,16 +3,17 @@ evaluation of one parameter set as the page shows it.
 
 Convention
 ----------
-The ECs are measured on the RVM image at the **EC output** size: the run's tuning output
-(``output`` of its tuning config, default 640 × 360), which is also the ``output`` of the
-params files ``rvmsim select`` and the console write, so ``rvmsim evaluate --params FILE``
-measures exactly what the page shows.  The picture is the same view at the **display** size
-(1280 × 720, :data:`rvmsim.tune.DISPLAY_SIZE`); the annotated picture is the EC image with
-its measurements drawn (at the EC size, with its results panel).
+The ECs are judged at the **RVM image of record** (:func:`rvmsim.pipeline.record_output`:
+the scene's or criteria's ``display.rvm_image_px``, default 1280 × 720), where
+``rvmsim evaluate --params FILE`` judges too, whatever size the run searched at: the page's
+verdict is the display's.  They come from the windowed evaluator (the same values as the
+full path, tested); the picture is the same view at that size; the annotated picture is the
+EC image of record with its measurements drawn (with its results panel).
 """
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,11 +25,11 @@ from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec, roi_outline
 from ..runs import is_run_folder, open_run, run_inputs, run_settings, store_candidates
 from ..search import TuningConfig
-from ..tune import DISPLAY_SIZE
 from .candidates import Candidate
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
+    from ..pipeline import ImageEvaluator
     from ..render import FisheyeImages
     from ..scene import Scene
 
@@ -118,10 +119,24 @@ class ConsoleSession:
     controls: tuple[ParamControl, ...] = field(repr=False)
     candidates: tuple[Candidate, ...] = field(repr=False)
     fisheye_jpeg: bytes = field(repr=False)
+    #: The ECs at ``ec_output`` (the windowed evaluator; one call at a time, see :meth:`ecs`).
+    evaluator: ImageEvaluator | None = field(default=None, repr=False)
+    _evaluating: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @property
     def kind(self) -> str:
         return "run" if self.run_dir is not None else "scene"
+
+    def ecs(self, params: IspParams) -> EcResult:
+        """The ECs of ``params`` at the RVM image of record (the requests' threads take
+        turns: the evaluator's ray cache is not shared between threads)."""
+        if self.evaluator is None:
+            from ..pipeline import evaluate_params
+
+            return evaluate_params(self.images, params, self.ec_output, self.criteria,
+                                   annotate=False).ec
+        with self._evaluating:
+            return self.evaluator(params)
 
 
 @dataclass(frozen=True)
@@ -204,13 +219,16 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         raise RvmsimError(f"{source}: no such run folder or scene file")
     scene = load_scene(scene_file)
     images, _ = cached_render(scene)
-    ec_output = config.output_spec()
+    from ..pipeline import make_evaluator, record_output
+
+    ec_output = record_output(criteria, scene, config.output.mirror)
     return ConsoleSession(
         source=source, run_dir=run_dir, root=root, save_dir=root / CONSOLE_DIR, scene=scene,
         scene_file=scene_file, images=images, criteria=criteria, ec_output=ec_output,
-        display=OutputSpec(DISPLAY_SIZE[0], DISPLAY_SIZE[1], ec_output.mirror), start=start,
+        display=ec_output, start=start,
         controls=_controls(config, scene), candidates=candidates,
-        fisheye_jpeg=jpeg_bytes(images.color))
+        fisheye_jpeg=jpeg_bytes(images.color),
+        evaluator=make_evaluator(images, ec_output, criteria))
 
 
 def evaluate_setting(session: ConsoleSession, params: IspParams, *,
@@ -222,18 +240,20 @@ def evaluate_setting(session: ConsoleSession, params: IspParams, *,
     from ..pipeline import evaluate_params, rvm_color
 
     t0 = time.perf_counter()
-    frame = evaluate_params(session.images, params, session.ec_output, session.criteria,
-                            annotate=False)
+    ec = session.ecs(params)
     t1 = time.perf_counter()
     display = jpeg_bytes(rvm_color(session.images, params, session.display))
     t2 = time.perf_counter()
-    annotated = (jpeg_bytes(annotate_ecs(frame.color, frame.labels, frame.ec)) if annotate
-                 else None)
+    annotated = None
+    if annotate:
+        frame = evaluate_params(session.images, params, session.ec_output, session.criteria,
+                                annotate=False)
+        annotated = jpeg_bytes(annotate_ecs(frame.color, frame.labels, frame.ec))
     t3 = time.perf_counter()
     poly = roi_outline(params, (session.images.color.shape[1], session.images.color.shape[0]),
                        session.ec_output, samples_per_side=32)
     roi = [[round(float(x), 2), round(float(y), 2)] for x, y in poly[np.isfinite(poly).all(1)]]
     t4 = time.perf_counter()
     ms = {"ecs": t1 - t0, "display": t2 - t1, "annotated": t3 - t2, "roi": t4 - t3}
-    return ConsoleFrame(params, frame.ec, display, annotated, roi,
+    return ConsoleFrame(params, ec, display, annotated, roi,
                         {k: round(1e3 * v, 2) for k, v in ms.items()})
