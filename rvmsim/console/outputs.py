@@ -52,13 +52,17 @@ def _new_file(session: ConsoleSession, stem: str, label: str, suffix: str, text:
 
 
 def params_text(session: ConsoleSession, frame: ConsoleFrame, label: str) -> str:
-    """A params file as ``rvmsim select`` writes it (a comment line, then the 14 parameters
-    and the EC output), loadable by :func:`rvmsim.isp.load_params`."""
+    """A params file as ``rvmsim select`` writes it (comment lines, then the 14 parameters,
+    the run's search output and the size of record the ECs were judged at), loadable by
+    :func:`rvmsim.isp.load_params`."""
     what = f" '{label}'" if label else ""
     result = "all pass" if frame.ec.passed else "not all pass"
+    rec = session.ec_output
     return (f"# console setting{what} of {session.scene.name}: EC score {frame.ec.score:.6g} "
             f"({result}; from {session.kind} {session.source})\n"
-            + yaml.safe_dump(params_to_dict(frame.params, session.ec_output, judged_at=session.ec_output), sort_keys=False))
+            f"# judged at the RVM image of record, {rec.width}x{rec.height} px\n"
+            + yaml.safe_dump(params_to_dict(frame.params, session.search_output or rec,
+                                            judged_at=rec), sort_keys=False))
 
 
 def save_params(session: ConsoleSession, frame: ConsoleFrame, label: str = "") -> Path:

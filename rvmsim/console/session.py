@@ -119,6 +119,8 @@ class ConsoleSession:
     controls: tuple[ParamControl, ...] = field(repr=False)
     candidates: tuple[Candidate, ...] = field(repr=False)
     fisheye_jpeg: bytes = field(repr=False)
+    #: The size the run searched at (its params files' ``output``; None: ``ec_output``).
+    search_output: OutputSpec | None = None
     #: The ECs at ``ec_output`` (the windowed evaluator; one call at a time, see :meth:`ecs`).
     evaluator: ImageEvaluator | None = field(default=None, repr=False)
     _evaluating: threading.Lock = field(default_factory=threading.Lock, repr=False)
@@ -228,7 +230,7 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         display=ec_output, start=start,
         controls=_controls(config, scene), candidates=candidates,
         fisheye_jpeg=jpeg_bytes(images.color),
-        evaluator=make_evaluator(images, ec_output, criteria))
+        search_output=config.output_spec(), evaluator=make_evaluator(images, ec_output, criteria))
 
 
 def evaluate_setting(session: ConsoleSession, params: IspParams, *,

@@ -78,8 +78,13 @@ def test_pictures_are_named_by_their_parameters_and_never_go_stale(session):
     first = _evaluate(client, {"params": {"zoom": 0.7}, "draft": True}).json()
     for k in range(60):  # more than the server keeps
         _evaluate(client, {"params": {"zoom": 0.5 + 0.01 * k}, "draft": True})
+    # the draft: the view at half the display's size (the ECs are judged at the display's)
+    from rvmsim.isp import OutputSpec
+
+    d = session.display
+    half = OutputSpec(d.width // 2, d.height // 2, d.mirror)
     for kind, url, size in (("display", first["image"], session.display),
-                            ("draft", first["draft"], session.ec_output)):
+                            ("draft", first["draft"], half)):
         r = client.get(url)
         assert r.status_code == 200 and r.headers["content-type"] == "image/jpeg", kind
         got = cv2.imdecode(np.frombuffer(r.content, np.uint8), cv2.IMREAD_COLOR)[:, :, ::-1]
@@ -164,8 +169,10 @@ def test_save_writes_a_select_format_file_into_the_run_folder(client, run_copy):
     params, output = load_params(path)
     start = open_session(run_copy / "run").start
     assert params == start.replace(zoom=0.8)
-    assert (output.width, output.height) == (640, 360)
+    # the run searched at its default size, the RVM image of record, where it was judged
+    assert (output.width, output.height) == (1280, 720)
     assert path.read_text().startswith("# console setting")
+    assert "judged_at:\n  - 1280\n  - 720" in path.read_text()
     again = client.post("/api/save", json={"params": {"zoom": 0.8}, "label": "../../../etc/passwd"})
     assert again.json()["file"] != doc["file"]  # never overwritten
     assert client.post("/api/save", json={"params": {"zoom": 0.8}, "label": 7}).status_code == 422

@@ -16,7 +16,7 @@ def test_a_saved_file_reads_back_as_the_setting(run_copy):
     path = save_params(s, frame, "first")
     assert path.parent == (run_copy / "run" / "console").resolve()
     params, output = load_params(path)
-    assert params == s.start and output == s.ec_output
+    assert params == s.start and output == s.search_output
     # the body is what `rvmsim select --rank 1` writes for the same candidate
     select = rank_params_text(run_copy / "run", 1)
     assert path.read_text().split("\n", 1)[1] == select.split("\n", 1)[1]

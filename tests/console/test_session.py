@@ -22,7 +22,8 @@ def test_a_run_starts_at_rank_1_with_its_candidates(small_run):
     assert s.kind == "run" and s.start == top[0].params
     assert [c.trial for c in s.candidates] == [r.idx for r in top]
     assert s.save_dir == small_run / "run" / "console" and s.root == small_run / "run"
-    assert (s.ec_output.width, s.ec_output.height) == (640, 360)
+    # judged (and shown) at the RVM image of record, whatever size the run searched at
+    assert (s.ec_output.width, s.ec_output.height) == (1280, 720)
     assert (s.display.width, s.display.height) == (1280, 720)
     names = [c.name for c in s.controls]
     assert sorted(names) == sorted(p.name for p in PARAM_SPECS)
