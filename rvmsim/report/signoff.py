@@ -114,15 +114,17 @@ def _params_file(r: _Run, out: Path) -> Path:
     from ..runs import rank_text
 
     best = r.top[0]
+    searched = r.config.output_spec()  # a params file's output: the size the run searched at
     ranked = r.run_dir / "top" / "rank_1.yaml"
     try:
         params, output = load_params(ranked)
-        if params == best.params and output == r.output:
+        if params == best.params and output == searched:
             return ranked
     except (ParamsFileError, OSError):  # absent or stale: the sign-off writes its own
         pass
     path = out / PARAMS_FILE
-    path.write_text(rank_text(best, 1, r.output, r.scene.name), encoding="utf-8")
+    path.write_text(rank_text(best, 1, searched, r.scene.name, judged_at=r.output),
+                    encoding="utf-8")
     return path
 
 

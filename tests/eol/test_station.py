@@ -84,7 +84,8 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
         assert all(e["passed"] for e in row["ecs"]["ecs"])
         # The car's parameter file is a params file with the per-car values written.
         params, output = load_params(out / f"car{k}.yaml")
-        assert (output.width, output.height) == (640, 360)
+        # every car judged (and its file written) at the RVM image of record
+        assert (output.width, output.height) == (1280, 720)
         for name, value in row["correction"]["values"].items():
             assert getattr(params, name) == pytest.approx(value, abs=1e-5)
         assert params.rad == pytest.approx(platform()[0].rad)

@@ -150,7 +150,8 @@ def test_report_has_every_section_and_decodable_images(runs):
     assert _decode_data_png(imgs[3]["src"]).shape[:2] == (720, 1280)
     fisheye = _decode_data_png(imgs[0]["src"])
     assert fisheye.shape[1] <= 640 and fisheye.shape[0] > 100
-    assert _decode_data_png(imgs[1]["src"]).shape[:2] == (180, 320)
+    # the RVM image the report shows is the one its verdict refers to: the image of record
+    assert _decode_data_png(imgs[1]["src"]).shape[:2] == (720, 1280)
 
 
 def test_report_tables_gallery_and_escaping(runs):

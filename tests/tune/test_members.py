@@ -11,6 +11,7 @@ import pytest
 from rvmsim.criteria import CandidateEvaluator, default_criteria
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import OutputSpec
+from rvmsim.pipeline import make_evaluator
 from rvmsim.tune import (Aggregate, EcSolver, Member, MembersScorer, MembersSolver, SearchOptions,
                          SearchSettings, TuningConfig, check_members, make_strategy,
                          parse_aggregate, score_params, score_vectors, search_members,
@@ -119,8 +120,10 @@ def test_two_members_store_each_members_results(two, tmp_path):
     best = out.best
     rows = store.member_results(best.idx)
     assert len(rows) == 2
-    # each member's stored verdict is what its own evaluator says of the stored parameters
-    for (score, _, passed, ecs), ev in zip(rows, evs):
+    # each member's stored verdict is what its own evaluator says of the stored parameters,
+    # judged at the RVM image of record (the search measured at 160 × 90)
+    judged = [make_evaluator(i, CFG.output_spec(), crit) for i in imgs]
+    for (score, _, passed, ecs), ev in zip(rows, judged):
         again = score_params(ev, [best.params])
         assert score == pytest.approx(again.score[0])
         assert passed == bool(again.passed[0])

@@ -28,7 +28,9 @@ def small(tmp_path_factory):
     folder = tmp_path_factory.mktemp("robust")
     old = os.environ.get("RVMSIM_CACHE")
     os.environ["RVMSIM_CACHE"] = str(folder / "cache")
-    yield write_small_scene(folder, name="scene.yaml")
+    # a 320 × 180 RVM image of record: the figures below are those of that display
+    yield write_small_scene(folder, name="scene.yaml",
+                            edit={"display": {"rvm_image_px": [320, 180]}})
     if old is None:
         os.environ.pop("RVMSIM_CACHE", None)
     else:
