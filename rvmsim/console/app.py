@@ -24,6 +24,7 @@ import secrets
 import shlex
 import time
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -125,6 +126,44 @@ def _roi(session: ConsoleSession, params: IspParams) -> list[list[float]]:
     return [[round(float(x), 2), round(float(y), 2)] for x, y in poly[np.isfinite(poly).all(1)]]
 
 
+def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any], frame_id: int,
+                picture_url: Callable[[str, IspParams], str]) -> dict[str, Any]:
+    """One ``/api/evaluate`` answer: the ECs at the RVM image of record, the ROI, and the
+    draft or annotated picture when asked (``frame_id``: the answer's number)."""
+    from ..pipeline import evaluate_params
+
+    params = parse_params(doc.get("params", {}), session.start)
+    annotate = parse_flag(doc.get("annotate"), "annotate")
+    draft = parse_flag(doc.get("draft"), "draft")
+    inline = parse_flag(doc.get("inline"), "inline")
+    t0 = time.perf_counter()
+    color = None
+    if annotate:  # the whole EC image of record, drawn
+        frame = evaluate_params(session.images, params, session.ec_output,
+                                session.criteria, annotate=True)
+        ec_result, color = frame.ec, frame.color
+        pictures.annotated(params, frame.annotated)
+    else:  # the windowed evaluator at the size of record: the same values, faster
+        ec_result = session.ecs(params)
+    t1 = time.perf_counter()
+    draft_jpeg = pictures.draft(params, color) if draft else b""
+    t2 = time.perf_counter()
+    roi = _roi(session, params)
+    t3 = time.perf_counter()
+    ec = ec_result.as_dict()
+    for item in ec["ecs"]:
+        item["margin"] = ec_margin(item["value"], *item["range"])
+    ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2}
+    return {"frame": frame_id, "params": params_to_dict(params), **ec, "roi": roi,
+            "image": picture_url("display", params),
+            "draft": picture_url("draft", params) if draft else None,
+            "annotated": picture_url("annotated", params) if annotate else None,
+            # the draft itself, when asked: one round trip per frame while dragging
+            **({"draft_jpeg": base64.b64encode(draft_jpeg).decode()} if draft and inline
+               else {}),
+            "timings_ms": {k: round(1e3 * v, 2) for k, v in ms.items()}}
+
+
 def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
     """The console app of ``session`` behind its :class:`~.guard.Guard`; ``token``:
     required on every request (None: no token, and loopback ``Host`` names only)."""
@@ -139,40 +178,7 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
         return f"/api/picture/{kind}.jpg?v={server}&p={params_key(params)}"
 
     def evaluate(doc: dict[str, Any]) -> dict[str, Any]:
-        """The ECs at the EC size (the one evaluation path), the ROI, and the draft or
-        annotated picture when asked (both come from the EC image just made)."""
-        from ..pipeline import evaluate_params
-
-        params = parse_params(doc.get("params", {}), session.start)
-        annotate = parse_flag(doc.get("annotate"), "annotate")
-        draft = parse_flag(doc.get("draft"), "draft")
-        inline = parse_flag(doc.get("inline"), "inline")
-        t0 = time.perf_counter()
-        color = None
-        if annotate:  # the whole EC image of record, drawn
-            frame = evaluate_params(session.images, params, session.ec_output,
-                                    session.criteria, annotate=True)
-            ec_result, color = frame.ec, frame.color
-            pictures.annotated(params, frame.annotated)
-        else:  # the windowed evaluator at the size of record: the same values, faster
-            ec_result = session.ecs(params)
-        t1 = time.perf_counter()
-        draft_jpeg = pictures.draft(params, color) if draft else b""
-        t2 = time.perf_counter()
-        roi = _roi(session, params)
-        t3 = time.perf_counter()
-        ec = ec_result.as_dict()
-        for item in ec["ecs"]:
-            item["margin"] = ec_margin(item["value"], *item["range"])
-        ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2}
-        return {"frame": next(frames), "params": params_to_dict(params), **ec, "roi": roi,
-                "image": picture_url("display", params),
-                "draft": picture_url("draft", params) if draft else None,
-                "annotated": picture_url("annotated", params) if annotate else None,
-                # the draft itself, when asked: one round trip per frame while dragging
-                **({"draft_jpeg": base64.b64encode(draft_jpeg).decode()} if draft and inline
-                   else {}),
-                "timings_ms": {k: round(1e3 * v, 2) for k, v in ms.items()}}
+        return _evaluation(session, pictures, doc, next(frames), picture_url)
 
     @app.get("/")
     async def index() -> FileResponse:
