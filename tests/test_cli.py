@@ -87,7 +87,11 @@ def test_evaluate_prints_table_writes_json_and_annotated_image(tmp_path):
     for ec in ("1-1", "2-3", "4-1"):
         assert f"\n{ec} " in res.stdout
     assert "OEM test" in res.stdout and "EC score" in res.stdout
+    # a file searched at 320 × 180 is judged at the RVM image of record, and says so
+    assert "judged at the RVM image of record, 1280x720 px" in res.stdout
     doc = json.loads((out / "ec.json").read_text())
+    assert doc["judged_at"] == [1280, 720] and doc["isp"]["output"]["judged_at"] == [1280, 720]
+    assert iio.imread(out / "rvm_labels.png").shape == (720, 1280)
     assert [e["id"] for e in doc["ecs"]][:2] == ["1-1", "1-2"]
     enabled = [e for e in doc["ecs"] if e["enabled"]]
     assert len(enabled) == 10
