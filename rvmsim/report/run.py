@@ -122,17 +122,9 @@ def _load_run(run_dir: Path) -> _Run:
     recorded_key = settings.scene_key
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
-                crit_file, _judged_at(settings), top, curve, scores, count,
+                crit_file, settings.record_output(), top, curve, scores, count,
                 scene_changed, load_member_scenes(settings, run_dir, recorded_path), member_top,
                 robust_rows, [c for c, _ in pairs])
-
-
-def _judged_at(settings: RunSettings) -> OutputSpec:
-    """The RVM image of record the run's verdicts refer to: what the report shows."""
-    from ..isp import OutputSpec
-
-    w, h = settings.record_px
-    return OutputSpec(w, h, settings.config.output.mirror)
 
 
 # ---------------------------------------------------------------------------- sections

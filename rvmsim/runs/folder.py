@@ -259,13 +259,7 @@ def rank_params_text(run_dir: str | Path, rank: int = 1, *, by_score: bool = Fal
         raise RvmsimError(f"{run_dir}: only {len(top)} candidates{apart}, no rank {rank}")
     cand, rec = top[rank - 1]
     return rank_text(rec, rank, settings.config.output_spec(), differs=cand.differs,
-                     judged_at=_judged_at(settings))
-
-
-def _judged_at(settings: RunSettings) -> OutputSpec:
-    """The run's RVM image of record, mirrored as its search."""
-    w, h = settings.record_px
-    return OutputSpec(w, h, settings.config.output.mirror)
+                     judged_at=settings.record_output())
 
 
 def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
@@ -280,7 +274,7 @@ def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
     out = cfg.output_spec()
     for cand, rec in pairs:
         (top / f"rank_{cand.rank}.yaml").write_text(
-            rank_text(rec, cand.rank, out, vehicle, cand.differs, _judged_at(settings)),
+            rank_text(rec, cand.rank, out, vehicle, cand.differs, settings.record_output()),
             encoding="utf-8")
     for old in top.glob("rank_*.yaml"):
         k = old.stem[len("rank_"):]

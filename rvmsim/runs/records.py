@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any, Mapping, Sequence
 
-from ..isp import IspParams
+from ..isp import IspParams, OutputSpec
 from ..search.config import TuningConfig
 
 __all__ = ["RunStatus", "StopReason", "EcOutcome", "TrialRecord", "RunSettings", "RunState",
@@ -130,6 +130,11 @@ class RunSettings:
         from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 
         return self.judged_at or RVM_IMAGE_OF_RECORD_PX
+
+    def record_output(self) -> OutputSpec:
+        """The RVM image of record (:attr:`record_px`), mirrored as the run's search."""
+        w, h = self.record_px
+        return OutputSpec(w, h, self.config.output.mirror)
 
     @property
     def shared(self) -> bool:
