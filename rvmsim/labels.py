@@ -31,6 +31,10 @@ __all__ = [
     "MAX_CROSS_LINES",
     "EXTRA_PART_BASE",
     "MAX_EXTRA_PARTS",
+    "SITE_OBJECT_BASE",
+    "MAX_SITE_OBJECTS",
+    "site_object_labels",
+    "BODY_LABELS",
     "label_names",
     "lut",
     "colorize",
@@ -58,6 +62,11 @@ MAX_CROSS_LINES = 19
 EXTRA_PART_BASE = 100  # user-supplied extra meshes: 100, 101, ...
 MAX_EXTRA_PARTS = 100
 
+# Test objects of a site definition other than FMVSS 111's (rvmsim.scene.sitedefs): object k
+# has its body 200 + 3k, its marked top band 201 + 3k and its top face 202 + 3k.
+SITE_OBJECT_BASE = 200
+MAX_SITE_OBJECTS = 18
+
 
 def object_body(letter: str) -> int:
     """Label of the unmarked surface of test object ``letter`` (A–G)."""
@@ -84,6 +93,20 @@ def guide_cross(number: int) -> int:
     return _GUIDE_CROSS_BASE + number
 
 
+#: Labels of the car body: bumper, garnish, trunk and the user's extra parts.
+BODY_LABELS: tuple[int, ...] = (BUMPER, GARNISH, TRUNK,
+                                *range(EXTRA_PART_BASE, EXTRA_PART_BASE + MAX_EXTRA_PARTS))
+
+
+def site_object_labels(index: int) -> tuple[int, int, int]:
+    """Labels (body, marked top band, top face) of object ``index`` (0, 1, …) of a site
+    definition (:mod:`rvmsim.scene.sitedefs`)."""
+    if not 0 <= index < MAX_SITE_OBJECTS:
+        raise ValueError(f"site object index must be 0..{MAX_SITE_OBJECTS - 1}, got {index}")
+    base = SITE_OBJECT_BASE + 3 * index
+    return (base, base + 1, base + 2)
+
+
 def label_names() -> dict[int, str]:
     """Every fixed label ID with a readable name."""
     names = {
@@ -107,6 +130,10 @@ def label_names() -> dict[int, str]:
         names[guide_cross(n)] = f"guide_cross_{n}"
     for i in range(MAX_EXTRA_PARTS):
         names[EXTRA_PART_BASE + i] = f"extra_{i}"
+    for k in range(MAX_SITE_OBJECTS):
+        body, band, top = site_object_labels(k)
+        names[body], names[band], names[top] = (f"site_object_{k}", f"site_object_{k}_band",
+                                                f"site_object_{k}_top")
     return names
 
 
@@ -142,6 +169,11 @@ def _palette() -> np.ndarray:
     fixed[object_patch("G")] = (255, 0, 255)
     for n in range(1, MAX_CROSS_LINES + 1):
         fixed[guide_cross(n)] = (255, max(0, 230 - 40 * n), 0)
+    for k in range(MAX_SITE_OBJECTS):
+        body, band, top = site_object_labels(k)
+        fixed[body] = (220, 140 + 5 * k, 40)
+        fixed[band] = (180, 20, 60 + 10 * k)
+        fixed[top] = (255, 230, 120)
     for k, v in fixed.items():
         pal[k] = v
     return pal

@@ -82,8 +82,7 @@ UPPER_BODY = LabelGroup("upper_body", (L.GARNISH, L.TRUNK), upper_region=True)
 _FG = {"F": F, "G": G}
 
 #: What may not touch a visible patch: vehicle body, void, user-supplied parts.
-_LUT_BLOCKERS = L.lut([L.BUMPER, L.GARNISH, L.TRUNK, L.VOID]
-                      + list(range(L.EXTRA_PART_BASE, 256)))
+_LUT_BLOCKERS = L.lut([*L.BODY_LABELS, L.VOID])
 
 
 # ---------------------------------------------------------------------------- EC 1: FMVSS 111

@@ -50,7 +50,7 @@ PATCH_SAMPLES = 11
 
 #: Labels of the car body: a patch pixel next to one fails EC 1-1, so one in front of the
 #: patch hides it (as the EC's own blockers, without void, which is checked geometrically).
-_BODY_LABELS = (L.BUMPER, L.GARNISH, L.TRUNK, *range(L.EXTRA_PART_BASE, 256))
+_BODY_LABELS = L.BODY_LABELS
 
 #: A sample counts as outside the sensor or the image circle only this far beyond it, px.
 _MARGIN_PX = 1.0

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene import MeshPart, Scene, mesh_parts
+from ..scene import DEFAULT_SITE, MeshPart, Scene, mesh_parts
 from .fisheye import FisheyeImages, render_fisheye
 
 __all__ = ["cache_dir", "scene_key", "file_scene_key", "same_scene", "cached_render",
@@ -57,6 +57,11 @@ def scene_key(scene: Scene, scale: float = 1.0) -> str:
         24 hex digits.
     """
     doc = scene.model_dump(mode="json")
+    site = doc.get("test_site", {})
+    if site.get("site") == DEFAULT_SITE and not site.get("site_objects"):
+        # the FMVSS site, as before sites existed: its keys (and cached renders) unchanged
+        site.pop("site", None)
+        site.pop("site_objects", None)
     if scene.load_state is not None:  # not dumped (unloaded scenes keep their keys)
         doc["load_state"] = scene.load_state.model_dump(mode="json")
     for key, part in mesh_parts(scene):

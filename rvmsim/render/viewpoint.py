@@ -47,7 +47,7 @@ __all__ = ["posed_parts", "cube_key", "cached_cube", "read_cube", "is_vehicle_la
 
 def is_vehicle_label(label: int) -> bool:
     """Whether a label belongs to the vehicle's body (moves with it under load)."""
-    return label in (L.BUMPER, L.GARNISH, L.TRUNK) or label >= L.EXTRA_PART_BASE
+    return label in L.BODY_LABELS
 
 
 def posed_parts(parts: list[Part], body_pose: np.ndarray | None) -> list[Part]:

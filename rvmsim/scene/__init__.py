@@ -58,6 +58,20 @@ from .site import (
     BOARD_LIFT_M,
     PATTERN_LIFT_M,
 )
+from .sitedefs import (
+    SiteDefinition,
+    SiteObject,
+    SiteError,
+    BUNDLED_SITES,
+    DEFAULT_SITE,
+    load_site,
+    bundled_site,
+    site_definition,
+    scene_site,
+    scene_sites,
+    site_scene,
+    scene_vehicle_width,
+)
 from .meshes import build_parts
 from .landmarks import Landmark, CheckerCorner, site_landmarks, checker_corners
 
@@ -106,6 +120,18 @@ __all__ = [
     "Landmark",
     "CheckerCorner",
     "build_parts",
+    "SiteDefinition",
+    "SiteObject",
+    "SiteError",
+    "BUNDLED_SITES",
+    "DEFAULT_SITE",
+    "load_site",
+    "bundled_site",
+    "site_definition",
+    "scene_site",
+    "scene_sites",
+    "site_scene",
+    "scene_vehicle_width",
     "site_landmarks",
     "checker_corners",
     "stripe_azimuth_deg",

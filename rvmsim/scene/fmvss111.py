@@ -11,6 +11,8 @@ driver's side), ``z`` behind the plane of the rearmost point of the bumper, metr
 
 from __future__ import annotations
 
+from .sitedefs import bundled_site
+
 __all__ = [
     "OBJECT_HEIGHT_M",
     "OBJECT_DIAMETER_M",
@@ -29,32 +31,31 @@ __all__ = [
     "IMAGE_SIZE_MIN_ARCMIN",
 ]
 
+#: The site file these come from (``rvmsim/scene/sites/fmvss111.yaml``: the one place to
+#: correct them; its ⚠ marks are the confidence of each value).
+_SITE = bundled_site("fmvss111")
+_ROWS = {row.name: row for row in _SITE.rows}
+
 #: Test object height: 0.8 m (32 in), confirmed; exact S14 figure ⚠️H.
-OBJECT_HEIGHT_M = 0.80
+OBJECT_HEIGHT_M = _ROWS["far"].height
 #: Test object external diameter: 0.3 m (12 in), confirmed; exact S14 figure ⚠️H.
-OBJECT_DIAMETER_M = 0.30
+OBJECT_DIAMETER_M = _ROWS["far"].diameter
 #: Width of the horizontal band (A–E) and of the vertical stripe (F, G): 150 mm. ⚠️M
-STRIPE_WIDTH_M = 0.150
+STRIPE_WIDTH_M = _ROWS["far"].marking.top_band
 #: The A–E band sits at the top of the cylinder (its upper edge at the top). ⚠️M
 HORIZONTAL_STRIPE_TOP_M = OBJECT_HEIGHT_M
 #: Height of the lower portion of the F/G stripe that S5.5.1(a) / EC 1-1 look at. ⚠️M
-LOWER_PATCH_HEIGHT_M = 0.150
+LOWER_PATCH_HEIGHT_M = _ROWS["near"].marking.lower_patch
 
 #: Object positions (x lateral, z behind the bumper plane), metres.  ⚠️M for the whole table:
 #: the row order (A–C far, D–E middle, F–G near) and the sides carrying A, D, F are the facts
 #: sheet's best reading of Figure 5, not verified.
 OBJECT_POSITIONS_M: dict[str, tuple[float, float]] = {
-    "A": (-1.52, 6.10),
-    "B": (0.00, 6.10),
-    "C": (+1.52, 6.10),
-    "D": (-1.52, 3.05),
-    "E": (+1.52, 3.05),
-    "F": (-1.52, 0.30),
-    "G": (+1.52, 0.30),
-}
+    name: (x, row.z) for row in _SITE.rows
+    for name, x in zip(row.names or (), row.lateral(0.0))}
 #: Whether the distances above run to the cylinder centre or to its nearest surface. ⚠️L
 #: ("centre" or "surface").
-OBJECT_POSITION_REFERENCE = "centre"
+OBJECT_POSITION_REFERENCE = _SITE.position_reference
 #: Which way the F/G vertical stripe faces. ⚠️L.  "vehicle_centreline": toward x = 0 at the
 #: object's own z; alternatives in the scene file are "vehicle" (toward −Z), "camera", or an
 #: azimuth in degrees.

@@ -28,6 +28,7 @@ from ..camera import FisheyeCamera, rotation_from_ypr
 from .display import Display
 from .eol import EolSpec
 from .load_state import SceneLoadState
+from .sitedefs import DEFAULT_SITE, SiteObject
 from .variation import VariationSpec
 
 __all__ = [
@@ -252,6 +253,10 @@ class Vehicle(_Model):
     garnish: Part | None = None
     trunk: Part | None = None
     extra: list[MeshPart] = []
+    #: Overall width (metres) that site definitions place their objects by
+    #: (:mod:`rvmsim.scene.sitedefs`); None: the widest body part.  Not part of the render
+    #: key (a site's placed objects are).
+    width: PositiveFloat | None = Field(default=None, exclude=True)
 
 
 # ---------------------------------------------------------------------------- test site
@@ -315,6 +320,10 @@ class TestSite(_Model):
     ground_patterns: list[GroundPattern] = []
     ground_size: PositiveFloat = 60.0
     ground_color: Rgb = (0.42, 0.42, 0.42)
+    #: The site this is (:mod:`rvmsim.scene.sitedefs`) and, for a site other than FMVSS
+    #: 111's, its placed objects (set by :func:`rvmsim.scene.site_scene`, not a YAML key).
+    site: str = DEFAULT_SITE
+    site_objects: tuple[SiteObject, ...] = ()
 
     @model_validator(mode="after")
     def _check(self) -> TestSite:
@@ -398,6 +407,11 @@ class Scene(_Model):
     #: The end-of-line station's target (:mod:`rvmsim.scene.eol`, ``rvmsim eol``); not part
     #: of the render cache's key.
     eol: EolSpec | None = Field(default=None, exclude=True)
+    #: The test sites the scene is judged at (:mod:`rvmsim.scene.sitedefs`): bundled names or
+    #: site files (relative to the scene file); not part of the render key (each site's
+    #: scene has its own).
+    sites: Annotated[list[str], Field(min_length=1, max_length=8)] = Field(
+        default=[DEFAULT_SITE], exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).
     base_dir: str = Field(default=".", exclude=True)
     #: The file the scene was read from, for messages (not a YAML key).

@@ -388,10 +388,29 @@ def _ground(scene: Scene) -> Part:
     return Part("ground", L.GROUND, mesh, scene.test_site.ground_color, texture="asphalt")
 
 
+def _site_objects(scene: Scene) -> list[Part]:
+    """The objects of a site definition other than FMVSS 111's (:mod:`.sitedefs`): each
+    cylinder's side below its band, its marked top band (black) and its top face."""
+    parts: list[Part] = []
+    for obj in scene.test_site.site_objects:
+        body_label, band_label, top_label = obj.labels
+        c, r, h = (obj.x, obj.z), obj.radius, obj.height
+        body_top = h - obj.top_band
+        parts.append(Part(f"site_{obj.name}", body_label,
+                          cylinder_side(r, 0.0, body_top, 0, 360, c), OBJECT_COLOR, smooth=True))
+        if obj.top_band > 0:
+            parts.append(Part(f"site_{obj.name}_band", band_label,
+                              cylinder_side(r, body_top, h, 0, 360, c), BLACK, smooth=True))
+        parts.append(Part(f"site_{obj.name}_top", top_label, disk(r, h, c), OBJECT_COLOR))
+    return parts
+
+
 def site_parts(scene: Scene) -> list[Part]:
     """Every labelled surface of the test site: ground, test objects, guidelines, pattern
-    board and ground patterns, in that order."""
+    board and ground patterns, in that order (at a site other than FMVSS 111's: ground and
+    the site's objects)."""
     parts = [_ground(scene)]
+    parts += _site_objects(scene)
     parts += _test_objects(scene)
     parts += _guidelines(scene)
     parts += _board(scene)
