@@ -16,7 +16,8 @@ plugins it names explicitly under ``plugins:``.  Format (every key optional)::
 
 Without ``ecs``, a file selects the ECs of the criteria it extends (the paper's eleven),
 then every EC of its plugins, in the order listed.  Bundled criteria sets are selected by
-name wherever a criteria file is (:data:`BUNDLED_CRITERIA`: ``fmvss111-full``).  See
+name wherever a criteria file is (:data:`BUNDLED_CRITERIA`: ``fmvss111-full``, ``unr158``,
+``jp``).  See
 docs/criteria.md.
 """
 
@@ -42,7 +43,9 @@ __all__ = ["load_criteria", "default_criteria", "criteria_from_text", "BUNDLED_C
 
 #: Criteria sets shipped with rvmsim, selected by name (``--criteria fmvss111-full``, a sweep
 #: file's ``criteria:``): name → file in this package.
-BUNDLED_CRITERIA: dict[str, str] = {"fmvss111-full": "criteria_fmvss111_full.yaml"}
+BUNDLED_CRITERIA: dict[str, str] = {"fmvss111-full": "criteria_fmvss111_full.yaml",
+                                    "unr158": "criteria_unr158.yaml",
+                                    "jp": "criteria_jp.yaml"}
 
 
 def _not_nan(value: float) -> float:

@@ -23,6 +23,7 @@ defaults are named in :mod:`rvmsim.scene.fmvss111` (⚠ values there are unverif
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,7 +43,7 @@ from . import (
 
 if TYPE_CHECKING:
     from ..scene import Display
-from .objects import silhouette, width_edges
+from .objects import silhouette_fractions, width_edges
 
 __all__ = ["ECS", "FULL_VIEW_OBJECTS", "SIZE_OBJECTS", "MAX_MAGNIFICATION",
            "MIN_PIXELS_PER_DEGREE", "object_widths", "ObjectWidths"]
@@ -71,30 +72,10 @@ _ARCMIN = 180.0 * 60.0 / math.pi
 def _measure_1_5(src: LabelSource, options: MeasureOptions) -> Measurement:
     """min over A–E of visible / whole silhouette (fisheye px of its 1-px-eroded interior;
     visible: the label image shows the object there and the RVM image samples it)."""
-    import cv2
-
     ctx, isp = src.context, src.isp
     if ctx is None or isp is None:
         return Measurement(None)
-    poly = isp.footprint(32)
-    contour = poly.astype(np.float32).reshape(-1, 1, 2)
-    fractions: dict[str, float] = {}
-    outlines: dict[str, np.ndarray] = {}
-    for letter in FULL_VIEW_OBJECTS:
-        sil = silhouette(ctx, letter)
-        if sil is None or sil.area == 0:
-            continue
-        h, w = sil.inner.shape
-        centre = (sil.box[0] + (w - 1) / 2.0, sil.box[1] + (h - 1) / 2.0)
-        if cv2.pointPolygonTest(contour, centre, True) > math.hypot(w, h) / 2.0 + 1.0:
-            seen = sil.visible_area  # the RVM border is farther than the whole box: all in
-        else:
-            inside = np.zeros((h, w), np.uint8)
-            pts = np.round((poly - sil.box) * 16.0).astype(np.int32).reshape(-1, 1, 2)
-            cv2.fillPoly(inside, [pts], 255, cv2.LINE_8, shift=4)
-            seen = cv2.countNonZero(cv2.bitwise_and(sil.visible, inside))
-        fractions[letter] = 100.0 * seen / sil.area
-        outlines[letter] = sil.outline
+    fractions, outlines = silhouette_fractions(src, FULL_VIEW_OBJECTS)
     if not fractions:
         return Measurement(None)
     return Measurement(min(fractions.values()), (fractions, outlines, isp))
@@ -120,8 +101,10 @@ def _draw_1_5(canvas: Canvas, item: EcValue, detail: _SilhouetteDetail | None) -
 
 
 # ---------------------------------------------------------------------------- 1-6 and 6-1
-def object_widths(src: LabelSource, options: MeasureOptions) -> ObjectWidths | None:
-    """Per object of :data:`SIZE_OBJECTS`: its horizontal width in RVM px (``px``), on the
+def object_widths(src: LabelSource, options: MeasureOptions,
+                  names: Sequence[str] = SIZE_OBJECTS) -> ObjectWidths | None:
+    """Per object of ``names`` (default :data:`SIZE_OBJECTS`; FMVSS letters or a site's
+    object names): its horizontal width in RVM px (``px``), on the
     display (``mm``), the visual angle from the eye point (``arcmin``), the RVM px per degree
     of the camera's view (``px_per_deg``), the ISP's magnification there (``magnification``,
     RVM px per px of the camera's sensor, whatever fraction of it was rendered) and its RVM
@@ -134,12 +117,13 @@ def object_widths(src: LabelSource, options: MeasureOptions) -> ObjectWidths | N
     ctx, isp = src.context, src.isp
     if ctx is None or isp is None:
         return None
-    return src.shared(("fmvss111.widths", options.display),
-                      lambda: _widths(ctx.display(options.display), ctx, isp))
+    return src.shared(("fmvss111.widths", options.display, tuple(names)),
+                      lambda: _widths(ctx.display(options.display), ctx, isp, names))
 
 
-def _widths(display: Display, ctx: SceneContext, isp: IspView) -> ObjectWidths | None:
-    edges = {c: width_edges(ctx, c) for c in SIZE_OBJECTS}
+def _widths(display: Display, ctx: SceneContext, isp: IspView,
+            names: Sequence[str]) -> ObjectWidths | None:
+    edges = {c: width_edges(ctx, c) for c in names}
     if any(e is None for e in edges.values()):
         return None
     pts = np.concatenate([np.concatenate([e.points, e.centre]) for e in edges.values() if e])

@@ -12,6 +12,7 @@ fisheye pixel centres at integer coordinates.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,8 +21,10 @@ from .. import labels as L
 from ..camera import FisheyeCamera
 from ..scene import Scene
 from .context import SceneContext
+from .measure import LabelSource
 
-__all__ = ["ObjectSilhouette", "WidthEdges", "silhouette", "width_edges", "object_cylinder"]
+__all__ = ["ObjectSilhouette", "WidthEdges", "silhouette", "width_edges", "object_cylinder",
+           "object_labels", "silhouette_fractions", "standing_alone_labels"]
 
 #: Fisheye px beyond the image kept around a silhouette (parts there count as not visible).
 _MARGIN_PX = 2
@@ -30,12 +33,31 @@ _RING = 96
 
 
 def object_cylinder(scene: Scene, letter: str) -> tuple[float, float, float, float] | None:
-    """(x, z, radius, height) of test object ``letter``, metres; None when it is disabled."""
+    """(x, z, radius, height) of test object ``letter``, metres: an FMVSS letter (A–G), or
+    the name of an object of the scene's site (:class:`rvmsim.scene.SiteObject`, e.g.
+    ``row2.1``); None when the scene has no such object (disabled, or another site)."""
     site = scene.test_site
-    centre = site.object_centre(letter)
-    if centre is None:
-        return None
-    return (centre[0], centre[1], site.object_diameter / 2.0, site.object_height)
+    if letter in L.OBJECT_LETTERS:
+        centre = site.object_centre(letter)
+        if centre is None:
+            return None
+        return (centre[0], centre[1], site.object_diameter / 2.0, site.object_height)
+    for obj in site.site_objects:
+        if obj.name == letter:
+            return (obj.x, obj.z, obj.radius, obj.height)
+    return None
+
+
+def object_labels(scene: Scene, letter: str) -> tuple[int, ...]:
+    """The label ids of object ``letter``'s surfaces (an FMVSS letter: body and stripe, and
+    the lower patch on F and G; a site object: body, band and top)."""
+    if letter in L.OBJECT_LETTERS:
+        own = (L.object_body(letter), L.object_stripe(letter))
+        return own + ((L.object_patch(letter),) if letter in "FG" else ())
+    for obj in scene.test_site.site_objects:
+        if obj.name == letter:
+            return obj.labels
+    return ()
 
 
 @dataclass(frozen=True)
@@ -119,7 +141,7 @@ def _compute_silhouette(ctx: SceneContext, letter: str) -> ObjectSilhouette | No
     ix1, iy1 = min(x1, labels.shape[1]), min(y1, labels.shape[0])
     if ix1 > ix0 and iy1 > iy0:
         crop[iy0 - y0 : iy1 - y0, ix0 - x0 : ix1 - x0] = labels[iy0:iy1, ix0:ix1]
-    own = cv2.LUT(crop, L.lut([L.object_body(letter), L.object_stripe(letter)]))
+    own = cv2.LUT(crop, L.lut(_silhouette_labels(ctx.scene, letter)))
     inner = cv2.erode(mask, np.ones((3, 3), np.uint8), borderType=cv2.BORDER_CONSTANT,
                       borderValue=0)
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
@@ -128,6 +150,27 @@ def _compute_silhouette(ctx: SceneContext, letter: str) -> ObjectSilhouette | No
     visible = cv2.bitwise_and(inner, own)
     return ObjectSilhouette((x0, y0), inner, visible, int(cv2.countNonZero(inner)),
                             int(cv2.countNonZero(visible)), outline)
+
+
+def _silhouette_labels(scene: Scene, letter: str) -> tuple[int, ...]:
+    """What shows object ``letter`` in the label image: FMVSS letters their body and stripe
+    (as EC 1-5 has always counted them); a site object any site object's label, since a
+    site's objects do not hide one another (:func:`standing_alone_labels`)."""
+    if letter in L.OBJECT_LETTERS:
+        return (L.object_body(letter), L.object_stripe(letter))
+    return standing_alone_labels(scene, letter)
+
+
+def standing_alone_labels(scene: Scene, name: str) -> tuple[int, ...]:
+    """Labels that count as showing site object ``name``: its own and every other object's
+    of the site.  Each object of a site definition is judged as if it stood alone (⚠ the
+    regulations test one position at a time: with all rows placed at once the near row
+    would hide the far rows' centre objects).  Exact as long as only other test objects
+    stand between an object and the camera, never the car body: the body is nearer the
+    camera than every object behind the car."""
+    if not any(o.name == name for o in scene.test_site.site_objects):
+        return ()
+    return tuple(k for o in scene.test_site.site_objects for k in o.labels)
 
 
 def silhouette(ctx: SceneContext, letter: str) -> ObjectSilhouette | None:
@@ -178,3 +221,40 @@ def width_edges(ctx: SceneContext, letter: str) -> WidthEdges | None:
     """Object ``letter``'s width edges (once per scene; None when disabled or out of the
     lens's field)."""
     return ctx.shared(("fmvss111.width", letter), lambda: _compute_edges(ctx, letter))
+
+
+def silhouette_fractions(src: LabelSource, names: Iterable[str]
+                         ) -> tuple[dict[str, float], dict[str, np.ndarray]]:
+    """Per object of ``names`` in the scene: the percentage of its whole silhouette (hidden
+    parts included) that the candidate's RVM image shows, and its fisheye outline.
+
+    Visible: the label image shows the object there (:func:`silhouette`) and the pixel lies
+    inside the RVM image's footprint in the fisheye image.  Objects absent from the scene or
+    wholly outside the lens's field are left out.  Needs ``src.context`` and ``src.isp``
+    (empty results without).
+    """
+    import cv2
+
+    ctx, isp = src.context, src.isp
+    if ctx is None or isp is None:
+        return {}, {}
+    poly = src.shared(("footprint", 32), lambda: isp.footprint(32))
+    contour = poly.astype(np.float32).reshape(-1, 1, 2)
+    fractions: dict[str, float] = {}
+    outlines: dict[str, np.ndarray] = {}
+    for letter in names:
+        sil = silhouette(ctx, letter)
+        if sil is None or sil.area == 0:
+            continue
+        h, w = sil.inner.shape
+        centre = (sil.box[0] + (w - 1) / 2.0, sil.box[1] + (h - 1) / 2.0)
+        if cv2.pointPolygonTest(contour, centre, True) > math.hypot(w, h) / 2.0 + 1.0:
+            seen = sil.visible_area  # the RVM border is farther than the whole box: all in
+        else:
+            inside = np.zeros((h, w), np.uint8)
+            pts = np.round((poly - sil.box) * 16.0).astype(np.int32).reshape(-1, 1, 2)
+            cv2.fillPoly(inside, [pts], 255, cv2.LINE_8, shift=4)
+            seen = cv2.countNonZero(cv2.bitwise_and(sil.visible, inside))
+        fractions[letter] = 100.0 * seen / sil.area
+        outlines[letter] = sil.outline
+    return fractions, outlines

@@ -312,7 +312,7 @@ class TestSite(_Model):
     object_diameter: PositiveFloat = fmvss111.OBJECT_DIAMETER_M
     stripe_width: PositiveFloat = fmvss111.STRIPE_WIDTH_M
     lower_patch_height: PositiveFloat = fmvss111.LOWER_PATCH_HEIGHT_M
-    position_reference: Literal["centre", "surface"] = fmvss111.OBJECT_POSITION_REFERENCE  # type: ignore[assignment]
+    position_reference: Literal["centre", "surface"] = fmvss111.OBJECT_POSITION_REFERENCE
     vertical_stripe_facing: StripeFacing = fmvss111.VERTICAL_STRIPE_FACING  # type: ignore[assignment]
     objects: dict[Literal["A", "B", "C", "D", "E", "F", "G"], TestObject] = {}
     guidelines: Guidelines = Guidelines()
