@@ -50,6 +50,9 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
               help="Tuning config (YAML): tuned parameters, ranges, steps, N, T, budgets.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
               help="Criteria file (YAML); default: the paper's thresholds.")
+@click.option("--markets", default=None, metavar="M1,M2,…",
+              help="One setting for every market: fmvss111-full, fmvss111, unr158, jp, or "
+                   "SITE:CRITERIA (docs/markets.md); exits 1 when none passes all.")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
 @click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
               show_default=True, help="Worker processes.")
@@ -66,10 +69,11 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
 def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
          robust: bool, samples: int | None, variation_file: Path | None,
          compensation: str | None, strategy: str,
-         config_file: Path | None, criteria_file: Path | None, seed: int, workers: int,
-         budget: int | None, max_time: float | None, target_score: float | None,
+         config_file: Path | None, criteria_file: Path | None, markets: str | None, seed: int,
+         workers: int, budget: int | None, max_time: float | None, target_score: float | None,
          resume_dir: Path | None, force: bool, progress: bool) -> None:
-    """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared), or --resume RUN."""
+    """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
+    markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
     from ..tune import (RunOptions, TuneRequest, check_tune_arguments, load_tuning_config,
                         summary_lines)
@@ -77,8 +81,9 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     from ..tune import tune as run_tune
     from ..tune.robust import DEFAULT_SAMPLES
 
-    check_tune_arguments(len(scenes), shared, aggregate, resume_dir is not None, robust,
-                         samples, variation_file, compensation)
+    check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
+                         resume_dir is not None, robust, samples, variation_file, compensation,
+                         markets=markets is not None)
     options = RunOptions(workers, max_time, target_score, progress)
     if resume_dir is not None:
         result = resume_run(resume_dir, options=options)
@@ -87,10 +92,14 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
             seed=seed, budget=budget, aggregate=aggregate,
             robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
-            variation_file=variation_file, compensation=compensation_for(compensation))
-        result = run_tune(request, out or Path("runs") / "+".join(s.stem for s in scenes),
-                          options=options, force=force)
+            variation_file=variation_file, compensation=compensation_for(compensation),
+            markets=markets)
+        name = "+".join(s.stem for s in scenes) + ("" if markets is None else "@markets")
+        result = run_tune(request, out or Path("runs") / name, options=options, force=force)
     click.echo("\n".join(summary_lines(result)))
+    best = result.outcome.best
+    if (result.run_dir / "best" / "markets.json").is_file() and (best is None or not best.passed):
+        sys.exit(1)  # no setting passes every market (the summary says why)
 
 
 _MIN_DISTANCE = click.option(

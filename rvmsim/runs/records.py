@@ -122,6 +122,10 @@ class RunSettings:
     #: The RVM image of record (W, H px) the run's verdicts refer to
     #: (:mod:`rvmsim.criteria.record`); None: a run from before it was recorded.
     judged_at: tuple[int, int] | None = None
+    #: A run for several markets (:mod:`rvmsim.markets`): their recorded forms
+    #: (:attr:`rvmsim.markets.Market.spec`), each a member per scene of ``scenes``; ():
+    #: the run's criteria at each scene's own site.
+    markets: tuple[str, ...] = ()
 
     @property
     def record_px(self) -> tuple[int, int]:
@@ -165,6 +169,8 @@ class RunSettings:
             doc["aggregate"] = self.aggregate
         if self.judged_at is not None:
             doc["judged_at"] = list(self.judged_at)
+        if self.markets:
+            doc["markets"] = list(self.markets)
         return doc
 
     @classmethod
@@ -223,7 +229,17 @@ class RunSettings:
                                                     robust.get("variation_key")),
                    None if robust is None else _mapping("robust: compensation",
                                                         robust.get("compensation")),
-                   _size("judged_at", doc.get("judged_at")))
+                   _size("judged_at", doc.get("judged_at")),
+                   _texts("markets", doc.get("markets")))
+
+
+def _texts(key: str, value: Any) -> tuple[str, ...]:
+    """``value`` as a tuple of texts (None: empty)."""
+    if value is None:
+        return ()
+    if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
+        raise ValueError(f"{key}: {str(value)[:40]!r} is not a list of names")
+    return tuple(value)
 
 
 def _size(key: str, value: Any) -> tuple[int, int] | None:

@@ -361,8 +361,9 @@ def search_members(members: Sequence[Member], settings: SearchSettings, store: R
         comp = _members_compensation(members, settings, output)
         if strat.solves:
             # with compensation every car is corrected toward the nominal one: solve there
-            solver = MembersSolver([EcSolver(ev.fisheye, output, criteria, strat.space)
-                                    for ev in evaluators],
+            solver = MembersSolver([EcSolver(ev.fisheye, output, m.criteria or criteria,
+                                             strat.space)
+                                    for m, ev in zip(members, evaluators)],
                                    "first" if comp is not None else settings.solve)
             strat.solved = solver.names
         scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg,

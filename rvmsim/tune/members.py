@@ -66,16 +66,19 @@ COMBINES = ("sum-violation", "min")
 
 @dataclass(frozen=True)
 class Member:
-    """One label image a candidate is judged on: its name (the vehicle, or a sample's
-    label), the fisheye label image (H_i, W_i) uint8, the camera that saw it, the scene
-    (for ECs that read its geometry; None when unknown) and, for a sample of a robust run
-    with compensation, the deviation the end-of-line station reads for it."""
+    """One label image a candidate is judged on: its name (the vehicle, a market, or a
+    sample's label), the fisheye label image (H_i, W_i) uint8, the camera that saw it, the
+    scene (for ECs that read its geometry; None when unknown), for a sample of a robust run
+    with compensation the deviation the end-of-line station reads for it, and the criteria
+    it is judged with when they are its own (a market's)."""
 
     name: str
     labels: np.ndarray
     camera: FisheyeCamera
     scene: Scene | None = None
     measured: Deviation | None = None
+    #: The member's own criteria (a market's, :mod:`rvmsim.markets`); None: the run's.
+    criteria: Criteria | None = None
 
 
 @dataclass(frozen=True)
@@ -185,11 +188,13 @@ class MembersSolver:
 def worst_ec_json(member_ecs: Sequence[str]) -> str:
     """The trial's ``ec`` column from its members' (:func:`rvmsim.tune.ec_json` texts): per
     EC the value and score of the member that scores it lowest (the first such), passed
-    where every member passes it."""
+    where every member that judges it passes it; ECs in the order the members first name
+    them (members with their own criteria judge different ECs)."""
     docs = [json.loads(e) for e in member_ecs]
     out = {}
-    for ec in docs[0]:
-        cells = [d[ec] for d in docs]
+    ids = list(dict.fromkeys(ec for d in docs for ec in d))  # members may judge other ECs
+    for ec in ids:
+        cells = [d[ec] for d in docs if ec in d]
         worst = min(range(len(cells)), key=lambda k: cells[k][1])
         out[ec] = [cells[worst][0], cells[worst][1], all(c[2] for c in cells)]
     return json.dumps(out)
@@ -256,5 +261,5 @@ class MembersScorer:
 def member_evaluators(members: Sequence[Member], output: OutputSpec,
                       criteria: Criteria) -> list[ImageEvaluator]:
     """One evaluator per member (:func:`rvmsim.pipeline.make_evaluator`) on the run's RVM
-    ``output`` and ``criteria``."""
-    return [make_evaluator(m, output, criteria) for m in members]
+    ``output``, with the member's own criteria or else ``criteria``."""
+    return [make_evaluator(m, output, m.criteria or criteria) for m in members]

@@ -135,6 +135,10 @@ class TuneRequest:
         with its per-car values (``--robust --compensation``, :mod:`rvmsim.tune.compensated`).
     scene_file : path, optional
         The path recorded for a loaded Scene given alone.
+    markets : str or sequence of str, optional
+        One setting for several markets (:mod:`rvmsim.markets`, ``--markets
+        fmvss111-full,unr158``): each scene at each market's site, judged with the
+        market's criteria (then give no ``criteria``).
     """
 
     scenes: tuple[SceneArg, ...]
@@ -149,6 +153,7 @@ class TuneRequest:
     variation_file: str | Path | None = None
     scene_file: str | Path | None = None
     compensation: CompensationModel | None = None
+    markets: str | tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.scenes, (tuple, list)) or not self.scenes:

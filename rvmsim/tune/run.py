@@ -30,6 +30,9 @@ from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
+from .markets import (check_market_arguments, market_summary_lines, markets_members,
+                      write_market_results)
+from .members import check_cameras
 from ..runs.store import RunStore
 from ..search.strategies import Strategy, check_seed
 
@@ -39,6 +42,7 @@ if TYPE_CHECKING:
     from ..storage import FolderLock
     from ..render import FisheyeImages
     from ..compensation import CompensationModel
+    from ..markets import MarketMember
     from ..scene import Scene
 
 __all__ = ["tune", "resume", "TuneResult", "write_results",
@@ -88,6 +92,8 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
     if r.compensation is not None and robust is None:
         raise RvmsimError("--compensation: tuning for the yield after compensation needs "
                           "--robust")
+    if r.markets is not None:  # one parameter set for every market (and scene)
+        return _markets_run(r, agg)
     crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
     if r.shared:  # one parameter set for every scene
         scenes = load_shared_scenes(r.scenes)
@@ -111,6 +117,29 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
         config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
         judged_at=record_size(crit, sc))
     return _robust_settings(settings, [sc], robust, agg, r.compensation), [sc], crit
+
+
+def _markets_run(r: TuneRequest, aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
+    """A new markets run's settings, scenes and its first market's criteria
+    (:mod:`rvmsim.tune.markets`)."""
+    from ..criteria import record_size
+    from ..markets import market_criteria, parse_markets
+    from ..scene import Scene, load_scene
+
+    check_market_arguments(r.markets if isinstance(r.markets, str) else ",".join(r.markets or ()),
+                           r.criteria is not None or r.criteria_file is not None,
+                           r.robust_samples is not None)
+    markets = parse_markets(r.markets or ())
+    loaded = [(str(r.scene_file or s.source) if isinstance(s, Scene) else str(s),
+               s if isinstance(s, Scene) else load_scene(s)) for s in r.scenes]
+    check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in loaded])
+    crit = market_criteria(markets[0])
+    record = record_size(crit, loaded[0][1])
+    settings = dataclasses.replace(
+        shared_settings(loaded, r.strategy, r.seed, r.budget, None,
+                        (r.config or TuningConfig()).at_record(record), aggregate),
+        judged_at=record, markets=tuple(m.spec for m in markets))
+    return settings, [sc for _, sc in loaded], crit
 
 
 def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
@@ -177,6 +206,10 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
         raise RvmsimError(f"{settings.variation_file or settings.scene}: the variation changed "
                           "since this run started; resuming would mix two sample sets "
                           "(start a new run)")
+    if settings.markets:
+        from ..markets import market_criteria, parse_markets
+
+        return settings, scenes, market_criteria(parse_markets(list(settings.markets))[0])
     return settings, scenes, load_criteria(settings.criteria_file)
 
 
@@ -283,15 +316,24 @@ def _run(run_dir: Path, lock: FolderLock, settings: RunSettings, scenes: list[Sc
     # the strategy before the render: a bad config, strategy or seed fails in a moment
     strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
                           settings.seed, settings.budget)
-    renders = [cached_render(s, progress=options.progress)[0] for s in scenes]
-    members = (robust_members(scenes, renders, settings, progress=options.progress)
-               if settings.robust else None)
+    pairs: list[MarketMember] = []
+    members: list[Member] | None
+    if settings.markets:  # each scene at each market's site, with its criteria
+        pairs, renders, members = markets_members(scenes, settings, progress=options.progress)
+    else:
+        renders = [cached_render(s, progress=options.progress)[0] for s in scenes]
+        members = (robust_members(scenes, renders, settings, progress=options.progress)
+                   if settings.robust else None)
     with lock:
         store = _writable_store(run_dir, settings, resume, force)
         try:
             outcome = _search(store, renders, scenes, settings, strat, crit, members, options,
                               _progress_bar(options.progress, strat.total(), sc.name,
                                             options.progress_position))
+            if pairs:
+                write_results(run_dir, store, pairs[0].scene, renders[0], cfg, crit)
+                write_market_results(run_dir, store, pairs, renders, cfg)
+                return TuneResult(run_dir, outcome, strat.total())
             write_results(run_dir, store, sc, renders[0], cfg, crit)
             if settings.shared:
                 write_member_results(run_dir, store, scenes, renders, cfg, crit,
@@ -344,9 +386,13 @@ def summary_lines(result: TuneResult) -> list[str]:
     if best is None:
         return ["no trials"]
     robust = _robust_line(result.run_dir)
-    return [f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
-            f"{o.seconds:.1f} s ({o.stopped}); best EC score {best.score:.4g} (trial {best.idx})",
-            *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
+    head = (f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
+            f"{o.seconds:.1f} s ({o.stopped}); best EC score {best.score:.4g} (trial {best.idx})")
+    markets = market_summary_lines(result.run_dir)
+    if markets:
+        return [head, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(), "",
+                *markets]
+    return [head, *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
 
 
 def _robust_line(run_dir: Path) -> list[str]:

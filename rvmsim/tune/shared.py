@@ -38,7 +38,8 @@ __all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "res
 
 def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
                          resume: bool, robust: bool = False, samples: int | None = None,
-                         variation: object = None, compensation: object = None) -> None:
+                         variation: object = None, compensation: object = None, *,
+                         markets: bool = False) -> None:
     """``rvmsim tune``'s scene arguments against its flags (``--shared``, ``--aggregate``,
     ``--resume``).
 
@@ -57,13 +58,13 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
         if robust:
             raise RvmsimError("--resume: give no --robust (a run resumes with its own "
                               "samples, recorded in its store)")
-        if shared or n_scenes > 1:
-            raise RvmsimError("--resume: give no scenes and no --shared (a run resumes with "
-                              "its own scenes, recorded in its store)")
+        if shared or n_scenes > 1 or markets:
+            raise RvmsimError("--resume: give no scenes, --shared or --markets (a run resumes "
+                              "with its own scenes and markets, recorded in its store)")
         return
     if not n_scenes:
         raise RvmsimError("tune: give a SCENE file, or --resume RUN")
-    if shared and n_scenes < 2:
+    if shared and n_scenes < 2 and not markets:
         raise RvmsimError(f"--shared: give at least two scenes (got {n_scenes}); tune one "
                           "scene without --shared")
     if not shared and n_scenes > 1:

@@ -1,0 +1,213 @@
+"""One setting for several markets (``rvmsim tune SCENE --markets fmvss111-full,unr158``).
+
+Each (scene, market) pair is a member of the run (:mod:`rvmsim.tune.members`): the scene at
+the market's test site (:func:`rvmsim.markets.market_scene`, rendered once and cached),
+judged with the market's criteria.  A candidate passes when it passes every member; its EC
+score is the members' minimum (``--aggregate``).  The run records its markets
+(:attr:`rvmsim.runs.RunSettings.markets`), so ``--resume`` rebuilds the same members.
+
+At the end, ``best/markets.json`` has one row per member (market): its EC score under the
+best setting, pass or fail, the *binding* criterion (the EC with the least score: the one
+that limits the setting in that market) and, where it fails, the failing ECs.  When no
+setting passes every market the file also says why (:func:`market_verdict`):
+
+- ECs no setting can pass in a market, read from the fisheye labels (the ECs' feasibility
+  reasons, :func:`rvmsim.batch.infeasible_ecs`: e.g. a far cylinder hidden behind the
+  bumper in the fisheye image itself);
+- conflicts: markets that each pass alone in some trial but never together, with the ECs
+  of the other market that fail in the trials where one passes (the conflicting ECs).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections import Counter
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Sequence
+
+from ..errors import RvmsimError
+from .members import Member, check_cameras
+
+if TYPE_CHECKING:
+    from ..markets import MarketMember
+    from ..render import FisheyeImages
+    from ..runs.records import RunSettings
+    from ..runs.store import RunStore
+    from ..scene import Scene
+    from ..search.config import TuningConfig
+
+__all__ = ["check_market_arguments", "markets_members", "write_market_results",
+           "market_verdict", "market_summary_lines", "MARKETS_JSON"]
+
+#: The per-market results of a markets run, in its ``best/`` folder.
+MARKETS_JSON = "markets.json"
+
+
+def check_market_arguments(markets: str | None, criteria_given: bool, robust: bool) -> None:
+    """``--markets`` against the other flags of ``rvmsim tune``.
+
+    Raises
+    ------
+    RvmsimError
+        One line: ``--criteria`` or ``--robust`` with ``--markets``.
+    """
+    if markets is None:
+        return
+    if criteria_given:
+        raise RvmsimError("--criteria: give no criteria with --markets (each market has its "
+                          "own; a market may be SITE:CRITERIA with your criteria file)")
+    if robust:
+        raise RvmsimError("--markets with --robust: not supported; tune for the markets, "
+                          "then measure the yield per market with rvmsim robustness "
+                          "RUN --markets …")
+
+
+def markets_members(scenes: Sequence[Scene], settings: RunSettings, *, progress: bool = False
+                    ) -> tuple[list[MarketMember], list[FisheyeImages], list[Member]]:
+    """The members of a markets run: every (scene, market) pair, each scene rendered at the
+    market's site (cached), with the market's criteria."""
+    from ..markets import market_members, parse_markets
+    from ..render import cached_render
+
+    pairs = market_members(scenes, parse_markets(list(settings.markets)))
+    renders = [cached_render(p.scene, progress=progress)[0] for p in pairs]
+    check_cameras([(p.name, im.camera) for p, im in zip(pairs, renders)])
+    members = [Member(p.name, im.labels, im.camera, p.scene, None, p.criteria)
+               for p, im in zip(pairs, renders)]
+    return pairs, renders, members
+
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "member"
+
+
+def _binding(ecs: Sequence[Any]) -> dict[str, Any] | None:
+    """The enabled EC with the least score (ties: the least margin), as a JSON row."""
+    enabled = [e for e in ecs if e.enabled]
+    if not enabled:
+        return None
+    worst = min(enabled, key=lambda e: (e.score, e.margin if e.margin is not None else 0.0))
+    return {"ec": worst.id, "name": worst.name, "value": worst.value, "unit": worst.unit,
+            "score": worst.score, "margin": worst.margin}
+
+
+def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketMember],
+                         renders: Sequence[FisheyeImages], config: TuningConfig) -> None:
+    """``best/markets/<member>/`` (each member's RVM image and annotated ECs under the best
+    setting, at the RVM image of record), ``best/members.json``, ``best/ec_table.txt``
+    and ``best/markets.json`` (see the module docstring)."""
+    from ..pipeline import evaluate_params, record_output, write_frame
+
+    top = store.top(1)
+    if not top:
+        return
+    best = top[0]
+    best_dir = run_dir / "best"
+    rows, docs, tables = [], [], []
+    for p, im in zip(pairs, renders):
+        record = record_output(p.criteria, p.scene, config.output.mirror)
+        frame = evaluate_params(im, best.params, record, p.criteria)
+        write_frame(frame, best_dir / "markets" / _slug(p.name))
+        ec = frame.ec
+        failing = [v.id for v in ec.items if v.enabled and not v.passed]
+        rows.append({"member": p.name, "market": p.market.name, "title": p.market.title,
+                     "vehicle": p.scene.name, "site": p.scene.test_site.site,
+                     "ec_score": ec.score, "passed": not failing, "failing": failing,
+                     "binding": _binding(ec.items),
+                     "images": f"markets/{_slug(p.name)}"})
+        docs.append({"member": p.name, "market": p.market.name, "vehicle": p.scene.name,
+                     **ec.as_dict()})
+        tables.append(f"{p.name} ({p.market.title or p.market.name}):\n{ec.table()}")
+    verdict = market_verdict(store, pairs, renders, best.passed)
+    (best_dir / "members.json").write_text(json.dumps(
+        {"trial": best.idx, "ec_score": best.score, "passed": best.passed, "members": docs},
+        indent=2))
+    rec = record_output(pairs[0].criteria, pairs[0].scene)
+    (best_dir / MARKETS_JSON).write_text(json.dumps(
+        {"trial": best.idx, "ec_score": best.score, "passed": best.passed,
+         "judged_at": [rec.width, rec.height],
+         "markets": rows, **verdict}, indent=2))
+    head = (f"one setting for {len(pairs)} markets, EC score {best.score:.4g}, "
+            f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}")
+    (best_dir / "ec_table.txt").write_text(head + "\n\n" + "\n\n".join(tables) + "\n")
+
+
+def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
+                   renders: Sequence[FisheyeImages], passed: bool) -> dict[str, Any]:
+    """Why no setting passes every market (empty when the best one does): ``infeasible``
+    (per member, the ECs no setting can pass there, from the fisheye labels) and
+    ``conflicts`` (pairs of members that each pass alone in some trial but never
+    together, with the ECs of the other that fail in the trials where one passes, most
+    often first)."""
+    from ..batch import infeasible_ecs
+
+    if passed:
+        return {}
+    infeasible = []
+    for p, im in zip(pairs, renders):
+        for f in infeasible_ecs(p.scene, im.camera, im.labels, p.criteria):
+            infeasible.append({"member": p.name, "ec": f.ec, "reason": f.reason})
+    per = _member_passes(store, len(pairs))
+    conflicts = []
+    for i, a in enumerate(pairs):
+        for j, b in enumerate(pairs):
+            if i >= j or not per[i] or not per[j] or per[i] & per[j]:
+                continue
+            conflicts.append({"members": [a.name, b.name],
+                              "ecs": _failing_where(store, per[i], j)
+                              + _failing_where(store, per[j], i, first=False)})
+    return {"infeasible": infeasible, "conflicts": conflicts,
+            "passes_alone": {p.name: len(per[k]) for k, p in enumerate(pairs)}}
+
+
+def _member_passes(store: RunStore, n: int) -> list[set[int]]:
+    """Per member, the trials it passes (from the store's ``members`` table)."""
+    out: list[set[int]] = [set() for _ in range(n)]
+    for idx, member in store.rows("SELECT idx, member FROM members WHERE passed = 1"):
+        if 0 <= int(member) < n:
+            out[int(member)].add(int(idx))
+    return out
+
+
+def _failing_where(store: RunStore, trials: set[int], member: int, *, first: bool = True,
+                   limit: int = 3) -> list[dict[str, Any]]:
+    """The ECs of ``member`` that fail most often in ``trials`` (its own results there)."""
+    counts: Counter[str] = Counter()
+    rows = store.rows("SELECT idx, ec FROM members WHERE member = ?", (member,))
+    for idx, ec in rows:
+        if int(idx) in trials:
+            for k, cell in json.loads(ec).items():
+                if not cell[2]:
+                    counts[k] += 1
+    return [{"ec": k, "fails_in": n, "of": len(trials)} for k, n in counts.most_common(limit)]
+
+
+def market_summary_lines(run_dir: Path) -> list[str]:
+    """The per-market table ``rvmsim tune`` prints (none for other runs)."""
+    path = run_dir / "best" / MARKETS_JSON
+    if not path.is_file():
+        return []
+    doc = json.loads(path.read_text())
+    lines = [f"{'market':<24} {'EC score':>8}  {'result':<6}  binding criterion"]
+    for r in doc["markets"]:
+        b = r.get("binding") or {}
+        value = "—" if b.get("value") is None else f"{b['value']:.4g}{b.get('unit', '')}"
+        lines.append(f"{r['member']:<24} {r['ec_score']:>8.4g}  "
+                     f"{'pass' if r['passed'] else 'FAIL':<6}  {b.get('ec', '—')} "
+                     f"{b.get('name', '')} = {value}"
+                     + ("" if r["passed"] else f"; fails {', '.join(r['failing'])}"))
+    if not doc.get("passed"):
+        lines.append("no setting found passes every market:")
+        for f in doc.get("infeasible", []):
+            lines.append(f"  {f['member']}: {f['reason']} (no setting can pass it)")
+        for c in doc.get("conflicts", []):
+            ecs = ", ".join(f"{e['ec']} (fails in {e['fails_in']} of {e['of']})"
+                            for e in c["ecs"])
+            lines.append(f"  {c['members'][0]} and {c['members'][1]} each pass alone but "
+                         f"never together; conflicting ECs: {ecs}")
+        if not doc.get("infeasible") and not doc.get("conflicts"):
+            lost = [r["member"] for r in doc["markets"] if not r["passed"]]
+            lines.append(f"  {', '.join(lost)}: no trial passed (a larger --budget may; "
+                         "no EC is proven impossible from the fisheye labels)")
+    return lines
