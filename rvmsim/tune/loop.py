@@ -25,8 +25,8 @@ from ..isp import IspParams, OutputSpec
 from ..pipeline import ImageEvaluator, make_evaluator
 from ..search.config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
-from .members import (Member, MembersScorer, MembersSolver, check_members, member_evaluators,
-                      parse_aggregate)
+from .members import (Aggregate, Member, MembersScorer, MembersSolver, check_members,
+                      member_evaluators, parse_aggregate)
 from ..runs.records import StopReason, TrialRecord
 from .requests import SearchOptions, SearchSettings
 from .solve import EcSolver
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from .compensated import MembersCompensation
 
 __all__ = ["SearchOutcome", "run_search", "BatchEvaluator", "search_scene", "search_members",
-           "VectorScorer",
+           "members_scorer", "VectorScorer",
            "candidate_evaluator", "solver_for", "strategy_scorer"]
 
 
@@ -352,21 +352,32 @@ def search_members(members: Sequence[Member], settings: SearchSettings, store: R
     else:
         strat = make_strategy(settings.strategy, config.space(members[0].camera), config,
                               settings.seed, settings.budget)
-    output = config.output_spec()
-    evaluators = member_evaluators(members, output, criteria)
     if len(members) == 1:
-        batch_eval = _one_scene(strat, evaluators[0], options.workers)
+        evaluator = member_evaluators(members, config.output_spec(), criteria)[0]
+        batch_eval = _one_scene(strat, evaluator, options.workers)
     else:
-        solver = None
-        comp = _members_compensation(members, settings, output)
-        if strat.solves:
-            # with compensation every car is corrected toward the nominal one: solve there
-            solver = MembersSolver([EcSolver(ev.fisheye, output, m.criteria or criteria,
-                                             strat.space)
-                                    for m, ev in zip(members, evaluators)],
-                                   "first" if comp is not None else settings.solve)
-            strat.solved = solver.names
-        scorer = MembersScorer(evaluators, strat.space, solver, strat.objective, agg,
-                               settings.combine, comp)
-        batch_eval = BatchEvaluator(None, strat.space, options.workers, scorer=scorer)
+        batch_eval = BatchEvaluator(None, strat.space, options.workers,
+                                    scorer=members_scorer(members, strat, settings, agg))
     return _drive(strat, batch_eval, store, options)
+
+
+def members_scorer(members: Sequence[Member], strat: Strategy, settings: SearchSettings,
+                   aggregate: Aggregate | None = None) -> MembersScorer:
+    """The scorer of a search over several members (:class:`MembersScorer`): one evaluator
+    per member (its own criteria or ``settings.criteria``) on the config's RVM output, and
+    the members' sub-solves when ``strat`` solves (which it is told: ``strat.solved``).
+    For :func:`search_members`, benchmarks and custom loops."""
+    agg = aggregate or parse_aggregate(settings.aggregate)
+    output = settings.config.output_spec()
+    evaluators = member_evaluators(members, output, settings.criteria)
+    solver = None
+    comp = _members_compensation(members, settings, output)
+    if strat.solves:
+        # with compensation every car is corrected toward the nominal one: solve there
+        solver = MembersSolver([EcSolver(ev.fisheye, output, m.criteria or settings.criteria,
+                                         strat.space)
+                                for m, ev in zip(members, evaluators)],
+                               "first" if comp is not None else settings.solve)
+        strat.solved = solver.names
+    return MembersScorer(evaluators, strat.space, solver, strat.objective, agg,
+                         settings.combine, comp)
