@@ -4,11 +4,15 @@ and the RVM image's ECs."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from .errors import Command
 from .params import FiniteFloat, Integer, OutputFolder, check_scale, default_folder, load_isp
+
+if TYPE_CHECKING:
+    from ..isp import IspParams
 
 __all__ = ["render", "process", "evaluate"]
 
@@ -77,6 +81,9 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
               help="ISP params file (YAML/JSON); default: the paper's Table 2 defaults.")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
               help="Criteria file (YAML); default: the paper's thresholds.")
+@click.option("--markets", default=None, metavar="M1,M2,…",
+              help="Judge the setting in every market (fmvss111-full, unr158, jp, or "
+                   "SITE:CRITERIA): one table per market, exit 1 unless all pass.")
 @click.option("--out", "-o", type=OutputFolder(), default=None,
               callback=default_folder("scene", lambda s: Path("out") / s.stem / "evaluate"),
               help="Output folder (default: out/<scene name>/evaluate).")
@@ -84,19 +91,26 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
               help="Render the fisheye at this fraction of the sensor (RAD and shifts follow).")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
-             out: Path, scale: float, progress: bool) -> None:
+             markets: str | None, out: Path, scale: float, progress: bool) -> None:
     """Evaluate the RVM image of SCENE under ISP parameters: the eleven ECs and the EC score,
     judged at the RVM image of record (the scene's or criteria's display.rvm_image_px,
     default 1280x720) whatever output size the params file names.
 
     Prints the EC table and writes ec.json, ec_annotated.png (the measurements drawn on the RVM
-    image), rvm_color.png and rvm_labels.png.
+    image), rvm_color.png and rvm_labels.png; with --markets one such folder per market and
+    markets.json (docs/markets.md).
     """
     from ..criteria import load_criteria
     from ..pipeline import record_output, render_rvm, write_evaluation
     from ..scene import load_scene
 
     params, output = load_isp(params_file)
+    if markets is not None:
+        if criteria_file is not None:
+            raise click.UsageError("--criteria: give no criteria with --markets (each market "
+                                   "has its own; a market may be SITE:CRITERIA)")
+        _evaluate_markets(scene, params, output.mirror, markets, out, scale, progress)
+        return
     criteria = load_criteria(criteria_file)
     sc = load_scene(scene)
     check_scale(sc, params, scale)
@@ -110,3 +124,44 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
                f"{record.width}x{record.height} px")
     click.echo(frame.ec.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
+
+
+def _evaluate_markets(scene: Path, params: IspParams, mirror: bool, markets: str, out: Path,
+                      scale: float, progress: bool) -> None:
+    """``evaluate --markets``: each market's table and folder, the per-market rows, exit 1
+    unless every market passes."""
+    import json
+    import sys
+
+    from ..markets import evaluate_markets, parse_markets
+    from ..pipeline import write_evaluation
+    from ..scene import load_scene
+
+    chosen = parse_markets(markets)
+    sc = load_scene(scene)
+    check_scale(sc, params, scale)
+    verdicts = evaluate_markets(sc, params, chosen, mirror=mirror, scale=scale,
+                                progress=progress)
+    rows = []
+    for v in verdicts:
+        folder = out / v.member.market.name.replace("/", "_").replace(":", "_")
+        write_evaluation(v.frame, folder, params, scene_file=scene, vehicle=sc.name,
+                         criteria_file=v.member.market.criteria)
+        click.echo(f"{v.member.name} ({v.member.market.title or v.member.market.spec}) — "
+                   f"judged at {v.frame.output.width}x{v.frame.output.height} px")
+        click.echo(v.frame.ec.table() + "\n")
+        b = v.binding
+        rows.append({"market": v.member.market.name, "site": v.member.scene.test_site.site,
+                     "ec_score": v.frame.ec.score, "passed": v.passed, "failing": v.failing,
+                     "binding": None if b is None else b.as_dict(),
+                     "folder": folder.name})
+    click.echo(f"{'market':<24} {'EC score':>8}  {'result':<6}  binding criterion")
+    click.echo("\n".join(v.row() for v in verdicts))
+    passed = all(v.passed for v in verdicts)
+    (out / "markets.json").write_text(json.dumps(
+        {"scene": str(scene), "vehicle": sc.name, "passed": passed, "markets": rows}, indent=2))
+    click.echo(f"wrote {out / 'markets.json'} and one folder per market")
+    if not passed:
+        lost = [f"{v.member.name} ({', '.join(v.failing)})" for v in verdicts if not v.passed]
+        click.echo(f"not every market passes: {'; '.join(lost)}", err=True)
+        sys.exit(1)

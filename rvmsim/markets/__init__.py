@@ -24,11 +24,14 @@ from typing import TYPE_CHECKING
 from ..errors import RvmsimError
 
 if TYPE_CHECKING:
-    from ..criteria import Criteria
+    from ..criteria import Criteria, EcValue
+    from ..isp import IspParams
+    from ..pipeline import RvmFrame
     from ..scene import Scene
 
 __all__ = ["Market", "BUNDLED_MARKETS", "parse_markets", "market_scene", "market_criteria",
-           "MarketMember", "market_members", "member_name"]
+           "MarketMember", "market_members", "member_name", "MarketVerdict",
+           "evaluate_markets"]
 
 
 @dataclass(frozen=True)
@@ -151,3 +154,64 @@ def market_members(scenes: Sequence[Scene], markets: Sequence[Market]) -> list[M
     return [MarketMember(member_name(sc, m, len(scenes)), m, market_scene(sc, m),
                          market_criteria(m))
             for sc in scenes for m in markets]
+
+
+@dataclass(frozen=True)
+class MarketVerdict:
+    """One market's verdict on one setting: its member, the evaluated frame (at the RVM
+    image of record) and the binding criterion (the enabled EC with the least score)."""
+
+    member: MarketMember
+    frame: RvmFrame
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.frame.ec.passed)
+
+    @property
+    def binding(self) -> EcValue | None:
+        enabled = [e for e in self.frame.ec.items if e.enabled]
+        if not enabled:
+            return None
+        return min(enabled, key=lambda e: (e.score, e.margin if e.margin is not None else 0.0))
+
+    @property
+    def failing(self) -> list[str]:
+        return [e.id for e in self.frame.ec.items if e.enabled and not e.passed]
+
+    def row(self) -> str:
+        """``market  EC score  pass/FAIL  binding EC = value`` for terminals."""
+        b = self.binding
+        value = "—" if b is None or b.value is None else f"{b.value:.4g}{b.unit}"
+        tail = "" if self.passed else f"; fails {', '.join(self.failing)}"
+        return (f"{self.member.name:<24} {self.frame.ec.score:>8.4g}  "
+                f"{'pass' if self.passed else 'FAIL':<6}  "
+                f"{'—' if b is None else f'{b.id} {b.name}'} = {value}{tail}")
+
+
+def evaluate_markets(scene: Scene, params: IspParams, markets: Sequence[Market], *,
+                     mirror: bool = True, scale: float = 1.0, progress: bool = False
+                     ) -> list[MarketVerdict]:
+    """One ISP setting judged in every market: the scene rendered at each market's site
+    (``scale`` of the sensor) and evaluated with the market's criteria at the RVM image of
+    record (:func:`rvmsim.pipeline.record_output`), annotated.
+
+    Parameters
+    ----------
+    scene : Scene
+        The car (at its FMVSS site, as loaded).
+    params : IspParams
+        The setting, for the full-size sensor.
+    markets : sequence of Market
+    mirror : bool
+        Whether the RVM image is mirrored.
+    """
+    from ..pipeline import record_output, render_rvm
+
+    out = []
+    for member in market_members([scene], markets):
+        record = record_output(member.criteria, member.scene, mirror)
+        frame = render_rvm(member.scene, params, record, criteria=member.criteria, scale=scale,
+                           annotate=True, progress=progress)
+        out.append(MarketVerdict(member, frame))
+    return out

@@ -8,13 +8,14 @@ resolved relative to the scene file.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
-from .._io import (image_size_problem, input_error_from_validation, key_lines, line_of,
-                   parse_yaml, read_text)
+from .._io import (KeyPath, image_size_problem, input_error_from_validation, key_lines,
+                   line_of, parse_yaml, read_text)
 from ..errors import SceneError
 from .schema import CameraSpec, MeshPart, Scene
 from .station import eol_problem
@@ -76,6 +77,7 @@ def scene_from_dict(
     if bad is not None:
         key, message = bad
         raise SceneError(source, key, message, line_of(lines, tuple(key.split("."))))
+    _check_sites(scene, lines)
     for key, part in mesh_parts(scene):
         path = scene.resolve_path(part.mesh)
         if not path.is_file():
@@ -84,6 +86,31 @@ def scene_from_dict(
                 source, key, f"mesh file not found: {path}", lines.get(loc)
             )
     return scene
+
+
+def _check_sites(scene: Scene, lines: Mapping[KeyPath, int]) -> None:
+    """Every site the scene names loads (a bundled name, or a site file next to the scene;
+    a bad site file's own one-line error names that file and its key), once each."""
+    from .sitedefs import BUNDLED_SITES, site_definition
+
+    seen: set[str] = set()
+    for i, entry in enumerate(scene.sites):
+        if entry in BUNDLED_SITES:
+            name = entry
+        elif entry.lower().endswith((".yaml", ".yml")) or "/" in entry:
+            path = scene.resolve_path(entry)
+            if not path.is_file():
+                raise SceneError(scene.source, f"sites.{i}", f"site file not found: {path}",
+                                 lines.get(("sites", i), lines.get(("sites",))))
+            name = site_definition(str(path)).name
+        else:
+            raise SceneError(scene.source, f"sites.{i}", f"unknown site {entry!r} (bundled: "
+                             f"{', '.join(BUNDLED_SITES)}; or a site file, .yaml)",
+                             lines.get(("sites", i), lines.get(("sites",))))
+        if name in seen:
+            raise SceneError(scene.source, f"sites.{i}", f"site {name!r} is named twice",
+                             lines.get(("sites", i), lines.get(("sites",))))
+        seen.add(name)
 
 
 #: Focal lengths lie within these factors of the longest image side (a fisheye has about
