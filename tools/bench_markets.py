@@ -82,7 +82,7 @@ def run_one(scene_path: str, markets: str, strategy: str, seed: int,
                     first = used + k + 1
             k = int(np.argmax(b.score))
             if b.score[k] > best:
-                best, best_ec = float(b.score[k]), b.ec[k]
+                best, best_ec = float(b.score[k]), b.ec_json[k]
             used += len(xs)
             told = list(zip(b.score, b.objective))
     except StopIteration:

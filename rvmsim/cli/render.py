@@ -24,8 +24,12 @@ __all__ = ["render", "process", "evaluate"]
               help="Resample the sensor by this factor (0.25 for a quick preview).")
 @click.option("--face-size", type=Integer(16, 4096), default=None,
               help="Cube face size in px (default: automatic, as dense as the fisheye image).")
+@click.option("--site", default=None, metavar="NAME|FILE",
+              help="Render the car at this test site (fmvss111, unr158, jp, or a site file; "
+                   "docs/markets.md) [default: its FMVSS 111 site].")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
-def render(scene: Path, out: Path, scale: float, face_size: int | None, progress: bool) -> None:
+def render(scene: Path, out: Path, scale: float, face_size: int | None, site: str | None,
+           progress: bool) -> None:
     """Render the fisheye (P camera) colour and label images of SCENE.
 
     Writes fisheye_color.png, fisheye_labels.png (one uint8 label ID per pixel),
@@ -33,9 +37,12 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, progress
     """
     from ..pipeline import write_fisheye
     from ..render import render_fisheye
-    from ..scene import load_scene
+    from ..scene import load_scene, load_site, site_scene
 
     sc = load_scene(scene)
+    if site is not None:
+        sc = site_scene(sc, load_site(site) if site.lower().endswith((".yaml", ".yml"))
+                        else site)
     cam = sc.fisheye_camera()
     if scale != 1.0:
         cam = cam.scaled(scale)
