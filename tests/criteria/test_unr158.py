@@ -215,3 +215,46 @@ def test_visual_angle_of_a_far_cylinder_in_a_rectilinear_view():
         assert widths[obj.name]["px"] == pytest.approx(px, rel=0.02)
         assert widths[obj.name]["arcmin"] == pytest.approx(
             ARCMIN * 2 * math.atan(mm / 1300.0), rel=0.02)
+
+
+# ---------------------------------------------------------------------------- --markets
+def test_tune_markets_writes_one_row_per_market(tmp_path):
+    import json
+
+    from ..cli_runner import run_in_process
+    from ..scenes import write_small_scene
+
+    small = write_small_scene(tmp_path)
+    out = tmp_path / "run"
+    res = run_in_process(["tune", small, "--markets", "fmvss111-full,unr158", "--budget", "60",
+                          "--strategy", "random", "--seed", "1", "--out", out],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    assert res.code in (0, 1), res.stderr
+    rows = json.loads((out / "best" / "markets.json").read_text())
+    rows = rows["markets"]
+    assert [r["market"] for r in rows] == ["fmvss111-full", "unr158"]
+    assert [r["site"] for r in rows] == ["fmvss111", "unr158"]
+    for r in rows:
+        assert 0.0 <= r["ec_score"] <= 1.0 and r["passed"] == (r["failing"] == [])
+        assert r["binding"]["ec"] in (r["failing"] or [r["binding"]["ec"]])
+        if r["market"] == "unr158":
+            assert r["binding"]["ec"].startswith("R158-")
+        assert (out / "best" / "markets" / r["market"] / "ec_annotated.png").is_file()
+    assert res.code == (0 if all(r["passed"] for r in rows) else 1)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--markets", "nosuch"], "nosuch"),
+    (["--markets", "fmvss111,fmvss111"], "given twice"),
+    (["--markets", "unr158", "--criteria", "unr158"], "--criteria"),
+])
+def test_bad_markets_are_one_line_and_exit_2(tmp_path, args, words):
+    from ..cli_runner import run_in_process
+    from ..scenes import write_small_scene
+
+    small = write_small_scene(tmp_path)
+    res = run_in_process(["tune", small, "--budget", "4", "--out", tmp_path / "r", *args],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    assert res.code == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], res.stderr
