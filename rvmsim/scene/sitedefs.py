@@ -47,7 +47,8 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Literal, Union
 
-from pydantic import Field, ValidationError, model_validator
+from pydantic import (Field, ValidationError, ValidationInfo, field_validator,
+                      model_validator)
 
 from .. import labels as L
 from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
@@ -141,22 +142,29 @@ class SiteDefinition(_Model):
     #: The file it was read from (not a YAML key).
     source: str = Field(default="<site>", exclude=True)
 
-    @model_validator(mode="after")
-    def _check(self) -> SiteDefinition:
-        _name(self.name)
-        names = [r.name for r in self.rows]
+    @field_validator("name")
+    @classmethod
+    def _check_name(cls, value: str) -> str:
+        return _name(value)
+
+    @field_validator("rows")
+    @classmethod
+    def _check_rows(cls, rows: list[SiteRow], info: ValidationInfo) -> list[SiteRow]:
+        """Unique row names; at most :data:`~rvmsim.labels.MAX_SITE_OBJECTS` objects and
+        top bands only, but on the FMVSS site (errors name the key ``rows``)."""
+        names = [r.name for r in rows]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"row names must be unique ({', '.join(dup)} repeated)")
-        if self.kind == "objects":
-            n = sum(len(r.x) for r in self.rows)
+        if info.data.get("kind", "objects") == "objects":
+            n = sum(len(r.x) for r in rows)
             if n > L.MAX_SITE_OBJECTS:
                 raise ValueError(f"{n} objects: a site holds at most {L.MAX_SITE_OBJECTS}")
-            for r in self.rows:
+            for r in rows:
                 if r.marking.vertical_stripe or r.marking.lower_patch:
                     raise ValueError(f"row {r.name}: vertical stripes and lower patches are "
                                      "drawn on the fmvss111 site only; use top_band")
-        return self
+        return rows
 
     def row(self, name: str) -> SiteRow:
         """The row called ``name`` (KeyError when there is none)."""
@@ -265,21 +273,20 @@ def site_definition(entry: str, base_dir: str | Path = ".") -> SiteDefinition:
 
 def vehicle_width(vehicle: object) -> float | None:
     """The vehicle's overall width, metres: ``vehicle.width`` when given, else its widest
-    parametric body part, else the x extent of its mesh parts; None without a vehicle."""
+    body part; None without a vehicle, or when a part is a mesh (the caller measures the
+    meshes, which need loading: :func:`scene_vehicle_width`)."""
     from .schema import BlockPart, MeshPart, Vehicle
 
     if not isinstance(vehicle, Vehicle):
         return None
     if vehicle.width is not None:
         return float(vehicle.width)
+    if any(isinstance(p, MeshPart)
+           for p in (vehicle.bumper, vehicle.garnish, vehicle.trunk, *vehicle.extra)):
+        return None
     widths = [p.width for p in (vehicle.bumper, vehicle.garnish, vehicle.trunk)
               if isinstance(p, BlockPart)]
-    meshes = [p for p in (vehicle.bumper, vehicle.garnish, vehicle.trunk, *vehicle.extra)
-              if isinstance(p, MeshPart)]
-    if meshes and not widths:
-        return None  # the caller measures the meshes (they need loading)
     return max(widths) if widths else None
-
 
 
 def scene_site(scene: Scene, name: str) -> SiteDefinition:
@@ -291,18 +298,33 @@ def scene_site(scene: Scene, name: str) -> SiteDefinition:
     RvmsimError
         An unknown site, or a bad site file (one line naming the file and key).
     """
-    for entry in scene.sites:
+    for i, entry in enumerate(scene.sites):
         if entry in BUNDLED_SITES:
             continue
-        site = site_definition(entry, scene.base_dir)
+        site = _scene_entry(scene, i, entry)
         if site.name == name:
             return site
     return bundled_site(name)
 
 
+def _scene_entry(scene: Scene, i: int, entry: str) -> SiteDefinition:
+    """Entry ``i`` of the scene's ``sites:``; a missing file or an unknown name is an error
+    naming the scene file and the key ``sites.<i>``."""
+    if entry not in BUNDLED_SITES:
+        p = Path(entry).expanduser()
+        path = p if p.is_absolute() else Path(scene.base_dir) / p
+        is_file = entry.lower().endswith((".yaml", ".yml")) or "/" in entry
+        if is_file and not path.is_file():
+            raise SiteError(scene.source, f"sites.{i}", f"{path}: no such site file")
+        if not is_file:
+            raise SiteError(scene.source, f"sites.{i}", f"{entry!r}: unknown site (bundled: "
+                            f"{', '.join(BUNDLED_SITES)}; or a site file .yaml)")
+    return site_definition(entry, scene.base_dir)
+
+
 def scene_sites(scene: Scene) -> list[SiteDefinition]:
     """Every site ``scene`` names (``sites:``), in order."""
-    return [site_definition(entry, scene.base_dir) for entry in scene.sites]
+    return [_scene_entry(scene, i, entry) for i, entry in enumerate(scene.sites)]
 
 
 def scene_vehicle_width(scene: Scene) -> float:
@@ -322,9 +344,17 @@ def scene_vehicle_width(scene: Scene) -> float:
                           "needs a vehicle (or vehicle.width)")
     from .loading import mesh_parts
     from .meshes import _load_mesh_part
+    from .schema import BlockPart
 
-    xs = [(_load_mesh_part(scene, key, part).bounds[:, 0]) for key, part in mesh_parts(scene)]
-    return float(max(x[1] for x in xs) - min(x[0] for x in xs))
+    v = scene.vehicle
+    widths = [p.width for p in (v.bumper, v.garnish, v.trunk) if isinstance(p, BlockPart)]
+    for key, part in mesh_parts(scene):  # the widest part, block or mesh
+        x = _load_mesh_part(scene, key, part).bounds[:, 0]
+        widths.append(float(x[1] - x[0]))
+    if not widths:
+        raise RvmsimError(f"{scene.source}: vehicle: a site placed by the vehicle's width "
+                          "needs a body part (or vehicle.width)")
+    return max(widths)
 
 
 def site_scene(scene: Scene, site: str | SiteDefinition) -> Scene:
