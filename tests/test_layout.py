@@ -124,7 +124,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render", "isp"),
     ("compensation",),
     ("criteria",),
-    ("pipeline",),
+    ("pipeline", "markets"),
     ("robust",),
     ("search",),
     ("runs",),
