@@ -41,4 +41,6 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
                   else f"yield {100 * result.yield_:.1f} %")
     click.echo(f"ECs at the display: {'all pass' if result.nominal_passed else 'not all pass'}"
                f"; {yield_text}; params {result.params_file} sha256 {result.params_sha256}")
+    if result.markets_text is not None:
+        click.echo(f"markets: {result.markets_text}")
     click.echo(f"wrote {result.html}" + ("" if result.pdf is None else f", {result.pdf}"))

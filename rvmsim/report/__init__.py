@@ -22,6 +22,7 @@ from .sweep import (
 )
 from .validation import validation_page, write_validation_outputs, PICTURE_CAPTIONS
 from .robustness import RobustnessInputs, robustness_page, write_robustness_outputs
+from .robustness_markets import markets_robustness_page, write_markets_robustness_outputs
 from .eol import eol_page, write_eol_page
 from .signoff import SignoffResult, signoff
 from .plots import (
@@ -49,6 +50,8 @@ __all__ = [
     "robustness_page",
     "write_robustness_outputs",
     "RobustnessInputs",
+    "markets_robustness_page",
+    "write_markets_robustness_outputs",
     "eol_page",
     "write_eol_page",
     "signoff",

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import RvmsimError
-from ..robust import EcStats, RobustnessResult
+from ..robust import EcStats, MarketsRobustness, RobustnessResult
 from ..storage import json_default
 from .page import escape, figure_png, img_tag, page, data_uri
 from .provenance import FileRecord, file_record, files_table, scene_records
@@ -41,13 +41,15 @@ class RobustnessInputs:
     own section or the built-in default); recorded in robustness.json (``inputs``), shown
     on the page and used to write the commands that reproduce a sample.
 
-    ``compensation`` is a file or ``"default"``; ``render_scale`` is ``--scale``."""
+    ``compensation`` is a file or ``"default"``; ``render_scale`` is ``--scale``;
+    ``markets`` is ``--markets`` (None: one market, the criteria's)."""
 
     params_file: Path | None = None
     criteria_file: Path | None = None
     variation_file: Path | None = None
     compensation: str | None = None
     render_scale: float = 1.0
+    markets: str | None = None
 
 #: Longest side of an embedded RVM image without its ECs drawn, px.  The annotated image is
 #: embedded at its own size: :func:`rvmsim.criteria.annotate` makes it as wide as the page
@@ -285,7 +287,8 @@ each sample per EC (distance to the nearer end of its range; below 0 fails).</fi
 """)
 
 
-def _setting_file(result: RobustnessResult, inputs: RobustnessInputs, out: Path) -> Path:
+def _setting_file(result: RobustnessResult | MarketsRobustness, inputs: RobustnessInputs,
+                  out: Path) -> Path:
     """The params file of the setting: the one given, else :data:`SETTING_FILE` written
     into ``out`` (the setting's values and output size)."""
     import yaml
@@ -326,7 +329,7 @@ def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path,
             "params_file": setting.file.path,
             "criteria_file": None if how.criteria_file is None else str(how.criteria_file),
             "variation_file": None if how.variation_file is None else str(how.variation_file),
-            "compensation": how.compensation}}
+            "compensation": how.compensation, "markets": how.markets}}
         js = out / "robustness.json"
         js.write_text(json.dumps(doc, indent=2, default=json_default) + "\n")
         html_path = out / "robustness.html"

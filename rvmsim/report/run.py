@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import RvmsimError
 from ..runs import find_runs, is_run_folder
+from .market_rows import load_markets, markets_html
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
                       members_section, robust_section, robust_top)
 from .page import data_uri, escape, img_tag, page, shrink
@@ -326,7 +327,8 @@ def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary
     result, color, annotated = frame.ec, frame.color, frame.annotated
     assert annotated is not None
     badge = "pass" if result.passed else "fail"
-    sections = (("members",) if r.members else ()) + (("robust",) if r.robust_rows else ()) \
+    markets = load_markets(run_dir)
+    sections = (("markets",) if markets else ()) + (("members",) if r.members else ()) + (("robust",) if r.robust_rows else ()) \
         + SECTION_IDS
     title = (r.scene.name if not r.members
              else "shared: " + ", ".join(m.vehicle for m in r.members))
@@ -345,6 +347,8 @@ def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary
         header += ('<p class="warn"><b>The scene file changed after this run.</b> The images and '
                    "EC values below are recomputed with the scene as it is now, so they can "
                    "differ from the scores the run stored.</p>")
+    if markets:
+        header += markets_html(markets, run_dir)
     if r.members:
         header += members_section(r.members, r.top[0].params, r.output, r.criteria,
                                   r.settings.aggregate or "min")

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..errors import RvmsimError
 from ..storage import json_default
+from .market_rows import all_markets_pass, load_markets, markets_rows, markets_verdict_text
 from .page import shrink
 from .provenance import FileRecord, file_record, provenance, scene_records
 from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,
@@ -72,6 +73,10 @@ class SignoffResult:
     params_sha256: str
     nominal_passed: bool
     yield_: float | None
+    #: A markets run: whether its best setting passes every market (None: not a markets
+    #: run); :attr:`markets_text` says so in words.
+    markets_passed: bool | None = None
+    markets_text: str | None = None
 
 
 def _record_output(criteria: Criteria, scene: Scene, output: OutputSpec) -> OutputSpec:
@@ -195,7 +200,7 @@ def _repro_commands(rob: RobustnessRecord | None, r: _Run, setting: SettingRecor
     """Per failing sample (its index as text): the commands that write its car as a scene
     (``rvmsim robustness … --export-sample N``) and render it in full (``rvmsim
     evaluate``)."""
-    if rob is None:
+    if rob is None or rob.inputs.get("markets"):  # no --export-sample with --markets yet
         return {}
     inputs, doc = rob.inputs, rob.doc
     params = str(inputs.get("params_file") or setting.file.path)
@@ -288,7 +293,18 @@ def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any
             "robustness": rob,
             "validation": None if res.validation is None else str(res.validation.path.resolve()),
             "eol": None if res.eol is None else str(res.eol.path.resolve()),
-            "reviewer": res.reviewer}
+            "reviewer": res.reviewer,
+            **_markets_summary(res)}
+
+
+def _markets_summary(res: SignoffContent) -> dict[str, Any]:
+    """signoff.json's ``markets`` (one row per market; a markets run only) and
+    ``all_markets_pass``."""
+    if res.markets is None:
+        return {}
+    return {"markets": markets_rows(res.markets, res.run_dir),
+            "markets_trial": res.markets.get("trial"),
+            "all_markets_pass": all_markets_pass(res.markets) and res.markets_same_trial}
 
 
 def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | None = None,
@@ -355,8 +371,12 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     finally:
         bar.close()
     f = content.setting.file
+    m = content.markets
     return SignoffResult(html, pdf_path, js, Path(f.path), f.sha256 or "", content.ec.passed,
-                         None if rob is None else rob.yield_)
+                         None if rob is None else rob.yield_,
+                         None if m is None else all_markets_pass(m) and content.markets_same_trial,
+                         None if m is None else markets_verdict_text(m) if
+                         content.markets_same_trial else "markets not judged for this setting")
 
 
 def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRecord | None,
@@ -374,10 +394,12 @@ def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRe
     bar.set_postfix_str("hashing the inputs")
     files, changed = _files(r, setting, rob, val, eol)
     same = rob is None or same_setting(rob.doc["isp"], params_to_dict(best.params))
+    markets = load_markets(r.run_dir)
     bar.update()
     return SignoffContent(
         title=r.scene.name, run_dir=str(r.run_dir.resolve()), setting=setting, files=files,
         provenance=provenance(), record_output=record, tuning_output=r.output, ec=ec,
         display=color, annotated=annotated, ec_pictures=each, robustness=rob,
         robustness_same_setting=same, changed_files=changed, validation=val, eol=eol,
-        reviewer=reviewer, repro=_repro_commands(rob, r, setting, out))
+        reviewer=reviewer, repro=_repro_commands(rob, r, setting, out), markets=markets,
+        markets_same_trial=markets is None or markets.get("trial") == best.idx)

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .market_rows import all_markets_pass, markets_html, markets_verdict_text
 from .page import escape, img_tag, page
 from .provenance import FileRecord, Provenance, files_table, provenance_html
 from .records import EolRecord, RobustnessRecord, ValidationRecord
@@ -63,6 +64,10 @@ class SignoffContent:
     eol: EolRecord | None = None
     reviewer: str = ""
     repro: dict[str, str] = field(default_factory=dict)
+    #: A markets run's ``best/markets.json`` (None: not a markets run), and whether it is of
+    #: the trial signed off here.
+    markets: dict[str, Any] | None = None
+    markets_same_trial: bool = True
 
 
 def _pct(est: dict[str, Any]) -> str:
@@ -76,6 +81,13 @@ def _verdict(c: SignoffContent) -> str:
     rows = [("ECs at the display output of record (nominal pose)",
              f'<span class="badge {nominal}">{"every EC passes" if c.ec.passed else "not all pass"}'
              f"</span> {c.record_output.width} × {c.record_output.height} px")]
+    if c.markets is not None:
+        ok = all_markets_pass(c.markets) and c.markets_same_trial
+        text = (markets_verdict_text(c.markets) if c.markets_same_trial else
+                f"not known for this setting (best/markets.json is of trial "
+                f"{c.markets.get('trial')})")
+        rows.append(("Markets (one setting judged at each market's site)",
+                     f'<span class="badge {"pass" if ok else "fail"}">{escape(text)}</span>'))
     r = c.robustness
     if r is None:
         rows.append(("Production yield", f'<span class="red">{escape(NO_ROBUSTNESS)}</span>'))
@@ -288,6 +300,9 @@ def signoff_html(c: SignoffContent) -> str:
             f"sign-off sheet, made {escape(c.provenance.date)} by rvmsim "
             f"{escape(c.provenance.version)} from the run <code>{escape(c.run_dir)}</code>."
             f"</p><nav><p>{nav}</p></nav>")
-    body = (head + _verdict(c) + _setting(c) + _inputs(c) + _tool(c) + _ecs(c) + _yield(c)
+    if c.markets is not None:
+        nav = nav.replace("</a>", '</a> · <a href="#markets">markets</a>', 1)
+    markets = "" if c.markets is None else markets_html(c.markets, c.run_dir)
+    body = (head + _verdict(c) + markets + _setting(c) + _inputs(c) + _tool(c) + _ecs(c) + _yield(c)
             + _failing(c) + _validation(c) + _eol(c) + _signature(c))
     return page(f"Sign-off: {c.title}", body)

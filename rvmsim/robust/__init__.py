@@ -4,7 +4,8 @@ their fisheye images (rotations re-folded, few renders) and the yield of an ISP 
 Modules: :mod:`.variation` (the variation model), :mod:`.samples` (Sobol draws),
 :mod:`.images` (sample images), :mod:`.stats` (yield, confidence interval, what drives
 failures), :mod:`.sensitivity` (each EC's value as a formula of the offsets and load),
-:mod:`.robustness` (:func:`robustness`), :mod:`.export` (a sample as a scene file).
+:mod:`.robustness` (:func:`robustness`), :mod:`.markets` (the yield per market,
+:func:`markets_robustness`), :mod:`.export` (a sample as a scene file).
 See docs/robustness.md.
 """
 
@@ -45,6 +46,7 @@ from .robustness import (
     robustness,
     DEFAULT_SCALES,
 )
+from .markets import MarketYield, MarketsRobustness, markets_robustness
 
 __all__ = [
     "AxisDistribution",
@@ -94,4 +96,7 @@ __all__ = [
     "evaluate_samples",
     "robustness",
     "DEFAULT_SCALES",
+    "MarketYield",
+    "MarketsRobustness",
+    "markets_robustness",
 ]

@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from ..search.config import TuningConfig
 
 __all__ = ["check_market_arguments", "markets_members", "write_market_results",
-           "market_verdict", "market_summary_lines", "MARKETS_JSON"]
+           "market_verdict", "market_summary_lines", "market_problem_lines", "MARKETS_JSON"]
 
 #: The per-market results of a markets run, in its ``best/`` folder.
 MARKETS_JSON = "markets.json"
@@ -197,17 +197,28 @@ def market_summary_lines(run_dir: Path) -> list[str]:
                      f"{'pass' if r['passed'] else 'FAIL':<6}  {b.get('ec', '—')} "
                      f"{b.get('name', '')} = {value}"
                      + ("" if r["passed"] else f"; fails {', '.join(r['failing'])}"))
-    if not doc.get("passed"):
+    problems = market_problem_lines(doc)
+    if problems:
         lines.append("no setting found passes every market:")
-        for f in doc.get("infeasible", []):
-            lines.append(f"  {f['member']}: {f['reason']} (no setting can pass it)")
-        for c in doc.get("conflicts", []):
-            ecs = ", ".join(f"{e['ec']} (fails in {e['fails_in']} of {e['of']})"
-                            for e in c["ecs"])
-            lines.append(f"  {c['members'][0]} and {c['members'][1]} each pass alone but "
-                         f"never together; conflicting ECs: {ecs}")
-        if not doc.get("infeasible") and not doc.get("conflicts"):
-            lost = [r["member"] for r in doc["markets"] if not r["passed"]]
-            lines.append(f"  {', '.join(lost)}: no trial passed (a larger --budget may; "
-                         "no EC is proven impossible from the fisheye labels)")
+        lines += [f"  {p}" for p in problems]
+    return lines
+
+
+def market_problem_lines(doc: dict[str, Any]) -> list[str]:
+    """Why no setting passes every market, one line per reason, from a ``markets.json``
+    document (none when its best setting passes every market): the ECs no setting can pass
+    in a market, the pairs of markets that pass alone but never together with their
+    conflicting ECs, else the markets no trial passed."""
+    if doc.get("passed"):
+        return []
+    lines = [f"{f['member']}: {f['reason']} (no setting can pass it)"
+             for f in doc.get("infeasible", [])]
+    for c in doc.get("conflicts", []):
+        ecs = ", ".join(f"{e['ec']} (fails in {e['fails_in']} of {e['of']})" for e in c["ecs"])
+        lines.append(f"{c['members'][0]} and {c['members'][1]} each pass alone but never "
+                     f"together; conflicting ECs: {ecs}")
+    if not doc.get("infeasible") and not doc.get("conflicts"):
+        lost = [r["member"] for r in doc["markets"] if not r["passed"]]
+        lines.append(f"{', '.join(lost)}: no trial passed (a larger --budget may; no EC is "
+                     "proven impossible from the fisheye labels)")
     return lines

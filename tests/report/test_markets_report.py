@@ -1,0 +1,107 @@
+"""A markets run (``rvmsim tune --markets``) in its report, its sign-off sheet and
+``rvmsim robustness RUN``: a real small run at two markets' sites."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from ..cli_runner import run_in_process
+from ..robust.conftest import ANGLES_ONLY
+from ..scenes import write_small_scene
+
+MARKETS = ["fmvss111", "unr158"]
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """A short markets run of a quarter-size vehicle A (too short to pass FMVSS: the report
+    must say why), its report and its sign-off (no PDF)."""
+    root = tmp_path_factory.mktemp("markets_report")
+    write_small_scene(root, "a", name="scene.yaml", variation=ANGLES_ONLY)
+    tuned = run_in_process(["tune", "scene.yaml", "--markets", ",".join(MARKETS), "--budget",
+                            "24", "--out", "run", "--no-progress"], cwd=root)
+    assert tuned.code in (0, 1), tuned.stderr
+    rep = run_in_process(["report", "run"], cwd=root)
+    assert rep.code == 0, rep.stderr
+    sign = run_in_process(["signoff", "run", "--out", "so", "--no-pdf", "--no-progress"],
+                          cwd=root)
+    assert sign.code == 0, sign.stderr
+    return root, json.loads((root / "run" / "best" / "markets.json").read_text()), sign
+
+
+def _market_rows(html: str) -> list[str]:
+    return re.findall(r'<tr class="(?:pass|fail) market"><td>([^<]*)</td>', html)
+
+
+def _images(html: str) -> dict[str, bytes]:
+    """The markets section's annotated images by their alt text."""
+    return {alt: base64.b64decode(data) for data, alt in re.findall(
+        r'<img src="data:image/png;base64,([^"]+)" alt="([^"]*) annotated ECs">', html)}
+
+
+def test_the_report_has_a_row_and_an_image_per_market(run):
+    root, doc, _ = run
+    html = (root / "run" / "report.html").read_text()
+    assert _market_rows(html) == MARKETS
+    images = _images(html)
+    for r in doc["markets"]:
+        png = root / "run" / "best" / r["images"] / "ec_annotated.png"
+        assert images[r["member"]] == png.read_bytes()
+        b = r["binding"]
+        assert f"{b['ec']} {b['name']} = " in html
+    passed = [r["passed"] for r in doc["markets"]]
+    assert ("all markets pass" in html) == all(passed)
+    if not all(passed):  # the reasons, as tune printed them
+        assert "No setting found passes every market" in html
+        assert "<li>" in html.split('id="markets"')[1].split("</section>")[0]
+
+
+def test_the_signoff_lists_the_markets(run):
+    root, doc, sign = run
+    so = json.loads((root / "so" / "signoff.json").read_text())
+    assert [m["member"] for m in so["markets"]] == MARKETS
+    assert [m["passed"] for m in so["markets"]] == [r["passed"] for r in doc["markets"]]
+    assert so["all_markets_pass"] == all(r["passed"] for r in doc["markets"])
+    html = (root / "so" / "signoff.html").read_text()
+    assert _market_rows(html) == MARKETS and len(_images(html)) == 2
+    assert ("all markets pass" in html) == so["all_markets_pass"]
+    assert ("markets: all markets pass" in sign.stdout) == so["all_markets_pass"]
+
+
+def test_the_signoff_says_all_markets_pass_only_when_every_one_does(run, tmp_path):
+    """The same run with its markets.json edited: every market passing, then one failing."""
+    root, doc, _ = run
+    copy = tmp_path / "run"
+    shutil.copytree(root / "run", copy)
+    for flags, expect in (([True, True], True), ([True, False], False)):
+        edited = {**doc, "passed": all(flags),
+                  "markets": [{**r, "passed": f, "failing": [] if f else ["R158-2"]}
+                              for r, f in zip(doc["markets"], flags)]}
+        (copy / "best" / "markets.json").write_text(json.dumps(edited))
+        out = run_in_process(["signoff", str(copy), "--out", str(tmp_path / f"so{expect}"),
+                              "--no-pdf", "--no-progress"])
+        assert out.code == 0, out.stderr
+        so = json.loads((tmp_path / f"so{expect}" / "signoff.json").read_text())
+        assert so["all_markets_pass"] is expect
+        assert ("markets: all markets pass (2)" in out.stdout) is expect
+        html = (tmp_path / f"so{expect}" / "signoff.html").read_text()
+        assert ("all markets pass (2)" in html) is expect
+        if not expect:
+            assert "not every market passes: unr158 fail" in html
+
+
+def test_robustness_of_a_run_uses_its_markets(run):
+    root, _, _ = run
+    out = run_in_process(["robustness", "run", "--samples", "6", "--scales", "1", "--out",
+                          "rob", "--no-progress"], cwd=root)
+    assert out.code == 0, out.stderr
+    doc = json.loads((root / "rob" / "robustness.json").read_text())
+    assert [m["market"] for m in doc["markets"]] == MARKETS
+    assert doc["inputs"]["params_file"].endswith("top/rank_1.yaml")
+    assert doc["n_pass"] == sum(s["passed"] for s in doc["samples"])
