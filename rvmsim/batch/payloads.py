@@ -19,6 +19,8 @@ from __future__ import annotations
 
 from typing import Any, Literal, NotRequired, TypedDict, final
 
+from ..criteria.infeasible import InfeasibleDoc
+
 __all__ = ["Verdict", "YieldRequest", "PointTask", "YieldTask", "EcOutcomeDoc",
            "InfeasibleDoc", "ParamSensitivity", "SensitivityDoc", "YieldDoc", "YieldError",
            "PointRun", "PointError", "PointResult", "YieldOnly", "FirstPass", "MergedPoint",
@@ -100,13 +102,6 @@ class EcOutcomeDoc(TypedDict):
     passed: bool
 
 
-class InfeasibleDoc(TypedDict):
-    """An EC no ISP setting can pass (:meth:`~rvmsim.batch.Infeasibility.as_dict`;
-    ``short`` is absent in stores made before it existed)."""
-
-    ec: str
-    reason: str
-    short: NotRequired[str]
 
 
 class ParamSensitivity(TypedDict):

@@ -140,7 +140,7 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
     ``conflicts`` (pairs of members that each pass alone in some trial but never
     together, with the ECs of the other that fail in the trials where one passes, most
     often first)."""
-    from ..batch import infeasible_ecs
+    from ..criteria.infeasible import infeasible_ecs
 
     if passed:
         return {}
