@@ -275,18 +275,19 @@ def test_a_bad_site_file_is_one_line_naming_file_and_key(tmp_path, case):
 
 
 def test_a_missing_site_file_named_by_a_scene_names_the_scene_and_key(tmp_path):
-    scene = load_small_scene("a", edit={"sites": ["fmvss111", "nosuch.yaml"]},
-                             source=str(tmp_path / "car.yaml"))
-    for call in (lambda: scene_sites(scene), lambda: scene_site(scene, "unr158"),
-                 lambda: site_scene(scene, "unr158")):
-        with pytest.raises(SiteError) as err:
-            call()
-        message = str(err.value)
-        assert "\n" not in message and str(tmp_path / "car.yaml") in message
-        assert "sites.1" in message and str(SCENES / "nosuch.yaml") in message
-    unknown = load_small_scene("a", edit={"sites": ["unr185"]})
-    with pytest.raises(SiteError, match=r"sites\.0: 'unr185': unknown site"):
-        scene_sites(unknown)
+    """The scene loader checks every site the scene names, before anything renders."""
+    from rvmsim.errors import SceneError
+
+    with pytest.raises(SceneError) as err:
+        load_small_scene("a", edit={"sites": ["fmvss111", "nosuch.yaml"]},
+                         source=str(tmp_path / "car.yaml"))
+    message = str(err.value)
+    assert "\n" not in message and str(tmp_path / "car.yaml") in message
+    assert "sites.1" in message and str(SCENES / "nosuch.yaml") in message
+    with pytest.raises(SceneError, match=r"sites\.0: unknown site 'unr185'"):
+        load_small_scene("a", edit={"sites": ["unr185"]})
+    with pytest.raises(SceneError, match=r"sites\.1: site 'unr158' is named twice"):
+        load_small_scene("a", edit={"sites": ["unr158", "unr158"]})
 
 
 def test_a_site_file_named_by_a_scene_replaces_the_bundled_one(tmp_path):
