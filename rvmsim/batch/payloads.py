@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Any, Literal, NotRequired, TypedDict, final
 
 __all__ = ["Verdict", "YieldRequest", "PointTask", "YieldTask", "EcOutcomeDoc",
-           "InfeasibleDoc", "ParamSensitivity", "SensitivityDoc", "YieldDoc", "YieldError",
+           "InfeasibleDoc", "MarketOutcomeDoc", "ParamSensitivity", "SensitivityDoc", "YieldDoc", "YieldError",
            "PointRun", "PointError", "PointResult", "YieldOnly", "FirstPass", "MergedPoint",
            "MergedResult", "BatchTask", "BatchRun", "BatchError", "SceneSummary",
            "SceneSummaryError"]
@@ -47,7 +47,8 @@ class PointTask(TypedDict):
     ``criteria_source`` in messages; ``robustness``: the yield to measure (None: none).
     A re-check's ``starts`` are parameter sets (name → value) evaluated first, its budget is
     ``budget`` times ``budget_factor``, and ``beat`` is (passed, score) of the point's best
-    so far.
+    so far.  A markets sweep's ``markets`` are the market specs every point must pass
+    (``criteria`` is then None; :mod:`rvmsim.batch.markets`).
     """
 
     scene: dict[str, Any]
@@ -63,6 +64,7 @@ class PointTask(TypedDict):
     starts: NotRequired[list[dict[str, float]]]
     budget_factor: NotRequired[float]
     beat: NotRequired[tuple[bool, float]]
+    markets: NotRequired[list[str]]
 
 
 class YieldTask(PointTask):
@@ -102,11 +104,25 @@ class EcOutcomeDoc(TypedDict):
 
 class InfeasibleDoc(TypedDict):
     """An EC no ISP setting can pass (:meth:`~rvmsim.batch.Infeasibility.as_dict`;
-    ``short`` is absent in stores made before it existed)."""
+    ``short`` is absent in stores made before it existed; ``market``: the market whose EC
+    it is, in a markets sweep)."""
 
     ec: str
     reason: str
     short: NotRequired[str]
+    market: NotRequired[str]
+
+
+class MarketOutcomeDoc(TypedDict):
+    """One market's verdict on a markets point's best setting
+    (:func:`~rvmsim.batch.markets.market_outcomes`): its EC score, pass, failing enabled
+    ECs, binding EC (least score) and each EC's result."""
+
+    score: float
+    passed: bool
+    failing: list[str]
+    binding: str | None
+    ecs: dict[str, EcOutcomeDoc]
 
 
 class ParamSensitivity(TypedDict):
@@ -163,6 +179,8 @@ class _RunKeys(TypedDict):
     stopped: NotRequired[str]
     infeasible: NotRequired[list[InfeasibleDoc]]
     limiting_ec: str | None
+    limiting_market: NotRequired[str | None]
+    markets: NotRequired[dict[str, MarketOutcomeDoc]]
     sensitivity: NotRequired[SensitivityDoc]
     robustness: NotRequired[YieldDoc | YieldError]
     seconds: NotRequired[float]

@@ -14,6 +14,7 @@ Sweep file (YAML)::
       seed: 0
       config: {output: {size: [640, 360]}}     # a tuning config (as `rvmsim tune --config`)
       criteria: my_criteria.yaml               # optional, relative to the sweep file
+      # markets: [fmvss111-full, unr158]       # or: pass every market (not with criteria)
       recheck: {rounds: 3, budget_factor: 2, neighbours: 4}   # re-check of failing points
     map: [camera_height_m, pitch_deg]          # the feasibility map's x and y axes
     sensitivity: true
@@ -42,6 +43,7 @@ from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, defa
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
 from ..tune import DEFAULT_STRATEGY
+from .markets import market_ec_ids, markets_fingerprint, sweep_markets
 from .axes import AXES, MAX_AXIS_VALUES, POSITION_AXES, expand_axis, sweep_error as _error
 from .yields import YieldModel, YieldSettings
 
@@ -72,6 +74,7 @@ class _Tune(BaseModel):
     seed: int = 0
     config: dict[str, Any] = {}
     criteria: str | None = None
+    markets: list[str] | None = None
     recheck: _Recheck = _Recheck()
 
 
@@ -108,6 +111,8 @@ class SweepSpec:
     ``criteria_doc`` is the criteria file's text (None: the default criteria);
     ``robustness``: the yield settings; ``has_variation``: some design point's scene has a
     ``variation`` section (those points get a yield unless ``robustness.samples`` is 0);
+    ``markets``: the specs of ``tune.markets`` (:attr:`rvmsim.markets.Market.spec`; empty:
+    one criteria set), every point tuned to pass all of them (:mod:`rvmsim.batch.markets`);
     ``lines`` maps the file's key paths to their lines, for error messages.
     ``base_doc``, ``config`` (``tune.config``) and the axis values are as the YAML gives them.
     """
@@ -128,14 +133,17 @@ class SweepSpec:
     recheck: RecheckSettings = RecheckSettings()
     robustness: YieldSettings = YieldSettings()
     has_variation: bool = False
+    markets: tuple[str, ...] = ()
     lines: Mapping[KeyPath, int] = field(default_factory=dict, compare=False, repr=False)
 
     def fingerprint(self) -> str:
         """Hash of what a design point's result depends on besides its axis values."""
         h = hashlib.sha256()
-        h.update(json.dumps([self.base_doc, self.strategy, self.budget, self.seed, self.config,
-                             self.criteria_doc, self.sensitivity], sort_keys=True,
-                            default=str).encode())
+        parts: list[Any] = [self.base_doc, self.strategy, self.budget, self.seed, self.config,
+                 self.criteria_doc, self.sensitivity]
+        if self.markets:  # kept out otherwise: stores made before markets still resume
+            parts.append(markets_fingerprint(self.markets))
+        h.update(json.dumps(parts, sort_keys=True, default=str).encode())
         for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
             if path.is_file():
                 _hash_file(h.update, path)
@@ -157,8 +165,14 @@ class SweepSpec:
         text = json.dumps([r.samples, r.seed] if self.has_variation and r.samples else "-")
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
+    def ec_ids(self) -> tuple[str, ...]:
+        """The EC ids of the results' EC columns: the criteria's, or every market's (the
+        first market's first, each id once)."""
+        return market_ec_ids(self.markets) if self.markets else self.criteria().ids
+
     def criteria(self) -> Criteria:
-        """The criteria every design point is judged by."""
+        """The criteria every design point is judged by (a markets sweep: the defaults; each
+        market has its own, :func:`rvmsim.markets.market_criteria`)."""
         if self.criteria_doc is None:
             return default_criteria()
         return criteria_from_text(self.criteria_doc, self.criteria_source)
@@ -249,6 +263,8 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
     axes = tuple((name, expand_axis(name, v, str(path), lines)) for name, v in f.axes.items())
     _point_count(axes, allow_large, str(path), lines)
     _check_tuning(f, str(path), lines)
+    markets = sweep_markets(f.tune.markets, f.tune.criteria is not None, str(path), lines,
+                            path.parent)
     criteria_doc, criteria_source = _read_criteria(f, path.parent)
     names = [a for a, _ in axes]
     if f.map is not None and not set(f.map) <= set(names):
@@ -263,7 +279,7 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
                                              float(f.tune.recheck.budget_factor),
                                              f.tune.recheck.neighbours),
                      robustness=YieldSettings(f.robustness.samples, f.robustness.seed),
-                     lines=lines)
+                     markets=markets, lines=lines)
     # Every point's scene must load: check them all now, not in a worker an hour later.
     has_variation = False
     for point in design_points(spec):
