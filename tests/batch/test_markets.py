@@ -163,3 +163,38 @@ def test_bad_markets_keys_are_one_line_exit_2(tmp_path, tune_lines, message):
     assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
     assert message in lines[0] and str(f) in lines[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_markets_yield_counts_a_sample_only_when_every_market_passes(markets_run):
+    from rvmsim.batch import markets_yield
+    from rvmsim.markets import market_members
+    from rvmsim.robust import RobustnessSettings, robustness
+
+    from .test_yields import VARIATION
+
+    spec, res = markets_run
+    mild = next(p for p in res.points if dict(p.values)["pitch_deg"] == 32)
+    params = IspParams(**res.results[mild.key]["params"])
+    from rvmsim.batch import point_scene_doc
+
+    doc, _ = point_scene_doc(spec, mild.values)
+    scene = scene_from_dict({**doc, "variation": VARIATION}, source=mild.label)
+    pairs = market_members([scene], parse_markets(["unr158", "fmvss111"]))
+    output = TuningConfig.model_validate(dict(spec.config)).output_spec()
+    y = markets_yield(pairs, params, output, samples=12, seed=5)
+    assert "error" not in y, y
+    # Each market on its own (independently of markets_yield), then a sample passes only
+    # where it passes in both.
+    own = [robustness(p.scene, params, RobustnessSettings(output, p.criteria, samples=12,
+                                                          seed=5, scales=(1.0,)), frames=False)
+           for p in pairs]
+    both = own[0].passed & own[1].passed
+    assert (y["n"], y["n_pass"]) == (12, int(both.sum()))
+    assert y["yield"] <= min(r.estimate.yield_ for r in own)
+    for p, r in zip(pairs, own):
+        for e in r.ecs:
+            if e.enabled:
+                assert y["failure_rates"][f"{p.market.name}: {e.id}"] == e.failure_rate
+    top = max(y["failure_rates"].values())
+    if top > 0:
+        assert y["failure_rates"][y["limiting_ec"]] == top
