@@ -124,6 +124,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render", "isp"),
     ("compensation",),
     ("criteria",),
+    ("markets",),
     ("pipeline",),
     ("robust",),
     ("search",),
