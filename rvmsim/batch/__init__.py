@@ -4,6 +4,7 @@ tuning runs.
 - :mod:`.executors`: where tasks run (local processes or a Dask cluster).
 - :mod:`.spec`: the sweep file, its axes and design points.
 - :mod:`.point`: one design point as a task (render, infeasibility, tune, sensitivity).
+- :mod:`.markets`: sweeps over markets (every point tuned to pass several markets).
 - :mod:`.feasibility`: the ECs no ISP setting can pass at a point (no search needed).
 - :mod:`.recheck`: continuation over the grid, re-checks, and each point's verdict.
 - :mod:`.yields`: each design point's yield over production variation.
@@ -43,7 +44,15 @@ from .yields import (
 from .point import (
     run_point,
     sensitivity,
+    probe_sensitivity,
     SENSITIVITY_STEPS,
+)
+from .markets import (
+    sweep_markets,
+    market_ec_ids,
+    market_names,
+    markets_yield,
+    run_markets_point,
 )
 from .feasibility import (
     Infeasibility,
@@ -120,7 +129,13 @@ __all__ = [
     "yield_cells",
     "run_point",
     "sensitivity",
+    "probe_sensitivity",
     "SENSITIVITY_STEPS",
+    "sweep_markets",
+    "market_ec_ids",
+    "market_names",
+    "markets_yield",
+    "run_markets_point",
     "Infeasibility",
     "PatchView",
     "patch_view",

@@ -3,7 +3,9 @@
 
 The table's EC columns are the ECs of the sweep's criteria, in their order; the yield
 columns (:data:`~rvmsim.batch.yields.YIELD_COLUMNS`) are always there, empty for a point
-without a yield.
+without a yield.  A markets sweep (:mod:`rvmsim.batch.markets`) has every market's ECs,
+a ``limiting_market`` column after ``limiting_ec`` and a ``pass_<market>`` column per
+market before the EC columns.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 from .payloads import MergedPoint, MergedResult, PointError, PointRun
 from .run import SweepResult
 from .spec import DesignPoint, SweepSpec
+from .markets import market_names
 from .yields import YIELD_COLUMNS, yield_cells
 
 __all__ = ["Cell", "sweep_table", "csv_text", "sweep_json", "page_columns", "point_verdict"]
@@ -27,22 +30,44 @@ Cell = str | int | float | bool | None
 _SCORE_COLUMNS = ("verdict", "ec_score", "passed", "limiting_ec", "reason")
 
 
+def _score_columns(spec: SweepSpec) -> tuple[str, ...]:
+    """The columns between the axes and the EC columns: :data:`_SCORE_COLUMNS`, and for a
+    markets sweep ``limiting_market`` after ``limiting_ec`` and ``pass_<market>`` per
+    market."""
+    if not spec.markets:
+        return _SCORE_COLUMNS
+    return ("verdict", "ec_score", "passed", "limiting_ec", "limiting_market", "reason",
+            *(f"pass_{m}" for m in market_names(spec.markets)))
+
+
+def _score_cells(spec: SweepSpec, r: MergedPoint) -> list[Cell]:
+    """A finished point's cells of :func:`_score_columns`."""
+    cells: list[Cell] = [point_verdict(r), r["score"], r["passed"], r["limiting_ec"]]
+    if not spec.markets:
+        return [*cells, r.get("reason")]
+    per = r.get("markets", {})
+    return [*cells, r.get("limiting_market"), r.get("reason"),
+            *(per[m]["passed"] if m in per else None for m in market_names(spec.markets))]
+
+
 def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, MergedResult]
                 ) -> tuple[list[str], list[list[Cell]]]:
     """(header, rows): one row per design point, in point order.
 
     Columns: ``point``, the axes, ``verdict`` (pass, not found, infeasible), ``ec_score``,
     ``passed``, ``limiting_ec``, ``reason`` (why infeasible), ``ec_<id>`` (pass/FAIL) per EC
-    of the sweep's criteria, :data:`~rvmsim.batch.yields.YIELD_COLUMNS` (empty without a
+    of the sweep's criteria (a markets sweep: ``limiting_market`` after ``limiting_ec``,
+    ``pass_<market>`` (True/False) per market after ``reason``, every market's ECs), :data:`~rvmsim.batch.yields.YIELD_COLUMNS` (empty without a
     yield), the ISP parameters, ``evaluations`` (first pass and re-checks summed) and
     ``error``.  Deterministic content only (no timings), so the same sweep gives the same
     table on any executor.
     """
     from ..isp import IspParams
 
-    ec_ids = spec.criteria().ids
+    ec_ids = spec.ec_ids()
     param_names = IspParams.names()
-    header = ["point", *(n for n, _ in spec.axes), *_SCORE_COLUMNS,
+    scores = _score_columns(spec)
+    header = ["point", *(n for n, _ in spec.axes), *scores,
               *[f"ec_{e}" for e in ec_ids], *YIELD_COLUMNS, *param_names, "evaluations",
               "error"]
     rows: list[list[Cell]] = []
@@ -50,13 +75,13 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, M
         r = results.get(p.key)
         vals = [json.dumps(v) if isinstance(v, list) else v for _, v in p.values]
         if r is None or "error" in r:
-            rows.append([p.index, *vals, *[None] * len(_SCORE_COLUMNS), *[None] * len(ec_ids),
+            rows.append([p.index, *vals, *[None] * len(scores), *[None] * len(ec_ids),
                          *[None] * len(YIELD_COLUMNS), *[None] * len(param_names), None,
                          "not run" if r is None else r["error"]])
             continue
-        rows.append([p.index, *vals, point_verdict(r), r["score"], r["passed"],
-                     r["limiting_ec"], r.get("reason"),
-                     *["pass" if r["ecs"][e]["passed"] else "FAIL" for e in ec_ids],
+        rows.append([p.index, *vals, *_score_cells(spec, r),
+                     *[("pass" if r["ecs"][e]["passed"] else "FAIL") if e in r["ecs"] else None
+                       for e in ec_ids],
                      *yield_cells(r), *[r["params"][n] for n in param_names], r["evaluations"], ""])
     return header, rows
 
@@ -76,7 +101,7 @@ def page_columns(spec: SweepSpec) -> int:
     ECs and, when the sweep measures yields, the yield columns (the tuned parameters are in
     sweep.csv)."""
     yields = len(YIELD_COLUMNS) if spec.has_variation and spec.robustness.samples else 0
-    return 1 + len(spec.axes) + len(_SCORE_COLUMNS) + len(spec.criteria().ids) + yields
+    return 1 + len(spec.axes) + len(_score_columns(spec)) + len(spec.ec_ids()) + yields
 
 
 def csv_text(header: list[str], rows: list[list[Cell]]) -> str:
@@ -98,6 +123,8 @@ def sweep_json(res: SweepResult) -> dict[str, Any]:
     return {"name": spec.name, "sweep_file": spec.source, "base_scene": str(spec.base_scene),
             "axes": [[n, list(v)] for n, v in spec.axes], "strategy": spec.strategy,
             "budget": spec.budget, "seed": spec.seed,
+            **({"markets": list(market_names(spec.markets)),
+                "market_specs": list(spec.markets)} if spec.markets else {}),
             "recheck": {"rounds": spec.recheck.rounds,
                         "budget_factor": spec.recheck.budget_factor,
                         "neighbours": spec.recheck.neighbours},

@@ -22,7 +22,8 @@ from typing import Any, Literal, NotRequired, TypedDict, final
 from ..criteria.infeasible import InfeasibleDoc
 
 __all__ = ["Verdict", "YieldRequest", "PointTask", "YieldTask", "EcOutcomeDoc",
-           "InfeasibleDoc", "ParamSensitivity", "SensitivityDoc", "YieldDoc", "YieldError",
+           "InfeasibleDoc", "MarketOutcomeDoc", "ParamSensitivity", "SensitivityDoc", "YieldDoc",
+           "YieldError",
            "PointRun", "PointError", "PointResult", "YieldOnly", "FirstPass", "MergedPoint",
            "MergedResult", "BatchTask", "BatchRun", "BatchError", "SceneSummary",
            "SceneSummaryError"]
@@ -49,7 +50,8 @@ class PointTask(TypedDict):
     ``criteria_source`` in messages; ``robustness``: the yield to measure (None: none).
     A re-check's ``starts`` are parameter sets (name → value) evaluated first, its budget is
     ``budget`` times ``budget_factor``, and ``beat`` is (passed, score) of the point's best
-    so far.
+    so far.  A markets sweep's ``markets`` are the market specs every point must pass
+    (``criteria`` is then None; :mod:`rvmsim.batch.markets`).
     """
 
     scene: dict[str, Any]
@@ -65,6 +67,7 @@ class PointTask(TypedDict):
     starts: NotRequired[list[dict[str, float]]]
     budget_factor: NotRequired[float]
     beat: NotRequired[tuple[bool, float]]
+    markets: NotRequired[list[str]]
 
 
 class YieldTask(PointTask):
@@ -102,6 +105,16 @@ class EcOutcomeDoc(TypedDict):
     passed: bool
 
 
+class MarketOutcomeDoc(TypedDict):
+    """One market's verdict on a markets point's best setting
+    (:func:`~rvmsim.batch.markets.market_outcomes`): its EC score, pass, failing enabled
+    ECs, binding EC (least score) and each EC's result."""
+
+    score: float
+    passed: bool
+    failing: list[str]
+    binding: str | None
+    ecs: dict[str, EcOutcomeDoc]
 
 
 class ParamSensitivity(TypedDict):
@@ -158,6 +171,8 @@ class _RunKeys(TypedDict):
     stopped: NotRequired[str]
     infeasible: NotRequired[list[InfeasibleDoc]]
     limiting_ec: str | None
+    limiting_market: NotRequired[str | None]
+    markets: NotRequired[dict[str, MarketOutcomeDoc]]
     sensitivity: NotRequired[SensitivityDoc]
     robustness: NotRequired[YieldDoc | YieldError]
     seconds: NotRequired[float]

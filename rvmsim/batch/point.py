@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -29,7 +30,7 @@ if TYPE_CHECKING:
     from ..scene import Scene
     from ..tune import SearchSpace, TuningConfig
 
-__all__ = ["run_point", "run_yield", "sensitivity", "SENSITIVITY_STEPS"]
+__all__ = ["run_point", "run_yield", "sensitivity", "probe_sensitivity", "SENSITIVITY_STEPS"]
 
 #: Parameter offsets (fractions of its search range) the sensitivity is probed at.
 SENSITIVITY_STEPS = (-0.1, -0.05, -0.02, 0.02, 0.05, 0.1)
@@ -60,8 +61,15 @@ def run_point(task: PointTask) -> PointResult:
     :func:`~rvmsim.batch.yields.point_yield`; only when the task asks for one, the scene
     has a ``variation`` section and the run beats ``beat``) and ``seconds``; a problem
     with the point is returned as ``{"error": message, "seconds"}``.
+
+    A markets sweep's task (``markets``) is tuned for every market at once
+    (:func:`~rvmsim.batch.markets.run_markets_point`).
     """
     with task_malloc():
+        if task.get("markets"):
+            from .markets import run_markets_point
+
+            return run_markets_point(task)
         return _run_point(task)
 
 
@@ -81,6 +89,8 @@ def _run_yield(task: YieldTask) -> YieldOnly | PointError:
     from .yields import point_yield
 
     t0 = time.perf_counter()
+    if task.get("markets"):
+        return _run_markets_yield(task)
     try:
         scene, config, criteria = _task_inputs(task)
         rob = task["robustness"]
@@ -89,6 +99,31 @@ def _run_yield(task: YieldTask) -> YieldOnly | PointError:
         with _RENDER_LOCK:
             y = point_yield(scene, IspParams(**task["yield_of"]), config.output_spec(),
                             criteria, rob["samples"], rob["seed"])
+        return {"robustness": y, "seconds": time.perf_counter() - t0}
+    except RvmsimError as err:
+        return {"error": str(err), "seconds": time.perf_counter() - t0}
+
+
+def _run_markets_yield(task: YieldTask) -> YieldOnly | PointError:
+    """:func:`run_yield` for a markets sweep's point: the yield over every market."""
+    from ..criteria import record_size
+    from ..isp import IspParams
+    from ..markets import market_members, parse_markets
+    from ..scene import scene_from_dict
+    from ..tune import TuningConfig
+    from .markets import markets_yield
+
+    t0 = time.perf_counter()
+    try:
+        scene = scene_from_dict(task["scene"], source=task["label"])
+        pairs = market_members([scene], parse_markets(task.get("markets", [])))
+        config = TuningConfig.model_validate(task["config"]).at_record(
+            record_size(pairs[0].criteria, pairs[0].scene))
+        rob = task["robustness"]
+        if rob is None:
+            raise RvmsimError(f"{task['label']}: a yield task without robustness settings")
+        y = markets_yield(pairs, IspParams(**task["yield_of"]), config.output_spec(),
+                          rob["samples"], rob["seed"])
         return {"robustness": y, "seconds": time.perf_counter() - t0}
     except RvmsimError as err:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
@@ -215,6 +250,15 @@ def sensitivity(evaluator: ImageEvaluator, space: SearchSpace, best: IspParams
     """
     from ..tune import score_vectors
 
+    return probe_sensitivity(lambda xs: score_vectors(evaluator, space, xs).score, space,
+                             best)
+
+
+def probe_sensitivity(score: Callable[[list[np.ndarray]], Sequence[float]],
+                      space: SearchSpace, best: IspParams) -> SensitivityDoc:
+    """:func:`sensitivity` with any scorer: ``score(xs)`` gives the EC scores of the
+    candidate vectors ``xs`` (in ``space``'s order), e.g. the markets' minimum of a markets
+    point (:class:`rvmsim.tune.MembersScorer`, no sub-solves)."""
     x0 = space.vector(best)
     lo, hi = space.low, space.high
     xs, meta = [x0.copy()], []
@@ -225,7 +269,7 @@ def sensitivity(evaluator: ImageEvaluator, space: SearchSpace, best: IspParams
             if lo[i] - 1e-12 <= x[i] <= hi[i] + 1e-12:
                 xs.append(x)
                 meta.append((name, f))
-    scores = score_vectors(evaluator, space, xs).score
+    scores = list(score(xs))
     s0 = scores[0]
     params: dict[str, ParamSensitivity] = {}
     for name in space.names:

@@ -54,7 +54,8 @@ class SweepResult:
         n = len(self.points)
         return (f"sweep {self.spec.name}: {n} design points, {self.ran} run now, "
                 f"{n - self.ran} already done, {self.rechecked} re-checks run now; "
-                f"{kinds.count('pass')} pass every EC, {kinds.count('not found')} not found, "
+                f"{kinds.count('pass')} pass every "
+                f"{'market' if self.spec.markets else 'EC'}, {kinds.count('not found')} not found, "
                 f"{kinds.count('infeasible')} infeasible"
                 + (f", {n_err} failed to run (see sweep.csv)" if n_err else ""))
 
@@ -118,11 +119,15 @@ def _open_store(spec: SweepSpec, out_dir: Path, force: bool) -> tuple[SweepStore
 def point_task(spec: SweepSpec, point: DesignPoint) -> PointTask:
     """The argument of :func:`~rvmsim.batch.point.run_point` for one design point."""
     doc, config = point_scene_doc(spec, point.values)
-    return {"scene": doc, "config": config, "label": point.label, "strategy": spec.strategy,
-            "budget": spec.budget, "seed": spec.seed, "criteria": spec.criteria_doc,
-            "criteria_source": spec.criteria_source, "sensitivity": spec.sensitivity,
-            "robustness": ({"samples": spec.robustness.samples, "seed": spec.robustness.seed}
-                           if spec.robustness.samples else None)}
+    task: PointTask = {
+        "scene": doc, "config": config, "label": point.label, "strategy": spec.strategy,
+        "budget": spec.budget, "seed": spec.seed, "criteria": spec.criteria_doc,
+        "criteria_source": spec.criteria_source, "sensitivity": spec.sensitivity,
+        "robustness": ({"samples": spec.robustness.samples, "seed": spec.robustness.seed}
+                       if spec.robustness.samples else None)}
+    if spec.markets:  # every market at once (rvmsim.batch.markets)
+        task["markets"] = list(spec.markets)
+    return task
 
 
 def run_sweep(spec: SweepSpec, out_dir: str | Path, *, executor: Executor | None = None,

@@ -14,6 +14,7 @@ Sweep file (YAML)::
       seed: 0
       config: {output: {size: [640, 360]}}     # a tuning config (as `rvmsim tune --config`)
       criteria: my_criteria.yaml               # optional, relative to the sweep file
+      # markets: [fmvss111-full, unr158]       # or: pass every market (not with criteria)
       recheck: {rounds: 3, budget_factor: 2, neighbours: 4}   # re-check of failing points
     map: [camera_height_m, pitch_deg]          # the feasibility map's x and y axes
     sensitivity: true
@@ -35,59 +36,30 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import (KeyPath, image_size_problem, input_error_from_validation, key_lines,
-                   line_of, parse_yaml_mapping, read_text)
+from .._io import KeyPath, input_error_from_validation, key_lines, parse_yaml_mapping, read_text
 from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
 from ..tune import DEFAULT_STRATEGY
+from .markets import market_ec_ids, markets_fingerprint, sweep_markets
+from .axes import AXES, MAX_AXIS_VALUES, POSITION_AXES, expand_axis, sweep_error as _error
 from .yields import YieldModel, YieldSettings
 
 __all__ = ["AXES", "SweepSpec", "DesignPoint", "RecheckSettings", "load_sweep",
            "design_points", "point_scene_doc", "MAX_AXIS_VALUES", "MAX_SWEEP_POINTS",
            "MAX_RECHECK_ROUNDS"]
 
-#: Most values of one axis (a list or a range).
-MAX_AXIS_VALUES = 1000
 #: Most design points of a sweep (each one is a tuning run) unless ``allow_large``
 #: (``rvmsim sweep --allow-large``).
 MAX_SWEEP_POINTS = 1000
 #: Most re-check rounds of a sweep (``tune.recheck.rounds``).
 MAX_RECHECK_ROUNDS = 20
 
-#: Named axes: name → where a value is written.  Heights are positive up; the camera
-#: position's y is negative up.
-AXES: dict[str, str] = {
-    "camera_height_m": "camera.mount.position.1 = -value",
-    "lateral_offset_m": "camera.mount.position.0 = value",
-    "bumper_overhang_m": "camera.mount.position.2 = -value (camera this far ahead of the "
-                         "bumper's rearmost point)",
-    "pitch_deg": "camera.mount.pitch_deg",
-    "yaw_deg": "camera.mount.yaw_deg",
-    "roll_deg": "camera.mount.roll_deg",
-    "focal_length_px": "camera.intrinsics fx = value, fy keeping the base fy/fx, same centre",
-    "horizontal_fov_deg": "camera.intrinsics = {horizontal_fov_deg: value}",
-    "lens_fov_deg": "camera.lens.fov_deg",
-    "output_size": "the tuning config's output.size ([W, H]): the RVM image the ECs see",
-}
-
-#: Position axes: name → (index in camera.mount.position, sign of the value there).
-_POSITION_AXES = {"camera_height_m": (1, -1), "lateral_offset_m": (0, 1),
-                  "bumper_overhang_m": (2, -1)}
 
 
 # ---------------------------------------------------------------------------- the file
-class _Range(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-    start: float
-    stop: float
-    num: int | None = Field(default=None, ge=1, le=MAX_AXIS_VALUES)
-    step: float | None = Field(default=None, gt=0)
-
-
 class _Recheck(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
     rounds: int = Field(default=3, ge=0, le=MAX_RECHECK_ROUNDS)
@@ -102,6 +74,7 @@ class _Tune(BaseModel):
     seed: int = 0
     config: dict[str, Any] = {}
     criteria: str | None = None
+    markets: list[str] | None = None
     recheck: _Recheck = _Recheck()
 
 
@@ -124,7 +97,7 @@ class _SweepFile(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str = "sweep"
     base_scene: str
-    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see _expand
+    axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see expand_axis
     tune: _Tune = _Tune()
     map: tuple[str, str] | None = None
     sensitivity: bool = True
@@ -138,6 +111,8 @@ class SweepSpec:
     ``criteria_doc`` is the criteria file's text (None: the default criteria);
     ``robustness``: the yield settings; ``has_variation``: some design point's scene has a
     ``variation`` section (those points get a yield unless ``robustness.samples`` is 0);
+    ``markets``: the specs of ``tune.markets`` (:attr:`rvmsim.markets.Market.spec`; empty:
+    one criteria set), every point tuned to pass all of them (:mod:`rvmsim.batch.markets`);
     ``lines`` maps the file's key paths to their lines, for error messages.
     ``base_doc``, ``config`` (``tune.config``) and the axis values are as the YAML gives them.
     """
@@ -158,14 +133,17 @@ class SweepSpec:
     recheck: RecheckSettings = RecheckSettings()
     robustness: YieldSettings = YieldSettings()
     has_variation: bool = False
+    markets: tuple[str, ...] = ()
     lines: Mapping[KeyPath, int] = field(default_factory=dict, compare=False, repr=False)
 
     def fingerprint(self) -> str:
         """Hash of what a design point's result depends on besides its axis values."""
         h = hashlib.sha256()
-        h.update(json.dumps([self.base_doc, self.strategy, self.budget, self.seed, self.config,
-                             self.criteria_doc, self.sensitivity], sort_keys=True,
-                            default=str).encode())
+        parts: list[Any] = [self.base_doc, self.strategy, self.budget, self.seed, self.config,
+                 self.criteria_doc, self.sensitivity]
+        if self.markets:  # kept out otherwise: stores made before markets still resume
+            parts.append(markets_fingerprint(self.markets))
+        h.update(json.dumps(parts, sort_keys=True, default=str).encode())
         for path in absolute_mesh_paths(copy.deepcopy(self.base_doc), self.base_scene.parent):
             if path.is_file():
                 _hash_file(h.update, path)
@@ -187,8 +165,14 @@ class SweepSpec:
         text = json.dumps([r.samples, r.seed] if self.has_variation and r.samples else "-")
         return hashlib.sha256(text.encode()).hexdigest()[:20]
 
+    def ec_ids(self) -> tuple[str, ...]:
+        """The EC ids of the results' EC columns: the criteria's, or every market's (the
+        first market's first, each id once)."""
+        return market_ec_ids(self.markets) if self.markets else self.criteria().ids
+
     def criteria(self) -> Criteria:
-        """The criteria every design point is judged by."""
+        """The criteria every design point is judged by (a markets sweep: the defaults; each
+        market has its own, :func:`rvmsim.markets.market_criteria`)."""
         if self.criteria_doc is None:
             return default_criteria()
         return criteria_from_text(self.criteria_doc, self.criteria_source)
@@ -204,78 +188,6 @@ def _hash_file(update: Callable[[bytes], None], path: Path) -> None:
     with path.open("rb") as f:
         for piece in iter(lambda: f.read(1 << 20), b""):
             update(piece)
-
-
-def _error(source: str, lines: Mapping[KeyPath, int], key: str, message: str,
-           at: KeyPath | None = None) -> SweepFileError:
-    """A :class:`SweepFileError` naming ``key``, on the line of the longest known prefix of
-    the key path ``at`` (default: ``key`` split at its dots)."""
-    parts = at if at is not None else (tuple(key.split(".")) if key else ())
-    return SweepFileError(source, key, message, line_of(lines, parts))
-
-
-def _expand(name: str, v: Any, source: str, lines: Mapping[KeyPath, int]
-            ) -> tuple[Any, ...]:
-    """An axis's values (``v`` from the YAML): a list as given, a range expanded (stop included)."""
-    key, at = f"axes.{name}", ("axes", name)
-    vals: np.ndarray
-    if isinstance(v, dict):
-        try:
-            v = _Range.model_validate(v)
-        except ValidationError as err:
-            sub = {k[2:]: n for k, n in lines.items() if k[:2] == at}
-            e = input_error_from_validation(err, source, sub, SweepFileError)
-            raise SweepFileError(source, f"{key}.{e.key}", e.message,
-                                 e.line or line_of(lines, at)) from None
-    elif not isinstance(v, list):
-        raise _error(source, lines, key, "an axis is a list of values or a range "
-                     "{start, stop, num or step}", at)
-    if isinstance(v, _Range):
-        if v.num is not None and v.step is None:
-            vals = np.linspace(v.start, v.stop, v.num)
-        elif v.step is not None and v.num is None:
-            count = (v.stop - v.start) / v.step + 1e-9
-            if not 0 <= count < MAX_AXIS_VALUES:  # also a count too large to be an int
-                raise _error(source, lines, key, f"the range gives {count + 1:.6g} values "
-                             f"(1..{MAX_AXIS_VALUES})", at)
-            n = int(math.floor(count)) + 1
-            vals = v.start + v.step * np.arange(n)
-        else:
-            raise _error(source, lines, key, "give a range either num or step", at)
-        return tuple(round(float(x), 10) for x in vals)
-    if not v:
-        raise _error(source, lines, key, "no values", at)
-    if len(v) > MAX_AXIS_VALUES:
-        raise _error(source, lines, key, f"{len(v)} values (at most {MAX_AXIS_VALUES})", at)
-    for i, value in enumerate(v):
-        problem = _value_problem(name, value)
-        if problem is not None:
-            raise _error(source, lines, key, f"value {i + 1} ({_short_repr(value)}): {problem}",
-                         at + (i,))
-    return tuple(v)
-
-
-def _value_problem(axis: str, value: object) -> str | None:
-    """Why ``value`` cannot be a value of the named ``axis`` (one line), or None; values of
-    scene-key axes are checked with each point's scene."""
-    if axis == "output_size":
-        if (not isinstance(value, list) or len(value) != 2
-                or not all(isinstance(x, int) and not isinstance(x, bool) for x in value)):
-            return "values are [W, H] in px"
-        if not all(16 <= x <= 8192 for x in value):
-            return "output sizes are 16..8192 px"
-        return image_size_problem(value[0], value[1], min_side=16)
-    if axis in AXES:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            return "must be a number"
-        if abs(value) > 1e7 or not math.isfinite(value):  # abs first: a 400-digit int
-            return "must be a finite number within ±1e7"
-    return None
-
-
-def _short_repr(value: object) -> str:
-    text = repr(value)
-    return text if len(text) <= 40 else text[:30] + "…"
 
 
 def _point_count(axes: tuple[tuple[str, tuple[object, ...]], ...], allow_large: bool,
@@ -348,9 +260,11 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
     if not base.is_file():
         raise _error(str(path), lines, "base_scene", f"scene file not found: {base}")
     _, base_doc = read_scene_document(base)
-    axes = tuple((name, _expand(name, v, str(path), lines)) for name, v in f.axes.items())
+    axes = tuple((name, expand_axis(name, v, str(path), lines)) for name, v in f.axes.items())
     _point_count(axes, allow_large, str(path), lines)
     _check_tuning(f, str(path), lines)
+    markets = sweep_markets(f.tune.markets, f.tune.criteria is not None, str(path), lines,
+                            path.parent)
     criteria_doc, criteria_source = _read_criteria(f, path.parent)
     names = [a for a, _ in axes]
     if f.map is not None and not set(f.map) <= set(names):
@@ -365,7 +279,7 @@ def load_sweep(path: str | Path, *, allow_large: bool = False) -> SweepSpec:
                                              float(f.tune.recheck.budget_factor),
                                              f.tune.recheck.neighbours),
                      robustness=YieldSettings(f.robustness.samples, f.robustness.seed),
-                     lines=lines)
+                     markets=markets, lines=lines)
     # Every point's scene must load: check them all now, not in a worker an hour later.
     has_variation = False
     for point in design_points(spec):
@@ -442,9 +356,9 @@ def _apply_axis(spec: SweepSpec, doc: dict[str, Any], config: dict[str, Any], na
     """Write one axis value into the scene document or the tuning config; returns the base
     scene when it had to be loaded (for ``focal_length_px``)."""
     mount = doc.setdefault("camera", {}).setdefault("mount", {})
-    if name in _POSITION_AXES:
+    if name in POSITION_AXES:
         pos = list(mount.get("position", [0.0, 0.0, 0.0]))
-        i, sign = _POSITION_AXES[name]
+        i, sign = POSITION_AXES[name]
         pos[i] = sign * float(value)
         mount["position"] = pos
     elif name in ("pitch_deg", "yaw_deg", "roll_deg"):

@@ -22,11 +22,13 @@ __all__ = ["Infeasibility", "InfeasibleDoc", "infeasible_ecs"]
 
 class InfeasibleDoc(TypedDict):
     """An EC no ISP setting can pass (:meth:`Infeasibility.as_dict`; ``short`` is absent in
-    stores made before it existed)."""
+    stores made before it existed; ``market``: the market whose EC it is, in a markets
+    sweep)."""
 
     ec: str
     reason: str
     short: NotRequired[str]
+    market: NotRequired[str]
 
 
 @dataclass(frozen=True)

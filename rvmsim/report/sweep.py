@@ -7,6 +7,9 @@ score and the limiting EC, *infeasible* cells grey and hatched with a short reas
 the sweep measured yields (:mod:`rvmsim.batch.yields`), the yield map beside it shows the
 yield of the same point per cell, with its 95 % interval and the EC failing most often.
 
+A markets sweep (``tune.markets``) shows a cell as *pass* only when every market passes;
+the map's title and legend name the markets, and a limiting EC names its market.
+
 Convention: the feasibility map's cell (i, j) is the j-th value of its x axis and the i-th
 of its y axis, drawn with the origin at the lower left; cells are 1 unit wide, centred on
 integers.
@@ -23,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..batch import (VERDICTS, Cell, DesignPoint, MergedPoint, MergedResult, SweepResult,
-                     SweepSpec, csv_text, page_columns, point_verdict, sweep_json, sweep_table,
-                     yield_cells)
+                     SweepSpec, csv_text, market_names, page_columns, point_verdict,
+                     sweep_json, sweep_table, yield_cells)
 from ..errors import RvmsimError
 from ..storage import json_default
 from .page import data_uri, escape, figure_png, page
@@ -106,7 +109,7 @@ def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
             continue
         best[(i, j)] = rank
         score[i, j], passed[i, j] = r["score"], r["passed"]
-        limiting[i, j] = r["limiting_ec"] or ""
+        limiting[i, j] = _limiting_text(r)
         verdict[i, j] = kind
         reason[i, j] = _short_reason(r) if kind == "infeasible" else ""
         evaluations[i, j] = r.get("evaluations", 0)
@@ -117,6 +120,18 @@ def feasibility_grid(spec: SweepSpec, points: list[DesignPoint],
     others = [n for n, v in spec.axes if n not in (xa, ya) and len(v) > 1]
     return FeasibilityGrid(xa, ya, xs, ys, score, passed, limiting, others, verdict, reason,
                            evaluations, yield_, yield_ci, yield_ec)
+
+
+def _limiting_text(r: MergedPoint) -> str:
+    """The limiting EC as a cell shows it: ``R158-2``, in a markets sweep ``unr158
+    R158-2`` ("" when none)."""
+    ec, market = r["limiting_ec"], r.get("limiting_market")
+    return "" if not ec else f"{market} {ec}" if market else ec
+
+
+def _markets_text(spec: SweepSpec) -> str:
+    """``fmvss111-full + unr158`` for a markets sweep, else ""."""
+    return " + ".join(market_names(spec.markets)) if spec.markets else ""
 
 
 def _short_reason(r: MergedPoint) -> str:
@@ -191,7 +206,9 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
     _axes_ticks(ax, g)
     fig.colorbar(ScalarMappable(Normalize(0.0, 1.0), greens), ax=ax,
                  label="EC score of passing cells")
-    ax.legend(handles=[Patch(facecolor=greens(0.7), edgecolor="black", label="pass"),
+    markets = _markets_text(spec)
+    ax.legend(handles=[Patch(facecolor=greens(0.7), edgecolor="black",
+                             label="pass" + (" (every market)" if markets else "")),
                        Patch(facecolor=_NOT_FOUND, label="not found (best score, limiting "
                                                          "EC, evaluations)"),
                        Patch(facecolor=_INFEASIBLE, hatch="///",
@@ -199,6 +216,8 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
               loc="upper center", bbox_to_anchor=(0.5, -0.12 if g.y_axis else -0.3),
               ncol=3, fontsize=7, frameon=False)
     title = "feasibility: pass region outlined"
+    if markets:
+        title += f"\nmarkets: {markets} (pass: all pass)"
     if g.others:
         title += f"\n(best over {', '.join(g.others)})"
     ax.set_title(title, fontsize=9)
@@ -350,25 +369,29 @@ def sweep_html(res: SweepResult, header: list[str], rows: list[list[Cell]], colu
             f'<img src="{data_uri(sensitivity)}" alt="sensitivity">')
     yields = "" if yield_map is None else f'<img src="{data_uri(yield_map)}" alt="yield map">'
     rob = spec.robustness
+    markets = _markets_text(spec)
+    every = f"every EC of every market ({markets})" if markets else "every EC"
     yield_text = ("" if yield_map is None else
                   f"<p class=\"muted\"><b>yield</b>: the share of {rob.samples} production "
                   f"variation samples (seed {rob.seed}; the scene's variation section) on which "
-                  "the point's best setting passes every EC, with its 95 % Wilson interval; "
+                  f"the point's best setting passes {escape(every)}, with its 95 % Wilson "
+                  "interval; "
                   "yield_limiting_ec fails on most samples, yield_limiting_axis drives its "
                   "failures.</p>")
     return page(f"Sweep: {spec.name}", f"""
 <h1>Feasibility sweep: {escape(spec.name)}</h1>
 <p>Base scene {escape(spec.base_scene)}; {len(res.points)} design points
 ({escape(sizes)}); tuning: {escape(spec.strategy)},
-budget {escape(spec.budget)}, seed {escape(spec.seed)}; re-check: up to
+budget {escape(spec.budget)}, seed {escape(spec.seed)}{
+"; markets " + escape(markets) + ", each point tuned for all at once" if markets else ""}; re-check: up to
 {escape(spec.recheck.rounds)} rounds at {escape(spec.recheck.budget_factor)}× the budget from
 the best of up to {escape(spec.recheck.neighbours)} neighbours. Of {len(res.results)} finished
-points, {counts["pass"]} pass every EC, {counts["not found"]} not found, {counts["infeasible"]}
+points, {counts["pass"]} pass {escape(every)}, {counts["not found"]} not found, {counts["infeasible"]}
 infeasible.</p>
 <h2>Feasibility map{" and yield" if yield_map is not None else ""}</h2>
 <div style="display:flex;flex-wrap:wrap;gap:1em;align-items:flex-start">
 <img src="{data_uri(feasibility)}" alt="feasibility map">{yields}</div>
-<p class="muted"><b>pass</b>: tuned to pass every EC. <b>not found</b>: no passing setting was
+<p class="muted"><b>pass</b>: tuned to pass {escape(every)}. <b>not found</b>: no passing setting was
 found within the evaluations shown (first pass and re-checks from the neighbours' optima); it
 may still exist. <b>infeasible</b>: no ISP setting can pass, for a reason that needs no search
 (the reason column).</p>
