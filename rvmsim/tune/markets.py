@@ -162,7 +162,10 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
 
 
 def _member_passes(store: RunStore, n: int) -> list[set[int]]:
-    """Per member, the trials it passes (from the store's ``members`` table)."""
+    """Per member, the trials it passes (from the store's ``members`` table; a run of one
+    member has none: its trials are the member's)."""
+    if n == 1:
+        return [{int(r[0]) for r in store.rows("SELECT idx FROM trials WHERE passed = 1")}]
     out: list[set[int]] = [set() for _ in range(n)]
     for idx, member in store.rows("SELECT idx, member FROM members WHERE passed = 1"):
         if 0 <= int(member) < n:
