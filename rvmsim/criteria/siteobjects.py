@@ -37,6 +37,9 @@ from .objects import silhouette, standing_alone_labels
 __all__ = ["SAMPLE_STEP_M", "row_objects", "SurfaceView", "surface_view", "ShownArea",
            "shown_area", "largest_square_cells", "hidden_reason"]
 
+#: What shows behind an object's outline (not in front of it).
+_BACKGROUND = (L.GROUND, L.SKY, L.GROUND_PATTERN)
+
 #: Spacing of the surface samples, metres (a row-1 cylinder ~1 m from the camera: ~4 fisheye
 #: px per step at 390 px/rad).
 SAMPLE_STEP_M = 0.01
@@ -67,16 +70,32 @@ class SurfaceView:
 
 def _seen(ctx: SceneContext, pts: np.ndarray, normals: np.ndarray, own: tuple[int, ...]
           ) -> tuple[np.ndarray, np.ndarray]:
-    """(N, 2) int32 px and (N,) bool seen of scene points with outward normals."""
+    """(N, 2) int32 px and (N,) bool seen of scene points with outward normals.
+
+    A facing sample on the sensor is seen where its pixel shows the object; also where it
+    shows the background (ground, sky) next to a pixel that shows the object: the sample
+    lies within a pixel of the object's outline (a grazing limb, the rim of the top face),
+    where rounding and not anything in front of it decides the pixel."""
     cam = ctx.camera
+    labels = ctx.fisheye_labels
     facing = np.einsum("ij,ij->i", normals, cam.position[None, :] - pts) > 0
     uv, in_fov = cam.project(pts)
     px = np.round(np.nan_to_num(uv, nan=-1e6)).astype(np.int64)
     on = (in_fov & (px[:, 0] >= 0) & (px[:, 0] < cam.width) & (px[:, 1] >= 0)
           & (px[:, 1] < cam.height))
     lab = np.zeros(len(pts), np.uint8)
-    lab[on] = ctx.fisheye_labels[px[on, 1], px[on, 0]]
-    seen = facing & on & np.isin(lab, own)
+    lab[on] = labels[px[on, 1], px[on, 0]]
+    mine = np.isin(lab, own)
+    edge = np.flatnonzero(facing & on & ~mine & np.isin(lab, _BACKGROUND))
+    if len(edge):
+        near = np.zeros(len(edge), bool)
+        for du in (-1, 0, 1):
+            for dv in (-1, 0, 1):
+                u = np.clip(px[edge, 0] + du, 0, cam.width - 1)
+                v = np.clip(px[edge, 1] + dv, 0, cam.height - 1)
+                near |= np.isin(labels[v, u], own)
+        mine[edge] = near
+    seen = facing & on & mine
     return np.clip(px, -2**30, 2**30).astype(np.int32), seen
 
 

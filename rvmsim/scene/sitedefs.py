@@ -45,7 +45,7 @@ import math
 import re
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Literal
 
 from pydantic import (Field, ValidationError, ValidationInfo, field_validator,
                       model_validator)
@@ -110,7 +110,7 @@ class SiteRow(_Model):
     name: Annotated[str, Field(min_length=1)]
     names: list[str] | None = None
     z: Annotated[float, Field(ge=0, le=100.0)]
-    x: Annotated[list[Union[Metres, Lateral]], Field(min_length=1, max_length=9)]
+    x: Annotated[list[Lateral], Field(min_length=1, max_length=9)]
     diameter: _Size
     height: _Size
     marking: Marking = Marking()
@@ -125,9 +125,18 @@ class SiteRow(_Model):
                              f"than the cylinder ({self.height} m)")
         return self
 
+    @field_validator("x", mode="before")
+    @classmethod
+    def _metres_are_laterals(cls, value: object) -> object:
+        """A plain number is ``{m: number}`` (so that a bad key of a mapping is named)."""
+        if isinstance(value, list):
+            return [{"m": v} if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+                    for v in value]
+        return value
+
     def lateral(self, width_m: float) -> list[float]:
         """The cylinders' x, metres, for a vehicle ``width_m`` wide."""
-        return [float(v) if isinstance(v, (int, float)) else v.at(width_m) for v in self.x]
+        return [v.at(width_m) for v in self.x]
 
 
 class SiteDefinition(_Model):
