@@ -14,7 +14,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -317,23 +317,44 @@ def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path,
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = Path(out_dir)
     how = inputs or RobustnessInputs()
+    return write_json_and_page(
+        result, out_dir, how, lambda setting: _input_records(result, how, setting),
+        lambda setting, records: robustness_page(result, setting, records),
+        {"criteria_file": None if how.criteria_file is None else str(how.criteria_file),
+         "compensation": how.compensation, "markets": how.markets})
+
+
+def write_json_and_page(result: RobustnessResult | MarketsRobustness, out_dir: str | Path,
+                        how: RobustnessInputs,
+                        records_for: Callable[[SettingRecord], list[FileRecord]],
+                        page_for: Callable[[SettingRecord, list[FileRecord]], str],
+                        inputs_doc: dict[str, Any]) -> list[Path]:
+    """``robustness.json`` (``result.as_dict()`` with ``inputs``: the files read, their
+    SHA-256, the render scale, the params and variation files and ``inputs_doc``) and
+    ``robustness.html`` (``page_for``) in ``out_dir``; the setting written beside them when
+    no params file was given.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the folder or file that cannot be created or written.
+    """
+    out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
         setting = SettingRecord(result.params, result.output,
                                 file_record("params", _setting_file(result, how, out)))
-        records = _input_records(result, how, setting)
+        records = records_for(setting)
         doc = {**result.as_dict(), "inputs": {
             "files": [r.as_dict() for r in records], "render_scale": how.render_scale,
             "params_file": setting.file.path,
-            "criteria_file": None if how.criteria_file is None else str(how.criteria_file),
             "variation_file": None if how.variation_file is None else str(how.variation_file),
-            "compensation": how.compensation, "markets": how.markets}}
+            **inputs_doc}}
         js = out / "robustness.json"
         js.write_text(json.dumps(doc, indent=2, default=json_default) + "\n")
         html_path = out / "robustness.html"
-        html_path.write_text(robustness_page(result, setting, records))
+        html_path.write_text(page_for(setting, records))
     except OSError as err:
         raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
     return [js, html_path]

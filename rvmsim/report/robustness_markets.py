@@ -10,17 +10,14 @@ HTML-escaped.
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import RvmsimError
-from ..storage import json_default
 from .page import data_uri, escape, page
 from .provenance import FileRecord, file_record, files_table, scene_records
 from .robustness import (RobustnessInputs, _ec_rows, _picture, _sample_text,
-                         _setting_file, margin_histograms_png, yield_curve_png)
+                         margin_histograms_png, write_json_and_page, yield_curve_png)
 from .setting import SettingRecord, by_load_html, setting_html, variation_html
 
 if TYPE_CHECKING:
@@ -133,23 +130,9 @@ def write_markets_robustness_outputs(result: MarketsRobustness, out_dir: str | P
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = Path(out_dir)
     how = inputs or RobustnessInputs()
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        setting = SettingRecord(result.params, result.output,
-                                file_record("params", _setting_file(result, how, out)))
-        records = _records(result, setting, how)
-        doc = {**result.as_dict(), "inputs": {
-            "files": [r.as_dict() for r in records], "render_scale": how.render_scale,
-            "params_file": setting.file.path, "criteria_file": None,
-            "variation_file": None if how.variation_file is None else str(how.variation_file),
-            "compensation": None, "markets": how.markets or ",".join(
-                m.name for m in result.markets)}}
-        js = out / "robustness.json"
-        js.write_text(json.dumps(doc, indent=2, default=json_default) + "\n")
-        html_path = out / "robustness.html"
-        html_path.write_text(markets_robustness_page(result, setting, records))
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
-    return [js, html_path]
+    return write_json_and_page(
+        result, out_dir, how, lambda setting: _records(result, setting, how),
+        lambda setting, records: markets_robustness_page(result, setting, records),
+        {"criteria_file": None, "compensation": None,
+         "markets": how.markets or ",".join(m.name for m in result.markets)})

@@ -26,7 +26,7 @@ from ..render import TaskRunner
 from ..scene import Scene
 from .robustness import EcStats, RobustnessResult, RobustnessSettings, _by_load, robustness
 from .samples import MountSample
-from .stats import YieldEstimate, yield_estimate
+from .stats import YieldEstimate, YieldVerdict, yield_estimate
 from .variation import Variation, variation_from_scene
 
 if TYPE_CHECKING:
@@ -76,7 +76,7 @@ class MarketYield:
 
 
 @dataclass(frozen=True)
-class MarketsRobustness:
+class MarketsRobustness(YieldVerdict):
     """The yield of one setting in several markets: each market's
     (:class:`MarketYield`, in the order given) and the yield over all of them (a sample
     passes when it passes every market)."""
@@ -102,18 +102,6 @@ class MarketsRobustness:
         """The all-markets yield with its 95 % interval."""
         return yield_estimate(self.passed)
 
-    @property
-    def yield_(self) -> float:
-        return self.estimate.yield_
-
-    @property
-    def ci(self) -> tuple[float, float]:
-        return self.estimate.ci
-
-    @property
-    def meets_min_yield(self) -> bool:
-        """Whether the all-markets yield reaches ``min_yield`` (or none was given)."""
-        return self.min_yield is None or self.yield_ >= self.min_yield
 
     @property
     def judged_at(self) -> OutputSpec:

@@ -32,7 +32,8 @@ from .compensated import CompensatedSamples, compensate_samples
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
-from .stats import AxisEffect, YieldEstimate, ec_margins, failure_drivers, yield_estimate
+from .stats import (AxisEffect, YieldEstimate, YieldVerdict, ec_margins, failure_drivers,
+                    yield_estimate)
 from .variation import MOUNT_AXES, LoadState, Variation, variation_from_scene
 
 __all__ = ["EcStats", "ScalePoint", "RobustnessResult", "RobustnessSettings", "evaluate_samples",
@@ -140,7 +141,7 @@ class ScalePoint:
 
 
 @dataclass(frozen=True)
-class RobustnessResult:
+class RobustnessResult(YieldVerdict):
     """What ``rvmsim robustness`` reports (see the module docstring).
 
     ``yield_`` and ``ci`` are the 95 % estimate's; ``ecs`` one :class:`EcStats` per EC in
@@ -193,17 +194,6 @@ class RobustnessResult:
         """The yield before compensation (None without compensation)."""
         return None if self.before is None else yield_estimate(self.before.all_passed)
 
-    @property
-    def yield_(self) -> float:
-        return self.estimate.yield_
-
-    @property
-    def ci(self) -> tuple[float, float]:
-        return self.estimate.ci
-
-    @property
-    def meets_min_yield(self) -> bool:
-        return self.min_yield is None or self.yield_ >= self.min_yield
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (robustness.json)."""

@@ -18,6 +18,8 @@ by state.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import math
 from dataclasses import dataclass
 
@@ -55,6 +57,31 @@ class YieldEstimate:
     def as_dict(self) -> dict[str, object]:
         return {"yield": self.yield_, "ci95": list(self.ci), "n_pass": self.n_pass,
                 "n": self.n, "interval": "Wilson score"}
+
+
+class YieldVerdict:
+    """What a robustness result says of its yield, from its ``estimate`` and ``min_yield``
+    (a mixin of :class:`~rvmsim.robust.RobustnessResult` and
+    :class:`~rvmsim.robust.MarketsRobustness`)."""
+
+    min_yield: float | None
+
+    if TYPE_CHECKING:  # a field of one, a property of the other
+        @property
+        def estimate(self) -> YieldEstimate: ...
+
+    @property
+    def yield_(self) -> float:
+        return self.estimate.yield_
+
+    @property
+    def ci(self) -> tuple[float, float]:
+        return self.estimate.ci
+
+    @property
+    def meets_min_yield(self) -> bool:
+        """Whether the yield reaches ``min_yield`` (or none was given)."""
+        return self.min_yield is None or self.yield_ >= self.min_yield
 
 
 def yield_estimate(passed: np.ndarray) -> YieldEstimate:
