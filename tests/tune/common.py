@@ -81,3 +81,30 @@ def make_legacy_run(run: Path, dest: Path, *, status: str = "done", keep: int | 
                                     "budget", "criteria_file")}
         (dest / "run.json").write_text(json.dumps({**doc, "config": config}, indent=2))
     return dest
+
+
+def wait_for_trials(db: Path, n: int, timeout_s: float = 300.0) -> None:
+    """Wait until the run store ``db`` holds at least ``n`` trials (or the time is up)."""
+    import time
+
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        if db.exists():
+            try:
+                if sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0] >= n:
+                    return
+            except sqlite3.Error:
+                pass  # not made yet
+        time.sleep(0.02)
+
+
+def stored_trials(run: Path) -> tuple[list[tuple], list[tuple]]:
+    """Every stored trial (idx, params, score, objective, passed, ec) and member row of the
+    run folder ``run``, in order: what an unbroken and a resumed run must share."""
+    con = sqlite3.connect(run / "run.sqlite")
+    trials = con.execute("SELECT idx, params, score, objective, passed, ec FROM trials "
+                         "ORDER BY idx").fetchall()
+    has = con.execute("SELECT 1 FROM sqlite_master WHERE name = 'members'").fetchone()
+    members = con.execute("SELECT * FROM members ORDER BY idx, member").fetchall() if has else []
+    con.close()
+    return trials, members

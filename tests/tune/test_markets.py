@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import signal
 import sqlite3
-import time
 
 import numpy as np
 import pytest
@@ -19,6 +18,7 @@ from rvmsim.render import cached_render
 from rvmsim.scene import bundled_site, load_scene, site_scene
 
 from ..cli_runner import run_in_process, start_in_child
+from .common import stored_trials, wait_for_trials
 from ..scenes import write_small_scene
 
 #: The RVM image of record of the small scenes (their search size: quick).
@@ -119,15 +119,7 @@ def test_a_killed_markets_run_resumes_to_the_unbroken_result(scene, tmp_path):
     run = tmp_path / "killed"
     proc = start_in_child(cmd(run))
     db = run / "run.sqlite"
-    deadline = time.time() + 300
-    while time.time() < deadline:
-        if db.exists():
-            try:
-                if sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0] >= 150:
-                    break
-            except sqlite3.Error:
-                pass  # not made yet
-        time.sleep(0.02)
+    wait_for_trials(db, 150)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     con = sqlite3.connect(db)
@@ -138,16 +130,7 @@ def test_a_killed_markets_run_resumes_to_the_unbroken_result(scene, tmp_path):
     assert resumed.code == clean.code, resumed.stderr
     assert "replayed" in resumed.stdout
 
-    def content(path):
-        con = sqlite3.connect(path / "run.sqlite")
-        rows = con.execute("SELECT idx, params, score, passed, ec FROM trials ORDER BY idx"
-                           ).fetchall()
-        members = con.execute("SELECT idx, member, score, passed, ec FROM members "
-                              "ORDER BY idx, member").fetchall()
-        con.close()
-        return rows, members
-
-    assert content(run) == content(tmp_path / "clean")
+    assert stored_trials(run) == stored_trials(tmp_path / "clean")
     markets = json.loads((run / "run.json").read_text())["markets"]
     assert markets == ["fmvss111", "unr158"]
     # the R158 criteria were really applied to the second member

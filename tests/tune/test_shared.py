@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import signal
 import sqlite3
-import time
 from html.parser import HTMLParser
 
 import pytest
@@ -23,6 +22,7 @@ from rvmsim.tune import TuneRequest, TuningConfig, resume, tune
 from rvmsim.runs import RunStore, rank_params_text, status_lines
 
 from ..cli_runner import run_in_process, start_in_child
+from .common import stored_trials, wait_for_trials
 from ..scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
@@ -191,15 +191,7 @@ def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_p
     run = tmp_path / "killed"
     proc = start_in_child(cmd(run))
     db = run / "run.sqlite"
-    deadline = time.time() + 300
-    while time.time() < deadline:
-        if db.exists():
-            try:
-                if sqlite3.connect(db).execute("SELECT COUNT(*) FROM trials").fetchone()[0] >= 200:
-                    break
-            except sqlite3.Error:
-                pass  # not made yet
-        time.sleep(0.02)
+    wait_for_trials(db, 200)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     con = sqlite3.connect(db)
@@ -212,14 +204,6 @@ def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_p
     assert resumed.code == 0, resumed.stderr
     assert "replayed" in resumed.stdout
 
-    def content(path):
-        con = sqlite3.connect(path / "run.sqlite")
-        out = (con.execute("SELECT idx, params, score, objective, passed, ec FROM trials "
-                           "ORDER BY idx").fetchall(),
-               con.execute("SELECT * FROM members ORDER BY idx, member").fetchall())
-        con.close()
-        return out
-
-    assert content(run) == content(tmp_path / "clean")
+    assert stored_trials(run) == stored_trials(tmp_path / "clean")
     assert (run / "best" / "members.json").read_text() == \
         (tmp_path / "clean" / "best" / "members.json").read_text()
