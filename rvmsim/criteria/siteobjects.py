@@ -57,7 +57,9 @@ class SurfaceView:
     ``side_px`` (nh, na, 2) int32 fisheye px of the side samples (rows: heights from the
     ground up, columns: azimuth); ``side_seen`` (nh, na) bool; ``top_px`` (m, 2) int32 and
     ``top_seen`` (m,) bool for the top face; ``box`` (x0, y0, x1, y1) fisheye px bounding
-    every seen sample (exclusive ends; None when none is seen); ``step_m`` the spacing.
+    every seen sample (exclusive ends; None when none is seen); ``step_m`` the spacing;
+    ``max_square`` the largest all-seen square of the side, cells (what the whole fisheye
+    image shows: no candidate shows more).
     """
 
     side_px: np.ndarray
@@ -66,6 +68,7 @@ class SurfaceView:
     top_seen: np.ndarray
     box: tuple[int, int, int, int] | None
     step_m: float
+    max_square: int = 0
 
 
 def _seen(ctx: SceneContext, pts: np.ndarray, normals: np.ndarray, own: tuple[int, ...]
@@ -123,8 +126,9 @@ def _compute_view(ctx: SceneContext, name: str, step: float) -> SurfaceView | No
     if len(seen_px):
         lo, hi = seen_px.min(axis=0), seen_px.max(axis=0) + 1
         box = (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
-    return SurfaceView(side_px.reshape(nh, na, 2), side_seen.reshape(nh, na), top_px,
-                       top_seen, box, step)
+    seen = side_seen.reshape(nh, na)
+    return SurfaceView(side_px.reshape(nh, na, 2), seen, top_px, top_seen, box, step,
+                       largest_square_cells(seen))
 
 
 def surface_view(ctx: SceneContext, name: str, step_m: float = SAMPLE_STEP_M
@@ -134,9 +138,11 @@ def surface_view(ctx: SceneContext, name: str, step_m: float = SAMPLE_STEP_M
     return ctx.shared(("site.surface", name, step_m), lambda: _compute_view(ctx, name, step_m))
 
 
-def largest_square_cells(mask: np.ndarray, wrap_columns: bool = True) -> int:
+def largest_square_cells(mask: np.ndarray, wrap_columns: bool = True,
+                         at_most: int | None = None) -> int:
     """Side, in cells, of the largest all-true square of ``mask`` (rows × columns), its
-    columns wrapping around (a cylinder's azimuth) when ``wrap_columns``."""
+    columns wrapping around (a cylinder's azimuth) when ``wrap_columns``; ``at_most``: a
+    known upper bound (tried first)."""
     import cv2
 
     if not mask.any():
@@ -145,11 +151,18 @@ def largest_square_cells(mask: np.ndarray, wrap_columns: bool = True) -> int:
     rows, cols = m.shape
     if wrap_columns:
         m = np.concatenate([m, m[:, : min(cols, rows)]], axis=1)
-    lo, hi = 1, min(rows, cols)
+
+    def fits(k: int) -> bool:
+        return bool(cv2.erode(m, np.ones((k, k), np.uint8), borderType=cv2.BORDER_CONSTANT,
+                              borderValue=0).any())
+
+    lo, hi = 1, min(rows, cols) if at_most is None else max(1, min(rows, cols, at_most))
+    if hi > 1 and fits(hi):
+        return hi
+    hi -= 1
     while lo < hi:  # the largest k with a k × k square all true
         k = (lo + hi + 1) // 2
-        if cv2.erode(m, np.ones((k, k), np.uint8), borderType=cv2.BORDER_CONSTANT,
-                     borderValue=0).any():
+        if fits(k):
             lo = k
         else:
             hi = k - 1
@@ -171,25 +184,27 @@ class ShownArea:
         return max(self.square_m / area_m, self.top_fraction if top else 0.0)
 
 
-def _inside(view: SurfaceView, poly: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-    """Which side and top samples lie inside the footprint polygon (all, without one)."""
+def _shown(view: SurfaceView, poly: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """Which seen side and top samples lie inside the footprint polygon; None when every
+    seen sample does (no polygon, or the polygon holds the samples' whole box)."""
     import cv2
 
     if poly is None or view.box is None:
-        return np.ones(view.side_seen.shape, bool), np.ones(view.top_seen.shape, bool)
+        return None
     x0, y0, x1, y1 = view.box
     inside = np.zeros((y1 - y0, x1 - x0), np.uint8)
     pts = np.round((poly - (x0, y0)) * 16.0).astype(np.int32).reshape(-1, 1, 2)
     cv2.fillPoly(inside, [pts], 255, cv2.LINE_8, shift=4)
+    if cv2.countNonZero(inside) == inside.size:
+        return None  # the RVM border is nowhere near the object
 
-    def look(px: np.ndarray) -> np.ndarray:
-        u, v = px[..., 0] - x0, px[..., 1] - y0
-        ok = (u >= 0) & (u < x1 - x0) & (v >= 0) & (v < y1 - y0)
-        out = np.zeros(u.shape, bool)
-        out[ok] = inside[v[ok], u[ok]] > 0
+    def look(px: np.ndarray, seen: np.ndarray) -> np.ndarray:
+        out = np.zeros(seen.shape, bool)
+        at = px[seen]  # seen samples lie inside the box by its construction
+        out[seen] = inside[at[:, 1] - y0, at[:, 0] - x0] > 0
         return out
 
-    return look(view.side_px), look(view.top_px)
+    return look(view.side_px, view.side_seen), look(view.top_px, view.top_seen)
 
 
 def shown_area(src: LabelSource, name: str, *, bound: bool = False) -> ShownArea | None:
@@ -205,10 +220,12 @@ def shown_area(src: LabelSource, name: str, *, bound: bool = False) -> ShownArea
     isp = src.isp
     poly = None if bound or isp is None else src.shared(("footprint", 32),
                                                         lambda: isp.footprint(32))
-    side_in, top_in = _inside(view, poly)
-    side = view.side_seen & side_in
-    top = view.top_seen & top_in
-    return ShownArea(largest_square_cells(side) * view.step_m,
+    shown = _shown(view, poly)
+    if shown is None:  # everything the fisheye shows of it, the RVM image shows
+        return ShownArea(view.max_square * view.step_m,
+                         float(view.top_seen.mean()) if len(view.top_seen) else 0.0)
+    side, top = shown
+    return ShownArea(largest_square_cells(side, at_most=view.max_square) * view.step_m,
                      float(top.mean()) if len(top) else 0.0)
 
 

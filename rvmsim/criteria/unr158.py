@@ -34,7 +34,7 @@ import numpy as np
 from . import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement,
                MeasureOptions, SceneContext, Sigmoid)
 from .fmvss111 import _draw_widths, object_widths
-from .objects import silhouette_fractions
+from .objects import silhouette, silhouette_fractions
 from .siteobjects import hidden_reason, row_objects, shown_area
 from .sigmoid import Criterion
 
@@ -68,7 +68,8 @@ def _area_measure(ec_id: str, row: str, area_m: float, top: bool
                 margins[obj.name] = shown.margin(size, top)
         if not margins:
             return Measurement(None)
-        _, outlines = silhouette_fractions(src, margins)
+        outlines = {n: sil.outline for n in margins
+                    if (sil := silhouette(ctx, n)) is not None}  # per scene, for drawing
         return Measurement(min(margins.values()), (margins, outlines, src.isp))
     return measure
 
@@ -149,8 +150,6 @@ def _whole_measure(rows: tuple[str, ...]) -> Callable[[LabelSource, MeasureOptio
 def _whole_feasibility(rows: tuple[str, ...]
                        ) -> Callable[[SceneContext, Criterion, MeasureOptions],
                                      tuple[str, str] | None]:
-    from .objects import silhouette
-
     def reason(ctx: SceneContext, criterion: Criterion, options: MeasureOptions
                ) -> tuple[str, str] | None:
         for r in rows:
