@@ -186,6 +186,7 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
         n = store.count()
         meta = store.meta()
         scenes, aggregate = meta.get("scenes"), meta.get("aggregate")
+        markets = meta.get("markets")
         top: list[tuple[int, TrialRecord, str]] = []
         note = ""
         try:
@@ -203,7 +204,13 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
     lines = [f"{run_dir}: {state.text}, strategy {state.strategy}, {n}{total} evaluations"]
     if isinstance(scenes, list) and scenes:
         names = ", ".join(str(r.get("vehicle") if isinstance(r, dict) else r) for r in scenes)
-        lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their {aggregate}")
+        if isinstance(markets, list) and markets:
+            per = f"{len(scenes)} scene{'s' if len(scenes) > 1 else ''} ({names})"
+            lines.append(f"  one setting for {len(markets)} markets ({', '.join(map(str, markets))})"
+                         f" of {per}; EC score: their {aggregate}")
+        else:
+            lines.append(f"  shared by {len(scenes)} scenes ({names}); EC score: their "
+                         f"{aggregate}")
     if note:
         lines.append("  " + " ".join(note.split()))
     for rank, rec, how in top:

@@ -63,6 +63,8 @@ def test_markets_that_pass_alone_but_never_together_exit_1_naming_the_conflict(s
                        "GROUP BY idx HAVING COUNT(*) = 2)").fetchone()[0]
     con.close()
     assert both == 0
+    status = run_in_process(["status", run])
+    assert status.code == 0 and "one setting for 2 markets" in status.stdout
 
 
 def _hidden_row2_site(folder):
