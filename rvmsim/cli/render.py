@@ -140,7 +140,7 @@ def _evaluate_markets(scene: Path, params: IspParams, mirror: bool, markets: str
     import json
     import sys
 
-    from ..markets import evaluate_markets, parse_markets
+    from ..markets import binding_row, evaluate_markets, parse_markets
     from ..pipeline import write_evaluation
     from ..scene import load_scene
 
@@ -157,11 +157,9 @@ def _evaluate_markets(scene: Path, params: IspParams, mirror: bool, markets: str
         click.echo(f"{v.member.name} ({v.member.market.title or v.member.market.spec}) — "
                    f"judged at {v.frame.output.width}x{v.frame.output.height} px")
         click.echo(v.frame.ec.table() + "\n")
-        b = v.binding
         rows.append({"market": v.member.market.name, "site": v.member.scene.test_site.site,
                      "ec_score": v.frame.ec.score, "passed": v.passed, "failing": v.failing,
-                     "binding": None if b is None else b.as_dict(),
-                     "folder": folder.name})
+                     "binding": binding_row(v.frame.ec.items), "folder": folder.name})
     click.echo(f"{'market':<24} {'EC score':>8}  {'result':<6}  binding criterion")
     click.echo("\n".join(v.row() for v in verdicts))
     passed = all(v.passed for v in verdicts)

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Market", "BUNDLED_MARKETS", "parse_markets", "market_scene", "market_criteria",
            "MarketMember", "market_members", "member_name", "MarketVerdict",
-           "evaluate_markets"]
+           "evaluate_markets", "binding_ec", "binding_row"]
 
 
 @dataclass(frozen=True)
@@ -170,10 +170,7 @@ class MarketVerdict:
 
     @property
     def binding(self) -> EcValue | None:
-        enabled = [e for e in self.frame.ec.items if e.enabled]
-        if not enabled:
-            return None
-        return min(enabled, key=lambda e: (e.score, e.margin if e.margin is not None else 0.0))
+        return binding_ec(self.frame.ec.items)
 
     @property
     def failing(self) -> list[str]:
@@ -187,6 +184,25 @@ class MarketVerdict:
         return (f"{self.member.name:<24} {self.frame.ec.score:>8.4g}  "
                 f"{'pass' if self.passed else 'FAIL':<6}  "
                 f"{'—' if b is None else f'{b.id} {b.name}'} = {value}{tail}")
+
+
+def binding_ec(items: Sequence[EcValue]) -> EcValue | None:
+    """A market's binding criterion: its enabled EC with the least score (ties: the least
+    margin), the one that limits a setting there; None without an enabled EC."""
+    enabled = [e for e in items if e.enabled]
+    if not enabled:
+        return None
+    return min(enabled, key=lambda e: (e.score, e.margin if e.margin is not None else 0.0))
+
+
+def binding_row(items: Sequence[EcValue]) -> dict[str, object] | None:
+    """The binding criterion as ``markets.json`` holds it: ``ec``, ``name``, ``value``,
+    ``unit``, ``score``, ``margin`` (None without an enabled EC)."""
+    worst = binding_ec(items)
+    if worst is None:
+        return None
+    return {"ec": worst.id, "name": worst.name, "value": worst.value, "unit": worst.unit,
+            "score": worst.score, "margin": worst.margin}
 
 
 def evaluate_markets(scene: Scene, params: IspParams, markets: Sequence[Market], *,

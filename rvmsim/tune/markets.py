@@ -82,21 +82,12 @@ def _slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_") or "member"
 
 
-def _binding(ecs: Sequence[Any]) -> dict[str, Any] | None:
-    """The enabled EC with the least score (ties: the least margin), as a JSON row."""
-    enabled = [e for e in ecs if e.enabled]
-    if not enabled:
-        return None
-    worst = min(enabled, key=lambda e: (e.score, e.margin if e.margin is not None else 0.0))
-    return {"ec": worst.id, "name": worst.name, "value": worst.value, "unit": worst.unit,
-            "score": worst.score, "margin": worst.margin}
-
-
 def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketMember],
                          renders: Sequence[FisheyeImages], config: TuningConfig) -> None:
     """``best/markets/<member>/`` (each member's RVM image and annotated ECs under the best
     setting, at the RVM image of record), ``best/members.json``, ``best/ec_table.txt``
     and ``best/markets.json`` (see the module docstring)."""
+    from ..markets import binding_row
     from ..pipeline import evaluate_params, record_output, write_frame
 
     top = store.top(1)
@@ -114,7 +105,7 @@ def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketM
         rows.append({"member": p.name, "market": p.market.name, "title": p.market.title,
                      "vehicle": p.scene.name, "site": p.scene.test_site.site,
                      "ec_score": ec.score, "passed": not failing, "failing": failing,
-                     "binding": _binding(ec.items),
+                     "binding": binding_row(ec.items),
                      "images": f"markets/{_slug(p.name)}"})
         docs.append({"member": p.name, "market": p.market.name, "vehicle": p.scene.name,
                      **ec.as_dict()})
