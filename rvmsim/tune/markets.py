@@ -146,8 +146,8 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
             if i >= j or not per[i] or not per[j] or per[i] & per[j]:
                 continue
             conflicts.append({"members": [a.name, b.name],
-                              "ecs": _failing_where(store, per[i], j)
-                              + _failing_where(store, per[j], i, first=False)})
+                              "ecs": _failing_where(store, per[i], j, b.name)
+                              + _failing_where(store, per[j], i, a.name)})
     return {"infeasible": infeasible, "conflicts": conflicts,
             "passes_alone": {p.name: len(per[k]) for k, p in enumerate(pairs)}}
 
@@ -164,9 +164,10 @@ def _member_passes(store: RunStore, n: int) -> list[set[int]]:
     return out
 
 
-def _failing_where(store: RunStore, trials: set[int], member: int, *, first: bool = True,
+def _failing_where(store: RunStore, trials: set[int], member: int, name: str,
                    limit: int = 3) -> list[dict[str, Any]]:
-    """The ECs of ``member`` that fail most often in ``trials`` (its own results there)."""
+    """The ECs of ``member`` (called ``name``) that fail most often in ``trials`` (the
+    trials another member passes; from its own results there)."""
     counts: Counter[str] = Counter()
     rows = store.rows("SELECT idx, ec FROM members WHERE member = ?", (member,))
     for idx, ec in rows:
@@ -174,7 +175,8 @@ def _failing_where(store: RunStore, trials: set[int], member: int, *, first: boo
             for k, cell in json.loads(ec).items():
                 if not cell[2]:
                     counts[k] += 1
-    return [{"ec": k, "fails_in": n, "of": len(trials)} for k, n in counts.most_common(limit)]
+    return [{"member": name, "ec": k, "fails_in": n, "of": len(trials)}
+            for k, n in counts.most_common(limit)]
 
 
 def market_summary_lines(run_dir: Path) -> list[str]:
@@ -208,9 +210,15 @@ def market_problem_lines(doc: dict[str, Any]) -> list[str]:
     lines = [f"{f['member']}: {f['reason']} (no setting can pass it)"
              for f in doc.get("infeasible", [])]
     for c in doc.get("conflicts", []):
-        ecs = ", ".join(f"{e['ec']} (fails in {e['fails_in']} of {e['of']})" for e in c["ecs"])
-        lines.append(f"{c['members'][0]} and {c['members'][1]} each pass alone but never "
-                     f"together; conflicting ECs: {ecs}")
+        a, b = c["members"]
+        sides = []
+        for passes, fails in ((a, b), (b, a)):
+            ecs = [e for e in c["ecs"] if e.get("member", b if passes == a else a) == fails]
+            if ecs:
+                sides.append(f"where {passes} passes, {fails} fails " + ", ".join(
+                    f"{e['ec']} ({e['fails_in']} of {e['of']} trials)" for e in ecs))
+        lines.append(f"{a} and {b} each pass alone but never together (conflicting ECs): "
+                     + "; ".join(sides))
     if not doc.get("infeasible") and not doc.get("conflicts"):
         lost = [r["member"] for r in doc["markets"] if not r["passed"]]
         lines.append(f"{', '.join(lost)}: no trial passed (a larger --budget may; no EC is "

@@ -56,7 +56,9 @@ def test_markets_that_pass_alone_but_never_together_exit_1_naming_the_conflict(s
     assert {e["ec"] for e in conflict["ecs"]} == {"3-2"}
     # in every trial where one market passes, the other's 3-2 fails
     assert all(e["fails_in"] == e["of"] for e in conflict["ecs"])
-    assert "each pass alone but never together; conflicting ECs: 3-2" in out.stdout
+    assert "each pass alone but never together (conflicting ECs)" in out.stdout
+    assert f"where fmvss111:{low} passes, fmvss111:{high} fails 3-2" in out.stdout
+    assert {e["member"] for e in conflict["ecs"]} == {f"fmvss111:{low}", f"fmvss111:{high}"}
     # the store agrees: no trial passes both, some pass each
     con = sqlite3.connect(run / "run.sqlite")
     both = con.execute("SELECT COUNT(*) FROM (SELECT idx FROM members WHERE passed = 1 "
