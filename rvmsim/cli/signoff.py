@@ -22,19 +22,26 @@ __all__ = ["signoff"]
               help="Folder written by rvmsim validate (the real capture's validation).")
 @click.option("--eol", "eol_dir", type=click.Path(path_type=Path), default=None,
               help="Folder written by rvmsim eol (the end-of-line record).")
+@click.option("--markets", default=None, metavar="M1,M2,…",
+              help="Judge the setting in these markets too (one row and picture per market; "
+                   "docs/markets.md); a run tuned with --markets shows its own.")
 @click.option("--reviewer", default="", help="The reviewer's name, for the signature block.")
 @click.option("--pdf/--no-pdf", default=True, show_default=True,
               help="Also print the page to signoff.pdf with headless Chromium.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: Path | None,
-            eol_dir: Path | None, reviewer: str, pdf: bool, progress: bool) -> None:
+            eol_dir: Path | None, markets: str | None, reviewer: str, pdf: bool,
+            progress: bool) -> None:
     """Write the sign-off sheet of RUN's best setting: its 14 values, params file and
     SHA-256, the input files with theirs, the tool's version and commit, every EC at the
     display output of record with its margin, the yield (--robustness), validation and EOL
     records, the failing samples with the commands that reproduce them, and a signature
     block.  One self-contained HTML page and its PDF."""
     from ..report import signoff as write_signoff
+    from ..tune.markets import judge_run_in_markets
 
+    if markets is not None:
+        judge_run_in_markets(run, markets)
     result = write_signoff(run, out, robustness=robustness_dir, validation=validation_dir,
                            eol=eol_dir, reviewer=reviewer, pdf=pdf, progress=progress)
     yield_text = ("robustness not run" if result.yield_ is None

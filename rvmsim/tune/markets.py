@@ -38,6 +38,7 @@ if TYPE_CHECKING:
     from ..search.config import TuningConfig
 
 __all__ = ["check_market_arguments", "markets_members", "write_market_results",
+           "judge_run_in_markets",
            "market_verdict", "market_summary_lines", "market_problem_lines", "MARKETS_JSON"]
 
 #: The per-market results of a markets run, in its ``best/`` folder.
@@ -83,10 +84,14 @@ def _slug(name: str) -> str:
 
 
 def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketMember],
-                         renders: Sequence[FisheyeImages], config: TuningConfig) -> None:
+                         renders: Sequence[FisheyeImages], config: TuningConfig, *,
+                         searched: bool = True) -> None:
     """``best/markets/<member>/`` (each member's RVM image and annotated ECs under the best
-    setting, at the RVM image of record), ``best/members.json``, ``best/ec_table.txt``
-    and ``best/markets.json`` (see the module docstring)."""
+    setting, at the RVM image of record), ``best/markets.json`` (see the module docstring)
+    and, for a run that searched these markets (``searched``), ``best/members.json`` and
+    ``best/ec_table.txt``.  A run tuned otherwise and judged in markets afterwards
+    (:func:`judge_run_in_markets`) gets no conflicts (it has no member results) and keeps
+    its own EC table."""
     from ..markets import binding_row
     from ..pipeline import evaluate_params, record_output, write_frame
 
@@ -95,12 +100,13 @@ def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketM
         return
     best = top[0]
     best_dir = run_dir / "best"
-    rows, docs, tables = [], [], []
+    rows, docs, tables, scores = [], [], [], []
     for p, im in zip(pairs, renders):
         record = record_output(p.criteria, p.scene, config.output.mirror)
         frame = evaluate_params(im, best.params, record, p.criteria)
         write_frame(frame, best_dir / "markets" / _slug(p.name))
         ec = frame.ec
+        scores.append(ec.score)
         failing = [v.id for v in ec.items if v.enabled and not v.passed]
         rows.append({"member": p.name, "market": p.market.name, "title": p.market.title,
                      "vehicle": p.scene.name, "site": p.scene.test_site.site,
@@ -110,22 +116,25 @@ def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketM
         docs.append({"member": p.name, "market": p.market.name, "vehicle": p.scene.name,
                      **ec.as_dict()})
         tables.append(f"{p.name} ({p.market.title or p.market.name}):\n{ec.table()}")
-    verdict = market_verdict(store, pairs, renders, best.passed)
+    passed = all(r["passed"] for r in rows)
+    verdict = market_verdict(store, pairs, renders, passed, conflicts=searched)
+    rec = record_output(pairs[0].criteria, pairs[0].scene)
+    (best_dir / MARKETS_JSON).write_text(json.dumps(
+        {"trial": best.idx, "ec_score": best.score if searched else min(scores), "passed": passed, "judged_at": [rec.width, rec.height],
+         "searched": searched, "markets": rows, **verdict}, indent=2))
+    if not searched:
+        return
     (best_dir / "members.json").write_text(json.dumps(
         {"trial": best.idx, "ec_score": best.score, "passed": best.passed, "members": docs},
         indent=2))
-    rec = record_output(pairs[0].criteria, pairs[0].scene)
-    (best_dir / MARKETS_JSON).write_text(json.dumps(
-        {"trial": best.idx, "ec_score": best.score, "passed": best.passed,
-         "judged_at": [rec.width, rec.height],
-         "markets": rows, **verdict}, indent=2))
     head = (f"one setting for {len(pairs)} markets, EC score {best.score:.4g}, "
             f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}")
     (best_dir / "ec_table.txt").write_text(head + "\n\n" + "\n\n".join(tables) + "\n")
 
 
 def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
-                   renders: Sequence[FisheyeImages], passed: bool) -> dict[str, Any]:
+                   renders: Sequence[FisheyeImages], passed: bool, *,
+                   conflicts: bool = True) -> dict[str, Any]:
     """Why no setting passes every market (empty when the best one does): ``infeasible``
     (per member, the ECs no setting can pass there, from the fisheye labels) and
     ``conflicts`` (pairs of members that each pass alone in some trial but never
@@ -139,16 +148,18 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
     for p, im in zip(pairs, renders):
         for f in infeasible_ecs(p.scene, im.camera, im.labels, p.criteria):
             infeasible.append({"member": p.name, "ec": f.ec, "reason": f.reason})
+    if not conflicts:  # judged after a search of other criteria: no member results
+        return {"infeasible": infeasible, "conflicts": []}
     per = _member_passes(store, len(pairs))
-    conflicts = []
+    found = []
     for i, a in enumerate(pairs):
         for j, b in enumerate(pairs):
             if i >= j or not per[i] or not per[j] or per[i] & per[j]:
                 continue
-            conflicts.append({"members": [a.name, b.name],
-                              "ecs": _failing_where(store, per[i], j, b.name)
-                              + _failing_where(store, per[j], i, a.name)})
-    return {"infeasible": infeasible, "conflicts": conflicts,
+            found.append({"members": [a.name, b.name],
+                          "ecs": _failing_where(store, per[i], j, b.name)
+                          + _failing_where(store, per[j], i, a.name)})
+    return {"infeasible": infeasible, "conflicts": found,
             "passes_alone": {p.name: len(per[k]) for k, p in enumerate(pairs)}}
 
 
@@ -219,8 +230,51 @@ def market_problem_lines(doc: dict[str, Any]) -> list[str]:
                     f"{e['ec']} ({e['fails_in']} of {e['of']} trials)" for e in ecs))
         lines.append(f"{a} and {b} each pass alone but never together (conflicting ECs): "
                      + "; ".join(sides))
-    if not doc.get("infeasible") and not doc.get("conflicts"):
+    if doc.get("searched") is False:  # judged after a search of other criteria
+        lost = [f"{r['member']} (fails {', '.join(r.get('failing') or [])})"
+                for r in doc["markets"] if not r["passed"]]
+        lines.append(f"{'; '.join(lost)}: the run was tuned without these markets; tune with "
+                     "--markets to search for a setting that passes every market")
+    elif not doc.get("infeasible") and not doc.get("conflicts"):
         lost = [r["member"] for r in doc["markets"] if not r["passed"]]
         lines.append(f"{', '.join(lost)}: no trial passed (a larger --budget may; no EC is "
                      "proven impossible from the fisheye labels)")
     return lines
+
+
+def judge_run_in_markets(run_dir: str | Path, markets: str) -> None:
+    """Judge the best setting of a finished run in ``markets`` (``report`` and ``signoff``
+    with ``--markets``): each scene of the run at each market's site, with the market's
+    criteria, written as a markets run writes them (``best/markets.json``,
+    ``best/markets/<member>/``); the run's own results stay as they are.  A run tuned for
+    markets keeps its rows: give no ``--markets``, or its own.
+
+    Raises
+    ------
+    RvmsimError
+        One line: no run there, bad markets, or a markets run given other markets.
+    """
+    from ..markets import market_members, parse_markets
+    from ..render import cached_render
+    from ..runs.folder import open_run, run_settings
+    from .shared import resumed_scenes
+
+    run_dir = Path(run_dir)
+    chosen = parse_markets(markets)
+    store = open_run(run_dir)
+    try:
+        settings = run_settings(run_dir, store)
+        if settings.markets:
+            if tuple(m.spec for m in chosen) != settings.markets:
+                raise RvmsimError(f"{run_dir}: this run was tuned for the markets "
+                                  f"{', '.join(settings.markets)}; give no --markets (its rows "
+                                  "are shown) or the same markets")
+            return
+        from ..scene import load_scene
+
+        scenes = resumed_scenes(settings) if settings.shared else [load_scene(settings.scene)]
+        pairs = market_members(scenes, chosen)
+        renders = [cached_render(p.scene)[0] for p in pairs]
+        write_market_results(run_dir, store, pairs, renders, settings.config, searched=False)
+    finally:
+        store.close()

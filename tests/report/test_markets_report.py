@@ -105,3 +105,39 @@ def test_robustness_of_a_run_uses_its_markets(run):
     assert [m["market"] for m in doc["markets"]] == MARKETS
     assert doc["inputs"]["params_file"].endswith("top/rank_1.yaml")
     assert doc["n_pass"] == sum(s["passed"] for s in doc["samples"])
+
+
+def test_a_plain_run_is_judged_in_markets_by_report_and_signoff(run, tmp_path):
+    """``report RUN --markets`` and ``signoff RUN --markets`` on a run tuned without markets:
+    the best setting judged at each market's site, measured as evaluate measures it; the
+    run's own results kept; a markets run refuses other markets."""
+    root, _, _ = run
+    shutil.copy(root / "scene.yaml", tmp_path / "scene.yaml")
+    tuned = run_in_process(["tune", "scene.yaml", "--strategy", "random", "--budget", "20",
+                            "--out", "plain", "--no-progress", "--workers", "1"], cwd=tmp_path)
+    assert tuned.code == 0, tuned.stderr
+    table = (tmp_path / "plain" / "best" / "ec_table.txt").read_bytes()
+    rep = run_in_process(["report", "plain", "--markets", ",".join(MARKETS)], cwd=tmp_path)
+    assert rep.code == 0, rep.stderr
+    html = (tmp_path / "plain" / "report.html").read_text()
+    assert _market_rows(html) == MARKETS
+    doc = json.loads((tmp_path / "plain" / "best" / "markets.json").read_text())
+    assert doc["searched"] is False and doc["conflicts"] == []
+    assert (tmp_path / "plain" / "best" / "ec_table.txt").read_bytes() == table
+    # the same verdicts as evaluate gives the run's rank-1 setting in those markets
+    ev = run_in_process(["evaluate", "scene.yaml", "--params", "plain/top/rank_1.yaml",
+                         "--markets", ",".join(MARKETS), "--out", "ev", "--no-progress"],
+                        cwd=tmp_path)
+    judged = json.loads((tmp_path / "ev" / "markets.json").read_text())
+    assert ev.code == (0 if judged["passed"] else 1)
+    assert [r["passed"] for r in judged["markets"]] == [r["passed"] for r in doc["markets"]]
+    assert [r["binding"]["ec"] for r in judged["markets"]] == \
+        [r["binding"]["ec"] for r in doc["markets"]]
+    sign = run_in_process(["signoff", "plain", "--markets", ",".join(MARKETS), "--out", "so",
+                           "--no-pdf", "--no-progress"], cwd=tmp_path)
+    assert sign.code == 0, sign.stderr
+    assert [m["member"] for m in json.loads((tmp_path / "so" / "signoff.json").read_text())
+            ["markets"]] == MARKETS
+    other = run_in_process(["report", str(root / "run"), "--markets", "jp"])
+    assert other.code == 2 and "tuned for the markets" in other.stderr
+    assert len(other.stderr.strip().splitlines()) == 1
