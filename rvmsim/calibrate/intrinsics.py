@@ -1,5 +1,5 @@
 """Fisheye (Kannala-Brandt) intrinsics from board views: ``cv2.fisheye.calibrate`` with
-per-view outlier rejection."""
+per-corner and per-view outlier rejection."""
 
 from __future__ import annotations
 
@@ -18,6 +18,17 @@ OUTLIER_FACTOR = 3.0
 OUTLIER_MIN_EXCESS_PX = 0.3
 #: Fewest views a calibration is made from.
 MIN_VIEWS = 3
+#: A corner is an outlier when its reprojection error exceeds
+#: max(:data:`CORNER_MIN_PX`, :data:`CORNER_SIGMAS` × σ), σ the robust per-axis sigma
+#: (1.4826 × the median of |dx|, |dy| over every corner of the used views).
+CORNER_MIN_PX = 3.0
+CORNER_SIGMAS = 5.0
+#: A view is dropped when more than this share of its corners are outliers.
+VIEW_BAD_SHARE = 0.5
+#: Fewest corners a view keeps (a board pose needs a homography's four).
+MIN_KEPT_CORNERS = 4
+#: Fits of the corner-rejection loop, at most.
+MAX_REFITS = 6
 
 
 #: Fewest corners a view of a ChArUco board (which may show part of it) is used with.
@@ -41,9 +52,11 @@ class BoardView:
 
 @dataclass(frozen=True)
 class ViewFit:
-    """How one view fits the calibration: RMS and largest reprojection error (px), whether
-    it was used (False: rejected as an outlier), and the board pose (rvec, tvec; board to
-    camera, metres)."""
+    """How one view fits the calibration: RMS and largest reprojection error (px) over its
+    kept corners, whether it was used (False: rejected as an outlier), the board pose
+    (rvec, tvec; board to camera, metres), and the corners dropped as outliers (indices
+    into the view's corners, and their reprojection errors, px; a rejected view reports
+    the corners that were bad when it was rejected)."""
 
     name: str
     rms_px: float
@@ -51,6 +64,8 @@ class ViewFit:
     used: bool
     rvec: tuple[float, float, float]
     tvec: tuple[float, float, float]
+    dropped: tuple[int, ...] = ()
+    dropped_px: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -92,18 +107,19 @@ def _flag(name: str) -> int:
     return int(getattr(cv2.fisheye, name, None) or getattr(cv2, name))
 
 
-def _fit(objs: list[np.ndarray], views: list[BoardView],
+def _fit(objs: list[np.ndarray], pts: list[np.ndarray],
          size: tuple[int, int]
          ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]]:
-    """cv2.fisheye.calibrate of the views (board points ``objs``) from its own start and
-    from focal lengths of W/8 … W (cv2's start fails on wide views); the lowest RMS wins."""
+    """cv2.fisheye.calibrate of the image points ``pts`` (board points ``objs``; views may
+    differ in count) from its own start and from focal lengths of W/8 … W (cv2's start
+    fails on wide views); the lowest RMS wins."""
     import cv2
 
     flags = _flag("CALIB_RECOMPUTE_EXTRINSIC") | _flag("CALIB_FIX_SKEW")
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 300, 1e-12)
     # (1, N, 3) / (1, N, 2): the shapes every OpenCV version accepts.
     obj_in = [o.reshape(1, -1, 3).astype(np.float64) for o in objs]
-    imgs = [v.corners.reshape(1, -1, 2).astype(np.float64) for v in views]
+    imgs = [c.reshape(1, -1, 2).astype(np.float64) for c in pts]
     w, h = size
     best: tuple[float, np.ndarray, np.ndarray, list[np.ndarray], list[np.ndarray]] | None = None
     last = ""
@@ -120,25 +136,40 @@ def _fit(objs: list[np.ndarray], views: list[BoardView],
         if np.all(np.isfinite(K)) and K[0, 0] > 0 and (best is None or rms < best[0]):
             best = (rms, K, D.ravel(), list(rvecs), list(tvecs))
     if best is None:
-        raise RvmsimError(f"cv2.fisheye.calibrate failed on {len(views)} views: {last}")
+        raise RvmsimError(f"cv2.fisheye.calibrate failed on {len(pts)} views: {last}")
     return best[1], best[2], best[3], best[4]
 
 
-def _errors(obj: np.ndarray, view: BoardView, K: np.ndarray, D: np.ndarray, rvec: np.ndarray,
-            tvec: np.ndarray) -> np.ndarray:
+def _residuals(obj: np.ndarray, corners: np.ndarray, K: np.ndarray, D: np.ndarray,
+               rvec: np.ndarray, tvec: np.ndarray) -> np.ndarray:
+    """(N, 2) reprojection residuals (projected − found), px."""
     import cv2
 
     proj, _ = cv2.fisheye.projectPoints(obj.reshape(-1, 1, 3), rvec, tvec, K, D)
-    return np.linalg.norm(proj.reshape(-1, 2) - view.corners, axis=1)
+    return np.asarray(proj.reshape(-1, 2) - corners, np.float64)
+
+
+def corner_threshold_px(residuals: np.ndarray) -> float:
+    """The reprojection error above which a corner is an outlier, px:
+    max(:data:`CORNER_MIN_PX`, :data:`CORNER_SIGMAS` × σ), σ = 1.4826 × the median of
+    the residuals' |dx| and |dy| (a robust per-axis sigma that a few wrong corners do not
+    move), ``residuals`` (N, 2) px over every corner of the used views."""
+    sigma = 1.4826 * float(np.median(np.abs(residuals))) if len(residuals) else 0.0
+    return max(CORNER_MIN_PX, CORNER_SIGMAS * sigma)
 
 
 def calibrate_fisheye(views: list[BoardView], board: BoardSpec,
                       image_size: tuple[int, int]) -> Calibration:
-    """Kannala-Brandt intrinsics from board views, rejecting outlier views.
+    """Kannala-Brandt intrinsics from board views, dropping outlier corners, then views.
 
-    Calibrates on every view, then drops the views whose RMS is more than
-    :data:`OUTLIER_FACTOR` × the median (and :data:`OUTLIER_MIN_EXCESS_PX` above it) and
-    calibrates again, until no view is dropped (at least :data:`MIN_VIEWS` stay).
+    Calibrates on every corner of every view.  Then, up to :data:`MAX_REFITS` times: every
+    corner of the used views whose reprojection error (with the fit's view pose) exceeds
+    :func:`corner_threshold_px` is dropped (a corner dropped before comes back when it
+    fits again); a view with more than :data:`VIEW_BAD_SHARE` of its corners dropped, or
+    fewer than :data:`MIN_KEPT_CORNERS` kept, is dropped whole; once no corner changes, a
+    view whose RMS over its kept corners is more than :data:`OUTLIER_FACTOR` × the median
+    (and :data:`OUTLIER_MIN_EXCESS_PX` above it) is dropped too; and it calibrates again on
+    what is kept, until nothing changes.  At least :data:`MIN_VIEWS` views stay.
 
     Raises
     ------
@@ -156,37 +187,73 @@ def calibrate_fisheye(views: list[BoardView], board: BoardSpec,
     for v, o in zip(views, objs):
         if len(o) != len(v.corners):
             raise RvmsimError(f"{v.name}: {len(v.corners)} corners for {len(o)} board points")
+    keep = [np.ones(len(v.corners), bool) for v in views]
     used = list(range(len(views)))
-    while True:
-        K, D, rvecs, tvecs = _fit([objs[i] for i in used], [views[i] for i in used],
-                                  image_size)
-        rms = np.array([np.sqrt(np.mean(_errors(objs[i], views[i], K, D, r, t) ** 2))
-                        for i, r, t in zip(used, rvecs, tvecs)])
-        med = float(np.median(rms))
-        bad = rms > max(OUTLIER_FACTOR * med, med + OUTLIER_MIN_EXCESS_PX)
-        if not bad.any() or len(used) - int(bad.sum()) < MIN_VIEWS:
+    for _ in range(MAX_REFITS + 1):
+        K, D, rvecs, tvecs = _fit([objs[i][keep[i]] for i in used],
+                                  [views[i].corners[keep[i]] for i in used], image_size)
+        res = {i: _residuals(objs[i], views[i].corners, K, D, r, t)
+               for i, r, t in zip(used, rvecs, tvecs)}
+        new_keep, new_used = _reject(res, keep, used)
+        if new_used == used and all(np.array_equal(new_keep[i], keep[i]) for i in used):
             break
-        used = [i for i, b in zip(used, bad) if not b]
-    return _result(objs, views, used, K, D, image_size)
+        keep, used = new_keep, new_used
+    return _result(objs, views, used, keep, K, D, image_size)
 
 
-def _result(objs: list[np.ndarray], views: list[BoardView], used: list[int], K: np.ndarray,
-            D: np.ndarray, size: tuple[int, int]) -> Calibration:
-    """Every view's fit (rejected ones posed by solvePnP with the final K, D)."""
+def _reject(res: dict[int, np.ndarray], keep: list[np.ndarray], used: list[int]
+            ) -> tuple[list[np.ndarray], list[int]]:
+    """The corners and views kept after a fit whose residuals are ``res`` (view index →
+    (N, 2) px): :func:`calibrate_fisheye`'s rules; ``keep`` of views already dropped stays
+    as it was."""
+    thr = corner_threshold_px(np.concatenate([r[keep[i]] for i, r in res.items()]))
+    new_keep = list(keep)
+    survivors = []
+    for i in used:
+        ok = np.linalg.norm(res[i], axis=1) <= thr
+        new_keep[i] = ok
+        if np.mean(~ok) <= VIEW_BAD_SHARE and int(ok.sum()) >= MIN_KEPT_CORNERS:
+            survivors.append(i)
+    # The view RMS rule only once the corners are settled (a view's pose is pulled by its
+    # wrong corners until they are dropped, and its good corners then fit badly too).
+    settled = all(np.array_equal(new_keep[i], keep[i]) for i in used)
+    rms = np.array([np.sqrt(np.mean(np.sum(res[i][new_keep[i]] ** 2, axis=1)))
+                    for i in survivors])
+    if settled and len(rms):
+        med = float(np.median(rms))
+        good = rms <= max(OUTLIER_FACTOR * med, med + OUTLIER_MIN_EXCESS_PX)
+        if int(good.sum()) >= MIN_VIEWS:
+            survivors = [i for i, g in zip(survivors, good) if g]
+    if len(survivors) < MIN_VIEWS:  # too few left: keep the views, drop only corners
+        survivors = [i for i in used if int(new_keep[i].sum()) >= MIN_KEPT_CORNERS]
+    if len(survivors) < MIN_VIEWS:
+        return keep, used
+    return new_keep, survivors
+
+
+def _result(objs: list[np.ndarray], views: list[BoardView], used: list[int],
+            keep: list[np.ndarray], K: np.ndarray, D: np.ndarray,
+            size: tuple[int, int]) -> Calibration:
+    """Every view's fit, posed by solvePnP on its kept corners with the final K, D (a view
+    with too few kept corners on all of them)."""
     import cv2
 
     fits, sq = [], []
     for i, (v, obj) in enumerate(zip(views, objs)):
-        ok, rvec, tvec = cv2.fisheye.solvePnP(obj.reshape(-1, 1, 3), v.corners.reshape(-1, 1, 2),
-                                              K, D)
+        k = keep[i] if int(keep[i].sum()) >= MIN_KEPT_CORNERS else np.ones(len(obj), bool)
+        ok, rvec, tvec = cv2.fisheye.solvePnP(obj[k].reshape(-1, 1, 3),
+                                              v.corners[k].reshape(-1, 1, 2), K, D)
         if not ok:
             rvec, tvec = np.zeros(3), np.zeros(3)
-        e = _errors(obj, v, K, D, rvec, tvec)
+        e = np.linalg.norm(_residuals(obj, v.corners, K, D, rvec, tvec), axis=1)
         if i in used:
-            sq.append(e**2)
-        fits.append(ViewFit(v.name, float(np.sqrt(np.mean(e**2))), float(e.max()), i in used,
+            sq.append(e[keep[i]] ** 2)
+        drop = np.flatnonzero(~keep[i])
+        fits.append(ViewFit(v.name, float(np.sqrt(np.mean(e[k] ** 2))), float(e[k].max()),
+                            i in used,
                             tuple(float(x) for x in np.ravel(rvec)),  # type: ignore[arg-type]
-                            tuple(float(x) for x in np.ravel(tvec))))  # type: ignore[arg-type]
+                            tuple(float(x) for x in np.ravel(tvec)),  # type: ignore[arg-type]
+                            tuple(int(j) for j in drop), tuple(float(e[j]) for j in drop)))
     rms = float(np.sqrt(np.mean(np.concatenate(sq))))
     return Calibration(np.asarray(K, np.float64), np.asarray(D, np.float64), size, rms,
                        tuple(fits))
