@@ -1,7 +1,9 @@
 """The calibration board of ``rvmsim calibrate``: its inner-corner grid and square size.
 
 ``--board`` is ``COLSxROWS:SQUARE`` (a checkerboard: inner corners across and down, square
-side in metres, e.g. ``9x7:0.03``), ``charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]`` (a
+side in metres, e.g. ``9x7:0.03``; ``inner:COLSxROWS:SQUARE`` says so explicitly, and
+``squares:COLSxROWS:SQUARE`` counts squares instead, e.g. ``squares:10x8:0.03`` for the
+same board), ``charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]`` (a
 ChArUco board as ``cv2.aruco.CharucoBoard`` counts it: *squares* across and down, square
 and marker side in metres, a ``cv2.aruco`` dictionary, default ``DICT_4X4_50``; e.g.
 ``charuco:7x10:0.08:0.06``), or a scene file whose ``test_site.board`` is the board used
@@ -59,8 +61,17 @@ class BoardSpec:
         pts = np.stack([x.ravel(), y.ravel(), np.zeros(cols * rows)], axis=1)
         return pts * self.square_size
 
+    def describe(self) -> str:
+        """The board in both countings, e.g. ``7x9 inner corners (8x10 squares)``, or for a
+        ChArUco board ``ChArUco 7x10 squares (6x9 inner corners)``."""
+        c, r = self.inner
+        if self.charuco is not None:
+            return f"ChArUco {c + 1}x{r + 1} squares ({c}x{r} inner corners)"
+        return f"{c}x{r} inner corners ({c + 1}x{r + 1} squares)"
 
-_SPEC = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*:\s*([0-9.eE+-]+)\s*$")
+
+_SPEC = re.compile(r"^\s*(?:(inner|squares)\s*:\s*)?(\d+)\s*[xX]\s*(\d+)\s*:"
+                   r"\s*([0-9.eE+-]+)\s*$", re.IGNORECASE)
 _CHARUCO = re.compile(r"^\s*charuco\s*:\s*(\d+)\s*[xX]\s*(\d+)\s*:\s*([0-9.eE+-]+)\s*:"
                       r"\s*([0-9.eE+-]+)\s*(?::\s*(\w+)\s*)?$", re.IGNORECASE)
 
@@ -90,8 +101,9 @@ def _from_pattern_board(board: PatternBoard) -> BoardSpec:
 
 
 def parse_board_spec(spec: str) -> BoardSpec:
-    """The board of ``--board SPEC``: ``COLSxROWS:SQUARE`` (inner corners, metres) or a
-    scene file (its ``test_site.board``).
+    """The board of ``--board SPEC``: ``[inner:]COLSxROWS:SQUARE`` (inner corners, metres),
+    ``squares:COLSxROWS:SQUARE`` (squares), ``charuco:COLSxROWS:SQUARE:MARKER[:DICT]``
+    (squares) or a scene file (its ``test_site.board``).
 
     Raises
     ------
@@ -103,7 +115,12 @@ def parse_board_spec(spec: str) -> BoardSpec:
         return _charuco_spec(spec, c)
     m = _SPEC.match(spec)
     if m is not None:
-        cols, rows, size = int(m.group(1)), int(m.group(2)), float(m.group(3))
+        squares = (m.group(1) or "").lower() == "squares"
+        cols, rows, size = int(m.group(2)), int(m.group(3)), float(m.group(4))
+        if squares:
+            if not (3 <= cols <= 201 and 3 <= rows <= 201):
+                raise RvmsimError(f"--board {spec}: squares must be 3..201 each way")
+            cols, rows = cols - 1, rows - 1
         if not (2 <= cols <= 200 and 2 <= rows <= 200):
             raise RvmsimError(f"--board {spec}: inner corners must be 2..200 each way")
         if not (0 < size <= 10):  # also refuses nan
@@ -115,5 +132,6 @@ def parse_board_spec(spec: str) -> BoardSpec:
 
         return _from_pattern_board(load_scene(path).test_site.board)
     raise RvmsimError(f"--board {spec}: expected COLSxROWS:SQUARE (inner corners, metres, "
-                      "e.g. 9x7:0.03), charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] (squares, "
-                      "metres) or a scene file")
+                      "e.g. 9x7:0.03), squares:COLSxROWS:SQUARE (squares, e.g. "
+                      "squares:10x8:0.03), charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] "
+                      "(squares, metres) or a scene file")

@@ -1,5 +1,5 @@
 """What ``rvmsim calibrate`` writes: ``calibration.json`` (K, D, RMS per view),
-``coverage.png`` (where the corners fell), ``camera.yaml`` (the scene's camera block), and
+``coverage.png`` (where the corners fell), the corners dropped as outliers, ``camera.yaml`` (the scene's camera block), and
 the camera section of a scene file (``--write-scene``)."""
 
 from __future__ import annotations
@@ -39,7 +39,8 @@ def camera_block(K: np.ndarray, D: np.ndarray, image_size: tuple[int, int],
 
 def coverage_image(calib: Calibration, views: list[BoardView]) -> np.ndarray:
     """(H, W, 3) uint8: every view's corners on a dark canvas of the image size, used views
-    in green (each view's outline in grey), rejected views in red."""
+    in green (each view's outline in grey), rejected views in red, corners dropped as
+    outliers ringed in orange."""
     import cv2
 
     w, h = calib.image_size
@@ -51,6 +52,9 @@ def coverage_image(calib: Calibration, views: list[BoardView]) -> np.ndarray:
         color = (60, 220, 60) if fit.used else (230, 40, 40)
         for x, y in np.rint(pts).astype(int):
             cv2.circle(img, (int(x), int(y)), 2, color, -1, cv2.LINE_AA)
+        for j in fit.dropped:  # outlier corners: an orange ring
+            x, y = np.rint(pts[j]).astype(int)
+            cv2.circle(img, (int(x), int(y)), 5, (255, 150, 0), 1, cv2.LINE_AA)
     return img
 
 
@@ -70,7 +74,11 @@ def write_calibration_outputs(calib: Calibration, views: list[BoardView], board:
                       "aruco_dictionary": board.charuco.dictionary})},
         "views": [{"name": v.name, "corners": int(len(view.corners)), "rms_px": v.rms_px,
                    "max_px": v.max_px, "used": v.used, "rvec": list(v.rvec),
-                   "tvec_m": list(v.tvec)} for v, view in zip(calib.views, views)],
+                   "tvec_m": list(v.tvec),
+                   "dropped_corners": [{"index": j, "px": [float(x) for x in view.corners[j]],
+                                        "error_px": e}
+                                       for j, e in zip(v.dropped, v.dropped_px)]}
+                  for v, view in zip(calib.views, views)],
     }
     paths = [out / "calibration.json", out / "coverage.png", out / "camera.yaml"]
     paths[0].write_text(json.dumps(doc, indent=2) + "\n")

@@ -7,7 +7,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
+import numpy as np
+
 from ..errors import RvmsimError
+from .board import BoardSpec
 from .intrinsics import BoardView
 
 __all__ = ["CalibrationSummary", "calibrate_captures", "import_camera"]
@@ -55,37 +58,82 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
         too few usable views.
     """
     from .board import parse_board_spec
-    from .captures import capture_files, load_grey
-    from .detect import find_board_view
+    from .captures import capture_files
     from .intrinsics import calibrate_fisheye
     from .outputs import camera_block, write_calibration_outputs
 
     board = parse_board_spec(board_spec)
     files = capture_files(list(captures))
+    views, missed, size = _find_views(files, board, board_spec)
+    calib = calibrate_fisheye(views, board, size)
+    write_calibration_outputs(calib, views, board, out, fov_deg)
+    used = sum(v.used for v in calib.views)
+    dropped = [(v.name, len(v.dropped)) for v in calib.views if v.used and v.dropped]
+    k = calib.K
+    text = (f"board found in {len(views)} of {len(files)} captures"
+            + (f" (not in: {', '.join(missed[:5])}{', …' if len(missed) > 5 else ''})"
+               if missed else "")
+            + f"; {used} views used, {len(views) - used} rejected as outliers"
+            + (f"; {sum(n for _, n in dropped)} outlier corners dropped in {len(dropped)} "
+               f"used views ({', '.join(f'{v}: {n}' for v, n in dropped[:8])}"
+               f"{', …' if len(dropped) > 8 else ''})" if dropped else "") + "\n"
+            f"fx {k[0, 0]:.3f}  fy {k[1, 1]:.3f}  cx {k[0, 2]:.3f}  cy {k[1, 2]:.3f} px; "
+            f"D {', '.join(f'{d:+.6f}' for d in calib.D)}; RMS {calib.rms_px:.3f} px")
+    return CalibrationSummary(camera_block(calib.K, calib.D, calib.image_size, fov_deg), text)
+
+
+def _find_views(files: list[Path], board: BoardSpec, spec: str
+                ) -> tuple[list[BoardView], list[str], tuple[int, int]]:
+    """The board's views in ``files``, the names of the captures without it, and the
+    capture size.  A checkerboard found in none of the first
+    :data:`~.counting.HINT_CAPTURES` captures, or in fewer than
+    :data:`~.intrinsics.MIN_VIEWS` in all, is looked for with the other counting
+    (:func:`~.counting.other_counting`); when that finds it, the error says so at once.
+
+    Raises
+    ------
+    RvmsimError
+        Captures of different sizes; the board (maybe) miscounted; too few views.
+    """
+    from .captures import load_grey
+    from .counting import HINT_CAPTURES, counting_hint, other_counting
+    from .detect import find_board_view
+    from .intrinsics import MIN_VIEWS
+
     views: list[BoardView] = []
     sizes: set[tuple[int, int]] = set()
     missed: list[str] = []
-    for f in files:
+    missed_greys: list[np.ndarray] = []
+    tried = board.charuco is not None  # ChArUco: markers, no counting to get wrong
+
+    def hint(where: str) -> None:
+        found = other_counting(missed_greys, board)
+        if found is not None:
+            raise RvmsimError(f"--board {spec}: board not found in {where}; "
+                              + counting_hint(board, found, spec))
+
+    for k, f in enumerate(files):
         grey = load_grey(f)
         sizes.add((grey.shape[1], grey.shape[0]))
         view = find_board_view(grey, board, f.name)
         if view is None:
             missed.append(f.name)
+            if len(missed_greys) < HINT_CAPTURES:
+                missed_greys.append(grey)
         else:
             views.append(view)
+        if not tried and not views and k + 1 == min(HINT_CAPTURES, len(files)):
+            tried = True
+            hint(f"the first {k + 1} captures")
     if len(sizes) > 1:
         raise RvmsimError(f"captures differ in size: {sorted(sizes)} (one camera per run)")
-    calib = calibrate_fisheye(views, board, sizes.pop())
-    write_calibration_outputs(calib, views, board, out, fov_deg)
-    used = sum(v.used for v in calib.views)
-    k = calib.K
-    text = (f"board found in {len(views)} of {len(files)} captures"
-            + (f" (not in: {', '.join(missed[:5])}{', …' if len(missed) > 5 else ''})"
-               if missed else "")
-            + f"; {used} views used, {len(views) - used} rejected as outliers\n"
-            f"fx {k[0, 0]:.3f}  fy {k[1, 1]:.3f}  cx {k[0, 2]:.3f}  cy {k[1, 2]:.3f} px; "
-            f"D {', '.join(f'{d:+.6f}' for d in calib.D)}; RMS {calib.rms_px:.3f} px")
-    return CalibrationSummary(camera_block(calib.K, calib.D, calib.image_size, fov_deg), text)
+    if len(views) < MIN_VIEWS:
+        if not tried:
+            hint(f"{len(missed)} of {len(files)} captures")
+        raise RvmsimError(f"calibration needs the board, {board.describe()}, found in at "
+                          f"least {MIN_VIEWS} captures (found in {len(views)} of "
+                          f"{len(files)})")
+    return views, missed, sizes.pop()
 
 
 def import_camera(file: str | Path, out: str | Path,

@@ -18,10 +18,12 @@ __all__ = ["calibrate"]
 @click.command(cls=Command, error_path=("out",))
 @click.argument("captures", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--board", "board_spec", metavar="SPEC",
-              help="COLSxROWS:SQUARE (inner corners across and down, square side in m, "
-                   "e.g. 9x7:0.03), charuco:COLSxROWS:SQUARE:MARKER[:DICT] (a ChArUco "
-                   "board: squares, m, a cv2.aruco dictionary; e.g. charuco:7x10:0.08:0.06), "
-                   "or a scene file whose test_site.board was used.")
+              help="COLSxROWS:SQUARE or inner:COLSxROWS:SQUARE (INNER CORNERS across and "
+                   "down, square side in m, e.g. 9x7:0.03 for a board of 10x8 squares), "
+                   "squares:COLSxROWS:SQUARE (SQUARES, e.g. squares:10x8:0.03), "
+                   "charuco:COLSxROWS:SQUARE:MARKER[:DICT] (a ChArUco board: SQUARES, m, a "
+                   "cv2.aruco dictionary; e.g. charuco:7x10:0.08:0.06), or a scene file "
+                   "whose test_site.board was used.")
 @click.option("--import", "import_file", type=click.Path(path_type=Path),
               help="Import an existing calibration instead: OpenCV FileStorage YAML, Kalibr "
                    "camchain (pinhole-equidistant), OCamCalib calib_results.txt.")
@@ -49,7 +51,8 @@ def calibrate(captures: tuple[Path, ...], board_spec: str | None, import_file: P
     elif not captures:
         raise RvmsimError("no captures given (images or folders), nor --import FILE")
     elif board_spec is None:
-        raise RvmsimError("--board is required with captures (e.g. --board 9x7:0.03)")
+        raise RvmsimError("--board is required with captures (e.g. --board 9x7:0.03, inner "
+                          "corners; or squares:10x8:0.03)")
     else:
         done = calibrate_captures(captures, board_spec, out, fov_deg)
     if write_scene is not None:
