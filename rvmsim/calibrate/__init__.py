@@ -2,8 +2,9 @@
 calibrations imported as Kannala-Brandt cameras.
 
 Modules: :mod:`.board` (``--board`` specs), :mod:`.captures` (image files),
-:mod:`.detect` (corner detection), :mod:`.intrinsics` (``cv2.fisheye.calibrate`` with
-outlier rejection), :mod:`.imports` (OpenCV / Kalibr / OCamCalib / camera-block files),
+:mod:`.detect` (corner detection), :mod:`.counting` (the other counting's hint),
+:mod:`.intrinsics` (``cv2.fisheye.calibrate`` with outlier corner and view rejection),
+:mod:`.imports` (OpenCV / Kalibr / OCamCalib / camera-block files),
 :mod:`.outputs` (JSON, coverage picture, camera block, ``--write-scene``), :mod:`.run`
 (a calibration from captures, or imported, into an output folder: ``rvmsim calibrate``).
 See ``docs/calibration.md``.

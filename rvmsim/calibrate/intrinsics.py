@@ -10,7 +10,8 @@ import numpy as np
 from ..errors import RvmsimError
 from .board import BoardSpec
 
-__all__ = ["BoardView", "ViewFit", "Calibration", "calibrate_fisheye"]
+__all__ = ["BoardView", "ViewFit", "Calibration", "calibrate_fisheye",
+           "corner_threshold_px"]
 
 #: A view is an outlier when its RMS exceeds this many times the median (and
 #: :data:`OUTLIER_MIN_EXCESS_PX` more than it).

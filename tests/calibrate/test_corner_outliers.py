@@ -49,14 +49,14 @@ def test_a_few_bad_corners_drop_the_corners_not_the_views(detected_views, clean)
     assert {v.name: set(v.dropped) for v in calib.views if v.dropped} == moved
     for v in calib.views:
         assert all(e > 10 for e in v.dropped_px) and v.rms_px < 0.5
-    # Against the clean fit (RMS 0.12 px): dropping 10 of 756 corners may move the
-    # focal lengths and centre by a few hundredths of a pixel (the clean fit's own error
-    # against the truth is 0.1-0.6 px); 0.1 px / 0.05 px on the lens radius is
-    # well under that, and far under what the wrong corners do when kept (see the docs).
+    # Against the clean fit (RMS 0.07 px): dropping 10 of 756 good-quality corners moves
+    # fx, fy, cx, cy by < 0.01 px here (measured 0.001-0.007); 0.05 px keeps a margin for
+    # other OpenCV builds and is well below what the bad corners do otherwise (kept: fx
+    # -6.3 px, cy +3.2 px; dropping their 4 views whole: cx -0.17 px, lens radius 0.19 px).
     for (i, j) in ((0, 0), (1, 1), (0, 2), (1, 2)):
-        assert calib.K[i, j] == pytest.approx(clean.K[i, j], abs=0.1), (i, j)
+        assert calib.K[i, j] == pytest.approx(clean.K[i, j], abs=0.05), (i, j)
     th = np.radians(np.linspace(0.0, 80.0, 161))
-    assert np.abs(_radius(calib.K, calib.D, th) - _radius(clean.K, clean.D, th)).max() < 0.1
+    assert np.abs(_radius(calib.K, calib.D, th) - _radius(clean.K, clean.D, th)).max() < 0.05
     check_recovered(calib.K, calib.D)
     assert calib.rms_px < 0.3
 
@@ -72,8 +72,10 @@ def test_a_view_with_most_corners_bad_is_dropped(detected_views, clean):
     fits = {v.name: v for v in calib.views}
     assert not fits["mostly_bad"].used and len(fits["mostly_bad"].dropped) > len(c) // 2
     assert all(v.used and not v.dropped for n, v in fits.items() if n != "mostly_bad")
+    # The same as a clean fit without that view (the same data, up to the solver).
+    without = calibrate_fisheye([*views[:6], *views[7:]], board, (640, 480))
     for (i, j) in ((0, 0), (1, 1), (0, 2), (1, 2)):
-        assert calib.K[i, j] == pytest.approx(clean.K[i, j], abs=0.3), (i, j)
+        assert calib.K[i, j] == pytest.approx(without.K[i, j], abs=0.01), (i, j)
 
 
 def test_the_corner_threshold_is_robust():
@@ -83,3 +85,22 @@ def test_the_corner_threshold_is_robust():
     res[:40] += 25.0  # 4 % wrong corners barely move the median
     assert corner_threshold_px(res) == 3.0
     assert corner_threshold_px(rng.normal(0, 1.0, (1000, 2))) == pytest.approx(5.0, rel=0.1)
+
+
+def test_the_dropped_corners_are_in_calibration_json(detected_views, tmp_path):
+    import json
+
+    from rvmsim.calibrate import write_calibration_outputs
+
+    board, views = detected_views
+    bad, moved = _corrupt(views, np.random.default_rng(7))
+    calib = calibrate_fisheye(bad, board, (640, 480))
+    write_calibration_outputs(calib, bad, board, tmp_path)
+    doc = json.loads((tmp_path / "calibration.json").read_text())
+    got = {v["name"]: {d["index"] for d in v["dropped_corners"]} for v in doc["views"]
+           if v["dropped_corners"]}
+    assert got == moved
+    v8 = next(v for v in doc["views"] if v["name"] == views[8].name)
+    for d in v8["dropped_corners"]:
+        np.testing.assert_allclose(d["px"], bad[8].corners[d["index"]])
+        assert 10 < d["error_px"] < 40
