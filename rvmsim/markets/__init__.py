@@ -8,7 +8,7 @@ fmvss111-full,unr158`` makes each market a *member* of the run
 (:mod:`rvmsim.tune.members`): the scene at the market's site (:func:`rvmsim.scene.site_scene`,
 rendered once and cached), judged with the market's criteria.  A setting passes when it
 passes every market; the binding criterion of a market is its EC with the least score
-(:func:`market_rows`).  A market may also be given as ``SITE:CRITERIA`` (each a bundled
+(:func:`binding_ec`).  A market may also be given as ``SITE:CRITERIA`` (each a bundled
 name or a file), e.g. ``./our_site.yaml:./our_criteria.yaml``.
 
 Sources, the regulations' requirements and every ⚠ choice: docs/markets.md.
