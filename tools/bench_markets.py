@@ -43,16 +43,14 @@ def _setup(scene_path: str, markets: str) -> Any:
 
         from rvmsim.criteria import record_size
         from rvmsim.markets import market_members, parse_markets
-        from rvmsim.render import cached_render
         from rvmsim.scene import load_scene
-        from rvmsim.tune import Member, TuningConfig
+        from rvmsim.tune import TuningConfig
+        from rvmsim.tune.markets import render_market_members
 
         cv2.setNumThreads(1)
         scene = load_scene(scene_path)
         pairs = market_members([scene], parse_markets(markets))
-        renders = [cached_render(p.scene)[0] for p in pairs]
-        members = [Member(p.name, im.labels, im.camera, p.scene, None, p.criteria)
-                   for p, im in zip(pairs, renders)]
+        renders, members = render_market_members(pairs)
         cfg = TuningConfig().at_record(record_size(pairs[0].criteria, scene))
         _CACHE[key] = (cfg, pairs, renders, members)
     return _CACHE[key]
@@ -63,8 +61,8 @@ def run_one(scene_path: str, markets: str, strategy: str, seed: int,
     """One search to its first all-pass or its budget."""
     import numpy as np
 
-    from rvmsim.batch import infeasible_ecs
     from rvmsim.tune import SearchSettings, make_strategy, members_scorer
+    from rvmsim.tune.markets import market_infeasible
 
     cfg, pairs, renders, members = _setup(scene_path, markets)
     strat = make_strategy(strategy, cfg.space(members[0].camera), cfg, seed, budget)
@@ -89,9 +87,7 @@ def run_one(scene_path: str, markets: str, strategy: str, seed: int,
         pass
     why: list[str] = []
     if first is None:
-        for p, im in zip(pairs, renders):
-            why += [f"{p.name} {f.reason}" for f in infeasible_ecs(p.scene, im.camera,
-                                                                   im.labels, p.criteria)]
+        why = [f"{p.name} {f.reason}" for p, f in market_infeasible(pairs, renders)]
         if not why and best_ec:
             why = [f"fails {ec}" for ec, cell in json.loads(best_ec).items() if not cell[2]]
     return {"scene": scene_path, "seed": seed, "first_pass": first, "evaluations": used,

@@ -35,7 +35,6 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
 
 from .._io import KeyPath
 from ..errors import InputFileError, RvmsimError
@@ -47,6 +46,7 @@ if TYPE_CHECKING:
     from ..markets import Market, MarketMember
     from ..render import FisheyeImages
     from ..runs import RunStore
+    from ..tune import Member
     from .payloads import YieldDoc, YieldError
 
 __all__ = ["sweep_markets", "markets_fingerprint", "market_ec_ids", "market_names",
@@ -137,34 +137,30 @@ def market_names(specs: Sequence[str]) -> tuple[str, ...]:
 
 
 # ---------------------------------------------------------------------------- the task
-def _members(task: PointTask) -> tuple[list[MarketMember], list[FisheyeImages]]:
-    """The point's scene at every market's site, each rendered (cached), same sensor."""
+def _members(task: PointTask
+             ) -> tuple[list[MarketMember], list[FisheyeImages], list[Member]]:
+    """The point's scene at every market's site, each rendered (cached, same sensor) and
+    made a search member (:func:`rvmsim.tune.markets.render_market_members`)."""
     from ..markets import market_members
-    from ..render import cached_render
     from ..scene import scene_from_dict
-    from ..tune import check_cameras
+    from ..tune.markets import render_market_members
     from .point import _RENDER_LOCK
 
     scene = scene_from_dict(task["scene"], source=task["label"])
     pairs = market_members([scene], _parsed(task.get("markets", ())))
     with _RENDER_LOCK:  # one OpenGL context at a time per process
-        renders = [cached_render(p.scene)[0] for p in pairs]
-    check_cameras([(p.name, im.camera) for p, im in zip(pairs, renders)])
-    return pairs, renders
+        renders, members = render_market_members(pairs)
+    return pairs, renders, members
 
 
 def _infeasible(pairs: Sequence[MarketMember], renders: Sequence[FisheyeImages]
                 ) -> list[InfeasibleDoc]:
-    """Per market, the ECs no setting can pass at its site, the reason naming the market."""
-    from .feasibility import infeasible_ecs
+    """Per market, the ECs no setting can pass at its site, the reason naming the market
+    (:func:`rvmsim.tune.markets.market_infeasible`)."""
+    from ..tune.markets import market_infeasible
 
-    out: list[InfeasibleDoc] = []
-    for p, im in zip(pairs, renders):
-        for f in infeasible_ecs(p.scene, im.camera, im.labels, p.criteria):
-            out.append({"ec": f.ec, "market": p.market.name,
-                        "reason": f"{p.market.name}: {f.reason}",
-                        "short": f"{p.market.name} {f.short}"})
-    return out
+    return [{"ec": f.ec, "market": p.market.name, "reason": f"{p.market.name}: {f.reason}",
+             "short": f"{p.market.name} {f.short}"} for p, f in market_infeasible(pairs, renders)]
 
 
 def market_outcomes(store: RunStore, idx: int, pairs: Sequence[MarketMember]
@@ -207,8 +203,8 @@ def run_markets_point(task: PointTask) -> PointResult:
     problem with the point is ``{"error", "seconds"}``."""
     t0 = time.perf_counter()
     try:
-        pairs, renders = _members(task)
-        result = _search(task, pairs, renders)
+        pairs, renders, members = _members(task)
+        result = _search(task, pairs, renders, members)
     except RvmsimError as err:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
     result["seconds"] = time.perf_counter() - t0
@@ -216,19 +212,17 @@ def run_markets_point(task: PointTask) -> PointResult:
 
 
 def _search(task: PointTask, pairs: Sequence[MarketMember],
-            renders: Sequence[FisheyeImages]) -> PointRun:
+            renders: Sequence[FisheyeImages], members: Sequence[Member]) -> PointRun:
     """Tune, then judge and probe the best setting of one markets point."""
     from ..criteria import record_size
     from ..isp import IspParams
     from ..runs import RunStore
-    from ..tune import (Member, MembersScorer, SearchSettings, TuningConfig, make_strategy,
+    from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy,
                         member_evaluators, search_members)
     from .point import _task_budget, probe_sensitivity
 
     config = TuningConfig.model_validate(task["config"]).at_record(
         record_size(pairs[0].criteria, pairs[0].scene))
-    members = [Member(p.name, im.labels, im.camera, p.scene, None, p.criteria)
-               for p, im in zip(pairs, renders)]
     infeasible = _infeasible(pairs, renders)
     space = config.space(members[0].camera)
     budget = _task_budget(task, renders[0], config)
@@ -290,25 +284,20 @@ def markets_yield(pairs: Sequence[MarketMember], params: IspParams, output: Outp
     render_scale : float
         Fraction of the sensor rendered (1, as the point's tuning renders it).
     """
-    from ..robust import RobustnessSettings, robustness
-    from ..robust.stats import yield_estimate
+    from ..robust import RobustnessSettings, markets_robustness
     from .point import _RENDER_LOCK
 
     t0 = time.perf_counter()
     try:
-        with _RENDER_LOCK:
-            res = [robustness(p.scene, params, RobustnessSettings(
-                output, p.criteria, samples=samples, seed=seed, scales=(1.0,),
-                render_scale=render_scale), frames=False) for p in pairs]
+        with _RENDER_LOCK:  # every market on the same samples (rvmsim robustness --markets)
+            res = markets_robustness(pairs[0].scene, params, pairs, RobustnessSettings(
+                output, pairs[0].criteria, samples=samples, seed=seed, scales=(1.0,),
+                render_scale=render_scale), frames=False)
     except RvmsimError as err:
         return {"error": f"yield: {err}", "seconds": time.perf_counter() - t0}
-    if any(r.samples != res[0].samples for r in res[1:]):
-        return {"error": "yield: the markets drew different variation samples",
-                "seconds": time.perf_counter() - t0}
-    passed = np.logical_and.reduce([r.passed for r in res])
-    est = yield_estimate(passed)
-    stats = [(f"{p.market.name}: {e.id}", e) for p, r in zip(pairs, res)
-             for e in r.ecs if e.enabled]
+    est = res.estimate
+    stats = [(f"{m.name}: {e.id}", e) for m in res.markets for e in m.result.ecs
+             if e.enabled]
     failing = [(name, e) for name, e in stats if e.n_fail]
     top = max(failing, key=lambda t: t[1].failure_rate) if failing else None
     driver = top[1].driver if top is not None else None

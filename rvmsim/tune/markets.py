@@ -30,6 +30,7 @@ from ..errors import RvmsimError
 from .members import Member, check_cameras
 
 if TYPE_CHECKING:
+    from ..criteria.infeasible import Infeasibility
     from ..markets import MarketMember
     from ..render import FisheyeImages
     from ..runs.records import RunSettings
@@ -37,7 +38,8 @@ if TYPE_CHECKING:
     from ..scene import Scene
     from ..search.config import TuningConfig
 
-__all__ = ["check_market_arguments", "markets_members", "write_market_results",
+__all__ = ["check_market_arguments", "markets_members", "render_market_members",
+           "market_infeasible", "write_market_results",
            "judge_run_in_markets",
            "market_verdict", "market_summary_lines", "market_problem_lines", "MARKETS_JSON"]
 
@@ -69,14 +71,39 @@ def markets_members(scenes: Sequence[Scene], settings: RunSettings, *, progress:
     """The members of a markets run: every (scene, market) pair, each scene rendered at the
     market's site (cached), with the market's criteria."""
     from ..markets import market_members, parse_markets
-    from ..render import cached_render
 
     pairs = market_members(scenes, parse_markets(list(settings.markets)))
+    renders, members = render_market_members(pairs, progress=progress)
+    return pairs, renders, members
+
+
+def render_market_members(pairs: Sequence[MarketMember], *, progress: bool = False
+                          ) -> tuple[list[FisheyeImages], list[Member]]:
+    """Each (scene, market) pair's site scene rendered (cached) and made a search member
+    with the market's criteria; the pairs' cameras checked to share one sensor size.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the pair whose camera differs.
+    """
+    from ..render import cached_render
+
     renders = [cached_render(p.scene, progress=progress)[0] for p in pairs]
     check_cameras([(p.name, im.camera) for p, im in zip(pairs, renders)])
     members = [Member(p.name, im.labels, im.camera, p.scene, None, p.criteria)
                for p, im in zip(pairs, renders)]
-    return pairs, renders, members
+    return renders, members
+
+
+def market_infeasible(pairs: Sequence[MarketMember], renders: Sequence[FisheyeImages]
+                      ) -> list[tuple[MarketMember, Infeasibility]]:
+    """Per pair, the ECs no ISP setting can pass at its market's site, read from its fisheye
+    labels (:func:`rvmsim.criteria.infeasible.infeasible_ecs`), in the pairs' order."""
+    from ..criteria.infeasible import infeasible_ecs
+
+    return [(p, f) for p, im in zip(pairs, renders)
+            for f in infeasible_ecs(p.scene, im.camera, im.labels, p.criteria)]
 
 
 def _slug(name: str) -> str:
@@ -140,14 +167,10 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
     ``conflicts`` (pairs of members that each pass alone in some trial but never
     together, with the ECs of the other that fail in the trials where one passes, most
     often first)."""
-    from ..criteria.infeasible import infeasible_ecs
-
     if passed:
         return {}
-    infeasible = []
-    for p, im in zip(pairs, renders):
-        for f in infeasible_ecs(p.scene, im.camera, im.labels, p.criteria):
-            infeasible.append({"member": p.name, "ec": f.ec, "reason": f.reason})
+    infeasible = [{"member": p.name, "ec": f.ec, "reason": f.reason}
+                  for p, f in market_infeasible(pairs, renders)]
     if not conflicts:  # judged after a search of other criteria: no member results
         return {"infeasible": infeasible, "conflicts": []}
     per = _member_passes(store, len(pairs))
