@@ -37,12 +37,11 @@ def render(scene: Path, out: Path, scale: float, face_size: int | None, site: st
     """
     from ..pipeline import write_fisheye
     from ..render import render_fisheye
-    from ..scene import load_scene, load_site, site_scene
+    from ..scene import is_site_file, load_scene, load_site, site_scene
 
     sc = load_scene(scene)
     if site is not None:
-        sc = site_scene(sc, load_site(site) if site.lower().endswith((".yaml", ".yml"))
-                        else site)
+        sc = site_scene(sc, load_site(site) if is_site_file(site) else site)
     cam = sc.fisheye_camera()
     if scale != 1.0:
         cam = cam.scaled(scale)

@@ -73,11 +73,13 @@ def _one(entry: str, base_dir: Path) -> Market:
         if not site or not crit:
             raise RvmsimError(f"--markets {entry!r}: give SITE:CRITERIA (each a bundled name "
                               "or a file)")
-        for part in (site, crit):
-            if part.lower().endswith((".yaml", ".yml")) and not (base_dir / part).is_file():
+        from ..scene import is_site_file
+
+        for part, is_file in ((site, is_site_file(site)),
+                              (crit, crit.lower().endswith((".yaml", ".yml")))):
+            if is_file and not (base_dir / part).is_file():
                 raise RvmsimError(f"--markets {entry!r}: {base_dir / part}: no such file")
-        return Market(entry, str(base_dir / site) if site.lower().endswith((".yaml", ".yml"))
-                      else site,
+        return Market(entry, str(base_dir / site) if is_site_file(site) else site,
                       str(base_dir / crit) if crit.lower().endswith((".yaml", ".yml"))
                       else crit, entry)
     raise RvmsimError(f"--markets {entry!r}: unknown market (bundled: "
@@ -104,26 +106,21 @@ def parse_markets(text: str | Sequence[str], base_dir: str | Path = ".") -> tupl
     if dup:
         raise RvmsimError(f"--markets: {', '.join(dup)} given twice")
     markets = tuple(_one(e, Path(base_dir)) for e in entries)
+    from ..scene import site_definition
+
     for m in markets:  # the site and the criteria load (one line each when they do not)
         market_criteria(m)
-        if m.site.lower().endswith((".yaml", ".yml")):
-            from ..scene import load_site
-
-            load_site(m.site)
-        else:
-            from ..scene import bundled_site
-
-            bundled_site(m.site)
+        site_definition(m.site)
     return markets
 
 
 def market_scene(scene: Scene, market: Market) -> Scene:
-    """``scene`` at the market's site (:func:`rvmsim.scene.site_scene`)."""
-    from ..scene import load_site, site_scene
+    """``scene`` at the market's site (:func:`rvmsim.scene.site_scene`; a bundled site by
+    name, so that a site file of the scene's own under that name replaces it)."""
+    from ..scene import is_site_file, site_definition, site_scene
 
-    if market.site.lower().endswith((".yaml", ".yml")):
-        return site_scene(scene, load_site(market.site))
-    return site_scene(scene, market.site)
+    return site_scene(scene, site_definition(market.site) if is_site_file(market.site)
+                      else market.site)
 
 
 def market_criteria(market: Market) -> Criteria:

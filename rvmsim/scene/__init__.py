@@ -71,6 +71,8 @@ from .sitedefs import (
     scene_sites,
     site_scene,
     scene_vehicle_width,
+    is_site_file,
+    scene_site_entry,
 )
 from .meshes import build_parts
 from .landmarks import Landmark, CheckerCorner, site_landmarks, checker_corners
@@ -132,6 +134,8 @@ __all__ = [
     "scene_sites",
     "site_scene",
     "scene_vehicle_width",
+    "is_site_file",
+    "scene_site_entry",
     "site_landmarks",
     "checker_corners",
     "stripe_azimuth_deg",

@@ -89,27 +89,17 @@ def scene_from_dict(
 
 
 def _check_sites(scene: Scene, lines: Mapping[KeyPath, int]) -> None:
-    """Every site the scene names loads (a bundled name, or a site file next to the scene;
-    a bad site file's own one-line error names that file and its key), once each."""
-    from .sitedefs import BUNDLED_SITES, site_definition
+    """Every site the scene names loads (:func:`~rvmsim.scene.sitedefs.scene_site_entry`:
+    a bundled name, or a site file next to the scene, whose own errors name that file and
+    its key), and none is named twice."""
+    from .sitedefs import scene_site_entry
 
     seen: set[str] = set()
     for i, entry in enumerate(scene.sites):
-        if entry in BUNDLED_SITES:
-            name = entry
-        elif entry.lower().endswith((".yaml", ".yml")) or "/" in entry:
-            path = scene.resolve_path(entry)
-            if not path.is_file():
-                raise SceneError(scene.source, f"sites.{i}", f"site file not found: {path}",
-                                 lines.get(("sites", i), lines.get(("sites",))))
-            name = site_definition(str(path)).name
-        else:
-            raise SceneError(scene.source, f"sites.{i}", f"unknown site {entry!r} (bundled: "
-                             f"{', '.join(BUNDLED_SITES)}; or a site file, .yaml)",
-                             lines.get(("sites", i), lines.get(("sites",))))
+        line = lines.get(("sites", i), lines.get(("sites",)))
+        name = scene_site_entry(scene, i, entry, line).name
         if name in seen:
-            raise SceneError(scene.source, f"sites.{i}", f"site {name!r} is named twice",
-                             lines.get(("sites", i), lines.get(("sites",))))
+            raise SceneError(scene.source, f"sites.{i}", f"site {name!r} is named twice", line)
         seen.add(name)
 
 

@@ -61,7 +61,7 @@ if TYPE_CHECKING:
 __all__ = ["SiteDefinition", "SiteRow", "Lateral", "Marking", "SiteObject", "BUNDLED_SITES",
            "DEFAULT_SITE", "load_site", "bundled_site", "site_definition", "place_objects",
            "vehicle_width", "SiteError", "scene_site", "scene_sites", "scene_vehicle_width",
-           "site_scene"]
+           "site_scene", "is_site_file", "scene_site_entry"]
 
 #: Site definitions shipped with rvmsim: name → file in ``rvmsim/scene/sites``.
 BUNDLED_SITES: dict[str, str] = {"fmvss111": "fmvss111.yaml", "unr158": "unr158.yaml",
@@ -269,12 +269,18 @@ def bundled_site(name: str) -> SiteDefinition:
     return _definition(text, f"<bundled site {name}>")
 
 
+def is_site_file(entry: str) -> bool:
+    """Whether a site entry (a scene's ``sites:``, ``--site``, a market's SITE) names a file
+    (``.yaml``/``.yml``, or a path with a folder) rather than a bundled site."""
+    return entry.lower().endswith((".yaml", ".yml")) or "/" in entry
+
+
 def site_definition(entry: str, base_dir: str | Path = ".") -> SiteDefinition:
-    """A site from a name (bundled) or a file path (``.yaml``/``.yml``, relative to
+    """A site from a name (bundled) or a file path (:func:`is_site_file`, relative to
     ``base_dir``, the folder of the file that names it)."""
     if entry in BUNDLED_SITES:
         return bundled_site(entry)
-    if entry.lower().endswith((".yaml", ".yml")) or "/" in entry:
+    if is_site_file(entry):
         p = Path(entry).expanduser()
         return load_site(p if p.is_absolute() else Path(base_dir) / p)
     return bundled_site(entry)  # raises: unknown name
@@ -310,30 +316,35 @@ def scene_site(scene: Scene, name: str) -> SiteDefinition:
     for i, entry in enumerate(scene.sites):
         if entry in BUNDLED_SITES:
             continue
-        site = _scene_entry(scene, i, entry)
+        site = scene_site_entry(scene, i, entry)
         if site.name == name:
             return site
     return bundled_site(name)
 
 
-def _scene_entry(scene: Scene, i: int, entry: str) -> SiteDefinition:
-    """Entry ``i`` of the scene's ``sites:``; a missing file or an unknown name is an error
-    naming the scene file and the key ``sites.<i>``."""
+def scene_site_entry(scene: Scene, i: int, entry: str, line: int | None = None
+                     ) -> SiteDefinition:
+    """Entry ``i`` of the scene's ``sites:`` (the scene loader checks every entry with it).
+
+    Raises
+    ------
+    SiteError
+        A missing site file or an unknown name, naming the scene file (``line`` of it) and
+        the key ``sites.<i>``; a bad site file names that file and its key.
+    """
     if entry not in BUNDLED_SITES:
-        p = Path(entry).expanduser()
-        path = p if p.is_absolute() else Path(scene.base_dir) / p
-        is_file = entry.lower().endswith((".yaml", ".yml")) or "/" in entry
-        if is_file and not path.is_file():
-            raise SiteError(scene.source, f"sites.{i}", f"{path}: no such site file")
-        if not is_file:
-            raise SiteError(scene.source, f"sites.{i}", f"{entry!r}: unknown site (bundled: "
-                            f"{', '.join(BUNDLED_SITES)}; or a site file .yaml)")
+        if not is_site_file(entry):
+            raise SiteError(scene.source, f"sites.{i}", f"unknown site {entry!r} (bundled: "
+                            f"{', '.join(BUNDLED_SITES)}; or a site file, .yaml)", line)
+        path = scene.resolve_path(entry)
+        if not path.is_file():
+            raise SiteError(scene.source, f"sites.{i}", f"site file not found: {path}", line)
     return site_definition(entry, scene.base_dir)
 
 
 def scene_sites(scene: Scene) -> list[SiteDefinition]:
     """Every site ``scene`` names (``sites:``), in order."""
-    return [_scene_entry(scene, i, entry) for i, entry in enumerate(scene.sites)]
+    return [scene_site_entry(scene, i, entry) for i, entry in enumerate(scene.sites)]
 
 
 def scene_vehicle_width(scene: Scene) -> float:
