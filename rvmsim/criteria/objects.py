@@ -24,7 +24,7 @@ from .context import SceneContext
 from .measure import LabelSource
 
 __all__ = ["ObjectSilhouette", "WidthEdges", "silhouette", "width_edges", "object_cylinder",
-           "object_labels", "silhouette_fractions", "standing_alone_labels"]
+           "silhouette_fractions", "standing_alone_labels"]
 
 #: Fisheye px beyond the image kept around a silhouette (parts there count as not visible).
 _MARGIN_PX = 2
@@ -46,18 +46,6 @@ def object_cylinder(scene: Scene, letter: str) -> tuple[float, float, float, flo
         if obj.name == letter:
             return (obj.x, obj.z, obj.radius, obj.height)
     return None
-
-
-def object_labels(scene: Scene, letter: str) -> tuple[int, ...]:
-    """The label ids of object ``letter``'s surfaces (an FMVSS letter: body and stripe, and
-    the lower patch on F and G; a site object: body, band and top)."""
-    if letter in L.OBJECT_LETTERS:
-        own = (L.object_body(letter), L.object_stripe(letter))
-        return own + ((L.object_patch(letter),) if letter in "FG" else ())
-    for obj in scene.test_site.site_objects:
-        if obj.name == letter:
-            return obj.labels
-    return ()
 
 
 @dataclass(frozen=True)
