@@ -29,7 +29,14 @@ from ..camera import FisheyeCamera
 from ..scene import CheckerCorner, Scene, board_frame, board_point
 from .charuco import CharucoPattern
 
-__all__ = ["BoardLayout", "BoardShade", "board_layout"]
+__all__ = ["BoardLayout", "BoardShade", "LatticeEvidence", "board_layout", "UNFIT"]
+
+#: Samples a pose alone puts on the board fit its colours at least this well when the pose is
+#: right (the board is there); squares put on the background fit about half.
+UNFIT = 0.6
+#: Where the board's local contrast is below this share of its overall contrast, it is
+#: hidden (or washed out) and its samples are not evidence.
+MIN_LOCAL_CONTRAST = 0.35
 
 
 @dataclass(frozen=True)
@@ -46,7 +53,8 @@ class BoardLayout:
         The inner corners' scene points, m.
     square_points : (M, 3) float
         Sample points on the squares (the centre and four points ±0.3 square from it; on a
-        ChArUco board's white squares, four points in the ring around the marker), m.
+        ChArUco board's white squares, four points in the ring around the marker), and in
+        the middle of the white margin around them (half a square apart), m.
     square_shade : (M,) float
         Their colour: 0 black, 1 white.
     origin, a, b, normal : (3,) float
@@ -69,6 +77,32 @@ class BoardLayout:
     normal: np.ndarray
     square_size: float
     charuco: CharucoPattern | None = None
+    margin: float = 0.0
+
+    def local_shade(self, pa: np.ndarray, pb: np.ndarray) -> np.ndarray:
+        """The board's colour at board-plane coordinates (``pa``, ``pb``) m from inner corner
+        (0, 0) along ``a`` and ``b``: 0 black, 1 white (a square or the margin), −1 off the
+        board; NaN (unknown) within 0.15 square of a square's edge (blur mixes the colours
+        there), on a ChArUco marker, or near the margin's edges."""
+        s = self.square_size
+        na, nb = self.grid[0] + 1, self.grid[1] + 1
+        ua, ub = pa / s + 1.0, pb / s + 1.0  # in squares from the board's squares' corner
+        ia, ib = np.floor(ua), np.floor(ub)
+        fa, fb = ua - ia, ub - ib
+        inside = (ia >= 0) & (ia < na) & (ib >= 0) & (ib < nb)
+        clean = (np.abs(fa - 0.5) <= 0.35) & (np.abs(fb - 0.5) <= 0.35)
+        out = np.where(inside, np.where(clean, np.mod(ia + ib, 2), np.nan), -1.0)
+        if self.charuco is not None:
+            half = 0.5 * self.charuco.marker_size / s + 0.1
+            marker = (np.abs(fa - 0.5) < half) & (np.abs(fb - 0.5) < half) & (out == 1)
+            out = np.where(marker, np.nan, out)
+        m = self.margin / s
+        d = np.maximum(np.maximum(-ua, ua - na), np.maximum(-ub, ub - nb))  # squares outside
+        buf = min(0.15, m / 4)
+        in_margin = (d > 0) & (d < m)
+        white = in_margin & (d >= buf) & (d <= m - buf) if m >= 0.1 else np.zeros_like(in_margin)
+        out = np.where(in_margin, np.where(white, 1.0, np.nan), out)
+        return out
 
     @property
     def symmetric(self) -> bool:
@@ -116,9 +150,94 @@ def board_layout(scene: Scene, corners: tuple[CheckerCorner, ...]) -> BoardLayou
             for oa, ob in (offsets if (i + j) % 2 == 0 else ring):
                 samples.append(board_point(board, a0 + (i + oa) * s, b0 + (j + ob) * s))
                 shade.append(float((i + j) % 2))
+    for sa, sb in _margin_ring(board.squares, s, board.margin):
+        samples.append(board_point(board, a0 + sa, b0 + sb))
+        shade.append(1.0)
     return BoardLayout((nx, ny), index, pts, np.array(samples), np.array(shade),
                        pts[0, 0].copy(), np.asarray(a, float), np.asarray(b, float),
-                       np.asarray(nrm, float), float(s), charuco)
+                       np.asarray(nrm, float), float(s), charuco, float(board.margin))
+
+
+def _margin_ring(squares: tuple[int, int], square: float,
+                 margin: float) -> list[tuple[float, float]]:
+    """Points in the middle of the board's white margin, about half a square apart, as
+    (along a, along b) m from the squares' corner at −a, −b; none when the margin is
+    narrower than a tenth of a square (its white would not show)."""
+    if margin < 0.1 * square:
+        return []
+    w, h = squares[0] * square, squares[1] * square
+    m = margin / 2
+    out = []
+    for k in range(2 * squares[0] + 1):
+        out += [(k * square / 2, -m), (k * square / 2, h + m)]
+    for k in range(2 * squares[1] + 1):
+        out += [(-m, k * square / 2), (w + m, k * square / 2)]
+    return out
+
+
+def _local_levels(pix: np.ndarray, grey: np.ndarray, black: np.ndarray,
+                  white: np.ndarray, k: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Per sample, the midpoint between the capture's black and white levels near it (the
+    medians of its ``k`` nearest ``black`` and ``white`` samples; pixels ``pix`` (N, 2), grey
+    levels ``grey``), so vignetting and uneven light do not shift the threshold; and whether
+    the board shows contrast there (at least :data:`MIN_LOCAL_CONTRAST` of the board's
+    overall): where it is hidden, both colours look alike and the sample says nothing."""
+    from scipy.spatial import cKDTree
+
+    levels = []
+    for mask in (black, white):
+        kk = min(k, int(mask.sum()))
+        _, idx = cKDTree(pix[mask]).query(pix, k=kk)
+        levels.append(np.median(grey[mask][np.asarray(idx).reshape(len(pix), kk)], axis=1))
+    overall = float(np.median(grey[white]) - np.median(grey[black]))
+    contrast = levels[1] - levels[0]
+    return 0.5 * (levels[0] + levels[1]), contrast >= max(MIN_LOCAL_CONTRAST * overall, 4.0)
+
+
+@dataclass(frozen=True)
+class LatticeEvidence:
+    """What the capture says about two poses of the board (see
+    :meth:`BoardShade.lattice_evidence`).
+
+    Attributes
+    ----------
+    n_differ : int
+        Samples where both poses see the board and predict different colours.
+    share_1 : float
+        The share of them whose grey level is nearer pose 1's colour's level.
+    n_1, fit_1, n_2, fit_2 : int, float
+        Samples where only pose 1 (2) sees the board, and the share of them whose grey
+        level has the colour it predicts (0.5 is chance: squares put on the background).
+    """
+
+    n_differ: int
+    share_1: float
+    n_1: int
+    fit_1: float
+    n_2: int
+    fit_2: float
+
+    def winner(self, min_samples: int, min_share: float) -> int:
+        """1 or 2: the pose the capture prefers; 0: it cannot tell.
+
+        The samples where both see the board decide when there are ``min_samples`` of them
+        and a share of at least ``min_share`` favours one pose.  Else a pose whose samples
+        off the other's board do not fit (``min_samples`` of them, fewer than
+        :data:`UNFIT` fitting: it put squares on the background) loses to one whose samples
+        fit (or that has none), unless the shared samples lean the other way."""
+        if self.n_differ >= min_samples:
+            if self.share_1 >= min_share:
+                return 1
+            if self.share_1 <= 1.0 - min_share:
+                return 2
+        lean = 0.5 if self.n_differ < min_samples else self.share_1
+        bad_1 = self.n_1 >= min_samples and self.fit_1 < UNFIT
+        bad_2 = self.n_2 >= min_samples and self.fit_2 < UNFIT
+        if bad_2 and not bad_1 and lean >= 0.5:
+            return 1
+        if bad_1 and not bad_2 and lean <= 0.5:
+            return 2
+        return 0
 
 
 @dataclass(frozen=True)
@@ -164,3 +283,72 @@ class BoardShade:
         if np.ptp(values) == 0:
             return -1.0
         return float(np.corrcoef(self.layout.square_shade[ok], values)[0, 1])
+
+    def lattice_evidence(self, pose_1: tuple[np.ndarray, np.ndarray],
+                         pose_2: tuple[np.ndarray, np.ndarray]) -> LatticeEvidence:
+        """How the capture decides between two poses of the board that agree on most of it
+        (readings of its lattice a few squares apart, or the fit and a shifted fit).
+
+        Points on the board's plane, a sixth of a square apart over the board and two
+        squares around it, are projected from either pose; at each of those pixels each
+        pose predicts the board's colour, or no board (:meth:`BoardLayout.local_shade`).  Where both
+        predict the same colour, the capture gives the black and white levels, and their
+        midpoint classifies every other sample black or white.  Where both predict
+        different colours (one's margin where the other sees squares; squares of the other
+        colour), each sample votes; where only one sees the board, the sample tests that
+        one's colour alone.
+
+        Returns
+        -------
+        LatticeEvidence
+        """
+        import cv2
+
+        lay = self.layout
+        h, w = self.grey.shape
+        step = lay.square_size / 6
+        ext = lay.margin + 2 * lay.square_size
+        ga = np.arange(-lay.square_size - ext, lay.grid[0] * lay.square_size + ext, step)
+        gb = np.arange(-lay.square_size - ext, lay.grid[1] * lay.square_size + ext, step)
+        aa, bb = np.meshgrid(ga + step / 2, gb + step / 2, indexing="ij")
+        pts = lay.origin + aa.reshape(-1, 1) * lay.a + bb.reshape(-1, 1) * lay.b
+        uv = []
+        for pos, rot in (pose_1, pose_2):
+            p, ok = self.camera.project_rays((pts - pos) @ rot)
+            ok &= (p[:, 0] >= 0) & (p[:, 1] >= 0) & (p[:, 0] <= w - 1) & (p[:, 1] <= h - 1)
+            uv.append(p[ok])
+        pix = np.concatenate(uv)
+        s1, s2 = (self._shade_at_pixels(pos, rot, pix) for pos, rot in (pose_1, pose_2))
+        c = cv2.remap(self.grey, pix[:, 0].astype(np.float32).reshape(-1, 1),
+                      pix[:, 1].astype(np.float32).reshape(-1, 1), cv2.INTER_LINEAR).ravel()
+        agree = (s1 == s2) & (s1 >= 0)
+        black, white = c[agree & (s1 == 0)], c[agree & (s1 == 1)]
+        if len(black) < 4 or len(white) < 4:
+            return LatticeEvidence(0, 0.5, 0, 0.0, 0, 0.0)
+        mid, seen = _local_levels(pix, c, agree & (s1 == 0), agree & (s1 == 1))
+        is_white = c > mid
+        differ = (s1 >= 0) & (s2 >= 0) & (s1 != s2) & seen
+        n_d = int(differ.sum())
+        share = float(np.mean(is_white[differ] == (s1[differ] == 1))) if n_d else 0.5
+
+        def alone(a: np.ndarray, b: np.ndarray) -> tuple[int, float]:
+            mine = (a >= 0) & (b == -1) & seen
+            n = int(mine.sum())
+            return n, (float(np.mean(is_white[mine] == (a[mine] == 1))) if n else 0.0)
+
+        return LatticeEvidence(n_d, share, *alone(s1, s2), *alone(s2, s1))
+
+    def _shade_at_pixels(self, position: np.ndarray, rotation: np.ndarray,
+                         uv: np.ndarray) -> np.ndarray:
+        """The board's colour seen at pixels ``uv`` (N, 2) from the pose, as
+        :meth:`BoardLayout.local_shade` gives it (−1 where the ray misses the board)."""
+        lay = self.layout
+        rays, ok = self.camera.pixel_rays(uv)
+        d = rays @ rotation.T  # scene frame
+        denom = d @ lay.normal
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = ((lay.origin - position) @ lay.normal) / denom
+        hit = ok & (t > 0) & np.isfinite(t)
+        p = position + t[:, None] * d - lay.origin
+        out = lay.local_shade(p @ lay.a, p @ lay.b)
+        return np.where(hit, out, -1.0)

@@ -36,20 +36,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import FisheyeCamera, ypr_from_rotation
-from .board import BoardLayout, BoardShade
+from .board import BoardLayout, BoardShade, LatticeEvidence
+from .board_detect import MIN_PATCH, GridDetection, detect_grids, view_basis
 from .capture import grey
 from .charuco import detect_charuco
 from .pose import fit_pose
 from .projection import project
 
-__all__ = ["BoardStart", "find_board_start", "ypr_from_rotation", "VIEWS", "predicted_shift_px"]
+__all__ = ["BoardStart", "BoardSearch", "find_board_start", "search_board", "ypr_from_rotation",
+           "VIEWS", "predicted_shift_px"]
 
-#: Perspective view: the board may lie this far from its predicted direction, degrees.
-VIEW_MARGIN_DEG = 20.0
-#: Perspective view: pixels per board square at the view's centre.
-VIEW_SQUARE_PX = 18.0
-#: Perspective view: longest side, px.
-VIEW_MAX_PX = 1200
 #: A candidate whose squares' colours correlate less than this with the capture is wrong.
 MIN_COLOUR_SCORE = 0.5
 #: Corners fitting one board pose worse than this fraction of their spacing (RMS) are not
@@ -62,6 +58,18 @@ COLOUR_TIE = 0.02
 #: A start turned further than this from the scene's rotation is not believed, degrees:
 #: a CAD mount is within a few degrees of the real one.
 MAX_START_TURN_DEG = 30.0
+#: A start moved further than this from the scene's camera position is not believed, m.
+MAX_START_MOVE_M = 1.0
+#: Readings whose colour score is within this of the best are rivals, decided by the samples
+#: where their colours differ (:meth:`.board.BoardShade.lattice_evidence`).
+RIVAL_SCORE = 0.25
+#: Two readings are told apart by at least :data:`MIN_VOTES` samples where their colours
+#: differ, of which this share must favour one (:meth:`.board.LatticeEvidence.winner`; a
+#: reading that puts squares on the background fits about half).
+MIN_FIT = 0.75
+MIN_VOTES = 12
+#: A reading must put at least this many of the detected corners on inner corners.
+MIN_INNER = 6
 
 
 @dataclass(frozen=True)
@@ -84,6 +92,12 @@ class BoardStart:
         Correlation of the board's square colours with the capture at ``x``.
     ambiguous : bool
         The board is half-turn symmetric and the scene's pose chose among the candidates.
+    rivals : int
+        Other readings of the same corners (within :data:`MAX_START_TURN_DEG` and
+        :data:`MAX_START_MOVE_M` of the scene's pose, colours within :data:`RIVAL_SCORE`)
+        that the capture refuted.
+    whole : bool
+        The detector found the board's whole grid (else a part of it).
     """
 
     x: np.ndarray
@@ -93,59 +107,31 @@ class BoardStart:
     rms_px: float
     colour_score: float
     ambiguous: bool
+    rivals: int = 0
+    whole: bool = True
 
 
-def _view_basis(direction: np.ndarray) -> np.ndarray:
-    """Columns: x, y, z axes (camera frame) of a pinhole view looking along ``direction``,
-    its x axis as close to the camera's as possible."""
-    z = direction / np.linalg.norm(direction)
-    ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = ref - (ref @ z) * z
-    x /= np.linalg.norm(x)
-    return np.stack([x, np.cross(z, x), z], axis=1)
+@dataclass(frozen=True)
+class BoardSearch:
+    """What looking for the board in the capture gave: a start, or why there is none.
 
+    Attributes
+    ----------
+    start : BoardStart or None
+    reason : str
+        Why there is no start ("" when there is one): the board not found, found only
+        where the scene's pose cannot be, its corners not fitting one board pose, or an
+        ambiguous lattice (two readings whose colours fit alike).
+    ambiguous : bool
+        No start because two readings of the corners fit alike (the board's lattice).
+    corners : (K, 2) float or None
+        The corners of the largest grid the detector found, px (for pictures).
+    """
 
-def _detect(img: np.ndarray, grid: tuple[int, int]) -> np.ndarray | None:
-    """The detector's corners (ny, nx, 2) in its own row order, or None."""
-    import cv2
-
-    flags = cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
-    ok, found = cv2.findChessboardCornersSB(img, grid, flags=flags)
-    if not ok or found is None or len(found) != grid[0] * grid[1]:
-        return None
-    return np.asarray(found, np.float64).reshape(grid[1], grid[0], 2)
-
-
-def _perspective_detect(grey_u8: np.ndarray, camera: FisheyeCamera,
-                        layout: BoardLayout) -> np.ndarray | None:
-    """Detect the board in a pinhole view of the capture centred on its predicted
-    direction (``camera``'s pose); corners mapped back to capture px, (ny, nx, 2)."""
-    import cv2
-
-    rays = camera.scene_to_camera(layout.corner_points.reshape(-1, 3))
-    centre = rays.mean(axis=0)
-    basis = _view_basis(centre)
-    unit = rays / np.linalg.norm(rays, axis=1, keepdims=True)
-    spread = np.degrees(np.arccos(np.clip(unit @ basis[:, 2], -1, 1))).max()
-    square_deg = np.degrees(layout.square_size / np.linalg.norm(centre))
-    half = np.radians(min(spread + square_deg + VIEW_MARGIN_DEG, 65.0))
-    f = VIEW_SQUARE_PX * np.linalg.norm(centre) / layout.square_size
-    f = min(f, VIEW_MAX_PX / 2 / np.tan(half))
-    n = int(2 * f * np.tan(half)) + 1
-    c = (n - 1) / 2
-    vv, uu = np.mgrid[0:n, 0:n].astype(np.float64)
-    view_rays = np.stack([(uu - c) / f, (vv - c) / f, np.ones_like(uu)], axis=-1) @ basis.T
-    uv, in_fov = camera.project_rays(view_rays.reshape(-1, 3))
-    uv[~in_fov] = -10.0
-    maps = uv.reshape(n, n, 2).astype(np.float32)
-    view = cv2.remap(grey_u8, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
-                     borderMode=cv2.BORDER_CONSTANT, borderValue=0)
-    found = _detect(view, layout.grid)
-    if found is None:
-        return None
-    pts = found.reshape(-1, 2)
-    back = np.stack([(pts[:, 0] - c) / f, (pts[:, 1] - c) / f, np.ones(len(pts))], -1) @ basis.T
-    return np.asarray(camera.project_rays(back)[0]).reshape(found.shape)
+    start: BoardStart | None
+    reason: str = ""
+    ambiguous: bool = False
+    corners: np.ndarray | None = None
 
 
 def _readings(det: np.ndarray, grid: tuple[int, int]) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -153,13 +139,15 @@ def _readings(det: np.ndarray, grid: tuple[int, int]) -> list[tuple[np.ndarray, 
     square lattice: (lattice indices (K, 2) int, the corners (K, 2) px).
 
     Lattice index (i, j) is inner corner (i, j) for 0 ≤ i < nx, 0 ≤ j < ny; −1 and nx (ny)
-    are the square corners on the board's edge.  A reading lies in that range and holds at
-    least half of the board's inner corners.
+    are the square corners on the board's edge.  A reading lies in that range and puts at
+    least :data:`MIN_INNER` corners (or all the board's) on inner corners: a part of the
+    board may be read at every place it fits.
     """
     nx, ny = grid
     rows, cols = det.shape[:2]
     r, c = np.mgrid[0:rows, 0:cols]
     pts = det.reshape(-1, 2)
+    need = min(MIN_INNER, nx * ny)
     out = []
     seen = set()
     for swap in (False, True):
@@ -173,7 +161,7 @@ def _readings(det: np.ndarray, grid: tuple[int, int]) -> list[tuple[np.ndarray, 
                         key = ij.tobytes()
                         inner = (ij[:, 0] >= 0) & (ij[:, 0] < nx) & (ij[:, 1] >= 0) \
                             & (ij[:, 1] < ny)
-                        if key in seen or 2 * inner.sum() < nx * ny:
+                        if key in seen or inner.sum() < need:
                             continue
                         seen.add(key)
                         out.append((ij, pts))
@@ -188,7 +176,7 @@ def _pnp(camera: FisheyeCamera, layout: BoardLayout, ij: np.ndarray,
     import cv2
 
     rays, _ = camera.pixel_rays(found)
-    basis = _view_basis(rays.mean(axis=0))
+    basis = view_basis(rays.mean(axis=0))
     r_v = rays @ basis
     if np.any(r_v[:, 2] <= 1e-3):
         return None
@@ -212,6 +200,7 @@ class _Reading:
 
     score: float
     turn_deg: float
+    move_m: float
     position: np.ndarray
     rotation: np.ndarray
     ij: np.ndarray
@@ -232,18 +221,20 @@ def _candidates(camera: FisheyeCamera, layout: BoardLayout, det: np.ndarray,
             continue  # mirrored: the camera would see the board from behind
         d_rot = rot.T @ camera.rotation
         angle = np.degrees(np.arccos(np.clip((np.trace(d_rot) - 1) / 2, -1, 1)))
-        out.append(_Reading(shade(pos, rot), float(angle), pos, rot, ij, found))
+        out.append(_Reading(shade(pos, rot), float(angle),
+                            float(np.linalg.norm(pos - camera.position)), pos, rot, ij, found))
     return out
 
 
-#: Where :func:`find_board_start` runs the detector, in order.
-VIEWS = ("whole image", "perspective view")
+#: Where :func:`find_board_start` looks for the board, in order (see
+#: :func:`.board_detect.detect_grids`).
+VIEWS = ("whole image", "perspective view", "tiles")
 
 
-def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
-                     layout: BoardLayout, views: tuple[str, ...] = VIEWS,
-                     charuco: tuple[np.ndarray, np.ndarray] | None = None) -> BoardStart | None:
-    """The scene's mount correction from the board found in ``capture``, or None.
+def search_board(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
+                 layout: BoardLayout, views: tuple[str, ...] = VIEWS,
+                 charuco: tuple[np.ndarray, np.ndarray] | None = None) -> BoardSearch:
+    """Look for the board in ``capture``: the scene's mount correction from it, or why not.
 
     Parameters
     ----------
@@ -254,84 +245,148 @@ def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.nd
         The scene's mount yaw, pitch, roll, degrees.
     layout : BoardLayout
     views : tuple of str
-        Where to run the detector, in order (of :data:`VIEWS`): the first that gives a
-        board pose wins.
+        Where to look, in order (of :data:`VIEWS`); the first grid that gives a start wins.
     charuco : (ij, px), optional
         A ChArUco board's corners already found in ``capture``
         (:func:`.charuco.detect_charuco`); found here when not given.
 
     Returns
     -------
-    BoardStart or None
-        None when the board's direction is outside the field, the detector does not find
-        it, or no assignment of its corners has the board's colours.
+    BoardSearch
+        The start, or the reason there is none (the board's direction outside the field,
+        not found, found only where the scene's pose cannot be, not one board's corners,
+        or an ambiguous lattice).
     """
     centre = camera.scene_to_camera(layout.corner_points.reshape(-1, 3).mean(axis=0)[None])[0]
     theta = np.degrees(np.arctan2(np.hypot(centre[0], centre[1]), centre[2]))
-    if theta > camera.fov_deg / 2 + VIEW_MARGIN_DEG:
-        return None
-    g = grey(capture)
-    g_u8 = np.clip(g, 0, 255).astype(np.uint8)
-    shade = BoardShade(layout, camera, g.astype(np.float32))
+    if theta > camera.fov_deg / 2 + 45.0:
+        return BoardSearch(None, f"at the scene's pose the board is {theta:.0f}° off the "
+                           "optical axis, far outside the lens's field")
+    g = grey(capture).astype(np.float32)
+    shade = BoardShade(layout, camera, g)
     if layout.charuco is not None:
-        named = charuco if charuco is not None else detect_charuco(g_u8, layout.charuco)
+        named = (charuco if charuco is not None
+                 else detect_charuco(np.clip(g, 0, 255).astype(np.uint8), layout.charuco))
         start = None if named is None else _charuco_start(camera, ypr0_deg, layout, named, shade)
         if start is not None:
-            return start
-    for view in views:
-        det = (_detect(g_u8, layout.grid) if view == "whole image"
-               else _perspective_detect(g_u8, camera, layout))
-        if det is None:
+            return BoardSearch(start)
+    outcomes: list[BoardSearch] = []
+    for det in detect_grids(g, camera, layout, views):
+        outcome = _judge(camera, ypr0_deg, layout, det, shade)
+        if outcome.start is not None:
+            return outcome
+        outcomes.append(outcome)
+    if not outcomes:
+        return BoardSearch(None, "the chessboard detector did not find the board (whole or "
+                           f"a part of at least {MIN_PATCH[0]} × {MIN_PATCH[1]} inner corners) "
+                           "in the capture")
+    # the most telling failure: an ambiguous lattice, else the largest grid's
+    return max(outcomes, key=lambda o: (o.ambiguous, 0 if o.corners is None else len(o.corners)))
+
+
+def find_board_start(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
+                     layout: BoardLayout, views: tuple[str, ...] = VIEWS,
+                     charuco: tuple[np.ndarray, np.ndarray] | None = None) -> BoardStart | None:
+    """The scene's mount correction from the board found in ``capture``, or None (see
+    :func:`search_board`, which also says why there is none)."""
+    return search_board(capture, camera, ypr0_deg, layout, views, charuco).start
+
+
+def _judge(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
+           det: GridDetection, shade: BoardShade) -> BoardSearch:
+    """The start from one detected grid, or why it gives none."""
+    corners = det.corners.reshape(-1, 2)
+    where = f"{det.n} corners in the {det.view}"
+    readings = _candidates(camera, layout, det.corners, shade)
+    near = [c for c in readings
+            if c.turn_deg <= MAX_START_TURN_DEG and c.move_m <= MAX_START_MOVE_M]
+    coloured = [c for c in readings if c.score >= MIN_COLOUR_SCORE]
+    if not near or max(c.score for c in near) < MIN_COLOUR_SCORE:
+        if coloured:
+            far = max(coloured, key=lambda c: c.score)
+            return BoardSearch(None, f"the board was found ({where}), but its colours fit only "
+                               f"a pose {far.turn_deg:.0f}° and {far.move_m:.2f} m from the "
+                               f"scene's (more than {MAX_START_TURN_DEG:.0f}° or "
+                               f"{MAX_START_MOVE_M:.1f} m): is the scene's mount right?",
+                               corners=corners)
+        best = max((c.score for c in readings), default=-1.0)
+        return BoardSearch(None, f"a grid of {where} is not the board: no reading of it has "
+                           f"the board's square colours (best r = {best:.2f} < "
+                           f"{MIN_COLOUR_SCORE})", corners=corners)
+    near.sort(key=lambda c: -c.score)
+    rivals = [c for c in near if c.score >= near[0].score - RIVAL_SCORE]
+    pick, rival, ev = _decide(rivals, shade)
+    if rival is not None and ev is not None:
+        return BoardSearch(None, _ambiguity_text(where, pick, rival, ev, layout),
+                           ambiguous=True, corners=corners)
+    # the half turn (however far from the scene's rotation) with the same colours: the
+    # scene's rotation chose
+    ties = [c for c in coloured if c.score >= pick.score - COLOUR_TIE]
+    nx, ny = layout.grid
+    inner = (pick.ij[:, 0] >= 0) & (pick.ij[:, 0] < nx) & (pick.ij[:, 1] >= 0) \
+        & (pick.ij[:, 1] < ny)
+    steps = np.concatenate([np.linalg.norm(np.diff(det.corners, axis=a), axis=-1).ravel()
+                            for a in (0, 1) if det.corners.shape[a] > 1])
+    start = _polished(camera, ypr0_deg, layout, pick.position, pick.rotation, pick.ij[inner],
+                      pick.found[inner], float(np.median(steps)), det.view, pick.score,
+                      len(ties) > 1, len(rivals) - 1, det.whole)
+    if start is None:
+        return BoardSearch(None, f"the grid of {where} does not fit one board pose (RMS over "
+                           f"{MAX_START_RMS:.0%} of the corner spacing): not the board",
+                           corners=corners)
+    return BoardSearch(start)
+
+
+def _decide(rivals: list[_Reading],
+            shade: BoardShade) -> tuple[_Reading, _Reading | None, LatticeEvidence | None]:
+    """Which of the readings whose colour scores are close the capture supports: each pair
+    is decided by the samples where their colours differ
+    (:meth:`~.board.BoardShade.lattice_evidence` and :meth:`~.board.LatticeEvidence.winner`
+    with :data:`MIN_VOTES` and :data:`MIN_FIT`).  Returns (the pick, a rival nothing tells
+    from it or None, their evidence)."""
+    pick = rivals[0]
+
+    def pose(c: _Reading) -> tuple[np.ndarray, np.ndarray]:
+        return c.position, c.rotation
+
+    for other in rivals[1:]:  # a rival the capture prefers takes over
+        if shade.lattice_evidence(pose(pick), pose(other)).winner(MIN_VOTES, MIN_FIT) == 2:
+            pick = other
+    for other in rivals:
+        if other is pick:
             continue
-        if view == "perspective view":  # corners through the view's interpolation
-            det = _refine(g.astype(np.float32), det)
-        start = _best_start(camera, ypr0_deg, layout, det, shade, view)
-        if start is not None:
-            return start
-    return None
+        ev = shade.lattice_evidence(pose(pick), pose(other))
+        if ev.winner(MIN_VOTES, MIN_FIT) != 1:
+            return pick, other, ev
+    return pick, None, None
 
 
-def _refine(grey_f: np.ndarray, det: np.ndarray) -> np.ndarray:
-    """The detector's corners (ny, nx, 2) refined by ``cv2.cornerSubPix`` in the capture,
-    with a window of 0.3 grid spacing."""
-    import cv2
-
-    step = np.concatenate([np.linalg.norm(np.diff(det, axis=0), axis=-1).ravel(),
-                           np.linalg.norm(np.diff(det, axis=1), axis=-1).ravel()])
-    win = int(np.clip(round(0.3 * float(np.median(step))), 2, 12))
-    pts = cv2.cornerSubPix(grey_f, det.reshape(-1, 1, 2).astype(np.float32), (win, win),
-                           (-1, -1), (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3))
-    return np.asarray(pts, np.float64).reshape(det.shape)
+def _ambiguity_text(where: str, pick: _Reading, second: _Reading, ev: LatticeEvidence,
+                    layout: BoardLayout) -> str:
+    """Why two readings cannot be told apart, in the board's squares."""
+    shift = (second.position - pick.position) / layout.square_size
+    along = (f"{abs(float(shift @ layout.a)):.0f} squares along the board's width and "
+             f"{abs(float(shift @ layout.b)):.0f} along its height")
+    evidence = (f"of the {ev.n_differ} samples where their colours differ, "
+                f"{ev.share_1:.0%} favour one, need {MIN_FIT:.0%} of at least {MIN_VOTES}"
+                if ev.n_differ >= MIN_VOTES else
+                f"where only one sees the board, {ev.fit_1:.0%} of {ev.n_1} and {ev.fit_2:.0%} "
+                f"of {ev.n_2} samples fit it")
+    return (f"the board's lattice is ambiguous: its {where} fit two places on the board "
+            f"({along} apart; {evidence}): the board's edges are out of view or hidden; "
+            "show more of the board, with its edge")
 
 
 def _best_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
                 det: np.ndarray, shade: BoardShade, view: str) -> BoardStart | None:
-    """The start from the detected corners ``det``: the reading with the board's colours
-    (nearest the scene's rotation among those colours cannot tell apart), polished by our
-    fisheye PnP on its inner corners; None when no reading within
-    :data:`MAX_START_TURN_DEG` of the scene's rotation has the colours, or the inner corners
-    do not fit one board pose (a spurious detection: RMS over :data:`MAX_START_RMS` of the
-    grid spacing)."""
-    readings = [c for c in _candidates(camera, layout, det, shade) if c.score >= MIN_COLOUR_SCORE]
-    cands = [c for c in readings if c.turn_deg <= MAX_START_TURN_DEG]
-    if not cands:
-        return None
-    best = max(c.score for c in cands)
-    pick = min((c for c in cands if c.score >= best - COLOUR_TIE), key=lambda c: c.turn_deg)
-    # Ambiguous: another reading (the half turn, however far from the scene's rotation)
-    # has the same colours, so the scene's rotation chose.
-    ties = [c for c in readings if c.score >= best - COLOUR_TIE]
-    nx, ny = layout.grid
-    inner = (pick.ij[:, 0] >= 0) & (pick.ij[:, 0] < nx) & (pick.ij[:, 1] >= 0) \
-        & (pick.ij[:, 1] < ny)
-    step = float(np.median(np.linalg.norm(np.diff(det, axis=0), axis=-1)))
-    return _polished(camera, ypr0_deg, layout, pick.position, pick.rotation,
-                     pick.ij[inner], pick.found[inner], step, view, pick.score, len(ties) > 1)
+    """:func:`_judge` on the detected corners ``det`` (rows, cols, 2) px: its start or None."""
+    return _judge(camera, ypr0_deg, layout, GridDetection(det, view, True), shade).start
 
 
 def _polished(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
               position: np.ndarray, rotation: np.ndarray, ij: np.ndarray, found: np.ndarray,
-              step_px: float, view: str, score: float, ambiguous: bool) -> BoardStart | None:
+              step_px: float, view: str, score: float, ambiguous: bool,
+              rivals: int = 0, whole: bool = True) -> BoardStart | None:
     """The start from a PnP pose (``position`` m, ``rotation``) and the inner corners
     ``ij`` (K, 2) found at ``found`` (K, 2) px, polished by our fisheye PnP; None when they
     do not fit one board pose (RMS over :data:`MAX_START_RMS` of ``step_px``, or 0.5 px)."""
@@ -343,7 +398,8 @@ def _polished(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
     if rms > max(0.5, MAX_START_RMS * step_px):
         return None
     return BoardStart(x=x, found=found, corner_ij=ij, view=view, rms_px=rms,
-                      colour_score=float(score), ambiguous=ambiguous)
+                      colour_score=float(score), ambiguous=ambiguous, rivals=rivals,
+                      whole=whole)
 
 
 def _charuco_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,

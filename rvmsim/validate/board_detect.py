@@ -1,0 +1,231 @@
+"""The calibration board's corners in a capture, without predicted corners: whole or partial.
+
+OpenCV's chessboard detector (``cv2.findChessboardCornersSB``) finds a board only when all
+of its inner corners are in view and the grid is not too curved.  Real captures often show
+less: a board close to the camera, cut by the image border or the lens's field, hidden in
+part by the car's body, or strongly curved near the fisheye's edge.  :func:`detect_grids`
+therefore looks in several places and accepts part of the board:
+
+* the whole capture, and perspective (pinhole) views of it: one centred on the board's
+  predicted direction, then views tiling the lens's field (so a board is found wherever it
+  lies, however wrong the scene's pose is); a pinhole view straightens the fisheye's curves;
+* in each, first the whole board (``findChessboardCornersSB`` with the board's grid), then
+  any part of it of at least :data:`MIN_PATCH` inner corners
+  (``cv2.findChessboardCornersSBWithMeta`` with ``CALIB_CB_LARGER``: the smallest grid it
+  must find is given, and it returns the largest it can grow).
+
+Which of the board's corners a patch holds is not known here: that is the correspondence
+(:mod:`.board_start`).
+
+Convention
+----------
+Pixels are (u, v) = (column, row) with pixel centres at integer coordinates, as in
+:mod:`rvmsim.camera`.  A grid is an array (rows, cols, 2) of capture pixels whose neighbours
+along either axis are neighbouring corners of the board.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterator
+
+import numpy as np
+
+from ..camera import FisheyeCamera
+from .board import BoardLayout
+
+__all__ = ["GridDetection", "detect_grids", "MIN_PATCH", "view_basis"]
+
+#: A partial board must show at least this many inner corners (rows, cols) to be used.
+MIN_PATCH = (3, 3)
+#: Perspective view around the board's predicted direction: margin, degrees.
+VIEW_MARGIN_DEG = 20.0
+#: Perspective view: pixels per board square at the view's centre.
+VIEW_SQUARE_PX = 18.0
+#: Perspective view: longest side, px.
+VIEW_MAX_PX = 1200
+#: Tiles: half-angle of each tile's view, degrees, and the tiles' directions (off-axis angle,
+#: number of azimuths): the centre, then rings reaching the edge of a 200° lens.
+TILE_HALF_DEG = 40.0
+TILE_RINGS = ((0.0, 1), (45.0, 6), (80.0, 8))
+
+
+@dataclass(frozen=True)
+class GridDetection:
+    """Corners the detector found, as a grid.
+
+    Attributes
+    ----------
+    corners : (rows, cols, 2) float
+        Capture pixels, px.
+    view : str
+        Where they were found (``"whole image"``, ``"perspective view"``, ``"tile …"``).
+    whole : bool
+        The detector found the board's whole inner grid (else a part of it, or possibly more:
+        the board's edge taken for a row).
+    """
+
+    corners: np.ndarray
+    view: str
+    whole: bool
+
+    @property
+    def n(self) -> int:
+        """Number of corners."""
+        return int(self.corners.shape[0] * self.corners.shape[1])
+
+
+def _flags() -> int:
+    import cv2
+
+    return cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
+
+
+def _grids_in(img: np.ndarray, grid: tuple[int, int]) -> Iterator[tuple[np.ndarray, bool]]:
+    """The whole board's grid in ``img`` (rows = grid[1]), else the largest part of it the
+    detector grows from :data:`MIN_PATCH`; (corners (rows, cols, 2) in ``img`` px, whole)."""
+    import cv2
+
+    ok, found = cv2.findChessboardCornersSB(img, grid, flags=_flags())
+    if ok and found is not None and len(found) == grid[0] * grid[1]:
+        yield np.asarray(found, np.float64).reshape(grid[1], grid[0], 2), True
+        return
+    best: np.ndarray | None = None
+    for size in (MIN_PATCH, (MIN_PATCH[0] + 1, MIN_PATCH[1] + 1)):
+        ok, found, meta = cv2.findChessboardCornersSBWithMeta(
+            img, size, flags=_flags() | cv2.CALIB_CB_LARGER)
+        if not ok or found is None or meta is None or len(found) != meta.size:
+            continue
+        pts = np.asarray(found, np.float64).reshape(meta.shape[0], meta.shape[1], 2)
+        if best is None or pts.shape[0] * pts.shape[1] > best.shape[0] * best.shape[1]:
+            best = pts
+    if best is not None:
+        yield best, False
+
+
+def view_basis(direction: np.ndarray) -> np.ndarray:
+    """Columns: x, y, z axes (camera frame) of a pinhole view looking along ``direction``,
+    its x axis as close to the camera's as possible."""
+    z = direction / np.linalg.norm(direction)
+    ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = ref - (ref @ z) * z
+    x /= np.linalg.norm(x)
+    return np.stack([x, np.cross(z, x), z], axis=1)
+
+
+@dataclass(frozen=True)
+class _View:
+    """A pinhole view of the capture: basis (camera frame), focal length and size, px."""
+
+    basis: np.ndarray
+    f: float
+    n: int
+
+    def image(self, grey_u8: np.ndarray, camera: FisheyeCamera) -> np.ndarray:
+        """The view rendered from the capture (bilinear; black outside the lens's field)."""
+        import cv2
+
+        c = (self.n - 1) / 2
+        vv, uu = np.mgrid[0:self.n, 0:self.n].astype(np.float64)
+        rays = np.stack([(uu - c) / self.f, (vv - c) / self.f, np.ones_like(uu)], -1) @ self.basis.T
+        uv, in_fov = camera.project_rays(rays.reshape(-1, 3))
+        uv[~in_fov] = -10.0
+        maps = uv.reshape(self.n, self.n, 2).astype(np.float32)
+        return cv2.remap(grey_u8, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+    def to_capture(self, pts: np.ndarray, camera: FisheyeCamera) -> np.ndarray | None:
+        """View pixels (..., 2) back to capture pixels; None if any leaves the field."""
+        c = (self.n - 1) / 2
+        flat = pts.reshape(-1, 2)
+        rays = np.stack([(flat[:, 0] - c) / self.f, (flat[:, 1] - c) / self.f,
+                         np.ones(len(flat))], -1) @ self.basis.T
+        uv, ok = camera.project_rays(rays)
+        if not np.all(ok):
+            return None
+        return np.asarray(uv, np.float64).reshape(pts.shape)
+
+
+def _predicted_view(camera: FisheyeCamera, layout: BoardLayout) -> _View:
+    """A view centred on the board's predicted direction (``camera``'s pose), wide enough
+    for the board to lie anywhere within :data:`VIEW_MARGIN_DEG` of it, ≈
+    :data:`VIEW_SQUARE_PX` px per square."""
+    rays = camera.scene_to_camera(layout.corner_points.reshape(-1, 3))
+    centre = rays.mean(axis=0)
+    basis = view_basis(centre)
+    unit = rays / np.linalg.norm(rays, axis=1, keepdims=True)
+    spread = np.degrees(np.arccos(np.clip(unit @ basis[:, 2], -1, 1))).max()
+    square_deg = np.degrees(layout.square_size / np.linalg.norm(centre))
+    half = np.radians(min(spread + square_deg + VIEW_MARGIN_DEG, 65.0))
+    f = VIEW_SQUARE_PX * np.linalg.norm(centre) / layout.square_size
+    f = min(f, VIEW_MAX_PX / 2 / np.tan(half))
+    return _View(basis, float(f), int(2 * f * np.tan(half)) + 1)
+
+
+def _tiles(camera: FisheyeCamera) -> list[tuple[str, _View]]:
+    """Views tiling the lens's field (:data:`TILE_RINGS`), each :data:`TILE_HALF_DEG` wide
+    on every side, at about the lens's own resolution at its centre."""
+    half = np.radians(TILE_HALF_DEG)
+    f = float(np.clip(0.5 * (camera.fx + camera.fy), 50.0, VIEW_MAX_PX / 2 / np.tan(half)))
+    n = int(2 * f * np.tan(half)) + 1
+    out = []
+    for off_deg, count in TILE_RINGS:
+        if off_deg - TILE_HALF_DEG >= camera.fov_deg / 2:
+            continue
+        for k in range(count):
+            az = 2 * np.pi * k / count
+            t = np.radians(off_deg)
+            d = np.array([np.sin(t) * np.cos(az), np.sin(t) * np.sin(az), np.cos(t)])
+            out.append((f"tile {off_deg:.0f}°/{np.degrees(az):.0f}°", _View(view_basis(d), f, n)))
+    return out
+
+
+def _refine(grey_f: np.ndarray, det: np.ndarray) -> np.ndarray:
+    """Corners (rows, cols, 2) refined by ``cv2.cornerSubPix`` in the capture, with a
+    window of 0.3 grid spacing (corners found in a view went through its interpolation)."""
+    import cv2
+
+    step = np.concatenate([np.linalg.norm(np.diff(det, axis=0), axis=-1).ravel(),
+                           np.linalg.norm(np.diff(det, axis=1), axis=-1).ravel()])
+    win = int(np.clip(round(0.3 * float(np.median(step))), 2, 12))
+    pts = cv2.cornerSubPix(grey_f, det.reshape(-1, 1, 2).astype(np.float32), (win, win),
+                           (-1, -1), (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3))
+    return np.asarray(pts, np.float64).reshape(det.shape)
+
+
+def detect_grids(grey_f: np.ndarray, camera: FisheyeCamera, layout: BoardLayout,
+                 places: tuple[str, ...] = ("whole image", "perspective view", "tiles"),
+                 ) -> Iterator[GridDetection]:
+    """The board's corners found in the capture, place by place (lazily: stop when one is
+    good enough).
+
+    Parameters
+    ----------
+    grey_f : (H, W) float32
+        The capture's grey level.
+    camera : FisheyeCamera
+        The scene's camera at the scene's pose (for the predicted view).
+    layout : BoardLayout
+    places : tuple of str
+        Where to look, in order: ``"whole image"``, ``"perspective view"`` (around the
+        board's predicted direction), ``"tiles"`` (views tiling the lens's field).
+
+    Yields
+    ------
+    GridDetection
+        Per place (per tile), the whole board's grid or the largest part of it found.
+    """
+    grey_u8 = np.clip(grey_f, 0, 255).astype(np.uint8)
+    grid = layout.grid
+    for place in places:
+        if place == "whole image":
+            for pts, whole in _grids_in(grey_u8, grid):
+                yield GridDetection(pts, place, whole)
+            continue
+        views = ([(place, _predicted_view(camera, layout))] if place == "perspective view"
+                 else _tiles(camera))
+        for name, view in views:
+            for pts, whole in _grids_in(view.image(grey_u8, camera), grid):
+                back = view.to_capture(pts, camera)
+                if back is not None:
+                    yield GridDetection(_refine(grey_f, back), name, whole)
