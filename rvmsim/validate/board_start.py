@@ -43,8 +43,8 @@ from .charuco import detect_charuco
 from .pose import fit_pose
 from .projection import project
 
-__all__ = ["BoardStart", "BoardSearch", "find_board_start", "search_board", "ypr_from_rotation",
-           "VIEWS", "predicted_shift_px"]
+__all__ = ["BoardStart", "BoardSearch", "board_outline", "find_board_start", "search_board",
+           "ypr_from_rotation", "VIEWS", "predicted_shift_px"]
 
 #: A candidate whose squares' colours correlate less than this with the capture is wrong.
 MIN_COLOUR_SCORE = 0.5
@@ -126,12 +126,15 @@ class BoardSearch:
         No start because two readings of the corners fit alike (the board's lattice).
     corners : (K, 2) float or None
         The corners of the largest grid the detector found, px (for pictures).
+    outlines : tuple of (M, 2) float
+        For an ambiguous lattice, the board's outline (px) at the pick and at its rival.
     """
 
     start: BoardStart | None
     reason: str = ""
     ambiguous: bool = False
     corners: np.ndarray | None = None
+    outlines: tuple[np.ndarray, ...] = ()
 
 
 def _readings(det: np.ndarray, grid: tuple[int, int]) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -318,7 +321,9 @@ def _judge(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
     pick, rival, ev = _decide(rivals, shade)
     if rival is not None and ev is not None:
         return BoardSearch(None, _ambiguity_text(where, pick, rival, ev, layout),
-                           ambiguous=True, corners=corners)
+                           ambiguous=True, corners=corners,
+                           outlines=tuple(board_outline(camera, layout, c.position, c.rotation)
+                                          for c in (pick, rival)))
     # the half turn (however far from the scene's rotation) with the same colours: the
     # scene's rotation chose
     ties = [c for c in coloured if c.score >= pick.score - COLOUR_TIE]
@@ -416,6 +421,21 @@ def _charuco_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLay
     step = float(np.median(camera.fx * layout.square_size / d))  # ~px per square
     return _polished(camera, ypr0_deg, layout, pos, rot, ij, found, step, "ChArUco markers",
                      shade(pos, rot), False)
+
+
+def board_outline(camera: FisheyeCamera, layout: BoardLayout, position: np.ndarray,
+                  rotation: np.ndarray, per_side: int = 24) -> np.ndarray:
+    """The outline of the board's squares seen from the pose (``position`` m,
+    camera-to-scene ``rotation``): (M, 2) px, ``per_side`` points along each side (the
+    fisheye bends them), points outside the lens's field left out."""
+    s = layout.square_size
+    w, h = (layout.grid[0] + 1) * s, (layout.grid[1] + 1) * s
+    t = np.linspace(0.0, 1.0, per_side, endpoint=False)
+    a = np.concatenate([t * w, np.full_like(t, w), (1 - t) * w, np.zeros_like(t)]) - s
+    b = np.concatenate([np.zeros_like(t), t * h, np.full_like(t, h), (1 - t) * h]) - s
+    pts = layout.origin + a[:, None] * layout.a + b[:, None] * layout.b
+    uv, ok = camera.project_rays((pts - position) @ rotation)
+    return np.asarray(uv[ok], np.float64)
 
 
 def predicted_shift_px(camera: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarray,

@@ -16,7 +16,7 @@ from .._io import make_output_folder, write_png
 from .edges import compare_edges, edge_overlay, model_mask
 from .verdict import EdgeComparison, LandmarkMatch
 
-__all__ = ["blend", "compare_with_pictures", "landmark_picture", "write_pictures"]
+__all__ = ["blend", "board_picture", "compare_with_pictures", "landmark_picture", "write_pictures"]
 
 
 def blend(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -63,6 +63,24 @@ def landmark_picture(capture: np.ndarray, matches: tuple[LandmarkMatch, ...]) ->
             cv2.circle(out, _px(m.corrected_px), 1, (0, 220, 255), -1)
         else:
             cv2.drawMarker(out, _px(f), (255, 150, 0), cv2.MARKER_TILTED_CROSS, 9, 2)
+    return out
+
+
+def board_picture(capture: np.ndarray, corners: np.ndarray | None,
+                  outlines: tuple[np.ndarray, ...] = ()) -> np.ndarray:
+    """The capture with what the board search found: the detector's corners (yellow o) and
+    the outlines of the board where the readings of them put it (the first green, the others
+    magenta: an ambiguous lattice's rivals).  ``corners`` (K, 2) px; each outline (M, 2) px,
+    a closed polyline."""
+    import cv2
+
+    out = capture.copy()
+    for k, line in enumerate(outlines):
+        colour = (40, 230, 40) if k == 0 else (255, 0, 255)
+        pts = np.round(line).astype(np.int32).reshape(-1, 1, 2)
+        cv2.polylines(out, [pts], True, colour, 2 if k == 0 else 1, cv2.LINE_AA)
+    for p in [] if corners is None else corners:
+        cv2.circle(out, _px(p), 3, (255, 230, 0), 1, cv2.LINE_AA)
     return out
 
 

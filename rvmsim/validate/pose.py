@@ -373,7 +373,47 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
                 f"{search.capture_name}: the board's corners were matched, but its squares' "
                 f"colours do not fit the pose (correlation {board_score:.2f} < "
                 f"{MIN_BOARD_SCORE}): the match is probably one square off", found=fit.found)
+        _check_board_lattice(search, fit, board, [sh for sh in shades if sh is not board])
     return fit
+
+
+#: Two poses of the board are told apart by at least this many samples where their colours
+#: differ, a share of at least :data:`LATTICE_SHARE` favouring one
+#: (:meth:`~.board.LatticeEvidence.winner`).
+LATTICE_VOTES = 12
+LATTICE_SHARE = 0.75
+
+
+def _check_board_lattice(search: PoseSearch, fit: PoseFit, board: BoardShade,
+                         others: list[GroundShade | BoardShade]) -> None:
+    """Refuse a fit that a same-colour shift of the board explains as well: the capture's
+    board must prefer the fit to every shift (:meth:`~.board.BoardShade.lattice_evidence`),
+    or the other evidence (the ground patterns' shade, better by > 0.02) must."""
+    pose = search.pose(fit.x)
+
+    def other_score(position: np.ndarray, rotation: np.ndarray) -> float:
+        return float(np.mean([sh(position, rotation) for sh in others])) if others else -1.0
+
+    base = other_score(*pose)
+    for dx in board.shifts():
+        shifted = (pose[0] + dx, pose[1])
+        ev = board.lattice_evidence(pose, shifted)
+        verdict = ev.winner(LATTICE_VOTES, LATTICE_SHARE)
+        if verdict == 1 or (others and base > other_score(*shifted) + 0.02):
+            continue
+        s = board.layout.square_size
+        du, dv = round(float(dx @ board.layout.a) / s), round(float(dx @ board.layout.b) / s)
+        why = ("the capture prefers the shifted pose, but the corners could not be matched "
+               "there" if verdict == 2 else
+               f"{ev.n_differ} samples tell them apart ({ev.share_1:.0%} favour the fit, need "
+               f"{LATTICE_SHARE:.0%} of at least {LATTICE_VOTES})" if ev.n_differ else
+               "nothing in view tells them apart")
+        raise ValidationFailure(
+            "correspondence",
+            f"{search.capture_name}: the board's lattice is ambiguous: its corners fit as well "
+            f"{du:+d}, {dv:+d} squares along its width and height ({why}); the board's edges "
+            "are out of view or hidden: show more of the board, with its edge",
+            found=fit.found)
 
 
 def pose_correction(cam: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarray,

@@ -32,12 +32,12 @@ from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
 from .board import BoardShade, board_layout
-from .board_start import BoardStart, find_board_start, predicted_shift_px
+from .board_start import BoardSearch, BoardStart, predicted_shift_px, search_board
 from .capture import check_capture_size, grey
 from .charuco import detect_charuco
 from .failure import ValidationFailure
 from .landmarks import VisibleLandmarks, visible_landmarks
-from .outputs import compare_with_pictures, landmark_picture
+from .outputs import board_picture, compare_with_pictures, landmark_picture
 from .pose import PoseFit, PoseSearch, find_pose, pose_correction
 from .projection import corrected_pose, project
 from .rvm import compare_rvm
@@ -70,7 +70,7 @@ class ValidationSettings:
         edge comparison after correction and the capture's ECs).
     global_start : bool
         Look for the scene's board in the capture with the chessboard detector and start
-        the pose search from the pose it gives (:func:`~.board_start.find_board_start`);
+        the pose search from the pose it gives (:func:`~.board_start.search_board`);
         else start from the scene's pose.
     dense_align : bool
         With ground patterns, start the corner matching from the dense pre-alignment on
@@ -133,16 +133,19 @@ def validate(scene: Scene, capture: np.ndarray,
     layout = board_layout(scene, landmarks.corners)
     charuco = (None if layout is None or layout.charuco is None else
                detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco))
-    start = (find_board_start(capture, cam, ypr0, layout, charuco=charuco)
-             if global_start and layout is not None else None)
+    search = (search_board(capture, cam, ypr0, layout, charuco=charuco)
+              if global_start and layout is not None else None)
+    start = None if search is None else search.start
     board = (None if layout is None
              else BoardShade(layout, cam, grey(capture).astype(np.float32)))
     # A ChArUco board's corners, by landmark index (its markers name them).
     named = (None if charuco is None or layout is None else
              {int(layout.corner_index[i, j]): xy for (i, j), xy in zip(*charuco)})
     try:
-        x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, start, ypr0,
-                                                       tolerances.min_landmarks, progress,
+        if search is not None and search.ambiguous and not scene.test_site.ground_patterns:
+            raise ValidationFailure("correspondence", f"{capture_name}: {search.reason}")
+        x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, search,
+                                                       ypr0, tolerances.min_landmarks, progress,
                                                        capture_name)
         fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
                                    float(settings.search_px), tolerances.min_landmarks,
@@ -150,8 +153,10 @@ def validate(scene: Scene, capture: np.ndarray,
                         board, None if layout is None else layout.corner_index.ravel(),
                         dense=settings.dense_align)
     except ValidationFailure as fail:
-        raise fail.with_images(_failure_pictures(capture, synthetic, landmarks, fail.found)) \
-            from None
+        images = _failure_pictures(capture, synthetic, landmarks, fail.found)
+        if search is not None and search.corners is not None:
+            images["board"] = board_picture(capture, search.corners, search.outlines)
+        raise fail.with_images(images) from None
     fit = replace(fit, x=fit.x + x_start)
     landmarks = replace(search_lm, predicted_px=landmarks.predicted_px)
     correction = mount_correction(scene, pose_correction(cam, ypr0, fit.x, fit.sigma))
@@ -193,18 +198,20 @@ def validate(scene: Scene, capture: np.ndarray,
 
 
 def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLandmarks,
-                  start: BoardStart | None, ypr0: np.ndarray, min_landmarks: int,
+                  search: BoardSearch | None, ypr0: np.ndarray, min_landmarks: int,
                   progress: bool, capture_name: str) -> tuple[np.ndarray, FisheyeImages, VisibleLandmarks]:
     """Where the pose search starts: (the start's correction, the frame rendered there, its
     landmarks).  The scene's own frame when there is no board start or it moves no usable
     landmark by more than :data:`RERENDER_SHIFT_PX` (the local matching's templates come
     from that frame, so it must show the capture's view closely)."""
+    start = None if search is None else search.start
     if start is None:
         if landmarks.n_usable < min_landmarks:
-            board = ("the chessboard detector did not find the scene's board in the capture"
-                     if scene.test_site.board.enabled else "the scene has no board to look for")
+            board = (search.reason if search is not None else
+                     "the scene has no board to look for" if not scene.test_site.board.enabled
+                     else "the board start is off")
             raise ValidationFailure(
-                "detection", f"{capture_name}: {board}, and at the scene's pose only "
+                "detection", f"{capture_name}: {board}; and at the scene's pose only "
                 f"{landmarks.n_usable} checker corners are visible in the synthetic frame "
                 f"(need {min_landmarks}); compare the pictures: is the mount far off, or "
                 "the board out of view or too small?")
@@ -228,8 +235,12 @@ def _start_text(start: BoardStart | None) -> str:
     if start.view == "ChArUco markers":
         return (f"the board found by its ChArUco markers ({len(start.found)} corners; corner "
                 f"RMS {start.rms_px:.2f} px, square colours r = {start.colour_score:.2f})")
-    text = (f"the board found by the chessboard detector ({start.view}; corner RMS "
+    part = "" if start.whole else f"a part of it, {len(start.found)} inner corners; "
+    text = (f"the board found by the chessboard detector ({start.view}; {part}corner RMS "
             f"{start.rms_px:.2f} px, square colours r = {start.colour_score:.2f})")
+    if start.rivals:
+        text += (f"; {start.rivals} other placement(s) of its corners on the board were "
+                 "refuted by the squares' colours where they differ")
     if start.ambiguous:
         text += ("; the board is half-turn symmetric, so its orientation was taken from the "
                  "scene's pose")

@@ -226,16 +226,23 @@ def test_corners_matched_on_squares_of_the_wrong_colours_are_refused():
     assert err.value.found is not None and np.isfinite(err.value.found[:, 0]).sum() >= 30
 
 
-def test_no_board_in_the_capture_and_none_in_view_is_a_detection_failure_with_pictures():
+def test_a_board_found_only_far_from_the_scenes_pose_is_a_detection_failure_saying_so():
     """The scene's camera turned 120° away from its board, and the capture is of the board:
-    the detector cannot look where the scene points, and the scene's view has no corners.
-    It is a ``detection`` failure naming both, with the pictures, not a bare error."""
+    the detector finds the board, but only a pose 120° from the scene's explains it (no CAD
+    mount is that far off), and the scene's view has no corners.  It is a ``detection``
+    failure naming that cause, with the pictures (the board's corners drawn), not a bare
+    error."""
     from rvmsim.validate import ValidationFailure
 
     scene = board_scene(d_ypr_deg=(120.0, 0.0, 0.0))
     with pytest.raises(ValidationFailure) as err:
         validate(scene, board_capture(), ValidationSettings(rerender=False))
     assert err.value.step == "detection"
-    assert "did not find the scene's board" in str(err.value)
-    assert "checker corners are visible" in str(err.value)
-    assert {"overlay", "edges", "landmarks"} <= set(err.value.images)
+    msg = str(err.value)
+    assert "the board was found (48 corners" in msg and "a pose 120°" in msg, msg
+    assert "is the scene's mount right?" in msg
+    assert "checker corners are visible" in msg
+    assert {"overlay", "edges", "landmarks", "board"} <= set(err.value.images)
+    # the board picture marks the detector's corners on the capture (yellow circles)
+    diff = np.any(err.value.images["board"] != board_capture(), axis=-1)
+    assert diff.sum() > 48 * 8
