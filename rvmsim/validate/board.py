@@ -53,8 +53,7 @@ class BoardLayout:
         The inner corners' scene points, m.
     square_points : (M, 3) float
         Sample points on the squares (the centre and four points ±0.3 square from it; on a
-        ChArUco board's white squares, four points in the ring around the marker), and in
-        the middle of the white margin around them (half a square apart), m.
+        ChArUco board's white squares, four points in the ring around the marker), m.
     square_shade : (M,) float
         Their colour: 0 black, 1 white.
     origin, a, b, normal : (3,) float
@@ -150,48 +149,33 @@ def board_layout(scene: Scene, corners: tuple[CheckerCorner, ...]) -> BoardLayou
             for oa, ob in (offsets if (i + j) % 2 == 0 else ring):
                 samples.append(board_point(board, a0 + (i + oa) * s, b0 + (j + ob) * s))
                 shade.append(float((i + j) % 2))
-    for sa, sb in _margin_ring(board.squares, s, board.margin):
-        samples.append(board_point(board, a0 + sa, b0 + sb))
-        shade.append(1.0)
     return BoardLayout((nx, ny), index, pts, np.array(samples), np.array(shade),
                        pts[0, 0].copy(), np.asarray(a, float), np.asarray(b, float),
                        np.asarray(nrm, float), float(s), charuco, float(board.margin))
 
 
-def _margin_ring(squares: tuple[int, int], square: float,
-                 margin: float) -> list[tuple[float, float]]:
-    """Points in the middle of the board's white margin, about half a square apart, as
-    (along a, along b) m from the squares' corner at −a, −b; none when the margin is
-    narrower than a tenth of a square (its white would not show)."""
-    if margin < 0.1 * square:
-        return []
-    w, h = squares[0] * square, squares[1] * square
-    m = margin / 2
-    out = []
-    for k in range(2 * squares[0] + 1):
-        out += [(k * square / 2, -m), (k * square / 2, h + m)]
-    for k in range(2 * squares[1] + 1):
-        out += [(-m, k * square / 2), (w + m, k * square / 2)]
-    return out
-
-
 def _local_levels(pix: np.ndarray, grey: np.ndarray, black: np.ndarray,
-                  white: np.ndarray, k: int = 8) -> tuple[np.ndarray, np.ndarray]:
-    """Per sample, the midpoint between the capture's black and white levels near it (the
+                  white: np.ndarray, where: np.ndarray,
+                  k: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Per sample (of those ``where`` is True; NaN and False elsewhere), the midpoint between the capture's black and white levels near it (the
     medians of its ``k`` nearest ``black`` and ``white`` samples; pixels ``pix`` (N, 2), grey
     levels ``grey``), so vignetting and uneven light do not shift the threshold; and whether
     the board shows contrast there (at least :data:`MIN_LOCAL_CONTRAST` of the board's
     overall): where it is hidden, both colours look alike and the sample says nothing."""
     from scipy.spatial import cKDTree
 
+    at = np.flatnonzero(where)
     levels = []
     for mask in (black, white):
         kk = min(k, int(mask.sum()))
-        _, idx = cKDTree(pix[mask]).query(pix, k=kk)
-        levels.append(np.median(grey[mask][np.asarray(idx).reshape(len(pix), kk)], axis=1))
+        _, idx = cKDTree(pix[mask]).query(pix[at], k=kk)
+        near = grey[mask][np.asarray(idx).reshape(len(at), kk)]
+        levels.append(np.partition(near, kk // 2, axis=1)[:, kk // 2])
     overall = float(np.median(grey[white]) - np.median(grey[black]))
-    contrast = levels[1] - levels[0]
-    return 0.5 * (levels[0] + levels[1]), contrast >= max(MIN_LOCAL_CONTRAST * overall, 4.0)
+    mid, seen = np.full(len(pix), np.nan), np.zeros(len(pix), bool)
+    mid[at] = 0.5 * (levels[0] + levels[1])
+    seen[at] = levels[1] - levels[0] >= max(MIN_LOCAL_CONTRAST * overall, 4.0)
+    return mid, seen
 
 
 @dataclass(frozen=True)
@@ -325,7 +309,9 @@ class BoardShade:
         black, white = c[agree & (s1 == 0)], c[agree & (s1 == 1)]
         if len(black) < 4 or len(white) < 4:
             return LatticeEvidence(0, 0.5, 0, 0.0, 0, 0.0)
-        mid, seen = _local_levels(pix, c, agree & (s1 == 0), agree & (s1 == 1))
+        decisive = ((s1 >= 0) & (s2 >= 0) & (s1 != s2)) | ((s1 >= 0) & (s2 == -1)) \
+            | ((s2 >= 0) & (s1 == -1))
+        mid, seen = _local_levels(pix, c, agree & (s1 == 0), agree & (s1 == 1), decisive)
         is_white = c > mid
         differ = (s1 >= 0) & (s2 >= 0) & (s1 != s2) & seen
         n_d = int(differ.sum())

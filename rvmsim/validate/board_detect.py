@@ -227,5 +227,25 @@ def detect_grids(grey_f: np.ndarray, camera: FisheyeCamera, layout: BoardLayout,
         for name, view in views:
             for pts, whole in _grids_in(view.image(grey_u8, camera), grid):
                 back = view.to_capture(pts, camera)
+                back = None if back is None else _inside(back, grey_f.shape)
                 if back is not None:
-                    yield GridDetection(_refine(grey_f, back), name, whole)
+                    yield GridDetection(_refine(grey_f, back), name,
+                                        whole and back.shape == pts.shape)
+
+
+def _inside(det: np.ndarray, shape: tuple[int, ...]) -> np.ndarray | None:
+    """The grid ``det`` (rows, cols, 2) px without its outer rows and columns that hold a
+    corner outside the image (within 2 px of its border); None when less than
+    :data:`MIN_PATCH` is left."""
+    h, w = shape[:2]
+    while det.size:
+        bad = (det[..., 0] < 2) | (det[..., 1] < 2) | (det[..., 0] > w - 3) | (det[..., 1] > h - 3)
+        if not bad.any():
+            break
+        edges = {"top": bad[0].sum(), "bottom": bad[-1].sum(), "left": bad[:, 0].sum(),
+                 "right": bad[:, -1].sum()}
+        side = max(edges, key=lambda k: edges[k])
+        det = {"top": det[1:], "bottom": det[:-1], "left": det[:, 1:], "right": det[:, :-1]}[side]
+    if min(det.shape[:2]) < min(MIN_PATCH) or det.shape[0] * det.shape[1] < MIN_PATCH[0] * MIN_PATCH[1]:
+        return None
+    return det

@@ -171,14 +171,15 @@ def _readings(det: np.ndarray, grid: tuple[int, int]) -> list[tuple[np.ndarray, 
     return out
 
 
-def _pnp(camera: FisheyeCamera, layout: BoardLayout, ij: np.ndarray,
-         found: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+def _pnp(camera: FisheyeCamera, layout: BoardLayout, ij: np.ndarray, found: np.ndarray,
+         rays: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray] | None:
     """Camera (position m, camera-to-scene rotation) from the corners ``found`` (K, 2) px
     at the board's lattice indices ``ij`` (K, 2), by planar PnP in a pinhole view along their
-    mean ray."""
+    mean ray (``rays``: their camera-frame rays, when already known)."""
     import cv2
 
-    rays, _ = camera.pixel_rays(found)
+    if rays is None:
+        rays, _ = camera.pixel_rays(found)
     basis = view_basis(rays.mean(axis=0))
     r_v = rays @ basis
     if np.any(r_v[:, 2] <= 1e-3):
@@ -215,8 +216,9 @@ def _candidates(camera: FisheyeCamera, layout: BoardLayout, det: np.ndarray,
     """Each reading of the detection (:func:`_readings`) that puts the camera in front of
     the board, with its pose and colour score."""
     out = []
+    rays, _ = camera.pixel_rays(det.reshape(-1, 2))
     for ij, found in _readings(det, layout.grid):
-        pose = _pnp(camera, layout, ij, found)
+        pose = _pnp(camera, layout, ij, found, rays)
         if pose is None:
             continue
         pos, rot = pose
@@ -376,7 +378,8 @@ def _ambiguity_text(where: str, pick: _Reading, second: _Reading, ev: LatticeEvi
                 f"{ev.share_1:.0%} favour one, need {MIN_FIT:.0%} of at least {MIN_VOTES}"
                 if ev.n_differ >= MIN_VOTES else
                 f"where only one sees the board, {ev.fit_1:.0%} of {ev.n_1} and {ev.fit_2:.0%} "
-                f"of {ev.n_2} samples fit it")
+                f"of {ev.n_2} samples fit it" if max(ev.n_1, ev.n_2) >= MIN_VOTES else
+                "nothing in view tells them apart")
     return (f"the board's lattice is ambiguous: its {where} fit two places on the board "
             f"({along} apart; {evidence}): the board's edges are out of view or hidden; "
             "show more of the board, with its edge")

@@ -314,8 +314,12 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
     one square off diagonally matches every corner with the right polarity.  The
     non-periodic parts decide: the ground patterns' borders, white squares and discs
     (:class:`GroundShade`), and the board's outer ring of squares (``board``,
-    :class:`~.board.BoardShade`).  Each same-polarity shift is tried, and the fit whose
-    mean shade correlation is better by > 0.02 wins.
+    :class:`~.board.BoardShade`).  The same-polarity shifts are tried best-scoring first
+    (the shade at the shifted pose), and a fit whose mean shade correlation is better by
+    > 0.02 wins (with at least 80 % as many inliers); then again from it (three rounds at
+    most).  A board's fit must then beat
+    every shift on the samples where their colours differ, or the ground's shade must
+    (:func:`_check_board_lattice`).
 
     Parameters
     ----------
@@ -333,7 +337,8 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
     ValidationFailure
         Too few landmarks found from the starting pose (step ``detection``); the board's
         corners were matched but its squares' colours do not fit the pose, i.e. a
-        one-square alias that no shift resolves (step ``correspondence``).
+        one-square alias that no shift resolves, or a shift of the board fits as well (an
+        ambiguous lattice; step ``correspondence``).
     """
     cam = search.synthetic.camera
     shades: list[GroundShade | BoardShade] = []
@@ -353,18 +358,25 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
         return float(np.mean([sh(*search.pose(x)) for sh in shades]))
 
     best = score(fit.x)
-    for dx in [d for sh in shades for d in sh.shifts()]:
-        x_try = fit.x.copy()
-        x_try[:3] += dx
-        if score(x_try) <= best + 0.02:
-            continue
-        try:
-            alt = search.match_and_fit(x_try)
-        except RvmsimError:
-            continue  # too few landmarks from that shift: it is not the pose
-        alt_score = score(alt.x)
-        if alt_score > best + 0.02:
-            fit, best = alt, alt_score
+    shifts = [d for sh in shades for d in sh.shifts()]
+    for _ in range(3):  # the best-scoring shifts first; again from a new fit
+        tries = sorted(((score(fit.x + np.r_[dx, 0.0, 0.0, 0.0]), k)
+                        for k, dx in enumerate(shifts)), reverse=True)
+        moved = False
+        for try_score, k in tries:
+            if try_score <= best + 0.02:
+                break
+            try:
+                alt = search.match_and_fit(fit.x + np.r_[shifts[k], 0.0, 0.0, 0.0])
+            except RvmsimError:
+                continue  # too few landmarks from that shift: it is not the pose
+            alt_score = score(alt.x)
+            # a true correction matches about as many corners as the alias did
+            if alt_score > best + 0.02 and alt.inliers.sum() >= 0.8 * fit.inliers.sum():
+                fit, best, moved = alt, alt_score, True
+                break
+        if not moved:
+            break
     if board is not None and board_index is not None and fit.inliers[board_index].sum() >= 4:
         board_score = board(*search.pose(fit.x))
         if board_score < MIN_BOARD_SCORE:
