@@ -12,9 +12,11 @@ negation), and ``rvmsim.validate.validate`` runs from each with
 
 - **converged**: the corrected mount within 5 mm (length) and 0.1° (each angle) of the
   true mount (the BAIC frame: of ``validate``'s result from the scene's own pose);
-- **wrong**: a pose reported (no exception) but farther off: the worst outcome;
+- **wrong**: a pose reported (no exception) but farther off: the worst outcome, and worst
+  of all when its verdict passes (column ``w/PASS``: nothing tells the user);
 - **refused**: ``ValidationFailure`` (counted by its ``.step``), or another
-  ``RvmsimError`` (counted as ``error``).
+  ``RvmsimError`` (counted as ``error``);
+- **crash**: any other exception (a bug: the command would end in a traceback).
 
 Captures (``--cases``, comma-separated names or groups): ``hard`` (every case of
 tests/validate/hard_captures.py, or ``hard:<name>``), ``base`` and ``perturbed`` (the mat
@@ -58,14 +60,15 @@ class Run:
 
     case: str
     start: int
-    d_position_m: tuple[float, float, float]
-    d_ypr_deg: tuple[float, float, float]
-    outcome: str  # converged, wrong, refused
-    step: str  # the failed step of a refused run, else ""
-    message: str  # its message's first 100 characters
+    d_position_m: tuple[float, ...]
+    d_ypr_deg: tuple[float, ...]
+    outcome: str  # converged, wrong, refused, crash
+    step: str  # the failed step of a refused run (the exception's type of a crash), else ""
+    message: str  # its message's first 100 characters (a crash's last 100)
     position_error_mm: float | None
     angle_error_deg: float | None
     rms_after_px: float | None
+    verdict_passed: bool | None  # the validation's verdict (its checks) when a pose came back
     start_text: str
     seconds: float
 
@@ -146,10 +149,14 @@ def run_one(task: tuple[str, int, tuple[float, ...], tuple[float, ...]]) -> Run:
         res = validate(scene, capture, ValidationSettings(rerender=False))
     except ValidationFailure as fail:
         return Run(name, k, d_pos, d_ypr, "refused", fail.step, fail.detail[:100], None, None,
-                   None, "", time.perf_counter() - t)
+                   None, None, "", time.perf_counter() - t)
     except RvmsimError as err:
         return Run(name, k, d_pos, d_ypr, "refused", "error", str(err)[:100], None, None,
-                   None, "", time.perf_counter() - t)
+                   None, None, "", time.perf_counter() - t)
+    except Exception as err:  # a bug in validate (a traceback for the user): counted apart
+        return Run(name, k, d_pos, d_ypr, "crash", type(err).__name__,
+                   " ".join(str(err).split())[-100:], None, None, None, None, "",
+                   time.perf_counter() - t)
     seconds = time.perf_counter() - t
     c = res.correction
     d_mm = float(np.linalg.norm((np.array(c.position_m) - truth["position"]) * 1000))
@@ -158,7 +165,7 @@ def run_one(task: tuple[str, int, tuple[float, ...], tuple[float, ...]]) -> Run:
     d_deg = float(np.abs((d_ang + 180.0) % 360.0 - 180.0).max())
     ok = d_mm <= POSITION_MM and d_deg <= ANGLE_DEG
     return Run(name, k, d_pos, d_ypr, "converged" if ok else "wrong", "", "", d_mm, d_deg,
-               res.rms_after_px, res.start[:100], seconds)
+               res.rms_after_px, res.passed, res.start[:100], seconds)
 
 
 def _die_with_parent() -> None:
@@ -202,17 +209,19 @@ def capture_names(spec: str) -> list[str]:
 
 
 def table(runs: list[Run], names: list[str]) -> str:
-    """One row per capture and the totals: n, converged, wrong, refused by step, median s."""
-    rows = [f"{'capture':<22} {'n':>3} {'conv':>4} {'wrong':>5}  {'refused (by step)':<40} "
-            f"{'median s':>8}"]
+    """One row per capture and the totals: n, converged, wrong (of them with a passing
+    verdict), crashed, refused by step, median seconds per run."""
+    rows = [f"{'capture':<22} {'n':>3} {'conv':>4} {'wrong':>5} {'w/PASS':>6} {'crash':>5}  "
+            f"{'refused (by step)':<34} {'median s':>8}"]
 
     def row(label: str, rs: list[Run]) -> str:
         count = Counter(r.outcome for r in rs)
         steps = Counter(r.step for r in rs if r.outcome == "refused")
         refused = ", ".join(f"{s} {n}" for s, n in sorted(steps.items())) or "-"
         med = statistics.median(r.seconds for r in rs) if rs else float("nan")
-        return (f"{label:<22} {len(rs):>3} {count['converged']:>4} {count['wrong']:>5}  "
-                f"{refused:<40} {med:>8.1f}")
+        passed = sum(r.outcome == "wrong" and bool(r.verdict_passed) for r in rs)
+        return (f"{label:<22} {len(rs):>3} {count['converged']:>4} {count['wrong']:>5} "
+                f"{passed:>6} {count['crash']:>5}  {refused:<34} {med:>8.1f}")
     for name in names:
         rows.append(row(name, [r for r in runs if r.case == name]))
     rows.append(row("total", runs))
@@ -239,9 +248,10 @@ def main(argv: list[str] | None = None) -> int:
     with mp.get_context("spawn").Pool(args.jobs, initializer=_die_with_parent) as pool:
         for r in pool.imap_unordered(run_one, tasks):
             runs.append(r)
-            extra = (f"{r.step}: {r.message}" if r.outcome == "refused" else
+            extra = (f"{r.step}: {r.message}" if r.outcome in ("refused", "crash") else
                      f"{r.position_error_mm:.1f} mm, {r.angle_error_deg:.3f}°, "
-                     f"RMS {r.rms_after_px:.2f} px")
+                     f"RMS {r.rms_after_px:.2f} px, verdict "
+                     f"{'PASS' if r.verdict_passed else 'FAIL'}")
             print(f"  {r.case} #{r.start}: {r.outcome} ({extra}) {r.seconds:.1f} s",
                   flush=True)
     runs.sort(key=lambda r: (names.index(r.case), r.start))
