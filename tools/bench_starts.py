@@ -3,6 +3,7 @@ test).
 
     python tools/bench_starts.py [--n 8] [--corners 2] [--cases hard,board,...] [--seed 0]
                                  [--jobs 2] [--json OUT.json]
+    python tools/bench_starts.py --table OUT.json
 
 For each capture, the scene's mount is moved from the true one by ``--n`` starts drawn
 uniformly within ±10° on each angle and ±0.3 m on each axis (seeded), plus ``--corners``
@@ -13,7 +14,8 @@ negation), and ``rvmsim.validate.validate`` runs from each with
 - **converged**: the corrected mount within 5 mm (length) and 0.1° (each angle) of the
   true mount (the BAIC frame: of ``validate``'s result from the scene's own pose);
 - **wrong**: a pose reported (no exception) but farther off: the worst outcome, and worst
-  of all when its verdict passes (column ``w/PASS``: nothing tells the user);
+  of all when its landmark RMS passes the verdict's 2 px (column ``w/fit``: only the
+  position and angle limits can then tell, and their hint is ``--write-scene``);
 - **refused**: ``ValidationFailure`` (counted by its ``.step``), or another
   ``RvmsimError`` (counted as ``error``);
 - **crash**: any other exception (a bug: the command would end in a traceback).
@@ -51,6 +53,8 @@ from _bench_common import cpu_model  # noqa: E402
 POSITION_MM, ANGLE_DEG = 5.0, 0.1
 #: The start box: ± degrees on each angle, ± metres on each axis.
 START_DEG, START_M = 10.0, 0.3
+#: A wrong pose "fits" when its landmark RMS passes the verdict's default limit (px).
+FIT_RMS_PX = 2.0
 GROUPS = ("hard", "base", "perturbed", "board", "baic")
 
 
@@ -209,9 +213,9 @@ def capture_names(spec: str) -> list[str]:
 
 
 def table(runs: list[Run], names: list[str]) -> str:
-    """One row per capture and the totals: n, converged, wrong (of them with a passing
-    verdict), crashed, refused by step, median seconds per run."""
-    rows = [f"{'capture':<22} {'n':>3} {'conv':>4} {'wrong':>5} {'w/PASS':>6} {'crash':>5}  "
+    """One row per capture and the totals: n, converged, wrong (of them fitting the
+    landmarks within :data:`FIT_RMS_PX`), crashed, refused by step, median seconds per run."""
+    rows = [f"{'capture':<22} {'n':>3} {'conv':>4} {'wrong':>5} {'w/fit':>6} {'crash':>5}  "
             f"{'refused (by step)':<34} {'median s':>8}"]
 
     def row(label: str, rs: list[Run]) -> str:
@@ -219,7 +223,8 @@ def table(runs: list[Run], names: list[str]) -> str:
         steps = Counter(r.step for r in rs if r.outcome == "refused")
         refused = ", ".join(f"{s} {n}" for s, n in sorted(steps.items())) or "-"
         med = statistics.median(r.seconds for r in rs) if rs else float("nan")
-        passed = sum(r.outcome == "wrong" and bool(r.verdict_passed) for r in rs)
+        passed = sum(r.outcome == "wrong" and (r.rms_after_px or 0.0) <= FIT_RMS_PX
+                     for r in rs)
         return (f"{label:<22} {len(rs):>3} {count['converged']:>4} {count['wrong']:>5} "
                 f"{passed:>6} {count['crash']:>5}  {refused:<34} {med:>8.1f}")
     for name in names:
@@ -237,7 +242,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path, help="write every run here")
+    ap.add_argument("--table", type=Path, metavar="RUNS.json",
+                    help="print the table of a --json file and stop")
     args = ap.parse_args(argv)
+    if args.table:
+        runs = [Run(**{k: tuple(v) if isinstance(v, list) else v for k, v in r.items()})
+                for r in json.loads(args.table.read_text())]
+        print(table(runs, list(dict.fromkeys(r.case for r in runs))))
+        return 0
     names = capture_names(args.cases)
     tasks = [(name, k, p, a) for name in names
              for k, (p, a) in enumerate(starts(args.n, args.corners, args.seed))]
