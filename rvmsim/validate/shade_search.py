@@ -38,7 +38,7 @@ from ..camera import FisheyeCamera
 from ..scene import Scene
 from .board import BoardLayout, BoardShade
 from .capture import grey
-from .pose import GroundShade
+from .pose import GroundShade, dense_align
 from .projection import corrected_pose
 
 __all__ = ["POSE_SCALE", "SearchLevel", "LEVELS", "ShadeStart", "search_pose_by_shade"]
@@ -79,8 +79,13 @@ class SearchLevel:
     restarts: int
 
 
-#: Coarse (the mat's outline and white squares; ±10° / ±0.3 m) to fine (a few mm).
-LEVELS = (SearchLevel(1.5, 1.5, 1.0, 40, 6), SearchLevel(0.75, 0.6, 0.3, 30, 1))
+#: Coarse (the mat's outline and white squares; ±10° / ±0.3 m) to fine (~15 mm, 0.3°).
+LEVELS = (SearchLevel(1.5, 1.5, 1.0, 40, 6), SearchLevel(1.0, 0.6, 0.3, 20, 1))
+#: The polish after the levels: the ground patterns' shade sampled every this many degrees
+#: of view, not blurred; Nelder-Mead from steps of 10 mm and 0.3°, at most
+#: :data:`POLISH_EVALUATIONS` poses.
+POLISH_STEP_DEG = 0.75
+POLISH_EVALUATIONS = 150
 
 
 @dataclass(frozen=True)
@@ -116,7 +121,7 @@ def level_shades(scene: Scene, cam: FisheyeCamera, capture: np.ndarray,
     board's squares' (``layout``), on the capture blurred as ``level`` says."""
     import cv2
 
-    px_per_deg = float(np.mean(np.diag(cam.K)[:2])) * math.pi / 180
+    px_per_deg = _px_per_deg(cam)
     blur = level.blur_deg * px_per_deg
     shades: list[Shade] = []
     if scene.test_site.ground_patterns:
@@ -179,7 +184,19 @@ def search_pose_by_shade(scene: Scene, cam: FisheyeCamera, ypr0_deg: np.ndarray,
                 break
         best, z = min(runs, key=lambda r: r[0])
         score = -best
-    return ShadeStart(z * POSE_SCALE, score, evaluations)
+    x = z * POSE_SCALE
+    if scene.test_site.ground_patterns:
+        fine = GroundShade.sample(scene, cam, None, capture,
+                                  step=max(1, round(POLISH_STEP_DEG * _px_per_deg(cam))))
+        x = dense_align(fine, cam, ypr0, x0=x, steps=np.array([0.01] * 3 + [0.3] * 3),
+                        max_evaluations=POLISH_EVALUATIONS)
+        evaluations += POLISH_EVALUATIONS
+    return ShadeStart(x, score, evaluations)
+
+
+def _px_per_deg(cam: FisheyeCamera) -> float:
+    """Pixels per degree of view at the image centre (the mean focal length)."""
+    return float(np.mean(np.diag(cam.K)[:2])) * math.pi / 180
 
 
 def _best_shift(cost: Callable[[np.ndarray], float], f: float, z: np.ndarray,
