@@ -246,14 +246,22 @@ class GroundShade:
     patterns: tuple[GroundPattern, ...]
 
     @classmethod
-    def sample(cls, scene: Scene, cam: FisheyeCamera, labels: np.ndarray,
-               capture: np.ndarray) -> GroundShade:
-        """Sample the ground pixels of ``labels`` (the scene's label image) in ``capture``."""
-        vv, uu = np.mgrid[0:cam.height:2, 0:cam.width:2]
-        keep = np.isin(labels[vv, uu], (L.GROUND, L.GROUND_PATTERN))
+    def sample(cls, scene: Scene, cam: FisheyeCamera, labels: np.ndarray | None,
+               capture: np.ndarray, *, step: int = 2, blur_px: float = 0.0) -> GroundShade:
+        """Sample the ground pixels of ``labels`` (the scene's label image; None: every
+        pixel in the lens's field) in ``capture``, every ``step`` px both ways, the
+        capture's grey level blurred by a Gaussian of ``blur_px`` (σ, px; 0: not)."""
+        import cv2
+
+        vv, uu = np.mgrid[0:cam.height:step, 0:cam.width:step]
+        keep = (np.ones(vv.shape, bool) if labels is None
+                else np.isin(labels[vv, uu], (L.GROUND, L.GROUND_PATTERN)))
         uv = np.stack([uu[keep], vv[keep]], axis=1).astype(np.float64)
         rays, in_fov = cam.pixel_rays(uv)
-        values = grey(capture)[vv[keep], uu[keep]][in_fov].astype(np.float64)
+        level = grey(capture)
+        if blur_px > 0:
+            level = cv2.GaussianBlur(level, (0, 0), blur_px)
+        values = level[vv[keep], uu[keep]][in_fov].astype(np.float64)
         return cls(rays[in_fov], values, tuple(scene.test_site.ground_patterns))
 
     def shifts(self) -> list[np.ndarray]:
@@ -268,39 +276,50 @@ class GroundShade:
     def __call__(self, position: np.ndarray, rotation: np.ndarray) -> float:
         """The correlation (-1..1) from the pose (position m, camera-to-scene rotation);
         -1 where fewer than 100 samples hit a pattern or the shade is constant."""
-        d = self.rays @ rotation.T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (-PATTERN_LIFT_M - position[1]) / d[:, 1]
-        hit = (d[:, 1] > 1e-6) & (t > 0)
-        x = position[0] + t * d[:, 0]
-        z = position[2] + t * d[:, 2]
-        shade = np.full(len(d), np.nan)
-        for p in self.patterns:
-            sh = pattern_shade(p, x, z)
-            shade = np.where(np.isnan(shade), sh, shade)
-        ok = hit & np.isfinite(shade)
+        shade = self.shade(position, rotation)
+        ok = np.isfinite(shade)
         if ok.sum() < 100 or np.ptp(shade[ok]) == 0:
             return -1.0
         return float(np.corrcoef(shade[ok], self.grey[ok])[0, 1])
 
+    def shade(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """The patterns' shade (0 black, 1 white) where each sample's ray meets the ground
+        from the pose (position m, camera-to-scene rotation); NaN off the patterns."""
+        d = self.rays @ rotation.T
+        height = -PATTERN_LIFT_M - position[1]
+        # rays down to the ground (none when the camera is below it)
+        hit = np.flatnonzero(d[:, 1] > 1e-6) if height > 0 else np.zeros(0, np.int64)
+        t = height / d[hit, 1]
+        x = position[0] + t * d[hit, 0]
+        z = position[2] + t * d[hit, 2]
+        on = np.full(len(hit), np.nan)
+        for p in self.patterns:
+            on = np.where(np.isnan(on), pattern_shade(p, x, z), on)
+        shade = np.full(len(d), np.nan)
+        shade[hit] = on
+        return shade
 
-def dense_align(shade: GroundShade, cam: FisheyeCamera, ypr0_deg: np.ndarray) -> np.ndarray:
+
+def dense_align(shade: GroundShade, cam: FisheyeCamera, ypr0_deg: np.ndarray, *,
+                x0: np.ndarray | None = None, steps: np.ndarray | None = None,
+                max_evaluations: int = 800) -> np.ndarray:
     """The pose correction maximising the ground-shade correlation.
 
-    Nelder-Mead from zero with initial steps of 30 mm and 1°; zero if that does not improve
-    the correlation.
+    Nelder-Mead from ``x0`` (default zero) with initial steps ``steps`` (default 30 mm and
+    1°), at most ``max_evaluations`` poses scored; ``x0`` if that does not improve the
+    correlation.
     """
     from scipy.optimize import minimize
 
     def cost(x: np.ndarray) -> float:
         return -shade(*corrected_pose(cam, ypr0_deg, x))
 
-    x0 = np.zeros(6)
-    steps = np.array([0.03, 0.03, 0.03, 1.0, 1.0, 1.0])
+    x0 = np.zeros(6) if x0 is None else np.asarray(x0, np.float64)
+    steps = np.array([0.03, 0.03, 0.03, 1.0, 1.0, 1.0]) if steps is None else steps
     simplex = np.vstack([x0, x0 + np.diag(steps)])
     res = minimize(cost, x0, method="Nelder-Mead",
                    options={"initial_simplex": simplex, "xatol": 1e-4, "fatol": 1e-5,
-                            "maxfev": 800})
+                            "maxfev": max_evaluations})
     return np.asarray(res.x) if res.fun < cost(x0) else x0
 
 

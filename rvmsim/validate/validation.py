@@ -32,7 +32,7 @@ from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
 from .board import BoardShade, board_layout
-from .board_start import BoardSearch, BoardStart, predicted_shift_px, search_board
+from .board_start import BoardStart, predicted_shift_px, search_board
 from .capture import check_capture_size, grey
 from .charuco import detect_charuco
 from .failure import ValidationFailure
@@ -42,6 +42,7 @@ from .pose import PoseFit, PoseSearch, find_pose, pose_correction
 from .projection import corrected_pose, project
 from .rvm import compare_rvm
 from .scene_edit import mount_correction, scene_with_mount
+from .shade_search import ShadeStart, search_pose_by_shade
 from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
 
 __all__ = ["validate", "ValidationSettings", "RERENDER_SHIFT_PX"]
@@ -74,10 +75,12 @@ class ValidationSettings:
         else start from the scene's pose.
     dense_align : bool
         With ground patterns, start the corner matching from the dense pre-alignment on
-        their shade (:func:`~.pose.dense_align`: for a scene pose tens of px off; ~1 s at
-        1280 × 960); without it, from the scene's pose (or the board start), which must
-        then be within the search radius (a station's car within ±1° and a few mm of its
-        nominal pose is).  The checker-shift disambiguation runs either way.
+        their shade: where no board start was found, the global search
+        (:func:`~.shade_search.search_pose_by_shade`: from ±10° / ±0.3 m, ~2 s at
+        960 × 640), then the local one (:func:`~.pose.dense_align`: for a pose tens of px
+        off; ~1 s at 1280 × 960); without it, from the scene's pose (or the board start),
+        which must then be within the search radius (a station's car within ±1° and a few
+        mm of its nominal pose is).  The checker-shift disambiguation runs either way.
     """
 
     params: IspParams | None = None
@@ -128,34 +131,40 @@ def validate(scene: Scene, capture: np.ndarray,
     check_capture_size(capture, cam, capture_name)
     tolerances, global_start = settings.tolerances, settings.global_start
     ypr0 = _mount_ypr_deg(scene)
-    # Few corners in view at the scene's pose is an error only when no board start helps.
-    landmarks = visible_landmarks(scene, synthetic, 0 if global_start else tolerances.min_landmarks)
+    by_shade = settings.dense_align and bool(scene.test_site.ground_patterns)
+    # Few corners in view at the scene's pose is an error only when no start helps.
+    landmarks = visible_landmarks(scene, synthetic, 0 if global_start or by_shade
+                                  else tolerances.min_landmarks)
     layout = board_layout(scene, landmarks.corners)
     charuco = (None if layout is None or layout.charuco is None else
                detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco))
-    search = (search_board(capture, cam, ypr0, layout, charuco=charuco)
-              if global_start and layout is not None else None)
-    start = None if search is None else search.start
+    found = (search_board(capture, cam, ypr0, layout, charuco=charuco)
+             if global_start and layout is not None else None)
+    start: BoardStart | ShadeStart | None = None if found is None else found.start
+    if start is None and by_shade:
+        start = search_pose_by_shade(scene, cam, ypr0, capture, layout)
     board = (None if layout is None
              else BoardShade(layout, cam, grey(capture).astype(np.float32)))
     # A ChArUco board's corners, by landmark index (its markers name them).
     named = (None if charuco is None or layout is None else
              {int(layout.corner_index[i, j]): xy for (i, j), xy in zip(*charuco)})
+    search = _PoseStart(scene, capture, synthetic, landmarks, ypr0, settings, capture_name,
+                        named, board, None if layout is None else layout.corner_index.ravel(),
+                        progress, "" if found is None else found.reason)
     try:
-        if search is not None and search.ambiguous and not scene.test_site.ground_patterns:
-            raise ValidationFailure("correspondence", f"{capture_name}: {search.reason}")
-        x_start, search_syn, search_lm = _search_frame(scene, synthetic, landmarks, search,
-                                                       ypr0, tolerances.min_landmarks, progress,
-                                                       capture_name)
-        fit = find_pose(PoseSearch(capture, search_syn, scene, search_lm, ypr0 + x_start[3:],
-                                   float(settings.search_px), tolerances.min_landmarks,
-                                   capture_name, named),
-                        board, None if layout is None else layout.corner_index.ravel(),
-                        dense=settings.dense_align)
+        if found is not None and found.ambiguous and not by_shade:
+            raise ValidationFailure("correspondence", f"{capture_name}: {found.reason}")
+        x_start, search_lm, fit = search.fit_from(start)
+        if isinstance(start, ShadeStart) and x_start.any():
+            # The frame at the shade's pose can be ~1 cm / 0.2° off the corners' pose, and
+            # its templates then bias the corners by a few mm: match once more in a frame
+            # rendered at the fitted pose.
+            x_start, search_lm, fit = search.fit_from(
+                replace(start, x=fit.x + x_start), dense=False)
     except ValidationFailure as fail:
         images = _failure_pictures(capture, synthetic, landmarks, fail.found)
-        if search is not None and search.corners is not None:
-            images["board"] = board_picture(capture, search.corners, search.outlines)
+        if found is not None and found.corners is not None:
+            images["board"] = board_picture(capture, found.corners, found.outlines)
         raise fail.with_images(images) from None
     fit = replace(fit, x=fit.x + x_start)
     landmarks = replace(search_lm, predicted_px=landmarks.predicted_px)
@@ -197,19 +206,57 @@ def validate(scene: Scene, capture: np.ndarray,
     )
 
 
+@dataclass(frozen=True)
+class _PoseStart:
+    """What the pose search from a start needs (one validation)."""
+
+    scene: Scene
+    capture: np.ndarray
+    synthetic: FisheyeImages
+    landmarks: VisibleLandmarks
+    ypr0: np.ndarray
+    settings: ValidationSettings
+    capture_name: str
+    named: dict[int, np.ndarray] | None
+    board: BoardShade | None
+    board_index: np.ndarray | None
+    progress: bool
+    board_search: str = ""
+
+    def fit_from(self, start: BoardStart | ShadeStart | None, *,
+                 dense: bool | None = None) -> tuple[np.ndarray, VisibleLandmarks, PoseFit]:
+        """(the start's correction, the landmarks of the frame matched in, the fit in that
+        frame) from ``start`` (:func:`_search_frame`, :func:`~.pose.find_pose`); the dense
+        pre-alignment runs when ``dense`` (default: the settings say so and the start is
+        not the shade search's, which ends with the same alignment)."""
+        tol = self.settings.tolerances
+        x_start, syn, lm = _search_frame(self.scene, self.synthetic, self.landmarks, start,
+                                         self.ypr0, tol.min_landmarks, self.progress,
+                                         self.capture_name, self.board_search)
+        if dense is None:
+            dense = self.settings.dense_align and not isinstance(start, ShadeStart)
+        fit = find_pose(PoseSearch(self.capture, syn, self.scene, lm, self.ypr0 + x_start[3:],
+                                   float(self.settings.search_px), tol.min_landmarks,
+                                   self.capture_name, self.named),
+                        self.board, self.board_index, dense=dense)
+        return x_start, lm, fit
+
+
 def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLandmarks,
-                  search: BoardSearch | None, ypr0: np.ndarray, min_landmarks: int,
-                  progress: bool, capture_name: str) -> tuple[np.ndarray, FisheyeImages, VisibleLandmarks]:
+                  start: BoardStart | ShadeStart | None, ypr0: np.ndarray, min_landmarks: int,
+                  progress: bool, capture_name: str,
+                  board_search: str = "") -> tuple[np.ndarray, FisheyeImages, VisibleLandmarks]:
     """Where the pose search starts: (the start's correction, the frame rendered there, its
-    landmarks).  The scene's own frame when there is no board start or it moves no usable
+    landmarks).  The scene's own frame when there is no start (the board's or the shade
+    search's) or it moves no usable
     landmark by more than :data:`RERENDER_SHIFT_PX` (the local matching's templates come
-    from that frame, so it must show the capture's view closely)."""
-    start = None if search is None else search.start
+    from that frame, so it must show the capture's view closely).  ``board_search``: why
+    the board gave no start, for the message when nothing else helps."""
     if start is None:
         if landmarks.n_usable < min_landmarks:
-            board = (search.reason if search is not None else
+            board = (board_search if board_search else
                      "the scene has no board to look for" if not scene.test_site.board.enabled
-                     else "the board start is off")
+                     else "the board was not looked for")
             raise ValidationFailure(
                 "detection", f"{capture_name}: {board}; and at the scene's pose only "
                 f"{landmarks.n_usable} checker corners are visible in the synthetic frame "
@@ -228,10 +275,13 @@ def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLand
     return start.x, frame, visible_landmarks(scene, frame, min_landmarks)
 
 
-def _start_text(start: BoardStart | None) -> str:
+def _start_text(start: BoardStart | ShadeStart | None) -> str:
     """How the pose search started, for the summary."""
     if start is None:
         return "the scene's pose"
+    if isinstance(start, ShadeStart):
+        return (f"the pose whose patterns' shade best fits the capture (global search: "
+                f"r = {start.score:.2f}, {start.evaluations} poses scored)")
     if start.view == "ChArUco markers":
         return (f"the board found by its ChArUco markers ({len(start.found)} corners; corner "
                 f"RMS {start.rms_px:.2f} px, square colours r = {start.colour_score:.2f})")

@@ -65,11 +65,14 @@ def test_degraded_capture_from_10_degrees_off_finds_its_pose():
 
 
 def test_without_the_global_start_such_a_pose_is_a_detection_failure():
+    """Neither the board start nor the mat's shade search (``dense_align=False``; with it,
+    the mat alone finds this pose: tests/validate/test_global_search.py)."""
     from rvmsim.validate import ValidationFailure
 
     scene = make_scene(scene_dict(moved_mount((0.3, -0.3, 0.3), (10.0, -10.0, 10.0))))
     with pytest.raises(ValidationFailure) as err:
-        validate(scene, base()[1].color, ValidationSettings(rerender=False, global_start=False))
+        validate(scene, base()[1].color,
+                 ValidationSettings(rerender=False, global_start=False, dense_align=False))
     assert err.value.step == "detection" and "(step failed: detection)" in str(err.value)
     assert {"overlay", "edges", "landmarks"} <= set(err.value.images)
     assert "--search-px" not in str(err.value)
