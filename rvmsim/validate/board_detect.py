@@ -7,8 +7,10 @@ part by the car's body, or strongly curved near the fisheye's edge.  :func:`dete
 therefore looks in several places and accepts part of the board:
 
 * the whole capture, and perspective (pinhole) views of it: one centred on the board's
-  predicted direction, then views tiling the lens's field (so a board is found wherever it
-  lies, however wrong the scene's pose is); a pinhole view straightens the fisheye's curves;
+  predicted direction, one looking straight at the board's predicted plane (squares stay
+  square even for a board seen nearly edge-on at the fisheye's rim), then views tiling the
+  lens's field (so a board is found wherever it lies, however wrong the scene's pose is); a
+  pinhole view straightens the fisheye's curves;
 * in each, first the whole board (``findChessboardCornersSB`` with the board's grid), then
   any part of it of at least :data:`MIN_PATCH` inner corners
   (``cv2.findChessboardCornersSBWithMeta`` with ``CALIB_CB_LARGER``: the smallest grid it
@@ -48,6 +50,9 @@ VIEW_MAX_PX = 1200
 #: number of azimuths): the centre, then rings reaching the edge of a 200° lens.
 TILE_HALF_DEG = 40.0
 TILE_RINGS = ((0.0, 1), (45.0, 6), (80.0, 8))
+#: Tiles of the rim's ring: their scale against the lens's own at its centre (the rim is
+#: squeezed; the detector wants about 10 px or more per square).
+TILE_ZOOM = 2.0
 
 
 @dataclass(frozen=True)
@@ -81,26 +86,64 @@ def _flags() -> int:
     return cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
 
 
-def _grids_in(img: np.ndarray, grid: tuple[int, int]) -> Iterator[tuple[np.ndarray, bool]]:
+def _grids_in(img: np.ndarray, grid: tuple[int, int],
+              pinhole: bool) -> Iterator[tuple[np.ndarray, bool]]:
     """The whole board's grid in ``img`` (rows = grid[1]), else the largest part of it the
-    detector grows from :data:`MIN_PATCH`; (corners (rows, cols, 2) in ``img`` px, whole)."""
+    detector grows from :data:`MIN_PATCH` and larger seeds; (corners (rows, cols, 2) in
+    ``img`` px, whole).  In a ``pinhole`` view a grid must be a plane's (:func:`_regular`)."""
     import cv2
 
     ok, found = cv2.findChessboardCornersSB(img, grid, flags=_flags())
     if ok and found is not None and len(found) == grid[0] * grid[1]:
-        yield np.asarray(found, np.float64).reshape(grid[1], grid[0], 2), True
-        return
+        pts = np.asarray(found, np.float64).reshape(grid[1], grid[0], 2)
+        if not pinhole or _regular(pts) is pts:
+            yield pts, True
+            return
     best: np.ndarray | None = None
-    for size in (MIN_PATCH, (MIN_PATCH[0] + 1, MIN_PATCH[1] + 1)):
+    for k in range(3):
+        size = (MIN_PATCH[0] + k, MIN_PATCH[1] + k)
         ok, found, meta = cv2.findChessboardCornersSBWithMeta(
             img, size, flags=_flags() | cv2.CALIB_CB_LARGER)
         if not ok or found is None or meta is None or len(found) != meta.size:
             continue
         pts = np.asarray(found, np.float64).reshape(meta.shape[0], meta.shape[1], 2)
-        if best is None or pts.shape[0] * pts.shape[1] > best.shape[0] * best.shape[1]:
-            best = pts
+        kept = _regular(pts) if pinhole else pts
+        if kept is not None and (best is None or kept.size > best.size):
+            best = kept
     if best is not None:
         yield best, False
+
+
+#: In a pinhole view a grid's corners lie within this share of their spacing of one
+#: homography of the grid (a plane's); the detector's partial grids sometimes grow rows off
+#: the board.
+MAX_GRID_RESIDUAL = 0.12
+
+
+def _regular(det: np.ndarray) -> np.ndarray | None:
+    """``det`` (rows, cols, 2) px if one homography maps the grid onto it (residuals within
+    :data:`MAX_GRID_RESIDUAL` of the spacing), else with its worst outer rows and columns
+    dropped until it does; None when less than :data:`MIN_PATCH` is left."""
+    import cv2
+
+    while min(det.shape[:2]) >= min(MIN_PATCH):
+        r, c = np.mgrid[0:det.shape[0], 0:det.shape[1]]
+        src = np.stack([c.ravel(), r.ravel()], axis=1).astype(np.float64)
+        dst = det.reshape(-1, 2)
+        h, _ = cv2.findHomography(src, dst, 0)
+        if h is None:
+            return None
+        proj = cv2.perspectiveTransform(src.reshape(-1, 1, 2), h).reshape(-1, 2)
+        err = np.linalg.norm(proj - dst, axis=1).reshape(det.shape[:2])
+        steps = np.concatenate([np.linalg.norm(np.diff(det, axis=a), axis=-1).ravel()
+                                for a in (0, 1)])
+        if err.max() <= MAX_GRID_RESIDUAL * float(np.median(steps)):
+            return det
+        sides = {"top": err[0].mean(), "bottom": err[-1].mean(), "left": err[:, 0].mean(),
+                 "right": err[:, -1].mean()}
+        side = max(sides, key=lambda k: sides[k])
+        det = {"top": det[1:], "bottom": det[:-1], "left": det[:, 1:], "right": det[:, :-1]}[side]
+    return None
 
 
 def view_basis(direction: np.ndarray) -> np.ndarray:
@@ -162,39 +205,90 @@ def _predicted_view(camera: FisheyeCamera, layout: BoardLayout) -> _View:
     return _View(basis, float(f), int(2 * f * np.tan(half)) + 1)
 
 
+@dataclass(frozen=True)
+class _PlaneView:
+    """A view of the board's predicted plane, straight on: view pixel (x, y) is the plane
+    point ``corner + (x / f) a + (y / f) b`` (m), seen through the lens from the camera's
+    predicted pose.  Even a board seen nearly edge-on at the fisheye's rim shows square
+    squares here, wherever the real camera is within a few degrees and decimetres."""
+
+    corner: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    f: float
+    size: tuple[int, int]
+
+    def _uv(self, xy: np.ndarray, camera: FisheyeCamera) -> tuple[np.ndarray, np.ndarray]:
+        pts = self.corner + (xy[:, :1] / self.f) * self.a + (xy[:, 1:] / self.f) * self.b
+        return camera.project_rays(camera.scene_to_camera(pts))
+
+    def image(self, grey_u8: np.ndarray, camera: FisheyeCamera) -> np.ndarray:
+        """The view rendered from the capture (bilinear; black outside the lens's field)."""
+        import cv2
+
+        w, h = self.size
+        yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)
+        uv, ok = self._uv(np.stack([xx.ravel(), yy.ravel()], axis=1), camera)
+        uv[~ok] = -10.0
+        maps = uv.reshape(h, w, 2).astype(np.float32)
+        return cv2.remap(grey_u8, maps[..., 0], maps[..., 1], cv2.INTER_LINEAR,
+                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+    def to_capture(self, pts: np.ndarray, camera: FisheyeCamera) -> np.ndarray | None:
+        """View pixels (..., 2) back to capture pixels; None if any leaves the field."""
+        uv, ok = self._uv(pts.reshape(-1, 2), camera)
+        return None if not np.all(ok) else np.asarray(uv, np.float64).reshape(pts.shape)
+
+
+#: Board-plane view: how far around the board (m) its plane is shown, and the view's
+#: longest side (px).
+PLANE_MARGIN_M = 1.0
+
+
+def _plane_view(camera: FisheyeCamera, layout: BoardLayout) -> _PlaneView | None:
+    """The board's plane around its predicted place, ≈ :data:`VIEW_SQUARE_PX` px per square
+    (fewer for a large area), oriented with ``b`` pointing up; None when the camera is
+    behind the plane."""
+    if (camera.position - layout.origin) @ layout.normal <= 0:
+        return None
+    s = layout.square_size
+    w_m = (layout.grid[0] + 1) * s + 2 * PLANE_MARGIN_M
+    h_m = (layout.grid[1] + 1) * s + 2 * PLANE_MARGIN_M
+    f = min(VIEW_SQUARE_PX / s, VIEW_MAX_PX / max(w_m, h_m))
+    top_left = layout.origin - (s + PLANE_MARGIN_M) * layout.a \
+        + (layout.grid[1] * s + PLANE_MARGIN_M) * layout.b
+    return _PlaneView(top_left, layout.a, -layout.b, float(f),
+                      (int(w_m * f) + 1, int(h_m * f) + 1))
+
+
 def _tiles(camera: FisheyeCamera) -> list[tuple[str, _View]]:
     """Views tiling the lens's field (:data:`TILE_RINGS`), each :data:`TILE_HALF_DEG` wide
-    on every side, at about the lens's own resolution at its centre."""
+    on every side, at about the lens's own resolution at its centre (the rim's ring
+    :data:`TILE_ZOOM` times finer); tiles whose centre is off the sensor are left out."""
     half = np.radians(TILE_HALF_DEG)
-    f = float(np.clip(0.5 * (camera.fx + camera.fy), 50.0, VIEW_MAX_PX / 2 / np.tan(half)))
-    n = int(2 * f * np.tan(half)) + 1
     out = []
-    for off_deg, count in TILE_RINGS:
+    for ring, (off_deg, count) in enumerate(TILE_RINGS):
         if off_deg - TILE_HALF_DEG >= camera.fov_deg / 2:
             continue
+        zoom = TILE_ZOOM if ring == len(TILE_RINGS) - 1 else 1.0
+        f = float(np.clip(zoom * 0.5 * (camera.fx + camera.fy), 50.0,
+                          VIEW_MAX_PX / 2 / np.tan(half)))
+        n = int(2 * f * np.tan(half)) + 1
         for k in range(count):
             az = 2 * np.pi * k / count
             t = np.radians(off_deg)
             d = np.array([np.sin(t) * np.cos(az), np.sin(t) * np.sin(az), np.cos(t)])
+            uv, ok = camera.project_rays(d[None])
+            if not (ok[0] and 0 <= uv[0, 0] <= camera.width - 1
+                    and 0 <= uv[0, 1] <= camera.height - 1):
+                continue
             out.append((f"tile {off_deg:.0f}°/{np.degrees(az):.0f}°", _View(view_basis(d), f, n)))
     return out
 
 
-def _refine(grey_f: np.ndarray, det: np.ndarray) -> np.ndarray:
-    """Corners (rows, cols, 2) refined by ``cv2.cornerSubPix`` in the capture, with a
-    window of 0.3 grid spacing (corners found in a view went through its interpolation)."""
-    import cv2
-
-    step = np.concatenate([np.linalg.norm(np.diff(det, axis=0), axis=-1).ravel(),
-                           np.linalg.norm(np.diff(det, axis=1), axis=-1).ravel()])
-    win = int(np.clip(round(0.3 * float(np.median(step))), 2, 12))
-    pts = cv2.cornerSubPix(grey_f, det.reshape(-1, 1, 2).astype(np.float32), (win, win),
-                           (-1, -1), (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 50, 1e-3))
-    return np.asarray(pts, np.float64).reshape(det.shape)
-
-
 def detect_grids(grey_f: np.ndarray, camera: FisheyeCamera, layout: BoardLayout,
-                 places: tuple[str, ...] = ("whole image", "perspective view", "tiles"),
+                 places: tuple[str, ...] = ("whole image", "perspective view",
+                                            "board plane view", "tiles"),
                  ) -> Iterator[GridDetection]:
     """The board's corners found in the capture, place by place (lazily: stop when one is
     good enough).
@@ -208,7 +302,9 @@ def detect_grids(grey_f: np.ndarray, camera: FisheyeCamera, layout: BoardLayout,
     layout : BoardLayout
     places : tuple of str
         Where to look, in order: ``"whole image"``, ``"perspective view"`` (around the
-        board's predicted direction), ``"tiles"`` (views tiling the lens's field).
+        board's predicted direction), ``"board plane view"`` (the board's predicted plane
+        straight on, :data:`PLANE_MARGIN_M` around it), ``"tiles"`` (views tiling the lens's
+        field).
 
     Yields
     ------
@@ -219,18 +315,23 @@ def detect_grids(grey_f: np.ndarray, camera: FisheyeCamera, layout: BoardLayout,
     grid = layout.grid
     for place in places:
         if place == "whole image":
-            for pts, whole in _grids_in(grey_u8, grid):
+            for pts, whole in _grids_in(grey_u8, grid, pinhole=False):
                 yield GridDetection(pts, place, whole)
             continue
-        views = ([(place, _predicted_view(camera, layout))] if place == "perspective view"
-                 else _tiles(camera))
+        views: list[tuple[str, _View | _PlaneView]] = []
+        if place == "perspective view":
+            views.append((place, _predicted_view(camera, layout)))
+        elif place == "board plane view":
+            plane = _plane_view(camera, layout)
+            views += [] if plane is None else [(place, plane)]
+        else:
+            views += _tiles(camera)
         for name, view in views:
-            for pts, whole in _grids_in(view.image(grey_u8, camera), grid):
+            for pts, whole in _grids_in(view.image(grey_u8, camera), grid, pinhole=True):
                 back = view.to_capture(pts, camera)
                 back = None if back is None else _inside(back, grey_f.shape)
                 if back is not None:
-                    yield GridDetection(_refine(grey_f, back), name,
-                                        whole and back.shape == pts.shape)
+                    yield GridDetection(back, name, whole and back.shape == pts.shape)
 
 
 def _inside(det: np.ndarray, shape: tuple[int, ...]) -> np.ndarray | None:

@@ -68,6 +68,13 @@ RIVAL_SCORE = 0.25
 #: reading that puts squares on the background fits about half).
 MIN_FIT = 0.75
 MIN_VOTES = 12
+#: A start's corners are taken as good to this (px) when judging how well they pin the pose.
+START_NOISE_PX = 0.5
+#: A start pins the pose when one standard error is within these (m, degrees): a small or
+#: distant part of a board fits a second, flipped pose about as well (the planar pose
+#: ambiguity; 0.3-0.6 m and 6-10° for 9-12 corners 3 m away).
+MAX_START_SIGMA_M = 0.06
+MAX_START_SIGMA_DEG = 3.0
 #: A reading must put at least this many of the detected corners on inner corners.
 MIN_INNER = 6
 
@@ -98,6 +105,9 @@ class BoardStart:
         that the capture refuted.
     whole : bool
         The detector found the board's whole grid (else a part of it).
+    sigma : (6,) float or None
+        The start's standard errors (m, degrees) for corners good to
+        :data:`START_NOISE_PX` (see :attr:`pins_pose`).
     """
 
     x: np.ndarray
@@ -109,6 +119,15 @@ class BoardStart:
     ambiguous: bool
     rivals: int = 0
     whole: bool = True
+    sigma: np.ndarray | None = None
+
+    @property
+    def pins_pose(self) -> bool:
+        """The corners pin the pose (one standard error within :data:`MAX_START_SIGMA_M` and
+        :data:`MAX_START_SIGMA_DEG` for corners good to :data:`START_NOISE_PX`): a small or
+        distant part of a board also fits a second, flipped pose (the planar ambiguity)."""
+        return self.sigma is None or bool(np.max(self.sigma[:3]) <= MAX_START_SIGMA_M
+                                          and np.max(self.sigma[3:]) <= MAX_START_SIGMA_DEG)
 
 
 @dataclass(frozen=True)
@@ -233,7 +252,7 @@ def _candidates(camera: FisheyeCamera, layout: BoardLayout, det: np.ndarray,
 
 #: Where :func:`find_board_start` looks for the board, in order (see
 #: :func:`.board_detect.detect_grids`).
-VIEWS = ("whole image", "perspective view", "tiles")
+VIEWS = ("whole image", "perspective view", "board plane view", "tiles")
 
 
 def search_board(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarray,
@@ -250,7 +269,8 @@ def search_board(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarra
         The scene's mount yaw, pitch, roll, degrees.
     layout : BoardLayout
     views : tuple of str
-        Where to look, in order (of :data:`VIEWS`); the first grid that gives a start wins.
+        Where to look, in order (of :data:`VIEWS`); the first grid that gives a start that
+        pins the pose (:attr:`BoardStart.pins_pose`) wins, else the one with most corners.
     charuco : (ij, px), optional
         A ChArUco board's corners already found in ``capture``
         (:func:`.charuco.detect_charuco`); found here when not given.
@@ -276,11 +296,17 @@ def search_board(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarra
         if start is not None:
             return BoardSearch(start)
     outcomes: list[BoardSearch] = []
+    weak: list[BoardStart] = []  # starts that do not pin the pose: the largest, if no other
     for det in detect_grids(g, camera, layout, views):
         outcome = _judge(camera, ypr0_deg, layout, det, shade)
-        if outcome.start is not None:
+        if outcome.start is not None and outcome.start.pins_pose:
             return outcome
-        outcomes.append(outcome)
+        if outcome.start is not None:
+            weak.append(outcome.start)
+        else:
+            outcomes.append(outcome)
+    if weak:
+        return BoardSearch(max(weak, key=lambda st: len(st.found)))
     if not outcomes:
         return BoardSearch(None, "the chessboard detector did not find the board (whole or "
                            f"a part of at least {MIN_PATCH[0]} × {MIN_PATCH[1]} inner corners) "
@@ -397,17 +423,23 @@ def _polished(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,
               rivals: int = 0, whole: bool = True) -> BoardStart | None:
     """The start from a PnP pose (``position`` m, ``rotation``) and the inner corners
     ``ij`` (K, 2) found at ``found`` (K, 2) px, polished by our fisheye PnP; None when they
-    do not fit one board pose (RMS over :data:`MAX_START_RMS` of ``step_px``, or 0.5 px)."""
+    do not fit one board pose (RMS over :data:`MAX_START_RMS` of ``step_px``, or 0.5 px) or
+    do not pin it (:data:`MAX_START_SIGMA_M`, :data:`MAX_START_SIGMA_DEG` for corners good
+    to :data:`START_NOISE_PX`)."""
     x0 = np.concatenate([position - camera.position,
                          (ypr_from_rotation(rotation) - ypr0_deg + 180.0) % 360.0 - 180.0])
     pts = layout.corner_points[ij[:, 0], ij[:, 1]]
-    x, resid, _ = fit_pose(camera, ypr0_deg, pts, found, x0=x0)
+    x, resid, sigma = fit_pose(camera, ypr0_deg, pts, found, x0=x0)
     rms = float(np.sqrt(np.mean(resid ** 2)))
     if rms > max(0.5, MAX_START_RMS * step_px):
         return None
+    # the pose's uncertainty for corners good to START_NOISE_PX (fit_pose scales it by
+    # the residuals, which a few exact corners make tiny)
+    per_component = float(np.sqrt(np.sum(resid ** 2) / max(1, 2 * len(resid) - 6)))
+    spread = sigma * START_NOISE_PX / max(per_component, 1e-6)
     return BoardStart(x=x, found=found, corner_ij=ij, view=view, rms_px=rms,
                       colour_score=float(score), ambiguous=ambiguous, rivals=rivals,
-                      whole=whole)
+                      whole=whole, sigma=spread)
 
 
 def _charuco_start(camera: FisheyeCamera, ypr0_deg: np.ndarray, layout: BoardLayout,

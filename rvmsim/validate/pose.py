@@ -405,7 +405,21 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
                 f"colours do not fit the pose (correlation {board_score:.2f} < "
                 f"{MIN_BOARD_SCORE}): the match is probably one square off", found=fit.found)
         _check_board_lattice(search, fit, board, [sh for sh in shades if sh is not board])
+    usable = int(search.landmarks.n_usable)
+    if fit.inliers.sum() < MIN_FIT_SHARE * usable:
+        raise ValidationFailure(
+            "correspondence",
+            f"{search.capture_name}: the fitted pose explains only {int(fit.inliers.sum())} of "
+            f"the {usable} checker corners it predicts in view (need {MIN_FIT_SHARE:.0%}): "
+            "it fits a part of the scene (e.g. a small part of the board, which a flipped "
+            "pose also fits), not the capture", found=fit.found)
     return fit
+
+
+#: A fit must explain at least this share of the checker corners predicted in view from the
+#: frame it was matched in; a wrong pose that fits a few corners (a small part of a board
+#: also fits its flipped pose) leaves most of the others unfound.
+MIN_FIT_SHARE = 0.5
 
 
 #: Two poses of the board are told apart by at least this many samples where their colours

@@ -140,9 +140,13 @@ def validate(scene: Scene, capture: np.ndarray,
                detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco))
     found = (search_board(capture, cam, ypr0, layout, charuco=charuco)
              if global_start and layout is not None else None)
-    start: BoardStart | ShadeStart | None = None if found is None else found.start
-    if start is None and by_shade:
-        start = search_pose_by_shade(scene, cam, ypr0, capture, layout)
+    board_start = None if found is None else found.start
+    starts: list[BoardStart | ShadeStart | None] = [board_start]
+    if by_shade and (board_start is None or not board_start.pins_pose):
+        # too little of the board to trust (or none): the patterns' shade first, then the
+        # board's start if that fails
+        starts = [search_pose_by_shade(scene, cam, ypr0, capture, layout)] \
+            + ([board_start] if board_start is not None else [])
     board = (None if layout is None
              else BoardShade(layout, cam, grey(capture).astype(np.float32)))
     # A ChArUco board's corners, by landmark index (its markers name them).
@@ -154,13 +158,7 @@ def validate(scene: Scene, capture: np.ndarray,
     try:
         if found is not None and found.ambiguous and not by_shade:
             raise ValidationFailure("correspondence", f"{capture_name}: {found.reason}")
-        x_start, search_lm, fit = search.fit_from(start)
-        if isinstance(start, ShadeStart) and x_start.any():
-            # The frame at the shade's pose can be ~1 cm / 0.2° off the corners' pose, and
-            # its templates then bias the corners by a few mm: match once more in a frame
-            # rendered at the fitted pose.
-            x_start, search_lm, fit = search.fit_from(
-                replace(start, x=fit.x + x_start), dense=False)
+        start, x_start, search_lm, fit = search.fit_from_first(starts)
     except ValidationFailure as fail:
         images = _failure_pictures(capture, synthetic, landmarks, fail.found)
         if found is not None and found.corners is not None:
@@ -222,6 +220,27 @@ class _PoseStart:
     board_index: np.ndarray | None
     progress: bool
     board_search: str = ""
+
+    def fit_from_first(self, starts: list[BoardStart | ShadeStart | None]) -> tuple[
+            BoardStart | ShadeStart | None, np.ndarray, VisibleLandmarks, PoseFit]:
+        """The fit from the first of ``starts`` that gives one (:meth:`fit_from`; a shade
+        search's start is matched twice), with that start; the first failure when none
+        does."""
+        first: ValidationFailure | None = None
+        for start in starts:
+            try:
+                x_start, lm, fit = self.fit_from(start)
+                if isinstance(start, ShadeStart) and x_start.any():
+                    # The frame at the shade's pose can be ~1 cm / 0.2° off the corners'
+                    # pose, and its templates then bias the corners by a few mm: match once
+                    # more in a frame rendered at the fitted pose.
+                    x_start, lm, fit = self.fit_from(replace(start, x=fit.x + x_start),
+                                                     dense=False)
+                return start, x_start, lm, fit
+            except ValidationFailure as fail:
+                first = first or fail
+        assert first is not None
+        raise first
 
     def fit_from(self, start: BoardStart | ShadeStart | None, *,
                  dense: bool | None = None) -> tuple[np.ndarray, VisibleLandmarks, PoseFit]:

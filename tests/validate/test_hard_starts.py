@@ -191,9 +191,14 @@ def test_hard_start_never_reports_a_wrong_pose(name, start):
         assert f"(step failed: {out.step})" in str(out)
         return
     px, mm, deg = _convergence_errors(name, out)
-    assert px <= PIXEL_PX and mm <= POSITION_MM and deg <= ANGLE_DEG, (
+    # off by more than the tolerance and than three of its own standard errors: a pose the
+    # data do not support (a few corners seen edge-on pin the angles only to ~0.3°)
+    sigma_mm = 3.0 * max(out.correction.sigma_position_mm)
+    sigma_deg = 3.0 * max(out.correction.sigma_angles_deg)
+    assert px <= PIXEL_PX and mm <= max(POSITION_MM, sigma_mm) \
+        and deg <= max(ANGLE_DEG, sigma_deg), (
         f"wrong pose reported: corners {px:.2f} px, {mm:.1f} mm, {deg:.3f}° off "
-        f"(start: {out.start})")
+        f"(3σ: {sigma_mm:.1f} mm, {sigma_deg:.2f}°; start: {out.start})")
 
 
 def _converges_marks(name: str, start: str) -> tuple[pytest.MarkDecorator, ...]:
