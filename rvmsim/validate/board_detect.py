@@ -47,9 +47,10 @@ VIEW_SQUARE_PX = 18.0
 #: Perspective view: longest side, px.
 VIEW_MAX_PX = 1200
 #: Tiles: half-angle of each tile's view, degrees, and the tiles' directions (off-axis angle,
-#: number of azimuths): the centre, then rings reaching the edge of a 200° lens.
+#: number of azimuths): two rings reaching the edge of a 200° lens, overlapping (the centre
+#: is the whole image's and the predicted views').
 TILE_HALF_DEG = 40.0
-TILE_RINGS = ((0.0, 1), (45.0, 6), (80.0, 8))
+TILE_RINGS = ((45.0, 4), (80.0, 6))
 #: Tiles of the rim's ring: their scale against the lens's own at its centre (the rim is
 #: squeezed; the detector wants about 10 px or more per square).
 TILE_ZOOM = 2.0
@@ -86,32 +87,32 @@ def _flags() -> int:
     return cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
 
 
-def _grids_in(img: np.ndarray, grid: tuple[int, int],
-              pinhole: bool) -> Iterator[tuple[np.ndarray, bool]]:
-    """The whole board's grid in ``img`` (rows = grid[1]), else the largest part of it the
-    detector grows from :data:`MIN_PATCH` and larger seeds; (corners (rows, cols, 2) in
-    ``img`` px, whole).  In a ``pinhole`` view a grid must be a plane's (:func:`_regular`)."""
+def _grids_in(img: np.ndarray, grid: tuple[int, int], pinhole: bool,
+              whole_first: bool = True) -> Iterator[tuple[np.ndarray, bool]]:
+    """The whole board's grid in ``img`` (rows = grid[1]; looked for first when
+    ``whole_first``), else the part of it the detector grows from :data:`MIN_PATCH` (or, when
+    that is not a plane's grid, from one size larger); (corners (rows, cols, 2) in ``img`` px,
+    whole).  In a ``pinhole`` view a grid must be a plane's (:func:`_regular`)."""
     import cv2
 
-    ok, found = cv2.findChessboardCornersSB(img, grid, flags=_flags())
-    if ok and found is not None and len(found) == grid[0] * grid[1]:
-        pts = np.asarray(found, np.float64).reshape(grid[1], grid[0], 2)
-        if not pinhole or _regular(pts) is pts:
-            yield pts, True
-            return
-    best: np.ndarray | None = None
-    for k in range(3):
+    if whole_first:
+        ok, found = cv2.findChessboardCornersSB(img, grid, flags=_flags())
+        if ok and found is not None and len(found) == grid[0] * grid[1]:
+            pts = np.asarray(found, np.float64).reshape(grid[1], grid[0], 2)
+            if not pinhole or _regular(pts) is pts:
+                yield pts, True
+                return
+    for k in range(2):
         size = (MIN_PATCH[0] + k, MIN_PATCH[1] + k)
         ok, found, meta = cv2.findChessboardCornersSBWithMeta(
             img, size, flags=_flags() | cv2.CALIB_CB_LARGER)
         if not ok or found is None or meta is None or len(found) != meta.size:
-            continue
+            return  # nothing from the smallest seed: nothing from a larger one either
         pts = np.asarray(found, np.float64).reshape(meta.shape[0], meta.shape[1], 2)
         kept = _regular(pts) if pinhole else pts
-        if kept is not None and (best is None or kept.size > best.size):
-            best = kept
-    if best is not None:
-        yield best, False
+        if kept is not None:
+            yield kept, kept.shape[:2] == (grid[1], grid[0])
+            return
 
 
 #: In a pinhole view a grid's corners lie within this share of their spacing of one
@@ -327,7 +328,8 @@ def detect_grids(grey_f: np.ndarray, camera: FisheyeCamera, layout: BoardLayout,
         else:
             views += _tiles(camera)
         for name, view in views:
-            for pts, whole in _grids_in(view.image(grey_u8, camera), grid, pinhole=True):
+            for pts, whole in _grids_in(view.image(grey_u8, camera), grid, pinhole=True,
+                                        whole_first=not name.startswith("tile")):
                 back = view.to_capture(pts, camera)
                 back = None if back is None else _inside(back, grey_f.shape)
                 if back is not None:

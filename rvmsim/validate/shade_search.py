@@ -52,6 +52,9 @@ POPULATION = 16
 #: Runs of one level whose poses are this close (scaled units, each axis: 25 mm, 0.8°)
 #: found the same optimum.
 AGREE = 0.5
+#: Two runs that both score below this (correlation) mean the patterns are not in the capture:
+#: stop restarting.
+MIN_SCORE = 0.2
 
 
 @dataclass(frozen=True)
@@ -180,8 +183,8 @@ def search_pose_by_shade(scene: Scene, cam: FisheyeCamera, ypr0_deg: np.ndarray,
             f, z_run = _best_shift(cost, f, z_run, shifts)
             evaluations += n + len(shifts)
             runs.append((f, z_run))
-            if _agree(runs):
-                break
+            if _agree(runs) or (len(runs) >= 2 and -min(r[0] for r in runs) < MIN_SCORE):
+                break  # found; or the patterns are nowhere in the capture
         best, z = min(runs, key=lambda r: r[0])
         score = -best
     x = z * POSE_SCALE

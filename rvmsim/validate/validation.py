@@ -23,6 +23,7 @@ Pixels are (u, v) = (column, row) with pixel centres at integer coordinates, as 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Callable, Union
 
 import numpy as np
 
@@ -140,13 +141,8 @@ def validate(scene: Scene, capture: np.ndarray,
                detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco))
     found = (search_board(capture, cam, ypr0, layout, charuco=charuco)
              if global_start and layout is not None else None)
-    board_start = None if found is None else found.start
-    starts: list[BoardStart | ShadeStart | None] = [board_start]
-    if by_shade and (board_start is None or not board_start.pins_pose):
-        # too little of the board to trust (or none): the patterns' shade first, then the
-        # board's start if that fails
-        starts = [search_pose_by_shade(scene, cam, ypr0, capture, layout)] \
-            + ([board_start] if board_start is not None else [])
+    starts = _start_plan(None if found is None else found.start, by_shade,
+                         lambda: search_pose_by_shade(scene, cam, ypr0, capture, layout))
     board = (None if layout is None
              else BoardShade(layout, cam, grey(capture).astype(np.float32)))
     # A ChArUco board's corners, by landmark index (its markers name them).
@@ -221,15 +217,23 @@ class _PoseStart:
     progress: bool
     board_search: str = ""
 
-    def fit_from_first(self, starts: list[BoardStart | ShadeStart | None]) -> tuple[
+    def fit_from_first(self, starts: list[_Start]) -> tuple[
             BoardStart | ShadeStart | None, np.ndarray, VisibleLandmarks, PoseFit]:
         """The fit from the first of ``starts`` that gives one (:meth:`fit_from`; a shade
-        search's start is matched twice), with that start; the first failure when none
-        does."""
+        search's start is matched twice; the scene's own pose only when it needs a small
+        correction, :data:`NEAR_M` and :data:`NEAR_DEG`, and explains most corners), with
+        that start; the first failure when none does."""
         first: ValidationFailure | None = None
-        for start in starts:
+        for plan in starts:
+            start: BoardStart | ShadeStart | None = None
+            if isinstance(plan, BoardStart):
+                start = plan
+            elif callable(plan):
+                start = plan()
             try:
                 x_start, lm, fit = self.fit_from(start)
+                if plan == "near" and not _near_fit(fit, lm):
+                    continue
                 if isinstance(start, ShadeStart) and x_start.any():
                     # The frame at the shade's pose can be ~1 cm / 0.2° off the corners'
                     # pose, and its templates then bias the corners by a few mm: match once
@@ -259,6 +263,32 @@ class _PoseStart:
                                    self.capture_name, self.named),
                         self.board, self.board_index, dense=dense)
         return x_start, lm, fit
+
+
+#: A start: a board start or None (the scene's pose), the shade search (called when its turn
+#: comes) or ``"near"`` (the scene's pose, kept only for a small correction).
+_Start = Union[BoardStart, None, Callable[[], Union[ShadeStart, None]], str]
+#: The scene's own pose is kept as the start (no global search) when the fit from it moves
+#: the mount at most this far (m, degrees) and explains :data:`NEAR_SHARE` of the corners.
+NEAR_M, NEAR_DEG, NEAR_SHARE = 0.05, 2.0, 0.8
+
+
+def _start_plan(board_start: BoardStart | None, by_shade: bool,
+                shade: Callable[[], ShadeStart | None]) -> list[_Start]:
+    """The starts to try in order: a board start that pins the pose alone; else, with
+    ground patterns, the scene's pose when it is near, the global shade search, then the
+    board's weak start."""
+    if not by_shade or (board_start is not None and board_start.pins_pose):
+        return [board_start]
+    plan: list[_Start] = ["near", shade]
+    return plan + ([board_start] if board_start is not None else [])
+
+
+def _near_fit(fit: PoseFit, landmarks: VisibleLandmarks) -> bool:
+    """The fit from the scene's pose needs only a small correction and explains most of the
+    corners in view."""
+    return bool(np.all(np.abs(fit.x[:3]) <= NEAR_M) and np.all(np.abs(fit.x[3:]) <= NEAR_DEG)
+                and fit.inliers.sum() >= NEAR_SHARE * landmarks.n_usable)
 
 
 def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLandmarks,
