@@ -102,7 +102,7 @@ def _grids_in(img: np.ndarray, grid: tuple[int, int], pinhole: bool,
             if not pinhole or _regular(pts) is pts:
                 yield pts, True
                 return
-    for k in range(2):
+    for k in range(2 if whole_first else 1):  # tiles: the smallest seed only
         size = (MIN_PATCH[0] + k, MIN_PATCH[1] + k)
         ok, found, meta = cv2.findChessboardCornersSBWithMeta(
             img, size, flags=_flags() | cv2.CALIB_CB_LARGER)
