@@ -5,8 +5,10 @@ Modules, in the order :func:`validate` uses them:
 - :mod:`.capture`: reading a capture (:func:`load_capture`) and its checks.
 - :mod:`.landmarks`: the scene's checker corners the synthetic frame shows usably.
 - :mod:`.board`: the calibration board's corner grid and square colours (:class:`BoardShade`).
-- :mod:`.board_start`: the global start: the board found by the chessboard detector without
-  predicted corners, and a planar PnP on it (:func:`find_board_start`).
+- :mod:`.board_detect`, :mod:`.board_start`: the global start: the board (whole or a part of
+  it) found by the chessboard detector without predicted corners, the readings of its grid
+  decided by the squares' colours where they differ, and a planar PnP on it
+  (:func:`search_board`, :func:`find_board_start`).
 - :mod:`.matching`: finding them in the capture (chessboard detector, NCC + cornerSubPix).
 - :mod:`.pose`: the mount pose fit (:func:`fit_pose`), the dense pre-alignment on the
   ground patterns' shade and the checker-shift disambiguation.
@@ -26,8 +28,9 @@ Modules, in the order :func:`validate` uses them:
 
 from __future__ import annotations
 
-from .board import BoardLayout, BoardShade, board_layout
-from .board_start import BoardStart, find_board_start, ypr_from_rotation
+from .board import BoardLayout, BoardShade, LatticeEvidence, board_layout
+from .board_start import (BoardSearch, BoardStart, find_board_start, search_board,
+                          ypr_from_rotation)
 from .capture import load_capture
 from .captures import (CAPTURE_SUFFIXES, CaptureOutcome, capture_files, capture_folders,
                        validate_captures)
@@ -70,7 +73,10 @@ __all__ = [
     "BoardShade",
     "board_layout",
     "BoardStart",
+    "BoardSearch",
+    "LatticeEvidence",
     "find_board_start",
+    "search_board",
     "ypr_from_rotation",
     "write_pictures",
     "CAPTURE_SUFFIXES",

@@ -157,9 +157,10 @@ def board_layout(scene: Scene, corners: tuple[CheckerCorner, ...]) -> BoardLayou
 def _local_levels(pix: np.ndarray, grey: np.ndarray, black: np.ndarray,
                   white: np.ndarray, where: np.ndarray,
                   k: int = 8) -> tuple[np.ndarray, np.ndarray]:
-    """Per sample (of those ``where`` is True; NaN and False elsewhere), the midpoint between the capture's black and white levels near it (the
-    medians of its ``k`` nearest ``black`` and ``white`` samples; pixels ``pix`` (N, 2), grey
-    levels ``grey``), so vignetting and uneven light do not shift the threshold; and whether
+    """Per sample (of those ``where`` is True; NaN and False elsewhere), the midpoint between
+    the capture's black and white levels near it (the medians of its ``k`` nearest ``black``
+    and ``white`` samples; pixels ``pix`` (N, 2), grey levels ``grey``), so vignetting and
+    uneven light do not shift the threshold; and whether
     the board shows contrast there (at least :data:`MIN_LOCAL_CONTRAST` of the board's
     overall): where it is hidden, both colours look alike and the sample says nothing."""
     from scipy.spatial import cKDTree

@@ -349,6 +349,6 @@ def _inside(det: np.ndarray, shape: tuple[int, ...]) -> np.ndarray | None:
                  "right": bad[:, -1].sum()}
         side = max(edges, key=lambda k: edges[k])
         det = {"top": det[1:], "bottom": det[:-1], "left": det[:, 1:], "right": det[:, :-1]}[side]
-    if min(det.shape[:2]) < min(MIN_PATCH) or det.shape[0] * det.shape[1] < MIN_PATCH[0] * MIN_PATCH[1]:
+    if min(det.shape[:2]) < min(MIN_PATCH) or det.size < 2 * MIN_PATCH[0] * MIN_PATCH[1]:
         return None
     return det

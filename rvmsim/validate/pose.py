@@ -198,11 +198,10 @@ class PoseSearch:
                 raise ValidationFailure(
                     "detection",
                     f"{self.capture_name}: too few landmarks found: {int(ok.sum())} of "
-                    f"{lm.n_usable} predicted checker corners (need {need}); is this a capture "
-                    "of this scene? Corners are searched for within 0.6 square of their "
-                    "predicted place, so without a calibration board the chessboard detector "
-                    "finds, the scene's mount must be within about half a square of the "
-                    "camera's", found=found)
+                    f"{lm.n_usable} predicted checker corners (need {need}) within "
+                    f"{radius:.0f} px (0.6 square at most) of where the start pose puts "
+                    "them: the start is further off than that, or the capture is not of "
+                    "this scene", found=found)
             idx = np.flatnonzero(ok)
             x_r, res_r, _ = fit_pose(cam, self.ypr0_deg, pts[idx], found[idx], robust=True, x0=x)
             mad = float(np.median(res_r)) * 1.4826

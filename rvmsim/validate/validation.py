@@ -159,6 +159,9 @@ def validate(scene: Scene, capture: np.ndarray,
         images = _failure_pictures(capture, synthetic, landmarks, fail.found)
         if found is not None and found.corners is not None:
             images["board"] = board_picture(capture, found.corners, found.outlines)
+        if found is not None and found.reason and found.reason not in fail.detail:
+            fail = ValidationFailure(fail.step, f"{fail.detail}; the board search: "
+                                     f"{found.reason}", found=fail.found)
         raise fail.with_images(images) from None
     fit = replace(fit, x=fit.x + x_start)
     landmarks = replace(search_lm, predicted_px=landmarks.predicted_px)

@@ -40,7 +40,9 @@ def test_summary_has_one_row_per_capture_and_one_page(tmp_path):
     assert tuple(table[0]) == SUMMARY_COLUMNS and table[1]["verdict"] == "ERROR"
     page = paths[2].read_text()
     assert "1 of 2 captures pass" in page and "&lt;noise&gt;" in page and "<noise>" not in page
-    # The error's pictures are on the page too (overlay, edges, landmarks).
-    assert page.count("<img") == len(outcomes[0].result.images) + 3
+    # The error's pictures are on the page too (overlay, edges, landmarks; the board's grid
+    # the detector took for the board in the noise).
+    assert page.count("<img") == len(outcomes[0].result.images) + len(outcomes[1].images)
+    assert {"overlay", "edges", "landmarks"} <= set(outcomes[1].images)
     text = summary_table(outcomes).splitlines()
     assert len(text) == 3 and "PASS" in text[1] and "ERROR" in text[2] and "detection" in text[2]

@@ -45,10 +45,8 @@ def _baic_reference() -> np.ndarray:
 @needs_real
 @pytest.mark.parametrize("d", [
     (0.0, -0.15, 0.0, -4.0, 5.0, 0.0),    # the issue's: 0.15 m high, +5° pitch, −4° yaw
-    (0.0, -0.3, 0.0, 0.0, -10.0, 0.0),    # 0.3 m high, −10° pitch
-    (0.3, 0.0, 0.0, 10.0, 0.0, 0.0),      # 0.3 m to the side, 10° yaw
     (-0.3, 0.3, -0.3, 10.0, -10.0, 10.0),  # every axis at its limit
-], ids=["issue", "high-pitch", "lateral-yaw", "all-axes"])
+], ids=["issue", "all-axes"])  # tools/bench_baic_starts.py runs 39 such starts
 def test_real_capture_from_a_rough_mount_finds_the_exact_pose_result(d):
     """The real BAIC frame (a ground mat only, no board) from its scene's mount moved by up to
     0.3 m and turned by up to 10° on each axis: validate ends within 5 mm and 0.1° of the
