@@ -299,8 +299,8 @@ def search_board(capture: np.ndarray, camera: FisheyeCamera, ypr0_deg: np.ndarra
     weak: list[BoardStart] = []  # starts that do not pin the pose: the largest, if no other
     for det in detect_grids(g, camera, layout, views):
         outcome = _judge(camera, ypr0_deg, layout, det, shade)
-        if outcome.start is not None and outcome.start.pins_pose:
-            return outcome
+        if outcome.start is not None and (outcome.start.pins_pose or outcome.start.whole):
+            return outcome  # pinned; or the whole board, which no other place betters
         if outcome.start is not None:
             weak.append(outcome.start)
         else:

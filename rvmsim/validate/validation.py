@@ -33,7 +33,7 @@ from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
 from .board import BoardShade, board_layout
-from .board_start import BoardStart, predicted_shift_px, search_board
+from .board_start import VIEWS, BoardStart, predicted_shift_px, search_board
 from .capture import check_capture_size, grey
 from .charuco import detect_charuco
 from .failure import ValidationFailure
@@ -81,7 +81,9 @@ class ValidationSettings:
         960 × 640), then the local one (:func:`~.pose.dense_align`: for a pose tens of px
         off; ~1 s at 1280 × 960); without it, from the scene's pose (or the board start),
         which must then be within the search radius (a station's car within ±1° and a few
-        mm of its nominal pose is).  The checker-shift disambiguation runs either way.
+        mm of its nominal pose is), and the board is not looked for in tiles of the whole
+        field (:data:`~.board_start.VIEWS`).  The checker-shift disambiguation runs either
+        way.
     """
 
     params: IspParams | None = None
@@ -139,7 +141,7 @@ def validate(scene: Scene, capture: np.ndarray,
     layout = board_layout(scene, landmarks.corners)
     charuco = (None if layout is None or layout.charuco is None else
                detect_charuco(np.clip(grey(capture), 0, 255).astype(np.uint8), layout.charuco))
-    found = (search_board(capture, cam, ypr0, layout, charuco=charuco)
+    found = (search_board(capture, cam, ypr0, layout, _board_places(settings), charuco=charuco)
              if global_start and layout is not None else None)
     starts = _start_plan(None if found is None else found.start, by_shade,
                          lambda: search_pose_by_shade(scene, cam, ypr0, capture, layout))
@@ -274,6 +276,12 @@ _Start = Union[BoardStart, None, Callable[[], Union[ShadeStart, None]], str]
 #: The scene's own pose is kept as the start (no global search) when the fit from it moves
 #: the mount at most this far (m, degrees) and explains :data:`NEAR_SHARE` of the corners.
 NEAR_M, NEAR_DEG, NEAR_SHARE = 0.05, 2.0, 0.8
+
+
+def _board_places(settings: ValidationSettings) -> tuple[str, ...]:
+    """Where the board is looked for: a station's car near its nominal pose (no dense
+    search) needs no tiles of the whole field."""
+    return VIEWS if settings.dense_align else tuple(v for v in VIEWS if v != "tiles")
 
 
 def _start_plan(board_start: BoardStart | None, by_shade: bool,
