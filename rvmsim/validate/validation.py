@@ -43,6 +43,7 @@ from .pose import PoseFit, PoseSearch, find_pose, pose_correction
 from .projection import corrected_pose, project
 from .rvm import compare_rvm
 from .scene_edit import mount_correction, scene_with_mount
+from .shade_search import MIN_SCORE as SHADE_MIN_SCORE
 from .shade_search import ShadeStart, search_pose_by_shade
 from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
 
@@ -227,8 +228,10 @@ class _PoseStart:
         """The fit from the first of ``starts`` that gives one (:meth:`fit_from`; a shade
         search's start is matched twice; the scene's own pose only when it needs a small
         correction, :data:`NEAR_M` and :data:`NEAR_DEG`, and explains most corners), with
-        that start; the first failure when none does."""
+        that start; when none does, the first failure of a start that was not a shortcut (the
+        scene's own pose tried as "near" says only that it is not near)."""
         first: ValidationFailure | None = None
+        near: ValidationFailure | None = None
         for plan in starts:
             start: BoardStart | ShadeStart | None = None
             if isinstance(plan, BoardStart):
@@ -236,6 +239,12 @@ class _PoseStart:
             elif callable(plan):
                 start = plan()
             try:
+                if isinstance(start, ShadeStart) and start.score < SHADE_MIN_SCORE:
+                    raise ValidationFailure(
+                        "detection", f"{self.capture_name}: the scene's patterns fit the "
+                        f"capture's shade nowhere within ±10° / ±0.3 m of its pose (best "
+                        f"correlation {start.score:.2f}, < {SHADE_MIN_SCORE}): is the capture "
+                        "of this scene?")
                 x_start, lm, fit = self.fit_from(start)
                 if plan == "near" and not _near_fit(fit, lm):
                     continue
@@ -247,9 +256,13 @@ class _PoseStart:
                                                      dense=False)
                 return start, x_start, lm, fit
             except ValidationFailure as fail:
-                first = first or fail
-        assert first is not None
-        raise first
+                if plan == "near":
+                    near = fail
+                else:
+                    first = first or fail
+        failure = first or near
+        assert failure is not None
+        raise failure
 
     def fit_from(self, start: BoardStart | ShadeStart | None, *,
                  dense: bool | None = None) -> tuple[np.ndarray, VisibleLandmarks, PoseFit]:
@@ -332,7 +345,13 @@ def _search_frame(scene: Scene, synthetic: FisheyeImages, landmarks: VisibleLand
                               mount_correction(scene, pose_correction(
                                   synthetic.camera, ypr0, start.x, np.zeros(6))),
                               pos, rot, progress)
-    return start.x, frame, visible_landmarks(scene, frame, min_landmarks)
+    seen = visible_landmarks(scene, frame, 0)
+    if seen.n_usable < min_landmarks:
+        raise ValidationFailure(
+            "detection", f"{capture_name}: at the pose {_start_text(start)} only "
+            f"{seen.n_usable} checker corners are visible in the frame rendered there (need "
+            f"{min_landmarks}){'; the board search: ' + board_search if board_search else ''}")
+    return start.x, frame, seen
 
 
 def _start_text(start: BoardStart | ShadeStart | None) -> str:

@@ -108,6 +108,7 @@ def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path, cache_env)
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "(step failed: detection)" in lines[0], res.stderr
     assert str(out) in lines[0] and "--search-px" not in lines[0]
+    assert "fit the capture's shade nowhere" in lines[0], lines[0]
     for name in ("overlay", "edges", "landmarks"):
         img = cv2.imread(str(out / f"{name}.png"))
         assert img is not None and img.shape == (480, 640, 3), name
