@@ -169,7 +169,9 @@ def search_pose_by_shade(scene: Scene, cam: FisheyeCamera, ypr0_deg: np.ndarray,
     Returns
     -------
     ShadeStart or None
-        None when the scene has neither ground patterns nor a board.
+        None when the scene has neither ground patterns nor a board.  A level whose best
+        score is below :data:`MIN_SCORE` ends the search there (the patterns are not in the
+        capture): its score says so.
     """
     if not scene.test_site.ground_patterns and layout is None:
         return None
@@ -194,6 +196,8 @@ def search_pose_by_shade(scene: Scene, cam: FisheyeCamera, ypr0_deg: np.ndarray,
                 break  # found; or the patterns are nowhere in the capture
         best, z = min(runs, key=lambda r: r[0])
         score = -best
+        if score < MIN_SCORE:
+            return ShadeStart(z * POSE_SCALE, score, evaluations)  # the patterns are nowhere
     x = z * POSE_SCALE
     if scene.test_site.ground_patterns:
         fine = GroundShade.sample(scene, cam, None, capture,

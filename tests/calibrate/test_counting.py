@@ -28,8 +28,10 @@ def test_specs_say_which_counting():
 
 @pytest.mark.parametrize("spec, gave", [
     (f"{SQUARES[0]}x{SQUARES[1]}:{SQUARE}", "which counts its squares"),
-    (f"squares:{INNER}:{SQUARE}", "which counts its inner corners"),
-    (f"{SQUARES[0] - 2}x{SQUARES[1] - 2}:{SQUARE}", "one fewer each way"),
+    pytest.param(f"squares:{INNER}:{SQUARE}", "which counts its inner corners",
+                 marks=pytest.mark.slow),
+    pytest.param(f"{SQUARES[0] - 2}x{SQUARES[1] - 2}:{SQUARE}", "one fewer each way",
+                 marks=pytest.mark.slow),
 ])
 def test_a_miscounted_board_gets_the_other_counting(board_views, tmp_path, spec, gave):
     caps = tmp_path / "caps"

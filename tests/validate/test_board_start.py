@@ -37,7 +37,8 @@ def test_ypr_from_rotation_inverts_rotation_from_ypr():
 
 
 @pytest.mark.parametrize("d_pos, d_ypr", [((0.3, -0.3, 0.3), (10.0, -10.0, 10.0)),
-                                          ((-0.3, 0.3, -0.3), (-10.0, 10.0, -10.0))])
+                                          pytest.param((-0.3, 0.3, -0.3), (-10.0, 10.0, -10.0),
+                                                       marks=pytest.mark.slow)])
 def test_starts_off_by_10_degrees_and_30_cm_converge_to_the_true_pose(d_pos, d_ypr):
     """The capture is the test scene's own render at :data:`MOUNT` (so the truth is known
     to the renderer's ~0.2 px); the scene starts ±10° and ±0.3 m off on every axis.  The

@@ -65,7 +65,8 @@ def test_detected_corners_are_our_inner_corners():
 
 
 @pytest.mark.parametrize("d_pos, d_ypr", [((0.3, -0.3, 0.3), (10.0, -10.0, 10.0)),
-                                          ((-0.3, 0.3, -0.3), (-10.0, 10.0, -10.0))])
+                                          pytest.param((-0.3, 0.3, -0.3), (-10.0, 10.0, -10.0),
+                                                       marks=pytest.mark.slow)])
 def test_from_10_degrees_and_30_cm_off_its_markers_give_the_pose(d_pos, d_ypr):
     res = validate(_scene(d_pos, d_ypr), _capture(), ValidationSettings(rerender=False))
     assert res.start.startswith("the board found by its ChArUco markers"), res.start

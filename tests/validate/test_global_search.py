@@ -45,7 +45,7 @@ def _baic_reference() -> np.ndarray:
 @needs_real
 @pytest.mark.parametrize("d", [
     (0.0, -0.15, 0.0, -4.0, 5.0, 0.0),    # the issue's: 0.15 m high, +5° pitch, −4° yaw
-    (-0.3, 0.3, -0.3, 10.0, -10.0, 10.0),  # every axis at its limit
+    pytest.param((-0.3, 0.3, -0.3, 10.0, -10.0, 10.0), marks=pytest.mark.slow),  # every limit
 ], ids=["issue", "all-axes"])  # tools/bench_baic_starts.py runs 39 such starts
 def test_real_capture_from_a_rough_mount_finds_the_exact_pose_result(d):
     """The real BAIC frame (a ground mat only, no board) from its scene's mount moved by up to
@@ -76,7 +76,7 @@ def _rendered_case(d: tuple[float, ...]) -> tuple[Scene, np.ndarray, np.ndarray]
 
 
 @pytest.mark.parametrize("d", [
-    (0.0, -0.3, 0.0, 0.0, -10.0, 0.0),
+    pytest.param((0.0, -0.3, 0.0, 0.0, -10.0, 0.0), marks=pytest.mark.slow),
     (0.3, 0.0, 0.2, 10.0, 0.0, -5.0),
 ], ids=["high-pitch", "lateral-yaw-roll"])
 def test_rendered_capture_without_a_board_from_a_rough_mount(d):

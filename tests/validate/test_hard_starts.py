@@ -48,6 +48,12 @@ EDGE_ON = pytest.mark.xfail(strict=False, reason="10 corners edge-on pin the ang
 STARTS = [("outside_fov", "low-back"), ("alias_7x9", "low-back"),
           ("odd_even_7x10", "high-fwd"), ("even_even_8x6", "low-back"),
           ("fisheye_edge", "bench-9"), ("cut_two_sides", "bench-4"), ("cut_one_side", "bench-3")]
+#: The starts of the fast tier (the others are in the slow one: ``-m slow``).
+FAST_STARTS = (("alias_7x9", "low-back"), ("cut_two_sides", "bench-4"))
+
+
+def _tier(name: str, start: str) -> tuple[pytest.MarkDecorator, ...]:
+    return () if (name, start) in FAST_STARTS else (pytest.mark.slow,)
 
 
 def _usable(name: str) -> np.ndarray:
@@ -165,7 +171,8 @@ def _convergence_errors(name: str, res: Validation) -> tuple[float, float, float
     return px, mm, deg
 
 
-@pytest.mark.parametrize("name, start", STARTS)
+@pytest.mark.parametrize("name, start", [pytest.param(name, start, marks=_tier(name, start))
+                                         for name, start in STARTS])
 def test_hard_start_never_reports_a_wrong_pose(name, start):
     """Converged, or refused with a failure naming its step: never a wrong pose."""
     out = _outcome(name, start)
@@ -184,11 +191,11 @@ def test_hard_start_never_reports_a_wrong_pose(name, start):
         f"(3σ: {sigma_mm:.1f} mm, {sigma_deg:.2f}°; start: {out.start})")
 
 
-def _converges_marks(name: str) -> tuple[pytest.MarkDecorator, ...]:
-    return (EDGE_ON,) if name == "odd_even_7x10" else ()
+def _converges_marks(name: str, start: str) -> tuple[pytest.MarkDecorator, ...]:
+    return ((EDGE_ON,) if name == "odd_even_7x10" else ()) + _tier(name, start)
 
 
-@pytest.mark.parametrize("name, start", [pytest.param(name, start, marks=_converges_marks(name))
+@pytest.mark.parametrize("name, start", [pytest.param(name, start, marks=_converges_marks(name, start))
                                          for name, start in STARTS])
 def test_hard_start_converges(name, start):
     """Every hard case converges from a ±10° / ±0.3 m start: the partial-board start finds

@@ -136,6 +136,7 @@ def test_grossly_wrong_pose_fails_the_verdict():
 
 
 @needs_real
+@pytest.mark.slow  # test_global_search.py runs the issue's rough start
 def test_real_capture_from_the_rough_pose_finds_the_same_pose():
     """Starting from the capture README's rough pose (0.97 m, 38°, no yaw or roll, centred)
     the search lands on the bundled scene's pose: the periodic checker does not fool it."""
