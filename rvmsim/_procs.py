@@ -25,9 +25,13 @@ The multiprocessing resource tracker, the one other child, exits by itself once 
 and every worker have closed its pipe (so within the same second).  A pool must be fed
 (``submit``, ``map``) from the thread that made it: that thread starts the workers.
 
-:func:`stop_on_terminate` makes SIGTERM the same orderly stop as Ctrl-C in the command line
+:func:`stop_on_signals` makes SIGTERM the same orderly stop as Ctrl-C in the command line
 (:class:`Terminated`, a :class:`KeyboardInterrupt`: every finished batch stays stored and
-the run can be resumed); a second SIGTERM ends the process at once.
+the run can be resumed; a second SIGTERM ends the process at once).  Under it, either signal
+waits while a pool starts a worker (``submit`` writes the worker's state into a pipe the
+worker reads as it starts, up to a second): cut there, the worker would be left out of the
+pool's table, unstopped, and die of its half-read state with a traceback on the command's
+stderr.
 """
 
 from __future__ import annotations
@@ -41,12 +45,15 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor
 from types import FrameType
-from typing import Any
+from typing import Any, ParamSpec, TypeVar
 
-__all__ = ["spawn_pool", "stop_pool", "die_with_parent", "stop_on_terminate", "Terminated",
+__all__ = ["spawn_pool", "stop_pool", "die_with_parent", "stop_on_signals", "Terminated",
            "ORPHAN_EXIT_STATUS"]
+
+_P = ParamSpec("_P")
+_T = TypeVar("_T")
 
 #: Exit status of a worker that ends because its parent is gone (nobody reads it).
 ORPHAN_EXIT_STATUS = 75
@@ -65,9 +72,18 @@ def spawn_pool(workers: int, *, initializer: Callable[..., None] | None = None,
     # watches its parent: unpickling a scorer imports half the package (seconds under load).
     payload = pickle.dumps((initializer, initargs), protocol=pickle.HIGHEST_PROTOCOL)
     kernel = threading.current_thread() is threading.main_thread()
-    return ProcessPoolExecutor(max(1, workers), mp_context=mp.get_context("spawn"),
-                               initializer=_start_worker,
-                               initargs=(os.getpid(), kernel, payload))
+    return _Pool(max(1, workers), mp_context=mp.get_context("spawn"),
+                 initializer=_start_worker, initargs=(os.getpid(), kernel, payload))
+
+
+class _Pool(ProcessPoolExecutor):
+    """A process pool whose ``submit`` (``map`` calls it), which starts a worker when one
+    is missing, is not cut by Ctrl-C or SIGTERM half-way (:func:`stop_on_signals`)."""
+
+    def submit(self, fn: Callable[_P, _T], /, *args: _P.args,
+               **kwargs: _P.kwargs) -> Future[_T]:
+        with _signals_held():
+            return super().submit(fn, *args, **kwargs)
 
 
 def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
@@ -141,32 +157,72 @@ def _watch_parent(parent_pid: int) -> None:
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised where the main thread is, to stop as Ctrl-C stops
-    (:func:`stop_on_terminate`); ``signal_number`` is the signal's."""
+    (:func:`stop_on_signals`); ``signal_number`` is the signal's."""
 
     signal_number = int(signal.SIGTERM)
 
 
-def _raise_terminated(signum: int, frame: FrameType | None) -> None:
-    # one orderly stop; a second SIGTERM (say, from an impatient supervisor) ends at once
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    raise Terminated()
+#: Sections of the main thread that a stop must not cut (nested), and the stop that came
+#: during one, raised as the outermost ends.
+_held = 0
+_pending: KeyboardInterrupt | None = None
 
 
 @contextlib.contextmanager
-def stop_on_terminate() -> Iterator[None]:
-    """For the block: SIGTERM raises :class:`Terminated` (a KeyboardInterrupt) in the main
-    thread, so a command stops as after Ctrl-C (workers stopped, results kept, run
-    resumable); the previous handler is put back afterwards.  Outside the main thread (where
-    Python cannot set handlers) or when SIGTERM is ignored, nothing changes."""
+def _signals_held() -> Iterator[None]:
+    """For the block: a Ctrl-C or SIGTERM (under :func:`stop_on_signals`) in the main
+    thread waits, and is raised when the block ends."""
+    global _held, _pending
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield  # signal handlers run in the main thread only
         return
-    previous = signal.getsignal(signal.SIGTERM)
-    if previous is signal.SIG_IGN:  # started as "ignore SIGTERM" (nohup-like): keep it so
-        yield
-        return
-    signal.signal(signal.SIGTERM, _raise_terminated)
+    _held += 1
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+        _held -= 1
+        if _held == 0 and _pending is not None:
+            stop, _pending = _pending, None
+            raise stop
+
+
+def _stop(stop: KeyboardInterrupt) -> None:
+    """Raise ``stop`` now, or when the held section ends."""
+    global _pending
+    if _held:
+        _pending = _pending or stop
+        return
+    raise stop
+
+
+def _on_sigint(signum: int, frame: FrameType | None) -> None:
+    _stop(KeyboardInterrupt())
+
+
+def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    # one orderly stop; a second SIGTERM (say, from an impatient supervisor) ends at once
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _stop(Terminated())
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """For the block: SIGTERM raises :class:`Terminated` (a KeyboardInterrupt) in the main
+    thread, so a command stops as after Ctrl-C (workers stopped, results kept, run
+    resumable), and neither signal cuts a pool's start of a worker (see the module
+    docstring).  The previous handlers are put back afterwards.  A signal ignored when the
+    block starts stays ignored; outside the main thread (where Python cannot set handlers)
+    nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    ours = {signal.SIGINT: _on_sigint, signal.SIGTERM: _on_sigterm}
+    before = {sig: signal.getsignal(sig) for sig in ours}
+    for sig, handler in ours.items():
+        if before[sig] is not signal.SIG_IGN:  # started as "ignore" (nohup, a background job)
+            signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in before.items():
+            signal.signal(sig, old if old is not None else signal.SIG_DFL)

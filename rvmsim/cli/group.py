@@ -8,7 +8,7 @@ from typing import NoReturn
 
 import click
 
-from .._procs import stop_on_terminate
+from .._procs import stop_on_signals
 from ..errors import RvmsimError
 from .calibrate import calibrate
 from .console import console
@@ -57,7 +57,7 @@ def main(args: Sequence[str] | None = None) -> NoReturn:
     Always raises :class:`SystemExit`.
     """
     try:
-        with stop_on_terminate():
+        with stop_on_signals():
             code = cli.main(args=None if args is None else list(args),
                             prog_name=None if args is None else "rvmsim", standalone_mode=False)
     except (KeyboardInterrupt, click.exceptions.Abort) as err:
