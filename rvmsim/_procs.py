@@ -82,8 +82,24 @@ class _Pool(ProcessPoolExecutor):
 
     def submit(self, fn: Callable[_P, _T], /, *args: _P.args,
                **kwargs: _P.kwargs) -> Future[_T]:
-        with _signals_held():
+        with _signals_held(), _sigint_blocked():
             return super().submit(fn, *args, **kwargs)
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread for the block (delivered when it ends): a worker started
+    meanwhile inherits the mask, so a Ctrl-C that reaches the whole process group while it
+    starts stays pending until it ignores SIGINT (:func:`_start_worker`), instead of
+    raising in its start-up.  (multiprocessing starts its resource tracker the same way.)"""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no process groups to signal
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
@@ -101,7 +117,9 @@ def _start_worker(parent_pid: int, kernel: bool, payload: bytes) -> None:
     """A pool worker's first step: die with the parent, leave Ctrl-C to it, then run the
     pool's own initializer."""
     die_with_parent(parent_pid, kernel=kernel)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C pending since the start
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     initializer, initargs = pickle.loads(payload)
     if initializer is not None:
         initializer(*initargs)
