@@ -228,19 +228,24 @@ def stop_on_signals() -> Iterator[None]:
     """For the block: SIGTERM raises :class:`Terminated` (a KeyboardInterrupt) in the main
     thread, so a command stops as after Ctrl-C (workers stopped, results kept, run
     resumable), and neither signal cuts a pool's start of a worker (see the module
-    docstring).  The previous handlers are put back afterwards.  A signal ignored when the
-    block starts stays ignored; outside the main thread (where Python cannot set handlers)
-    nothing changes."""
+    docstring).  The previous handlers are put back afterwards (unless the block set other
+    ones).  A signal ignored when the block starts stays ignored; outside the main thread
+    (where Python cannot set handlers) nothing changes."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     ours = {signal.SIGINT: _on_sigint, signal.SIGTERM: _on_sigterm}
     before = {sig: signal.getsignal(sig) for sig in ours}
+    ours = {sig: handler for sig, handler in ours.items()
+            if before[sig] is not signal.SIG_IGN}  # started as "ignore" (nohup, background)
     for sig, handler in ours.items():
-        if before[sig] is not signal.SIG_IGN:  # started as "ignore" (nohup, a background job)
-            signal.signal(sig, handler)
+        signal.signal(sig, handler)
     try:
         yield
     finally:
-        for sig, old in before.items():
-            signal.signal(sig, old if old is not None else signal.SIG_DFL)
+        for sig, handler in ours.items():
+            # ours (or SIGTERM's default after one stop) goes; a handler someone else set
+            # meanwhile stays, theirs to answer for
+            if signal.getsignal(sig) in (handler, signal.SIG_DFL):
+                old = before[sig]
+                signal.signal(sig, old if old is not None else signal.SIG_DFL)
