@@ -257,7 +257,7 @@ def test_the_console_starts_no_process_and_stops_on_sigterm(case):
 
 
 WATCH_ONLY = """\
-import sys, threading, time
+import threading, time
 from rvmsim._procs import spawn_pool
 
 def start():  # made in a thread that ends: no PR_SET_PDEATHSIG, the watch thread alone
@@ -267,25 +267,27 @@ def start():  # made in a thread that ends: no PR_SET_PDEATHSIG, the watch threa
         f.result()
     pool.submit(time.sleep, 600)
     pool.submit(time.sleep, 600)
-    print("ready", flush=True)
 
 thread = threading.Thread(target=start)
 thread.start()
 thread.join()
+time.sleep(0.5)
+print("ready", flush=True)
 time.sleep(600)
 """
 
 
 def test_workers_of_a_pool_made_in_a_thread_end_with_their_parent(tmp_path):
-    """The portable watch (the pipe from the parent), without the kernel's help: a pool
-    started from a thread that has ended still ends with its process."""
+    """The portable watch (the pipe from the parent), without the kernel's help: the
+    workers of a pool started from a thread outlive that thread, and end with their
+    process."""
     proc = subprocess.Popen([sys.executable, "-c", WATCH_ONLY], env=child_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     kids: list[psutil.Process] = []
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "ready\n"
         kids = psutil.Process(proc.pid).children(recursive=True)
-        assert len(kids) == POOL_CHILDREN
+        assert len(kids) == POOL_CHILDREN and all(_alive(k) for k in kids)
         proc.kill()
         proc.wait()
         ended = time.monotonic()
