@@ -1,28 +1,105 @@
-"""Worker processes on this machine: the one process-pool recipe tuning and batches share.
+"""Worker processes on this machine: the one process-pool recipe tuning and batches share,
+and the rule that no process outlives its parent.
 
 Workers are spawned, not forked: a process that has run OpenCV's thread pool or an OpenGL
 context cannot be forked safely.  :func:`spawn_pool` makes the pool
 (:class:`concurrent.futures.ProcessPoolExecutor`, optionally with a per-worker initializer
 that receives the state every task reads); :func:`stop_pool` ends it, at once when the
 caller is interrupted.
+
+**No process outlives its parent.**  However the parent ends (Ctrl-C, SIGTERM, SIGKILL, a
+crash), every worker of :func:`spawn_pool` exits within about a second
+(:func:`die_with_parent`, run in each worker before anything else):
+
+- on Linux the kernel sends it SIGKILL when the parent dies (``PR_SET_PDEATHSIG``; set only
+  when the pool is made in the main thread, since the kernel ties it to the *thread* that
+  started the worker), and the worker checks its parent right after setting it, in case the
+  parent died while it started;
+- on every platform a daemon thread waits on the pipe multiprocessing keeps from the parent
+  to each spawned child (:func:`multiprocessing.parent_process`'s sentinel, at end of file
+  once the parent is gone: no polling) and ends the worker with :func:`os._exit`;
+- Ctrl-C is the parent's business: workers ignore SIGINT (a terminal sends it to the whole
+  process group), and the parent stops them with :func:`stop_pool` as it unwinds.
+
+The multiprocessing resource tracker, the one other child, exits by itself once the parent
+and every worker have closed its pipe (so within the same second).  A pool must be fed
+(``submit``, ``map``) from the thread that made it: that thread starts the workers.
+
+:func:`stop_on_signals` makes SIGTERM the same orderly stop as Ctrl-C in the command line
+(:class:`Terminated`, a :class:`KeyboardInterrupt`: every finished batch stays stored and
+the run can be resumed; a second SIGTERM ends the process at once).  Under it, either signal
+waits while a pool starts a worker (``submit`` writes the worker's state into a pipe the
+worker reads as it starts, up to a second): cut there, the worker would be left out of the
+pool's table, unstopped, and die of its half-read state with a traceback on the command's
+stderr.
 """
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
-from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
-from typing import Any
+import os
+import pickle
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ProcessPoolExecutor
+from types import FrameType
+from typing import Any, ParamSpec, TypeVar
 
-__all__ = ["spawn_pool", "stop_pool"]
+__all__ = ["spawn_pool", "stop_pool", "die_with_parent", "stop_on_signals", "Terminated",
+           "ORPHAN_EXIT_STATUS"]
+
+_P = ParamSpec("_P")
+_T = TypeVar("_T")
+
+#: Exit status of a worker that ends because its parent is gone (nobody reads it).
+ORPHAN_EXIT_STATUS = 75
+#: Linux's ``prctl`` option that sets the signal a process gets when its parent dies.
+_PR_SET_PDEATHSIG = 1
+#: How often the fallback watch polls the parent's pid when there is no parent pipe (s).
+_POLL_S = 0.25
 
 
 def spawn_pool(workers: int, *, initializer: Callable[..., None] | None = None,
                initargs: tuple[Any, ...] = ()) -> ProcessPoolExecutor:
     """A pool of ``workers`` spawned processes, each running ``initializer(*initargs)``
-    once when it starts."""
-    return ProcessPoolExecutor(max(1, workers), mp_context=mp.get_context("spawn"),
-                               initializer=initializer, initargs=initargs)
+    once when it starts, after :func:`die_with_parent` (every worker ends with this
+    process; see the module docstring).  Submit to it from the thread that calls this."""
+    # The initializer and its state travel pickled and are unpickled only once the worker
+    # watches its parent: unpickling a scorer imports half the package (seconds under load).
+    payload = pickle.dumps((initializer, initargs), protocol=pickle.HIGHEST_PROTOCOL)
+    kernel = threading.current_thread() is threading.main_thread()
+    return _Pool(max(1, workers), mp_context=mp.get_context("spawn"),
+                 initializer=_start_worker, initargs=(os.getpid(), kernel, payload))
+
+
+class _Pool(ProcessPoolExecutor):
+    """A process pool whose ``submit`` (``map`` calls it), which starts a worker when one
+    is missing, is not cut by Ctrl-C or SIGTERM half-way (:func:`stop_on_signals`)."""
+
+    def submit(self, fn: Callable[_P, _T], /, *args: _P.args,
+               **kwargs: _P.kwargs) -> Future[_T]:
+        with _signals_held(), _sigint_blocked():
+            return super().submit(fn, *args, **kwargs)
+
+
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread for the block (delivered when it ends): a worker started
+    meanwhile inherits the mask, so a Ctrl-C that reaches the whole process group while it
+    starts stays pending until it ignores SIGINT (:func:`_start_worker`), instead of
+    raising in its start-up.  (multiprocessing starts its resource tracker the same way.)"""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no process groups to signal
+        yield
+        return
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
@@ -34,3 +111,141 @@ def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
         for proc in list((getattr(pool, "_processes", None) or {}).values()):
             proc.terminate()
     pool.shutdown(wait=not now, cancel_futures=True)
+
+
+def _start_worker(parent_pid: int, kernel: bool, payload: bytes) -> None:
+    """A pool worker's first step: die with the parent, leave Ctrl-C to it, then run the
+    pool's own initializer."""
+    die_with_parent(parent_pid, kernel=kernel)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C pending since the start
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    initializer, initargs = pickle.loads(payload)
+    if initializer is not None:
+        initializer(*initargs)
+
+
+def die_with_parent(parent_pid: int, *, kernel: bool = True) -> None:
+    """End this process as soon as process ``parent_pid`` (its parent) is gone.
+
+    Parameters
+    ----------
+    parent_pid : int
+        The parent's pid, as the parent saw it (:func:`os.getpid` there).
+    kernel : bool
+        Also ask Linux for SIGKILL at the parent's death (``PR_SET_PDEATHSIG``); only when
+        the parent started this process from its main thread (the kernel watches the
+        thread that forked, so a worker started from a thread that then ends would die).
+
+    A daemon thread watches too (every platform; see the module docstring), and if the
+    parent is already gone the process exits here with :data:`ORPHAN_EXIT_STATUS`.
+    """
+    if kernel and sys.platform.startswith("linux"):
+        _kill_at_parent_death()
+    if os.getppid() != parent_pid:  # it died before the kernel was told: nobody will say so
+        os._exit(ORPHAN_EXIT_STATUS)
+    threading.Thread(target=_watch_parent, args=(parent_pid,), name="rvmsim-parent-watch",
+                     daemon=True).start()
+
+
+def _kill_at_parent_death() -> None:
+    """``prctl(PR_SET_PDEATHSIG, SIGKILL)`` through the C library."""
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        failed = libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0
+    except (OSError, AttributeError):  # no prctl in this C library: the thread watches alone
+        failed = True
+    if failed:
+        print(f"rvmsim: worker {os.getpid()}: PR_SET_PDEATHSIG not available; a thread "
+              "watches the parent instead", file=sys.stderr)
+
+
+def _watch_parent(parent_pid: int) -> None:
+    """Block until the parent is gone, then end this process at once."""
+    parent = mp.parent_process()
+    if parent is not None and parent.pid == parent_pid:
+        parent.join()  # its sentinel: the parent's end of the start-up pipe closed
+    else:  # not a multiprocessing child: watch the parent's pid (re-parented when it dies)
+        while os.getppid() == parent_pid:
+            time.sleep(_POLL_S)
+    os._exit(ORPHAN_EXIT_STATUS)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the main thread is, to stop as Ctrl-C stops
+    (:func:`stop_on_signals`); ``signal_number`` is the signal's."""
+
+    signal_number = int(signal.SIGTERM)
+
+
+#: Sections of the main thread that a stop must not cut (nested), and the stop that came
+#: during one, raised as the outermost ends.
+_held = 0
+_pending: KeyboardInterrupt | None = None
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """For the block: a Ctrl-C or SIGTERM (under :func:`stop_on_signals`) in the main
+    thread waits, and is raised when the block ends."""
+    global _held, _pending
+    if threading.current_thread() is not threading.main_thread():
+        yield  # signal handlers run in the main thread only
+        return
+    _held += 1
+    try:
+        yield
+    finally:
+        _held -= 1
+        if _held == 0 and _pending is not None:
+            stop, _pending = _pending, None
+            raise stop
+
+
+def _stop(stop: KeyboardInterrupt) -> None:
+    """Raise ``stop`` now, or when the held section ends."""
+    global _pending
+    if _held:
+        _pending = _pending or stop
+        return
+    raise stop
+
+
+def _on_sigint(signum: int, frame: FrameType | None) -> None:
+    _stop(KeyboardInterrupt())
+
+
+def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    # one orderly stop; a second SIGTERM (say, from an impatient supervisor) ends at once
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _stop(Terminated())
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """For the block: SIGTERM raises :class:`Terminated` (a KeyboardInterrupt) in the main
+    thread, so a command stops as after Ctrl-C (workers stopped, results kept, run
+    resumable), and neither signal cuts a pool's start of a worker (see the module
+    docstring).  The previous handlers are put back afterwards (unless the block set other
+    ones).  A signal ignored when the block starts stays ignored; outside the main thread
+    (where Python cannot set handlers) nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    ours = {signal.SIGINT: _on_sigint, signal.SIGTERM: _on_sigterm}
+    before = {sig: signal.getsignal(sig) for sig in ours}
+    ours = {sig: handler for sig, handler in ours.items()
+            if before[sig] is not signal.SIG_IGN}  # started as "ignore" (nohup, background)
+    for sig, handler in ours.items():
+        signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, handler in ours.items():
+            # ours (or SIGTERM's default after one stop) goes; a handler someone else set
+            # meanwhile stays, theirs to answer for
+            if signal.getsignal(sig) in (handler, signal.SIG_DFL):
+                old = before[sig]
+                signal.signal(sig, old if old is not None else signal.SIG_DFL)

@@ -21,21 +21,40 @@ Two kinds, each mapped in one place:
 
 from __future__ import annotations
 
+import signal
 import sys
 from pathlib import Path
 from typing import Any, Callable, NoReturn
 
 import click
 
+from .._procs import Terminated
 from ..errors import RvmsimError
 
-__all__ = ["Command", "Group", "usage_error_line", "fail", "fail_os"]
+__all__ = ["Command", "Group", "usage_error_line", "fail", "fail_os", "interrupted_status",
+           "stopped_line"]
 
 
 def fail(err: Exception) -> NoReturn:
     """Print ``err`` as the one line ``rvmsim: error: …`` on stderr and exit with status 2."""
     click.echo(f"rvmsim: error: {err}", err=True)
     sys.exit(2)
+
+
+def interrupted_status(stop: BaseException | None) -> int:
+    """The exit status of a command stopped by ``stop``: 128 + the signal's number, so 143
+    for SIGTERM (:class:`~rvmsim._procs.Terminated`) and 130 for Ctrl-C (SIGINT, anything
+    else)."""
+    if isinstance(stop, Terminated):
+        return 128 + stop.signal_number
+    return 128 + int(signal.SIGINT)
+
+
+def stopped_line(stop: BaseException | None) -> str:
+    """What a stopped command says on stderr: ``rvmsim: terminated (SIGTERM)`` or
+    ``rvmsim: interrupted``."""
+    return ("rvmsim: terminated (SIGTERM)" if isinstance(stop, Terminated)
+            else "rvmsim: interrupted")
 
 
 def fail_os(err: OSError, where: Path | None) -> NoReturn:

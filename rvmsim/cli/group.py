@@ -8,11 +8,12 @@ from typing import NoReturn
 
 import click
 
+from .._procs import stop_on_signals
 from ..errors import RvmsimError
 from .calibrate import calibrate
 from .console import console
 from .eol import eol
-from .errors import Group, fail, fail_os, usage_error_line
+from .errors import Group, fail, fail_os, interrupted_status, stopped_line, usage_error_line
 from .render import evaluate, process, render
 from .report import report
 from .robust import robustness
@@ -50,15 +51,20 @@ def main(args: Sequence[str] | None = None) -> NoReturn:
 
     A usage error is one line naming the option, exit 2
     (:func:`~rvmsim.cli.errors.usage_error_line`); so is any error a command did not report
-    itself (:class:`~rvmsim.cli.errors.Command` reports theirs); Ctrl-C exits 130 (a tuning
-    run keeps every finished batch and can be resumed).  Always raises :class:`SystemExit`.
+    itself (:class:`~rvmsim.cli.errors.Command` reports theirs); Ctrl-C exits 130 and SIGTERM
+    the same orderly way with 143 (128 + the signal; a tuning run keeps every finished batch
+    and can be resumed, and no worker process outlives the command: :mod:`rvmsim._procs`).
+    Always raises :class:`SystemExit`.
     """
     try:
-        code = cli.main(args=None if args is None else list(args),
-                        prog_name=None if args is None else "rvmsim", standalone_mode=False)
-    except (KeyboardInterrupt, click.exceptions.Abort):
-        click.echo("rvmsim: interrupted", err=True)
-        sys.exit(130)
+        with stop_on_signals():
+            code = cli.main(args=None if args is None else list(args),
+                            prog_name=None if args is None else "rvmsim", standalone_mode=False)
+    except (KeyboardInterrupt, click.exceptions.Abort) as err:
+        # click re-raises a KeyboardInterrupt (and so a SIGTERM's Terminated) as Abort from it
+        stop = err.__cause__ if isinstance(err, click.exceptions.Abort) else err
+        click.echo(stopped_line(stop), err=True)
+        sys.exit(interrupted_status(stop))
     except click.UsageError as err:
         click.echo(usage_error_line(err), err=True)
         sys.exit(err.exit_code)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .errors import Command
+from .errors import Command, interrupted_status, stopped_line
 from .params import Integer, OutputFolder, SchedulerAddress, default_folder
 
 __all__ = ["sweep"]
@@ -45,13 +45,13 @@ def sweep(sweep_file: Path, out: Path, workers: int, scheduler: str | None,
     try:
         with make_executor(scheduler, workers) as ex:
             res = run_sweep(spec, out, executor=ex, force=force, progress=progress)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (rvmsim._procs.Terminated)
         # Every finished point is in sweep.sqlite; write what there is, then stop.
         part = stored_sweep(spec, out)
         write_sweep_outputs(part)
-        click.echo(f"rvmsim: interrupted: {len(part.results)} of {len(part.points)} design "
+        click.echo(f"{stopped_line(stop)}: {len(part.results)} of {len(part.points)} design "
                    "points done; run the same command again to resume", err=True)
-        sys.exit(130)
+        sys.exit(interrupted_status(stop))
     written = write_sweep_outputs(res)
     click.echo(res.summary())
     click.echo(f"wrote {', '.join(p.name for p in written)} in {out}")
