@@ -82,6 +82,7 @@ def test_a_point_a_neighbours_optimum_solves_is_not_reported_failing(grid_run):
     assert res.rechecked >= solved_by_neighbour
 
 
+@pytest.mark.slow  # a cluster; test_tasks.py runs batches on Dask
 def test_rechecks_on_dask_give_the_local_results(grid_run, cluster, tmp_path):
     from rvmsim.batch import DaskExecutor
 
@@ -155,6 +156,7 @@ def _recheck_rows(out):
         return con.execute("SELECT key, round FROM rechecks").fetchall()
 
 
+@pytest.mark.slow  # the sweep twice; test_run.py's resume tests compare runs too
 def test_results_are_deterministic_per_seed(grid_run, tmp_path):
     """The same sweep again (one process instead of two) gives the same table; another
     seed searches differently."""

@@ -146,6 +146,7 @@ def _wait_for_points(db, n, proc):
     raise AssertionError(f"fewer than {n} points stored (exit {proc.poll()})")
 
 
+@pytest.mark.slow  # a 6-point sweep; the killed sweep's lock test stays
 def test_a_second_sweep_on_the_same_folder_is_refused(tmp_path):
     """Two `rvmsim sweep` processes on one folder: the second (and a --force one) exits 2
     naming the first's PID and writes nothing: the first stores every point once, in its

@@ -41,7 +41,7 @@ def empty_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     return tmp_path / "cache"
 
 
-@pytest.mark.parametrize("workers", [1, 2])
+@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.slow)])
 def test_render_cubes_stores_what_cached_cube_renders(empty_cache: Path, workers: int):
     scene = load_small_scene("a", 0.25, variation=VARIATION)
     views = _views(scene)

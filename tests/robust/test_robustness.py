@@ -160,6 +160,7 @@ def test_viewpoints_render_up_front_on_local_processes(settings, here, tmp_path:
     np.testing.assert_array_equal(again.evaluation.values, spread.evaluation.values)
 
 
+@pytest.mark.slow  # a cluster; the local processes' test stays
 def test_viewpoints_render_on_a_dask_cluster(settings, here, tmp_path: Path,
                                              monkeypatch: pytest.MonkeyPatch):
     distributed = pytest.importorskip("distributed")

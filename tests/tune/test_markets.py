@@ -113,6 +113,7 @@ def _load(path):
     return load_site(path)
 
 
+@pytest.mark.slow  # the resume path is tune's, tested in test_run.py
 def test_a_killed_markets_run_resumes_to_the_unbroken_result(scene, tmp_path):
     def cmd(out):
         return ["tune", scene, "--markets", "fmvss111,unr158", "--budget", "600", "--out", out,

@@ -55,6 +55,7 @@ def _best_members(run_dir):
         store.close()
 
 
+@pytest.mark.slow  # two tunes and two yields of 200 samples
 def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     from rvmsim.isp import OutputSpec
     from rvmsim.robust import RobustnessSettings, robustness

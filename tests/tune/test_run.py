@@ -108,7 +108,8 @@ def test_an_interrupted_old_run_resumes_to_the_unbroken_result(clean, tmp_path):
     store.close()
 
 
-@pytest.mark.parametrize("strategy", ["grid-random", "cmaes-solved"])
+@pytest.mark.parametrize("strategy", [pytest.param("grid-random", marks=pytest.mark.slow),
+                                      "cmaes-solved"])
 def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
     """A real `rvmsim tune` subprocess is killed with SIGKILL mid-run, resumed, and ends with
     exactly the top-M of an uninterrupted run (the paper's search, and the default one,
@@ -175,6 +176,7 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
         assert doc["ec_score"] == pytest.approx(best.score)
 
 
+@pytest.mark.slow  # tests/test_process_lifetime.py stops tune by SIGINT and resumes it
 def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
     cfg = tmp_path / "tune.yaml"
