@@ -88,7 +88,7 @@ def test_cli_bad_captures_are_one_line_errors(tmp_path, cache_env, case):
         cv2.imwrite(str(cap), np.random.default_rng(0).integers(0, 255, (480, 640), np.uint8))
     expect = {"missing": "capture not found", "text": "cannot read capture",
               "empty": "empty file", "blank": "blank", "size": "960×640 px but the scene's "
-              "camera.image_size is 640×480", "unrelated": "too few landmarks"}[case]
+              "camera.image_size is 640×480", "unrelated": "fit the capture's shade nowhere"}[case]
     res = _run("validate", str(scene_file), "--capture", str(cap), "--out", str(tmp_path / "v"),
                "--no-progress", env=cache_env)
     assert res.code == 2

@@ -28,7 +28,7 @@ def test_unperturbed_capture_gives_no_correction():
 def test_capture_of_something_else_is_an_error():
     sc, syn = base()
     noise = np.random.default_rng(3).integers(0, 255, syn.color.shape, dtype=np.uint8)
-    with pytest.raises(RvmsimError, match="too few landmarks"):
+    with pytest.raises(RvmsimError, match="fit the capture.s shade nowhere"):
         validate(sc, noise, ValidationSettings(rerender=False), synthetic=syn)
     with pytest.raises(RvmsimError, match="320×240 px but the scene's camera is 640×480"):
         validate(sc, syn.color[::2, ::2].copy(), ValidationSettings(rerender=False), synthetic=syn)
