@@ -98,12 +98,26 @@ class EcSolver:
         self.names = tuple(s.hook.param for s in solves)
         self.targets = {s.ec.id: s.target for s in solves}
 
+    @property
+    def points(self) -> np.ndarray:
+        """Every solve's fisheye outline points, (N, 2) px: what :meth:`solve_at` takes
+        mapped onto the plane."""
+        return self._points
+
     def __call__(self, params: IspParams) -> IspParams:
         """``params`` with the solved parameters set (the others unchanged)."""
         if not self._solves:
             return params
-        planes: dict[int, np.ndarray] = {}
         xy_all, ok_all = input_to_plane(params, self._points, self.input_size)
+        return self.solve_at(params, xy_all, ok_all)
+
+    def solve_at(self, params: IspParams, xy_all: np.ndarray, ok_all: np.ndarray
+                 ) -> IspParams:
+        """:meth:`__call__` with :attr:`points` already mapped onto the plane
+        (:func:`rvmsim.isp.input_to_plane` of ``params``: ``xy_all``, ``ok_all``)."""
+        if not self._solves:
+            return params
+        planes: dict[int, np.ndarray] = {}
         for k, part in enumerate(self._slices):
             xy, ok = xy_all[part], ok_all[part]
             if np.count_nonzero(ok) >= 3:
