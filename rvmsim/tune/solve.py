@@ -21,6 +21,7 @@ are refused (:class:`~rvmsim.errors.CriteriaError`): which one wins would be arb
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -129,9 +130,13 @@ class EcSolver:
                     continue
                 value = checked_solve_value(
                     s.ec, "solve", s.hook.solve(planes[k], current, self.output, s.target))
-                if value is not None:
-                    current = current.replace(
-                        **{s.hook.param: float(min(max(value, s.low), s.high))})
+                if value is None:
+                    continue
+                value = float(min(max(value, s.low), s.high))
+                now = getattr(current, s.hook.param)
+                # an equal value (and sign: −0.0 is stored as such) changes nothing
+                if value != now or math.copysign(1.0, value) != math.copysign(1.0, now):
+                    current = current.replace(**{s.hook.param: value})
         return params.replace(**{n: getattr(current, n) for n in self.names})
 
 
