@@ -5,8 +5,9 @@
 Runs the sweep three times into temporary folders, all from the same render cache: once to
 warm the cache (not timed for the comparison), then on ``--workers`` local processes and on a
 Dask LocalCluster with as many single-threaded worker processes on loopback.  It prints the
-wall times, their ratio, the mean seconds per point, and whether the two tables are
-identical.
+wall times, their ratio, the mean seconds per point, whether the two tables are
+identical, and the local run's seconds per phase (render, tune, yield) summed over the
+points.
 """
 
 from __future__ import annotations
@@ -35,7 +36,8 @@ def main() -> None:
 
     spec = S.load_sweep(args.sweep)
     n = len(S.design_points(spec))
-    print(f"{platform.python_version()} on {cpu_model()} ({os.cpu_count()} cores); "
+    print(f"{platform.python_version()} on {cpu_model()} ({os.cpu_count()} cores, load "
+          f"average {os.getloadavg()[0]:.2f}); "
           f"{args.sweep}: {n} design points, {spec.strategy} budget {spec.budget}")
     with tempfile.TemporaryDirectory() as tmp:
         t = time.perf_counter()
@@ -59,6 +61,9 @@ def main() -> None:
     print(f"Dask LocalCluster, {args.workers} workers: {t_dask:6.1f} s wall, "
           f"{per['dask']:.2f} s per point")
     print(f"Dask / local wall time: {t_dask / t_local:.2f}; tables identical: {same}")
+    phases = S.phase_seconds(local.results)
+    print("local, seconds per phase over the points' final runs: "
+          + ", ".join(f"{k} {v:.1f}" for k, v in phases.items()))
 
 
 if __name__ == "__main__":

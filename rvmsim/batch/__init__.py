@@ -72,6 +72,8 @@ from .store import (
     SweepStore,
 )
 from .run import (
+    PHASES,
+    phase_seconds,
     SweepResult,
     run_sweep,
     stored_sweep,
@@ -148,6 +150,8 @@ __all__ = [
     "merged_results",
     "SweepStore",
     "SweepResult",
+    "PHASES",
+    "phase_seconds",
     "run_sweep",
     "stored_sweep",
     "point_task",

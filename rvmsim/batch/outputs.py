@@ -16,7 +16,7 @@ import json
 from typing import Any
 
 from .payloads import MergedPoint, MergedResult, PointError, PointRun
-from .run import SweepResult
+from .run import SweepResult, phase_seconds
 from .spec import DesignPoint, SweepSpec
 from .markets import market_names
 from .yields import YIELD_COLUMNS, yield_cells
@@ -130,7 +130,9 @@ def sweep_json(res: SweepResult) -> dict[str, Any]:
                         "neighbours": spec.recheck.neighbours},
             "robustness": {"samples": spec.robustness.samples, "seed": spec.robustness.seed,
                            "variation": spec.has_variation},
+            "phase_seconds": phase_seconds(res.results),
             "points": [_point_json(p, res.results.get(p.key)) for p in res.points]}
+
 
 
 def _point_json(point: DesignPoint, result: MergedResult | None) -> dict[str, Any]:

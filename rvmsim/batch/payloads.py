@@ -175,6 +175,9 @@ class _RunKeys(TypedDict):
     markets: NotRequired[dict[str, MarketOutcomeDoc]]
     sensitivity: NotRequired[SensitivityDoc]
     robustness: NotRequired[YieldDoc | YieldError]
+    #: Seconds per phase of the run: ``render``, ``tune`` (the search and the sensitivity
+    #: probes), ``yield`` (absent in results stored before phases were timed).
+    phases: NotRequired[dict[str, float]]
     seconds: NotRequired[float]
 
 

@@ -25,10 +25,12 @@ from .payloads import (EcOutcomeDoc, PointError, PointResult, PointRun, PointTas
 if TYPE_CHECKING:
     from ..criteria import Criteria
     from ..isp import IspParams
+    from ..runs import TrialRecord
     from ..pipeline import ImageEvaluator
     from ..render import FisheyeImages
     from ..scene import Scene
     from ..tune import SearchSpace, TuningConfig
+    from .feasibility import Infeasibility
 
 __all__ = ["run_point", "run_yield", "sensitivity", "probe_sensitivity", "SENSITIVITY_STEPS"]
 
@@ -147,14 +149,19 @@ def _run_point(task: PointTask) -> PointResult:
         # otherwise open several OpenGL contexts at once.
         with _RENDER_LOCK:
             images, _ = cached_render(scene)
+        phases = {"render": time.perf_counter() - t0}
+        t = time.perf_counter()
         infeasible = infeasible_ecs(scene, images.camera, images.labels, criteria)
         evaluator = candidate_evaluator(images, config, criteria)
         budget = _task_budget(task, images, config)
         starts = [IspParams(**p) for p in task.get("starts", ())]
+        # an infeasible point's verdict is proven before any search: one candidate fills
+        # its EC columns (it fails the infeasible ECs, as every setting does)
+        how = (SearchSettings(config, criteria, "random", task["seed"], 1) if infeasible else
+               SearchSettings(config, criteria, task["strategy"], task["seed"], budget,
+                              tuple(starts)))
         store = RunStore(":memory:")
         try:
-            how = SearchSettings(config, criteria, task["strategy"], task["seed"], budget,
-                                 tuple(starts))
             outcome = search_scene(images, how, store, evaluator=evaluator)
             n_eval = store.count()
         finally:
@@ -162,36 +169,52 @@ def _run_point(task: PointTask) -> PointResult:
         best, space = outcome.best, outcome.space
         if best is None:
             raise RvmsimError(f"{task['label']}: the search evaluated no candidate")
-        ecs: dict[str, EcOutcomeDoc] = {  # as EcOutcome.as_dict gives them, typed
-            ec: {"value": o.value, "score": o.score, "passed": o.passed}
-            for ec, o in best.ecs.items()}
-        failing = [(v["score"], ec) for ec, v in ecs.items()
-                   if not v["passed"] and criteria.items[ec].enabled]
-        result: PointRun = {
-            "score": best.score,
-            "passed": bool(best.passed),
-            "ecs": ecs,
-            "params": {n: getattr(best.params, n) for n in best.params.names()},
-            "tuned": list(space.names),
-            "evaluations": n_eval,
-            "budget": budget,
-            "stopped": outcome.stopped,
-            "infeasible": [x.as_dict() for x in infeasible],
-            "limiting_ec": min(failing)[1] if failing else None,
-        }
-        if task.get("sensitivity", True):
+        result = _run_doc(best, space, criteria, n_eval, budget,
+                          "infeasible" if infeasible else outcome.stopped, infeasible)
+        if task.get("sensitivity", True) and not infeasible:
             result["sensitivity"] = sensitivity(evaluator, space, best.params)
+        phases["tune"] = time.perf_counter() - t
+        t = time.perf_counter()
         rob = task.get("robustness")
         beat = task.get("beat")
-        if (rob and rob["samples"] > 0 and scene.variation is not None
+        if rob and rob["samples"] > 0 and scene.variation is not None and infeasible:
+            result["robustness"] = {"error": "not measured: the point is infeasible ("
+                                    + "; ".join(x.reason for x in infeasible) + ")",
+                                    "seconds": 0.0}
+        elif (rob and rob["samples"] > 0 and scene.variation is not None
                 and (beat is None or (result["passed"], result["score"]) > tuple(beat))):
             with _RENDER_LOCK:  # renders the variation's viewpoints
                 result["robustness"] = point_yield(scene, best.params, config.output_spec(),
                                                    criteria, rob["samples"], rob["seed"])
+        phases["yield"] = time.perf_counter() - t
+        result["phases"] = phases
         result["seconds"] = time.perf_counter() - t0
         return result
     except RvmsimError as err:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
+
+
+def _run_doc(best: TrialRecord, space: SearchSpace, criteria: Criteria, n_eval: int,
+             budget: int | None, stopped: str, infeasible: Sequence[Infeasibility]
+             ) -> PointRun:
+    """A run's result from its best trial (see :func:`run_point`)."""
+    ecs: dict[str, EcOutcomeDoc] = {  # as EcOutcome.as_dict gives them, typed
+        ec: {"value": o.value, "score": o.score, "passed": o.passed}
+        for ec, o in best.ecs.items()}
+    failing = [(v["score"], ec) for ec, v in ecs.items()
+               if not v["passed"] and criteria.items[ec].enabled]
+    return {
+        "score": best.score,
+        "passed": bool(best.passed),
+        "ecs": ecs,
+        "params": {n: getattr(best.params, n) for n in best.params.names()},
+        "tuned": list(space.names),
+        "evaluations": n_eval,
+        "budget": budget,
+        "stopped": stopped,
+        "infeasible": [x.as_dict() for x in infeasible],
+        "limiting_ec": min(failing)[1] if failing else None,
+    }
 
 
 def _task_inputs(task: PointTask) -> tuple[Scene, TuningConfig, Criteria]:

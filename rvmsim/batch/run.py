@@ -26,7 +26,7 @@ from .store import SWEEP_DB, SweepStore, sweep_lock
 if TYPE_CHECKING:
     from .._progress import ProgressBar
 
-__all__ = ["SweepResult", "point_task", "run_sweep", "stored_sweep"]
+__all__ = ["SweepResult", "point_task", "run_sweep", "stored_sweep", "PHASES", "phase_seconds"]
 
 _Task = TypeVar("_Task")
 _Result = TypeVar("_Result")
@@ -57,7 +57,25 @@ class SweepResult:
                 f"{kinds.count('pass')} pass every "
                 f"{'market' if self.spec.markets else 'EC'}, {kinds.count('not found')} not found, "
                 f"{kinds.count('infeasible')} infeasible"
-                + (f", {n_err} failed to run (see sweep.csv)" if n_err else ""))
+                + (f", {n_err} failed to run (see sweep.csv)" if n_err else "")
+                + "; seconds per phase over the points' final runs: "
+                + ", ".join(f"{k} {v:.1f}" for k, v in phase_seconds(self.results).items()))
+
+
+#: The timed phases of a point's run (its ``phases``), in order.
+PHASES = ("render", "tune", "yield")
+
+
+def phase_seconds(results: Mapping[str, MergedResult]) -> dict[str, float]:
+    """Seconds per phase (:data:`PHASES`) summed over the points' final runs (each point's
+    ``phases``; points stored before phases were timed count 0)."""
+    out = dict.fromkeys(PHASES, 0.0)
+    for r in results.values():
+        phases = r.get("phases") if "error" not in r else None
+        if isinstance(phases, Mapping):
+            for k in PHASES:
+                out[k] += float(phases.get(k, 0.0))
+    return out
 
 
 def _check_out(spec: SweepSpec, out_dir: Path, force: bool) -> None:

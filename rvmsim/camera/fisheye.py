@@ -34,6 +34,10 @@ from .lens import LensModel
 __all__ = ["FisheyeCamera"]
 
 
+#: :meth:`FisheyeCamera.image_rays` of the last few intrinsics (key → (rays, in_fov)).
+_IMAGE_RAYS: dict[tuple[object, ...], tuple[np.ndarray, np.ndarray]] = {}
+_IMAGE_RAYS_KEPT = 2
+
 @dataclass(frozen=True)
 class FisheyeCamera:
     """A calibrated fisheye camera at a pose in the scene.
@@ -255,7 +259,19 @@ class FisheyeCamera:
         Convention
         ----------
         ``rays[v, u]`` is the ray of the pixel centre (u, v) (integer px); see
-        :meth:`pixel_rays`.
+        :meth:`pixel_rays`.  The rays depend on the intrinsics and lens only, not on the
+        mount: the last few sets are kept (read-only arrays, shared) for cameras that differ
+        only in their mount, such as a sweep's design points and variation samples.
         """
-        u, v = np.meshgrid(np.arange(self.width), np.arange(self.height))
-        return self.pixel_rays(np.stack([u, v], axis=-1).astype(np.float64))
+        key = (self.width, self.height, self.fx, self.fy, self.cx, self.cy, tuple(self.k),
+               self.skew, self.fov_deg)
+        found = _IMAGE_RAYS.get(key)
+        if found is None:
+            u, v = np.meshgrid(np.arange(self.width), np.arange(self.height))
+            found = self.pixel_rays(np.stack([u, v], axis=-1).astype(np.float64))
+            for a in found:
+                a.setflags(write=False)  # shared by every camera with these intrinsics
+            if len(_IMAGE_RAYS) >= _IMAGE_RAYS_KEPT:
+                _IMAGE_RAYS.pop(next(iter(_IMAGE_RAYS)))
+            _IMAGE_RAYS[key] = found
+        return found

@@ -103,6 +103,7 @@ from .annotate import (
 from .evaluator import (
     CandidateEvaluator,
 )
+from .batched import CandidateBatch
 from .record import (
     NEAR_SCORE,
     could_pass,
@@ -176,6 +177,7 @@ __all__ = [
     "OFF",
     "INK",
     "CandidateEvaluator",
+    "CandidateBatch",
     "NEAR_SCORE",
     "record_display",
     "record_size",

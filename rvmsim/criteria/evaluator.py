@@ -34,6 +34,7 @@ tests check this on random candidates.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,7 +48,7 @@ from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
 
-__all__ = ["CandidateEvaluator"]
+__all__ = ["CandidateEvaluator", "NodeLookup", "merge_windows"]
 
 #: Fisheye px around the image that node positions are clipped to.
 _PAD_PX = 8
@@ -107,7 +108,7 @@ def _node_reach(grid: np.ndarray) -> np.ndarray:
 _CALL_US, _PX_US = 20.0, 0.0025
 
 
-def _merge_windows(windows: list[Window]) -> list[Window]:
+def merge_windows(windows: list[Window]) -> list[Window]:
     """Boxes to remap so that every window lies in one of them, merging windows where one
     remap of their union costs less than two (``_CALL_US``, ``_PX_US``); greedy, in order."""
     boxes: list[list[int]] = []
@@ -127,7 +128,7 @@ def _merge_windows(windows: list[Window]) -> list[Window]:
 
 class _RemapSource(LabelSource):
     """Label pixels of one candidate: the windows are merged into a few boxes
-    (:func:`_merge_windows`), remapped on first use."""
+    (:func:`merge_windows`), remapped on first use."""
 
     def __init__(self, fisheye: np.ndarray, nodes: MapNodes, windows: list[Window],
                  shape: tuple[int, int], groups: dict[str, Window], *,
@@ -138,7 +139,7 @@ class _RemapSource(LabelSource):
         self.nodes = nodes
         self.groups = groups
         self.shape = shape
-        self.boxes = _merge_windows(windows)
+        self.boxes = merge_windows(windows)
         self.images: dict[int, np.ndarray] = {}
         self._shared = {}
 
@@ -166,6 +167,18 @@ class _RemapSource(LabelSource):
                     img = self.images[k] = self._remap(self.boxes[k])
                 return img[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
         return self._remap(win)
+
+
+@dataclass(frozen=True)
+class NodeLookup:
+    """A candidate's node grid as :meth:`CandidateEvaluator.windows_at` reads it: each
+    node's block in the stored group distances (``flat``, (rows, cols) intp), its reach
+    (px, in every byte of ``reach_bytes``, with the high bits set) and the grid's spacing
+    ``cell`` (output px)."""
+
+    flat: np.ndarray
+    reach_bytes: np.ndarray
+    cell: float
 
 
 class CandidateEvaluator:
@@ -220,6 +233,11 @@ class CandidateEvaluator:
             (int(x0), int(y0), int(x1), int(y1)) for ec in self.criteria.ecs if ec.regions
             for x0, y0, x1, y1 in ec.regions(shape, options)))
 
+    @property
+    def regions(self) -> list[Window]:
+        """The fixed RVM regions the ECs read (e.g. the bumper's columns), each once."""
+        return self._regions
+
     def _whole(self) -> dict[str, Window]:
         w, h = self.output.width, self.output.height
         rows = self.criteria.options.upper_rows(h)
@@ -228,18 +246,23 @@ class CandidateEvaluator:
     def windows(self, params: IspParams, nodes: MapNodes | None = None) -> dict[str, Window]:
         """The RVM window each label group can appear in, for one parameter set (``nodes``:
         its map's node grid, when already built)."""
-        import cv2
-
         if nodes is None:
             nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
+        return self.windows_at(self.node_lookup(nodes))
+
+    def node_lookup(self, nodes: MapNodes) -> NodeLookup | None:
+        """What :meth:`windows_at` reads of a candidate's node grid: the same for every
+        evaluator of this input size and output (None: the windows are the whole image)."""
+        import cv2
+
         # nearest rounding (1 px) + distances are block minima: a node's own distance is at
         # least its block's minimum − the block size
         use, margin = nodes, 1.0 + _DIST_BLOCK_PX
         first = nodes.first
         if first is not None and first.grid is not None and first.error_px <= _COARSE_ERROR_LIMIT_PX:
             use, margin = first, margin + 2.0 * (first.error_px + nodes.error_px)
-        if use.grid is None or not self._chunks:
-            return self._whole()
+        if use.grid is None:
+            return None
         iw, ih = self.input_size
         grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),  # type: ignore[call-overload]
                        (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0))
@@ -247,15 +270,20 @@ class CandidateEvaluator:
         # block of each node (floor: positions are ≥ 0 here)
         idx = ((grid + _PAD_PX) * (1.0 / _DIST_BLOCK_PX)).astype(np.intp)
         flat = idx[..., 1] * self._dist_width + idx[..., 0]
-        reach_bytes = reach * _BYTES | _HIGH_BITS
+        return NodeLookup(flat, reach * _BYTES | _HIGH_BITS, use.cell)
+
+    def windows_at(self, lookup: NodeLookup | None) -> dict[str, Window]:
+        """:meth:`windows` from a candidate's :meth:`node_lookup`."""
+        if lookup is None or not self._chunks:
+            return self._whole()
         out: dict[str, Window] = {}
         for chunk, dists in zip(self._chunks, self._dists):
             # bytewise "distance ≤ reach" for all groups at once: each byte of
             # (reach | 0x80) − distance is 128 + reach − distance ≥ 1 (both ≤ 127, no borrow)
-            flags = (reach_bytes - np.take(dists, flat)) & _HIGH_BITS
+            flags = (lookup.reach_bytes - np.take(dists, lookup.flat)) & _HIGH_BITS
             flags = np.ascontiguousarray(flags[..., None].view(np.uint8).transpose(2, 0, 1))
             for k, group in enumerate(chunk):
-                out[group.name] = self._window(flags[k], use.cell, group)
+                out[group.name] = self._window(flags[k], lookup.cell, group)
         return out
 
     def _window(self, flags: np.ndarray, c: float, group: LabelGroup) -> Window:

@@ -150,6 +150,8 @@ class IspParams:
     def __post_init__(self) -> None:
         for spec in PARAM_SPECS:
             value = getattr(self, spec.name)
+            if type(value) is float and spec.low <= value <= spec.high:
+                continue  # the common case, checked fast (NaN and infinities fail the range)
             problem = spec.problem(value)
             if problem is not None:
                 raise ValueError(f"{spec.name}: {problem}")

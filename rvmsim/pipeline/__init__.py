@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from .frame import RvmFrame, evaluate_params, evaluate_rvm_labels, render_rvm, rvm_color
 from .pixels import RvmPixels, rvm_pixels
+from .batched import ImagesEvaluator
 from .evaluators import (
     EvaluationPath,
     FisheyeLabels,
@@ -27,6 +28,7 @@ from .evaluators import (
 from .files import write_evaluation, write_fisheye, write_frame, write_processed
 
 __all__ = [
+    "ImagesEvaluator",
     "RvmFrame",
     "evaluate_params",
     "evaluate_rvm_labels",

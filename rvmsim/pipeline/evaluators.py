@@ -183,8 +183,15 @@ class RecordEvaluator:
 
     def values(self, params: IspParams) -> np.ndarray:
         """The values of record, (k,) in ``criteria.ids`` order, NaN where not measured."""
-        v = self.search.values(params) * self._scales
-        return v if self._decided(v) else self.record.values(params)
+        v = self.decided_values(self.search.values(params))
+        return v if v is not None else self.record.values(params)
+
+    def decided_values(self, search_values: np.ndarray) -> np.ndarray | None:
+        """``search``'s values of a candidate in units of record when they decide its
+        verdict (a clear fail), else None: the candidate is measured at the size of
+        record."""
+        v = search_values * self._scales
+        return v if self._decided(v) else None
 
     def measure(self, params: IspParams) -> Measurements:
         """The measurements of record (a clear fail: the search size's, values converted)."""

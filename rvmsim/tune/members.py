@@ -38,9 +38,10 @@ import numpy as np
 
 from ..criteria import Criteria
 from ..errors import RvmsimError
-from ..isp import IspParams, OutputSpec
-from ..pipeline import ImageEvaluator, make_evaluator
-from .objective import PASS_WEIGHT, ParamsScores, ScoredBatch, check_objective, score_params
+from ..isp import IspParams, OutputSpec, input_to_plane
+from ..pipeline import ImageEvaluator, ImagesEvaluator, make_evaluator
+from .objective import (PASS_WEIGHT, ParamsScores, ScoredBatch, check_objective, score_params,
+                        score_values)
 from ..runs.records import params_json
 from .solve import EcSolver
 from ..search.space import SearchSpace
@@ -173,11 +174,30 @@ class MembersSolver:
         for s in self.solvers:
             names += [n for n in s.names if n not in names]
         self.names = tuple(names)
+        sizes = {s.input_size for s in self.solvers}
+        self._size = sizes.pop() if len(sizes) == 1 else None
+        ends = np.cumsum([0] + [len(s.points) for s in self.solvers])
+        self._parts = [slice(int(a), int(b)) for a, b in zip(ends, ends[1:])]
+        self._points = (np.concatenate([s.points for s in self.solvers]) if self.solvers
+                        else np.zeros((0, 2)))
+
+    def _each(self, params: IspParams) -> list[IspParams]:
+        """Each solver's solution.  Without the rotations (the paper's setting) the plane
+        point of a fisheye point is a function of that point alone
+        (:func:`rvmsim.isp.input_to_plane`), so every solver's points are mapped in one call
+        and each solver gets its own rows, exactly as it would map them; with rotations each
+        maps its own (a matrix product, whose rounding need not be the same per row in a
+        larger batch)."""
+        if self._size is None or not params.h_pan == params.tilt == params.theta == 0.0:
+            return [s(params) for s in self.solvers]
+        xy, ok = input_to_plane(params, self._points, self._size)
+        return [s.solve_at(params, xy[part], ok[part])
+                for s, part in zip(self.solvers, self._parts)]
 
     def __call__(self, params: IspParams) -> IspParams:
         if len(self.solvers) == 1:
             return self.solvers[0](params)
-        solved = [(s.names, s(params)) for s in self.solvers]
+        solved = [(s.names, p) for s, p in zip(self.solvers, self._each(params))]
         values = {}
         for n in self.names:
             got = [getattr(p, n) for names, p in solved if n in names]
@@ -220,6 +240,8 @@ class MembersScorer:
         self.aggregate = aggregate
         self.combine = combine
         self.compensation = compensation
+        #: Every member's evaluation of a candidate with one map (made on first use).
+        self.images: ImagesEvaluator | None = None
 
     def __call__(self, xs: Sequence[np.ndarray]) -> ScoredBatch:
         params = [self.space.params(x) for x in xs]
@@ -245,8 +267,13 @@ class MembersScorer:
     def _per_member(self, params: list[IspParams]) -> list[ParamsScores]:
         """Each member's scores of the candidates: with compensation, each sample member
         judged with its per-car values, failing where they leave the allowed range."""
-        if self.compensation is None:
-            return [score_params(ev, params) for ev in self.evaluators]
+        if self.compensation is None:  # one map per candidate for every member
+            images = ImagesEvaluator(self.evaluators) if self.images is None else self.images
+            self.images = images
+            found = [images.values(p) for p in params]
+            return [score_values(np.array([row[m] for row in found]).reshape(
+                len(params), len(ev.criteria.ids)), ev.criteria)
+                for m, ev in enumerate(self.evaluators)]
         per = []
         for ev, row in zip(self.evaluators, self.compensation.corrections(params)):
             m = score_params(ev, [p if c is None else c.params for p, c in zip(params, row)])

@@ -30,7 +30,8 @@ from ..runs.records import ec_json, params_json
 from ..search.space import SearchSpace
 
 __all__ = ["OBJECTIVE_FLOOR", "OBJECTIVES", "PASS_WEIGHT", "MAX_VIOLATION", "ScoredBatch",
-           "score_vectors", "violations", "ParamsScores", "score_params", "check_objective"]
+           "score_vectors", "violations", "ParamsScores", "score_params", "score_values",
+           "check_objective"]
 
 #: Floor of each EC score inside the objective's logarithm.
 OBJECTIVE_FLOOR = 1e-4
@@ -128,10 +129,19 @@ def score_params(evaluator: ImageEvaluator, params: Sequence[IspParams], *,
     ``violation`` the violations are not computed (zeros)."""
     ids = evaluator.criteria.ids
     values = np.array([evaluator.values(p) for p in params]).reshape(len(params), len(ids))
-    b = score_batch(values, evaluator.criteria)
+    return score_values(values, evaluator.criteria, violation=violation)
+
+
+def score_values(values: np.ndarray, criteria: Criteria, *, violation: bool = True
+                 ) -> ParamsScores:
+    """:func:`score_params` from the measured values, (n, k) in ``criteria.ids`` order (NaN
+    where not measured)."""
+    ids = criteria.ids
+    values = np.asarray(values, np.float64).reshape(-1, len(ids))
+    b = score_batch(values, criteria)
     ecs = [ec_json(ids, v, s, o) for v, s, o in zip(b.values.tolist(), b.scores.tolist(),
                                                 b.passed.tolist())]
     return ParamsScores(np.asarray(b.score, np.float64), b.objective(OBJECTIVE_FLOOR),
-                        violations(values, evaluator.criteria).sum(axis=1) if violation
-                        else np.zeros(len(params)),
+                        violations(values, criteria).sum(axis=1) if violation
+                        else np.zeros(len(values)),
                         np.asarray(b.all_passed, bool), ecs)

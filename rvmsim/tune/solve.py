@@ -21,6 +21,7 @@ are refused (:class:`~rvmsim.errors.CriteriaError`): which one wins would be arb
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,12 +99,26 @@ class EcSolver:
         self.names = tuple(s.hook.param for s in solves)
         self.targets = {s.ec.id: s.target for s in solves}
 
+    @property
+    def points(self) -> np.ndarray:
+        """Every solve's fisheye outline points, (N, 2) px: what :meth:`solve_at` takes
+        mapped onto the plane."""
+        return self._points
+
     def __call__(self, params: IspParams) -> IspParams:
         """``params`` with the solved parameters set (the others unchanged)."""
         if not self._solves:
             return params
-        planes: dict[int, np.ndarray] = {}
         xy_all, ok_all = input_to_plane(params, self._points, self.input_size)
+        return self.solve_at(params, xy_all, ok_all)
+
+    def solve_at(self, params: IspParams, xy_all: np.ndarray, ok_all: np.ndarray
+                 ) -> IspParams:
+        """:meth:`__call__` with :attr:`points` already mapped onto the plane
+        (:func:`rvmsim.isp.input_to_plane` of ``params``: ``xy_all``, ``ok_all``)."""
+        if not self._solves:
+            return params
+        planes: dict[int, np.ndarray] = {}
         for k, part in enumerate(self._slices):
             xy, ok = xy_all[part], ok_all[part]
             if np.count_nonzero(ok) >= 3:
@@ -115,9 +130,13 @@ class EcSolver:
                     continue
                 value = checked_solve_value(
                     s.ec, "solve", s.hook.solve(planes[k], current, self.output, s.target))
-                if value is not None:
-                    current = current.replace(
-                        **{s.hook.param: float(min(max(value, s.low), s.high))})
+                if value is None:
+                    continue
+                value = float(min(max(value, s.low), s.high))
+                now = getattr(current, s.hook.param)
+                # an equal value (and sign: −0.0 is stored as such) changes nothing
+                if value != now or math.copysign(1.0, value) != math.copysign(1.0, now):
+                    current = current.replace(**{s.hook.param: value})
         return params.replace(**{n: getattr(current, n) for n in self.names})
 
 

@@ -30,11 +30,18 @@ def test_local_sweep_results_and_sensitivity(local_run):
     for p in res.points:
         r = res.results[p.key]
         assert "error" not in r, r
-        assert 0.0 <= r["score"] <= 1.0 and r["evaluations"] == 200
         assert list(r["ecs"]) == list(criteria.ids)
         # The limiting EC is a failing one with the lowest score (None when all pass).
         failing = {e: v["score"] for e, v in r["ecs"].items() if not v["passed"]}
         assert r["limiting_ec"] == (min(failing, key=failing.get) if failing else None)
+        assert set(r["phases"]) == {"render", "tune", "yield"}
+        assert sum(r["phases"].values()) <= r["seconds"]
+        if r["infeasible"]:  # proven before any search: one candidate, failing those ECs
+            assert r["evaluations"] == 1 and r["stopped"] == "infeasible"
+            assert r["score"] == 0.0 and "sensitivity" not in r
+            assert all(not r["ecs"][x["ec"]]["passed"] for x in r["infeasible"])
+            continue
+        assert 0.0 <= r["score"] <= 1.0 and r["evaluations"] == 200
         # Sensitivity: every tuned parameter, probed at ±2/5/10 % of its range; the optimum
         # is the point's best score.
         sens = r["sensitivity"]

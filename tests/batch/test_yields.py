@@ -296,3 +296,20 @@ def _points(db):
             return con.execute("SELECT COUNT(*) FROM points").fetchone()[0]
     except sqlite3.OperationalError:
         return 0
+
+
+def test_an_infeasible_point_is_neither_searched_nor_given_a_yield(tmp_path):
+    """Its verdict is proven from the render: one candidate, no sensitivity, and a yield
+    'not measured' with the reason, empty in the table (issue #29)."""
+    text = SWEEP.replace("axes:\n  pitch_deg: [28, 34]",
+                         "axes:\n  camera_height_m: [0.8]\n  pitch_deg: [30]")
+    spec = load_sweep(write_sweep(tmp_path, text, VARIATION))
+    res = run_sweep(spec, tmp_path / "out", executor=LocalExecutor(1))
+    (r,) = res.results.values()
+    assert r["verdict"] == "infeasible" and r["evaluations"] == 1 and r["score"] == 0.0
+    assert "sensitivity" not in r and r["rechecks"] == 0
+    assert r["robustness"]["error"].startswith("not measured: the point is infeasible (")
+    assert r["reason"] in r["robustness"]["error"]
+    assert r["phases"]["yield"] < 0.5 and r["phases"]["tune"] < r["seconds"]
+    header, rows = sweep_table(spec, res.points, res.results)
+    assert all(rows[0][header.index(c)] is None for c in YIELD_COLUMNS)
