@@ -31,7 +31,7 @@ import numpy as np
 from .. import labels as L
 from ..isp import IspParams, MapNodes, RayCache, map_nodes
 from .context import IspView
-from .evaluator import CandidateEvaluator, merge_windows
+from .evaluator import CandidateEvaluator, box_holding, group_window, merge_windows
 from .groups import LabelGroup, Window
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import values_array
@@ -85,19 +85,16 @@ class _BatchSource(LabelSource):
         self._shared = {}
 
     def window(self, group: LabelGroup | str) -> Window:
-        name = group if isinstance(group, str) else group.name
-        try:
-            return self.groups[name]
-        except KeyError:
-            raise KeyError(f"label group {name!r} is not declared by the ECs measured") from None
+        return group_window(self.groups, group)
 
     def pixels(self, win: Window) -> np.ndarray:
         x0, y0, x1, y1 = win
         if x1 <= x0 or y1 <= y0:
             return np.zeros((0, 0), np.uint8)
-        for k, (bx0, by0, bx1, by1) in enumerate(self.planes.boxes):
-            if bx0 <= x0 and by0 <= y0 and x1 <= bx1 and y1 <= by1:
-                return self.planes.box(k)[self.member][y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
+        k = box_holding(self.planes.boxes, win)
+        if k is not None:
+            bx0, by0 = self.planes.boxes[k][:2]
+            return self.planes.box(k)[self.member][y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
         import cv2
 
         return cv2.remap(self.evaluator.fisheye, self.planes.nodes.window(win), None,  # type: ignore[call-overload]

@@ -34,6 +34,7 @@ tests check this on random candidates.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +49,7 @@ from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
 
-__all__ = ["CandidateEvaluator", "NodeLookup", "merge_windows"]
+__all__ = ["CandidateEvaluator", "NodeLookup", "box_holding", "group_window", "merge_windows"]
 
 #: Fisheye px around the image that node positions are clipped to.
 _PAD_PX = 8
@@ -108,6 +109,30 @@ def _node_reach(grid: np.ndarray) -> np.ndarray:
 _CALL_US, _PX_US = 20.0, 0.0025
 
 
+def box_holding(boxes: Sequence[Window], win: Window) -> int | None:
+    """The index of the first of ``boxes`` that holds window ``win`` whole, or None."""
+    x0, y0, x1, y1 = win
+    for k, (bx0, by0, bx1, by1) in enumerate(boxes):
+        if bx0 <= x0 and by0 <= y0 and x1 <= bx1 and y1 <= by1:
+            return k
+    return None
+
+
+def group_window(groups: dict[str, Window], group: LabelGroup | str) -> Window:
+    """The window of label group ``group`` (or its name) among ``groups``.
+
+    Raises
+    ------
+    KeyError
+        The group is not one the ECs measured declare.
+    """
+    name = group if isinstance(group, str) else group.name
+    try:
+        return groups[name]
+    except KeyError:
+        raise KeyError(f"label group {name!r} is not declared by the ECs measured") from None
+
+
 def merge_windows(windows: list[Window]) -> list[Window]:
     """Boxes to remap so that every window lies in one of them, merging windows where one
     remap of their union costs less than two (``_CALL_US``, ``_PX_US``); greedy, in order."""
@@ -150,23 +175,20 @@ class _RemapSource(LabelSource):
                          cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
 
     def window(self, group: LabelGroup | str) -> Window:
-        name = group if isinstance(group, str) else group.name
-        try:
-            return self.groups[name]
-        except KeyError:
-            raise KeyError(f"label group {name!r} is not declared by the ECs measured") from None
+        return group_window(self.groups, group)
 
     def pixels(self, win: Window) -> np.ndarray:
         x0, y0, x1, y1 = win
         if x1 <= x0 or y1 <= y0:
             return np.zeros((0, 0), np.uint8)
-        for k, (bx0, by0, bx1, by1) in enumerate(self.boxes):
-            if bx0 <= x0 and by0 <= y0 and x1 <= bx1 and y1 <= by1:
-                img = self.images.get(k)
-                if img is None:
-                    img = self.images[k] = self._remap(self.boxes[k])
-                return img[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
-        return self._remap(win)
+        k = box_holding(self.boxes, win)
+        if k is None:
+            return self._remap(win)
+        img = self.images.get(k)
+        if img is None:
+            img = self.images[k] = self._remap(self.boxes[k])
+        bx0, by0 = self.boxes[k][:2]
+        return img[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
 
 
 @dataclass(frozen=True)
