@@ -31,8 +31,8 @@ import numpy as np
 from .. import labels as L
 from ..isp import IspParams, MapNodes, RayCache, map_nodes
 from .context import IspView
-from .evaluator import CandidateEvaluator, box_holding, group_window, merge_windows
-from .groups import LabelGroup, Window
+from .evaluator import BoxedSource, CandidateEvaluator, merge_windows, remap_labels
+from .groups import Window
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import values_array
 
@@ -70,7 +70,7 @@ class _Planes:
         return out[: self.n]
 
 
-class _BatchSource(LabelSource):
+class _BatchSource(BoxedSource):
     """One image's label pixels of a candidate, cut from the batch's remapped boxes."""
 
     def __init__(self, planes: _Planes, member: int, groups: dict[str, Window],
@@ -78,27 +78,18 @@ class _BatchSource(LabelSource):
         self.planes = planes
         self.member = member
         self.groups = groups
+        self.boxes = planes.boxes
         self.shape = shape
         self.evaluator = evaluator
         self.context = evaluator.context
         self.isp = isp
         self._shared = {}
 
-    def window(self, group: LabelGroup | str) -> Window:
-        return group_window(self.groups, group)
+    def box_image(self, k: int) -> np.ndarray:
+        return self.planes.box(k)[self.member]
 
-    def pixels(self, win: Window) -> np.ndarray:
-        x0, y0, x1, y1 = win
-        if x1 <= x0 or y1 <= y0:
-            return np.zeros((0, 0), np.uint8)
-        k = box_holding(self.planes.boxes, win)
-        if k is not None:
-            bx0, by0 = self.planes.boxes[k][:2]
-            return self.planes.box(k)[self.member][y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
-        import cv2
-
-        return cv2.remap(self.evaluator.fisheye, self.planes.nodes.window(win), None,  # type: ignore[call-overload]
-                         cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+    def remap(self, win: Window) -> np.ndarray:
+        return remap_labels(self.evaluator.fisheye, self.planes.nodes, win)
 
 
 class CandidateBatch:

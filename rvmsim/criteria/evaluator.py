@@ -49,7 +49,8 @@ from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
 
-__all__ = ["CandidateEvaluator", "NodeLookup", "box_holding", "group_window", "merge_windows"]
+__all__ = ["CandidateEvaluator", "NodeLookup", "BoxedSource", "box_holding", "group_window", "merge_windows",
+           "remap_labels"]
 
 #: Fisheye px around the image that node positions are clipped to.
 _PAD_PX = 8
@@ -151,7 +152,46 @@ def merge_windows(windows: list[Window]) -> list[Window]:
     return [tuple(b) for b in boxes]  # type: ignore[misc]
 
 
-class _RemapSource(LabelSource):
+def remap_labels(fisheye: np.ndarray, nodes: MapNodes, win: Window) -> np.ndarray:
+    """The label pixels of output window ``win`` through the map ``nodes`` (nearest
+    neighbour; outside the fisheye image :data:`rvmsim.labels.VOID`)."""
+    import cv2
+
+    return cv2.remap(fisheye, nodes.window(win), None,  # type: ignore[call-overload]
+                     cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+
+
+class BoxedSource(LabelSource):
+    """Label pixels of one candidate cut from a few remapped boxes that hold its windows
+    (``boxes``); a window no box holds is remapped alone (:meth:`remap`).  Subclasses give
+    ``groups``, ``boxes``, :meth:`box_image` and :meth:`remap`."""
+
+    groups: dict[str, Window]
+    boxes: Sequence[Window]
+
+    def box_image(self, k: int) -> np.ndarray:
+        """The label pixels of box ``k``."""
+        raise NotImplementedError
+
+    def remap(self, win: Window) -> np.ndarray:
+        """The label pixels of window ``win`` alone."""
+        raise NotImplementedError
+
+    def window(self, group: LabelGroup | str) -> Window:
+        return group_window(self.groups, group)
+
+    def pixels(self, win: Window) -> np.ndarray:
+        x0, y0, x1, y1 = win
+        if x1 <= x0 or y1 <= y0:
+            return np.zeros((0, 0), np.uint8)
+        k = box_holding(self.boxes, win)
+        if k is None:
+            return self.remap(win)
+        bx0, by0 = self.boxes[k][:2]
+        return self.box_image(k)[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
+
+
+class _RemapSource(BoxedSource):
     """Label pixels of one candidate: the windows are merged into a few boxes
     (:func:`merge_windows`), remapped on first use."""
 
@@ -168,27 +208,14 @@ class _RemapSource(LabelSource):
         self.images: dict[int, np.ndarray] = {}
         self._shared = {}
 
-    def _remap(self, win: Window) -> np.ndarray:
-        import cv2
+    def remap(self, win: Window) -> np.ndarray:
+        return remap_labels(self.fisheye, self.nodes, win)
 
-        return cv2.remap(self.fisheye, self.nodes.window(win), None,  # type: ignore[call-overload]
-                         cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
-
-    def window(self, group: LabelGroup | str) -> Window:
-        return group_window(self.groups, group)
-
-    def pixels(self, win: Window) -> np.ndarray:
-        x0, y0, x1, y1 = win
-        if x1 <= x0 or y1 <= y0:
-            return np.zeros((0, 0), np.uint8)
-        k = box_holding(self.boxes, win)
-        if k is None:
-            return self._remap(win)
+    def box_image(self, k: int) -> np.ndarray:
         img = self.images.get(k)
         if img is None:
-            img = self.images[k] = self._remap(self.boxes[k])
-        bx0, by0 = self.boxes[k][:2]
-        return img[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
+            img = self.images[k] = self.remap(self.boxes[k])
+        return img
 
 
 @dataclass(frozen=True)
