@@ -204,16 +204,21 @@ def run_markets_point(task: PointTask) -> PointResult:
     t0 = time.perf_counter()
     try:
         pairs, renders, members = _members(task)
+        rendered = time.perf_counter() - t0
         result = _search(task, pairs, renders, members)
     except RvmsimError as err:
         return {"error": str(err), "seconds": time.perf_counter() - t0}
+    result["phases"] = {"render": rendered, **result.get("phases", {})}
     result["seconds"] = time.perf_counter() - t0
     return result
 
 
 def _search(task: PointTask, pairs: Sequence[MarketMember],
             renders: Sequence[FisheyeImages], members: Sequence[Member]) -> PointRun:
-    """Tune, then judge and probe the best setting of one markets point."""
+    """Tune, then judge and probe the best setting of one markets point.  A point some
+    market makes infeasible is proven so before any search: one candidate fills its EC
+    columns, and it gets neither a sensitivity probe nor a yield (as a one-criteria
+    point, :func:`~rvmsim.batch.point.run_point`)."""
     from ..criteria import record_size
     from ..isp import IspParams
     from ..runs import RunStore
@@ -223,11 +228,15 @@ def _search(task: PointTask, pairs: Sequence[MarketMember],
 
     config = TuningConfig.model_validate(task["config"]).at_record(
         record_size(pairs[0].criteria, pairs[0].scene))
+    t = time.perf_counter()
     infeasible = _infeasible(pairs, renders)
     space = config.space(members[0].camera)
     budget = _task_budget(task, renders[0], config)
-    strat = make_strategy(task["strategy"], space, config, task["seed"], budget,
-                          [space.vector(IspParams(**p)) for p in task.get("starts", ())])
+    if infeasible:  # the verdict is proven: one candidate, every setting fails alike
+        strat = make_strategy("random", space, config, task["seed"], 1)
+    else:
+        strat = make_strategy(task["strategy"], space, config, task["seed"], budget,
+                              [space.vector(IspParams(**p)) for p in task.get("starts", ())])
     store = RunStore(":memory:")
     try:
         outcome = search_members(members, SearchSettings(config, pairs[0].criteria, strat),
@@ -246,18 +255,26 @@ def _search(task: PointTask, pairs: Sequence[MarketMember],
                 for ec, o in best.ecs.items()},
         "params": {n: getattr(best.params, n) for n in best.params.names()},
         "tuned": list(space.names), "evaluations": n_eval, "budget": budget,
-        "stopped": outcome.stopped, "infeasible": infeasible, "limiting_ec": limiting,
-        "limiting_market": market, "markets": outcomes}
-    if task.get("sensitivity", True):
+        "stopped": "infeasible" if infeasible else outcome.stopped, "infeasible": infeasible,
+        "limiting_ec": limiting, "limiting_market": market, "markets": outcomes}
+    if task.get("sensitivity", True) and not infeasible:
         scorer = MembersScorer(member_evaluators(members, config.output_spec(),
                                                  pairs[0].criteria), space)
         result["sensitivity"] = probe_sensitivity(lambda xs: scorer(xs).score, space,
                                                   best.params)
+    phases = {"tune": time.perf_counter() - t}
+    t = time.perf_counter()
     rob, beat = task.get("robustness"), task.get("beat")
-    if (rob and rob["samples"] > 0 and pairs[0].scene.variation is not None
-            and (beat is None or (result["passed"], result["score"]) > tuple(beat))):
+    measured = rob and rob["samples"] > 0 and pairs[0].scene.variation is not None
+    if measured and infeasible:
+        result["robustness"] = {"error": "not measured: the point is infeasible ("
+                                + "; ".join(x["reason"] for x in infeasible) + ")",
+                                "seconds": 0.0}
+    elif measured and (beat is None or (result["passed"], result["score"]) > tuple(beat)):
         result["robustness"] = markets_yield(pairs, best.params, config.output_spec(),
                                              rob["samples"], rob["seed"])
+    phases["yield"] = time.perf_counter() - t
+    result["phases"] = phases
     return result
 
 

@@ -92,6 +92,9 @@ def test_far_row_cut_by_the_border_is_infeasible_for_unr158(markets_run):
     steep = next(p for p in res.points if dict(p.values)["pitch_deg"] == 75)
     r = res.results[steep.key]
     assert r["verdict"] == "infeasible" and not r["passed"]
+    # proven before any search: one candidate, failing the infeasible ECs, no probe
+    assert r["evaluations"] == 1 and r["stopped"] == "infeasible" and "sensitivity" not in r
+    assert set(r["phases"]) == {"render", "tune", "yield"}
     unr = [x for x in r["infeasible"] if x["market"] == "unr158"]
     assert unr and unr[0]["ec"] == "R158-3" and unr[0]["reason"].startswith("unr158: R158-3: ")
     assert "unr158: R158-3" in r["reason"]
