@@ -14,7 +14,6 @@ the stages of a candidate:
 ``remap``     the windows' maps (``cv2.resize`` of the nodes) and label pixels (``cv2.remap``)
 ``ECs``       the measure functions, without the remaps they ask for
 ``scoring``   sigmoid scores, objective, JSON of the parameters and EC columns
-``IPC``       pickling a batch's results as a worker sends them (timed separately)
 ``other``     the rest (parameter vectors, the loop)
 ``IPC``       pickling a batch's results as a worker sends them (timed separately)
 ``storage``   writing the batch to a run store (timed separately)
