@@ -64,6 +64,7 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
 
     board = parse_board_spec(board_spec)
     files = capture_files(list(captures))
+    _check_captures(files)
     views, missed, size = _find_views(files, board, board_spec)
     calib = calibrate_fisheye(views, board, size)
     write_calibration_outputs(calib, views, board, out, fov_deg)
@@ -80,6 +81,27 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
             f"fx {k[0, 0]:.3f}  fy {k[1, 1]:.3f}  cx {k[0, 2]:.3f}  cy {k[1, 2]:.3f} px; "
             f"D {', '.join(f'{d:+.6f}' for d in calib.D)}; RMS {calib.rms_px:.3f} px")
     return CalibrationSummary(camera_block(calib.K, calib.D, calib.image_size, fov_deg), text)
+
+
+def _check_captures(files: list[Path]) -> None:
+    """Every capture read once before any detection (:func:`rvmsim.validate.check_captures`):
+    a missing, unreadable, corrupt or blank one is refused naming it, and so are captures
+    of different sizes.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the capture at fault, or the sizes met.
+    """
+    from ..validate import check_captures
+
+    sizes = check_captures(files)
+    if len(set(sizes)) > 1:
+        first = files[sizes.index(sizes[0])]
+        other = next(k for k, s in enumerate(sizes) if s != sizes[0])
+        raise RvmsimError(f"{files[other]}: capture is {sizes[other][0]}x{sizes[other][1]} px "
+                          f"but {first.name} is {sizes[0][0]}x{sizes[0][1]} px (captures "
+                          "differ in size: one camera per run)")
 
 
 def _find_views(files: list[Path], board: BoardSpec, spec: str
