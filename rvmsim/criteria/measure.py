@@ -243,6 +243,11 @@ class EcFailedError(CriteriaError):
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         return (type(self), (self.plugin, self.ec_id, self.part, self.image, self.what))
 
+    def on(self, image: str) -> EcFailedError:
+        """The same failure, naming the image as ``image`` (a caller that knows more of it,
+        e.g. its scene)."""
+        return type(self)(self.plugin, self.ec_id, self.part, image, self.what)
+
 
 def passes_through(err: BaseException, plugin: str) -> bool:
     """Whether an exception raised by an EC's code goes on as it is rather than becoming an

@@ -75,28 +75,6 @@ def _hostile_case(folder, module: str) -> Case:
                             "--no-progress"), ("c.yaml",))
 
 
-@pytest.fixture
-def plugin_module(tmp_path, monkeypatch, request):
-    """A writer of importable plugin modules (``name`` → source), found on ``sys.path`` (and
-    on a child's ``PYTHONPATH``) and forgotten after the test."""
-    folder = tmp_path / "plugins"
-    folder.mkdir()
-    monkeypatch.syspath_prepend(str(folder))
-    made: list[str] = []
-
-    def write(source: str) -> str:
-        name = f"rvmsim_test_hostile_{request.node.name.translate(str.maketrans('[]-', '___'))}"
-        name += f"_{len(made)}"
-        (folder / f"{name}.py").write_text(source)
-        made.append(name)
-        return name
-
-    write.folder = folder
-    yield write
-    for name in made:
-        sys.modules.pop(name, None)
-
-
 @pytest.mark.parametrize("source, why", [h[1:] for h in HOSTILE], ids=[h[0] for h in HOSTILE])
 def test_an_unclean_failure_in_process_is_caught(source, why, case_dir, plugin_module):
     """The in-process runner sees what a child's pipes would: extra lines (from Python, from
