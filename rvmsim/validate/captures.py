@@ -182,6 +182,8 @@ def validate_captures(
     from .capture import check_captures, load_capture
     from .outputs import write_pictures
 
+    if len(folders) != len(captures):
+        raise ValueError(f"{len(captures)} captures but {len(folders)} output folders")
     check_captures(captures, scene.fisheye_camera())
     def one(capture_file: Path, out: Path) -> CaptureOutcome:
         name = str(capture_file)
