@@ -49,6 +49,8 @@ from concurrent.futures import Future, ProcessPoolExecutor
 from types import FrameType
 from typing import Any, ParamSpec, TypeVar
 
+from .errors import RvmsimError
+
 __all__ = ["spawn_pool", "stop_pool", "die_with_parent", "stop_on_signals", "Terminated",
            "ORPHAN_EXIT_STATUS"]
 
@@ -59,6 +61,9 @@ _T = TypeVar("_T")
 ORPHAN_EXIT_STATUS = 75
 #: Linux's ``prctl`` option that sets the signal a process gets when its parent dies.
 _PR_SET_PDEATHSIG = 1
+#: Longest wait (s) of :func:`stop_pool` for terminated workers to be gone and their pool to
+#: know it.
+_BROKEN_WAIT_S = 2.0
 #: How often the fallback watch polls the parent's pid when there is no parent pipe (s).
 _POLL_S = 0.25
 
@@ -82,8 +87,23 @@ class _Pool(ProcessPoolExecutor):
 
     def submit(self, fn: Callable[_P, _T], /, *args: _P.args,
                **kwargs: _P.kwargs) -> Future[_T]:
+        task: Callable[..., _T] = _task
         with _signals_held(), _sigint_blocked():
-            return super().submit(fn, *args, **kwargs)
+            return super().submit(task, fn, *args, **kwargs)
+
+
+#: This worker's start-up failure: its state or initializer raised an
+#: :class:`~rvmsim.errors.RvmsimError` (e.g. a criteria plugin that fails when the worker
+#: loads it again).  Every task the worker runs raises it (:func:`_task`), so the parent gets
+#: it as the task's error, one line, instead of a traceback and a broken pool.
+_START_FAILURE: RvmsimError | None = None
+
+
+def _task(fn: Callable[..., _T], *args: Any, **kwargs: Any) -> _T:
+    """A pool task: ``fn(*args, **kwargs)``, or the worker's start-up failure."""
+    if _START_FAILURE is not None:
+        raise _START_FAILURE
+    return fn(*args, **kwargs)
 
 
 @contextlib.contextmanager
@@ -108,8 +128,17 @@ def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
     if now:
         # concurrent.futures has no public way to end running workers before Python 3.14
         # (ProcessPoolExecutor.terminate_workers); its process table is the only handle.
-        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        procs = list((getattr(pool, "_processes", None) or {}).values())
+        for proc in procs:
             proc.terminate()
+        # Let the pool's manager thread see its workers gone and fail the tasks still
+        # pending before they are cancelled: cancelled first, it fails them afterwards and
+        # prints an InvalidStateError traceback (Python 3.11's concurrent.futures).
+        deadline = time.monotonic() + _BROKEN_WAIT_S
+        for proc in procs:
+            proc.join(max(0.0, deadline - time.monotonic()))
+        while procs and not getattr(pool, "_broken", True) and time.monotonic() < deadline:
+            time.sleep(0.01)
     pool.shutdown(wait=not now, cancel_futures=True)
 
 
@@ -120,9 +149,13 @@ def _start_worker(parent_pid: int, kernel: bool, payload: bytes) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C pending since the start
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
-    initializer, initargs = pickle.loads(payload)
-    if initializer is not None:
-        initializer(*initargs)
+    global _START_FAILURE
+    try:
+        initializer, initargs = pickle.loads(payload)
+        if initializer is not None:
+            initializer(*initargs)
+    except RvmsimError as err:  # kept for the tasks to raise (see _START_FAILURE)
+        _START_FAILURE = err
 
 
 def die_with_parent(parent_pid: int, *, kernel: bool = True) -> None:

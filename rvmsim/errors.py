@@ -8,6 +8,8 @@ line before exiting with status 2.
 
 from __future__ import annotations
 
+from typing import Any
+
 __all__ = [
     "RvmsimError",
     "InputFileError",
@@ -48,6 +50,10 @@ class InputFileError(RvmsimError):
         where = self.file if line is None else f"{self.file}:{line}"
         text = f"{where}: {key}: {message}" if key else f"{where}: {message}"
         super().__init__(text)
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        # by its parameters: a worker process's error reaches the parent whole
+        return (type(self), (self.file, self.key, self.message, self.line))
 
 
 class SceneError(InputFileError):

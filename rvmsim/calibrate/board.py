@@ -100,6 +100,28 @@ def _from_pattern_board(board: PatternBoard) -> BoardSpec:
     return BoardSpec((board.squares[0] - 1, board.squares[1] - 1), board.square_size, charuco)
 
 
+def _scene_board(path: Path) -> BoardSpec:
+    """The board of a scene file's ``test_site.board``.
+
+    Raises
+    ------
+    CalibrationInputError
+        The scene gives no ``test_site.board`` (the default board is not a board anybody
+        captured), or its board is disabled (``enabled: false``): naming the file and key.
+    """
+    from ..scene import load_scene
+
+    site = load_scene(path).test_site
+    if "board" not in site.model_fields_set:
+        raise CalibrationInputError(str(path), "test_site.board", "the scene gives no board "
+                                    "(--board SCENE calibrates with the scene's board)")
+    if not site.board.enabled:
+        raise CalibrationInputError(str(path), "test_site.board.enabled", "the board is "
+                                    "disabled in this scene: give the board captured with "
+                                    "--board COLSxROWS:SQUARE, or enable it")
+    return _from_pattern_board(site.board)
+
+
 def parse_board_spec(spec: str) -> BoardSpec:
     """The board of ``--board SPEC``: ``[inner:]COLSxROWS:SQUARE`` (inner corners, metres),
     ``squares:COLSxROWS:SQUARE`` (squares), ``charuco:COLSxROWS:SQUARE:MARKER[:DICT]``
@@ -128,9 +150,7 @@ def parse_board_spec(spec: str) -> BoardSpec:
         return BoardSpec((cols, rows), size)
     path = Path(spec)
     if path.suffix.lower() in (".yaml", ".yml") and path.is_file():
-        from ..scene import load_scene
-
-        return _from_pattern_board(load_scene(path).test_site.board)
+        return _scene_board(path)
     raise RvmsimError(f"--board {spec}: expected COLSxROWS:SQUARE (inner corners, metres, "
                       "e.g. 9x7:0.03), squares:COLSxROWS:SQUARE (squares, e.g. "
                       "squares:10x8:0.03), charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY] "

@@ -10,7 +10,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import RvmsimError
-from .board import BoardSpec
+from .board import BoardSpec, CalibrationInputError
 from .intrinsics import BoardView
 
 __all__ = ["CalibrationSummary", "calibrate_captures", "import_camera"]
@@ -27,10 +27,14 @@ class CalibrationSummary:
         ``camera.yaml`` and, on request, into a scene (:func:`~.outputs.write_scene_camera`).
     text : str
         For the terminal: what was found or imported, and how well it fits.
+    warnings : tuple of str
+        One line each, for stderr: what was written although it is doubtful (an OCamCalib
+        fit over :data:`~.imports.MAX_FIT_RMS_PX` accepted with ``accept_fit_error``).
     """
 
     camera: dict[str, Any]
     text: str
+    warnings: tuple[str, ...] = ()
 
 
 def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str | Path,
@@ -64,6 +68,7 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
 
     board = parse_board_spec(board_spec)
     files = capture_files(list(captures))
+    _check_captures(files)
     views, missed, size = _find_views(files, board, board_spec)
     calib = calibrate_fisheye(views, board, size)
     write_calibration_outputs(calib, views, board, out, fov_deg)
@@ -80,6 +85,27 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
             f"fx {k[0, 0]:.3f}  fy {k[1, 1]:.3f}  cx {k[0, 2]:.3f}  cy {k[1, 2]:.3f} px; "
             f"D {', '.join(f'{d:+.6f}' for d in calib.D)}; RMS {calib.rms_px:.3f} px")
     return CalibrationSummary(camera_block(calib.K, calib.D, calib.image_size, fov_deg), text)
+
+
+def _check_captures(files: list[Path]) -> None:
+    """Every capture read once before any detection (:func:`rvmsim.validate.check_captures`):
+    a missing, unreadable, corrupt or blank one is refused naming it, and so are captures
+    of different sizes.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the capture at fault, or the sizes met.
+    """
+    from ..validate import check_captures
+
+    sizes = check_captures(files)
+    if len(set(sizes)) > 1:
+        first = files[sizes.index(sizes[0])]
+        other = next(k for k, s in enumerate(sizes) if s != sizes[0])
+        raise RvmsimError(f"{files[other]}: capture is {sizes[other][0]}x{sizes[other][1]} px "
+                          f"but {first.name} is {sizes[0][0]}x{sizes[0][1]} px (captures "
+                          "differ in size: one camera per run)")
 
 
 def _find_views(files: list[Path], board: BoardSpec, spec: str
@@ -136,26 +162,58 @@ def _find_views(files: list[Path], board: BoardSpec, spec: str
     return views, missed, sizes.pop()
 
 
-def import_camera(file: str | Path, out: str | Path,
-                  fov_deg: float | None = None) -> CalibrationSummary:
+def import_camera(file: str | Path, out: str | Path, fov_deg: float | None = None, *,
+                  accept_fit_error: bool = False) -> CalibrationSummary:
     """Import an existing calibration (:func:`~.imports.import_calibration`: OpenCV, Kalibr,
     OCamCalib or a camera block) and write its camera block as ``out/camera.yaml``.
+
+    Parameters
+    ----------
+    file : path
+        The calibration file.
+    out : path
+        Output folder (created; nothing is written when the import is refused).
+    fov_deg : float, optional
+        The lens's field, degrees, for the camera block.
+    accept_fit_error : bool
+        Write an OCamCalib model whose Kannala-Brandt fit is worse than
+        :data:`~.imports.MAX_FIT_RMS_PX` px RMS (with a warning) instead of refusing it.
 
     Raises
     ------
     RvmsimError
-        One line naming the file: unreadable, of no known format, or without an image size.
+        One line naming the file: unreadable, of no known format, an unusable camera,
+        without an image size, or an OCamCalib fit over the limit (without
+        ``accept_fit_error``).
     """
     import yaml
+    from pydantic import ValidationError
 
-    from .imports import import_calibration
+    from ..scene import CameraSpec, camera_problem
+    from .imports import MAX_FIT_RMS_PX, fit_error_text, import_calibration
     from .outputs import camera_block
 
     file, out = Path(file), Path(out)
     cam = import_calibration(file)
+    warnings: tuple[str, ...] = ()
+    if cam.fit_rms_px > MAX_FIT_RMS_PX:
+        if not accept_fit_error:
+            raise CalibrationInputError(str(file), "polynomial", f"{fit_error_text(cam)}; "
+                                        "--accept-fit-error writes it anyway")
+        warnings = (f"{file}: polynomial: {fit_error_text(cam)}; written as asked "
+                    "(--accept-fit-error)",)
     if cam.image_size is None:
-        raise RvmsimError(f"{file}: the calibration gives no image size (resolution)")
+        raise CalibrationInputError(str(file), "resolution" if cam.source_format == "opencv"
+                                    else "", "the calibration gives no image size")
     block = camera_block(cam.K, cam.D, cam.image_size, fov_deg)
+    try:  # what a scene's camera must be: a camera that passed the import's checks is
+        spec = CameraSpec.model_validate({**block, "mount": {"position": [0.0, 0.0, 0.0]}})
+    except ValidationError as err:
+        raise CalibrationInputError(str(file), "", "not usable as a scene's camera: "
+                                    f"{err.errors()[0]['msg']}") from None
+    problem = camera_problem(spec)
+    if problem is not None:
+        raise CalibrationInputError(str(file), problem[0], problem[1])
     out.mkdir(parents=True, exist_ok=True)
     (out / "camera.yaml").write_text(f"# rvmsim calibrate --import {file.name} "
                                      f"({cam.source_format})\n"
@@ -165,4 +223,4 @@ def import_camera(file: str | Path, out: str | Path,
     if cam.source_format == "ocamcalib":
         text += (f"; Kannala-Brandt fit error RMS {cam.fit_rms_px:.3f} px, "
                  f"max {cam.fit_max_px:.3f} px")
-    return CalibrationSummary(block, text)
+    return CalibrationSummary(block, text, warnings)

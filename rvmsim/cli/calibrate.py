@@ -27,6 +27,10 @@ __all__ = ["calibrate"]
 @click.option("--import", "import_file", type=click.Path(path_type=Path),
               help="Import an existing calibration instead: OpenCV FileStorage YAML, Kalibr "
                    "camchain (pinhole-equidistant), OCamCalib calib_results.txt.")
+@click.option("--accept-fit-error", is_flag=True,
+              help="With --import of an OCamCalib model: write it even when its "
+                   "Kannala-Brandt fit is worse than 1 px RMS (a warning instead of an "
+                   "error).")
 @click.option("-o", "--out", type=OutputFolder(), required=True,
               help="Output folder (calibration.json, coverage.png, camera.yaml).")
 @click.option("--write-scene", "write_scene", type=click.Path(path_type=Path),
@@ -35,7 +39,8 @@ __all__ = ["calibrate"]
               help="The lens's field (degrees) for the camera block; default: the "
                    "scene's, else 190.")
 def calibrate(captures: tuple[Path, ...], board_spec: str | None, import_file: Path | None,
-              out: Path, write_scene: Path | None, fov_deg: float | None) -> None:
+              accept_fit_error: bool, out: Path, write_scene: Path | None,
+              fov_deg: float | None) -> None:
     """Fisheye (Kannala-Brandt) intrinsics from CAPTURES (images or folders) of a
     checkerboard, or an existing calibration imported with --import.
 
@@ -44,10 +49,12 @@ def calibrate(captures: tuple[Path, ...], board_spec: str | None, import_file: P
     """
     from ..calibrate import calibrate_captures, import_camera, write_scene_camera
 
+    if accept_fit_error and import_file is None:
+        raise RvmsimError("--accept-fit-error: only with --import (an OCamCalib model's fit)")
     if import_file is not None:
         if captures:
             raise RvmsimError("give captures or --import, not both")
-        done = import_camera(import_file, out, fov_deg)
+        done = import_camera(import_file, out, fov_deg, accept_fit_error=accept_fit_error)
     elif not captures:
         raise RvmsimError("no captures given (images or folders), nor --import FILE")
     elif board_spec is None:
@@ -57,6 +64,8 @@ def calibrate(captures: tuple[Path, ...], board_spec: str | None, import_file: P
         done = calibrate_captures(captures, board_spec, out, fov_deg)
     if write_scene is not None:
         write_scene_camera(write_scene, done.camera)
+    for line in done.warnings:
+        click.echo(f"rvmsim: warning: {line}", err=True)
     click.echo(done.text)
     click.echo(f"wrote {out / 'camera.yaml'}"
                + (f"; updated the camera of {write_scene}" if write_scene else ""))

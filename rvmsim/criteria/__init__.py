@@ -23,11 +23,13 @@ from .groups import (
     group_windows,
 )
 from .measure import (
+    EcFailedError,
     LabelSource,
     Measurement,
     Measurements,
     MeasureOptions,
     bounding_box,
+    call_ec,
     count_label,
     label_mask,
     offset,
@@ -120,6 +122,8 @@ __all__ = [
     "BUILTIN_PLUGIN",
     "ENTRY_POINT_GROUP",
     "EcDefinition",
+    "EcFailedError",
+    "call_ec",
     "builtin_ecs",
     "load_plugin",
     "resolve_plugin",

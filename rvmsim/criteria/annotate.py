@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .canvas import FAIL, INK, OFF, PASS, Canvas, Colour, Label, font, unit_text
+from .measure import call_ec
 from .registry import EcDefinition, builtin_ecs
 from .scoring import EcResult
 from .values import EcValue
@@ -149,7 +150,8 @@ def annotation(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult,
     defs = _definitions(result)
     for item, ec in zip(result.items, defs):
         if ec is not None and ec.annotate is not None:
-            ec.annotate(canvas, item, details.get(item.id))
+            call_ec(ec, "annotate", f"the {w}x{h} RVM image", ec.annotate, canvas, item,
+                    details.get(item.id))
 
     k = picture_scale(w, display_width)
     pw, ph = max(1, round(w * k)), max(1, round(h * k))

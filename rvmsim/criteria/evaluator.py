@@ -46,7 +46,7 @@ from ..scene import Scene
 from .config import default_criteria
 from .context import IspView, SceneContext, scene_context
 from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
-from .measure import LabelSource, Measurements, measure_ecs
+from .measure import LabelSource, Measurements, call_ec, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
 
 __all__ = ["CandidateEvaluator", "NodeLookup", "BoxedSource", "box_holding", "group_window", "merge_windows",
@@ -280,7 +280,8 @@ class CandidateEvaluator:
         shape, options = (output.height, output.width), self.criteria.options
         self._regions: list[Window] = list(dict.fromkeys(
             (int(x0), int(y0), int(x1), int(y1)) for ec in self.criteria.ecs if ec.regions
-            for x0, y0, x1, y1 in ec.regions(shape, options)))
+            for x0, y0, x1, y1 in call_ec(ec, "regions", f"a {output.width}x{output.height} "
+                                          "RVM image", ec.regions, shape, options)))
 
     @property
     def regions(self) -> list[Window]:

@@ -15,6 +15,7 @@ from ..camera import FisheyeCamera
 from ..errors import CriteriaError
 from ..scene import Scene
 from .context import SceneContext
+from .measure import call_ec
 from .scoring import Criteria
 
 __all__ = ["Infeasibility", "InfeasibleDoc", "infeasible_ecs"]
@@ -78,7 +79,8 @@ def infeasible_ecs(scene: Scene, camera: FisheyeCamera, labels: np.ndarray,
         criterion = criteria.items[ec.id]
         if ec.infeasibility is None or not criterion.enabled:
             continue
-        found = ec.infeasibility(context, criterion, criteria.options)
+        found = call_ec(ec, "infeasibility", f"the fisheye labels of {scene.source}",
+                        ec.infeasibility, context, criterion, criteria.options)
         if found is None:
             continue
         if not (isinstance(found, tuple) and len(found) == 2

@@ -30,9 +30,13 @@ if TYPE_CHECKING:
     from .context import IspView, SceneContext
 
 __all__ = ["MeasureOptions", "Measurement", "Measurements", "LabelSource", "measure_ecs",
-           "label_mask", "count_label", "bounding_box", "offset"]
+           "EcFailedError", "error_text", "passes_through", "call_ec", "label_mask", "count_label",
+           "bounding_box", "offset"]
 
 T = TypeVar("T")
+
+#: Plugins whose module name starts so are rvmsim's own (the paper's ECs, the markets').
+BUNDLED_PLUGIN_PREFIX = "rvmsim."
 
 
 @dataclass(frozen=True)
@@ -195,13 +199,92 @@ def measure_ecs(src: LabelSource, ecs: Sequence[MeasuredEc],
     values: dict[str, float | None] = {}
     details: dict[str, object] = {}
     for ec in ecs:
-        m = ec.measure(src, options)
-        value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)
-        if type(value) is not float or value != value:  # not a plain float, or NaN
-            value = _checked_value(ec, value)
+        try:
+            m = ec.measure(src, options)
+            value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)
+            if type(value) is not float or value != value:  # not a plain float, or NaN
+                value = _checked_value(ec, value)
+        except BaseException as err:  # noqa: BLE001 - the EC's own code: see passes_through
+            if passes_through(err, ec.plugin):
+                raise
+            raise EcFailedError(ec.plugin or "<ec>", ec.id, "measure", image_name(src),
+                                error_text(err)) from None
         values[ec.id] = value
         details[ec.id] = detail
     return Measurements(values, (w, h), details)
+
+
+class EcFailedError(CriteriaError):
+    """An EC's own code (a plugin's) raised: one line naming the plugin, the EC, what of it
+    failed and on which image.
+
+    Parameters
+    ----------
+    plugin : str
+        The plugin that defines the EC (its file or module).
+    ec_id : str
+        The EC.
+    part : str
+        What of the EC failed: ``"measure"``, ``"annotate"``, ``"regions"``, ….
+    image : str
+        The image it failed on (:func:`image_name`).
+    what : str
+        The error (:func:`error_text`).
+
+    Pickles by its parameters, so that a worker process's failure reaches the parent whole.
+    """
+
+    def __init__(self, plugin: str, ec_id: str, part: str, image: str, what: str):
+        self.plugin, self.ec_id, self.part, self.image, self.what = (
+            plugin, ec_id, part, image, what)
+        super().__init__(plugin, f"EC {ec_id}", f"the plugin's {part} failed on {image} "
+                                                f"({what})")
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        return (type(self), (self.plugin, self.ec_id, self.part, self.image, self.what))
+
+    def on(self, image: str) -> EcFailedError:
+        """The same failure, naming the image as ``image`` (a caller that knows more of it,
+        e.g. its scene)."""
+        return type(self)(self.plugin, self.ec_id, self.part, image, self.what)
+
+
+def passes_through(err: BaseException, plugin: str) -> bool:
+    """Whether an exception raised by an EC's code goes on as it is rather than becoming an
+    :class:`EcFailedError`: a Ctrl-C or SIGTERM (``KeyboardInterrupt`` and its
+    subclasses) stops the command, a :class:`CriteriaError` already names the plugin, and
+    rvmsim's own ECs (plugins ``rvmsim.…``) failing is a bug of rvmsim, reported with its
+    traceback.  Anything else a plugin raises, also ``SystemExit`` and other
+    ``BaseException`` subclasses, is the plugin's failure."""
+    return (isinstance(err, (KeyboardInterrupt, CriteriaError))
+            or plugin.startswith(BUNDLED_PLUGIN_PREFIX))
+
+
+def call_ec(ec: MeasuredEc, part: str, image: str, fn: Callable[..., T], *args: Any) -> T:
+    """``fn(*args)``, a function of ``ec`` (its ``part``: ``"annotate"``, ``"regions"``, …)
+    run on ``image`` (for the message); what it raises becomes an :class:`EcFailedError`
+    unless it :func:`passes_through`."""
+    try:
+        return fn(*args)
+    except BaseException as err:  # noqa: BLE001 - the EC's own code: see passes_through
+        if passes_through(err, ec.plugin):
+            raise
+        raise EcFailedError(ec.plugin or "<ec>", ec.id, part, image, error_text(err)) from None
+
+
+def error_text(err: BaseException) -> str:
+    """``Type: first line of the message`` (or the type alone), at most 200 characters."""
+    text = str(err).strip().splitlines()[0] if str(err).strip() else ""
+    return (f"{type(err).__name__}: {text}" if text else type(err).__name__)[:200]
+
+
+def image_name(src: LabelSource) -> str:
+    """The image a source reads, for messages: ``the 320x180 RVM image of scene.yaml`` (its
+    scene's file when the source knows it)."""
+    h, w = src.shape
+    scene = getattr(getattr(src, "context", None), "scene", None)
+    where = getattr(scene, "source", "") or ""
+    return f"the {w}x{h} RVM image" + (f" of {where}" if where and where != "<dict>" else "")
 
 
 def _checked_value(ec: MeasuredEc, value: object) -> float | None:

@@ -32,7 +32,8 @@ import numpy as np
 from ..errors import CriteriaError
 from .groups import LabelGroup, Window
 from .hooks import InfeasibilityFn, SubSolve
-from .measure import LabelSource, Measurement, MeasureOptions, measure_ecs
+from .measure import (EcFailedError, LabelSource, Measurement, MeasureOptions, error_text,
+                      measure_ecs, passes_through)
 from .sigmoid import Criterion, Sigmoid
 
 if TYPE_CHECKING:
@@ -275,13 +276,28 @@ def _import(source: str) -> object:
         obj: object = importlib.import_module(module_name)
     except ImportError as err:
         raise CriteriaError(source, "", f"cannot import the plugin ({err})") from None
-    except Exception as err:  # noqa: BLE001 - the plugin's own code failed on import
-        raise CriteriaError(source, "", f"the plugin failed on import ({_what(err)})") from None
+    except BaseException as err:  # noqa: BLE001 - the plugin's own code failed on import
+        raise _import_failure(source, err) from None
     for part in filter(None, attr.split(".")):
         if not hasattr(obj, part):
             raise CriteriaError(source, "", f"the module has no attribute {part!r}")
         obj = getattr(obj, part)
     return obj
+
+
+def _import_failure(source: str, err: BaseException) -> BaseException:
+    """What a plugin's failure on import becomes: ``err`` itself for a Ctrl-C or SIGTERM
+    (:func:`~.measure.passes_through`), else a :class:`CriteriaError` naming the plugin, also
+    for ``sys.exit`` (a ``SystemExit``, which would otherwise end rvmsim with the plugin's
+    status, 0 included) and any other ``BaseException``.  ``os._exit`` ends the process
+    below Python and cannot be caught."""
+    if isinstance(err, KeyboardInterrupt):
+        return err
+    if isinstance(err, SystemExit):
+        what = f"it called sys.exit({err.code!r})"
+    else:
+        what = _what(err)
+    return CriteriaError(source, "", f"the plugin failed on import ({what})")
 
 
 def _import_file(path: Path) -> object:
@@ -298,9 +314,9 @@ def _import_file(path: Path) -> object:
     sys.modules[name] = module  # dataclasses and pickling look the module up by name
     try:
         spec.loader.exec_module(module)
-    except Exception as err:  # noqa: BLE001 - the plugin's own code failed on import
+    except BaseException as err:  # noqa: BLE001 - the plugin's own code failed on import
         del sys.modules[name]
-        raise CriteriaError(str(path), "", f"the plugin failed on import ({_what(err)})") from None
+        raise _import_failure(str(path), err) from None
     return module
 
 
@@ -314,9 +330,12 @@ def _probe(ec: EcDefinition, source: str) -> None:
             wins = [tuple(int(v) for v in win) for win in ec.regions((8, 8), MeasureOptions())]
             if not all(len(win) == 4 for win in wins):
                 raise TypeError("regions must return (x0, y0, x1, y1) windows")
-    except CriteriaError:
-        raise
-    except Exception as err:  # noqa: BLE001 - any failure of the plugin's code is reported
+    except EcFailedError as err:  # its measure (measure_ecs names the failure so)
+        raise CriteriaError(source, ec.id, f"the EC fails on an empty 8x8 image ({err.what})"
+                            ) from None
+    except BaseException as err:  # noqa: BLE001 - any failure of the plugin's code is reported
+        if passes_through(err, ""):
+            raise
         raise CriteriaError(source, ec.id, f"the EC fails on an empty 8x8 image ({_what(err)})"
                             ) from None
     if ec.sub_solve is not None:
@@ -334,7 +353,9 @@ def _probe_sub_solve(ec: EcDefinition, hook: SubSolve, source: str) -> None:
         checked_solve_value(ec, "target", target)
         value = hook.solve(square, IspParams(), OutputSpec(64, 36),
                            0.0 if target is None else float(target))
-    except Exception as err:  # noqa: BLE001 - any failure of the plugin's code is reported
+    except BaseException as err:  # noqa: BLE001 - any failure of the plugin's code is reported
+        if passes_through(err, ""):
+            raise
         raise CriteriaError(source, ec.id, f"the EC's sub-solve fails on a square of plane "
                                            f"points ({_what(err)})") from None
     checked_solve_value(ec, "solve", value)
@@ -358,5 +379,4 @@ def checked_solve_value(ec: EcDefinition, what: str, value: object) -> float | N
 
 
 def _what(err: BaseException) -> str:
-    text = str(err).splitlines()[0] if str(err) else ""
-    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+    return error_text(err)

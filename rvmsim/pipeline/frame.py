@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import (Criteria, EcResult, IspView, SceneContext, default_criteria, evaluate,
-                        scene_context)
+from ..criteria import (Criteria, EcFailedError, EcResult, IspView, SceneContext,
+                        default_criteria, evaluate, scene_context)
 from ..criteria import annotate as annotate_ecs
 from ..isp import IspParams, OutputSpec, process
 from ..render import FisheyeImages, render_fisheye
@@ -71,7 +71,12 @@ def evaluate_params(images: FisheyeImages, params: IspParams, output: OutputSpec
     assert color is not None and labels is not None  # process returns what it is given
     ec = evaluate_rvm_labels(labels, images.labels, params, output, criteria,
                              context=_context(images))
-    drawn = annotate_ecs(color, labels, ec) if annotate else None
+    try:
+        drawn = annotate_ecs(color, labels, ec) if annotate else None
+    except EcFailedError as err:  # name the scene too
+        h, w = labels.shape
+        raise err.on(f"the {w}x{h} RVM image of {images.scene.source}" if images.scene
+                     else err.image) from None
     return RvmFrame(fisheye=images, params=params, output=output, color=color, labels=labels,
                     ec=ec, annotated=drawn)
 

@@ -40,6 +40,8 @@ from .eol import EolSpec, EolPose, BOARD_TARGET
 from .station import station_scene, station_target, eol_problem
 from .compensation import CompensationSpec, StationSpec, COMPENSABLE_PARAMS, DEFAULT_RANGES
 from .loading import (
+    FOCAL_FACTORS,
+    camera_problem,
     load_scene,
     read_scene_document,
     scene_from_dict,
@@ -80,6 +82,8 @@ from .landmarks import Landmark, CheckerCorner, site_landmarks, checker_corners
 __all__ = [
     "Scene",
     "CameraSpec",
+    "FOCAL_FACTORS",
+    "camera_problem",
     "Intrinsics",
     "Lens",
     "Mount",

@@ -121,7 +121,10 @@ class BatchEvaluator:
         if self.pool is None:
             return self.scorer(xs)
         try:
-            parts = list(self.pool.map(_work, [xs[a:b] for a, b in _chunks(len(xs), self.workers)]))
+            # submit, not map: map cancels the other chunks when one fails, and the pool,
+            # stopped then, fails the cancelled ones with a traceback (Python 3.11)
+            futures = [self.pool.submit(_work, xs[a:b]) for a, b in _chunks(len(xs), self.workers)]
+            parts = [f.result() for f in futures]
         except BrokenProcessPool as err:  # a worker died, or could not start (its state did
             # not unpickle: e.g. a criteria plugin it cannot import)
             raise RvmsimError(f"tuning worker processes failed ({err}); run with workers=1 "

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import Criteria, EcDefinition, SubSolve, checked_solve_value, outline_points
+from ..criteria import (Criteria, EcDefinition, SubSolve, call_ec, checked_solve_value,
+                        outline_points)
 from ..errors import CriteriaError
 from ..isp import IspParams, OutputSpec, input_to_plane
 from ..search.space import ParamRange, SearchSpace
@@ -128,8 +129,9 @@ class EcSolver:
             for k, s in enumerate(self._solves):
                 if k not in planes:
                     continue
-                value = checked_solve_value(
-                    s.ec, "solve", s.hook.solve(planes[k], current, self.output, s.target))
+                value = checked_solve_value(s.ec, "solve", call_ec(
+                    s.ec, "sub-solve", "a candidate's plane points", s.hook.solve, planes[k],
+                    current, self.output, s.target))
                 if value is None:
                     continue
                 value = float(min(max(value, s.low), s.high))
@@ -152,7 +154,9 @@ def _applicable(criteria: Criteria, space: SearchSpace
         hook, criterion = ec.sub_solve, criteria.items[ec.id]
         if hook is None or not criterion.enabled or hook.param not in ranges:
             continue
-        target = checked_solve_value(ec, "target", hook.target(criterion))
+        target = checked_solve_value(ec, "target", call_ec(
+            ec, "sub-solve target", f"the criterion of {criteria.source}", hook.target,
+            criterion))
         if target is None:
             continue
         if hook.param in setter:

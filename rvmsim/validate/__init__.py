@@ -31,7 +31,7 @@ from __future__ import annotations
 from .board import BoardLayout, BoardShade, LatticeEvidence, board_layout
 from .board_start import (BoardSearch, BoardStart, find_board_start, search_board,
                           ypr_from_rotation)
-from .capture import load_capture
+from .capture import check_captures, load_capture
 from .captures import (CAPTURE_SUFFIXES, CaptureOutcome, capture_files, capture_folders,
                        validate_captures)
 from .edges import CHAMFER_TRUNCATE_PX, compare_edges
@@ -60,6 +60,7 @@ __all__ = [
     "Check",
     "Validation",
     "load_capture",
+    "check_captures",
     "find_landmarks",
     "fit_pose",
     "compare_edges",

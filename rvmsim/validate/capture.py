@@ -6,6 +6,7 @@ import re
 import struct
 import warnings
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,7 +19,7 @@ from ..errors import InputFileError, RvmsimError
 if TYPE_CHECKING:
     from PIL import Image
 
-__all__ = ["load_capture", "check_capture_size", "grey", "capture_header_size"]
+__all__ = ["load_capture", "check_captures", "check_capture_size", "grey", "capture_header_size"]
 
 
 def load_capture(path: str | Path, camera: FisheyeCamera | None = None) -> np.ndarray:
@@ -56,6 +57,30 @@ def load_capture(path: str | Path, camera: FisheyeCamera | None = None) -> np.nd
     if float(img.std()) < 1.0:
         raise RvmsimError(f"{path}: capture is blank (every pixel ≈ {int(img.mean())})")
     return img
+
+
+def check_captures(paths: Sequence[str | Path], camera: FisheyeCamera | None = None
+                   ) -> list[tuple[int, int]]:
+    """Read every capture once (:func:`load_capture`, decoded and dropped one at a time), so
+    that a command given several refuses a missing, unreadable, corrupt, empty or blank one
+    (a folder or a zero-byte file too) before any work, rather than after validating or
+    detecting in the others.
+
+    Returns
+    -------
+    list of (int, int)
+        Each capture's (width, height), px.
+
+    Raises
+    ------
+    RvmsimError
+        One line naming the first capture at fault (:func:`load_capture`).
+    """
+    sizes = []
+    for path in paths:
+        img = load_capture(path, camera)
+        sizes.append((int(img.shape[1]), int(img.shape[0])))
+    return sizes
 
 
 def _size_error(path: Path, w: int, h: int, camera: FisheyeCamera) -> InputFileError:

@@ -1,10 +1,11 @@
 """Capture files validated one after another (``rvmsim validate --capture …``).
 
 :func:`capture_files` turns the paths given (files, or folders of them) into capture files;
-:func:`validate_captures` validates each into its own output folder and returns one
+:func:`validate_captures` reads every capture first (one that cannot be read is refused
+before any work), then validates each into its own output folder and returns one
 :class:`CaptureOutcome` per capture: its validation, or the error that stopped it (a capture
-that cannot be read or validated, or whose outputs cannot be written, is that capture's row,
-and the others still run).  The outputs of a finished validation (its JSON and page) are
+that cannot be validated, or whose outputs cannot be written, is that capture's row, and the
+others still run).  The outputs of a finished validation (its JSON and page) are
 written by the caller's ``write_outputs`` (:func:`rvmsim.report.write_validation_outputs`);
 a failed one leaves its pictures (:func:`~.outputs.write_pictures`).
 """
@@ -167,12 +168,23 @@ def validate_captures(
     Returns
     -------
     list of CaptureOutcome
-        One per capture, in order.  A capture that cannot be read or validated, or whose
-        outputs cannot be written, is an ``ERROR`` outcome with the one-line message (a
-        failed step's pictures are written into its folder first); nothing is raised for it.
+        One per capture, in order.  A capture that cannot be validated, or whose outputs
+        cannot be written, is an ``ERROR`` outcome with the one-line message (a failed
+        step's pictures are written into its folder first); nothing is raised for it.
+
+    Raises
+    ------
+    RvmsimError
+        Before any work (no render, no search, nothing written): a capture that is
+        missing, unreadable, corrupt, blank or of another size than the camera's
+        (:func:`~.capture.check_captures`), naming it.
     """
-    from .capture import load_capture
+    from .capture import check_captures, load_capture
     from .outputs import write_pictures
+
+    if len(folders) != len(captures):
+        raise ValueError(f"{len(captures)} captures but {len(folders)} output folders")
+    check_captures(captures, scene.fisheye_camera())
     def one(capture_file: Path, out: Path) -> CaptureOutcome:
         name = str(capture_file)
         try:

@@ -4,6 +4,7 @@ sweep folder (made once) that cases copy and must leave byte-identical."""
 from __future__ import annotations
 
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -39,3 +40,25 @@ def case_dir(tmp_path: Path, finished_run: Path) -> Path:
     shutil.copy(finished_run / SMALL_SCENE, tmp_path / SMALL_SCENE)
     shutil.copytree(finished_run / "run", tmp_path / "run")
     return tmp_path
+
+
+@pytest.fixture
+def plugin_module(tmp_path, monkeypatch, request):
+    """A writer of importable plugin modules (``name`` → source), found on ``sys.path`` (and
+    on a child's ``PYTHONPATH``) and forgotten after the test."""
+    folder = tmp_path / "plugins"
+    folder.mkdir()
+    monkeypatch.syspath_prepend(str(folder))
+    made: list[str] = []
+
+    def write(source: str) -> str:
+        name = f"rvmsim_test_hostile_{request.node.name.translate(str.maketrans('[]-', '___'))}"
+        name += f"_{len(made)}"
+        (folder / f"{name}.py").write_text(source)
+        made.append(name)
+        return name
+
+    write.folder = folder
+    yield write
+    for name in made:
+        sys.modules.pop(name, None)

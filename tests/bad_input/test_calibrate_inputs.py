@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import yaml
 
 from .harness import MEMORY, Case, check_case
 from .test_captures import png
@@ -85,6 +86,55 @@ CASES = [
     Case("write-scene-invalid", (*CAL, "--import", "x.yaml", "--write-scene", "s/scene.yaml"),
          ["scene.yaml", "camera"], keep=("s",),
          setup=_both(_write("x.yaml", GOOD_CAMERA), _write("s/scene.yaml", "name: t\n"))),
+]
+
+
+def _scene_board(edit):
+    """The small scene with its ``test_site.board`` edited (``edit``: the board mapping
+    changed in place; None: the key removed), as ``s.yaml``, and three blank captures."""
+    def setup(folder):
+        from .conftest import small_scene
+
+        _blank_pngs(3)(folder)
+        small_scene(folder)
+        doc = yaml.safe_load((folder / "scene.yaml").read_text())
+        if edit is None:
+            del doc["test_site"]["board"]
+        else:
+            edit(doc["test_site"]["board"])
+        (folder / "s.yaml").write_text(yaml.safe_dump(doc))
+    return setup
+
+
+def _good_then_bad(name: str, data: bytes | None):
+    """Three good captures in ``caps``, then ``name`` holding ``data`` (None: a real image
+    of another size)."""
+    def setup(folder):
+        import imageio.v3 as iio
+
+        _blank_pngs(3)(folder)
+        if data is None:
+            noise = np.random.default_rng(9).integers(0, 255, (24, 32), dtype=np.uint8)
+            iio.imwrite(folder / "caps" / name, noise)
+        else:
+            (folder / "caps" / name).write_bytes(data)
+    return setup
+
+
+#: Issue #30: a scene's board disabled or absent (before any capture is read), and a bad
+#: capture among good ones (before any detection).
+CASES += [
+    Case("board-scene-disabled", (*CAL, "nothere.png", "--board", "s.yaml"),
+         ["s.yaml", "test_site.board.enabled", "disabled"],
+         setup=_scene_board(lambda b: b.update(enabled=False))),
+    Case("board-scene-absent", (*CAL, "caps", "--board", "s.yaml"),
+         ["s.yaml", "test_site.board"], setup=_scene_board(None)),
+    Case("capture-empty-among-good", (*CAL, "caps", "--board", "7x9:0.05"), ["c9.png"],
+         setup=_good_then_bad("c9.png", b"")),
+    Case("capture-corrupt-among-good", (*CAL, "caps", "--board", "7x9:0.05"), ["c9.png"],
+         setup=_good_then_bad("c9.png", b"\x89PNG\r\n\x1a\nnot really")),
+    Case("capture-other-size-among-good", (*CAL, "caps", "--board", "7x9:0.05"),
+         ["c9.png", "differ in size"], setup=_good_then_bad("c9.png", None)),
 ]
 
 

@@ -121,3 +121,45 @@ CASES_SEVERAL = [
 @pytest.mark.parametrize("case", CASES_SEVERAL, ids=[c.id for c in CASES_SEVERAL])
 def test_bad_captures_of_several(case, case_dir):
     check_case(case, case_dir)
+
+
+def _noise_png(folder, name: str, size=(320, 240)) -> None:
+    import imageio.v3 as iio
+    import numpy as np
+
+    noise = np.random.default_rng(7).integers(0, 255, (size[1], size[0], 3), dtype=np.uint8)
+    iio.imwrite(folder / name, noise)
+
+
+def _good_then(name: str, data: bytes | None):
+    """Two good captures (of the camera's size), then ``name`` (None: a folder)."""
+    def setup(folder):
+        for good in ("good1.png", "good2.png"):
+            _noise_png(folder, good)
+        if data is None:
+            (folder / name).mkdir()
+        elif data != b"missing":
+            (folder / name).write_bytes(data)
+    return setup
+
+
+#: Several captures, one of them bad after good ones (issue #30): refused before any work
+#: (nothing rendered, searched or written), naming the bad one.
+BAD_AMONG_GOOD = [
+    ("missing", "gone.png", b"missing"),
+    ("zero-bytes", "zero.png", b""),
+    ("directory", "dir.png", None),
+    ("corrupt", "bad.png", png(320, 240, zlib.compress(b"\x01" * 5000))[:60]),
+    ("other-size", "small.png", png(32, 24)),
+]
+CASES_AMONG_GOOD = [
+    Case(f"validate-{i}-among-good", ("validate", SMALL_SCENE, "--out", "v", "--no-progress",
+                                      "--capture", "good1.png", "--capture", "good2.png",
+                                      "--capture", name), (name,), _good_then(name, data),
+         keep=("run",)) for i, name, data in BAD_AMONG_GOOD]
+
+
+@pytest.mark.parametrize("case", CASES_AMONG_GOOD, ids=[c.id for c in CASES_AMONG_GOOD])
+def test_a_bad_capture_among_good_ones_is_refused_before_any_work(case, case_dir):
+    out = check_case(case, case_dir)
+    assert not (case_dir / "v").exists(), out.stdout

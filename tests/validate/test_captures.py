@@ -1,5 +1,6 @@
 """rvmsim.validate.captures: capture files, their output folders, and several captures
-validated one after another, every error one capture's outcome (not raised)."""
+validated one after another: every capture read before any work (one that cannot be read is
+raised), every error of a validation one capture's outcome (not raised)."""
 
 from __future__ import annotations
 
@@ -37,30 +38,37 @@ def test_capture_folders_number_a_name_met_again(tmp_path: Path):
                                                tmp_path / "rear", tmp_path / "front_3"]
 
 
-def test_unreadable_captures_are_outcomes_and_the_rest_still_run(tmp_path: Path):
-    """A missing and a blank capture: two ERROR outcomes, each reported as it is known, in
-    order; nothing raised and nothing written for them."""
+def test_an_unreadable_capture_is_refused_before_any_work(tmp_path: Path):
+    """A good capture, then a missing and a blank one (issue #30): refused at once, naming
+    the first bad one; no capture is validated, none reported, nothing written."""
     scene = make_scene(scene_dict())
+    good = tmp_path / "good.png"
+    noise = np.random.default_rng(1).integers(0, 255, (480, 640), dtype=np.uint8)
+    cv2.imwrite(str(good), noise)
     blank = tmp_path / "blank.png"
     cv2.imwrite(str(blank), np.zeros((480, 640), np.uint8))
     missing = tmp_path / "missing.png"
-    caps = [missing, blank]
     seen: list[CaptureOutcome] = []
 
     def never(result: Validation, folder: Path) -> list[Path]:
-        raise AssertionError("no validation finished")
+        raise AssertionError("no validation may run")
 
-    outcomes = validate_captures(scene, caps, capture_folders(caps, tmp_path / "v"), never,
-                                 on_outcome=seen.append)
-    assert seen == outcomes and [o.capture for o in outcomes] == [str(missing), str(blank)]
-    assert [o.verdict for o in outcomes] == ["ERROR", "ERROR"]
-    assert all(o.step == "error" and o.result is None for o in outcomes)
-    assert "capture not found" in outcomes[0].error and "blank" in outcomes[1].error
-    # An error of no step has no pictures to point at; the row carries the message.
-    assert outcomes[1].message == outcomes[1].error and str(blank) in outcomes[1].message
-    assert outcomes[1].row()["error"] == outcomes[1].error
-    assert outcomes[1].row()["out_dir"] == str(tmp_path / "v" / "blank")
-    assert not (tmp_path / "v").exists()
+    for caps, bad, why in (([good, missing, blank], missing, "capture not found"),
+                           ([good, blank], blank, "blank")):
+        with pytest.raises(RvmsimError, match=why) as info:
+            validate_captures(scene, caps, capture_folders(caps, tmp_path / "v"), never,
+                              on_outcome=seen.append)
+        assert str(bad) in str(info.value) and "\n" not in str(info.value)
+    assert seen == [] and not (tmp_path / "v").exists()
+
+
+def test_an_error_of_no_step_is_its_row(tmp_path: Path):
+    """An error of no step (one capture's files not written) has no pictures to point at;
+    the row carries the message."""
+    out = CaptureOutcome("c.png", tmp_path / "v" / "c", None, "v/c: Permission denied",
+                         "error")
+    assert out.verdict == "ERROR" and out.message == out.error
+    assert out.row()["error"] == out.error and out.row()["out_dir"] == str(tmp_path / "v" / "c")
 
 
 def test_a_failed_step_points_at_its_pictures(tmp_path: Path):
