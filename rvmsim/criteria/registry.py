@@ -252,7 +252,7 @@ def load_plugin(source: str) -> tuple[EcDefinition, ...]:
     ecs = _LOADED.get(source)
     if ecs is None:
         obj = _import(source)
-        found = getattr(obj, "ECS", None)
+        found = _attribute(source, obj, "ECS")
         if not isinstance(found, (list, tuple)) or not found:
             raise CriteriaError(source, "ECS", "a plugin needs a module-level ECS: a non-empty "
                                 "list of rvmsim.criteria.EcDefinition")
@@ -279,10 +279,24 @@ def _import(source: str) -> object:
     except BaseException as err:  # noqa: BLE001 - the plugin's own code failed on import
         raise _import_failure(source, err) from None
     for part in filter(None, attr.split(".")):
-        if not hasattr(obj, part):
+        obj = _attribute(source, obj, part)
+        if obj is None:
             raise CriteriaError(source, "", f"the module has no attribute {part!r}")
-        obj = getattr(obj, part)
     return obj
+
+
+def _attribute(source: str, obj: object, name: str) -> object:
+    """``obj.name`` of a plugin, None when it has none; what the plugin's own code raises
+    while giving it (a module ``__getattr__``, a property) is one line naming the plugin."""
+    try:
+        return getattr(obj, name, None)
+    except BaseException as err:  # noqa: BLE001 - the plugin's own code failed
+        if isinstance(err, KeyboardInterrupt):
+            raise
+        what = (f"it called sys.exit({err.code!r})" if isinstance(err, SystemExit)
+                else _what(err))
+        raise CriteriaError(source, name, f"reading the plugin's {name} failed ({what})"
+                            ) from None
 
 
 def _import_failure(source: str, err: BaseException) -> BaseException:

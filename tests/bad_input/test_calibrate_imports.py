@@ -127,3 +127,12 @@ def test_a_good_file_of_each_format_imports(tmp_path, name, text, fmt):
         np.testing.assert_allclose(K_out[:2, 2], [160, 120], atol=0.2)
     else:
         np.testing.assert_allclose(K_out, GOOD_K)
+
+
+def test_the_help_states_the_fit_limit():
+    """``calibrate --help`` gives the limit ``--accept-fit-error`` lifts, as the code has it."""
+    from rvmsim.calibrate.imports import MAX_FIT_RMS_PX
+
+    out = run_in_process(["calibrate", "--help"])
+    assert out.code == 0
+    assert f"worse than {MAX_FIT_RMS_PX:g} px RMS" in " ".join(out.stdout.split())

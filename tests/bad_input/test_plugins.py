@@ -65,6 +65,9 @@ MEASURE = [
     ("import-baseexception", EVALUATE,
      "class Boom(BaseException):\n    pass\n\n\nraise Boom('at import')\n", False),
     ("import-generatorexit", EVALUATE, "raise GeneratorExit\n", False),
+    ("ecs-getattr-raises", EVALUATE,
+     "def __getattr__(name):\n    raise RuntimeError('no ' + name)\n", False),
+    ("ecs-getattr-exits", TUNE, "def __getattr__(name):\n    raise SystemExit(0)\n", False),
 ]
 
 
