@@ -11,6 +11,7 @@ import click
 
 from .._progress import ProgressBar
 from ..tune import DEFAULT_STRATEGY, STRATEGIES
+from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 from .errors import Command
 from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
                      SchedulerAddress)
@@ -32,12 +33,14 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
               "scene's EC score is maximised, every scene must pass).")
 @click.option("--aggregate", default=None, metavar="min|quantile Q", help="--shared, --robust: "
               "the EC score is the members' minimum or this quantile [default: min, "
-              "quantile 0.1 with --robust].")
+              f"{ROBUST_AGGREGATE} with --robust].")
 @click.option("--robust", is_flag=True, help="Judge every candidate on production variation "
               "samples too (the scene's variation section, or --variation): its EC score is "
-              "the worst sample's.")
+              "a low quantile of the nominal's and the samples' scores [default: "
+              f"{ROBUST_AGGREGATE}; --aggregate min: the worst one's]; it passes where every "
+              "one passes.")
 @click.option("--samples", type=Integer(1, 256), default=None,
-              help="With --robust: variation samples per scene [default: 16].")
+              help=f"With --robust: variation samples per scene [default: {DEFAULT_SAMPLES}].")
 @click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
               help="With --robust: a variation file instead of the scene's section.")
 @click.option("--compensation", default=None, metavar="FILE|default",
@@ -63,7 +66,8 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
 @click.option("--target-score", type=FiniteFloat(0, 1), default=None,
               help="Stop once the EC score reaches this.")
 @click.option("--resume", "resume_dir", type=click.Path(path_type=Path), default=None,
-              help="Continue the run in this folder (same settings, same final result).")
+              help="Continue the run in this folder with its own settings (same final "
+                   "result); a SCENE or run option given too must be the run's own.")
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
@@ -79,6 +83,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
                         summary_lines)
     from ..tune import resume as resume_run
     from ..tune import tune as run_tune
+    from ..tune.resumed import ResumeArgs
     from ..tune.robust import DEFAULT_SAMPLES
 
     check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
@@ -86,7 +91,11 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
                          markets=markets is not None)
     options = RunOptions(workers, max_time, target_score, progress)
     if resume_dir is not None:
-        result = resume_run(resume_dir, options=options)
+        given = _given(click.get_current_context())
+        result = resume_run(resume_dir, options=options, given=ResumeArgs(
+            scenes, shared, markets, robust, samples, variation_file, compensation, aggregate,
+            strategy if "strategy" in given else None, seed if "seed" in given else None,
+            budget, config_file, criteria_file, out, force))
     else:
         request = TuneRequest(
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
@@ -100,6 +109,14 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     best = result.outcome.best
     if (result.run_dir / "best" / "markets.json").is_file() and (best is None or not best.passed):
         sys.exit(1)  # no setting passes every market (the summary says why)
+
+
+def _given(ctx: click.Context) -> set[str]:
+    """The options given on the command line (or in the environment), not defaulted."""
+    from click.core import ParameterSource
+
+    return {name for name in ctx.params
+            if ctx.get_parameter_source(name) not in (None, ParameterSource.DEFAULT)}
 
 
 _MIN_DISTANCE = click.option(

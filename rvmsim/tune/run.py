@@ -20,7 +20,8 @@ from ..errors import RvmsimError
 from ..isp import params_to_dict
 from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 from ..search.config import TuningConfig, make_strategy
-from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
+from ..runs.folder import (RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock,
+                           run_settings, write_top_files)
 from .loop import SearchOutcome, search_members, search_scene
 from .members import Member, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compensation,
@@ -28,6 +29,7 @@ from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compen
                      write_robust_results)
 from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
+from .resumed import ResumeArgs, check_resume_args
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
 from .markets import (check_market_arguments, market_summary_lines, markets_members,
@@ -168,9 +170,11 @@ def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
                                else compensation.as_dict())
 
 
-def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
+def _resumed_run(run_dir: Path, given: ResumeArgs | None
+                 ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scene and criteria of the run to resume in ``run_dir`` (read, not
-    written), checking that its scene has not changed since."""
+    written), checking what the caller ``given`` against them (:mod:`.resumed`), its
+    run.json against its store, and that its scene has not changed since."""
     from ..criteria import load_criteria
     from ..render import same_scene
     from ..scene import load_scene
@@ -179,6 +183,7 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
         raise RvmsimError(f"{run_dir}: no run to resume ({RUN_DB} missing)")
     store = open_run(run_dir)
     try:
+        stored = store.settings()  # None: a run of rvmsim 0.1, whose run.json is its truth
         settings = run_settings(run_dir, store)
         # a status or a trial this version cannot read is refused before anything changes
         store.state()
@@ -186,6 +191,13 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
     finally:
         store.close()
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
+    if given is not None:
+        check_resume_args(run_dir, settings, given)
+    differs = None if stored is None else run_json_disagreement(run_dir, settings)
+    if differs:
+        raise RvmsimError(f"{differs}: the settings live in {RUN_DB} and {RUN_JSON} only "
+                          f"exports them; restore {RUN_JSON}, or delete it to resume with the "
+                          "stored settings (it is written anew)")
     if settings.shared or settings.robust:
         try:
             parse_aggregate(settings.aggregate or "min")
@@ -289,21 +301,26 @@ def tune(request: TuneRequest, run_dir: str | Path, *, options: RunOptions = Run
     return _run(run_dir, lock, settings, scenes, crit, options, resume=False, force=force)
 
 
-def resume(run_dir: str | Path, *, options: RunOptions = RunOptions()) -> TuneResult:
+def resume(run_dir: str | Path, *, options: RunOptions = RunOptions(),
+           given: ResumeArgs | None = None) -> TuneResult:
     """Continue the run in ``run_dir`` with its own settings, read from its store (after
     Ctrl-C, a kill, ``--max-time``): the same final result as an unbroken run.
+
+    ``given``: what the caller gave besides the run (``tune SCENE --resume RUN --budget
+    …``), each of which must be the run's own (:mod:`rvmsim.tune.resumed`).
 
     Raises
     ------
     RvmsimError
-        One line: no run there, an unreadable store, a scene or variation changed since the
-        run started, or a run in use by another writer.
+        One line: no run there, an unreadable store, something ``given`` that the run was
+        not made with, a run.json that disagrees with the store, a scene or variation
+        changed since the run started, or a run in use by another writer.
     """
     run_dir = Path(run_dir)
     _check_out(run_dir)
     lock = run_lock(run_dir)
     lock.check_free()
-    settings, scenes, crit = _resumed_run(run_dir)
+    settings, scenes, crit = _resumed_run(run_dir, given)
     return _run(run_dir, lock, settings, scenes, crit, options, resume=True, force=False)
 
 

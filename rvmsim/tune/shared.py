@@ -54,14 +54,8 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
                 else "compensation")
         raise RvmsimError(f"--{flag}: only with --robust (tune on production variation "
                           "samples)")
-    if resume:
-        if robust:
-            raise RvmsimError("--resume: give no --robust (a run resumes with its own "
-                              "samples, recorded in its store)")
-        if shared or n_scenes > 1 or markets:
-            raise RvmsimError("--resume: give no scenes, --shared or --markets (a run resumes "
-                              "with its own scenes and markets, recorded in its store)")
-        return
+    if resume:  # each given option is checked against the run's own settings
+        return  # (rvmsim.tune.resumed, once the run's store is read)
     if not n_scenes:
         raise RvmsimError("tune: give a SCENE file, or --resume RUN")
     if shared and n_scenes < 2 and not markets:
