@@ -13,8 +13,8 @@ from .._progress import ProgressBar
 from ..tune import DEFAULT_STRATEGY, STRATEGIES
 from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 from .errors import Command
-from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
-                     SchedulerAddress)
+from .params import (DEFAULT_WORKERS, ONLY_SUPPORTED, SEED, FiniteFloat, Integer, OutputFile,
+                     OutputFolder, SchedulerAddress)
 
 if TYPE_CHECKING:
     from ..batch import SceneRun
@@ -69,13 +69,14 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
               help="Continue the run in this folder with its own settings (same final "
                    "result); a SCENE or run option given too must be the run's own.")
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
+@ONLY_SUPPORTED
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
          robust: bool, samples: int | None, variation_file: Path | None,
          compensation: str | None, strategy: str,
          config_file: Path | None, criteria_file: Path | None, markets: str | None, seed: int,
          workers: int, budget: int | None, max_time: float | None, target_score: float | None,
-         resume_dir: Path | None, force: bool, progress: bool) -> None:
+         resume_dir: Path | None, force: bool, only_supported: bool, progress: bool) -> None:
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
     markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
@@ -95,14 +96,14 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
         result = resume_run(resume_dir, options=options, given=ResumeArgs(
             scenes, shared, markets, robust, samples, variation_file, compensation, aggregate,
             strategy if "strategy" in given else None, seed if "seed" in given else None,
-            budget, config_file, criteria_file, out, force))
+            budget, config_file, criteria_file, out, force, only_supported))
     else:
         request = TuneRequest(
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
             seed=seed, budget=budget, aggregate=aggregate,
             robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
             variation_file=variation_file, compensation=compensation_for(compensation),
-            markets=markets)
+            markets=markets, only_supported=only_supported)
         name = "+".join(s.stem for s in scenes) + ("" if markets is None else "@markets")
         result = run_tune(request, out or Path("runs") / name, options=options, force=force)
     click.echo("\n".join(summary_lines(result)))

@@ -10,7 +10,8 @@ a run, given with ``--resume``, must say what the run already is, or the resume 
   resolved path or by content (:func:`rvmsim.render.same_scene` on the stored fingerprint);
 - ``--shared``, ``--markets``, ``--robust``, ``--samples``, ``--variation``,
   ``--compensation``, ``--aggregate``, ``--strategy``, ``--seed``, ``--budget``, ``--config``
-  (the file's settings at the run's image of record), ``--criteria``: the stored values;
+  (the file's settings at the run's image of record), ``--criteria``,
+  ``--only-supported``: the stored values;
 - ``--out``: the run's own folder; ``--force`` (replace a run) is never one with ``--resume``.
 
 Options that only say how the run goes here (``--workers``, ``--max-time``,
@@ -48,6 +49,7 @@ class ResumeArgs:
     criteria_file: Path | None = None
     out: Path | None = None
     force: bool = False
+    only_supported: bool = False
 
 
 def _refuse(option: str, db: Path, made: str, given: str | None = None) -> RvmsimError:
@@ -177,5 +179,7 @@ def check_resume_args(run_dir: Path, settings: RunSettings, args: ResumeArgs) ->
                           "own folder (give no --out)")
     if args.scenes:
         _check_scenes(db, settings, args.scenes)
+    if args.only_supported and not settings.left_out:
+        raise _refuse("--only-supported", db, "with every EC of its criteria (none left out)")
     _check_members(db, settings, args)
     _check_search(db, settings, args)

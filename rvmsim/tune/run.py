@@ -99,11 +99,12 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
     crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
     if r.shared:  # one parameter set for every scene
         scenes = load_shared_scenes(r.scenes)
+        crit, left_out = _supported(crit, scenes, r.only_supported)
         record = record_size(crit, scenes[0][1])
         settings = dataclasses.replace(
             shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
                             (r.config or TuningConfig()).at_record(record), agg),
-            judged_at=record)
+            judged_at=record, left_out=left_out)
         return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg,
                                  r.compensation), [sc for _, sc in scenes], crit)
     scene = r.scenes[0]
@@ -112,13 +113,26 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
         sc, recorded = scene, r.scene_file or scene.source
     else:
         recorded, sc = scene, load_scene(scene)
+    crit, left_out = _supported(crit, [(str(recorded), sc)], r.only_supported)
     settings = RunSettings(
         scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
         strategy=r.strategy, seed=r.seed, budget=r.budget,
         criteria_file=None if r.criteria_file is None else criteria_reference(r.criteria_file),
         config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
-        judged_at=record_size(crit, sc))
+        judged_at=record_size(crit, sc), left_out=left_out)
     return _robust_settings(settings, [sc], robust, agg, r.compensation), [sc], crit
+
+
+def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_supported: bool
+               ) -> tuple[Criteria, tuple[str, ...]]:
+    """The criteria every scene supports (:func:`rvmsim.criteria.check_supported`: refused
+    before any work unless ``only_supported``) and the ECs that left out."""
+    from ..criteria import check_supported
+
+    out = crit
+    for recorded, sc in scenes:
+        out = check_supported(sc, out, recorded, only_supported=only_supported)
+    return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)
 
 
 def _markets_run(r: TuneRequest, aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
@@ -175,7 +189,7 @@ def _resumed_run(run_dir: Path, given: ResumeArgs | None
     """The settings, scene and criteria of the run to resume in ``run_dir`` (read, not
     written), checking what the caller ``given`` against them (:mod:`.resumed`), its
     run.json against its store, and that its scene has not changed since."""
-    from ..criteria import load_criteria
+    from ..criteria import Unsupported, load_criteria, supported_criteria
     from ..render import same_scene
     from ..scene import load_scene
 
@@ -222,7 +236,11 @@ def _resumed_run(run_dir: Path, given: ResumeArgs | None
         from ..markets import market_criteria, parse_markets
 
         return settings, scenes, market_criteria(parse_markets(list(settings.markets))[0])
-    return settings, scenes, load_criteria(settings.criteria_file)
+    crit = load_criteria(settings.criteria_file)
+    if settings.left_out:  # tuned with --only-supported: the same ECs left out again
+        crit = supported_criteria(crit, [Unsupported(k, ()) for k in settings.left_out
+                                         if k in crit.items])
+    return settings, scenes, crit
 
 
 def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: bool) -> RunStore:
