@@ -30,7 +30,8 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
 @click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Run folder (default: runs/<scene name>, runs/<name>+<name>… with --shared).")
 @click.option("--shared", is_flag=True, help="One parameter set for all SCENES (the worst "
-              "scene's EC score is maximised, every scene must pass).")
+              "scene's EC score is maximised, every scene must pass); exits 1 when none "
+              "passes all, naming the ECs that fail on which scenes.")
 @click.option("--aggregate", default=None, metavar="min|quantile Q", help="--shared, --robust: "
               "the EC score is the members' minimum or this quantile [default: min, "
               f"{ROBUST_AGGREGATE} with --robust].")
@@ -85,6 +86,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     from ..tune import resume as resume_run
     from ..tune import tune as run_tune
     from ..tune.resumed import ResumeArgs
+    from ..tune.shared import shared_problem_lines
     from ..tune.robust import DEFAULT_SAMPLES
 
     check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
@@ -110,6 +112,8 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     best = result.outcome.best
     if (result.run_dir / "best" / "markets.json").is_file() and (best is None or not best.passed):
         sys.exit(1)  # no setting passes every market (the summary says why)
+    if shared_problem_lines(result.run_dir):
+        sys.exit(1)  # no setting passes every scene (the summary says which ECs where)
 
 
 def _given(ctx: click.Context) -> set[str]:

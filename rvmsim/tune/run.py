@@ -31,7 +31,7 @@ from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .resumed import ResumeArgs, check_resume_args
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
-                     write_member_results)
+                     shared_problem_lines, write_member_results)
 from .markets import (check_market_arguments, market_summary_lines, markets_members,
                       write_market_results)
 from .members import check_cameras
@@ -427,7 +427,10 @@ def summary_lines(result: TuneResult) -> list[str]:
     if markets:
         return [head, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(), "",
                 *markets]
-    return [head, *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
+    problems = shared_problem_lines(result.run_dir)
+    return [head, *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(),
+            *(["", "no setting found passes every scene:", *(f"  {p}" for p in problems)]
+              if problems else [])]
 
 
 def _robust_line(run_dir: Path) -> list[str]:
