@@ -75,7 +75,8 @@ def label_left_out(scene: Scene, label: int) -> str | None:
             return "test_site.guidelines.enabled: false"
         line = label - L.guide_cross(1) + 1
         if line > len(site.guidelines.cross_z) and label >= L.guide_cross(1):
-            return f"test_site.guidelines.cross_z: {len(site.guidelines.cross_z)} lines, no line {line}"
+            n = len(site.guidelines.cross_z)
+            return f"test_site.guidelines.cross_z: {n} line{'s' if n != 1 else ''}, no line {line}"
         return None
     if label == L.BOARD and not site.board.enabled:
         return "test_site.board.enabled: false"
