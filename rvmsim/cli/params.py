@@ -21,7 +21,8 @@ if TYPE_CHECKING:
     from ..scene import Scene
 
 __all__ = ["FiniteFloat", "Integer", "OutputFile", "OutputFolder", "SchedulerAddress", "SEED",
-           "DEFAULT_WORKERS", "default_folder", "scale_factors", "check_scale", "load_isp"]
+           "DEFAULT_WORKERS", "ONLY_SUPPORTED", "default_folder", "scale_factors", "check_scale",
+           "load_isp"]
 
 #: ``--workers`` of tune, batch and robustness: one per core, at most their limit of 64.
 DEFAULT_WORKERS = min(os.cpu_count() or 1, 64)
@@ -170,3 +171,12 @@ def load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
     from ..isp import IspParams, OutputSpec, load_params
 
     return load_params(params_file) if params_file else (IspParams(), OutputSpec())
+
+
+#: ``--only-supported`` of the commands that score a scene (tune, evaluate, robustness):
+#: score only the ECs the scene supports (:func:`rvmsim.criteria.check_supported`).
+ONLY_SUPPORTED = click.option(
+    "--only-supported", is_flag=True,
+    help="Score only the ECs the scene supports, leaving out those whose objects it leaves "
+         "out (test objects, guidelines or board disabled); without it such a scene is "
+         "refused before any work.")

@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING
 import click
 
 from .errors import Command
-from .params import FiniteFloat, Integer, OutputFolder, check_scale, default_folder, load_isp
+from .params import (ONLY_SUPPORTED, FiniteFloat, Integer, OutputFolder, check_scale,
+                     default_folder, load_isp)
 
 if TYPE_CHECKING:
     from ..isp import IspParams
@@ -95,9 +96,11 @@ def process(scene: Path, params_file: Path | None, out: Path, scale: float,
               help="Output folder (default: out/<scene name>/evaluate).")
 @click.option("--scale", type=FiniteFloat(0.05, 4.0), default=1.0, show_default=True,
               help="Render the fisheye at this fraction of the sensor (RAD and shifts follow).")
+@ONLY_SUPPORTED
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
-             markets: str | None, out: Path, scale: float, progress: bool) -> None:
+             markets: str | None, out: Path, scale: float, only_supported: bool,
+             progress: bool) -> None:
     """Evaluate the RVM image of SCENE under ISP parameters: the eleven ECs and the EC score,
     judged at the RVM image of record (the scene's or criteria's display.rvm_image_px,
     default 1280x720) whatever output size the params file names.
@@ -106,7 +109,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     image), rvm_color.png and rvm_labels.png; with --markets one such folder per market and
     markets.json (docs/markets.md).
     """
-    from ..criteria import load_criteria
+    from ..criteria import check_supported, load_criteria
     from ..pipeline import record_output, render_rvm, write_evaluation
     from ..scene import load_scene
 
@@ -117,8 +120,9 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
                                    "has its own; a market may be SITE:CRITERIA)")
         _evaluate_markets(scene, params, output.mirror, markets, out, scale, progress)
         return
-    criteria = load_criteria(criteria_file)
     sc = load_scene(scene)
+    criteria = check_supported(sc, load_criteria(criteria_file), scene,
+                               only_supported=only_supported)
     check_scale(sc, params, scale)
     # Judged at the RVM image of record, whatever size the params file was searched at.
     record = record_output(criteria, sc, output.mirror)

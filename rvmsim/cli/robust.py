@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from .errors import Command
-from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFolder,
+from .params import (DEFAULT_WORKERS, ONLY_SUPPORTED, SEED, FiniteFloat, Integer, OutputFolder,
                      SchedulerAddress, check_scale, load_isp, scale_factors)
 
 __all__ = ["robustness"]
@@ -57,13 +57,14 @@ __all__ = ["robustness"]
               metavar="N", help="Also write sample N's scene (its mount offsets and load "
                                 "state; repeatable) as OUT/sample_N.yaml, with what was "
                                 "measured on it in OUT/sample_N.json.")
+@ONLY_SUPPORTED
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Path,
                min_yield: float | None, variation_file: Path | None,
                criteria_file: Path | None, markets: str | None, scale: float, scales: tuple[float, ...],
                scale_samples: int | None, workers: int, scheduler: str | None,
                compensation: str | None, export_samples: tuple[int, ...],
-               progress: bool) -> None:
+               only_supported: bool, progress: bool) -> None:
     """Yield of the ISP setting in --params over SCENE's production variation (SCENE may
     be a run folder: its scene, its best setting and, for a markets run, its markets).
 
@@ -78,7 +79,7 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     """
     from ..batch import make_executor
     from ..compensation import compensation_for
-    from ..criteria import load_criteria
+    from ..criteria import check_supported, load_criteria
     from ..markets import market_members, parse_markets
     from ..report import (RobustnessInputs, write_markets_robustness_outputs,
                           write_robustness_outputs)
@@ -99,7 +100,9 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     params, output = load_isp(params_file)
     sc, document = read_scene_document(scene)
     check_scale(sc, params, scale)
-    settings = RobustnessSettings(output, None if markets else load_criteria(criteria_file),
+    settings = RobustnessSettings(output, None if markets else check_supported(
+                                      sc, load_criteria(criteria_file), scene,
+                                      only_supported=only_supported),
                                   variation_for(sc, variation_file), samples, seed, scales,
                                   scale_samples, scale, min_yield,
                                   compensation_for(compensation))

@@ -11,9 +11,10 @@ import click
 
 from .._progress import ProgressBar
 from ..tune import DEFAULT_STRATEGY, STRATEGIES
+from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 from .errors import Command
-from .params import (DEFAULT_WORKERS, SEED, FiniteFloat, Integer, OutputFile, OutputFolder,
-                     SchedulerAddress)
+from .params import (DEFAULT_WORKERS, ONLY_SUPPORTED, SEED, FiniteFloat, Integer, OutputFile,
+                     OutputFolder, SchedulerAddress)
 
 if TYPE_CHECKING:
     from ..batch import SceneRun
@@ -29,15 +30,18 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
 @click.option("--out", "-o", type=OutputFolder(), default=None,
               help="Run folder (default: runs/<scene name>, runs/<name>+<name>… with --shared).")
 @click.option("--shared", is_flag=True, help="One parameter set for all SCENES (the worst "
-              "scene's EC score is maximised, every scene must pass).")
+              "scene's EC score is maximised, every scene must pass); exits 1 when none "
+              "passes all, naming the ECs that fail on which scenes.")
 @click.option("--aggregate", default=None, metavar="min|quantile Q", help="--shared, --robust: "
               "the EC score is the members' minimum or this quantile [default: min, "
-              "quantile 0.1 with --robust].")
+              f"{ROBUST_AGGREGATE} with --robust].")
 @click.option("--robust", is_flag=True, help="Judge every candidate on production variation "
               "samples too (the scene's variation section, or --variation): its EC score is "
-              "the worst sample's.")
+              "a low quantile of the nominal's and the samples' scores [default: "
+              f"{ROBUST_AGGREGATE}; --aggregate min: the worst one's]; it passes where every "
+              "one passes.")
 @click.option("--samples", type=Integer(1, 256), default=None,
-              help="With --robust: variation samples per scene [default: 16].")
+              help=f"With --robust: variation samples per scene [default: {DEFAULT_SAMPLES}].")
 @click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
               help="With --robust: a variation file instead of the scene's section.")
 @click.option("--compensation", default=None, metavar="FILE|default",
@@ -63,15 +67,17 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
 @click.option("--target-score", type=FiniteFloat(0, 1), default=None,
               help="Stop once the EC score reaches this.")
 @click.option("--resume", "resume_dir", type=click.Path(path_type=Path), default=None,
-              help="Continue the run in this folder (same settings, same final result).")
+              help="Continue the run in this folder with its own settings (same final "
+                   "result); a SCENE or run option given too must be the run's own.")
 @click.option("--force", is_flag=True, help="Replace an existing run in the output folder.")
+@ONLY_SUPPORTED
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: str | None,
          robust: bool, samples: int | None, variation_file: Path | None,
          compensation: str | None, strategy: str,
          config_file: Path | None, criteria_file: Path | None, markets: str | None, seed: int,
          workers: int, budget: int | None, max_time: float | None, target_score: float | None,
-         resume_dir: Path | None, force: bool, progress: bool) -> None:
+         resume_dir: Path | None, force: bool, only_supported: bool, progress: bool) -> None:
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
     markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
@@ -79,6 +85,8 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
                         summary_lines)
     from ..tune import resume as resume_run
     from ..tune import tune as run_tune
+    from ..tune.resumed import ResumeArgs
+    from ..tune.shared import shared_problem_lines
     from ..tune.robust import DEFAULT_SAMPLES
 
     check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
@@ -86,20 +94,34 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
                          markets=markets is not None)
     options = RunOptions(workers, max_time, target_score, progress)
     if resume_dir is not None:
-        result = resume_run(resume_dir, options=options)
+        given = _given(click.get_current_context())
+        result = resume_run(resume_dir, options=options, given=ResumeArgs(
+            scenes, shared, markets, robust, samples, variation_file, compensation, aggregate,
+            strategy if "strategy" in given else None, seed if "seed" in given else None,
+            budget, config_file, criteria_file, out, force, only_supported))
     else:
         request = TuneRequest(
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
             seed=seed, budget=budget, aggregate=aggregate,
             robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
             variation_file=variation_file, compensation=compensation_for(compensation),
-            markets=markets)
+            markets=markets, only_supported=only_supported)
         name = "+".join(s.stem for s in scenes) + ("" if markets is None else "@markets")
         result = run_tune(request, out or Path("runs") / name, options=options, force=force)
     click.echo("\n".join(summary_lines(result)))
     best = result.outcome.best
     if (result.run_dir / "best" / "markets.json").is_file() and (best is None or not best.passed):
         sys.exit(1)  # no setting passes every market (the summary says why)
+    if shared_problem_lines(result.run_dir):
+        sys.exit(1)  # no setting passes every scene (the summary says which ECs where)
+
+
+def _given(ctx: click.Context) -> set[str]:
+    """The options given on the command line (or in the environment), not defaulted."""
+    from click.core import ParameterSource
+
+    return {name for name in ctx.params
+            if ctx.get_parameter_source(name) not in (None, ParameterSource.DEFAULT)}
 
 
 _MIN_DISTANCE = click.option(

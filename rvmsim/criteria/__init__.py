@@ -71,6 +71,15 @@ from .feasibility import (
     label_counts,
     patch_view,
 )
+from .support import (
+    ONLY_SUPPORTED_HINT,
+    Unsupported,
+    check_supported,
+    ec_needs,
+    label_left_out,
+    supported_criteria,
+    unsupported_ecs,
+)
 from .scoring import (
     Criteria,
     EcBatch,
@@ -188,6 +197,13 @@ __all__ = [
     "pixel_scales",
     "to_record_units",
     "could_pass",
+    "ONLY_SUPPORTED_HINT",
+    "Unsupported",
+    "check_supported",
+    "ec_needs",
+    "label_left_out",
+    "supported_criteria",
+    "unsupported_ecs",
 ]
 
 

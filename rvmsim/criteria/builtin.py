@@ -384,7 +384,8 @@ ECS = [
     EcDefinition("1-1", "fg_lower_patches_visible", "", (F, G), _measure_1_1, _draw_1_1,
                  (1, 1), None, binary=True,
                  description="lower 150 × 150 mm of the F and G stripes wholly visible",
-                 infeasibility=fg_patches_reason),
+                 infeasibility=fg_patches_reason,
+                 needs=((L.object_patch("F"),), (L.object_patch("G"),))),
     EcDefinition("1-2", "fg_stripe_area_ratio", "‰", (F, G), _measure_1_2, _draw_1_2,
                  (10, None), Sigmoid(0.5, 10, 0, _INF),  # larger is better; 26.12 ‰ -> 1.00
                  description="area of the F and G vertical stripes / image area",
@@ -392,7 +393,7 @@ ECS = [
     EcDefinition("1-3", "abc_top_margin_ratio", "%", (ABC,), _measure_1_3, _draw_1_3,
                  (15, None), Sigmoid(0.43, 15, 0, _INF),  # >= 15 %; 25.70 % -> 0.99
                  description="distance d from the image top to the highest point of A, B, C "
-                             "/ height"),
+                             "/ height", needs=(ABC.labels,)),
     EcDefinition("1-4", "b_stripe_area_ratio", "‰", (ABC,), _measure_1_4, _draw_1_4,
                  (0.1, None), Sigmoid(23.1, 0.1, 0, _INF),  # larger is better; 0.2 ‰ -> 0.91
                  description="area of the horizontal stripe on B / image area",
@@ -409,7 +410,8 @@ ECS = [
                  regions=_bumper_regions, infeasibility=_BUMPER_ABSENT),
     EcDefinition("2-3", "bumper_side_difference", "px", (), _measure_2_3, _draw_2_3,
                  (None, 5), Sigmoid(0, -_INF, 1.17, 5),  # smaller is better; 1.08 px -> 0.99
-                 description="|t_l − t_r|", regions=_bumper_regions, pixel_axis="y"),
+                 description="|t_l − t_r|", regions=_bumper_regions, pixel_axis="y",
+                 needs=((L.BUMPER,),)),
     EcDefinition("2-4", "no_body_in_upper_region", "", (UPPER_BODY,), _measure_2_4, _draw_2_4,
                  (1, 1), None, binary=True,
                  description="no garnish or trunk in the upper part of the image"),

@@ -122,6 +122,13 @@ class EcDefinition:
         column offset, ``"y"``: a height); ``""``: both (a length in any direction).  A value
         measured at a search size is converted to the RVM image of record with that axis's
         scale (:mod:`rvmsim.criteria.record`).  Ignored for other units.
+    needs : tuple of tuple of int
+        What the scene must hold for the EC to be measurable: label id sets, each needing
+        at least one of its labels (``((patch F,), (patch G,))``: both patches).  A scene
+        whose settings leave a whole set out (an object, the guidelines or the board
+        disabled) cannot support the EC (:func:`rvmsim.criteria.unsupported_ecs`); ():
+        the labels of a :class:`~rvmsim.criteria.LabelsAbsent` feasibility reason, else
+        nothing.
     """
 
     id: str
@@ -141,6 +148,7 @@ class EcDefinition:
     sub_solve: SubSolve | None = None
     infeasibility: InfeasibilityFn | None = None
     pixel_axis: str = ""
+    needs: tuple[tuple[int, ...], ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id or any(c.isspace() for c in self.id):
@@ -159,6 +167,11 @@ class EcDefinition:
         if self.pixel_axis not in ("x", "y", ""):
             raise ValueError(f"EC {self.id!r}: pixel_axis must be 'x', 'y' or '', got "
                              f"{self.pixel_axis!r}")
+        try:
+            needs = tuple(tuple(int(i) for i in ids) for ids in self.needs)
+        except (TypeError, ValueError):
+            raise TypeError(f"EC {self.id!r}: needs must be a tuple of label id tuples") from None
+        object.__setattr__(self, "needs", needs)
         if self.sub_solve is not None and not isinstance(self.sub_solve, SubSolve):
             raise TypeError(f"EC {self.id!r}: sub_solve must be an rvmsim.criteria.SubSolve "
                             "or None")

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from ..criteria import Criteria
 
 __all__ = ["RUN_DB", "RUN_JSON", "recorded_path", "run_inputs", "open_run", "run_settings",
+           "json_difference", "run_json_disagreement",
            "run_state", "run_lock", "find_runs", "is_run_folder", "status_lines", "rank_text",
            "rank_params_text", "diverse_candidates", "write_top_files"]
 
@@ -109,6 +110,55 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
         raise RvmsimError(" ".join(msg.split())) from None
 
 
+def json_difference(a: Any, b: Any, key: str = "", *, a_keys: bool = False) -> str:
+    """The dotted key of the first difference between two JSON documents (objects compared
+    key by key, in ``a``'s order, then ``b``'s extra keys unless ``a_keys``: then only the
+    keys ``a`` has); '' when they are equal."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in list(a) + ([] if a_keys else [k for k in b if k not in a]):
+            sub = json_difference(a.get(k), b.get(k), f"{key}.{k}" if key else str(k),
+                                  a_keys=a_keys)
+            if sub:
+                return sub
+        return ""
+    return "" if a == b else (key or "(the whole document)")
+
+
+def _at(doc: Any, key: str) -> Any:
+    for part in key.split("."):
+        doc = doc.get(part) if isinstance(doc, dict) else None
+    return doc
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = json.dumps(value, default=json_default)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def run_json_disagreement(run_dir: str | Path, settings: RunSettings) -> str | None:
+    """Where the run's ``run.json`` disagrees with the settings in its store, as the start of
+    one line (``RUN/run.json: budget is 80 but RUN/run.sqlite holds 40``); None when
+    run.json is absent or each of its keys says what the store holds.  The store is the truth (``tune
+    --resume``, ``report``, ``select`` read it); run.json is its export for people, so an
+    edit there changes nothing, and ``status`` and ``tune --resume`` say so."""
+    path = Path(run_dir) / RUN_JSON
+    if not path.is_file():
+        return None
+    stored = json.loads(json.dumps(settings.as_json(), default=json_default))
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as err:
+        return f"{path}: not readable JSON ({' '.join(str(err).split())})"
+    # only the keys run.json has: one written by an older rvmsim may lack newer defaults
+    key = json_difference(doc, stored, a_keys=True)
+    if not key:
+        return None
+    if key == "(the whole document)":
+        return f"{path}: holds {_short(doc)}, not the settings {Path(run_dir) / RUN_DB} holds"
+    return (f"{path}: {key} is {_short(_at(doc, key))} but {Path(run_dir) / RUN_DB} holds "
+            f"{_short(_at(stored, key))}")
+
+
 def recorded_path(recorded: str, run_dir: Path) -> Path | None:
     """A file as ``tune`` recorded it: absolute, or relative to the current folder (where
     tune usually ran), the run folder or its parent; None when it is not there."""
@@ -189,11 +239,14 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
         markets = meta.get("markets")
         top: list[tuple[int, TrialRecord, str]] = []
         note = ""
+        differs = None
         try:
+            settings = run_settings(run_dir, store)
             top = [(c.rank, rec, "" if not c.differs else f"  (d {c.distance:.2f}: "
                     f"{c.differs})") for c, rec in store_candidates(
-                        store, run_settings(run_dir, store), top_m, min_distance,
-                        by_score=by_score)]
+                        store, settings, top_m, min_distance, by_score=by_score)]
+            if store.settings() is not None:  # not a run of rvmsim 0.1 (run.json its truth)
+                differs = run_json_disagreement(run_dir, settings)
         except RvmsimError as err:  # status needs only the store: say why, show by score
             note = f"top candidates by EC score (the diverse top-M needs: {err})"
             top = [(k, rec, "") for k, rec in enumerate(store.top(top_m or 5), start=1)]
@@ -213,6 +266,9 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
                          f"{aggregate}")
     if note:
         lines.append("  " + " ".join(note.split()))
+    if differs:
+        lines.append(f"  {differs}: the settings live in {RUN_DB} and are used; {RUN_JSON} "
+                     "only exports them (an edit there changes nothing)")
     for rank, rec, how in top:
         fails = rec.failing()
         each = "" if not members[rec.idx] else "  [" + ", ".join(

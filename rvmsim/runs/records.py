@@ -126,6 +126,9 @@ class RunSettings:
     #: (:attr:`rvmsim.markets.Market.spec`), each a member per scene of ``scenes``; ():
     #: the run's criteria at each scene's own site.
     markets: tuple[str, ...] = ()
+    #: ECs left out because the scene cannot support them (``tune --only-supported``,
+    #: :func:`rvmsim.criteria.unsupported_ecs`): not scored, not in the verdict; ().
+    left_out: tuple[str, ...] = ()
 
     @property
     def record_px(self) -> tuple[int, int]:
@@ -171,6 +174,8 @@ class RunSettings:
             doc["judged_at"] = list(self.judged_at)
         if self.markets:
             doc["markets"] = list(self.markets)
+        if self.left_out:
+            doc["only_supported"] = {"left_out": list(self.left_out)}
         return doc
 
     @classmethod
@@ -230,7 +235,10 @@ class RunSettings:
                    None if robust is None else _mapping("robust: compensation",
                                                         robust.get("compensation")),
                    _size("judged_at", doc.get("judged_at")),
-                   _texts("markets", doc.get("markets")))
+                   _texts("markets", doc.get("markets")),
+                   _texts("only_supported: left_out",
+                          (_mapping("only_supported", doc.get("only_supported"))
+                           or {}).get("left_out")))
 
 
 def _texts(key: str, value: Any) -> tuple[str, ...]:

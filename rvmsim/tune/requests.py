@@ -139,6 +139,10 @@ class TuneRequest:
         One setting for several markets (:mod:`rvmsim.markets`, ``--markets
         fmvss111-full,unr158``): each scene at each market's site, judged with the
         market's criteria (then give no ``criteria``).
+    only_supported : bool
+        Tune only the ECs the scenes support (``--only-supported``): those whose measured
+        objects a scene leaves out (:func:`rvmsim.criteria.unsupported_ecs`) are disabled
+        and recorded; without it such a scene is refused before any work.
     """
 
     scenes: tuple[SceneArg, ...]
@@ -154,6 +158,7 @@ class TuneRequest:
     scene_file: str | Path | None = None
     compensation: CompensationModel | None = None
     markets: str | tuple[str, ...] | None = None
+    only_supported: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.scenes, (tuple, list)) or not self.scenes:

@@ -20,7 +20,8 @@ from ..errors import RvmsimError
 from ..isp import params_to_dict
 from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 from ..search.config import TuningConfig, make_strategy
-from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_lock, run_settings, write_top_files
+from ..runs.folder import (RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock,
+                           run_settings, write_top_files)
 from .loop import SearchOutcome, search_members, search_scene
 from .members import Member, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compensation,
@@ -28,8 +29,9 @@ from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compen
                      write_robust_results)
 from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
+from .resumed import ResumeArgs, check_resume_args
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
-                     write_member_results)
+                     shared_problem_lines, write_member_results)
 from .markets import (check_market_arguments, market_summary_lines, markets_members,
                       write_market_results)
 from .members import check_cameras
@@ -97,11 +99,12 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
     crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
     if r.shared:  # one parameter set for every scene
         scenes = load_shared_scenes(r.scenes)
+        crit, left_out = _supported(crit, scenes, r.only_supported)
         record = record_size(crit, scenes[0][1])
         settings = dataclasses.replace(
             shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
                             (r.config or TuningConfig()).at_record(record), agg),
-            judged_at=record)
+            judged_at=record, left_out=left_out)
         return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg,
                                  r.compensation), [sc for _, sc in scenes], crit)
     scene = r.scenes[0]
@@ -110,13 +113,26 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
         sc, recorded = scene, r.scene_file or scene.source
     else:
         recorded, sc = scene, load_scene(scene)
+    crit, left_out = _supported(crit, [(str(recorded), sc)], r.only_supported)
     settings = RunSettings(
         scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
         strategy=r.strategy, seed=r.seed, budget=r.budget,
         criteria_file=None if r.criteria_file is None else criteria_reference(r.criteria_file),
         config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
-        judged_at=record_size(crit, sc))
+        judged_at=record_size(crit, sc), left_out=left_out)
     return _robust_settings(settings, [sc], robust, agg, r.compensation), [sc], crit
+
+
+def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_supported: bool
+               ) -> tuple[Criteria, tuple[str, ...]]:
+    """The criteria every scene supports (:func:`rvmsim.criteria.check_supported`: refused
+    before any work unless ``only_supported``) and the ECs that left out."""
+    from ..criteria import check_supported
+
+    out = crit
+    for recorded, sc in scenes:
+        out = check_supported(sc, out, recorded, only_supported=only_supported)
+    return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)
 
 
 def _markets_run(r: TuneRequest, aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
@@ -168,10 +184,12 @@ def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
                                else compensation.as_dict())
 
 
-def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
+def _resumed_run(run_dir: Path, given: ResumeArgs | None
+                 ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scene and criteria of the run to resume in ``run_dir`` (read, not
-    written), checking that its scene has not changed since."""
-    from ..criteria import load_criteria
+    written), checking what the caller ``given`` against them (:mod:`.resumed`), its
+    run.json against its store, and that its scene has not changed since."""
+    from ..criteria import Unsupported, load_criteria, supported_criteria
     from ..render import same_scene
     from ..scene import load_scene
 
@@ -179,6 +197,7 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
         raise RvmsimError(f"{run_dir}: no run to resume ({RUN_DB} missing)")
     store = open_run(run_dir)
     try:
+        stored = store.settings()  # None: a run of rvmsim 0.1, whose run.json is its truth
         settings = run_settings(run_dir, store)
         # a status or a trial this version cannot read is refused before anything changes
         store.state()
@@ -186,6 +205,13 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
     finally:
         store.close()
     check_seed(settings.seed, f"{run_dir / RUN_DB}: seed")
+    if given is not None:
+        check_resume_args(run_dir, settings, given)
+    differs = None if stored is None else run_json_disagreement(run_dir, settings)
+    if differs:
+        raise RvmsimError(f"{differs}: the settings live in {RUN_DB} and {RUN_JSON} only "
+                          f"exports them; restore {RUN_JSON}, or delete it to resume with the "
+                          "stored settings (it is written anew)")
     if settings.shared or settings.robust:
         try:
             parse_aggregate(settings.aggregate or "min")
@@ -210,7 +236,11 @@ def _resumed_run(run_dir: Path) -> tuple[RunSettings, list[Scene], Criteria]:
         from ..markets import market_criteria, parse_markets
 
         return settings, scenes, market_criteria(parse_markets(list(settings.markets))[0])
-    return settings, scenes, load_criteria(settings.criteria_file)
+    crit = load_criteria(settings.criteria_file)
+    if settings.left_out:  # tuned with --only-supported: the same ECs left out again
+        crit = supported_criteria(crit, [Unsupported(k, ()) for k in settings.left_out
+                                         if k in crit.items])
+    return settings, scenes, crit
 
 
 def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: bool) -> RunStore:
@@ -289,21 +319,26 @@ def tune(request: TuneRequest, run_dir: str | Path, *, options: RunOptions = Run
     return _run(run_dir, lock, settings, scenes, crit, options, resume=False, force=force)
 
 
-def resume(run_dir: str | Path, *, options: RunOptions = RunOptions()) -> TuneResult:
+def resume(run_dir: str | Path, *, options: RunOptions = RunOptions(),
+           given: ResumeArgs | None = None) -> TuneResult:
     """Continue the run in ``run_dir`` with its own settings, read from its store (after
     Ctrl-C, a kill, ``--max-time``): the same final result as an unbroken run.
+
+    ``given``: what the caller gave besides the run (``tune SCENE --resume RUN --budget
+    …``), each of which must be the run's own (:mod:`rvmsim.tune.resumed`).
 
     Raises
     ------
     RvmsimError
-        One line: no run there, an unreadable store, a scene or variation changed since the
-        run started, or a run in use by another writer.
+        One line: no run there, an unreadable store, something ``given`` that the run was
+        not made with, a run.json that disagrees with the store, a scene or variation
+        changed since the run started, or a run in use by another writer.
     """
     run_dir = Path(run_dir)
     _check_out(run_dir)
     lock = run_lock(run_dir)
     lock.check_free()
-    settings, scenes, crit = _resumed_run(run_dir)
+    settings, scenes, crit = _resumed_run(run_dir, given)
     return _run(run_dir, lock, settings, scenes, crit, options, resume=True, force=False)
 
 
@@ -392,7 +427,10 @@ def summary_lines(result: TuneResult) -> list[str]:
     if markets:
         return [head, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(), "",
                 *markets]
-    return [head, *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip()]
+    problems = shared_problem_lines(result.run_dir)
+    return [head, *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(),
+            *(["", "no setting found passes every scene:", *(f"  {p}" for p in problems)]
+              if problems else [])]
 
 
 def _robust_line(run_dir: Path) -> list[str]:

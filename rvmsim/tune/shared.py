@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 from ..errors import RvmsimError
 from ..search.config import TuningConfig
@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from ..runs.store import RunStore
 
 __all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "resumed_scenes", "scene_members",
-           "write_member_results"]
+           "write_member_results", "shared_problem_lines"]
 
 
 def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
@@ -54,14 +54,8 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
                 else "compensation")
         raise RvmsimError(f"--{flag}: only with --robust (tune on production variation "
                           "samples)")
-    if resume:
-        if robust:
-            raise RvmsimError("--resume: give no --robust (a run resumes with its own "
-                              "samples, recorded in its store)")
-        if shared or n_scenes > 1 or markets:
-            raise RvmsimError("--resume: give no scenes, --shared or --markets (a run resumes "
-                              "with its own scenes and markets, recorded in its store)")
-        return
+    if resume:  # each given option is checked against the run's own settings
+        return  # (rvmsim.tune.resumed, once the run's store is read)
     if not n_scenes:
         raise RvmsimError("tune: give a SCENE file, or --resume RUN")
     if shared and n_scenes < 2 and not markets:
@@ -160,10 +154,79 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
         docs.append({"vehicle": sc.name, "scene": sc.source, **ec.as_dict()})
         tables.append(f"{sc.name}:\n{ec.table()}")
     (run_dir / "best").mkdir(parents=True, exist_ok=True)
+    conflicts = [] if best.passed else _scene_conflicts(store, [sc.name for sc in scenes])
     (run_dir / "best" / "members.json").write_text(json.dumps(
         {"trial": best.idx, "aggregate": aggregate, "ec_score": best.score,
-         "passed": best.passed, "members": docs}, indent=2))
+         "passed": best.passed, "members": docs, "conflicts": conflicts}, indent=2))
     (run_dir / "best" / "ec_table.txt").write_text(
         f"shared by {len(scenes)} scenes, EC score ({aggregate}) {best.score:.4g}, "
         f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}\n\n"
         + "\n\n".join(tables) + "\n")
+
+
+def _scene_conflicts(store: RunStore, names: Sequence[str]) -> list[dict[str, Any]]:
+    """Pairs of scenes that each pass alone in some trial but never together, with the ECs
+    of the other that fail where one passes (as a markets run's conflicts)."""
+    from .markets import _failing_where, _member_passes
+
+    per = _member_passes(store, len(names))
+    found = []
+    for i, a in enumerate(names):
+        for j, b in enumerate(names):
+            if i < j and per[i] and per[j] and not per[i] & per[j]:
+                found.append({"members": [a, b],
+                              "ecs": _failing_where(store, per[i], j, b)
+                              + _failing_where(store, per[j], i, a)})
+    return found
+
+
+def _limit(ec: dict[str, Any]) -> str:
+    """An EC's acceptable range as a person reads it (``≤ 5 px``, ``45–55 %``)."""
+    lo, hi = (list(ec.get("range") or []) + [None, None])[:2]
+    unit = ec.get("unit") or ""
+    unit = f" {unit}" if unit else ""
+    if lo is not None and hi is not None:
+        return f"{lo:g}–{hi:g}{unit}" if lo != hi else f"= {lo:g}{unit}"
+    if hi is not None:
+        return f"≤ {hi:g}{unit}"
+    return f"≥ {lo:g}{unit}" if lo is not None else "any value"
+
+
+def shared_problem_lines(run_dir: Path) -> list[str]:
+    """Why the best setting of a shared run does not pass every scene (none when it does,
+    or for other runs), from ``best/members.json``: each EC that fails on some scene with
+    its value on every scene against its range (``EC 3-1 guide2_center_offset: 5.5 px on E
+    and 5.5 px on B, passes on C; needs ≤ 5 px``), then the pairs of scenes that each pass
+    alone in some trial but never together, with their conflicting ECs."""
+    path = run_dir / "best" / "members.json"
+    if not path.is_file():
+        return []
+    doc = json.loads(path.read_text())
+    members = doc.get("members") or []
+    # every scene passes (a robust shared run may still fail on a sample: robust.json says)
+    if all(m.get("passed") for m in members) or (run_dir / "best" / "markets.json").is_file():
+        return []
+    rows: dict[str, list[tuple[str, dict[str, Any]]]] = {}
+    for m in members:
+        for ec in m.get("ecs") or []:
+            if ec.get("enabled", True):
+                rows.setdefault(ec["id"], []).append((m["vehicle"], ec))
+    lines = []
+    for ec_id, per in rows.items():
+        fails = [(v, e) for v, e in per if not e.get("passed")]
+        if not fails:
+            continue
+        unit = f" {per[0][1].get('unit')}" if per[0][1].get("unit") else ""
+        shown = " and ".join(("—" if e.get("value") is None else f"{e['value']:.4g}{unit}")
+                             + f" on {v}" for v, e in fails)
+        ok = [v for v, e in per if e.get("passed")]
+        lines.append(f"EC {ec_id} {per[0][1].get('name', '')}: {shown}"
+                     + (f", passes on {', '.join(ok)}" if ok else "")
+                     + f"; needs {_limit(per[0][1])}")
+    for c in doc.get("conflicts") or []:
+        a, b = c["members"]
+        ecs = ", ".join(f"{e['ec']} on {e['member']} ({e['fails_in']} of {e['of']} trials)"
+                        for e in c["ecs"])
+        lines.append(f"{a} and {b} each pass alone but never together; where one passes the "
+                     f"other fails {ecs}")
+    return lines

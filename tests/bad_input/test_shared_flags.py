@@ -42,7 +42,9 @@ def _shared_run(folder: Path) -> None:
     out = run_in_process(["tune", S, "b.yaml", "--shared", "--strategy", "random", "--budget",
                           "20", "--out", "shared", "--no-progress", "--workers", "1"],
                          cwd=folder)
-    assert out.code == 0, out.stderr
+    # 1: no setting of so short a search passes both scenes (the summary says which ECs)
+    assert out.code in (0, 1) and (folder / "shared" / "best" / "members.json").is_file(), \
+        out.stderr
 
 
 def _changed_shared_run(folder: Path) -> None:

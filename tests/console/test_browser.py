@@ -45,12 +45,32 @@ def _open(browser, url):
     return page, errors
 
 
+#: True when the image ``sel`` holds a ``src`` containing ``part`` other than ``old`` and
+#: has loaded it (``naturalWidth`` is 0 until then, also for a moment after ``src`` changes).
+_IMAGE_LOADED = ("([sel, part, old]) => { const i = document.querySelector(sel); "
+                 "return !!i && !!i.src && i.src.includes(part) && i.src !== old && "
+                 "i.complete && i.naturalWidth > 0; }")
+
+
+def _image_loaded(page, selector: str, part: str = "", old: str | None = None,
+                  timeout: float = 30000) -> None:
+    """Wait until the image ``selector`` shows a new picture and has loaded it: its ``src``
+    contains ``part`` and differs from ``old`` (the src before the action; None: any), and
+    ``complete && naturalWidth > 0``."""
+    page.wait_for_function(_IMAGE_LOADED, arg=[selector, part, old], timeout=timeout)
+
+
 def _settled(page, timeout: float = 30000) -> None:
-    """Wait until the newest value has been shown (nothing in flight, nothing pending)."""
+    """Wait until the newest value has been shown (nothing in flight, nothing pending) and
+    its picture has loaded, in the main view and as A of the A/B view."""
     page.wait_for_function("(() => { const s = window.rvmConsole; return !s.inflight && "
                            "!s.pending && s.last && s.shown && !s.shown.draft && "
                            "Object.keys(s.current).every(k => s.last.params[k] === s.current[k]);"
                            " })()", timeout=timeout)
+    _image_loaded(page, "#rvm", timeout=timeout)
+    page.wait_for_function("(() => { const a = document.getElementById('ab-a'); "
+                           "return a.hidden || (a.src === document.getElementById('rvm').src && "
+                           "a.complete && a.naturalWidth > 0); })()", timeout=timeout)
 
 
 def _drag(page, selector: str, fraction: float) -> None:
@@ -194,12 +214,10 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     folder, session, url = served_run
     page, errors = _open(browser, url)
     _settled(page)
-    assert "/display.jpg?v=" in page.get_attribute("#rvm", "src")
+    before = page.get_attribute("#rvm", "src")
+    assert "/display.jpg?v=" in before
     page.check("#annotate")
-    # the new picture is in place once it has loaded (naturalWidth is 0 until then)
-    page.wait_for_function("(() => { const img = document.getElementById('rvm'); return "
-                           "img.src.includes('/annotated.jpg') && img.complete && "
-                           "img.naturalWidth > 0; })()")
+    _image_loaded(page, "#rvm", "/annotated.jpg", before)
     width = page.evaluate("document.getElementById('rvm').naturalWidth")
     # the EC image of record with its results panel, at the report column's width or wider
     assert width >= min(session.ec_output.width, 1200)

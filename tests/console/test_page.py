@@ -14,7 +14,7 @@ from rvmsim.console import check_access, ec_margin, open_session
 
 from ..cli_runner import run_in_child
 from .conftest import serving
-from .test_browser import _drag, _new_page, _open, _settled
+from .test_browser import _drag, _image_loaded, _new_page, _open, _settled
 
 ZOOM_RANGE = (0.01, 10.0)  # zoom's allowed range (PARAM_SPECS)
 
@@ -180,8 +180,10 @@ def test_ab_side_by_side_above_the_fold_and_never_a_broken_image(served, browser
     b = page.locator("#ab-b-empty").bounding_box()
     assert a and b and a["y"] + a["height"] <= 900 and b["y"] + b["height"] <= 900
     assert abs(a["y"] - b["y"]) < 2 and b["x"] >= a["x"] + a["width"]
+    b_before = page.get_attribute("#ab-b", "src")
     page.click('#candidates tr[data-rank="2"] button.as-b')
     page.wait_for_function("window.rvmConsole.b !== null")
+    _image_loaded(page, "#ab-b", "/display", b_before)
     assert page.locator("#ab-b").is_visible() and not page.locator("#ab-b-empty").is_visible()
     assert page.evaluate(broken) == []
     b = page.locator("#ab-b").bounding_box()
