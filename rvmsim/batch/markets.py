@@ -265,12 +265,13 @@ def _search(task: PointTask, pairs: Sequence[MarketMember],
     phases = {"tune": time.perf_counter() - t}
     t = time.perf_counter()
     rob, beat = task.get("robustness"), task.get("beat")
-    measured = rob and rob["samples"] > 0 and pairs[0].scene.variation is not None
-    if measured and infeasible:
+    if rob is None or rob["samples"] <= 0 or pairs[0].scene.variation is None:
+        pass  # no yield asked for
+    elif infeasible:
         result["robustness"] = {"error": "not measured: the point is infeasible ("
                                 + "; ".join(x["reason"] for x in infeasible) + ")",
                                 "seconds": 0.0}
-    elif measured and (beat is None or (result["passed"], result["score"]) > tuple(beat)):
+    elif beat is None or (result["passed"], result["score"]) > tuple(beat):
         result["robustness"] = markets_yield(pairs, best.params, config.output_spec(),
                                              rob["samples"], rob["seed"])
     phases["yield"] = time.perf_counter() - t
