@@ -1,6 +1,7 @@
 """Benchmark: tuning throughput and the paper protocol's wall time (not a test).
 
     python tools/bench_tune.py [scenes/vehicle_a.yaml] [--trials 20000] [--workers 2]
+        [--size W H]
 
 Runs the paper's grid-to-random protocol (3⁹ = 19,683 coarse candidates, then N = 2 seeds ×
 T fine candidates) on the scene with ``--workers`` processes, from a warm render cache, and
@@ -30,11 +31,13 @@ def main() -> None:
     ap.add_argument("scene", nargs="?", default="scenes/vehicle_a.yaml")
     ap.add_argument("--trials", type=int, default=20000)
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 2)
+    ap.add_argument("--size", type=int, nargs=2, metavar=("W", "H"),
+                    help="the search size (default: the RVM image of record, 1280x720)")
     args = ap.parse_args()
     print(f"machine: {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        cfg = TuningConfig()
+        cfg = TuningConfig.model_validate({"output": {"size": args.size}} if args.size else {})
         # Warm the render cache (rendering is once per scene, not part of the protocol).
         tune(TuneRequest((args.scene,), "random", cfg, budget=1), tmp / "warm")
         one = tune(TuneRequest((args.scene,), "grid-random", cfg, budget=args.trials),
@@ -46,7 +49,7 @@ def main() -> None:
         wall = time.perf_counter() - t
         n = run.outcome.evaluated
         print(f"scene {args.scene}: paper protocol, {n} evaluations "
-              f"(3^9 coarse + 2 x {args.trials} fine), RVM {cfg.output.size[0]}x{cfg.output.size[1]}")
+              f"(3^9 coarse + 2 x {args.trials} fine), RVM {cfg.output_spec().width}x{cfg.output_spec().height}")
         print(f"  {args.workers} workers: {wall:.1f} s wall, {n / wall:.0f} evaluations/s "
               f"(search only: {run.outcome.seconds:.1f} s)")
         print(f"  baseline, 1 process, first {one.outcome.evaluated} candidates: {base_rate:.0f} "
