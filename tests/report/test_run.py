@@ -217,12 +217,17 @@ def test_batch_index_links_and_groups(runs, tmp_path):
 
 
 def _record_scene(run, scene) -> None:
-    """Point the run's recorded scene (in run.sqlite, the run's truth) at ``scene``."""
+    """Point the run's recorded scene (in run.sqlite, the run's truth) at ``scene``, and its
+    export run.json with it (a run.json that disagrees with the store blocks a resume)."""
     from rvmsim.runs import RunStore
 
     store = RunStore(run / "run.sqlite")
     store.write_settings(dataclasses.replace(store.settings(), scene=str(scene)))
     store.close()
+    doc = json.loads((run / "run.json").read_text())
+    if "scene" in doc:
+        doc["scene"] = str(scene)
+        (run / "run.json").write_text(json.dumps(doc, indent=2))
 
 
 def test_report_missing_scene_is_one_line_error(runs, tmp_path):
