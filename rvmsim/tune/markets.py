@@ -22,12 +22,11 @@ from __future__ import annotations
 
 import json
 import re
-from collections import Counter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
 from ..errors import RvmsimError
-from .members import Member, check_cameras
+from .members import Member, check_cameras, member_conflicts, member_passes
 
 if TYPE_CHECKING:
     from ..criteria.infeasible import Infeasibility
@@ -173,44 +172,10 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
                   for p, f in market_infeasible(pairs, renders)]
     if not conflicts:  # judged after a search of other criteria: no member results
         return {"infeasible": infeasible, "conflicts": []}
-    per = _member_passes(store, len(pairs))
-    found = []
-    for i, a in enumerate(pairs):
-        for j, b in enumerate(pairs):
-            if i >= j or not per[i] or not per[j] or per[i] & per[j]:
-                continue
-            found.append({"members": [a.name, b.name],
-                          "ecs": _failing_where(store, per[i], j, b.name)
-                          + _failing_where(store, per[j], i, a.name)})
-    return {"infeasible": infeasible, "conflicts": found,
+    per = member_passes(store, len(pairs))
+    return {"infeasible": infeasible,
+            "conflicts": member_conflicts(store, [p.name for p in pairs], per),
             "passes_alone": {p.name: len(per[k]) for k, p in enumerate(pairs)}}
-
-
-def _member_passes(store: RunStore, n: int) -> list[set[int]]:
-    """Per member, the trials it passes (from the store's ``members`` table; a run of one
-    member has none: its trials are the member's)."""
-    if n == 1:
-        return [{int(r[0]) for r in store.rows("SELECT idx FROM trials WHERE passed = 1")}]
-    out: list[set[int]] = [set() for _ in range(n)]
-    for idx, member in store.rows("SELECT idx, member FROM members WHERE passed = 1"):
-        if 0 <= int(member) < n:
-            out[int(member)].add(int(idx))
-    return out
-
-
-def _failing_where(store: RunStore, trials: set[int], member: int, name: str,
-                   limit: int = 3) -> list[dict[str, Any]]:
-    """The ECs of ``member`` (called ``name``) that fail most often in ``trials`` (the
-    trials another member passes; from its own results there)."""
-    counts: Counter[str] = Counter()
-    rows = store.rows("SELECT idx, ec FROM members WHERE member = ?", (member,))
-    for idx, ec in rows:
-        if int(idx) in trials:
-            for k, cell in json.loads(ec).items():
-                if not cell[2]:
-                    counts[k] += 1
-    return [{"member": name, "ec": k, "fails_in": n, "of": len(trials)}
-            for k, n in counts.most_common(limit)]
 
 
 def market_summary_lines(run_dir: Path) -> list[str]:

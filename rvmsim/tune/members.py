@@ -31,8 +31,9 @@ from __future__ import annotations
 
 import json
 import re
+from collections import Counter
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
@@ -50,9 +51,10 @@ if TYPE_CHECKING:
     from ..camera import FisheyeCamera
     from ..compensation import Deviation
     from ..scene import Scene
+    from ..runs.store import RunStore
     from .compensated import MembersCompensation
 
-__all__ = ["Member", "Aggregate", "parse_aggregate", "MembersSolver", "MembersScorer",
+__all__ = ["member_passes", "member_conflicts", "Member", "Aggregate", "parse_aggregate", "MembersSolver", "MembersScorer",
            "check_members", "check_cameras", "worst_ec_json", "member_evaluators", "SOLVE_MODES", "OBJECTIVE_COMBINE", "COMBINES"]
 
 #: How the sub-solves of several members combine (:class:`MembersSolver`).
@@ -290,3 +292,48 @@ def member_evaluators(members: Sequence[Member], output: OutputSpec,
     """One evaluator per member (:func:`rvmsim.pipeline.make_evaluator`) on the run's RVM
     ``output``, with the member's own criteria or else ``criteria``."""
     return [make_evaluator(m, output, m.criteria or criteria) for m in members]
+
+
+# ---------------------------------------------------------------------------- conflicts
+def member_passes(store: RunStore, n: int) -> list[set[int]]:
+    """Per member of a search of ``n`` members, the trials it passes (from the store's
+    ``members`` table; a run of one member has none: its trials are the member's)."""
+    if n == 1:
+        return [{int(r[0]) for r in store.rows("SELECT idx FROM trials WHERE passed = 1")}]
+    out: list[set[int]] = [set() for _ in range(n)]
+    for idx, member in store.rows("SELECT idx, member FROM members WHERE passed = 1"):
+        if 0 <= int(member) < n:
+            out[int(member)].add(int(idx))
+    return out
+
+
+def _failing_where(store: RunStore, trials: set[int], member: int, name: str,
+                   limit: int = 3) -> list[dict[str, Any]]:
+    """The ECs of ``member`` (called ``name``) that fail most often in ``trials`` (the
+    trials another member passes; from its own results there)."""
+    counts: Counter[str] = Counter()
+    rows = store.rows("SELECT idx, ec FROM members WHERE member = ?", (member,))
+    for idx, ec in rows:
+        if int(idx) in trials:
+            for k, cell in json.loads(ec).items():
+                if not cell[2]:
+                    counts[k] += 1
+    return [{"member": name, "ec": k, "fails_in": n, "of": len(trials)}
+            for k, n in counts.most_common(limit)]
+
+
+def member_conflicts(store: RunStore, names: Sequence[str],
+                     passes: list[set[int]] | None = None) -> list[dict[str, Any]]:
+    """Pairs of members (by ``names``, in the search's order) that each pass alone in some
+    trial but never together, with the ECs of the other that fail in the trials where one
+    passes, most often first: ``{"members": [a, b], "ecs": [{"member", "ec", "fails_in",
+    "of"}, …]}`` each.  ``passes``: :func:`member_passes`, when already read."""
+    per = passes if passes is not None else member_passes(store, len(names))
+    found = []
+    for i, a in enumerate(names):
+        for j, b in enumerate(names):
+            if i < j and per[i] and per[j] and not per[i] & per[j]:
+                found.append({"members": [a, b],
+                              "ecs": _failing_where(store, per[i], j, b)
+                              + _failing_where(store, per[j], i, a)})
+    return found

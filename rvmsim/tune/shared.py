@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 from ..errors import RvmsimError
 from ..search.config import TuningConfig
-from .members import Member, check_cameras
+from .members import Member, check_cameras, member_conflicts
 from ..runs.records import RunSettings, SceneRef
 
 if TYPE_CHECKING:
@@ -154,7 +154,7 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
         docs.append({"vehicle": sc.name, "scene": sc.source, **ec.as_dict()})
         tables.append(f"{sc.name}:\n{ec.table()}")
     (run_dir / "best").mkdir(parents=True, exist_ok=True)
-    conflicts = [] if best.passed else _scene_conflicts(store, [sc.name for sc in scenes])
+    conflicts = [] if best.passed else member_conflicts(store, [sc.name for sc in scenes])
     (run_dir / "best" / "members.json").write_text(json.dumps(
         {"trial": best.idx, "aggregate": aggregate, "ec_score": best.score,
          "passed": best.passed, "members": docs, "conflicts": conflicts}, indent=2))
@@ -162,22 +162,6 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
         f"shared by {len(scenes)} scenes, EC score ({aggregate}) {best.score:.4g}, "
         f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}\n\n"
         + "\n\n".join(tables) + "\n")
-
-
-def _scene_conflicts(store: RunStore, names: Sequence[str]) -> list[dict[str, Any]]:
-    """Pairs of scenes that each pass alone in some trial but never together, with the ECs
-    of the other that fail where one passes (as a markets run's conflicts)."""
-    from .markets import _failing_where, _member_passes
-
-    per = _member_passes(store, len(names))
-    found = []
-    for i, a in enumerate(names):
-        for j, b in enumerate(names):
-            if i < j and per[i] and per[j] and not per[i] & per[j]:
-                found.append({"members": [a, b],
-                              "ecs": _failing_where(store, per[i], j, b)
-                              + _failing_where(store, per[j], i, a)})
-    return found
 
 
 def _limit(ec: dict[str, Any]) -> str:
