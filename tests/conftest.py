@@ -20,39 +20,17 @@ SCENES = ROOT / "scenes"
 SHARED_FIXTURE_FOLDERS = ("batch", "calibrate", "console")
 
 
-#: The costliest groups' share of the test time (seconds of a duration profile of the default
-#: tier on 2 loaded cores, 2026-12-02; every other group is lighter).  Under pytest-xdist
-#: the groups are handed out in this order, heaviest first, then the others in collection
-#: order: the longest-processing-time-first rule, so that the run does not end waiting for
-#: one heavy file begun last.  Stale figures only cost time, never a result.
-HEAVY_GROUPS = {
-    "batch": 418, "calibrate": 273, "validate/test_cli_validate.py": 213, "console": 143,
-    "validate/test_board_start.py": 133, "tune/test_shared.py": 131,
-    "validate/test_global_search.py": 131, "robust/test_robustness.py": 118,
-    "eol/test_station.py": 104, "storage/test_lock.py": 91, "tune/test_run.py": 88,
-    "report/test_markets_report.py": 82, "report/test_run.py": 74,
-    "validate/test_validation.py": 61, "validate/test_hard_starts.py": 56,
-    "report/test_signoff.py": 52,
-}
-
-
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under pytest-xdist: each item's group (:data:`SHARED_FIXTURE_FOLDERS`, else its
-    file), for ``--dist loadgroup``; in a worker, the items of :data:`HEAVY_GROUPS` first,
-    heaviest first (each group's items in their order)."""
+    file), for ``--dist loadgroup``."""
     if not config.pluginmanager.hasplugin("xdist"):
         return
     tests = Path(__file__).resolve().parent
-    groups: dict[int, str] = {}
     for item in items:
         rel = Path(item.path).resolve().relative_to(tests)
         group = rel.parts[0] if rel.parts[0] in SHARED_FIXTURE_FOLDERS else rel.as_posix()
         item.add_marker(pytest.mark.xdist_group(group))
-        groups[id(item)] = group
-    if hasattr(config, "workerinput"):  # a worker of a distributed run
-        order = {id(item): k for k, item in enumerate(items)}
-        items.sort(key=lambda it: (-HEAVY_GROUPS.get(groups[id(it)], 0), order[id(it)]))
 
 
 @functools.lru_cache(maxsize=None)
