@@ -3,7 +3,8 @@ tuning runs.
 
 - :mod:`.executors`: where tasks run (local processes or a Dask cluster).
 - :mod:`.spec`: the sweep file, its axes and design points.
-- :mod:`.point`: one design point as a task (render, infeasibility, tune, sensitivity).
+- :mod:`.point`: one design point as a task (render, infeasibility, tune, sensitivity);
+  :mod:`.probes`: what it shares with markets points (render lock, budget, sensitivity).
 - :mod:`.markets`: sweeps over markets (every point tuned to pass several markets).
 - :mod:`.feasibility`: the ECs no ISP setting can pass at a point (no search needed).
 - :mod:`.recheck`: continuation over the grid, re-checks, and each point's verdict.
@@ -41,8 +42,8 @@ from .yields import (
     yield_summary,
     yield_cells,
 )
-from .point import (
-    run_point,
+from .point import run_point
+from .probes import (
     sensitivity,
     probe_sensitivity,
     SENSITIVITY_STEPS,

@@ -144,11 +144,11 @@ def _members(task: PointTask
     from ..markets import market_members
     from ..scene import scene_from_dict
     from ..tune.markets import render_market_members
-    from .point import _RENDER_LOCK
+    from .probes import RENDER_LOCK
 
     scene = scene_from_dict(task["scene"], source=task["label"])
     pairs = market_members([scene], _parsed(task.get("markets", ())))
-    with _RENDER_LOCK:  # one OpenGL context at a time per process
+    with RENDER_LOCK:  # one OpenGL context at a time per process
         renders, members = render_market_members(pairs)
     return pairs, renders, members
 
@@ -224,14 +224,14 @@ def _search(task: PointTask, pairs: Sequence[MarketMember],
     from ..runs import RunStore
     from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy,
                         member_evaluators, search_members)
-    from .point import _task_budget, probe_sensitivity
+    from .probes import probe_sensitivity, task_budget
 
     config = TuningConfig.model_validate(task["config"]).at_record(
         record_size(pairs[0].criteria, pairs[0].scene))
     t = time.perf_counter()
     infeasible = _infeasible(pairs, renders)
     space = config.space(members[0].camera)
-    budget = _task_budget(task, renders[0], config)
+    budget = task_budget(task, renders[0], config)
     if infeasible:  # the verdict is proven: one candidate, every setting fails alike
         strat = make_strategy("random", space, config, task["seed"], 1)
     else:
@@ -303,11 +303,11 @@ def markets_yield(pairs: Sequence[MarketMember], params: IspParams, output: Outp
         Fraction of the sensor rendered (1, as the point's tuning renders it).
     """
     from ..robust import RobustnessSettings, markets_robustness
-    from .point import _RENDER_LOCK
+    from .probes import RENDER_LOCK
 
     t0 = time.perf_counter()
     try:
-        with _RENDER_LOCK:  # every market on the same samples (rvmsim robustness --markets)
+        with RENDER_LOCK:  # every market on the same samples (rvmsim robustness --markets)
             res = markets_robustness(pairs[0].scene, params, pairs, RobustnessSettings(
                 output, pairs[0].criteria, samples=samples, seed=seed, scales=(1.0,),
                 render_scale=render_scale), frames=False)

@@ -10,34 +10,25 @@ cache.  :func:`run_yield` measures only the yield of a given setting at a point.
 
 from __future__ import annotations
 
-import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
-
-import numpy as np
 
 from ..errors import RvmsimError
 from .executors import task_malloc
 from .payloads import (EcOutcomeDoc, PointError, PointResult, PointRun, PointTask,
-                       SensitivityDoc, ParamSensitivity, YieldOnly, YieldTask)
+                       YieldOnly, YieldTask)
+from .probes import RENDER_LOCK, sensitivity, task_budget
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
     from ..isp import IspParams
     from ..runs import TrialRecord
-    from ..pipeline import ImageEvaluator
-    from ..render import FisheyeImages
     from ..scene import Scene
     from ..tune import SearchSpace, TuningConfig
     from .feasibility import Infeasibility
 
-__all__ = ["run_point", "run_yield", "sensitivity", "probe_sensitivity", "SENSITIVITY_STEPS"]
-
-#: Parameter offsets (fractions of its search range) the sensitivity is probed at.
-SENSITIVITY_STEPS = (-0.1, -0.05, -0.02, 0.02, 0.05, 0.1)
-
-_RENDER_LOCK = threading.Lock()
+__all__ = ["run_point", "run_yield"]
 
 
 def run_point(task: PointTask) -> PointResult:
@@ -98,7 +89,7 @@ def _run_yield(task: YieldTask) -> YieldOnly | PointError:
         rob = task["robustness"]
         if rob is None:
             raise RvmsimError(f"{task['label']}: a yield task without robustness settings")
-        with _RENDER_LOCK:
+        with RENDER_LOCK:
             y = point_yield(scene, IspParams(**task["yield_of"]), config.output_spec(),
                             criteria, rob["samples"], rob["seed"])
         return {"robustness": y, "seconds": time.perf_counter() - t0}
@@ -147,13 +138,13 @@ def _run_point(task: PointTask) -> PointResult:
         scene, config, criteria = _task_inputs(task)
         # One render at a time per process: a Dask worker with several threads would
         # otherwise open several OpenGL contexts at once.
-        with _RENDER_LOCK:
+        with RENDER_LOCK:
             images, _ = cached_render(scene)
         phases = {"render": time.perf_counter() - t0}
         t = time.perf_counter()
         infeasible = infeasible_ecs(scene, images.camera, images.labels, criteria)
         evaluator = candidate_evaluator(images, config, criteria)
-        budget = _task_budget(task, images, config)
+        budget = task_budget(task, images, config)
         starts = [IspParams(**p) for p in task.get("starts", ())]
         # an infeasible point's verdict is proven before any search: one candidate fills
         # its EC columns (it fails the infeasible ECs, as every setting does)
@@ -183,7 +174,7 @@ def _run_point(task: PointTask) -> PointResult:
                                     "seconds": 0.0}
         elif (rob and rob["samples"] > 0 and scene.variation is not None
                 and (beat is None or (result["passed"], result["score"]) > tuple(beat))):
-            with _RENDER_LOCK:  # renders the variation's viewpoints
+            with RENDER_LOCK:  # renders the variation's viewpoints
                 result["robustness"] = point_yield(scene, best.params, config.output_spec(),
                                                    criteria, rob["samples"], rob["seed"])
         phases["yield"] = time.perf_counter() - t
@@ -230,74 +221,3 @@ def _task_inputs(task: PointTask) -> tuple[Scene, TuningConfig, Criteria]:
     criteria = (criteria_from_text(text, task.get("criteria_source") or "sweep criteria")
                 if text else default_criteria())
     return scene, config.at_record(record_size(criteria, scene)), criteria
-
-
-def _task_budget(task: PointTask, images: FisheyeImages, config: TuningConfig) -> int | None:
-    """The budget to search with: the task's, times its ``budget_factor`` (a re-check); a
-    budget of None (the strategy's default) is the strategy's planned size times the factor
-    (kept None when the strategy does not know its size in advance)."""
-    budget, factor = task["budget"], float(task.get("budget_factor", 1.0))
-    if factor == 1.0:
-        return budget
-    if budget is None:
-        from ..tune import make_strategy
-
-        budget = make_strategy(task["strategy"], config.space(images.camera), config,
-                               task["seed"]).total()
-        if budget is None:
-            return None
-    return max(1, int(round(budget * factor)))
-
-
-def sensitivity(evaluator: ImageEvaluator, space: SearchSpace, best: IspParams
-                ) -> SensitivityDoc:
-    """EC score with each tuned parameter moved off the optimum by ±2, 5, 10 % of its range
-    (others at the optimum).
-
-    Parameters
-    ----------
-    evaluator : ImageEvaluator
-        The point's evaluator (:func:`rvmsim.pipeline.make_evaluator`).
-    space : SearchSpace
-        The tuned parameters and their ranges.
-    best : IspParams
-        The optimum.
-
-    Returns
-    -------
-    dict
-        ``optimum`` (the score there), ``steps`` (:data:`SENSITIVITY_STEPS`) and per tuned
-        parameter ``scores`` (one per step, None outside the range) and ``drop_5pct``:
-        1 − (mean score at ±5 %) / optimum score; 0 if the parameter does not matter there,
-        1 if a small change loses everything (None when the optimum scores 0).
-    """
-    from ..tune import score_vectors
-
-    return probe_sensitivity(lambda xs: score_vectors(evaluator, space, xs).score, space,
-                             best)
-
-
-def probe_sensitivity(score: Callable[[list[np.ndarray]], Sequence[float]],
-                      space: SearchSpace, best: IspParams) -> SensitivityDoc:
-    """:func:`sensitivity` with any scorer: ``score(xs)`` gives the EC scores of the
-    candidate vectors ``xs`` (in ``space``'s order), e.g. the markets' minimum of a markets
-    point (:class:`rvmsim.tune.MembersScorer`, no sub-solves)."""
-    x0 = space.vector(best)
-    lo, hi = space.low, space.high
-    xs, meta = [x0.copy()], []
-    for i, name in enumerate(space.names):
-        for f in SENSITIVITY_STEPS:
-            x = x0.copy()
-            x[i] = x0[i] + f * (hi[i] - lo[i])
-            if lo[i] - 1e-12 <= x[i] <= hi[i] + 1e-12:
-                xs.append(x)
-                meta.append((name, f))
-    scores = list(score(xs))
-    s0 = scores[0]
-    params: dict[str, ParamSensitivity] = {}
-    for name in space.names:
-        pts = {f: s for (n, f), s in zip(meta, scores[1:]) if n == name}
-        at5 = [pts[f] for f in (-0.05, 0.05) if f in pts]
-        drop = (1.0 - float(np.mean(at5)) / s0) if (at5 and s0 > 0) else None
-        params[name] = {"scores": [pts.get(f) for f in SENSITIVITY_STEPS], "drop_5pct": drop}
-    return {"optimum": s0, "steps": list(SENSITIVITY_STEPS), "params": params}
