@@ -68,8 +68,8 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
 
     board = parse_board_spec(board_spec)
     files = capture_files(list(captures))
-    _check_captures(files)
-    views, missed, size = _find_views(files, board, board_spec)
+    size = _check_captures(files)
+    views, missed = _find_views(files, board, board_spec)
     calib = calibrate_fisheye(views, board, size)
     write_calibration_outputs(calib, views, board, out, fov_deg)
     used = sum(v.used for v in calib.views)
@@ -87,10 +87,10 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
     return CalibrationSummary(camera_block(calib.K, calib.D, calib.image_size, fov_deg), text)
 
 
-def _check_captures(files: list[Path]) -> None:
+def _check_captures(files: list[Path]) -> tuple[int, int]:
     """Every capture read once before any detection (:func:`rvmsim.validate.check_captures`):
     a missing, unreadable, corrupt or blank one is refused naming it, and so are captures
-    of different sizes.
+    of different sizes.  Returns their (width, height), px.
 
     Raises
     ------
@@ -106,12 +106,13 @@ def _check_captures(files: list[Path]) -> None:
         raise RvmsimError(f"{files[other]}: capture is {sizes[other][0]}x{sizes[other][1]} px "
                           f"but {first.name} is {sizes[0][0]}x{sizes[0][1]} px (captures "
                           "differ in size: one camera per run)")
+    return sizes[0]
 
 
 def _find_views(files: list[Path], board: BoardSpec, spec: str
-                ) -> tuple[list[BoardView], list[str], tuple[int, int]]:
-    """The board's views in ``files``, the names of the captures without it, and the
-    capture size.  A checkerboard found in none of the first
+                ) -> tuple[list[BoardView], list[str]]:
+    """The board's views in ``files`` (captures of one size, :func:`_check_captures`) and
+    the names of the captures without it.  A checkerboard found in none of the first
     :data:`~.counting.HINT_CAPTURES` captures, or in fewer than
     :data:`~.intrinsics.MIN_VIEWS` in all, is looked for with the other counting
     (:func:`~.counting.other_counting`); when that finds it, the error says so at once.
@@ -119,7 +120,7 @@ def _find_views(files: list[Path], board: BoardSpec, spec: str
     Raises
     ------
     RvmsimError
-        Captures of different sizes; the board (maybe) miscounted; too few views.
+        The board (maybe) miscounted; too few views.
     """
     from .captures import load_grey
     from .counting import HINT_CAPTURES, counting_hint, other_counting
@@ -127,7 +128,6 @@ def _find_views(files: list[Path], board: BoardSpec, spec: str
     from .intrinsics import MIN_VIEWS
 
     views: list[BoardView] = []
-    sizes: set[tuple[int, int]] = set()
     missed: list[str] = []
     missed_greys: list[np.ndarray] = []
     tried = board.charuco is not None  # ChArUco: markers, no counting to get wrong
@@ -140,7 +140,6 @@ def _find_views(files: list[Path], board: BoardSpec, spec: str
 
     for k, f in enumerate(files):
         grey = load_grey(f)
-        sizes.add((grey.shape[1], grey.shape[0]))
         view = find_board_view(grey, board, f.name)
         if view is None:
             missed.append(f.name)
@@ -151,15 +150,13 @@ def _find_views(files: list[Path], board: BoardSpec, spec: str
         if not tried and not views and k + 1 == min(HINT_CAPTURES, len(files)):
             tried = True
             hint(f"the first {k + 1} captures")
-    if len(sizes) > 1:
-        raise RvmsimError(f"captures differ in size: {sorted(sizes)} (one camera per run)")
     if len(views) < MIN_VIEWS:
         if not tried:
             hint(f"{len(missed)} of {len(files)} captures")
         raise RvmsimError(f"calibration needs the board, {board.describe()}, found in at "
                           f"least {MIN_VIEWS} captures (found in {len(views)} of "
                           f"{len(files)})")
-    return views, missed, sizes.pop()
+    return views, missed
 
 
 def import_camera(file: str | Path, out: str | Path, fov_deg: float | None = None, *,

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 from .._procs import spawn_pool, stop_pool
 from ..errors import RvmsimError
 from ..scene import Scene
-from ..validate import capture_folders, load_capture
+from ..validate import capture_folders, check_captures, load_capture
 from .outputs import Staging, write_car, write_tables
 from .records import CarResult, StationResult
 from .station import Station, StationSettings
@@ -36,14 +36,6 @@ def car_names(captures: Sequence[Path]) -> list[str]:
     """The stem of each capture's output files: its file's stem, numbered when met again
     (``front``, ``front_2``, …), as :func:`rvmsim.validate.capture_folders` names folders."""
     return [p.name for p in capture_folders(captures, Path("."))]
-
-
-def _check_captures(scene: Scene, captures: Sequence[Path]) -> None:
-    """Read every capture once: a missing, unreadable, corrupt or blank file, or one of
-    another size than the camera's, is an error naming it (before anything is written)."""
-    cam = scene.fisheye_camera()
-    for path in captures:
-        load_capture(path, cam)
 
 
 #: The station of a worker process (made once per worker by :func:`_init_worker`).
@@ -144,7 +136,9 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
     """
     t0 = time.perf_counter()
     captures = [Path(p) for p in captures]
-    _check_captures(scene, captures)
+    # every capture read once before anything is written: a missing, unreadable, corrupt
+    # or blank file, or one of another size than the camera's, is an error naming it
+    check_captures(captures, scene.fisheye_camera())
     station = Station(scene, settings, progress=progress)
     t_setup = time.perf_counter() - t0
     names = car_names(captures)
