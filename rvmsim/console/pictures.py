@@ -138,8 +138,9 @@ class Pictures:
         nodes = map_nodes(params, size, output, rays=self._rays)
         xy = nodes.window((0, 0, output.width, output.height))
         # map2 None: xy holds both coordinates (the stubs do not know that form)
-        return cv2.remap(self._bgr, xy, None, cv2.INTER_LINEAR,  # type: ignore[call-overload]
-                         borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+        return cv2.remap(  # type: ignore[call-overload, unused-ignore]
+            self._bgr, xy, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+            borderValue=0)
 
     def display(self, params: IspParams) -> bytes:
         """The full-quality picture (display size, JPEG)."""

@@ -64,8 +64,9 @@ class _Planes:
         m = self.nodes.window(win)
         out: list[np.ndarray] = []
         for img in self.packed:
-            r = cv2.remap(img, m, None, cv2.INTER_NEAREST,  # type: ignore[call-overload]
-                          borderMode=cv2.BORDER_CONSTANT, borderValue=(L.VOID,) * 4)
+            r = cv2.remap(  # type: ignore[call-overload, unused-ignore]
+                img, m, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
+                borderValue=(L.VOID,) * 4)
             out += [r] if r.ndim == 2 else list(cv2.split(r))
         return out[: self.n]
 

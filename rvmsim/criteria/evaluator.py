@@ -157,7 +157,7 @@ def remap_labels(fisheye: np.ndarray, nodes: MapNodes, win: Window) -> np.ndarra
     neighbour; outside the fisheye image :data:`rvmsim.labels.VOID`)."""
     import cv2
 
-    return cv2.remap(fisheye, nodes.window(win), None,  # type: ignore[call-overload]
+    return cv2.remap(fisheye, nodes.window(win), None,  # type: ignore[call-overload, unused-ignore]
                      cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
 
 
@@ -314,8 +314,8 @@ class CandidateEvaluator:
         if use.grid is None:
             return None
         iw, ih = self.input_size
-        grid = cv2.min(cv2.max(use.grid, (-_PAD_PX, -_PAD_PX, 0, 0)),  # type: ignore[call-overload]
-                       (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0))
+        lo, hi = (-_PAD_PX, -_PAD_PX, 0, 0), (iw - 1 + _PAD_PX, ih - 1 + _PAD_PX, 0, 0)
+        grid = cv2.min(cv2.max(use.grid, lo), hi)  # type: ignore[call-overload, unused-ignore]
         reach = np.minimum(_node_reach(grid) + margin, _FAR_PX).astype(np.uint64)
         # block of each node (floor: positions are ≥ 0 here)
         idx = ((grid + _PAD_PX) * (1.0 / _DIST_BLOCK_PX)).astype(np.intp)
