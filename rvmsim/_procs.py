@@ -21,12 +21,6 @@ crash), every worker of :func:`spawn_pool` exits within about a second
 - Ctrl-C is the parent's business: workers ignore SIGINT (a terminal sends it to the whole
   process group), and the parent stops them with :func:`stop_pool` as it unwinds.
 
-**A worker's share of the cores.**  A pool of N workers on C cores gives each worker
-max(1, C // N) threads for OpenCV, Mesa's llvmpipe (renders), OpenMP and OpenBLAS
-(:func:`worker_threads`; a thread count the user set in the environment is kept): with their
-default of one thread per core in every worker, N workers ask for N × C threads and
-contend for the cores (the example sweep took 6 % longer that way, 2 workers on 2 cores).
-
 The multiprocessing resource tracker, the one other child, exits by itself once the parent
 and every worker have closed its pipe (so within the same second).  A pool must be fed
 (``submit``, ``map``) from the thread that made it: that thread starts the workers.
@@ -58,7 +52,7 @@ from typing import Any, ParamSpec, TypeVar
 from .errors import RvmsimError
 
 __all__ = ["spawn_pool", "stop_pool", "die_with_parent", "stop_on_signals", "Terminated",
-           "ORPHAN_EXIT_STATUS", "worker_threads", "THREAD_VARIABLES"]
+           "ORPHAN_EXIT_STATUS"]
 
 _P = ParamSpec("_P")
 _T = TypeVar("_T")
@@ -72,10 +66,6 @@ _PR_SET_PDEATHSIG = 1
 _BROKEN_WAIT_S = 2.0
 #: How often the fallback watch polls the parent's pid when there is no parent pipe (s).
 _POLL_S = 0.25
-#: The environment variables that set the thread counts of the libraries a worker uses:
-#: OpenCV, Mesa's llvmpipe, OpenMP, OpenBLAS.
-THREAD_VARIABLES = ("OPENCV_FOR_THREADS_NUM", "LP_NUM_THREADS", "OMP_NUM_THREADS",
-                    "OPENBLAS_NUM_THREADS")
 
 
 def spawn_pool(workers: int, *, initializer: Callable[..., None] | None = None,
@@ -87,31 +77,8 @@ def spawn_pool(workers: int, *, initializer: Callable[..., None] | None = None,
     # watches its parent: unpickling a scorer imports half the package (seconds under load).
     payload = pickle.dumps((initializer, initargs), protocol=pickle.HIGHEST_PROTOCOL)
     kernel = threading.current_thread() is threading.main_thread()
-    workers = max(1, workers)
-    return _Pool(workers, mp_context=mp.get_context("spawn"), initializer=_start_worker,
-                 initargs=(os.getpid(), kernel, worker_threads(workers), payload))
-
-
-def worker_threads(workers: int, cores: int | None = None) -> int:
-    """Threads per library for each of ``workers`` pool workers on ``cores`` cores (default:
-    this machine's): max(1, cores // workers)."""
-    cores = cores if cores is not None else (os.cpu_count() or 1)
-    return max(1, cores // max(1, workers))
-
-
-def _limit_threads(threads: int) -> None:
-    """This process's libraries to ``threads`` threads each (:data:`THREAD_VARIABLES`; a
-    value already in the environment is kept).  OpenCV, when already loaded, is told
-    directly; the others read the environment when they start (llvmpipe at the first
-    render)."""
-    for var in THREAD_VARIABLES:
-        os.environ.setdefault(var, str(threads))
-    cv2 = sys.modules.get("cv2")
-    if cv2 is not None:
-        try:
-            cv2.setNumThreads(max(1, int(os.environ["OPENCV_FOR_THREADS_NUM"])))
-        except ValueError:  # the user's value, not a number: OpenCV ignores it too
-            cv2.setNumThreads(threads)
+    return _Pool(max(1, workers), mp_context=mp.get_context("spawn"),
+                 initializer=_start_worker, initargs=(os.getpid(), kernel, payload))
 
 
 class _Pool(ProcessPoolExecutor):
@@ -175,11 +142,10 @@ def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
     pool.shutdown(wait=not now, cancel_futures=True)
 
 
-def _start_worker(parent_pid: int, kernel: bool, threads: int, payload: bytes) -> None:
-    """A pool worker's first step: die with the parent, leave Ctrl-C to it, take its share
-    of the cores (``threads`` per library), then run the pool's own initializer."""
+def _start_worker(parent_pid: int, kernel: bool, payload: bytes) -> None:
+    """A pool worker's first step: die with the parent, leave Ctrl-C to it, then run the
+    pool's own initializer."""
     die_with_parent(parent_pid, kernel=kernel)
-    _limit_threads(threads)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C pending since the start
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
