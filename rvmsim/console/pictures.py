@@ -137,7 +137,7 @@ class Pictures:
         size = (self._bgr.shape[1], self._bgr.shape[0])
         nodes = map_nodes(params, size, output, rays=self._rays)
         xy = nodes.window((0, 0, output.width, output.height))
-        # map2 None: xy holds both coordinates (the stubs do not know that form)
+        # map2 None: xy holds both coordinates (OpenCV 4's stubs do not know that form; 5's do)
         return cv2.remap(  # type: ignore[call-overload, unused-ignore]
             self._bgr, xy, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
             borderValue=0)

@@ -311,7 +311,7 @@ def apply_map(image: np.ndarray, isp_map: IspMap, *, labels: bool | None = None)
     if labels is None:
         labels = img.ndim == 2
     interp = cv2.INTER_NEAREST if labels else cv2.INTER_LINEAR
-    # map2 None: xy holds both coordinates (the stubs do not know that form)
+    # map2 None: xy holds both coordinates (OpenCV 4's stubs do not know that form; 5's do)
     return cv2.remap(img, isp_map.xy, None, interp,  # type: ignore[call-overload, unused-ignore]
                      borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
 
