@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import RvmsimError
-from ..isp import PARAM_SPECS, IspParams, OutputSpec, RayCache, map_nodes
+from ..isp import PARAM_SPECS, IspParams, OutputSpec, RayCache, map_nodes, remap_xy
 from .inputs import ConsoleInputError
 
 if TYPE_CHECKING:
@@ -137,10 +137,7 @@ class Pictures:
         size = (self._bgr.shape[1], self._bgr.shape[0])
         nodes = map_nodes(params, size, output, rays=self._rays)
         xy = nodes.window((0, 0, output.width, output.height))
-        # map2 None: xy holds both coordinates (OpenCV 4's stubs do not know that form; 5's do)
-        return cv2.remap(  # type: ignore[call-overload, unused-ignore]
-            self._bgr, xy, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-            borderValue=0)
+        return remap_xy(self._bgr, xy, cv2.INTER_LINEAR, 0)
 
     def display(self, params: IspParams) -> bytes:
         """The full-quality picture (display size, JPEG)."""

@@ -29,7 +29,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .. import labels as L
-from ..isp import IspParams, MapNodes, RayCache, map_nodes
+from ..isp import IspParams, MapNodes, RayCache, map_nodes, remap_xy
 from .context import IspView
 from .evaluator import BoxedSource, CandidateEvaluator, merge_windows, remap_labels
 from .groups import Window
@@ -64,9 +64,7 @@ class _Planes:
         m = self.nodes.window(win)
         out: list[np.ndarray] = []
         for img in self.packed:
-            r = cv2.remap(  # type: ignore[call-overload, unused-ignore]
-                img, m, None, cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT,
-                borderValue=(L.VOID,) * 4)
+            r = remap_xy(img, m, cv2.INTER_NEAREST, (L.VOID,) * 4)
             out += [r] if r.ndim == 2 else list(cv2.split(r))
         return out[: self.n]
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import labels as L
 from ..camera import FisheyeCamera
-from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes
+from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes, remap_xy
 from ..scene import Scene
 from .config import default_criteria
 from .context import IspView, SceneContext, scene_context
@@ -157,8 +157,7 @@ def remap_labels(fisheye: np.ndarray, nodes: MapNodes, win: Window) -> np.ndarra
     neighbour; outside the fisheye image :data:`rvmsim.labels.VOID`)."""
     import cv2
 
-    return cv2.remap(fisheye, nodes.window(win), None,  # type: ignore[call-overload, unused-ignore]
-                     cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+    return remap_xy(fisheye, nodes.window(win), cv2.INTER_NEAREST, L.VOID)
 
 
 class BoxedSource(LabelSource):

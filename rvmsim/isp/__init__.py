@@ -23,6 +23,7 @@ from .map import (
     MapNodes,
     RayCache,
     apply_map,
+    remap_xy,
     process,
 )
 from .roi import roi_outline, draw_roi, input_to_output, input_to_plane
@@ -40,6 +41,7 @@ __all__ = [
     "MapNodes",
     "RayCache",
     "apply_map",
+    "remap_xy",
     "process",
     "roi_outline",
     "draw_roi",

@@ -29,6 +29,7 @@ __all__ = [
     "MapNodes",
     "RayCache",
     "apply_map",
+    "remap_xy",
     "process",
     "DEFAULT_CELL_PX",
     "MIN_CELL_PX",
@@ -311,9 +312,39 @@ def apply_map(image: np.ndarray, isp_map: IspMap, *, labels: bool | None = None)
     if labels is None:
         labels = img.ndim == 2
     interp = cv2.INTER_NEAREST if labels else cv2.INTER_LINEAR
+    return remap_xy(img, isp_map.xy, interp, L.VOID)
+
+
+def remap_xy(image: np.ndarray, xy: np.ndarray, interpolation: int,
+             border_value: float | tuple[float, ...]) -> np.ndarray:
+    """``cv2.remap`` through a map that holds both coordinates, ``border_value`` outside the
+    image.
+
+    Parameters
+    ----------
+    image : (H_i, W_i[, C]) array
+        The image read.
+    xy : (H_o, W_o, 2) float32
+        Output → input map, (u, v) px (a window of :meth:`MapNodes.window` or
+        :attr:`IspMap.xy`).
+    interpolation : int
+        ``cv2.INTER_NEAREST`` (labels) or ``cv2.INTER_LINEAR``.
+    border_value : float or tuple of float
+        The value of output pixels whose input lies outside the image (per channel).
+
+    Returns
+    -------
+    (H_o, W_o[, C]) array, ``image``'s type
+
+    Convention
+    ----------
+    Pixel centres at integer coordinates (OpenCV).
+    """
+    import cv2
+
     # map2 None: xy holds both coordinates (OpenCV 4's stubs do not know that form; 5's do)
-    return cv2.remap(img, isp_map.xy, None, interp,  # type: ignore[call-overload, unused-ignore]
-                     borderMode=cv2.BORDER_CONSTANT, borderValue=L.VOID)
+    return cv2.remap(image, xy, None, interpolation,  # type: ignore[call-overload, unused-ignore]
+                     borderMode=cv2.BORDER_CONSTANT, borderValue=border_value)
 
 
 def process(
