@@ -34,6 +34,14 @@ from .measure import (
     label_mask,
     offset,
 )
+from .stack import (
+    LabelStack,
+    StackMeasureFn,
+    measure_stack_ecs,
+    stack_boxes,
+    stack_counts,
+    stack_mask,
+)
 from .sigmoid import (
     Criterion,
     Sigmoid,
@@ -154,6 +162,12 @@ __all__ = [
     "EMPTY_WINDOW",
     "group_windows",
     "LabelSource",
+    "LabelStack",
+    "StackMeasureFn",
+    "measure_stack_ecs",
+    "stack_boxes",
+    "stack_counts",
+    "stack_mask",
     "Measurement",
     "Measurements",
     "MeasureOptions",

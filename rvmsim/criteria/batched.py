@@ -7,19 +7,21 @@ not on what the image shows.  :class:`CandidateBatch` therefore, per candidate,
 
 1. builds the map's node grid once (:func:`rvmsim.isp.map_nodes`) and what the windows read
    of it once (:meth:`CandidateEvaluator.node_lookup`);
-2. finds each image's windows from its own group distances
-   (:meth:`CandidateEvaluator.windows_at`), and merges every image's windows and fixed
-   regions into one set of boxes;
-3. remaps each box once for all images: the label images are packed as the channels of a
-   few uint8 images (:data:`PACK`), each remapped in one ``cv2.remap`` call through the
-   box's map, and split back into per-image planes;
+2. finds the windows once for every image (:func:`union_windows`: from the group
+   distances of all images at once; each image's own, when their criteria differ), and
+   merges them and the fixed regions into one set of boxes;
+3. remaps each box once for all images: the label images are the channels of one uint8
+   image (K channels), remapped in one ``cv2.remap`` call through the box's map, and each
+   image's plane is cut from it when first read;
 4. measures each image's ECs (:func:`~rvmsim.criteria.measure.measure_ecs`) on its planes.
 
 Exact: nearest-neighbour remapping reads each output pixel from the fisheye pixel its map
 value rounds to, channel by channel, and a window's map is bit-identical to the same pixels
 of the whole map (:meth:`rvmsim.isp.MapNodes.window`), so every pixel an EC reads equals the
-one its own :class:`CandidateEvaluator` gives; the measurements are equal value for value
-(tests/criteria/test_batched.py compares them on rendered variation samples).
+one its own :class:`CandidateEvaluator` gives; a union window holds each image's group
+pixels and their neighbours, as its own window does, so the measurements are equal value
+for value (tests/tune/test_batched_members.py compares them on rendered variation
+samples).
 """
 
 from __future__ import annotations
@@ -31,51 +33,55 @@ import numpy as np
 from .. import labels as L
 from ..isp import IspParams, MapNodes, RayCache, map_nodes, remap_xy
 from .context import IspView
-from .evaluator import BoxedSource, CandidateEvaluator, merge_windows, remap_labels
+from .evaluator import (BoxedSource, CandidateEvaluator, box_holding, merge_windows,
+                        remap_labels, union_windows)
 from .groups import Window
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import values_array
+from .stack import LabelStack, measure_stack_ecs
 
-__all__ = ["CandidateBatch", "PACK"]
+__all__ = ["CandidateBatch"]
 
-#: Label images per remap call: the channels of one uint8 image (OpenCV's remap runs its
-#: vectorised path for up to 4 channels; tools/bench_robust_candidate.py).
-PACK = 4
+# Outside the fisheye image a remap reads the border value, whose channels past the fourth
+# OpenCV fills with 0: the label images' channels read VOID there only because VOID is 0.
+assert L.VOID == 0, "CandidateBatch's K-channel remap fills the outside with 0"
 
 
 class _Planes:
-    """The remapped boxes of one candidate, each made for every image on first use."""
+    """The remapped boxes of one candidate: each box remapped once for every image (a
+    (h, w, K) uint8 stack) on first use, each image's plane of it cut when first read."""
 
-    def __init__(self, packed: list[np.ndarray], n: int, nodes: MapNodes,
-                 boxes: list[Window]):
-        self.packed, self.n, self.nodes, self.boxes = packed, n, nodes, boxes
-        self.made: dict[int, list[np.ndarray]] = {}
+    def __init__(self, stack: np.ndarray, nodes: MapNodes, boxes: list[Window]):
+        self.stack, self.nodes, self.boxes = stack, nodes, boxes
+        self.made: dict[int, np.ndarray] = {}
+        self.cut: dict[tuple[int, int], np.ndarray] = {}
 
-    def box(self, k: int) -> list[np.ndarray]:
-        """Box ``k`` of every image: (h, w) uint8 planes, in image order."""
-        planes = self.made.get(k)
-        if planes is None:
-            planes = self.made[k] = self._remap(self.boxes[k])
-        return planes
+    def box(self, k: int) -> np.ndarray:
+        """Box ``k`` of every image: (h, w, K) uint8, channel c the image of channel c."""
+        got = self.made.get(k)
+        if got is None:
+            import cv2
 
-    def _remap(self, win: Window) -> list[np.ndarray]:
-        import cv2
+            got = remap_xy(self.stack, self.nodes.window(self.boxes[k]), cv2.INTER_NEAREST,
+                           (L.VOID,) * 4)
+            got = self.made[k] = got.reshape(*got.shape[:2], self.stack.shape[2])
+        return got
 
-        m = self.nodes.window(win)
-        out: list[np.ndarray] = []
-        for img in self.packed:
-            r = remap_xy(img, m, cv2.INTER_NEAREST, (L.VOID,) * 4)
-            out += [r] if r.ndim == 2 else list(cv2.split(r))
-        return out[: self.n]
+    def plane(self, k: int, channel: int) -> np.ndarray:
+        """Box ``k`` of the image of ``channel``: (h, w) uint8, C-contiguous."""
+        got = self.cut.get((k, channel))
+        if got is None:
+            got = self.cut[(k, channel)] = np.ascontiguousarray(self.box(k)[:, :, channel])
+        return got
 
 
 class _BatchSource(BoxedSource):
     """One image's label pixels of a candidate, cut from the batch's remapped boxes."""
 
-    def __init__(self, planes: _Planes, member: int, groups: dict[str, Window],
+    def __init__(self, planes: _Planes, channel: int, groups: dict[str, Window],
                  shape: tuple[int, int], evaluator: CandidateEvaluator, isp: IspView):
         self.planes = planes
-        self.member = member
+        self.channel = channel
         self.groups = groups
         self.boxes = planes.boxes
         self.shape = shape
@@ -85,16 +91,48 @@ class _BatchSource(BoxedSource):
         self._shared = {}
 
     def box_image(self, k: int) -> np.ndarray:
-        return self.planes.box(k)[self.member]
+        return self.planes.plane(k, self.channel)
 
     def remap(self, win: Window) -> np.ndarray:
         return remap_labels(self.evaluator.fisheye, self.planes.nodes, win)
 
 
+class _BatchStack(LabelStack):
+    """The label pixels of one candidate on the images of ``channels``, cut from the
+    batch's remapped boxes (each image's own source in :attr:`sources`)."""
+
+    def __init__(self, planes: _Planes, channels: list[int], groups: dict[str, Window],
+                 shape: tuple[int, int], sources: list[LabelSource]):
+        self.planes = planes
+        self.channels = channels
+        self.every = channels == list(range(planes.stack.shape[2]))
+        self._windows = groups
+        self.shape = shape
+        self.n = len(channels)
+        self.sources = sources
+        self._shared = {}
+
+    def pixels(self, win: Window) -> np.ndarray:
+        x0, y0, x1, y1 = win
+        if x1 <= x0 or y1 <= y0:
+            return np.zeros((0, 0, self.n), np.uint8)
+        k = box_holding(self.planes.boxes, win)
+        if k is None:
+            import cv2
+
+            got = remap_xy(self.planes.stack, self.planes.nodes.window(win),
+                           cv2.INTER_NEAREST, (L.VOID,) * 4)
+            got = got.reshape(*got.shape[:2], self.planes.stack.shape[2])
+        else:
+            bx0, by0 = self.planes.boxes[k][:2]
+            got = self.planes.box(k)[y0 - by0 : y1 - by0, x0 - bx0 : x1 - bx0]
+        return got if self.every else got[:, :, self.channels]
+
+
 class CandidateBatch:
     """Candidates judged on several fisheye label images of one size, each with its own
     :class:`CandidateEvaluator` (its criteria, scene and windows), sharing each candidate's
-    map (see the module docstring).
+    map, windows and remaps (see the module docstring).
 
     Parameters
     ----------
@@ -106,7 +144,7 @@ class CandidateBatch:
     ValueError
         Evaluators of different fisheye sizes or outputs, or not windowed.
 
-    Picklable: the packed label images are made again on first use after unpickling.
+    Picklable: the stacked label images are made again on first use after unpickling.
     """
 
     def __init__(self, evaluators: Sequence[CandidateEvaluator]):
@@ -120,41 +158,63 @@ class CandidateBatch:
                 raise ValueError("a candidate batch takes windowed evaluators of one fisheye "
                                  "size and RVM output")
         self.input_size, self.output = first.input_size, first.output
+        #: One evaluator whose windows hold every image's (None: each finds its own).
+        self._union = union_windows(self.evaluators)
+        self._regions = list(dict.fromkeys(r for ev in self.evaluators for r in ev.regions))
+        #: One set of windows, ECs and options for every image: measured as one stack.
+        c0 = first.criteria
+        self._same_ecs = self._union is not None and all(
+            ev.criteria.ecs == c0.ecs and ev.criteria.options == c0.options
+            for ev in self.evaluators)
         self._rays = RayCache()
-        self._packed: list[np.ndarray] | None = None
+        self._stack: np.ndarray | None = None
 
     def __getstate__(self) -> dict[str, object]:
-        return {**self.__dict__, "_packed": None}
+        return {**self.__dict__, "_stack": None}
 
-    def packed(self) -> list[np.ndarray]:
-        """The label images as the channels of uint8 images of :data:`PACK` channels (the
-        last one with fewer; one channel: a 2-D image)."""
-        if self._packed is None:
-            self._packed = _pack([ev.fisheye for ev in self.evaluators])
-        return self._packed
+    def stack(self) -> np.ndarray:
+        """The label images as the channels of one (H_i, W_i, K) uint8 image."""
+        if self._stack is None:
+            self._stack = np.ascontiguousarray(
+                np.stack([ev.fisheye for ev in self.evaluators], axis=2))
+        return self._stack
+
+    def _windows(self, nodes: MapNodes, idx: list[int]) -> list[dict[str, Window]]:
+        """Each image's group windows of a candidate (the union's, when there is one)."""
+        evs = [self.evaluators[m] for m in idx]
+        if self._union is not None:
+            return [self._union.windows_at(self._union.node_lookup(nodes))] * len(idx)
+        lookup = evs[0].node_lookup(nodes)
+        return [ev.windows_at(lookup) for ev in evs]
 
     def sources(self, params: IspParams, members: Sequence[int] | None = None
                 ) -> list[LabelSource]:
         """The label sources of one candidate on the images ``members`` (default: all)."""
         idx = list(range(len(self.evaluators))) if members is None else list(members)
-        evs = [self.evaluators[m] for m in idx]
         nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
-        lookup = evs[0].node_lookup(nodes) if evs else None
-        groups = [ev.windows_at(lookup) for ev in evs]
-        wins = [w for g, ev in zip(groups, evs) for w in [*g.values(), *ev.regions]]
-        packed = self.packed() if members is None else _pack([ev.fisheye for ev in evs])
-        planes = _Planes(packed, len(evs), nodes, merge_windows(list(dict.fromkeys(wins))))
+        groups = self._windows(nodes, idx)
+        wins = [w for g in groups for w in g.values()] + self._regions
+        planes = _Planes(self.stack(), nodes, merge_windows(list(dict.fromkeys(wins))))
         isp = IspView(params, self.input_size, self.output)
         shape = (self.output.height, self.output.width)
-        return [_BatchSource(planes, k, g, shape, ev, isp)
-                for k, (g, ev) in enumerate(zip(groups, evs))]
+        return [_BatchSource(planes, m, g, shape, self.evaluators[m], isp)
+                for m, g in zip(idx, groups)]
 
     def measure(self, params: IspParams, members: Sequence[int] | None = None
                 ) -> list[Measurements]:
-        """The raw measurements of one parameter set on every image (or ``members``)."""
+        """The raw measurements of one parameter set on every image (or ``members``): with
+        one set of ECs and windows for all, each EC with a stack measure measures every
+        image in one call (:func:`rvmsim.criteria.measure_stack_ecs`)."""
         idx = list(range(len(self.evaluators))) if members is None else list(members)
+        sources = self.sources(params, idx)
+        if self._same_ecs and sources:
+            c = self.evaluators[idx[0]].criteria
+            first = sources[0]
+            assert isinstance(first, _BatchSource)
+            stack = _BatchStack(first.planes, idx, first.groups, first.shape, sources)
+            return measure_stack_ecs(stack, c.ecs, c.options)
         out = []
-        for m, src in zip(idx, self.sources(params, idx if members is not None else None)):
+        for m, src in zip(idx, sources):
             c = self.evaluators[m].criteria
             out.append(measure_ecs(src, c.ecs, c.options))
         return out
@@ -165,11 +225,3 @@ class CandidateBatch:
         idx = list(range(len(self.evaluators))) if members is None else list(members)
         return [values_array(m, self.evaluators[k].criteria.ids)
                 for k, m in zip(idx, self.measure(params, members))]
-
-
-def _pack(labels: list[np.ndarray]) -> list[np.ndarray]:
-    """Label images as the channels of :data:`PACK`-channel uint8 images (a lone last one
-    stays 2-D)."""
-    return [np.ascontiguousarray(np.dstack(labels[a : a + PACK]))
-            if len(labels[a : a + PACK]) > 1 else labels[a]
-            for a in range(0, len(labels), PACK)]

@@ -39,6 +39,7 @@ each is noted with the pair it reproduces.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -67,22 +68,15 @@ from . import (
     range_zero,
 )
 from .feasibility import fg_patches_reason
+from .builtin_groups import (ABC, BLOCKERS, BOARD, F, FG as _FG, G, GUIDE2, GUIDE3,
+                             UPPER_BODY, bumper_spans)
+from .builtin_stack import STACK_MEASURES
 from .solves import board_aspect_scale, guide_centre_shift, guide_height_shift
 
 __all__ = ["ECS", "bumper_spans", "F", "G", "ABC", "GUIDE2", "GUIDE3", "BOARD", "UPPER_BODY"]
 
-F = LabelGroup("F", (L.object_stripe("F"), L.object_patch("F")))
-G = LabelGroup("G", (L.object_stripe("G"), L.object_patch("G")))
-ABC = LabelGroup("ABC", tuple(L.object_body(c) for c in "ABC")
-                 + tuple(L.object_stripe(c) for c in "ABC"))
-GUIDE2 = LabelGroup("guide2", (L.guide_cross(2),))
-GUIDE3 = LabelGroup("guide3", (L.guide_cross(3),))
-BOARD = LabelGroup("board", (L.BOARD,))
-UPPER_BODY = LabelGroup("upper_body", (L.GARNISH, L.TRUNK), upper_region=True)
-_FG = {"F": F, "G": G}
-
 #: What may not touch a visible patch: vehicle body, void, user-supplied parts.
-_LUT_BLOCKERS = L.lut([*L.BODY_LABELS, L.VOID])
+_LUT_BLOCKERS = L.lut(BLOCKERS)
 
 
 # ---------------------------------------------------------------------------- EC 1: FMVSS 111
@@ -177,13 +171,6 @@ def _draw_1_4(canvas: Canvas, item: EcValue, detail: object) -> None:
 
 
 # ---------------------------------------------------------------------------- EC 2: body
-def bumper_spans(width: int, edge_columns: int) -> dict[str, tuple[int, int]]:
-    """Column spans [a, b) of the bumper heights t_l, t_r (image edges) and t_c (centred)."""
-    k = max(1, min(edge_columns, width // 3))
-    c0 = int(round(width / 2.0 - k / 2))
-    return {"t_l": (0, k), "t_r": (width - k, width), "t_c": (c0, c0 + k)}
-
-
 BumperColumns = dict[str, tuple[float, float, float]]
 
 
@@ -433,3 +420,5 @@ ECS = [
                  sub_solve=_SOLVE_4_1,
                  infeasibility=_absent((L.BOARD,), "the pattern board is", "board")),
 ]
+# each with its stack measure (K images at once; rvmsim.criteria.builtin_stack)
+ECS = [dataclasses.replace(ec, measure_stack=STACK_MEASURES[ec.id]) for ec in ECS]

@@ -49,8 +49,8 @@ from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
 from .measure import LabelSource, Measurements, call_ec, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
 
-__all__ = ["CandidateEvaluator", "NodeLookup", "BoxedSource", "box_holding", "group_window", "merge_windows",
-           "remap_labels"]
+__all__ = ["CandidateEvaluator", "NodeLookup", "BoxedSource", "box_holding", "group_window",
+           "merge_windows", "remap_labels", "union_windows"]
 
 #: Fisheye px around the image that node positions are clipped to.
 _PAD_PX = 8
@@ -374,3 +374,32 @@ class CandidateEvaluator:
     def __call__(self, params: IspParams) -> EcResult:
         """The EC result of one parameter set."""
         return score(self.measure(params), self.criteria)
+
+
+def union_windows(evaluators: Sequence[CandidateEvaluator]) -> CandidateEvaluator | None:
+    """An evaluator whose windows hold every evaluator's: the first one with each group's
+    stored distances replaced by their minimum over ``evaluators`` (the distance to the
+    group's nearest pixel in any of their label images).  Its windows (:meth:`windows_at`)
+    are those of the union of their groups' pixels, so each one holds the group's pixels,
+    and the pixels next to them, on every image, and every EC measures on them what it
+    measures on the image's own windows (any window that holds a group's pixels gives the
+    same value).  None when the evaluators' criteria declare other groups or upper regions,
+    or their fisheye sizes or outputs differ (each then finds its own windows).
+
+    Exact for the same reason as :meth:`windows_at` (module docstring): a group pixel of
+    any image is within the stored distance of every node of a cell that shows it."""
+    import copy
+
+    if not evaluators:
+        return None
+    first = evaluators[0]
+    key = (first.input_size, first.output, first.criteria.groups,
+           first.criteria.options.upper_region_fraction)
+    if any((ev.input_size, ev.output, ev.criteria.groups,
+            ev.criteria.options.upper_region_fraction) != key for ev in evaluators):
+        return None
+    out = copy.copy(first)
+    out._dists = [  # bytewise: each byte is one group's distance
+        np.minimum.reduce([ev._dists[k].view(np.uint8) for ev in evaluators]).view("<u8")
+        for k in range(len(first._dists))]
+    return out

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = ["MeasureOptions", "Measurement", "Measurements", "LabelSource", "measure_ecs",
            "EcFailedError", "error_text", "passes_through", "call_ec", "label_mask", "count_label",
-           "bounding_box", "offset"]
+           "bounding_box", "offset", "measurement_of", "image_name", "MeasuredEc"]
 
 T = TypeVar("T")
 
@@ -200,10 +200,7 @@ def measure_ecs(src: LabelSource, ecs: Sequence[MeasuredEc],
     details: dict[str, object] = {}
     for ec in ecs:
         try:
-            m = ec.measure(src, options)
-            value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)
-            if type(value) is not float or value != value:  # not a plain float, or NaN
-                value = _checked_value(ec, value)
+            value, detail = measurement_of(ec, ec.measure(src, options))
         except BaseException as err:  # noqa: BLE001 - the EC's own code: see passes_through
             if passes_through(err, ec.plugin):
                 raise
@@ -212,6 +209,20 @@ def measure_ecs(src: LabelSource, ecs: Sequence[MeasuredEc],
         values[ec.id] = value
         details[ec.id] = detail
     return Measurements(values, (w, h), details)
+
+
+def measurement_of(ec: MeasuredEc, m: object) -> tuple[float | None, object]:
+    """(value, detail) of what an EC's measure function returned: a :class:`Measurement`,
+    or the value alone; the value a plain float, or None for NaN or nothing.
+
+    Raises
+    ------
+    CriteriaError
+        Something else than a Measurement, a number or None."""
+    value, detail = (m.value, m.detail) if isinstance(m, Measurement) else (m, None)
+    if type(value) is not float or value != value:  # not a plain float, or NaN
+        value = _checked_value(ec, value)
+    return value, detail
 
 
 class EcFailedError(CriteriaError):

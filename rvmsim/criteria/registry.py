@@ -35,6 +35,7 @@ from .hooks import InfeasibilityFn, SubSolve
 from .measure import (EcFailedError, LabelSource, Measurement, MeasureOptions, error_text,
                       measure_ecs, passes_through)
 from .sigmoid import Criterion, Sigmoid
+from .stack import LabelStack, StackMeasureFn, measure_stack_ecs
 
 if TYPE_CHECKING:
     from .canvas import Canvas
@@ -129,6 +130,11 @@ class EcDefinition:
         disabled) cannot support the EC (:func:`rvmsim.criteria.unsupported_ecs`); ():
         the labels of a :class:`~rvmsim.criteria.LabelsAbsent` feasibility reason, else
         nothing.
+    measure_stack : callable, optional
+        ``measure_stack(stack, options)`` → one Measurement (or value) per image of a
+        :class:`rvmsim.criteria.LabelStack`: the measurement on K images at once, image for
+        image exactly what ``measure`` gives on that image alone (a speed-up for robust
+        tuning, which judges each candidate on many images; :mod:`rvmsim.criteria.stack`).
     """
 
     id: str
@@ -149,6 +155,7 @@ class EcDefinition:
     infeasibility: InfeasibilityFn | None = None
     pixel_axis: str = ""
     needs: tuple[tuple[int, ...], ...] = ()
+    measure_stack: StackMeasureFn | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id or any(c.isspace() for c in self.id):
@@ -160,7 +167,7 @@ class EcDefinition:
         if groups is None or not all(isinstance(g, LabelGroup) for g in groups):
             raise TypeError(f"EC {self.id!r}: groups must be a tuple of LabelGroup")
         object.__setattr__(self, "groups", groups)
-        for key in ("measure", "annotate", "regions", "infeasibility"):
+        for key in ("measure", "annotate", "regions", "infeasibility", "measure_stack"):
             fn = getattr(self, key)
             if not callable(fn) and not (fn is None and key != "measure"):
                 raise TypeError(f"EC {self.id!r}: {key} must be a function")
@@ -352,7 +359,13 @@ def _probe(ec: EcDefinition, source: str) -> None:
     in the middle of a tuning run."""
     src = LabelSource(np.zeros((8, 8), np.uint8), ec.groups)
     try:
-        measure_ecs(src, [ec], MeasureOptions())
+        alone = measure_ecs(src, [ec], MeasureOptions()).values[ec.id]
+        if ec.measure_stack is not None:
+            stack = LabelStack(np.zeros((8, 8, 2), np.uint8), ec.groups)
+            each = [m.values[ec.id] for m in measure_stack_ecs(stack, [ec], MeasureOptions())]
+            if each != [alone, alone]:
+                raise TypeError(f"measure_stack gives {each} where measure gives {alone} "
+                                "on each image")
         if ec.regions is not None:
             wins = [tuple(int(v) for v in win) for win in ec.regions((8, 8), MeasureOptions())]
             if not all(len(win) == 4 for win in wins):

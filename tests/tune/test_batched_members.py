@@ -100,3 +100,33 @@ def test_a_batch_of_some_members_measures_those_members(members):
         np.testing.assert_array_equal(ev.values(p), v)
     with pytest.raises(ValueError, match="one fisheye size"):
         CandidateBatch([evs[0], CandidateEvaluator(mem[0].labels[:-2], config.output_spec())])
+
+
+def test_a_batch_of_many_members_measures_each_as_its_own_evaluator(members, candidates):
+    """Eight members (the label images as the channels of one remap, past the four OpenCV
+    fills with the border value) and members with other ECs (their own windows, each
+    image measured on its own): measurements equal to each member's own evaluator, value
+    and detail, on views that reach past the fisheye image."""
+    from rvmsim.criteria import criteria_from_text
+    from rvmsim.isp import IspParams, build_map
+
+    mem, _ = members
+    config = TuningConfig.model_validate({"output": {"size": [320, 180]}})
+    out, space = config.output_spec(), config.space(mem[0].camera)
+    assert space.ranges[1].name == "rad"
+    fewer = criteria_from_text("ecs: [1-3, 2-1, 3-2, 4-1]\n")
+    wide = IspParams(fov=210.0, rad=float(space.high[1]), zoom=0.25, adv_h_scale=0.5,
+                     adv_v_scale=0.6)  # the widest view of the space
+    for crits in ([default_criteria()] * 8, [default_criteria(), fewer] * 4):
+        evs = [CandidateEvaluator(m.labels, out, c, scene=m.scene, camera=m.camera)
+               for m, c in zip(mem * 2, crits)]
+        batch = CandidateBatch(evs)
+        for p in [*candidates, wide]:
+            got = batch.measure(p)
+            for ev, g in zip(evs, got):
+                want = ev.measure(p)
+                assert (g.values, g.details) == (want.values, want.details)
+    # the wide view's bumper columns (at the image's edges) read outside the fisheye image
+    xy = build_map(wide, (mem[0].labels.shape[1], mem[0].labels.shape[0]), out).xy
+    edge = xy[:, :4]
+    assert ((edge < -0.5) | (edge > np.array(mem[0].labels.shape[::-1]) - 0.5)).any()
