@@ -49,6 +49,8 @@ from .sigmoid import (
 from .hooks import (
     InfeasibilityFn,
     SolveFn,
+    SolveStackFn,
+    StackParams,
     SubSolve,
     TargetFn,
     range_middle,
@@ -146,6 +148,8 @@ __all__ = [
     "resolve_plugin",
     "SubSolve",
     "SolveFn",
+    "SolveStackFn",
+    "StackParams",
     "TargetFn",
     "InfeasibilityFn",
     "range_middle",

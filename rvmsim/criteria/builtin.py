@@ -71,7 +71,8 @@ from .feasibility import fg_patches_reason
 from .builtin_groups import (ABC, BLOCKERS, BOARD, F, FG as _FG, G, GUIDE2, GUIDE3,
                              UPPER_BODY, bumper_spans)
 from .builtin_stack import STACK_MEASURES
-from .solves import board_aspect_scale, guide_centre_shift, guide_height_shift
+from .solves import (board_aspect_scale, board_aspect_scale_stack, guide_centre_shift,
+                     guide_centre_shift_stack, guide_height_shift, guide_height_shift_stack)
 
 __all__ = ["ECS", "bumper_spans", "F", "G", "ABC", "GUIDE2", "GUIDE3", "BOARD", "UPPER_BODY"]
 
@@ -360,10 +361,12 @@ _FG_ABSENT = _absent((L.object_stripe("F"), L.object_patch("F"), L.object_stripe
 _BUMPER_ABSENT = _absent((L.BUMPER,), "the bumper is", "bumper")
 #: The sub-solves run in this order (4-1 does not depend on the shifts; 3-2 reads the
 #: horizontal shift 3-1 sets, and 3-1 the vertical shift 3-2 sets).
-_SOLVE_4_1 = SubSolve("adv_h_scale", (L.BOARD,), board_aspect_scale, order=0)
-_SOLVE_3_2 = SubSolve("adv_v_shift", (L.guide_cross(3),), guide_height_shift, order=1)
+_SOLVE_4_1 = SubSolve("adv_h_scale", (L.BOARD,), board_aspect_scale, order=0,
+                      solve_stack=board_aspect_scale_stack)
+_SOLVE_3_2 = SubSolve("adv_v_shift", (L.guide_cross(3),), guide_height_shift, order=1,
+                      solve_stack=guide_height_shift_stack)
 _SOLVE_3_1 = SubSolve("adv_h_shift", (L.guide_cross(2),), guide_centre_shift, range_zero,
-                      order=2)
+                      order=2, solve_stack=guide_centre_shift_stack)
 
 # ---------------------------------------------------------------------------- the eleven
 _INF = math.inf

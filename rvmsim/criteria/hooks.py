@@ -30,14 +30,18 @@ if TYPE_CHECKING:
     from .context import SceneContext
     from .measure import MeasureOptions
 
-__all__ = ["SubSolve", "SolveFn", "TargetFn", "InfeasibilityFn", "range_middle", "range_zero",
-           "ISP_PARAM_NAMES"]
+__all__ = ["SubSolve", "SolveFn", "SolveStackFn", "StackParams", "TargetFn", "InfeasibilityFn",
+           "range_middle", "range_zero", "ISP_PARAM_NAMES"]
 
 #: The names of the ISP parameters (:class:`rvmsim.isp.IspParams` fields) a sub-solve may set.
 ISP_PARAM_NAMES: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(IspParams))
 
 #: ``solve(plane_xy, params, output, target)`` → the parameter's value (None: no solution).
 SolveFn = Callable[[np.ndarray, IspParams, OutputSpec, float], "float | None"]
+#: ``solve_stack(plane_xy, starts, params, output, target)`` → (K,) values, NaN for none:
+#: the solve of K images at once (:class:`SubSolve`).
+SolveStackFn = Callable[[np.ndarray, np.ndarray, "StackParams", OutputSpec, float],
+                        np.ndarray]
 #: ``target(criterion)`` → the value the EC is solved to (None: the range has none).
 TargetFn = Callable[[Criterion], "float | None"]
 #: ``reason(context, criterion, options)`` → None, or (reason, short) of why no ISP setting
@@ -60,6 +64,21 @@ def range_zero(criterion: Criterion) -> float | None:
     if criterion.high is None or (criterion.low is not None and criterion.low > 0):
         return None
     return 0.0
+
+
+@dataclass(frozen=True)
+class StackParams:
+    """A candidate's parameters as the solves of K images see them: ``base``, with the
+    values solved so far on each image (``values``: parameter name → (K,) float64)."""
+
+    base: IspParams
+    values: dict[str, np.ndarray]
+    n: int
+
+    def get(self, name: str) -> np.ndarray:
+        """Parameter ``name`` on each image: (K,) float64."""
+        got = self.values.get(name)
+        return got if got is not None else np.full(self.n, float(getattr(self.base, name)))
 
 
 @dataclass(frozen=True)
@@ -92,6 +111,12 @@ class SubSolve:
         Solves run in increasing ``order`` (ties: the criteria's EC order), and the whole
         sequence runs twice, so that a solve reading another's parameter sees its solved
         value (e.g. the guidelines' visible parts depend on each other's shift).
+    solve_stack : callable, optional
+        ``solve_stack(plane_xy, starts, params, output, target) -> (K,) float64``: the solve
+        of K images at once (robust tuning solves every variation sample), image k's points
+        ``plane_xy[starts[k]:starts[k + 1]]`` (at least 3 each), its parameters
+        ``params.get(name)[k]`` (:class:`StackParams`); NaN where there is no solution.
+        Image for image exactly what ``solve`` gives.
 
     Convention
     ----------
@@ -109,6 +134,7 @@ class SubSolve:
     solve: SolveFn
     target: TargetFn = range_middle
     order: int = 0
+    solve_stack: SolveStackFn | None = None
 
     def __post_init__(self) -> None:
         if self.param not in ISP_PARAM_NAMES:
@@ -120,6 +146,8 @@ class SubSolve:
             raise TypeError(f"sub-solve of {self.param}: labels must be a non-empty tuple of "
                             "label ids 0..255")
         object.__setattr__(self, "labels", tuple(int(x) for x in labels))
+        if self.solve_stack is not None and not callable(self.solve_stack):
+            raise TypeError(f"sub-solve of {self.param}: solve_stack must be a function")
         for key in ("solve", "target"):
             if not callable(getattr(self, key)):
                 raise TypeError(f"sub-solve of {self.param}: {key} must be a function")

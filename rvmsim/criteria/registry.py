@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import CriteriaError
 from .groups import LabelGroup, Window
-from .hooks import InfeasibilityFn, SubSolve
+from .hooks import InfeasibilityFn, StackParams, SubSolve
 from .measure import (EcFailedError, LabelSource, Measurement, MeasureOptions, error_text,
                       measure_ecs, passes_through)
 from .sigmoid import Criterion, Sigmoid
@@ -393,6 +393,15 @@ def _probe_sub_solve(ec: EcDefinition, hook: SubSolve, source: str) -> None:
         checked_solve_value(ec, "target", target)
         value = hook.solve(square, IspParams(), OutputSpec(64, 36),
                            0.0 if target is None else float(target))
+        if hook.solve_stack is not None:  # two images of the square: what solve gives
+            each = np.asarray(hook.solve_stack(
+                np.concatenate([square, square]), np.array([0, 4, 8]),
+                StackParams(IspParams(), {}, 2), OutputSpec(64, 36),
+                0.0 if target is None else float(target)), dtype=np.float64).reshape(-1)
+            alone = math.nan if value is None else float(value)
+            if not np.array_equal(each, [alone, alone], equal_nan=True):
+                raise TypeError(f"solve_stack gives {each.tolist()} where solve gives "
+                                f"{value!r} for each image")
     except BaseException as err:  # noqa: BLE001 - any failure of the plugin's code is reported
         if passes_through(err, ""):
             raise

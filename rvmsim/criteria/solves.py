@@ -25,9 +25,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..isp import IspParams, OutputSpec
+from .hooks import StackParams
 
 __all__ = ["outline_points", "OUTLINE_MAX_POINTS", "board_aspect_scale", "guide_centre_shift",
-           "guide_height_shift", "guide_row"]
+           "guide_height_shift", "guide_row", "board_aspect_scale_stack",
+           "guide_centre_shift_stack", "guide_height_shift_stack"]
 
 #: At most this many outline points per sub-solve (evenly thinned).
 OUTLINE_MAX_POINTS = 1500
@@ -116,3 +118,76 @@ def guide_row(xy: np.ndarray, params: IspParams, output: OutputSpec) -> float | 
     if not near.any():
         near = seen & (np.abs(u - uc) <= np.sort(np.abs(u[seen] - uc))[min(7, seen.sum() - 1)])
     return float(xy[near, 1].mean())
+
+
+# ---------------------------------------------------------------------------- K images at once
+# The solves above on K images' points at once (SubSolve.solve_stack): image k's points are
+# xy[starts[k]:starts[k + 1]]; each runs the same floating-point operations on each point
+# and each image as its one-image solve, so each image's value is exactly that solve's.
+def _per_point(values: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(K,) per image → (N,) per point."""
+    return np.repeat(values, np.diff(starts))
+
+
+def _extremes(v: np.ndarray, keep: np.ndarray | None, starts: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Per image, the minimum and maximum of ``v`` over its points where ``keep`` (NaN where
+    none is kept)."""
+    first = starts[:-1]
+    if keep is None:
+        return np.minimum.reduceat(v, first), np.maximum.reduceat(v, first)
+    lo = np.minimum.reduceat(np.where(keep, v, np.inf), first)
+    hi = np.maximum.reduceat(np.where(keep, v, -np.inf), first)
+    none = np.logical_or.reduceat(keep, first) == 0
+    return np.where(none, np.nan, lo), np.where(none, np.nan, hi)
+
+
+def board_aspect_scale_stack(xy: np.ndarray, starts: np.ndarray, params: StackParams,
+                             output: OutputSpec, target: float) -> np.ndarray:
+    """:func:`board_aspect_scale` of K images: (K,), NaN where it gives None."""
+    half = output.width / 2.0
+    x0, x1 = _extremes(xy[:, 0], None, starts)
+    y0, y1 = _extremes(xy[:, 1], None, starts)
+    dx, dy = x1 - x0, y1 - y0
+    bh = dy * params.get("adv_v_scale") * half + 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = (target * bh - 1.0) / (dx * half)
+    return np.where(dx <= 0, np.nan, out)
+
+
+def guide_centre_shift_stack(xy: np.ndarray, starts: np.ndarray, params: StackParams,
+                             output: OutputSpec, target: float) -> np.ndarray:
+    """:func:`guide_centre_shift` of K images: (K,), NaN where it gives None."""
+    h = output.height
+    half = output.width / 2.0
+    shift = _per_point(params.get("adv_v_shift"), starts)
+    scale = _per_point(params.get("adv_v_scale"), starts)
+    yv = (xy[:, 1] - shift) * scale * half + (h - 1) / 2.0
+    lo, hi = _extremes(xy[:, 0], (yv >= -0.5) & (yv <= h - 0.5), starts)
+    return (lo + hi) / 2
+
+
+def guide_height_shift_stack(xy: np.ndarray, starts: np.ndarray, params: StackParams,
+                             output: OutputSpec, target: float) -> np.ndarray:
+    """:func:`guide_height_shift` of K images: (K,), NaN where it gives None."""
+    w, h = output.width, output.height
+    half = w / 2.0
+    u = ((xy[:, 0] - _per_point(params.get("adv_h_shift"), starts))
+         * _per_point(params.get("adv_h_scale"), starts) * half + (w - 1) / 2.0)
+    seen = (u >= -0.5) & (u <= w - 0.5)
+    lo, hi = _extremes(u, seen, starts)
+    uc = (lo + hi) / 2.0
+    with np.errstate(invalid="ignore"):
+        near = seen & (np.abs(u - _per_point(uc, starts)) <= 1.5)
+    y = np.full(len(uc), np.nan)
+    for k in range(len(uc)):
+        if np.isnan(uc[k]):
+            continue
+        a, b = starts[k], starts[k + 1]
+        nk = near[a:b]
+        if not nk.any():  # the eight nearest, as guide_row takes them
+            sk, dk = seen[a:b], np.abs(u[a:b] - uc[k])
+            nk = sk & (dk <= np.sort(dk[sk])[min(7, sk.sum() - 1)])
+        y[k] = float(xy[a:b][nk, 1].mean())
+    row = target / 100.0 * h - 0.5
+    return y - (row - (h - 1) / 2.0) / (params.get("adv_v_scale") * half)

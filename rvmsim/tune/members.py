@@ -45,6 +45,7 @@ from .objective import (PASS_WEIGHT, ParamsScores, ScoredBatch, check_objective,
                         score_values)
 from ..runs.records import params_json
 from .solve import EcSolver
+from .stacked_solve import StackedSolves
 from ..search.space import SearchSpace
 
 if TYPE_CHECKING:
@@ -182,6 +183,9 @@ class MembersSolver:
         self._parts = [slice(int(a), int(b)) for a, b in zip(ends, ends[1:])]
         self._points = (np.concatenate([s.points for s in self.solvers]) if self.solvers
                         else np.zeros((0, 2)))
+        stacked = StackedSolves(self.solvers) if len(self.solvers) > 1 else None
+        #: Every member's solves at once (None: member by member).
+        self._stacked = stacked if stacked is not None and stacked.applies else None
 
     def _each(self, params: IspParams) -> list[IspParams]:
         """Each solver's solution.  Without the rotations (the paper's setting) the plane
@@ -199,6 +203,9 @@ class MembersSolver:
     def __call__(self, params: IspParams) -> IspParams:
         if len(self.solvers) == 1:
             return self.solvers[0](params)
+        if (self._stacked is not None and self._size is not None
+                and params.h_pan == params.tilt == params.theta == 0.0):
+            return self._stacked(params)
         solved = [(s.names, p) for s, p in zip(self.solvers, self._each(params))]
         values = {}
         for n in self.names:

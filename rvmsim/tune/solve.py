@@ -32,7 +32,7 @@ from ..errors import CriteriaError
 from ..isp import IspParams, OutputSpec, input_to_plane
 from ..search.space import ParamRange, SearchSpace
 
-__all__ = ["EcSolver", "SOLVE_ROUNDS"]
+__all__ = ["EcSolver", "PlannedSolve", "SOLVE_ROUNDS"]
 
 #: Every solve runs this many times per candidate, in order (:attr:`SubSolve.order`): a solve
 #: that reads a parameter another one sets after it sees that solved value the second time.
@@ -40,7 +40,10 @@ SOLVE_ROUNDS = 2
 
 
 @dataclass(frozen=True)
-class _Solve:
+class PlannedSolve:
+    """One sub-solve of an :class:`EcSolver`: the EC, its target, the fisheye outline
+    points it maps and the parameter's search range."""
+
     ec: EcDefinition  # pickles by reference to its plugin, its hook with it
     target: float
     points: np.ndarray  # fisheye px (N, 2)
@@ -87,10 +90,11 @@ class EcSolver:
         self.input_size = (fisheye_labels.shape[1], fisheye_labels.shape[0])
         self.output = output
         solves = []
-        for ec, hook, target, r in _applicable(criteria, space):
+        applicable = _applicable(criteria, space)
+        for ec, hook, target, r in applicable:
             pts = outline_points(fisheye_labels, hook.labels)
             if len(pts) >= 3:
-                solves.append(_Solve(ec, target, pts, r.low, r.high))
+                solves.append(PlannedSolve(ec, target, pts, r.low, r.high))
         self._solves = tuple(solves)
         # every solve's points in one array, mapped in one call per candidate
         self._points = (np.concatenate([s.points for s in solves]) if solves
@@ -99,6 +103,20 @@ class EcSolver:
         self._slices = tuple(slice(int(a), int(b)) for a, b in zip(ends, ends[1:]))
         self.names = tuple(s.hook.param for s in solves)
         self.targets = {s.ec.id: s.target for s in solves}
+        #: The solves the criteria and space call for, before the scene's points are
+        #: known (EC id, parameter, target, range): equal for one criteria and space.
+        self.plan = tuple((ec.id, hook.param, target, r.low, r.high)
+                          for ec, hook, target, r in applicable)
+
+    @property
+    def solves(self) -> tuple[PlannedSolve, ...]:
+        """The solves this scene has points for, in solve order."""
+        return self._solves
+
+    @property
+    def slices(self) -> tuple[slice, ...]:
+        """Each solve's rows of :attr:`points`."""
+        return self._slices
 
     @property
     def points(self) -> np.ndarray:
