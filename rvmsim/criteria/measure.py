@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = ["MeasureOptions", "Measurement", "Measurements", "LabelSource", "measure_ecs",
            "EcFailedError", "error_text", "passes_through", "call_ec", "label_mask", "count_label",
-           "bounding_box", "offset", "measurement_of", "image_name", "MeasuredEc"]
+           "bounding_box", "offset", "measurement_of", "image_name", "MeasuredEc", "PixelReads"]
 
 T = TypeVar("T")
 
@@ -103,7 +103,35 @@ class Measurements:
     details: dict[str, object] = field(default_factory=dict)
 
 
-class LabelSource:
+class PixelReads:
+    """What label sources and stacks share: windows of ``labels`` ((H, W) uint8, or
+    (H, W, K) for K images) and work shared between ECs."""
+
+    labels: np.ndarray
+    shape: tuple[int, int]
+    _shared: dict[Hashable, Any]
+
+    def pixels(self, win: Window) -> np.ndarray:
+        """The label pixels of a window, (y1 − y0, x1 − x0) uint8 (and K images last, for
+        a stack)."""
+        x0, y0, x1, y1 = win
+        return self.labels[y0:y1, x0:x1]
+
+    def columns(self, x0: int, x1: int) -> np.ndarray:
+        """Every row of columns [x0, x1): (H, x1 − x0) uint8 (and K images last)."""
+        return self.pixels((x0, 0, x1, self.shape[0]))
+
+    def shared(self, key: Hashable, compute: Callable[[], T]) -> T:
+        """``compute()``, once per source or stack: for work several ECs share (e.g. the
+        bumper heights of ECs 2-1 … 2-3).  ``key`` must name the work and its options."""
+        try:
+            return self._shared[key]
+        except KeyError:
+            out = self._shared[key] = compute()
+            return out
+
+
+class LabelSource(PixelReads):
     """The label pixels measurements read: here a whole RVM label image.
 
     Parameters
@@ -152,23 +180,6 @@ class LabelSource:
             win = self._windows[name] = group_windows(self.labels, [group])[name]
         return win
 
-    def pixels(self, win: Window) -> np.ndarray:
-        """The label pixels of a window, (y1 − y0, x1 − x0) uint8."""
-        x0, y0, x1, y1 = win
-        return self.labels[y0:y1, x0:x1]
-
-    def columns(self, x0: int, x1: int) -> np.ndarray:
-        """Every row of columns [x0, x1): (H, x1 − x0) uint8."""
-        return self.pixels((x0, 0, x1, self.shape[0]))
-
-    def shared(self, key: Hashable, compute: Callable[[], T]) -> T:
-        """``compute()``, once per source: for work several ECs share (e.g. the bumper
-        heights of ECs 2-1 … 2-3).  ``key`` must name the work and its options."""
-        try:
-            return self._shared[key]
-        except KeyError:
-            out = self._shared[key] = compute()
-            return out
 
 
 class MeasuredEc(Protocol):

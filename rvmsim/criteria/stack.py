@@ -18,28 +18,26 @@ image (any window that does gives the same measurements).
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Hashable, Sequence
-from typing import Any, TypeVar
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
 from .groups import EMPTY_WINDOW, LabelGroup, Window, group_windows
-from .measure import (EcFailedError, LabelSource, Measurement, MeasureOptions, Measurements,
-                      MeasuredEc, error_text, image_name, measure_ecs, measurement_of,
+from .measure import (EcFailedError, LabelSource, MeasureOptions, Measurements, MeasuredEc,
+                      PixelReads, error_text, image_name, measure_ecs, measurement_of,
                       passes_through)
 
 __all__ = ["LabelStack", "StackMeasureFn", "measure_stack_ecs", "stack_mask", "stack_counts",
            "stack_boxes"]
 
-T = TypeVar("T")
-
 #: ``measure_stack(stack, options)`` → one :class:`Measurement` (or value) per image.
 StackMeasureFn = Callable[["LabelStack", MeasureOptions], Sequence[Any]]
 
 
-class LabelStack:
+class LabelStack(PixelReads):
     """The label pixels of K RVM label images of one size, read together: here whole
-    images.
+    images.  :meth:`pixels` and :meth:`columns` give (…, K) arrays, image ``k`` last.
 
     Parameters
     ----------
@@ -67,7 +65,7 @@ class LabelStack:
         self._windows = {g.name: union_box([f[g.name] for f in found]) for g in groups}
         self.sources = (list(sources) if sources is not None
                         else [LabelSource(p, groups) for p in planes])
-        self._shared: dict[Hashable, Any] = {}
+        self._shared = {}
 
     def window(self, group: LabelGroup | str) -> Window:
         """A window that holds every pixel of ``group``, and the pixels next to them, on
@@ -78,23 +76,6 @@ class LabelStack:
         except KeyError:
             raise KeyError(f"label group {name!r} is not declared by the ECs measured"
                            ) from None
-
-    def pixels(self, win: Window) -> np.ndarray:
-        """The label pixels of a window on every image, (y1 − y0, x1 − x0, K) uint8."""
-        x0, y0, x1, y1 = win
-        return self.labels[y0:y1, x0:x1]
-
-    def columns(self, x0: int, x1: int) -> np.ndarray:
-        """Every row of columns [x0, x1) on every image: (H, x1 − x0, K) uint8."""
-        return self.pixels((x0, 0, x1, self.shape[0]))
-
-    def shared(self, key: Hashable, compute: Callable[[], T]) -> T:
-        """``compute()``, once per stack (:meth:`LabelSource.shared`)."""
-        try:
-            return self._shared[key]
-        except KeyError:
-            out = self._shared[key] = compute()
-            return out
 
 
 def union_box(windows: Sequence[Window]) -> Window:
