@@ -13,7 +13,10 @@ not on what the image shows.  :class:`CandidateBatch` therefore, per candidate,
 3. remaps each box once for all images: the label images are the channels of one uint8
    image (K channels), remapped in one ``cv2.remap`` call through the box's map, and each
    image's plane is cut from it when first read;
-4. measures each image's ECs (:func:`~rvmsim.criteria.measure.measure_ecs`) on its planes.
+4. measures the ECs: with one set of ECs and windows for every image, each EC with a stack
+   measure on all images in one call (:func:`~rvmsim.criteria.stack.measure_stack_ecs`
+   on a :class:`~rvmsim.criteria.LabelStack` of the remapped boxes), any other one on
+   each image's planes (:func:`~rvmsim.criteria.measure.measure_ecs`).
 
 Exact: nearest-neighbour remapping reads each output pixel from the fisheye pixel its map
 value rounds to, channel by channel, and a window's map is bit-identical to the same pixels
