@@ -47,15 +47,22 @@ def _patches_visible(stack: LabelStack, win: Window, label: int) -> list[bool]:
     mask = stack_mask(sub, (label,))
     enough = stack_counts(mask) >= 4
     h, w = stack.shape
-    ok = []
-    for k, box in enumerate(stack_boxes(mask)):
+    ok, boxes = [], stack_boxes(mask)
+    for k, box in enumerate(boxes):
         if not enough[k] or box is None:
             ok.append(False)
             continue
         x, y = box[0] + win[0], box[1] + win[1]
         ok.append(not (x == 0 or y == 0 or x + box[2] == w or y + box[3] == h))
-    if any(ok):  # a blocker next to a patch pixel: under the patch's dilation
-        touched = stack_counts(_grown(mask) & stack_mask(sub, BLOCKERS)) > 0
+    if any(ok):  # a blocker next to a patch pixel: under the patch's dilation, which lies
+        # in the box of the patches grown by 1 px (the window's part a crop reads)
+        held = [b for b, v in zip(boxes, ok) if v and b is not None]
+        x0 = max(min(b[0] for b in held) - 1, 0)
+        y0 = max(min(b[1] for b in held) - 1, 0)
+        x1 = max(b[0] + b[2] for b in held) + 1
+        y1 = max(b[1] + b[3] for b in held) + 1
+        near = (slice(y0, y1), slice(x0, x1))
+        touched = stack_counts(_grown(mask[near]) & stack_mask(sub[near], BLOCKERS)) > 0
         ok = [v and not bool(t) for v, t in zip(ok, touched)]
     return ok
 

@@ -69,7 +69,23 @@ def test_stack_measures_equal_each_images_measures_on_cut_and_hidden_objects():
     few = labels.copy()  # a patch of 3 px
     few[few == L.object_patch("F")] = L.GROUND
     few[100, 100:103] = L.object_patch("F")
-    _check([labels, cut, hidden, no_c, body, few, np.full_like(labels, L.VOID)])
+    # a blocker touching F's patch from each side and corner (1-1 reads the ring around it)
+    rows, cols = np.nonzero(labels == L.object_patch("F"))
+    top, bottom = np.argmin(rows), np.argmax(rows)
+    left, right = np.argmin(cols), np.argmax(cols)
+    touching = []
+    for y, x, what in ((rows[top] - 1, cols[top] - 1, L.BUMPER),  # above left
+                       (rows[left], cols[left] - 1, L.VOID),  # left
+                       (rows[top] - 1, cols[top], L.GARNISH),  # above
+                       (rows[bottom] + 1, cols[bottom] + 1, L.TRUNK),  # below right
+                       (rows[right], cols[right] + 1, L.BUMPER),  # right
+                       (rows[bottom] + 1, cols[bottom], L.VOID)):  # below
+        t = labels.copy()
+        t[y, x] = what
+        touching.append(t)
+    _check([labels, cut, hidden, no_c, body, few, np.full_like(labels, L.VOID), *touching])
+    assert all(measure_ecs(LabelSource(t, default_criteria().groups), default_criteria().ecs,
+                           default_criteria().options).values["1-1"] == 0.0 for t in touching)
 
 
 @pytest.mark.parametrize("shape", [(1, 1), (1, 7), (7, 1), (2, 2), (5, 9)])
