@@ -114,11 +114,6 @@ class EcSolver:
         return self._solves
 
     @property
-    def slices(self) -> tuple[slice, ...]:
-        """Each solve's rows of :attr:`points`."""
-        return self._slices
-
-    @property
     def points(self) -> np.ndarray:
         """Every solve's fisheye outline points, (N, 2) px: what :meth:`solve_at` takes
         mapped onto the plane."""
