@@ -45,7 +45,7 @@ from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes, remap_xy
 from ..scene import Scene
 from .config import default_criteria
 from .context import IspView, SceneContext, scene_context
-from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks
+from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks, group_window
 from .measure import LabelSource, Measurements, call_ec, measure_ecs
 from .scoring import Criteria, EcResult, score, values_array
 
@@ -117,21 +117,6 @@ def box_holding(boxes: Sequence[Window], win: Window) -> int | None:
         if bx0 <= x0 and by0 <= y0 and x1 <= bx1 and y1 <= by1:
             return k
     return None
-
-
-def group_window(groups: dict[str, Window], group: LabelGroup | str) -> Window:
-    """The window of label group ``group`` (or its name) among ``groups``.
-
-    Raises
-    ------
-    KeyError
-        The group is not one the ECs measured declare.
-    """
-    name = group if isinstance(group, str) else group.name
-    try:
-        return groups[name]
-    except KeyError:
-        raise KeyError(f"label group {name!r} is not declared by the ECs measured") from None
 
 
 def merge_windows(windows: list[Window]) -> list[Window]:

@@ -21,8 +21,8 @@ import numpy as np
 
 from .. import labels as L
 
-__all__ = ["LabelGroup", "Window", "EMPTY_WINDOW", "group_windows", "unique_groups",
-           "group_chunks", "GROUPS_PER_CHUNK"]
+__all__ = ["LabelGroup", "Window", "EMPTY_WINDOW", "group_windows", "group_window",
+           "unique_groups", "group_chunks", "GROUPS_PER_CHUNK"]
 
 #: ``(x0, y0, x1, y1)``, output px, ``x1`` and ``y1`` exclusive.
 Window = tuple[int, int, int, int]
@@ -140,3 +140,18 @@ def group_windows(labels: np.ndarray, groups: Sequence[LabelGroup]) -> dict[str,
                 out[g.name] = (max(0, bx * _BLOCK - 1), max(0, by * _BLOCK - 1),
                                min(w, (bx + bw) * _BLOCK + 1), min(h, (by + bh) * _BLOCK + 1))
     return out
+
+
+def group_window(groups: dict[str, Window], group: LabelGroup | str) -> Window:
+    """The window of label group ``group`` (or its name) among ``groups``.
+
+    Raises
+    ------
+    KeyError
+        The group is not one the ECs measured declare.
+    """
+    name = group if isinstance(group, str) else group.name
+    try:
+        return groups[name]
+    except KeyError:
+        raise KeyError(f"label group {name!r} is not declared by the ECs measured") from None

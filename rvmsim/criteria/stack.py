@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .groups import EMPTY_WINDOW, LabelGroup, Window, group_windows
+from .groups import EMPTY_WINDOW, LabelGroup, Window, group_window, group_windows
 from .measure import (EcFailedError, LabelSource, MeasureOptions, Measurements, MeasuredEc,
                       PixelReads, error_text, image_name, measure_ecs, measurement_of,
                       passes_through)
@@ -70,12 +70,7 @@ class LabelStack(PixelReads):
     def window(self, group: LabelGroup | str) -> Window:
         """A window that holds every pixel of ``group``, and the pixels next to them, on
         every image."""
-        name = group if isinstance(group, str) else group.name
-        try:
-            return self._windows[name]
-        except KeyError:
-            raise KeyError(f"label group {name!r} is not declared by the ECs measured"
-                           ) from None
+        return group_window(self._windows, group)
 
 
 def union_box(windows: Sequence[Window]) -> Window:
