@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from rvmsim.isp import IspParams
+from rvmsim.tune import SearchSpace, TuningConfig, make_strategy
 
 #: Ranges a tuning run explores around the paper's defaults (inside Table 2's ranges), for
 #: the 1280×960 bundled sensors.
@@ -32,3 +33,26 @@ def cpu_model() -> str:
     except OSError:
         pass
     return platform.processor() or "unknown"
+
+
+def protocol_candidates(space: SearchSpace, config: TuningConfig, n: int) -> list[np.ndarray]:
+    """``n`` parameter vectors like the paper protocol's: half drawn from its 3⁹ coarse grid,
+    half fine-stage-like (uniform draws one grid step around the grid's centre), seed 0."""
+    strat = make_strategy("grid-random", space, config, 0, 2000)
+    gen = strat.batches()
+    grid: list[np.ndarray] = []
+    told = None
+    while True:
+        try:
+            stage, xs = gen.send(told) if told is not None else next(gen)
+        except StopIteration:
+            break
+        if stage != "coarse":
+            break
+        grid += list(xs)
+        told = [(0.0, 0.0)] * len(xs)
+    rng = np.random.default_rng(0)
+    picked = [grid[i] for i in rng.choice(len(grid), n // 2, replace=False)]
+    mid, step = (space.low + space.high) / 2.0, (space.high - space.low) / 4.0
+    fine = [mid + (rng.random(len(mid)) * 2.0 - 1.0) * step for _ in range(n - n // 2)]
+    return picked + fine

@@ -37,7 +37,7 @@ from pathlib import Path
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 import numpy as np  # noqa: E402
-from _bench_common import cpu_model  # noqa: E402
+from _bench_common import cpu_model, protocol_candidates  # noqa: E402
 
 from rvmsim.criteria import default_criteria  # noqa: E402
 from rvmsim.render import cached_render  # noqa: E402
@@ -57,28 +57,6 @@ _CUMULATIVE = {
     "ECs": [("criteria/measure.py", "measure_ecs")],
     "scoring": [("tune/objective.py", "score_values"), ("runs/records.py", "params_json")],
 }
-
-
-def _candidates(space, config, n: int) -> list[np.ndarray]:
-    """Half drawn from the protocol's coarse grid, half fine-stage-like draws."""
-    strat = make_strategy("grid-random", space, config, 0, 2000)
-    gen = strat.batches()
-    grid: list[np.ndarray] = []
-    told = None
-    while True:
-        try:
-            stage, xs = gen.send(told) if told is not None else next(gen)
-        except StopIteration:
-            break
-        if stage != "coarse":
-            break
-        grid += list(xs)
-        told = [(0.0, 0.0)] * len(xs)
-    rng = np.random.default_rng(0)
-    picked = [grid[i] for i in rng.choice(len(grid), n // 2, replace=False)]
-    mid, step = (space.low + space.high) / 2.0, (space.high - space.low) / 4.0
-    fine = [mid + (rng.random(len(mid)) * 2.0 - 1.0) * step for _ in range(n - n // 2)]
-    return picked + fine
 
 
 def _cumulative(stats: dict, keys: list[tuple[str, str]]) -> float:
@@ -101,7 +79,7 @@ def main() -> None:
     space = config.space(images.camera)
     strat = make_strategy("grid-random", space, config, 0, 2000)
     scorer = VectorScorer(evaluator, space, solver_for(strat, evaluator), strat.objective)
-    xs = _candidates(space, config, args.candidates)
+    xs = protocol_candidates(space, config, args.candidates)
     batches = [xs[a : a + _BATCH] for a in range(0, len(xs), _BATCH)]
     scorer(batches[0][:32])  # warm caches
     t = time.process_time()
