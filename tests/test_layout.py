@@ -125,6 +125,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("compensation",),
     ("criteria",),
     ("pipeline", "markets"),
+    ("percar",),
     ("robust",),
     ("search",),
     ("runs",),

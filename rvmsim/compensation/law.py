@@ -323,9 +323,56 @@ class CompensationLaw:
             k += 1
         return p.replace(**changes)
 
+    @property
+    def variables(self) -> tuple[str, ...]:
+        """The fit's variables, in the order of its vectors: ``pan_x``, ``pan_y`` (the
+        offset of the view axis's turn as a 2-vector, degrees; when the pans are written),
+        then the other written parameters' offsets."""
+        return tuple(self._vars)
+
+    @property
+    def scales(self) -> np.ndarray:
+        """Each variable's typical size (degrees, input px, half-widths): (n,) float64."""
+        return self._scale.copy()
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each variable's allowed offset (low, high), (n,) float64 each: the pans' components
+        within ± the turn's limit (:meth:`clip` keeps the turn itself inside it)."""
+        lows, highs = [], []
+        k = 0
+        if self.model.pans:
+            high = self.model.range_of("h_pan")[1]
+            lows += [-high, -high]
+            highs += [high, high]
+            k = 2
+        for name in self._vars[k:]:
+            low, high = self.model.range_of(name)
+            lows.append(low)
+            highs.append(high)
+        return np.array(lows, np.float64), np.array(highs, np.float64)
+
+    def clip(self, x: np.ndarray) -> np.ndarray:
+        """``x`` moved into the allowed ranges (the pans' turn scaled back to its limit,
+        the others clipped)."""
+        low, high = self.bounds
+        out = np.clip(np.asarray(x, dtype=np.float64), low, high)
+        if self.model.pans:
+            limit = self.model.range_of("h_pan")[1]
+            turn = math.hypot(out[0], out[1])
+            if turn > limit:
+                out[:2] *= limit / turn
+        return out
+
     def correct(self, deviation: Deviation) -> Correction:
         """The per-car values for a car whose camera deviates by ``deviation`` (as the
         station measured it)."""
+        return self.correction_at(*self.fit(deviation))
+
+    def fit(self, deviation: Deviation) -> tuple[np.ndarray, float, float]:
+        """The least-squares fit for a car whose camera deviates by ``deviation``: its
+        variables (:attr:`variables`; before any range check) and the reference points'
+        residual RMS and largest distance, RVM px."""
         from scipy.optimize import least_squares
 
         rot, pos = deviated_pose(self.scene, deviation)
@@ -344,10 +391,12 @@ class CompensationLaw:
                             x_scale=self._scale)
         res = residual(fit.x).reshape(-1, 2)
         dist = np.hypot(res[:, 0], res[:, 1])
-        return self._correction(fit.x, float(np.sqrt(np.mean(dist ** 2))), float(dist.max()))
+        return fit.x, float(np.sqrt(np.mean(dist ** 2))), float(dist.max())
 
-    def _correction(self, x: np.ndarray, rms: float, worst: float) -> Correction:
-        """The correction of fit ``x``: offsets, the range check, the clipped parameters."""
+    def correction_at(self, x: np.ndarray, rms: float = 0.0, worst: float = 0.0) -> Correction:
+        """The correction of variables ``x`` (:attr:`variables`): offsets, the range check,
+        the parameters clipped to the allowed ranges; ``rms``, ``worst``: the reference
+        points' residuals to record, RVM px."""
         exceeded: list[str] = []
         clipped = np.array(x, dtype=np.float64)
         offsets: dict[str, float] = {}

@@ -41,10 +41,23 @@ class CompensationModel:
     measured_at : str or None
         The load state the station measures at (None: the variation's first).
     reference : str
-        ``site`` or ``ground``: the ground points the law keeps where the nominal car shows
-        them (:func:`rvmsim.compensation.reference_points`).
+        ``site`` or ``ground``: the ground points the reference-point law keeps where the
+        nominal car shows them (:func:`rvmsim.compensation.reference_points`).
     source : str
         Where the model came from (a file, ``default``).
+    law : str
+        How the per-car values are chosen: ``ec-solve`` (every enabled EC on the car's own
+        picture, the largest least margin; :mod:`rvmsim.percar`) or ``reference-points``
+        (:class:`~rvmsim.compensation.CompensationLaw` alone).
+    budget : int
+        ``ec-solve``: the EC evaluations one car may cost (the search; a car that fails
+        within it is then checked on a grid of the allowed ranges, which costs more).
+    edge_sigma_px : float
+        The body's edge as the station finds it on the capture, 1 σ, fisheye px (the error
+        the ECs that read the body inherit instead of the pose's).
+    marginal : str
+        ``fail`` (default) or ``accept``: what the station does with a car whose least EC
+        margin is inside the station's uncertainty of that EC.
     """
 
     params: tuple[str, ...] = ("h_pan", "v_pan", "tilt")
@@ -54,6 +67,10 @@ class CompensationModel:
     measured_at: str | None = None
     reference: str = "site"
     source: str = "built-in default"
+    law: str = "ec-solve"
+    budget: int = 24
+    edge_sigma_px: float = 0.3
+    marginal: str = "fail"
 
     def range_of(self, name: str) -> tuple[float, float]:
         """The allowed offset of parameter ``name`` (±inf for ``v_pan``)."""
@@ -67,10 +84,13 @@ class CompensationModel:
         """Whether the pans are written (the view axis turns)."""
         return "h_pan" in self.params
 
-    def with_station(self, angle_sigma_deg: float, position_sigma_mm: float) -> CompensationModel:
-        """The same model with another station accuracy (for the yield-against-σ curve)."""
-        return dataclasses.replace(self, angle_sigma_deg=angle_sigma_deg,
-                                   position_sigma_mm=position_sigma_mm)
+    def with_station(self, angle_sigma_deg: float, position_sigma_mm: float,
+                     edge_sigma_px: float | None = None) -> CompensationModel:
+        """The same model with another station accuracy (for the yield-against-σ curve;
+        the edge's σ unchanged unless given)."""
+        return dataclasses.replace(
+            self, angle_sigma_deg=angle_sigma_deg, position_sigma_mm=position_sigma_mm,
+            edge_sigma_px=self.edge_sigma_px if edge_sigma_px is None else edge_sigma_px)
 
     def as_dict(self) -> dict[str, object]:
         """JSON-ready description (what robustness.json and eol.json record)."""
@@ -78,8 +98,9 @@ class CompensationModel:
                 "ranges": {n: list(self.range_of(n)) for n in self.params if n != "v_pan"},
                 "station": {"angle_sigma_deg": self.angle_sigma_deg,
                             "position_sigma_mm": self.position_sigma_mm,
-                            "measured_at": self.measured_at},
-                "reference": self.reference}
+                            "edge_sigma_px": self.edge_sigma_px,
+                            "measured_at": self.measured_at, "marginal": self.marginal},
+                "reference": self.reference, "law": self.law, "budget": self.budget}
 
 
 #: The documented defaults (docs/compensation.md): the view's rotation, ±3°, a station of
@@ -93,19 +114,24 @@ def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>") -> Co
     ranges = tuple((n, *spec.ranges.get(n, DEFAULT_RANGES[n])) for n in params if n != "v_pan")
     st = spec.station
     return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,
-                             st.measured_at, spec.reference, source)
+                             st.measured_at, spec.reference, source, spec.law, spec.budget,
+                             st.edge_sigma_px, st.marginal)
 
 
 def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
     """The model :meth:`CompensationModel.as_dict` described (a run's stored settings).
+    A description without ``law`` was stored before there was a choice (runs of
+    2026-12-05 and earlier): its law is ``reference-points``, the only one then.
 
     Raises
     ------
     ValueError
         ``doc`` is not such a description (pydantic's ValidationError names the key).
     """
-    spec = CompensationSpec.model_validate({k: doc[k] for k in ("params", "ranges", "station",
-                                                                "reference") if k in doc})
+    data = {k: doc[k] for k in ("params", "ranges", "station", "reference", "law", "budget")
+            if k in doc}
+    data.setdefault("law", "reference-points")
+    spec = CompensationSpec.model_validate(data)
     return compensation_from_spec(spec, str(doc.get("source", "<run>")))
 
 

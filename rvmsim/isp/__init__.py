@@ -16,7 +16,7 @@ from .params import (
     load_params,
     params_to_dict,
 )
-from .exact import IspMap, build_map_exact
+from .exact import IspMap, build_map_exact, view_angles, view_rotation
 from .map import (
     build_map,
     map_nodes,
@@ -37,6 +37,8 @@ __all__ = [
     "IspMap",
     "build_map",
     "build_map_exact",
+    "view_rotation",
+    "view_angles",
     "map_nodes",
     "MapNodes",
     "RayCache",

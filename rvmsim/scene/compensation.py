@@ -11,8 +11,12 @@ Example (every key optional; these are the defaults)::
       station:
         angle_sigma_deg: 0.1           # the station's measurement error, 1 σ (assumption)
         position_sigma_mm: 1.0         #   (assumption)
+        edge_sigma_px: 0.3             # the body edge found on the capture, 1 σ (measured)
         measured_at: null              # the load state on the line (default: the first)
-      reference: site                  # the ground points the law keeps in place
+        marginal: fail                 # a car whose margin is inside its uncertainty
+      law: ec-solve                    # how the per-car values are chosen
+      budget: 24                       # ec-solve: EC evaluations per car (search)
+      reference: site                  # the ground points the reference-point law holds
 
 The models validate the YAML (unknown keys are errors); :mod:`rvmsim.compensation` builds its
 frozen dataclasses from them.  The law itself is documented there and in
@@ -48,24 +52,32 @@ class _Model(BaseModel):
 
 
 class StationSpec(_Model):
-    """The EOL station: how well it measures the camera's pose (1 σ, per axis) and at which
-    load state the car stands on the line (a load state's name; default: the first)."""
+    """The EOL station: how well it measures the camera's pose (1 σ, per axis) and the body's
+    edge on the capture (1 σ, px), at which load state the car stands on the line (a load
+    state's name; default: the first), and what it does with a car whose EC margin is inside
+    the station's uncertainty (``fail`` it, or ``accept`` it on its measured values)."""
 
     angle_sigma_deg: Annotated[float, Field(ge=0, le=5)] = 0.1
     position_sigma_mm: Annotated[float, Field(ge=0, le=100)] = 1.0
+    edge_sigma_px: Annotated[float, Field(ge=0, le=20)] = 0.3
     measured_at: Annotated[str, Field(min_length=1, max_length=40)] | None = None
+    marginal: Literal["fail", "accept"] = "fail"
 
 
 class CompensationSpec(_Model):
     """What the EOL step writes (``params``), within which offsets (``ranges``), measured how
-    well (``station``), keeping which points in place (``reference``: ``site`` = the
-    guideline ends and the bases of the test objects; ``ground`` = a grid of ground points
-    over the RVM image)."""
+    well (``station``), chosen how (``law``: ``ec-solve``, every EC on the car's own picture
+    within ``budget`` evaluations; ``reference-points``, ground points held in place), and
+    which points the reference-point law holds (``reference``: ``site`` = the guideline ends
+    and the bases of the test objects; ``ground`` = a grid of ground points over the RVM
+    image; ec-solve starts from that law's values)."""
 
     params: Annotated[list[_Param], Field(min_length=1)] = ["h_pan", "v_pan", "tilt"]
     ranges: dict[str, tuple[float, float]] = {}
     station: StationSpec = StationSpec()
     reference: Literal["site", "ground"] = "site"
+    law: Literal["ec-solve", "reference-points"] = "ec-solve"
+    budget: Annotated[int, Field(ge=4, le=2000)] = 24
 
     @field_validator("params")
     @classmethod

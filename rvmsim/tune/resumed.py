@@ -101,7 +101,7 @@ def _kind(settings: RunSettings) -> str:
 
 def _check_members(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
     """--shared, --markets, --robust, --samples, --variation, --compensation, --aggregate."""
-    from ..compensation import compensation_for
+    from ..compensation import compensation_for, compensation_from_dict
     from ..markets import parse_markets
     from .members import parse_aggregate
     from .robust import ROBUST_AGGREGATE
@@ -122,7 +122,9 @@ def _check_members(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
             else "each scene's own variation section"), str(a.variation_file))
     if a.compensation is not None:
         model = compensation_for(a.compensation)
-        if model is None or model.as_dict() != settings.compensation:
+        stored = (compensation_from_dict(settings.compensation).as_dict()
+                  if settings.compensation else None)
+        if model is None or model.as_dict() != stored:
             raise _refuse("--compensation", db, "with another compensation model"
                           if settings.compensation else "without --compensation",
                           a.compensation)

@@ -1,0 +1,27 @@
+"""The per-car step of end-of-line compensation: from a car's station reading and picture to
+the values written into its camera, and the station's verdict (docs/compensation.md).
+
+Modules: :mod:`.law` (``ec-solve`` and ``reference-points``: :class:`EcSolveLaw`,
+:class:`ReferencePointsLaw`, :func:`make_law`), :mod:`.picture` (what a law judges a car by:
+a fisheye label image, or a true one seen with the station's errors), :mod:`.margins` (EC
+margins on one scale), :mod:`.uncertainty` (the station's σ of each EC), :mod:`.conflicts`
+(cars no setting can pass).
+"""
+
+from __future__ import annotations
+
+from .conflicts import GRID_LEVELS, conflicts_on_grid, grid_of
+from .factory import LAWS, make_law
+from .law import CarSolution, EcSolveLaw, PerCarLaw, ReferencePointsLaw, STATUSES
+from .margins import FAIL_MARGIN, MarginScale
+from .picture import CarPicture, ImagePicture, StationView, body_ecs, edge_turn, turned
+from .uncertainty import PROBE_DEG, PROBE_PX, axis_turn, ec_uncertainty
+
+__all__ = [
+    "GRID_LEVELS", "conflicts_on_grid", "grid_of",
+    "LAWS", "make_law",
+    "CarSolution", "EcSolveLaw", "PerCarLaw", "ReferencePointsLaw", "STATUSES",
+    "FAIL_MARGIN", "MarginScale",
+    "CarPicture", "ImagePicture", "StationView", "body_ecs", "edge_turn", "turned",
+    "PROBE_DEG", "PROBE_PX", "axis_turn", "ec_uncertainty",
+]
