@@ -12,7 +12,7 @@ from .model import (CompensationModel, DEFAULT_COMPENSATION, compensation_for,
                     compensation_from_dict, compensation_from_spec, load_compensation, measured_load_index)
 from .law import (Correction, CompensationLaw, Deviation, MIN_REFERENCE_POINTS, deviated_camera,
                   deviated_pose, loaded_deviation, reference_points)
-from .station import measured_deviation, station_error
+from .station import edge_error, measured_deviation, station_error
 
 __all__ = [
     "CompensationModel",
@@ -31,5 +31,6 @@ __all__ = [
     "loaded_deviation",
     "reference_points",
     "measured_deviation",
+    "edge_error",
     "station_error",
 ]

@@ -14,7 +14,8 @@ from .conflicts import GRID_LEVELS, conflicts_on_grid, grid_of
 from .factory import LAWS, make_law
 from .law import CarSolution, EcSolveLaw, PerCarLaw, ReferencePointsLaw, STATUSES
 from .margins import FAIL_MARGIN, MarginScale
-from .picture import CarPicture, ImagePicture, StationView, body_ecs, edge_turn, turned
+from .picture import (CarPicture, ImagePicture, SplitEvaluator, StationView, body_ecs,
+                      criteria_subset, edge_turn, turned)
 from .uncertainty import PROBE_DEG, PROBE_PX, axis_turn, ec_uncertainty
 
 __all__ = [
@@ -22,6 +23,7 @@ __all__ = [
     "LAWS", "make_law",
     "CarSolution", "EcSolveLaw", "PerCarLaw", "ReferencePointsLaw", "STATUSES",
     "FAIL_MARGIN", "MarginScale",
-    "CarPicture", "ImagePicture", "StationView", "body_ecs", "edge_turn", "turned",
+    "CarPicture", "ImagePicture", "SplitEvaluator", "StationView", "body_ecs",
+    "criteria_subset", "edge_turn", "turned",
     "PROBE_DEG", "PROBE_PX", "axis_turn", "ec_uncertainty",
 ]

@@ -78,13 +78,13 @@ def conflicts_on_grid(criteria: Criteria, names: Sequence[str], points: np.ndarr
     least = scale.least(values)
     best = int(np.argmax(least))
     out: list[str] = []
-    for j in np.flatnonzero(enabled & ~passed.any(axis=0)):
+    for j in (int(i) for i in np.flatnonzero(enabled & ~passed.any(axis=0))):
         m = scale.normalized(values)[:, j]
         b = int(np.argmax(m))
         where = ", ".join(f"{n} {_fmt(n, x)}" for n, x in zip(names, points[b]))
         out.append(f"infeasible car: {ids[j]} fails over the whole allowed range (best "
                    f"{_value(criteria, j, values[b, j])} at {where})")
-    somewhere = [j for j in np.flatnonzero(enabled) if passed[:, j].any()]
+    somewhere = [int(j) for j in np.flatnonzero(enabled) if passed[:, j].any()]
     for a, b in itertools.combinations(somewhere, 2):
         if len(out) >= 3:
             break

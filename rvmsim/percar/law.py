@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..compensation import CompensationLaw, Correction, Deviation
-from ..criteria import (Criteria, SubSolve, call_ec, checked_solve_value, outline_points,
+from ..criteria import (Criteria, EcDefinition, SubSolve, call_ec, checked_solve_value, outline_points,
                         score_batch)
 from ..isp import IspParams, OutputSpec, input_to_plane
 from .conflicts import GRID_LEVELS, conflicts_on_grid, grid_of
@@ -339,11 +339,11 @@ def _outline(picture: CarPicture, labels: tuple[int, ...]) -> np.ndarray:
 
 
 def _written_solves(criteria: Criteria, reference: CompensationLaw
-                    ) -> list[tuple[object, SubSolve, float]]:
+                    ) -> list[tuple[EcDefinition, SubSolve, float]]:
     """(EC, its sub-solve, target) for each enabled EC whose sub-solve pins a parameter the
     model writes (not the pans or tilt: they turn the view, which no solve sets)."""
     written = set(reference.variables) - {"pan_x", "pan_y", "tilt"}
-    out: list[tuple[object, SubSolve, float]] = []
+    out: list[tuple[EcDefinition, SubSolve, float]] = []
     taken: set[str] = set()
     for ec in criteria.ecs:
         hook, criterion = ec.sub_solve, criteria.items[ec.id]

@@ -29,6 +29,7 @@ image of record.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Protocol
@@ -37,10 +38,11 @@ import numpy as np
 
 from .. import labels as L
 from ..criteria import Criteria, ec_needs
-from ..isp import IspParams, view_angles, view_rotation
-from ..pipeline import ImageEvaluator
+from ..isp import IspParams, OutputSpec, view_angles, view_rotation
+from ..pipeline import FisheyeLabels, ImageEvaluator, make_evaluator
 
-__all__ = ["CarPicture", "ImagePicture", "StationView", "body_ecs", "turned", "edge_turn"]
+__all__ = ["CarPicture", "ImagePicture", "StationView", "SplitEvaluator", "body_ecs", "turned",
+           "edge_turn", "criteria_subset"]
 
 
 class CarPicture(Protocol):
@@ -137,33 +139,75 @@ class ImagePicture:
             len(params), len(self.criteria.ids))
 
 
-class StationView(ImagePicture):
+def criteria_subset(criteria: Criteria, keep: np.ndarray) -> Criteria:
+    """``criteria`` with only the ECs ``keep`` ((k,) bool) selected."""
+    ecs = tuple(ec for ec, k in zip(criteria.ecs, keep) if k)
+    return dataclasses.replace(criteria, ecs=ecs, items={ec.id: criteria.items[ec.id]
+                                                         for ec in ecs})
+
+
+class SplitEvaluator:
+    """One fisheye label image's ECs as two evaluators, the site's and the body's
+    (:func:`body_ecs`), so that each part can be read through its own view at the cost of
+    one evaluation of all of them.
+
+    Parameters
+    ----------
+    image : FisheyeLabels
+    record : OutputSpec
+        The RVM image of record (what the ECs are measured at).
+    criteria : Criteria
+    """
+
+    def __init__(self, image: FisheyeLabels, record: OutputSpec, criteria: Criteria):
+        self.criteria = criteria
+        self.body = body_ecs(criteria)
+        self.fisheye = np.asarray(image.labels)
+        self._parts = [(mask, make_evaluator(image, record, criteria_subset(criteria, mask)))
+                       for mask in (~self.body, self.body) if mask.any()]
+
+    def values(self, site: IspParams, body: IspParams | None = None) -> np.ndarray:
+        """The values, (k,): the site's ECs with ``site``, the body's with ``body``
+        (default ``site``)."""
+        out = np.full(len(self.criteria.ids), np.nan)
+        for mask, ev in self._parts:
+            out[mask] = ev.values(body if mask is self.body and body is not None else site)
+        return out
+
+
+class StationView:
     """A car's true picture seen as the station sees it (the module docstring): the site's
     ECs through the view turned by ``site_turn``, the body's through ``body_turn``.
 
     Parameters
     ----------
-    evaluator : ImageEvaluator
+    evaluator : SplitEvaluator
         Of the car's true fisheye label image (at the station's load state).
     site_turn, body_turn : (3, 3) float, optional
         ``E`` and ``B`` of the module docstring (None: no error).
     input_scale : float
     """
 
-    def __init__(self, evaluator: ImageEvaluator, site_turn: np.ndarray | None,
+    def __init__(self, evaluator: SplitEvaluator, site_turn: np.ndarray | None,
                  body_turn: np.ndarray | None, input_scale: float = 1.0):
-        super().__init__(evaluator, input_scale)
+        self.evaluator = evaluator
         self.site_turn = site_turn
         self.body_turn = body_turn
-        self.body = body_ecs(evaluator.criteria)
+        self.input_scale = input_scale
+
+    @property
+    def criteria(self) -> Criteria:
+        return self.evaluator.criteria
+
+    @property
+    def fisheye(self) -> np.ndarray:
+        return self.evaluator.fisheye
+
+    def _at(self, params: IspParams) -> IspParams:
+        return params if self.input_scale == 1.0 else params.for_input_scale(self.input_scale)
 
     def values(self, params: Sequence[IspParams]) -> np.ndarray:
-        if self.site_turn is None and self.body_turn is None:
-            return super().values(params)
-        site = super().values([turned(p, self.site_turn) for p in params])
-        if not self.body.any():
-            return site
-        if self.body_turn is self.site_turn:
-            return site
-        body = super().values([turned(p, self.body_turn) for p in params])
-        return np.where(self.body, body, site)
+        ev = self.evaluator
+        return np.array([ev.values(self._at(turned(p, self.site_turn)),
+                                   self._at(turned(p, self.body_turn))) for p in params]
+                        ).reshape(len(params), len(self.criteria.ids))

@@ -33,8 +33,8 @@ from .stats import (
     failure_drivers,
     ec_margins,
 )
-from .compensated import (CompensatedSamples, compensate_samples, station_readings,
-                          true_deviation)
+from .compensated import (COMPENSATION_CHUNK, CarJudge, CompensatedSamples, station_readings,
+                          station_twin, true_deviation)
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes, GOOD_R2
 from .export import SampleExport, sample_scene_document, write_sample_scenes
 from .robustness import (
@@ -79,7 +79,9 @@ __all__ = [
     "failure_drivers",
     "ec_margins",
     "CompensatedSamples",
-    "compensate_samples",
+    "CarJudge",
+    "station_twin",
+    "COMPENSATION_CHUNK",
     "station_readings",
     "true_deviation",
     "Sensitivity",

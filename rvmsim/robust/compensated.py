@@ -1,30 +1,47 @@
-"""Variation samples after end-of-line compensation: each car's per-car values from its
-measured deviation (:mod:`rvmsim.compensation`), and what they add up to.
+"""Variation samples after end-of-line compensation: each car through the station's step
+(:mod:`rvmsim.percar`) and judged in the field with the values it wrote.
 
-A sample's camera deviates from the nominal mount by its angles and the position it is
-rendered at (the image judged is the rendered one: the snapping of positions is the image's
-approximation, not the station's error).  The station reads that deviation with its error
-(:func:`rvmsim.compensation.measured_deviation`, seeded per car) in the load state it
-measures at, against the design pose; the law turns it into the car's values; the car is
-then judged in its own load state with those values, as in the field.  A car whose correction leaves the allowed range
-fails, named as such.
+For each car (a sample):
+
+1. **At the station.** The car stands in the station's load state (its *twin*: the same
+   mount deviation, the station's load; :func:`station_twin`).  The station reads its
+   camera's deviation with its error (:func:`rvmsim.compensation.measured_deviation`, seeded
+   per car) against the design pose, and the body's edge on the capture with the edge
+   finder's error (:func:`rvmsim.compensation.edge_error`).  The law judges the car on the
+   twin's true fisheye labels seen with those errors (:class:`rvmsim.percar.StationView`)
+   and writes its values (or, ``law: reference-points``, the reference points' values).
+2. **In the field.** The car in its own load state, judged with those values on its own
+   true picture (the verdicts of ``rvmsim robustness``), before (platform values) and after.
+
+A car passes when the station lets it go (``pass``; ``marginal`` only under the ``accept``
+policy) and its picture in the field passes every EC.  A sample's camera is at its rendered
+position (the snapping of positions is the image's approximation, not the station's error).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..compensation import (CompensationLaw, CompensationModel, Correction, Deviation,
-                            loaded_deviation, measured_deviation)
-from ..isp import IspParams
+from ..compensation import (CompensationModel, Correction, Deviation, deviated_pose,
+                            edge_error, loaded_deviation, measured_deviation)
+from ..criteria import Criteria, EcBatch, score_batch
+from ..isp import IspParams, OutputSpec
+from ..percar import CarSolution, PerCarLaw, SplitEvaluator, StationView, edge_turn
+from ..render import FisheyeImages
 from ..scene import Scene
+from .images import Refolder, sample_camera, sample_images
 from .samples import MountSample
 from .variation import LoadState
 
-__all__ = ["CompensatedSamples", "compensate_samples", "true_deviation", "station_readings"]
+__all__ = ["CompensatedSamples", "station_readings", "true_deviation", "station_twin",
+           "CarJudge", "COMPENSATION_CHUNK"]
+
+#: Cars whose images are held at once (each a few MB of fisheye labels).
+COMPENSATION_CHUNK = 24
 
 
 def true_deviation(sample: MountSample) -> Deviation:
@@ -32,66 +49,196 @@ def true_deviation(sample: MountSample) -> Deviation:
     return Deviation.from_offsets((*sample.render_position_mm, *sample.angles_deg))
 
 
+def station_twin(sample: MountSample, load: LoadState) -> MountSample:
+    """``sample``'s car standing in the station's load state ``load``."""
+    return sample if sample.load == load else dataclasses.replace(sample, load=load)
+
+
 @dataclass(frozen=True)
 class CompensatedSamples:
-    """Per sample: the deviation the station measured and the correction the law wrote."""
+    """Per sample: the deviation the station measured, the law's solution (its values and
+    the station's verdict), and whether the station lets the car go."""
 
     model: CompensationModel
     measured: tuple[Deviation, ...]
-    corrections: tuple[Correction, ...]
+    solutions: tuple[CarSolution, ...]
+    accepted: np.ndarray
+
+    @property
+    def corrections(self) -> tuple[Correction, ...]:
+        """Each car's written values."""
+        return tuple(s.correction for s in self.solutions)
 
     @property
     def params(self) -> list[IspParams]:
-        """Each car's parameters (full sensor; clipped to the allowed ranges)."""
-        return [c.params for c in self.corrections]
+        """Each car's parameters (full sensor; within the allowed ranges)."""
+        return [s.params for s in self.solutions]
 
     @property
     def within_range(self) -> np.ndarray:
-        """(n,) bool: the correction fits the allowed ranges."""
-        return np.array([c.within_range for c in self.corrections], dtype=bool)
+        """(n,) bool: the written values needed no clipping to the allowed ranges."""
+        return np.array([s.correction.within_range for s in self.solutions], dtype=bool)
+
+    def count(self, status: str) -> int:
+        """The cars the station gave ``status`` (:data:`rvmsim.percar.STATUSES`)."""
+        return sum(s.status == status for s in self.solutions)
+
+    def summary_lines(self, field_ok: np.ndarray) -> list[str]:
+        """What the station did with the cars (terminal lines): out of range, infeasible,
+        marginal (rejected or accepted), and the cars it let go that fail in the field
+        (``field_ok``: (n,) bool, the cars' pictures in the field pass)."""
+        lines = []
+        n_out = int((~self.within_range).sum())
+        if n_out:
+            first = next(c for c in self.corrections if c.exceeded)
+            lines.append(f"  {n_out} cars fail the EOL step itself (e.g. {first.exceeded[0]})")
+        infeasible = [s for s in self.solutions if s.status == "infeasible"]
+        if infeasible:
+            lines.append(f"  {len(infeasible)} infeasible cars: no per-car setting within the "
+                         f"allowed ranges passes every EC (e.g. {infeasible[0].reasons[0]})")
+        marginal = self.count("marginal")
+        if marginal:
+            policy = "accepted" if self.model.marginal == "accept" else "failed"
+            lines.append(f"  {marginal} marginal cars (an EC's margin inside the station's "
+                         f"uncertainty), {policy} by the station's policy")
+        escaped = int((self.accepted & ~field_ok).sum())
+        if escaped:
+            lines.append(f"  {escaped} cars the station passed fail in the field (the "
+                         "station's error)")
+        return lines
 
     def distribution(self) -> dict[str, object]:
         """JSON-ready: per written parameter (and the pan's turn) the spread of the per-car
-        offsets from the platform, and the cars out of range."""
+        offsets from the platform, the cars out of range, the station's verdicts and the
+        law's evaluations per car."""
         out: dict[str, object] = {}
-        names = list(self.corrections[0].offsets) if self.corrections else []
+        corrections = self.corrections
+        names = list(corrections[0].offsets) if corrections else []
         for name in names:
-            v = np.array([c.offsets[name] for c in self.corrections])
+            v = np.array([c.offsets[name] for c in corrections])
             low, high = self.model.range_of(name)
             out["pan_turn" if name == "h_pan" else name] = {
                 "range": [low, high], "mean": float(v.mean()), "sd": float(v.std()),
                 "min": float(v.min()), "p1": float(np.percentile(v, 1)),
                 "median": float(np.median(v)), "p99": float(np.percentile(v, 99)),
                 "max": float(v.max())}
-        res = np.array([c.residual_rms_px for c in self.corrections])
+        res = np.array([c.residual_rms_px for c in corrections])
+        evals = np.array([s.evaluations for s in self.solutions])
         return {"offsets": out, "n_out_of_range": int((~self.within_range).sum()),
                 "residual_rms_px": {"median": float(np.median(res)) if res.size else 0.0,
-                                    "max": float(res.max()) if res.size else 0.0}}
-
-
-def compensate_samples(law: CompensationLaw, samples: Sequence[MountSample], seed: int,
-                       measured_at: LoadState) -> CompensatedSamples:
-    """The station's reading and the law's correction for every sample.
-
-    Parameters
-    ----------
-    law : CompensationLaw
-    samples : sequence of MountSample
-    seed : int
-        The run's seed: with each sample's index and tolerance scale it seeds the sample's
-        station error.
-    measured_at : LoadState
-        The load state the car stands in at the station: the station compares the camera's
-        pose then with the design pose (:func:`rvmsim.compensation.loaded_deviation`), so a
-        load state other than the scene's own attitude reads as a deviation too.
-    """
-    measured = station_readings(law.scene, samples, law.model, seed, measured_at)
-    return CompensatedSamples(law.model, measured, tuple(law.correct(m) for m in measured))
+                                    "max": float(res.max()) if res.size else 0.0},
+                "verdicts": {st: self.count(st) for st in ("pass", "marginal", "fail",
+                                                          "infeasible")},
+                "n_rejected": int((~self.accepted).sum()),
+                "evaluations_per_car": {"median": float(np.median(evals)) if evals.size
+                                        else 0.0,
+                                        "max": int(evals.max()) if evals.size else 0}}
 
 
 def station_readings(scene: Scene, samples: Sequence[MountSample], model: CompensationModel,
                      seed: int, measured_at: LoadState) -> tuple[Deviation, ...]:
-    """What the station reads for each sample (see :func:`compensate_samples`)."""
+    """What the station reads for each sample: its deviation in the station's load state
+    (:func:`rvmsim.compensation.loaded_deviation`) plus the station's error."""
     return tuple(measured_deviation(
         loaded_deviation(scene, true_deviation(s), measured_at.height_mm, measured_at.pitch_deg),
         model, seed, s.index, s.scale) for s in samples)
+
+
+class CarJudge:
+    """Every car of a sample set through the station and into the field (the module
+    docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    law : PerCarLaw
+        The platform setting's law (:func:`rvmsim.percar.make_law`).
+    seed : int
+        The run's seed (with each car's index and tolerance scale it seeds its errors).
+    station_load : LoadState
+        The load state the car stands in at the station.
+    criteria : Criteria
+    record : OutputSpec
+        The RVM image of record (what the ECs are judged at).
+    scale : float
+        Fraction of the sensor rendered.
+    """
+
+    def __init__(self, scene: Scene, law: PerCarLaw, seed: int, station_load: LoadState,
+                 criteria: Criteria, record: OutputSpec, scale: float = 1.0):
+        self.scene = scene
+        self.law = law
+        self.model = law.model
+        self.seed = seed
+        self.station_load = station_load
+        self.criteria = criteria
+        self.record = record
+        self.scale = scale
+        cam = scene.camera.to_camera()
+        self._f_px, self._half_width = float(cam.fy), cam.width / 2.0
+
+    def _at(self, params: IspParams) -> IspParams:
+        return params if self.scale == 1.0 else params.for_input_scale(self.scale)
+
+    def __call__(self, samples: Sequence[MountSample], platform: IspParams, shared: Refolder,
+                 *, progress: bool = False) -> tuple[EcBatch, EcBatch, CompensatedSamples]:
+        """Each car before compensation, after it, and what the station did.
+
+        Returns
+        -------
+        before, after : EcBatch
+            One row per sample: the ECs in the field with the platform values, and with
+            the car's own values.
+        compensated : CompensatedSamples
+        """
+        measured = station_readings(self.scene, samples, self.model, self.seed,
+                                    self.station_load)
+        k = len(self.criteria.ids)
+        before, after = np.full((len(samples), k), np.nan), np.full((len(samples), k), np.nan)
+        solutions: list[CarSolution] = []
+        bar = _bar(progress, len(samples))
+        for a in range(0, len(samples), COMPENSATION_CHUNK):
+            part = list(samples[a:a + COMPENSATION_CHUNK])
+            twins = [station_twin(s, self.station_load) for s in part]
+            fields = [s for s in part if s.load != self.station_load]
+            images = sample_images(self.scene, twins + fields, scale=self.scale,
+                                   color=False, shared=shared)
+            in_field = dict(zip((s.index for s in fields), images[len(twins):]))
+            for j, (s, twin, twin_img) in enumerate(zip(part, twins, images)):
+                i = a + j
+                sol, b, v = self._car(s, twin, twin_img, in_field.get(s.index), measured[i],
+                                      platform)
+                solutions.append(sol)
+                before[i], after[i] = b, v
+                if bar is not None:
+                    bar.update(1)
+        if bar is not None:
+            bar.close()
+        accepted = np.array([self.law.accepts(s) for s in solutions], dtype=bool)
+        return (score_batch(before, self.criteria), score_batch(after, self.criteria),
+                CompensatedSamples(self.model, measured, tuple(solutions), accepted))
+
+    def _car(self, sample: MountSample, twin: MountSample, twin_img: FisheyeImages,
+             field_img: FisheyeImages | None, measured: Deviation, platform: IspParams
+             ) -> tuple[CarSolution, np.ndarray, np.ndarray]:
+        """One car: the law on its station picture, then its ECs in the field."""
+        station_ev = SplitEvaluator(twin_img, self.record, self.criteria)
+        cam = sample_camera(self.scene, twin, scale=self.scale)
+        site = cam.rotation.T @ deviated_pose(self.scene, measured)[0]
+        if np.abs(site - np.eye(3)).max() < 1e-12:
+            site = None
+        body = edge_turn(*edge_error(self.model, self.seed, sample.index, sample.scale),
+                         self._f_px, self._half_width)
+        sol = self.law.solve(measured, StationView(station_ev, site, body, self.scale))
+        field_ev = station_ev if field_img is None else SplitEvaluator(
+            field_img, self.record, self.criteria)
+        return (sol, field_ev.values(self._at(platform)),
+                field_ev.values(self._at(sol.params)))
+
+
+def _bar(progress: bool, total: int):  # type: ignore[no-untyped-def]
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="cars through the station", unit="car", leave=False)

@@ -22,13 +22,14 @@ from typing import Any
 
 import numpy as np
 
-from ..compensation import CompensationLaw, CompensationModel, measured_load_index
+from ..compensation import CompensationModel, measured_load_index
 from ..criteria import Criteria, EcBatch, default_criteria, score_batch
 from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params, make_evaluator, record_output
 from ..scene import Scene
 from ..render import TaskRunner
-from .compensated import CompensatedSamples, compensate_samples
+from ..percar import ImagePicture, PerCarLaw, make_law
+from .compensated import CarJudge, CompensatedSamples, station_twin
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
@@ -176,10 +177,10 @@ class RobustnessResult(YieldVerdict):
 
     @property
     def passed(self) -> np.ndarray:
-        """(n,) bool: the sample passes every EC (after compensation: with its per-car
-        values, which fit the allowed ranges)."""
+        """(n,) bool: the sample passes every EC (after compensation: the station let the
+        car go, and its picture passes with its per-car values)."""
         ok = self.evaluation.all_passed
-        return ok if self.compensated is None else ok & self.compensated.within_range
+        return ok if self.compensated is None else ok & self.compensated.accepted
 
     def yield_by_load(self, *, before: bool = False) -> dict[str, Any]:
         """The yield in each load state (JSON-ready), after compensation (or without one),
@@ -240,11 +241,17 @@ class RobustnessResult(YieldVerdict):
         row: dict[str, Any] = {**s.as_dict(), "ec_score": float(ev.score[i]),
                                "passed": bool(self.passed[i]), "failed": failed}
         if self.compensated is not None and self.before is not None:
-            c = self.compensated.corrections[i]
-            row["failed"] = failed + list(c.exceeded)
+            sol = self.compensated.solutions[i]
+            c = sol.correction
+            row["failed"] = failed + list(c.exceeded) + [
+                r for r in sol.reasons if r.startswith(("infeasible car", "marginal"))]
             row["passed_before_compensation"] = bool(self.before.all_passed[i])
             row["measured_deviation"] = self.compensated.measured[i].as_dict()
             row["correction"] = c.as_dict()
+            row["station"] = {k: v for k, v in sol.as_dict().items()
+                              if k in ("law", "status", "reasons", "evaluations",
+                                       "station_ecs")}
+            row["station"]["accepted"] = bool(self.compensated.accepted[i])
         return row
 
     def summary(self) -> str:
@@ -259,11 +266,7 @@ class RobustnessResult(YieldVerdict):
             blo, bhi = est.ci
             lines.append(f"  before compensation: {100 * est.yield_:.1f} % (95 % CI "
                          f"{100 * blo:.1f}–{100 * bhi:.1f} %)")
-            n_out = int((~self.compensated.within_range).sum())
-            if n_out:
-                first = next(c for c in self.compensated.corrections if c.exceeded)
-                lines.append(f"  {n_out} cars fail the EOL step itself (e.g. "
-                             f"{first.exceeded[0]})")
+            lines += self.compensated.summary_lines(self.evaluation.all_passed)
         for e in self.ecs:
             if e.enabled and e.n_fail:
                 lines.append(f"  EC {e.id} fails on {100 * e.failure_rate:.1f} % (worst "
@@ -400,7 +403,6 @@ def robustness(scene: Scene, params: IspParams,
     crit = settings.criteria if settings.criteria is not None else default_criteria()
     var = settings.variation if settings.variation is not None else variation_from_scene(scene)
     seed, output, render_scale = settings.seed, settings.output, settings.render_scale
-    law, measured_at = _law(scene, params, settings, var)
     drawn = draw_samples(var, settings.samples, seed)
     n_extra = settings.scale_samples or min(settings.samples, 64)
     extra = {float(s): draw_samples(var, n_extra, seed, s)
@@ -409,29 +411,32 @@ def robustness(scene: Scene, params: IspParams,
     base = refolder(scene, drawn, scale=render_scale)
     folds = {1.0: base, **{s: Refolder(cover_for(scene, v, scale=render_scale), base.rays)
                            for s, v in extra.items()}}  # the same camera: the same rays
+    station_load = _station_load(settings.compensation, var)
     rendered = 0
     if runner is not None:
-        rendered = render_viewpoints(scene, list(sets.values()), scale=render_scale,
-                                     runner=runner, shared=list(folds.values()),
+        views = list(sets.values())
+        if settings.compensation is not None:  # the cars at the station too
+            views += [[station_twin(s, station_load) for s in v] for v in sets.values()]
+        rendered = render_viewpoints(scene, views, scale=render_scale, runner=runner,
+                                     shared=list(folds.values()) * (len(views) // len(sets)),
                                      progress=progress)
+    judge_cars = _judge(scene, params, settings, crit, station_load, base)
     t_render = time.perf_counter()
+    before: EcBatch | None = None
 
     def judge(samples: list[MountSample], fold: Refolder
               ) -> tuple[EcBatch, np.ndarray, CompensatedSamples | None]:
         """The samples' ECs (after compensation with a law), and who passes."""
-        if law is None:
+        nonlocal before
+        if judge_cars is None:
             e = evaluate_samples(scene, samples, params, output, crit, scale=render_scale,
                                  shared=fold, progress=progress)
             return e, e.all_passed, None
-        fixed = compensate_samples(law, samples, seed, measured_at)
-        e = evaluate_samples(scene, samples, fixed.params, output, crit, scale=render_scale,
-                             shared=fold, progress=progress)
-        return e, e.all_passed & fixed.within_range, fixed
+        b, e, fixed = judge_cars(samples, params, fold, progress=progress)
+        if before is None:
+            before = b
+        return e, e.all_passed & fixed.accepted, fixed
 
-    before = None
-    if law is not None:
-        before = evaluate_samples(scene, drawn, params, output, crit, scale=render_scale,
-                                  shared=folds[1.0], progress=progress)
     ev, passed, fixed = judge(drawn, folds[1.0])
     t1 = time.perf_counter()
     curve = [ScalePoint(float(s), yield_estimate(
@@ -439,8 +444,8 @@ def robustness(scene: Scene, params: IspParams,
         for s in settings.scales]
     t2 = time.perf_counter()
     n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
-    if fixed is not None:  # a car the EOL step cannot correct is worse than any EC failure
-        n_fail = n_fail + len(crit.ids) * ~fixed.within_range
+    if fixed is not None:  # a car the station rejects is worse than any EC failure
+        n_fail = n_fail + len(crit.ids) * ~fixed.accepted
     worst = int(np.lexsort((ev.score, -n_fail))[0])
     nominal = worst_frame = None
     record = record_output(crit, scene, output.mirror)  # the frames show the verdicts' size
@@ -457,15 +462,29 @@ def robustness(scene: Scene, params: IspParams,
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
          "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)},
         fixed, before, () if before is None else _ec_stats(crit, drawn, before, var),
-        0 if law is None else len(law.points), record)
+        0 if judge_cars is None else len(judge_cars.law.reference.points), record)
 
 
-def _law(scene: Scene, params: IspParams, settings: RobustnessSettings,
-         var: Variation) -> tuple[CompensationLaw | None, LoadState]:
-    """The compensation law of ``settings`` for ``params`` (None without compensation) and
-    the load state its station measures in."""
-    comp = settings.compensation
-    if comp is None:
-        return None, var.load_states[0]
-    load = var.load_states[measured_load_index(comp, [s.name for s in var.load_states])]
-    return CompensationLaw(scene, params, settings.output, comp), load
+def _station_load(model: CompensationModel | None, var: Variation) -> LoadState:
+    """The load state the station measures in (the variation's first without a model)."""
+    if model is None:
+        return var.load_states[0]
+    return var.load_states[measured_load_index(model, [s.name for s in var.load_states])]
+
+
+def _judge(scene: Scene, params: IspParams, settings: RobustnessSettings, crit: Criteria,
+           station_load: LoadState, shared: Refolder) -> CarJudge | None:
+    """The station's step for ``params`` (None without compensation): its law, with the
+    station's uncertainty read on the nominal car standing at the station."""
+    model = settings.compensation
+    if model is None:
+        return None
+    record = record_output(crit, scene, settings.output.mirror)
+    twin = station_twin(nominal_sample(settings.variation or variation_from_scene(scene)),
+                        station_load)
+    nominal = sample_images(scene, [twin], scale=settings.render_scale, color=False,
+                            shared=shared)[0]
+    picture = ImagePicture(make_evaluator(nominal, record, crit), settings.render_scale)
+    law: PerCarLaw = make_law(scene, params, record, model, crit, picture)
+    return CarJudge(scene, law, settings.seed, station_load, crit, record,
+                    settings.render_scale)

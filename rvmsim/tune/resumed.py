@@ -122,9 +122,9 @@ def _check_members(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
             else "each scene's own variation section"), str(a.variation_file))
     if a.compensation is not None:
         model = compensation_for(a.compensation)
-        stored = (compensation_from_dict(settings.compensation).as_dict()
-                  if settings.compensation else None)
-        if model is None or model.as_dict() != stored:
+        recorded = (compensation_from_dict(settings.compensation).as_dict()
+                    if settings.compensation else None)
+        if model is None or model.as_dict() != recorded:
             raise _refuse("--compensation", db, "with another compensation model"
                           if settings.compensation else "without --compensation",
                           a.compensation)

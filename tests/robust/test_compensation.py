@@ -22,7 +22,9 @@ from .conftest import ANGLES_ONLY
 from .test_robustness import settings  # noqa: F401 - the fixture
 
 OUTPUT = OutputSpec(640, 360)
-PERFECT = DEFAULT_COMPENSATION.with_station(0.0, 0.0)
+PERFECT = DEFAULT_COMPENSATION.with_station(0.0, 0.0, 0.0)
+#: The reference-point law alone (``law: reference-points``): it restores the nominal picture.
+POINTS = dataclasses.replace(PERFECT, law="reference-points")
 #: ±2.5° on every angle: EC 2-1 in the middle of its range still fails on many samples.
 WIDE_ANGLES = {"mount": {a: {"uniform": {"half_width": 2.5}}
                          for a in ("yaw_deg", "pitch_deg", "roll_deg")}}
@@ -37,9 +39,9 @@ def edge(settings):
     return load_small_scene("a", 0.25, variation=WIDE_ANGLES), crit, mid
 
 
-def test_a_perfect_station_recovers_every_car_an_edge_setting_loses(edge, tmp_path: Path):
+def test_the_reference_point_law_restores_the_nominal_picture(edge, tmp_path: Path):
     sc, crit, params = edge
-    wide = dataclasses.replace(PERFECT, ranges=(("h_pan", 0.0, 5.0), ("tilt", -5.0, 5.0)))
+    wide = dataclasses.replace(POINTS, ranges=(("h_pan", 0.0, 5.0), ("tilt", -5.0, 5.0)))
     how = RobustnessSettings(OUTPUT, crit, samples=24, seed=2, scales=(1.0, 0.5),
                              scale_samples=8, compensation=wide)
     r = robustness(sc, params, how)
@@ -92,7 +94,7 @@ def test_per_car_values_take_the_fast_path_to_the_full_paths_values(edge):
 
 def test_cars_out_of_the_eol_range_fail_and_are_named(edge):
     sc, crit, params = edge
-    narrow = dataclasses.replace(PERFECT, ranges=(("h_pan", 0.0, 1.5), ("tilt", -3.0, 3.0)))
+    narrow = dataclasses.replace(POINTS, ranges=(("h_pan", 0.0, 1.5), ("tilt", -3.0, 3.0)))
     r = robustness(sc, params, RobustnessSettings(OUTPUT, crit, samples=16, seed=2,
                                                   scales=(1.0,), compensation=narrow),
                    frames=False)
