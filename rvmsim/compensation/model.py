@@ -58,6 +58,10 @@ class CompensationModel:
     marginal : str
         ``fail`` (default) or ``accept``: what the station does with a car whose least EC
         margin is inside the station's uncertainty of that EC.
+    stop_sigmas : float or None
+        ``ec-solve``: the search stops once every EC passes by this many of the station's
+        σ of it (and by :data:`rvmsim.percar.STOP_FLOOR` normalised units); None: it
+        maximises the least margin until its budget is spent.
     """
 
     params: tuple[str, ...] = ("h_pan", "v_pan", "tilt")
@@ -71,6 +75,7 @@ class CompensationModel:
     budget: int = 24
     edge_sigma_px: float = 0.3
     marginal: str = "fail"
+    stop_sigmas: float | None = None
 
     def range_of(self, name: str) -> tuple[float, float]:
         """The allowed offset of parameter ``name`` (±inf for ``v_pan``)."""
@@ -100,7 +105,8 @@ class CompensationModel:
                             "position_sigma_mm": self.position_sigma_mm,
                             "edge_sigma_px": self.edge_sigma_px,
                             "measured_at": self.measured_at, "marginal": self.marginal},
-                "reference": self.reference, "law": self.law, "budget": self.budget}
+                "reference": self.reference, "law": self.law, "budget": self.budget,
+                "stop_sigmas": self.stop_sigmas}
 
 
 #: The documented defaults (docs/compensation.md): the view's rotation, ±3°, a station of
@@ -115,7 +121,7 @@ def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>") -> Co
     st = spec.station
     return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,
                              st.measured_at, spec.reference, source, spec.law, spec.budget,
-                             st.edge_sigma_px, st.marginal)
+                             st.edge_sigma_px, st.marginal, spec.stop_sigmas)
 
 
 def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
@@ -128,8 +134,8 @@ def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
     ValueError
         ``doc`` is not such a description (pydantic's ValidationError names the key).
     """
-    data = {k: doc[k] for k in ("params", "ranges", "station", "reference", "law", "budget")
-            if k in doc}
+    data = {k: doc[k] for k in ("params", "ranges", "station", "reference", "law", "budget",
+                                "stop_sigmas") if k in doc}
     data.setdefault("law", "reference-points")
     spec = CompensationSpec.model_validate(data)
     return compensation_from_spec(spec, str(doc.get("source", "<run>")))

@@ -41,7 +41,7 @@ import numpy as np
 
 from .. import labels as L
 from ..camera import FisheyeCamera
-from ..isp import IspParams, MapNodes, OutputSpec, RayCache, map_nodes, remap_xy
+from ..isp import InputWarp, IspParams, MapNodes, OutputSpec, RayCache, map_nodes, remap_xy
 from ..scene import Scene
 from .config import default_criteria
 from .context import IspView, SceneContext, scene_context
@@ -349,24 +349,29 @@ class CandidateEvaluator:
         y1 = min(y_end, math.ceil((jy + nh - 2.5) * c - 0.5) + 2)
         return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else EMPTY_WINDOW
 
-    def source(self, params: IspParams) -> LabelSource:
-        """The label pixels of one candidate's RVM image, windowed or whole."""
+    def source(self, params: IspParams, warp: InputWarp | None = None) -> LabelSource:
+        """The label pixels of one candidate's RVM image, windowed or whole; with ``warp``,
+        of the fisheye image read where ``warp`` sends each of the map's positions
+        (:meth:`rvmsim.isp.MapNodes.warped`: e.g. the image of a turned camera)."""
         nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
+        if warp is not None:
+            nodes = nodes.warped(warp)
         w, h = self.output.width, self.output.height
         groups = self.windows(params, nodes) if self.windowed else self._whole()
         return _RemapSource(self.fisheye, nodes, list(groups.values()) + self._regions, (h, w),
                             groups, context=self.context,
                             isp=IspView(params, self.input_size, self.output))
 
-    def measure(self, params: IspParams) -> Measurements:
-        """The raw measurements of one parameter set."""
+    def measure(self, params: IspParams, warp: InputWarp | None = None) -> Measurements:
+        """The raw measurements of one parameter set (``warp``: as :meth:`source`)."""
         c = self.criteria
-        return measure_ecs(self.source(params), c.ecs, c.options)
+        return measure_ecs(self.source(params, warp), c.ecs, c.options)
 
-    def values(self, params: IspParams) -> np.ndarray:
+    def values(self, params: IspParams, warp: InputWarp | None = None) -> np.ndarray:
         """The measured values of one parameter set, (k,) in ``criteria.ids`` order, NaN
-        where not measured (what tuning ships between processes; see ``score_batch``)."""
-        return values_array(self.measure(params), self.criteria.ids)
+        where not measured (what tuning ships between processes; see ``score_batch``;
+        ``warp``: as :meth:`source`)."""
+        return values_array(self.measure(params, warp), self.criteria.ids)
 
     def __call__(self, params: IspParams) -> EcResult:
         """The EC result of one parameter set."""

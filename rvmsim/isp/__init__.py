@@ -16,8 +16,9 @@ from .params import (
     load_params,
     params_to_dict,
 )
-from .exact import IspMap, build_map_exact, view_angles, view_rotation
+from .exact import IspMap, build_map_exact
 from .map import (
+    InputWarp,
     build_map,
     map_nodes,
     MapNodes,
@@ -37,10 +38,9 @@ __all__ = [
     "IspMap",
     "build_map",
     "build_map_exact",
-    "view_rotation",
-    "view_angles",
     "map_nodes",
     "MapNodes",
+    "InputWarp",
     "RayCache",
     "apply_map",
     "remap_xy",

@@ -53,7 +53,7 @@ import numpy as np
 from .params import IspParams, OutputSpec
 
 __all__ = ["IspMap", "build_map_exact", "map_points", "plane_and_view", "pixel_to_ray_matrix",
-           "view_rotation", "view_angles", "isp_rays"]
+           "view_rotation", "isp_rays"]
 
 
 @dataclass(frozen=True)
@@ -135,40 +135,6 @@ def view_rotation(h_pan: float, v_pan: float, tilt: float) -> np.ndarray:
     Both camera frames are OpenCV's (x right, y down, z the optical axis).
     """
     return np.array(_view_lists(h_pan, v_pan, tilt))
-
-
-def view_angles(rotation: np.ndarray, v_pan_hint: float = 0.0) -> tuple[float, float, float]:
-    """The pans and tilt (h_pan, v_pan, tilt; degrees) whose :func:`view_rotation` is
-    ``rotation``: the inverse of that function, h_pan in [0, 180], v_pan and tilt in
-    (−180, 180].  Where h_pan is 0 the turn has no direction: v_pan is then
-    ``v_pan_hint`` and the tilt carries the whole roll.
-
-    Parameters
-    ----------
-    rotation : (3, 3) float
-        A rotation (V camera → A camera), as :func:`view_rotation` gives it.
-    v_pan_hint : float
-        The direction to report for a turn of (nearly) 0, degrees.
-
-    Convention
-    ----------
-    Both camera frames are OpenCV's (x right, y down, z the optical axis).
-    """
-    r = np.asarray(rotation, dtype=np.float64)
-    sb = math.hypot(r[0, 2], r[1, 2])
-    b = math.atan2(sb, r[2, 2])
-    if sb < 1e-12:
-        a = math.radians(v_pan_hint)
-        g = math.atan2(r[1, 0], r[0, 0]) - a
-    else:
-        a = math.atan2(r[1, 2], r[0, 2])
-        g = math.atan2(r[2, 1], -r[2, 0])
-
-    def wrap(deg: float) -> float:
-        w = (deg + 180.0) % 360.0 - 180.0
-        return 180.0 if w == -180.0 else w
-
-    return math.degrees(b), wrap(math.degrees(a)), wrap(math.degrees(g + a))
 
 
 def isp_rays(p: IspParams, uv: np.ndarray, input_size: tuple[int, int]) -> np.ndarray:

@@ -13,9 +13,11 @@ Conventions: pixel centres at integer coordinates (OpenCV); maps are output → 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import OrderedDict
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -24,6 +26,7 @@ from .exact import IspMap, build_map_exact, pixel_to_ray_matrix
 from .params import IspParams, OutputSpec
 
 __all__ = [
+    "InputWarp",
     "build_map",
     "map_nodes",
     "MapNodes",
@@ -203,6 +206,19 @@ def build_map(
     return IspMap(nodes.window((0, 0, output.width, output.height)), input_size, output)
 
 
+#: What :meth:`MapNodes.warped` adds to a map's interpolation error, px: a bound on the
+#: curvature of the warps it is used for (turns of under a degree, edges moved by a few px)
+#: over one cell.
+WARP_ERROR_PX = 0.05
+
+
+class InputWarp(Protocol):
+    """A smooth map of the fisheye image onto itself: ``warp(xy)`` → the positions (…, 2)
+    the image is read at instead of ``xy`` (…, 2) px (pixel centres at integers)."""
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray: ...
+
+
 @dataclass(frozen=True)
 class MapNodes:
     """The exactly evaluated nodes of a map, from which any window of it is interpolated.
@@ -219,6 +235,23 @@ class MapNodes:
     exact: np.ndarray | None = None
     error_px: float = 0.0
     first: MapNodes | None = None
+
+    def warped(self, warp: InputWarp) -> MapNodes:
+        """These nodes with every input position moved by ``warp`` (a smooth map of the
+        fisheye image onto itself, applied after the ISP's: the map then reads the image
+        where ``warp`` sends each position).  The interpolation between the moved nodes is
+        the map's own, so a window of it holds the warp to within the map's error plus the
+        warp's own curvature over a cell (a fraction of a pixel for the small turns and
+        shifts it is used for)."""
+        def moved(xy: np.ndarray | None) -> np.ndarray | None:
+            if xy is None:
+                return None
+            return np.ascontiguousarray(warp(xy).astype(np.float32))
+
+        return dataclasses.replace(self, grid=moved(self.grid), exact=moved(self.exact),
+                                   error_px=self.error_px + WARP_ERROR_PX,
+                                   first=None if self.first is None else
+                                   self.first.warped(warp))
 
     def window(self, win: tuple[int, int, int, int]) -> np.ndarray:
         """Map of the output window ``(x0, y0, x1, y1)`` (exclusive ends): (h, w, 2) float32.

@@ -9,7 +9,8 @@ from ..errors import CompensationError
 from ..isp import IspParams, OutputSpec
 from ..scene import Scene
 from .law import EcSolveLaw, PerCarLaw, ReferencePointsLaw
-from .picture import CarPicture
+from ..camera import FisheyeCamera
+from .picture import ImagePicture
 from .uncertainty import ec_uncertainty
 
 __all__ = ["LAWS", "make_law"]
@@ -20,7 +21,8 @@ LAWS: dict[str, type[PerCarLaw]] = {"ec-solve": EcSolveLaw,
 
 
 def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: CompensationModel,
-             criteria: Criteria, nominal: CarPicture | None = None) -> PerCarLaw:
+             criteria: Criteria, nominal: ImagePicture | None = None,
+             camera: FisheyeCamera | None = None) -> PerCarLaw:
     """The model's law for one platform setting.
 
     Parameters
@@ -34,9 +36,11 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
         held on).
     model : CompensationModel
     criteria : Criteria
-    nominal : CarPicture, optional
+    nominal : ImagePicture, optional
         The nominal car's picture: the station's uncertainty of each EC is read there
         (:func:`rvmsim.percar.ec_uncertainty`); without it no car is called marginal.
+    camera : FisheyeCamera, optional
+        ``nominal``'s camera (default: the scene's, at the picture's scale).
 
     Raises
     ------
@@ -48,8 +52,10 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
         raise CompensationError(model.source, "law", f"unknown law {model.law!r} (known: "
                                 f"{', '.join(LAWS)})")
     reference = CompensationLaw(scene, platform, output, model)
-    sigma = None
+    law = cls(reference, criteria, output)
     if nominal is not None:
-        cam = scene.camera.to_camera()
-        sigma = ec_uncertainty(nominal, platform, model, float(cam.fy), cam.width / 2.0)
-    return cls(reference, criteria, output, sigma)
+        cam = camera or scene.fisheye_camera()
+        if camera is None and nominal.input_scale != 1.0:
+            cam = cam.scaled(nominal.input_scale)
+        law.uncertainty = ec_uncertainty(nominal, platform, model, cam)
+    return law

@@ -47,7 +47,7 @@ from .margins import MarginScale
 from .picture import CarPicture
 
 __all__ = ["CarSolution", "EcSolveLaw", "ReferencePointsLaw", "PerCarLaw", "STATUSES",
-           "INITIAL_STEP"]
+           "INITIAL_STEP", "STOP_FLOOR"]
 
 #: What the station says of a car: every EC passes (``pass``), passes but one inside its
 #: uncertainty (``marginal``), fails (``fail``: a reference-point law's values), or no
@@ -56,6 +56,9 @@ STATUSES = ("pass", "marginal", "fail", "infeasible")
 #: The search's first step along each variable, in the variable's typical size
 #: (:attr:`rvmsim.compensation.CompensationLaw.scales`: 0.25° for the pans and tilt).
 INITIAL_STEP = 0.25
+#: The least normalised margin (:mod:`.margins`) every EC needs before the search may stop
+#: early (besides the model's ``stop_sigmas`` of the station's σ).
+STOP_FLOOR = 1.0
 
 
 @dataclass(frozen=True)
@@ -120,7 +123,7 @@ class CarSolution:
 
 
 class _Budget(Exception):
-    """The law's evaluations are spent (stops the search)."""
+    """The law's evaluations are spent, or the margin is enough (stops the search)."""
 
 
 class PerCarLaw:
@@ -150,6 +153,21 @@ class PerCarLaw:
         k = len(criteria.ids)
         self.uncertainty = (np.zeros(k) if uncertainty is None
                             else np.asarray(uncertainty, dtype=np.float64).reshape(k))
+
+    def settled(self, values: np.ndarray) -> bool:
+        """Whether ``values`` ((k,)) pass every EC by enough that the search may stop: by
+        ``stop_sigmas`` of the station's σ of each EC and by :data:`STOP_FLOOR`
+        normalised units (never, with ``stop_sigmas`` None)."""
+        k = self.model.stop_sigmas
+        if k is None:
+            return False
+        norm = self.scale.normalized(values)[0]
+        if not np.all(norm >= STOP_FLOOR):
+            return False
+        m = self.scale.margins(values)[0]
+        with np.errstate(invalid="ignore"):
+            short = self.scale.enabled & (m < k * self.uncertainty)
+        return not bool(short.any())
 
     def accepts(self, solution: CarSolution) -> bool:
         """Whether the station lets the car go (``marginal``: by the model's policy)."""
@@ -395,6 +413,8 @@ class _Run:
         least = float(law.scale.least(values)[0])
         self._seen[key] = least
         self.consider(x, values, least)
+        if law.settled(values):
+            raise _Budget
         return least
 
     def scaled(self, z: np.ndarray) -> float:

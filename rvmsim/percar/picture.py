@@ -2,47 +2,47 @@
 
 A :class:`CarPicture` gives the car's EC values for any per-car ISP setting.  Two kinds:
 
-- :class:`ImagePicture`: one fisheye label image (the station's: the test site's labels
-  rendered at the measured pose, the body's read on the capture; or a car's own, true one).
+- :class:`ImagePicture`: one fisheye label image (the station's own: the test site's labels
+  rendered at the measured pose, the body's read on the capture; or a car's true one).
 - :class:`StationView`: a car's true fisheye label image seen as the station sees it, for
   ``rvmsim robustness --compensation`` and ``tune --robust --compensation``, which hold each
   car's true picture and the station's errors, not a capture.  The station's picture of the
-  **site** is the site seen from the measured pose: the car's camera turned by the
-  station's error ``E`` (camera frame; ``R_measured = R_true · E``).  Through a view turned
-  by ``R_view`` that is the true picture through the view turned by ``E · R_view``
-  (:func:`turned`; exact where the ISP's lens model is the camera's, and otherwise off by
-  the lens models' difference over the small angle of ``E``: at 0.1° and vehicle A's
-  tuned setting, under 0.01° (docs/compensation.md)).  Its picture of the **body** comes
-  from the capture, whose error is the edge finder's: modelled the same way, as the body
-  region turned by a small ``B`` (a pitch that moves the edge by δ₀ px at the image centre
-  and a roll that tilts it by ±δ₁ px at the image's sides, δ drawn with the model's
-  ``edge_sigma_px``; :func:`edge_turn`).  So the site's ECs are read through ``E · R_view``
-  and the body's (:func:`body_ecs`) through ``B · R_view``, both on the true image.
+  **site** is the site seen from the measured pose, the car's camera turned by the station's
+  error ``E`` (camera frame; ``R_measured = R_true · E``): at fisheye pixel q it shows what
+  the true image shows at ``π(E · π⁻¹(q))`` (π the real lens; :class:`TurnWarp`), exactly
+  for a turn.  Its picture of the **body** comes from the capture, whose body edge the edge
+  finder places off by δ(u) = δ₀ + δ₁·(u − c_x)/(W/2) rows (:class:`EdgeWarp`, δ drawn with
+  the model's ``edge_sigma_px``).  So the site's ECs read the true image through the ISP's
+  map followed by the one warp, the body's (:func:`body_ecs`) followed by the other
+  (:meth:`rvmsim.isp.MapNodes.warped`): no image is made for either.  The station's
+  position error is not modelled in the picture (its parallax on the site: at 1 mm, a few
+  tenths of a pixel; docs/compensation.md).
 
 Convention
 ----------
 Parameters are for the full sensor; a picture rendered at a fraction of it scales them
 (RAD and shifts: :meth:`rvmsim.isp.IspParams.for_input_scale`).  Values are (n, k) in the
 criteria's :attr:`~rvmsim.criteria.Criteria.ids` order, NaN where not measured, at the RVM
-image of record.
+image of record.  Fisheye positions in px, pixel centres at integers.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
 from .. import labels as L
-from ..criteria import Criteria, ec_needs
-from ..isp import IspParams, OutputSpec, view_angles, view_rotation
-from ..pipeline import FisheyeLabels, ImageEvaluator, make_evaluator
+from ..camera import FisheyeCamera
+from ..criteria import CandidateEvaluator, Criteria, ec_needs
+from ..isp import InputWarp, IspParams, OutputSpec
+from ..pipeline import FisheyeLabels, make_evaluator
 
-__all__ = ["CarPicture", "ImagePicture", "StationView", "SplitEvaluator", "body_ecs", "turned",
-           "edge_turn", "criteria_subset"]
+__all__ = ["CarPicture", "ImagePicture", "StationView", "SplitEvaluator", "body_ecs",
+           "criteria_subset", "TurnWarp", "EdgeWarp"]
 
 
 class CarPicture(Protocol):
@@ -79,66 +79,6 @@ def body_ecs(criteria: Criteria) -> np.ndarray:
     return np.array(out, bool)
 
 
-def turned(params: IspParams, turn: np.ndarray | None) -> IspParams:
-    """``params`` with the view turned by ``turn`` ((3, 3), camera frame, applied after the
-    view's own rotation: ``turn · R_view``); ``params`` itself for None."""
-    if turn is None:
-        return params
-    h_pan, v_pan, tilt = view_angles(turn @ view_rotation(params.h_pan, params.v_pan,
-                                                         params.tilt), params.v_pan)
-    return params.replace(h_pan=h_pan, v_pan=v_pan, tilt=tilt)
-
-
-def edge_turn(offset_px: float, tilt_px: float, f_px: float, half_width_px: float
-              ) -> np.ndarray | None:
-    """The turn of the body region that models an edge found ``offset_px`` off at the image
-    centre and tilted by ``tilt_px`` at the image's sides: ``Rz(tilt_px / half_width_px) ·
-    Rx(offset_px / f_px)`` (radians; camera frame, x right, y down, z the optical axis), a
-    turn about x moving the image centre by ``f_px`` px per radian, a roll about z moving a
-    point ``half_width_px`` from the centre by that many px per radian.  None when both
-    are 0."""
-    if offset_px == 0.0 and tilt_px == 0.0:
-        return None
-    a, r = offset_px / f_px, tilt_px / half_width_px
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(a), -math.sin(a)],
-                   [0.0, math.sin(a), math.cos(a)]])
-    rz = np.array([[math.cos(r), -math.sin(r), 0.0], [math.sin(r), math.cos(r), 0.0],
-                   [0.0, 0.0, 1.0]])
-    return rz @ rx
-
-
-class ImagePicture:
-    """A car's picture as one fisheye label image, judged by ``evaluator``
-    (:func:`rvmsim.pipeline.make_evaluator` of the image at the RVM image of record).
-
-    Parameters
-    ----------
-    evaluator : ImageEvaluator
-    input_scale : float
-        The fraction of the sensor the image is at.
-    """
-
-    def __init__(self, evaluator: ImageEvaluator, input_scale: float = 1.0):
-        self.evaluator = evaluator
-        self.input_scale = input_scale
-
-    @property
-    def criteria(self) -> Criteria:
-        return self.evaluator.criteria
-
-    @property
-    def fisheye(self) -> np.ndarray:
-        return self.evaluator.fisheye
-
-    def _at(self, params: IspParams) -> IspParams:
-        return params if self.input_scale == 1.0 else params.for_input_scale(self.input_scale)
-
-    def values(self, params: Sequence[IspParams]) -> np.ndarray:
-        ev = self.evaluator
-        return np.array([ev.values(self._at(p)) for p in params]).reshape(
-            len(params), len(self.criteria.ids))
-
-
 def criteria_subset(criteria: Criteria, keep: np.ndarray) -> Criteria:
     """``criteria`` with only the ECs ``keep`` ((k,) bool) selected."""
     ecs = tuple(ec for ec, k in zip(criteria.ecs, keep) if k)
@@ -146,9 +86,43 @@ def criteria_subset(criteria: Criteria, keep: np.ndarray) -> Criteria:
                                                          for ec in ecs})
 
 
+@dataclass(frozen=True)
+class TurnWarp:
+    """The fisheye image of ``camera`` turned by ``turn`` ((3, 3), camera frame: the turned
+    camera's ray d is the camera's ``turn · d``), read from the unturned camera's image:
+    ``q → π(turn · π⁻¹(q))``.  Rays the lens does not see are left where they are."""
+
+    camera: FisheyeCamera
+    turn: np.ndarray
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray:
+        flat = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        rays, inside = self.camera.pixel_rays(flat)
+        moved, ok = self.camera.project_rays(rays @ self.turn.T)
+        keep = inside & ok & np.isfinite(moved).all(axis=1)
+        return np.where(keep[:, None], moved, flat).reshape(np.shape(xy))
+
+
+@dataclass(frozen=True)
+class EdgeWarp:
+    """An edge found ``offset_px`` rows low at the image's centre column ``cx`` and tilted
+    by ``tilt_px`` rows at ``half_width_px`` from it: ``(u, v) → (u, v − δ(u))``,
+    ``δ(u) = offset_px + tilt_px · (u − cx) / half_width_px`` (the region below the edge
+    then shows δ rows lower)."""
+
+    offset_px: float
+    tilt_px: float
+    cx: float
+    half_width_px: float
+
+    def __call__(self, xy: np.ndarray) -> np.ndarray:
+        delta = self.offset_px + self.tilt_px * (xy[..., 0] - self.cx) / self.half_width_px
+        return np.stack([xy[..., 0], xy[..., 1] - delta], axis=-1)
+
+
 class SplitEvaluator:
-    """One fisheye label image's ECs as two evaluators, the site's and the body's
-    (:func:`body_ecs`), so that each part can be read through its own view at the cost of
+    """One fisheye label image's ECs as two windowed evaluators, the site's and the body's
+    (:func:`body_ecs`), so that each part can be read through its own warp at the cost of
     one evaluation of all of them.
 
     Parameters
@@ -163,37 +137,42 @@ class SplitEvaluator:
         self.criteria = criteria
         self.body = body_ecs(criteria)
         self.fisheye = np.asarray(image.labels)
-        self._parts = [(mask, make_evaluator(image, record, criteria_subset(criteria, mask)))
-                       for mask in (~self.body, self.body) if mask.any()]
+        self._parts: list[tuple[np.ndarray, CandidateEvaluator]] = []
+        for mask in (~self.body, self.body):
+            if mask.any():
+                ev = make_evaluator(image, record, criteria_subset(criteria, mask))
+                assert isinstance(ev, CandidateEvaluator)  # one image at its size of record
+                self._parts.append((mask, ev))
 
-    def values(self, site: IspParams, body: IspParams | None = None) -> np.ndarray:
-        """The values, (k,): the site's ECs with ``site``, the body's with ``body``
-        (default ``site``)."""
+    def values(self, params: IspParams, site: InputWarp | None = None,
+               body: InputWarp | None = None) -> np.ndarray:
+        """The values of ``params``, (k,): the site's ECs read through ``site``, the body's
+        through ``body`` (None: the image as it is)."""
         out = np.full(len(self.criteria.ids), np.nan)
         for mask, ev in self._parts:
-            out[mask] = ev.values(body if mask is self.body and body is not None else site)
+            out[mask] = ev.values(params, body if mask is self.body else site)
         return out
 
 
-class StationView:
-    """A car's true picture seen as the station sees it (the module docstring): the site's
-    ECs through the view turned by ``site_turn``, the body's through ``body_turn``.
+class ImagePicture:
+    """A car's picture as one fisheye label image (the station's picture, or a car's true
+    one), read through optional warps (``site`` for the site's ECs, ``body`` for the
+    body's; :class:`SplitEvaluator`).
 
     Parameters
     ----------
     evaluator : SplitEvaluator
-        Of the car's true fisheye label image (at the station's load state).
-    site_turn, body_turn : (3, 3) float, optional
-        ``E`` and ``B`` of the module docstring (None: no error).
     input_scale : float
+        The fraction of the sensor the image is at.
+    site, body : InputWarp, optional
     """
 
-    def __init__(self, evaluator: SplitEvaluator, site_turn: np.ndarray | None,
-                 body_turn: np.ndarray | None, input_scale: float = 1.0):
+    def __init__(self, evaluator: SplitEvaluator, input_scale: float = 1.0,
+                 site: InputWarp | None = None, body: InputWarp | None = None):
         self.evaluator = evaluator
-        self.site_turn = site_turn
-        self.body_turn = body_turn
         self.input_scale = input_scale
+        self.site = site
+        self.body = body
 
     @property
     def criteria(self) -> Criteria:
@@ -208,6 +187,37 @@ class StationView:
 
     def values(self, params: Sequence[IspParams]) -> np.ndarray:
         ev = self.evaluator
-        return np.array([ev.values(self._at(turned(p, self.site_turn)),
-                                   self._at(turned(p, self.body_turn))) for p in params]
+        return np.array([ev.values(self._at(p), self.site, self.body) for p in params]
                         ).reshape(len(params), len(self.criteria.ids))
+
+    def warped(self, site: InputWarp | None, body: InputWarp | None) -> ImagePicture:
+        """The same image read through other warps."""
+        return ImagePicture(self.evaluator, self.input_scale, site, body)
+
+
+class StationView(ImagePicture):
+    """A car's true picture seen as the station sees it (the module docstring): built from
+    the station's errors.
+
+    Parameters
+    ----------
+    evaluator : SplitEvaluator
+        Of the car's true fisheye label image at the station's load state.
+    camera : FisheyeCamera
+        The image's camera (its lens at the image's size).
+    site_turn : (3, 3) float, optional
+        ``E``: the measured camera's rotation relative to the true one, camera frame (None:
+        none).
+    edge_px : (float, float)
+        The edge finder's offset and tilt, full-sensor px.
+    input_scale : float
+    """
+
+    def __init__(self, evaluator: SplitEvaluator, camera: FisheyeCamera,
+                 site_turn: np.ndarray | None, edge_px: tuple[float, float] = (0.0, 0.0),
+                 input_scale: float = 1.0):
+        site = None if site_turn is None else TurnWarp(camera, np.asarray(site_turn))
+        s = input_scale
+        body = None if edge_px == (0.0, 0.0) else EdgeWarp(
+            edge_px[0] * s, edge_px[1] * s, camera.cx, camera.width / 2.0)
+        super().__init__(evaluator, input_scale, site, body)

@@ -2,14 +2,14 @@
 the station judged.
 
 - An EC that reads the **test site** inherits the pose error: the station renders the site
-  at the pose it measured, off by σ per angle (the model's ``angle_sigma_deg``).  A turn of
-  the camera by δ shows the site as the view turned by δ does (:func:`rvmsim.percar.turned`),
-  so the EC's sensitivity to each of the camera's three angles is read by turning the view
-  by :data:`PROBE_DEG` about its x, y and z axes; ``σ_EC = sqrt(Σ (ΔEC/δ · σ)²)``.
+  at the pose it measured, off by σ per angle (the model's ``angle_sigma_deg``).  The EC's
+  sensitivity to each of the camera's three angles is read on the image of the camera
+  turned by :data:`PROBE_DEG` about its x, y and z axes (:class:`rvmsim.percar.TurnWarp`);
+  ``σ_EC = sqrt(Σ (ΔEC/δ · σ)²)``.
 - An EC that reads only the **body** (:func:`rvmsim.percar.body_ecs`) is measured on the
-  capture and inherits the edge finder's error instead (``edge_sigma_px``): the body
-  region moved by :data:`PROBE_PX` px at the image centre and tilted by as much at its
-  sides (:func:`rvmsim.percar.edge_turn`).
+  capture and inherits the edge finder's error instead (``edge_sigma_px``): read with the
+  body's edge moved by :data:`PROBE_PX` px, and tilted by as much at the image's sides
+  (:class:`rvmsim.percar.EdgeWarp`).
 
 Each sensitivity is one-sided (the change from the platform setting to the probe: a value
 such as |t_l − t_r| that sits at its kink then still shows its slope), read once per
@@ -26,7 +26,8 @@ import numpy as np
 
 from ..compensation import CompensationModel
 from ..isp import IspParams
-from .picture import CarPicture, body_ecs, edge_turn, turned
+from ..camera import FisheyeCamera
+from .picture import EdgeWarp, ImagePicture, TurnWarp, body_ecs
 
 __all__ = ["ec_uncertainty", "PROBE_DEG", "PROBE_PX", "axis_turn"]
 
@@ -46,32 +47,33 @@ def axis_turn(axis: int, degrees: float) -> np.ndarray:
     return r
 
 
-def ec_uncertainty(picture: CarPicture, platform: IspParams, model: CompensationModel,
-                   f_px: float, half_width_px: float) -> np.ndarray:
+def ec_uncertainty(picture: ImagePicture, platform: IspParams, model: CompensationModel,
+                   camera: FisheyeCamera) -> np.ndarray:
     """Each EC's 1 σ (its own unit) at the station, read on the nominal car's ``picture``
     at the ``platform`` setting (the module docstring; 6 EC evaluations).
 
     Parameters
     ----------
-    picture : CarPicture
+    picture : ImagePicture
         The nominal car (its true picture).
     platform : IspParams
         Full sensor.
     model : CompensationModel
         Its station's σ.
-    f_px, half_width_px : float
-        The camera's focal length (px/rad) and half its image width (px), full sensor:
-        the edge's px to a turn (:func:`rvmsim.percar.edge_turn`).
+    camera : FisheyeCamera
+        The picture's camera (its lens at the picture's size).
 
     Returns
     -------
     (k,) float64
         0 where the EC is not measured at the platform setting or the station's σ is 0.
     """
-    probes = [platform] + [turned(platform, axis_turn(a, PROBE_DEG)) for a in range(3)]
-    probes += [turned(platform, edge_turn(PROBE_PX, 0.0, f_px, half_width_px)),
-               turned(platform, edge_turn(0.0, PROBE_PX, f_px, half_width_px))]
-    v = picture.values(probes)
+    s = picture.input_scale
+    probes = [picture] + [picture.warped(TurnWarp(camera, axis_turn(a, PROBE_DEG)), None)
+                          for a in range(3)]
+    probes += [picture.warped(None, EdgeWarp(d0 * s, d1 * s, camera.cx, camera.width / 2.0))
+               for d0, d1 in ((PROBE_PX, 0.0), (0.0, PROBE_PX))]
+    v = np.array([pic.values([platform])[0] for pic in probes])
     with np.errstate(invalid="ignore"):
         slopes = np.nan_to_num(np.abs(v[1:] - v[0]), nan=0.0)
     site = np.sqrt(np.sum((slopes[:3] / PROBE_DEG * model.angle_sigma_deg) ** 2, axis=0))

@@ -30,7 +30,7 @@ from ..compensation import (CompensationModel, Correction, Deviation, deviated_p
                             edge_error, loaded_deviation, measured_deviation)
 from ..criteria import Criteria, EcBatch, score_batch
 from ..isp import IspParams, OutputSpec
-from ..percar import CarSolution, PerCarLaw, SplitEvaluator, StationView, edge_turn
+from ..percar import CarSolution, PerCarLaw, SplitEvaluator, StationView
 from ..render import FisheyeImages
 from ..scene import Scene
 from .images import Refolder, sample_camera, sample_images
@@ -174,8 +174,6 @@ class CarJudge:
         self.criteria = criteria
         self.record = record
         self.scale = scale
-        cam = scene.camera.to_camera()
-        self._f_px, self._half_width = float(cam.fy), cam.width / 2.0
 
     def _at(self, params: IspParams) -> IspParams:
         return params if self.scale == 1.0 else params.for_input_scale(self.scale)
@@ -224,12 +222,11 @@ class CarJudge:
         """One car: the law on its station picture, then its ECs in the field."""
         station_ev = SplitEvaluator(twin_img, self.record, self.criteria)
         cam = sample_camera(self.scene, twin, scale=self.scale)
-        site = cam.rotation.T @ deviated_pose(self.scene, measured)[0]
-        if np.abs(site - np.eye(3)).max() < 1e-12:
-            site = None
-        body = edge_turn(*edge_error(self.model, self.seed, sample.index, sample.scale),
-                         self._f_px, self._half_width)
-        sol = self.law.solve(measured, StationView(station_ev, site, body, self.scale))
+        error = cam.rotation.T @ deviated_pose(self.scene, measured)[0]
+        site = None if np.abs(error - np.eye(3)).max() < 1e-12 else error
+        edge = edge_error(self.model, self.seed, sample.index, sample.scale)
+        view = StationView(station_ev, cam, site, edge, self.scale)
+        sol = self.law.solve(measured, view)
         field_ev = station_ev if field_img is None else SplitEvaluator(
             field_img, self.record, self.criteria)
         return (sol, field_ev.values(self._at(platform)),

@@ -28,7 +28,7 @@ from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params, make_evaluator, record_output
 from ..scene import Scene
 from ..render import TaskRunner
-from ..percar import ImagePicture, PerCarLaw, make_law
+from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, make_law
 from .compensated import CarJudge, CompensatedSamples, station_twin
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
@@ -484,7 +484,7 @@ def _judge(scene: Scene, params: IspParams, settings: RobustnessSettings, crit: 
                         station_load)
     nominal = sample_images(scene, [twin], scale=settings.render_scale, color=False,
                             shared=shared)[0]
-    picture = ImagePicture(make_evaluator(nominal, record, crit), settings.render_scale)
-    law: PerCarLaw = make_law(scene, params, record, model, crit, picture)
+    picture = ImagePicture(SplitEvaluator(nominal, record, crit), settings.render_scale)
+    law: PerCarLaw = make_law(scene, params, record, model, crit, picture, nominal.camera)
     return CarJudge(scene, law, settings.seed, station_load, crit, record,
                     settings.render_scale)
