@@ -33,8 +33,8 @@ from .stats import (
     failure_drivers,
     ec_margins,
 )
-from .compensated import (COMPENSATION_CHUNK, CarJudge, CompensatedSamples, station_readings,
-                          station_twin, true_deviation)
+from .compensated import (COMPENSATION_CHUNK, CarJudge, CompensatedSamples, StationReading,
+                          read_at_station, station_readings, station_twin, true_deviation)
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes, GOOD_R2
 from .export import SampleExport, sample_scene_document, write_sample_scenes
 from .robustness import (
@@ -80,6 +80,8 @@ __all__ = [
     "ec_margins",
     "CompensatedSamples",
     "CarJudge",
+    "StationReading",
+    "read_at_station",
     "station_twin",
     "COMPENSATION_CHUNK",
     "station_readings",

@@ -33,12 +33,12 @@ from ..isp import IspParams, OutputSpec
 from ..percar import CarSolution, PerCarLaw, SplitEvaluator, StationView
 from ..render import FisheyeImages
 from ..scene import Scene
-from .images import Refolder, sample_camera, sample_images
+from .images import Refolder, sample_images
 from .samples import MountSample
 from .variation import LoadState
 
 __all__ = ["CompensatedSamples", "station_readings", "true_deviation", "station_twin",
-           "CarJudge", "COMPENSATION_CHUNK"]
+           "CarJudge", "COMPENSATION_CHUNK", "StationReading", "read_at_station"]
 
 #: Cars whose images are held at once (each a few MB of fisheye labels).
 COMPENSATION_CHUNK = 24
@@ -144,6 +144,41 @@ def station_readings(scene: Scene, samples: Sequence[MountSample], model: Compen
         model, seed, s.index, s.scale) for s in samples)
 
 
+@dataclass(frozen=True)
+class StationReading:
+    """What the station has of one car: its measured deviation, its true fisheye labels at
+    the station's load state (``image``), the station's pose error as a turn of the camera
+    (``site_turn``, camera frame; None: none) and the edge finder's error (``edge_px``:
+    offset and tilt, full-sensor px).  Picklable (tuning's workers judge with it)."""
+
+    measured: Deviation
+    image: FisheyeImages
+    site_turn: np.ndarray | None
+    edge_px: tuple[float, float]
+    scale: float = 1.0
+
+    def picture(self, record: OutputSpec, criteria: Criteria) -> StationView:
+        """The car's picture as the station has it (:class:`rvmsim.percar.StationView`)."""
+        return StationView(SplitEvaluator(self.image, record, criteria), self.image.camera,
+                           self.site_turn, self.edge_px, self.scale)
+
+
+def read_at_station(scene: Scene, samples: Sequence[MountSample],
+                    measured: Sequence[Deviation], twin_images: Sequence[FisheyeImages],
+                    model: CompensationModel, seed: int, scale: float = 1.0
+                    ) -> list[StationReading]:
+    """The :class:`StationReading` of each car from its station reading ``measured`` and
+    its true fisheye labels at the station's load state ``twin_images`` (as
+    :func:`sample_images` makes them of :func:`station_twin`)."""
+    out = []
+    for s, m, img in zip(samples, measured, twin_images):
+        error = img.camera.rotation.T @ deviated_pose(scene, m)[0]
+        site = None if np.abs(error - np.eye(3)).max() < 1e-12 else error
+        out.append(StationReading(m, img, site, edge_error(model, seed, s.index, s.scale),
+                                  scale))
+    return out
+
+
 class CarJudge:
     """Every car of a sample set through the station and into the field (the module
     docstring).
@@ -202,10 +237,11 @@ class CarJudge:
             images = sample_images(self.scene, twins + fields, scale=self.scale,
                                    color=False, shared=shared)
             in_field = dict(zip((s.index for s in fields), images[len(twins):]))
-            for j, (s, twin, twin_img) in enumerate(zip(part, twins, images)):
+            readings = read_at_station(self.scene, part, measured[a:a + len(part)],
+                                       images[:len(twins)], self.model, self.seed, self.scale)
+            for j, (s, reading) in enumerate(zip(part, readings)):
                 i = a + j
-                sol, b, v = self._car(s, twin, twin_img, in_field.get(s.index), measured[i],
-                                      platform)
+                sol, b, v = self._car(reading, in_field.get(s.index), platform)
                 solutions.append(sol)
                 before[i], after[i] = b, v
                 if bar is not None:
@@ -216,18 +252,13 @@ class CarJudge:
         return (score_batch(before, self.criteria), score_batch(after, self.criteria),
                 CompensatedSamples(self.model, measured, tuple(solutions), accepted))
 
-    def _car(self, sample: MountSample, twin: MountSample, twin_img: FisheyeImages,
-             field_img: FisheyeImages | None, measured: Deviation, platform: IspParams
-             ) -> tuple[CarSolution, np.ndarray, np.ndarray]:
-        """One car: the law on its station picture, then its ECs in the field."""
-        station_ev = SplitEvaluator(twin_img, self.record, self.criteria)
-        cam = sample_camera(self.scene, twin, scale=self.scale)
-        error = cam.rotation.T @ deviated_pose(self.scene, measured)[0]
-        site = None if np.abs(error - np.eye(3)).max() < 1e-12 else error
-        edge = edge_error(self.model, self.seed, sample.index, sample.scale)
-        view = StationView(station_ev, cam, site, edge, self.scale)
-        sol = self.law.solve(measured, view)
-        field_ev = station_ev if field_img is None else SplitEvaluator(
+    def _car(self, reading: StationReading, field_img: FisheyeImages | None,
+             platform: IspParams) -> tuple[CarSolution, np.ndarray, np.ndarray]:
+        """One car: the law on its station picture, then its ECs in the field (its own
+        image, or the station's when it stands in the station's load state)."""
+        view = reading.picture(self.record, self.criteria)
+        sol = self.law.solve(reading.measured, view)
+        field_ev = view.evaluator if field_img is None else SplitEvaluator(
             field_img, self.record, self.criteria)
         return (sol, field_ev.values(self._at(platform)),
                 field_ev.values(self._at(sol.params)))

@@ -320,11 +320,14 @@ def _members_compensation(members: Sequence[Member], settings: SearchSettings,
     """The per-car values of ``members`` under ``settings.compensation`` (None without)."""
     if settings.compensation is None:
         return None
+    from ..pipeline import record_output
     from .compensated import MembersCompensation as Compensation
 
-    return Compensation(settings.compensation, output,
-                               tuple(m.scene for m in members),
-                               tuple(m.measured for m in members))
+    nominal = [i for i, m in enumerate(members) if m.station is None]
+    return Compensation(settings.compensation,
+                        record_output(settings.criteria, members[0].scene, output.mirror),
+                        settings.criteria, [m.scene for m in members],
+                        [m.station for m in members], nominal, [members[i] for i in nominal])
 
 
 def search_members(members: Sequence[Member], settings: SearchSettings, store: RunStore, *,

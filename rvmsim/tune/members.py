@@ -50,7 +50,7 @@ from ..search.space import SearchSpace
 
 if TYPE_CHECKING:
     from ..camera import FisheyeCamera
-    from ..compensation import Deviation
+    from ..robust import StationReading
     from ..scene import Scene
     from ..runs.store import RunStore
     from .compensated import MembersCompensation
@@ -73,14 +73,14 @@ class Member:
     """One label image a candidate is judged on: its name (the vehicle, a market, or a
     sample's label), the fisheye label image (H_i, W_i) uint8, the camera that saw it, the
     scene (for ECs that read its geometry; None when unknown), for a sample of a robust run
-    with compensation the deviation the end-of-line station reads for it, and the criteria
-    it is judged with when they are its own (a market's)."""
+    with compensation what the end-of-line station has of its car, and the criteria it is
+    judged with when they are its own (a market's)."""
 
     name: str
     labels: np.ndarray
     camera: FisheyeCamera
     scene: Scene | None = None
-    measured: Deviation | None = None
+    station: StationReading | None = None
     #: The member's own criteria (a market's, :mod:`rvmsim.markets`); None: the run's.
     criteria: Criteria | None = None
 
@@ -275,7 +275,7 @@ class MembersScorer:
 
     def _per_member(self, params: list[IspParams]) -> list[ParamsScores]:
         """Each member's scores of the candidates: with compensation, each sample member
-        judged with its per-car values, failing where they leave the allowed range."""
+        judged with its per-car values, failing where the station rejects the car."""
         if self.compensation is None:  # one map per candidate for every member
             images = ImagesEvaluator(self.evaluators) if self.images is None else self.images
             self.images = images
@@ -283,14 +283,20 @@ class MembersScorer:
             return [score_values(np.array([row[m] for row in found]).reshape(
                 len(params), len(ev.criteria.ids)), ev.criteria)
                 for m, ev in enumerate(self.evaluators)]
+        comp = self.compensation
+        nominal = {n: score_params(self.evaluators[n], params) for n in comp.nominal}
+        cars = comp.cars(params, np.array([nominal[n].passed for n in comp.nominal]))
         per = []
-        for ev, row in zip(self.evaluators, self.compensation.corrections(params)):
-            m = score_params(ev, [p if c is None else c.params for p, c in zip(params, row)])
-            out_of_range = np.array([c is not None and not c.within_range for c in row])
-            if out_of_range.any():
-                m = ParamsScores(m.score, m.log_score, m.violation + out_of_range,
-                                 m.passed & ~out_of_range, m.ec_json)
-            per.append(m)
+        for m, (ev, row) in enumerate(zip(self.evaluators, cars)):
+            if m in nominal:
+                per.append(nominal[m])
+                continue
+            s = score_params(ev, [p if c is None else c.params for p, c in zip(params, row)])
+            rejected = np.array([c is not None and not c.accepted for c in row])
+            if rejected.any():
+                s = ParamsScores(s.score, s.log_score, s.violation + rejected,
+                                 s.passed & ~rejected, s.ec_json)
+            per.append(s)
         return per
 
 

@@ -30,7 +30,8 @@ from ..errors import RvmsimError
 from .members import Member
 
 if TYPE_CHECKING:
-    from ..compensation import CompensationModel, Deviation
+    from ..compensation import CompensationModel
+    from ..robust import StationReading
     from ..render import FisheyeImages
     from ..robust import Variation
     from ..scene import Scene
@@ -82,7 +83,8 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
     """The members of a robust run: per scene its nominal image, then its samples' (with
     the station's reading of each when the run tunes for the yield after compensation)."""
     from ..compensation import measured_load_index
-    from ..robust import draw_samples, sample_images, station_readings
+    from ..robust import (draw_samples, read_at_station, refolder, sample_images,
+                          station_readings, station_twin)
 
     k = settings.robust_samples
     if k is None:
@@ -92,13 +94,22 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
     for sc, im, var in zip(scenes, renders, run_variations(scenes, settings.variation_file)):
         out.append(Member(f"{sc.name} nominal", im.labels, im.camera, sc))
         samples = draw_samples(var, k, settings.seed)
-        readings: Sequence[Deviation | None] = [None] * len(samples)
+        shared = refolder(sc, samples)
+        images = sample_images(sc, samples, progress=progress, color=False, shared=shared)
+        stations: Sequence[StationReading | None] = [None] * len(samples)
         if comp is not None:
             load = var.load_states[measured_load_index(comp, [s.name for s in var.load_states])]
-            readings = station_readings(sc, samples, comp, settings.seed, load)
-        for i, s_im in enumerate(sample_images(sc, samples, progress=progress, color=False)):
+            twins = [station_twin(s, load) for s in samples]
+            at_station = [img if t == s else None for s, t, img in zip(samples, twins, images)]
+            others = [t for t, img in zip(twins, at_station) if img is None]
+            made = iter(sample_images(sc, others, color=False, shared=shared))
+            stations = read_at_station(
+                sc, samples, station_readings(sc, samples, comp, settings.seed, load),
+                [img if img is not None else next(made) for img in at_station], comp,
+                settings.seed)
+        for i, s_im in enumerate(images):
             out.append(Member(f"{sc.name} sample {i + 1}", s_im.labels, s_im.camera, sc,
-                              readings[i]))
+                              stations[i]))
     return out
 
 
