@@ -58,10 +58,11 @@ class CompensationModel:
     marginal : str
         ``fail`` (default) or ``accept``: what the station does with a car whose least EC
         margin is inside the station's uncertainty of that EC.
-    stop_sigmas : float or None
-        ``ec-solve``: the search stops once every EC passes by this many of the station's
-        σ of it (and by :data:`rvmsim.percar.STOP_FLOOR` normalised units); None: it
-        maximises the least margin until its budget is spent.
+    stop : str
+        ``ec-solve``: ``nominal`` (default), the search stops once the car's least EC margin
+        is the nominal car's with the platform setting (and no EC is inside the station's
+        uncertainty): the car is as good as the design; ``never``: it maximises the least
+        margin until its budget is spent.
     """
 
     params: tuple[str, ...] = ("h_pan", "v_pan", "tilt")
@@ -75,7 +76,7 @@ class CompensationModel:
     budget: int = 24
     edge_sigma_px: float = 0.3
     marginal: str = "fail"
-    stop_sigmas: float | None = None
+    stop: str = "nominal"
 
     def range_of(self, name: str) -> tuple[float, float]:
         """The allowed offset of parameter ``name`` (±inf for ``v_pan``)."""
@@ -106,7 +107,7 @@ class CompensationModel:
                             "edge_sigma_px": self.edge_sigma_px,
                             "measured_at": self.measured_at, "marginal": self.marginal},
                 "reference": self.reference, "law": self.law, "budget": self.budget,
-                "stop_sigmas": self.stop_sigmas}
+                "stop": self.stop}
 
 
 #: The documented defaults (docs/compensation.md): the view's rotation, ±3°, a station of
@@ -121,7 +122,7 @@ def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>") -> Co
     st = spec.station
     return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,
                              st.measured_at, spec.reference, source, spec.law, spec.budget,
-                             st.edge_sigma_px, st.marginal, spec.stop_sigmas)
+                             st.edge_sigma_px, st.marginal, spec.stop)
 
 
 def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
@@ -135,7 +136,7 @@ def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
         ``doc`` is not such a description (pydantic's ValidationError names the key).
     """
     data = {k: doc[k] for k in ("params", "ranges", "station", "reference", "law", "budget",
-                                "stop_sigmas") if k in doc}
+                                "stop") if k in doc}
     data.setdefault("law", "reference-points")
     spec = CompensationSpec.model_validate(data)
     return compensation_from_spec(spec, str(doc.get("source", "<run>")))

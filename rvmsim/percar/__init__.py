@@ -12,19 +12,19 @@ from __future__ import annotations
 
 from .conflicts import GRID_LEVELS, conflicts_on_grid, grid_of
 from .factory import LAWS, make_law
-from .law import (STATUSES, STOP_FLOOR, CarSolution, EcSolveLaw, PerCarLaw,
+from .law import (STATUSES, STOP_SIGMAS, STOP_TOLERANCE, CarSolution, EcSolveLaw, PerCarLaw,
                   ReferencePointsLaw)
 from .margins import FAIL_MARGIN, MarginScale
 from .picture import (CarPicture, EdgeWarp, ImagePicture, SplitEvaluator, StationView,
                       TurnWarp, body_ecs, criteria_subset)
-from .uncertainty import PROBE_DEG, PROBE_PX, axis_turn, ec_uncertainty
+from .uncertainty import DRAWS, axis_turn, ec_uncertainty
 
 __all__ = [
     "GRID_LEVELS", "conflicts_on_grid", "grid_of",
     "LAWS", "make_law",
-    "CarSolution", "EcSolveLaw", "PerCarLaw", "ReferencePointsLaw", "STATUSES", "STOP_FLOOR",
+    "CarSolution", "EcSolveLaw", "PerCarLaw", "ReferencePointsLaw", "STATUSES", "STOP_SIGMAS", "STOP_TOLERANCE",
     "FAIL_MARGIN", "MarginScale",
     "CarPicture", "EdgeWarp", "ImagePicture", "SplitEvaluator", "StationView", "TurnWarp",
     "body_ecs", "criteria_subset",
-    "PROBE_DEG", "PROBE_PX", "axis_turn", "ec_uncertainty",
+    "DRAWS", "axis_turn", "ec_uncertainty",
 ]

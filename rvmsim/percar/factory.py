@@ -38,7 +38,9 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
     criteria : Criteria
     nominal : ImagePicture, optional
         The nominal car's picture: the station's uncertainty of each EC is read there
-        (:func:`rvmsim.percar.ec_uncertainty`); without it no car is called marginal.
+        (:func:`rvmsim.percar.ec_uncertainty`), and the least margin a car is restored to
+        (``stop: nominal``); without it no car is called marginal and the search always
+        spends its budget.
     camera : FisheyeCamera, optional
         ``nominal``'s camera (default: the scene's, at the picture's scale).
 
@@ -57,5 +59,6 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
         cam = camera or scene.fisheye_camera()
         if camera is None and nominal.input_scale != 1.0:
             cam = cam.scaled(nominal.input_scale)
-        law.uncertainty = ec_uncertainty(nominal, platform, model, cam)
+        law.uncertainty, values = ec_uncertainty(nominal, platform, model, cam)
+        law.target = float(law.scale.least(values, law.uncertainty)[0])
     return law

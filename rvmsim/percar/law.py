@@ -47,18 +47,20 @@ from .margins import MarginScale
 from .picture import CarPicture
 
 __all__ = ["CarSolution", "EcSolveLaw", "ReferencePointsLaw", "PerCarLaw", "STATUSES",
-           "INITIAL_STEP", "STOP_FLOOR"]
+           "INITIAL_STEP", "STOP_TOLERANCE", "STOP_SIGMAS"]
 
 #: What the station says of a car: every EC passes (``pass``), passes but one inside its
 #: uncertainty (``marginal``), fails (``fail``: a reference-point law's values), or no
 #: setting within the allowed ranges passes (``infeasible``).
 STATUSES = ("pass", "marginal", "fail", "infeasible")
+#: How far below the nominal car's least normalised margin a car may stay and the search
+#: stop (``stop: nominal``): half the unit of :mod:`.margins` (for EC 2-3, 0.43 px).
+STOP_TOLERANCE = 0.5
+#: The margin, in the station's σ of each EC, every EC needs before the search stops early.
+STOP_SIGMAS = 3.0
 #: The search's first step along each variable, in the variable's typical size
 #: (:attr:`rvmsim.compensation.CompensationLaw.scales`: 0.25° for the pans and tilt).
 INITIAL_STEP = 0.25
-#: The least normalised margin (:mod:`.margins`) every EC needs before the search may stop
-#: early (besides the model's ``stop_sigmas`` of the station's σ).
-STOP_FLOOR = 1.0
 
 
 @dataclass(frozen=True)
@@ -153,21 +155,24 @@ class PerCarLaw:
         k = len(criteria.ids)
         self.uncertainty = (np.zeros(k) if uncertainty is None
                             else np.asarray(uncertainty, dtype=np.float64).reshape(k))
+        #: The nominal car's least normalised margin with the platform setting (None:
+        #: unknown; :func:`rvmsim.percar.make_law` reads it on the nominal picture).
+        self.target: float | None = None
 
     def settled(self, values: np.ndarray) -> bool:
-        """Whether ``values`` ((k,)) pass every EC by enough that the search may stop: by
-        ``stop_sigmas`` of the station's σ of each EC and by :data:`STOP_FLOOR`
-        normalised units (never, with ``stop_sigmas`` None)."""
-        k = self.model.stop_sigmas
-        if k is None:
+        """Whether ``values`` ((k,)) are good enough for the search to stop (model
+        ``stop: nominal``): every EC passes by :data:`STOP_SIGMAS` of the station's
+        uncertainty of it, and the least normalised margin is at least :attr:`target` (the
+        nominal car's) less :data:`STOP_TOLERANCE`."""
+        if self.model.stop != "nominal" or self.target is None:
             return False
-        norm = self.scale.normalized(values)[0]
-        if not np.all(norm >= STOP_FLOOR):
+        if not self.scale.passed(values)[0] or float(
+                self.scale.least(values, self.uncertainty)[0]) < self.target - STOP_TOLERANCE:
             return False
         m = self.scale.margins(values)[0]
         with np.errstate(invalid="ignore"):
-            short = self.scale.enabled & (m < k * self.uncertainty)
-        return not bool(short.any())
+            close = self.scale.enabled & (m < STOP_SIGMAS * self.uncertainty)
+        return not bool(close.any())
 
     def accepts(self, solution: CarSolution) -> bool:
         """Whether the station lets the car go (``marginal``: by the model's policy)."""
@@ -282,7 +287,7 @@ class EcSolveLaw(PerCarLaw):
         pts = grid_of(self.reference, self._free, GRID_LEVELS)
         values = picture.values([self.params_at(x, picture) for x in pts])
         run.count += len(pts)
-        least = self.scale.least(values)
+        least = self.scale.least(values, self.uncertainty)
         passed = self.scale.passed(values)
         for x, v, m in zip(pts, values, least):
             run.consider(x, v, float(m))
@@ -410,7 +415,7 @@ class _Run:
             raise _Budget
         values = self.picture.values([law.params_at(x, self.picture)])[0]
         self.count += 1
-        least = float(law.scale.least(values)[0])
+        least = float(law.scale.least(values, law.uncertainty)[0])
         self._seen[key] = least
         self.consider(x, values, least)
         if law.settled(values):

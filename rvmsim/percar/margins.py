@@ -93,21 +93,25 @@ class MarginScale:
             m = np.minimum(v - self.low, self.high - v)
         return np.where(self.binary, np.nan, m)
 
-    def normalized(self, values: np.ndarray) -> np.ndarray:
+    def normalized(self, values: np.ndarray, sigma: np.ndarray | None = None) -> np.ndarray:
         """Normalised margins, (n, k): +inf for disabled ECs and passing binary ones,
-        :data:`FAIL_MARGIN` for failing binary ones and values not measured."""
+        :data:`FAIL_MARGIN` for failing binary ones and values not measured.  With
+        ``sigma`` ((k,), the ECs' units), the margin left beyond one σ of each."""
         v = np.atleast_2d(np.asarray(values, dtype=np.float64))
+        sig = np.zeros(v.shape[1]) if sigma is None else np.asarray(sigma, np.float64)
         with np.errstate(invalid="ignore"):
-            m = np.minimum((v - self.low) * self.scale_low, (self.high - v) * self.scale_high)
+            m = np.minimum((v - self.low - sig) * self.scale_low,
+                           (self.high - sig - v) * self.scale_high)
         passed = score_batch(v, self.criteria).passed
         m = np.where(self.binary, np.where(passed, np.inf, FAIL_MARGIN), m)
         m = np.where(np.isnan(v), FAIL_MARGIN, m)
         return np.where(self.enabled, m, np.inf)
 
-    def least(self, values: np.ndarray) -> np.ndarray:
+    def least(self, values: np.ndarray, sigma: np.ndarray | None = None) -> np.ndarray:
         """The least normalised margin of each row, (n,): the law's objective (> 0: every
-        enabled EC passes; +inf when no EC bounds it)."""
-        return self.normalized(values).min(axis=1)
+        enabled EC passes, by more than ``sigma`` of it when given; +inf when no EC bounds
+        it)."""
+        return self.normalized(values, sigma).min(axis=1)
 
     def passed(self, values: np.ndarray) -> np.ndarray:
         """(n,) bool: every enabled EC passes (:func:`rvmsim.criteria.score_batch`)."""

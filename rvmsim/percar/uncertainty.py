@@ -2,20 +2,20 @@
 the station judged.
 
 - An EC that reads the **test site** inherits the pose error: the station renders the site
-  at the pose it measured, off by σ per angle (the model's ``angle_sigma_deg``).  The EC's
-  sensitivity to each of the camera's three angles is read on the image of the camera
-  turned by :data:`PROBE_DEG` about its x, y and z axes (:class:`rvmsim.percar.TurnWarp`);
-  ``σ_EC = sqrt(Σ (ΔEC/δ · σ)²)``.
+  at the pose it measured, off by σ per angle (the model's ``angle_sigma_deg``).
 - An EC that reads only the **body** (:func:`rvmsim.percar.body_ecs`) is measured on the
-  capture and inherits the edge finder's error instead (``edge_sigma_px``): read with the
-  body's edge moved by :data:`PROBE_PX` px, and tilted by as much at the image's sides
-  (:class:`rvmsim.percar.EdgeWarp`).
+  capture and inherits the edge finder's error instead (``edge_sigma_px``: the found edge's
+  offset and tilt, :class:`rvmsim.percar.EdgeWarp`).
 
-Each sensitivity is one-sided (the change from the platform setting to the probe: a value
-such as |t_l − t_r| that sits at its kink then still shows its slope), read once per
-platform setting on the nominal car.  The position error's parallax is not included: at
-1 mm it moves the test site by under half the angle error's shift on the bundled vehicles
-(docs/compensation.md).
+Each σ is read on the nominal car at the platform setting by drawing the station's errors
+:data:`DRAWS` times (a fixed seed: the same setting, the same σ): the site's ECs on the
+image of the camera turned by the drawn pose error (:class:`rvmsim.percar.TurnWarp`), the
+body's with the drawn edge error, and σ is the root mean square of the change.  Drawing
+rather than differentiating keeps what the label images' pixels do to a value: a bumper
+height averaged over a few columns moves in quarter pixels, and a small move of the edge
+changes EC 2-3 by up to 2 px at the image's sides where a slope read from one probe says
+0.3 px.  The position error's parallax is not included (its move of the test site at 1 mm:
+docs/compensation.md).
 """
 
 from __future__ import annotations
@@ -27,14 +27,13 @@ import numpy as np
 from ..compensation import CompensationModel
 from ..isp import IspParams
 from ..camera import FisheyeCamera
-from .picture import EdgeWarp, ImagePicture, TurnWarp, body_ecs
+from .picture import EdgeWarp, ImagePicture, TurnWarp
 
-__all__ = ["ec_uncertainty", "PROBE_DEG", "PROBE_PX", "axis_turn"]
+__all__ = ["ec_uncertainty", "DRAWS", "axis_turn"]
 
-#: The camera turn the site ECs' sensitivity is read with, degrees.
-PROBE_DEG = 0.25
-#: The edge move the body ECs' sensitivity is read with, fisheye px.
-PROBE_PX = 2.0
+#: The station's errors drawn per EC uncertainty (each draw one EC evaluation).
+DRAWS = 12
+_SEED = 0x51D
 
 
 def axis_turn(axis: int, degrees: float) -> np.ndarray:
@@ -48,9 +47,10 @@ def axis_turn(axis: int, degrees: float) -> np.ndarray:
 
 
 def ec_uncertainty(picture: ImagePicture, platform: IspParams, model: CompensationModel,
-                   camera: FisheyeCamera) -> np.ndarray:
+                   camera: FisheyeCamera, draws: int = DRAWS) -> tuple[np.ndarray, np.ndarray]:
     """Each EC's 1 σ (its own unit) at the station, read on the nominal car's ``picture``
-    at the ``platform`` setting (the module docstring; 6 EC evaluations).
+    at the ``platform`` setting (the module docstring; ``draws`` + 1 EC evaluations), and
+    its values there.
 
     Parameters
     ----------
@@ -62,20 +62,29 @@ def ec_uncertainty(picture: ImagePicture, platform: IspParams, model: Compensati
         Its station's σ.
     camera : FisheyeCamera
         The picture's camera (its lens at the picture's size).
+    draws : int
 
     Returns
     -------
-    (k,) float64
+    sigma : (k,) float64
         0 where the EC is not measured at the platform setting or the station's σ is 0.
+    nominal : (k,) float64
+        The nominal car's values at the platform setting.
     """
+    base = picture.values([platform])[0]
+    rng = np.random.default_rng(_SEED)
     s = picture.input_scale
-    probes = [picture] + [picture.warped(TurnWarp(camera, axis_turn(a, PROBE_DEG)), None)
-                          for a in range(3)]
-    probes += [picture.warped(None, EdgeWarp(d0 * s, d1 * s, camera.cx, camera.width / 2.0))
-               for d0, d1 in ((PROBE_PX, 0.0), (0.0, PROBE_PX))]
-    v = np.array([pic.values([platform])[0] for pic in probes])
-    with np.errstate(invalid="ignore"):
-        slopes = np.nan_to_num(np.abs(v[1:] - v[0]), nan=0.0)
-    site = np.sqrt(np.sum((slopes[:3] / PROBE_DEG * model.angle_sigma_deg) ** 2, axis=0))
-    body = np.sqrt(np.sum((slopes[3:] / PROBE_PX * model.edge_sigma_px) ** 2, axis=0))
-    return np.where(body_ecs(picture.criteria), body, site)
+    sq = np.zeros(len(base))
+    for _ in range(draws):
+        a = rng.standard_normal(3) * model.angle_sigma_deg
+        e = rng.standard_normal(2) * model.edge_sigma_px
+        turn = axis_turn(2, a[2]) @ axis_turn(1, a[1]) @ axis_turn(0, a[0])
+        site = None if model.angle_sigma_deg == 0 else TurnWarp(camera, turn)
+        body = None if model.edge_sigma_px == 0 else EdgeWarp(e[0] * s, e[1] * s, camera.cx,
+                                                             camera.width / 2.0)
+        if site is None and body is None:
+            break
+        v = picture.warped(site, body).values([platform])[0]
+        with np.errstate(invalid="ignore"):
+            sq += np.nan_to_num(v - base, nan=0.0) ** 2
+    return np.sqrt(sq / draws), base

@@ -12,6 +12,9 @@ For each car (a sample):
    and writes its values (or, ``law: reference-points``, the reference points' values).
 2. **In the field.** The car in its own load state, judged with those values on its own
    true picture (the verdicts of ``rvmsim robustness``), before (platform values) and after.
+   The ECs that read only the body (:func:`rvmsim.percar.body_ecs`) are read on the car at
+   the station: the body moves with the camera, so a load state does not change them, and
+   another render of the same body would only add its own sampling of the body's edge.
 
 A car passes when the station lets it go (``pass``; ``marginal`` only under the ``accept``
 policy) and its picture in the field passes every EC.  A sample's camera is at its rendered
@@ -258,10 +261,18 @@ class CarJudge:
         image, or the station's when it stands in the station's load state)."""
         view = reading.picture(self.record, self.criteria)
         sol = self.law.solve(reading.measured, view)
-        field_ev = view.evaluator if field_img is None else SplitEvaluator(
-            field_img, self.record, self.criteria)
-        return (sol, field_ev.values(self._at(platform)),
-                field_ev.values(self._at(sol.params)))
+        at_station = view.evaluator
+        if field_img is None:
+            return (sol, at_station.values(self._at(platform)),
+                    at_station.values(self._at(sol.params)))
+        # the body moves with the camera: its ECs do not change with the load state, and
+        # are read on the car at the station (another render of the same body would only
+        # add its own sampling of the bumper's edge, ±2 px of EC 2-3 at the image's sides)
+        field_ev = SplitEvaluator(field_img, self.record, self.criteria)
+        body = at_station.body
+        return tuple([sol] + [np.where(body, at_station.values(self._at(p)),
+                                       field_ev.values(self._at(p)))
+                              for p in (platform, sol.params)])  # type: ignore[return-value]
 
 
 def _bar(progress: bool, total: int):  # type: ignore[no-untyped-def]

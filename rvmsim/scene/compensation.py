@@ -16,7 +16,7 @@ Example (every key optional; these are the defaults)::
         marginal: fail                 # a car whose margin is inside its uncertainty
       law: ec-solve                    # how the per-car values are chosen
       budget: 24                       # ec-solve: EC evaluations per car (search)
-      stop_sigmas: null                # ec-solve: stop at this many station σ of margin
+      stop: nominal                    # ec-solve: stop once as good as the nominal car
       reference: site                  # the ground points the reference-point law holds
 
 The models validate the YAML (unknown keys are errors); :mod:`rvmsim.compensation` builds its
@@ -79,7 +79,7 @@ class CompensationSpec(_Model):
     reference: Literal["site", "ground"] = "site"
     law: Literal["ec-solve", "reference-points"] = "ec-solve"
     budget: Annotated[int, Field(ge=4, le=2000)] = 24
-    stop_sigmas: Annotated[float, Field(ge=0, le=100)] | None = None
+    stop: Literal["nominal", "never"] = "nominal"
 
     @field_validator("params")
     @classmethod
