@@ -254,9 +254,12 @@ def capture_labels(labels: np.ndarray, edge: BodyEdge, band_px: int = SEARCH_PX
     near = np.isfinite(dist)
     sx, sy, idx = bx[near], by[near], idx[near]
     q = np.stack([sx, sy], axis=1).astype(np.float64)
-    # signed distance out of the body along the nearest point's normal, minus its offset
-    s = np.sum((q - pts[idx]) * edge.normals[idx], axis=1) - edge.offset[idx]
-    inside = s < 0
+    # signed distance out of the predicted outline along the nearest point's normal: a
+    # scene pixel turns body when the found outline lies beyond it, a body pixel scene
+    # when the found outline lies inside it (pixels on the wrong side of that tangent, in
+    # the outline's corners, keep their label)
+    s0 = np.sum((q - pts[idx]) * edge.normals[idx], axis=1)
+    off = edge.offset[idx]
     out = labels.copy()
     cur = labels[sy, sx]
     is_body = np.isin(cur, L.BODY_LABELS)
@@ -264,8 +267,8 @@ def capture_labels(labels: np.ndarray, edge: BodyEdge, band_px: int = SEARCH_PX
     outer = np.rint(pts[idx] + 1.0 * edge.normals[idx]).astype(int)
     ax, ay = np.clip(anchor[:, 0], 0, w - 1), np.clip(anchor[:, 1], 0, h - 1)
     ox, oy = np.clip(outer[:, 0], 0, w - 1), np.clip(outer[:, 1], 0, h - 1)
-    grow = inside & ~is_body & (cur != L.VOID)
-    shrink = ~inside & is_body
+    grow = ~is_body & (cur != L.VOID) & (s0 >= 0) & (s0 < off)
+    shrink = is_body & (s0 < 0) & (s0 > off)
     out[sy[grow], sx[grow]] = labels[ay[grow], ax[grow]]
     out[sy[shrink], sx[shrink]] = labels[oy[shrink], ox[shrink]]
     return out

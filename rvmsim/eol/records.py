@@ -12,6 +12,7 @@ import numpy as np
 
 from ..compensation import Correction, Deviation
 from ..criteria import EcResult
+from ..percar import CarSolution
 from ..scene import MOUNT_AXES
 
 __all__ = ["CarResult", "StationResult", "PASS", "FAIL"]
@@ -55,6 +56,11 @@ class CarResult:
     files : dict of str to str
         The car's files in the output folder by kind (``params``, ``rvm``, ``annotated``,
         ``landmarks``, ``overlay``), once written.
+    solution : CarSolution or None
+        The law's values and the station's verdict on the car's picture (status ``pass``,
+        ``marginal``, ``infeasible``; each EC's value, margin and uncertainty).
+    body_edge : dict or None
+        The body's outline found in the capture (:meth:`rvmsim.eol.BodyEdge.as_dict`).
     """
 
     capture: str
@@ -69,6 +75,8 @@ class CarResult:
     images: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
     seconds: float = 0.0
     files: dict[str, str] = field(default_factory=dict, compare=False)
+    solution: CarSolution | None = field(default=None, compare=False)
+    body_edge: dict[str, Any] | None = None
 
     @property
     def passed(self) -> bool:
@@ -77,6 +85,14 @@ class CarResult:
     @property
     def verdict(self) -> str:
         return PASS if self.passed else FAIL
+
+    @property
+    def status(self) -> str:
+        """``pass``, ``marginal``, ``infeasible``, ``fail`` (an EC or a range), or
+        ``no pose`` (the pose was not recovered)."""
+        if self.solution is None:
+            return "no pose" if self.deviation is None else ("pass" if self.passed else "fail")
+        return self.solution.status
 
     @property
     def reason(self) -> str:
@@ -93,7 +109,12 @@ class CarResult:
             "deviation_sigma": None if self.sigma is None else {
                 n: round(s, 4) for n, s in zip(MOUNT_AXES, self.sigma)},
             "landmarks": self.landmarks, "rms_px": self.rms_px,
+            "status": self.status,
             "correction": None if self.correction is None else self.correction.as_dict(),
+            "station": None if self.solution is None else {
+                k: v for k, v in self.solution.as_dict().items()
+                if k in ("law", "status", "reasons", "evaluations", "station_ecs")},
+            "body_edge": self.body_edge,
             "ecs": None if self.ec is None else self.ec.as_dict(),
             "seconds": round(self.seconds, 3), "files": dict(self.files),
         }
@@ -146,15 +167,31 @@ class StationResult:
         """Whether every car passes."""
         return self.n_pass == len(self.cars)
 
+    def count(self, status: str) -> int:
+        """The cars of one :attr:`CarResult.status`."""
+        return sum(c.status == status for c in self.cars)
+
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready: the run's inputs, the counts and one entry per car."""
+        """JSON-ready: the run's inputs, the counts and one entry per car.  The station's
+        σ the model assumes (what robustness draws the station's errors with, and what
+        calls a car marginal here) is under ``assumed_station_sigma``, not among the
+        station's results."""
+        comp = dict(self.compensation)
+        station = dict(comp.pop("station", {}))
+        assumed = {k: station.pop(k) for k in ("angle_sigma_deg", "position_sigma_mm",
+                                               "edge_sigma_px") if k in station}
         return {
             "scene": self.scene_name, "scene_file": self.scene_file, "target": self.target,
             "load_state": self.load_state, "params_file": self.params_file,
-            "output": list(self.output), "compensation": self.compensation,
+            "output": list(self.output), "compensation": {**comp, "station": station},
+            "assumed_station_sigma": {**assumed, "note": "an assumption of the compensation "
+                                      "model (not measured by this run): the ECs' "
+                                      "uncertainty a car is called marginal by"},
             "criteria": self.criteria, "written_params": list(self.written),
             "cars": len(self.cars), "passed": self.n_pass,
             "failed": len(self.cars) - self.n_pass, "all_pass": self.passed,
+            "by_status": {st: self.count(st) for st in ("pass", "marginal", "infeasible",
+                                                        "fail", "no pose")},
             "timings": {k: round(v, 3) for k, v in self.timings.items()},
             "results": [c.as_dict() for c in self.cars],
         }

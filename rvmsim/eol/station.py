@@ -14,20 +14,27 @@ For each capture (:meth:`Station.car`):
    the station reads it in its load state (:func:`~.geometry.deviation_of`; a load state
    that moves the body reads as a deviation too, as ``rvmsim robustness --compensation``
    models the station).
-3. **Per-car values.** :meth:`rvmsim.compensation.CompensationLaw.correct`: the platform
-   setting with the written parameters set so that the reference ground points land where
-   the nominal car shows them, clipped to the allowed ranges.
-4. **ECs.** The capture has no labels, so the scene (its full test site) is rendered at the
-   measured pose (labels only, and only of the fisheye pixels the car's RVM image shows
-   when no EC reads the fisheye labels elsewhere): the synthetic frame that explains the
-   capture.  The
-   capture's colour and those labels go through the car's ISP parameters and every EC is
-   evaluated (:func:`rvmsim.pipeline.evaluate_params`), as ``rvmsim validate --params`` does.
+3. **The car's picture.** The scene (its full test site) is rendered at the measured pose
+   (labels only, and only of the fisheye pixels the car's RVM image can show under any
+   per-car values in the allowed ranges, when no EC reads the fisheye labels elsewhere):
+   the test site as the station sees it.  The body's outline is then found in the capture
+   itself and the body region re-drawn from it (:mod:`.body`): the ECs that read the body
+   do not inherit the pose error.
+4. **Per-car values.** The compensation model's law on that picture
+   (:func:`rvmsim.percar.make_law`; ``ec-solve`` by default: every enabled EC passes with
+   the largest least margin), the same call ``rvmsim robustness --compensation`` makes.
+   The station's verdict: ``pass``, ``marginal`` (an EC's margin inside the station's
+   uncertainty; failed unless the model's ``marginal`` is ``accept``), ``infeasible`` (no
+   setting within the allowed ranges passes, with the ECs that conflict named).
+5. **ECs.** The capture's colour and the picture's labels through the car's values: every
+   EC evaluated (:func:`rvmsim.pipeline.evaluate_params`) at the RVM image of record, and
+   the pictures of the car's RVM image drawn.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -37,17 +44,19 @@ import numpy as np
 
 from .._io import key_lines, line_of
 from ..camera import FisheyeCamera, rotation_from_ypr
-from ..compensation import DEFAULT_COMPENSATION, CompensationLaw, CompensationModel
+from ..compensation import DEFAULT_COMPENSATION, CompensationModel
 from ..criteria import Criteria, default_criteria
 from ..errors import RvmsimError, SceneError
 from ..isp import IspParams, OutputSpec
-from ..pipeline import evaluate_params, rvm_pixels
+from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, make_law
+from ..pipeline import evaluate_params, record_output, rvm_pixels
 from ..render import FisheyeImages
 from ..robust import Variation, body_pose
 from ..scene import Scene, station_scene
 from ..validate import (Tolerances, Validation, ValidationFailure, ValidationSettings,
                         validate)
 from ..validate.landmarks import visible_landmarks
+from .body import capture_labels, find_body_edge
 from .frames import PoseRenderer
 from .geometry import deviation_of, mount_at, moved_camera, station_load
 from .records import CarResult, StationResult
@@ -64,7 +73,9 @@ class StationSettings:
     params : IspParams
         The platform setting (full sensor).
     output : OutputSpec
-        The RVM image the law keeps the reference points on and the ECs are measured on.
+        Its mirroring: every car is judged at the RVM image of record
+        (:func:`rvmsim.pipeline.record_output`: the scene's or criteria's display size,
+        default 1280 × 720), whatever size is given here.
     compensation : CompensationModel
         What the EOL step writes, within which ranges, and the load state it measures at.
     criteria : Criteria, optional
@@ -142,9 +153,14 @@ class Station:
         self.frame: FisheyeImages = self._station_renderer.frame(self.nominal_camera,
                                                                  progress=progress)
         self._check_target_in_view()
-        self.law = CompensationLaw(scene, settings.params, settings.output,
-                                   settings.compensation)
+        #: The RVM image of record every car is judged at.
+        self.record = record_output(self.criteria, scene, settings.output.mirror)
         self._renderer = PoseRenderer(scene, cam, self.body_pose)
+        # the car as designed at the station: where the station's EC uncertainty is read
+        nominal = self._renderer.frame(self.nominal_camera, progress=progress)
+        self.law: PerCarLaw = make_law(
+            scene, settings.params, self.record, settings.compensation, self.criteria,
+            ImagePicture(SplitEvaluator(nominal, self.record, self.criteria)), nominal.camera)
 
     def prepare(self) -> None:
         """Build the scene's meshes now (else the first car does, ~1 s)."""
@@ -160,7 +176,7 @@ class Station:
             target=self.scene.eol.target,
             load_state={"name": load.name, "height_mm": load.height_mm,
                         "pitch_deg": load.pitch_deg},
-            params_file=params_file, output=(s.output.width, s.output.height),
+            params_file=params_file, output=(self.record.width, self.record.height),
             compensation=s.compensation.as_dict(), criteria=self.criteria.name,
             written=tuple(s.compensation.params), cars=tuple(cars), timings=dict(timings or {}))
 
@@ -180,14 +196,28 @@ class Station:
                              "unoccluded, inside the lens's field, ≥ 8 px apart)",
                              _line(self.scene, key))
 
-    def _shown(self, camera: FisheyeCamera, params: IspParams) -> np.ndarray | None:
-        """The fisheye pixels the car's RVM image shows ((H, W) bool): only their labels
-        are rendered, unless an EC reads the scene's fisheye labels elsewhere (None)."""
+    def _shown(self, camera: FisheyeCamera) -> np.ndarray | None:
+        """The fisheye pixels the car's RVM image can show ((H, W) bool): those the platform
+        setting shows, grown by what the per-car values may turn the view by (the allowed
+        turn and roll at the image's corner, + 8 px); only their labels are rendered,
+        unless an EC reads the scene's fisheye labels elsewhere (None)."""
+        import cv2
+
         if self.criteria.uses_scene:
             return None
-        mask = np.zeros(camera.width * camera.height, bool)
-        mask[rvm_pixels(camera, params, self.settings.output).pixels] = True
-        return mask.reshape(camera.height, camera.width)
+        m = self.settings.compensation
+        turn = math.radians(m.range_of("h_pan")[1] if m.pans else 0.0)
+        roll = math.radians(max(abs(v) for v in m.range_of("tilt"))) if "tilt" in m.params \
+            else 0.0
+        shifts = sum(max(abs(v) for v in m.range_of(n)) for n in ("h_shift", "v_shift")
+                     if n in m.params)
+        grow = int(math.ceil(camera.fx * turn + math.hypot(camera.width, camera.height) / 2
+                             * roll + shifts)) + 8
+        flat = np.zeros(camera.width * camera.height, np.uint8)
+        flat[rvm_pixels(camera, self.settings.params, self.record).pixels] = 1
+        k = 2 * grow + 1
+        return cv2.dilate(flat.reshape(camera.height, camera.width),
+                          cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))) > 0
 
     def _pose(self, capture: np.ndarray, capture_name: str, *, dense: bool
               ) -> Validation | tuple[str, int, float | None, dict[str, np.ndarray]]:
@@ -225,17 +255,17 @@ class Station:
         rotation = rotation_from_ypr(c.yaw_deg, c.pitch_deg, c.roll_deg)
         position = np.asarray(c.position_m, dtype=np.float64)
         deviation = deviation_of(self.scene, position, rotation)
-        correction = self.law.correct(deviation)
         pose = dataclasses.replace(self.nominal_camera, rotation=rotation, position=position)
-        labels = self._renderer.labels(pose, self._shown(pose, correction.params))
-        images = FisheyeImages(color=capture, labels=labels, camera=pose, scene=self.scene)
-        frame = evaluate_params(images, correction.params, s.output, self.criteria)
-        failing = [i.id for i in frame.ec.items if i.enabled and not i.passed]
-        reasons = list(correction.exceeded)
-        if failing:
-            reasons.append(f"EC {', '.join(failing)} fail{'s' if len(failing) == 1 else ''}")
+        rendered = self._renderer.labels(pose, self._shown(pose))
+        edge = find_body_edge(capture, rendered)
+        images = FisheyeImages(color=capture, labels=capture_labels(rendered, edge),
+                               camera=pose, scene=self.scene)
+        sol = self.law.solve(deviation, ImagePicture(SplitEvaluator(images, self.record,
+                                                                    self.criteria)))
+        frame = evaluate_params(images, sol.params, self.record, self.criteria)
+        reasons = () if self.law.accepts(sol) else sol.reasons
         assert frame.annotated is not None  # asked for
         return CarResult(capture_name, name, tuple(reasons), deviation, sigma, v.n_inliers,
-                         v.rms_after_px, correction, frame.ec,
+                         v.rms_after_px, sol.correction, frame.ec,
                          {"rvm": frame.color, "annotated": frame.annotated},
-                         time.perf_counter() - t0)
+                         time.perf_counter() - t0, solution=sol, body_edge=edge.as_dict())

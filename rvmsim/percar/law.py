@@ -274,6 +274,8 @@ class EcSolveLaw(PerCarLaw):
         reasons: list[str] = []
         if run.best_least <= 0 and not run.best_passed:
             infeasible, reasons = self._grid(run, picture)
+            if infeasible and start.exceeded:  # what holding the site in place would need
+                reasons += [f"the reference points need more: {e}" for e in start.exceeded]
         x = self._full(run.best_x, picture)
         correction = self.reference.correction_at(x, rms, worst)
         return self._solution(correction, run.best_values, run.count, start, reasons,

@@ -43,13 +43,18 @@ def capture_files(paths: Sequence[Path]) -> list[Path]:
     Raises
     ------
     RvmsimError
-        A folder without any capture.
+        A folder without any capture, or with an entry named as a capture that is not a
+        readable file (a dangling link, a folder).
     """
     out: list[Path] = []
     for p in paths:
         if p.is_dir():
-            found = sorted(f for f in p.iterdir()
-                           if f.is_file() and f.suffix.lower() in CAPTURE_SUFFIXES)
+            named = sorted(f for f in p.iterdir() if f.suffix.lower() in CAPTURE_SUFFIXES)
+            for f in named:
+                if not f.is_file():  # a capture that is not there is not a car to skip
+                    what = "a link to a missing file" if f.is_symlink() else "not a file"
+                    raise RvmsimError(f"{f}: {what} (--capture {p})")
+            found = named
             if not found:
                 raise RvmsimError(f"{p}: no captures ({', '.join(CAPTURE_SUFFIXES)}) in this "
                                   "folder (--capture)")

@@ -50,7 +50,8 @@ def test_a_synthetic_cars_deviation_is_recovered(station: Station, truth: Deviat
     # The law corrected what was measured, within its range, and the ECs were measured.
     assert car.correction is not None and car.correction.within_range
     assert car.ec is not None and len(car.ec.items) == 11
-    assert car.images["rvm"].shape == (360, 640, 3)
+    # judged at the RVM image of record, whatever size the settings give (640 × 360 here)
+    assert car.images["rvm"].shape == (720, 1280, 3)
 
 
 def _run(folder: Path, *captures: Path, env: dict[str, str], extra: tuple[str, ...] = ()):
@@ -100,9 +101,10 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
 
 
 def test_a_car_beyond_the_range_or_without_a_pose_fails_exit_1(tmp_path: Path, env):
-    """A camera turned 6° needs more pan and tilt than the EOL step may write: the car fails,
-    named; a capture of something else fails as a car whose pose was not recovered; the
-    good car still passes."""
+    """A camera turned 6° needs more pan and tilt than the EOL step may write: no setting
+    within the allowed ranges passes it, and the car is named infeasible with the ECs that
+    fail and what the reference points would need; a capture of something else fails as a
+    car whose pose was not recovered; the good car still passes."""
     caps = tmp_path / "caps"
     write_capture(caps / "a_good.png", GOOD[0])
     write_capture(caps / "b_turned.png", TURNED)
@@ -117,10 +119,16 @@ def test_a_car_beyond_the_range_or_without_a_pose_fails_exit_1(tmp_path: Path, e
     assert good["verdict"] == "PASS"
     assert turned["verdict"] == "FAIL"
     assert turned["deviation"]["yaw_deg"] == pytest.approx(6.0, abs=0.05)
-    assert any(r.startswith("EOL range exceeded: pan ") and r.endswith("> 3°")
-               for r in turned["reasons"]), turned["reasons"]
-    assert "EOL range exceeded: pan" in res.stdout
-    assert turned["correction"]["within_range"] is False
+    assert turned["status"] == "infeasible"
+    assert turned["reasons"][0].startswith("infeasible car: "), turned["reasons"]
+    assert any(r.startswith("the reference points need more: EOL range exceeded: pan ")
+               and r.endswith("> 3°") for r in turned["reasons"]), turned["reasons"]
+    assert "infeasible car" in res.stdout
+    # the values written stay within the allowed ranges
+    assert turned["correction"]["within_range"] is True
+    assert turned["correction"]["offsets"]["h_pan"] <= 3.0 + 1e-9
+    assert doc["by_status"] == {"pass": 1, "marginal": 0, "infeasible": 1, "fail": 0,
+                                "no pose": 1}
     assert lost["verdict"] == "FAIL" and lost["deviation"] is None
     assert lost["reasons"][0].startswith("pose not recovered (detection)")
     out = tmp_path / "out"
@@ -128,7 +136,7 @@ def test_a_car_beyond_the_range_or_without_a_pose_fails_exit_1(tmp_path: Path, e
     assert (out / "c_noise_landmarks.png").is_file()
     with (out / "eol.csv").open() as f:
         rows = list(csv.DictReader(f))
-    assert rows[1]["reason"].startswith("EOL range exceeded: pan")
+    assert rows[1]["reason"].startswith("infeasible car: ")
     assert rows[2]["x_mm"] == "" and rows[2]["verdict"] == "FAIL"
 
 
