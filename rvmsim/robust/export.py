@@ -14,7 +14,11 @@ tests check it to the bit); ``rvmsim evaluate`` renders it directly where robust
 a cube rendered at the sample's viewpoint, so the EC values agree to within that re-fold's
 label-border sampling (docs/robustness.md gives the measured differences).  A second file,
 ``sample_N.json``, holds what robustness measured on the sample (every EC's value and
-verdict) and the command that reproduces it.
+verdict) and the command that reproduces it.  After end-of-line compensation the car is
+judged with its own values: they are written as ``sample_N.params.yaml`` (the platform
+setting with the per-car values, a params file of the RVM image of record), the command
+evaluates that file, and the JSON holds the station's verdict and the verdict before
+compensation beside it.
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ from typing import Any
 import yaml
 
 from ..errors import RvmsimError
+from ..isp import params_to_dict
 from ..scene import Scene, absolute_mesh_paths
 from .robustness import RobustnessResult
 from .samples import MountSample
@@ -114,26 +119,45 @@ def write_sample_scenes(result: RobustnessResult, document: Mapping[str, Any], s
         sample = result.samples[n]
         yaml_path, json_path = out / f"sample_{n}.yaml", out / f"sample_{n}.json"
         doc = sample_scene_document(document, scene, sample)
-        command = (f"rvmsim evaluate {yaml_path.name} --params {how.params_file.resolve()}"
+        comp = result.compensated
+        params_path = out / f"sample_{n}.params.yaml"
+        params_arg = str(how.params_file.resolve()) if comp is None else params_path.name
+        command = (f"rvmsim evaluate {yaml_path.name} --params {params_arg}"
                    + (f" --criteria {how.criteria_file.resolve()}" if how.criteria_file else "")
                    + (f" --scale {how.render_scale:g}" if how.render_scale != 1.0 else ""))
-        record = {
+        record: dict[str, Any] = {
             "sample": sample.as_dict(), "scene": str(yaml_path.name),
             "from_scene": scene.source, "seed": result.seed, "criteria": result.criteria_name,
             "render_scale": how.render_scale, "reproduce": command,
             "ec_score": float(ev.score[n]), "passed": bool(ev.all_passed[n]),
             "ecs": {e: {"value": _finite(float(ev.values[n, j])),
                         "passed": bool(ev.passed[n, j])} for j, e in enumerate(ev.ids)}}
-        head = (f"# {scene.name}: sample {n} of `rvmsim robustness {scene.source}` "
-                f"(seed {result.seed}); what robustness measured: {json_path.name}\n"
-                f"# reproduce: {command}\n")
+        files = [(yaml_path, f"# {scene.name}: sample {n} of `rvmsim robustness "
+                             f"{scene.source}` (seed {result.seed}); what robustness measured: "
+                             f"{json_path.name}\n# reproduce: {command}\n"
+                  + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True))]
+        if comp is not None and result.before is not None:
+            sol = comp.solutions[n]
+            record.update({
+                "params": params_path.name, "platform_params": str(how.params_file.resolve()),
+                "station": {"status": sol.status, "accepted": bool(comp.accepted[n]),
+                            "reasons": list(sol.reasons), "law": sol.law},
+                "passed_with_station": bool(result.passed[n]),
+                "passed_before_compensation": bool(result.before.all_passed[n])})
+            judged = result.judged_at or result.output
+            files.append((params_path, (
+                f"# {scene.name}: sample {n}'s own ISP setting after end-of-line compensation "
+                f"({sol.law}: {', '.join(f'{k} {v:+.4f}' for k, v in sol.correction.offsets.items())} "
+                f"from the platform setting {how.params_file.resolve()}); station: "
+                f"{sol.status}\n# reproduce: {command}\n") + yaml.safe_dump(
+                params_to_dict(sol.params, result.output, judged_at=judged), sort_keys=False)))
+        files.append((json_path, json.dumps(record, indent=2) + "\n"))
         try:
             out.mkdir(parents=True, exist_ok=True)
-            yaml_path.write_text(head + yaml.safe_dump(doc, sort_keys=False,
-                                                       allow_unicode=True))
-            json_path.write_text(json.dumps(record, indent=2) + "\n")
+            for path, text in files:
+                path.write_text(text)
         except OSError as err:
             raise RvmsimError(f"{out}: cannot write sample {n} ({err.strerror or err})") \
                 from None
-        written += [yaml_path, json_path]
+        written += [path for path, _ in files]
     return written

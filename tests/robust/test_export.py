@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from rvmsim.criteria import default_criteria
-from rvmsim.isp import IspParams, OutputSpec, build_map, params_to_dict
+from rvmsim.isp import IspParams, OutputSpec, build_map, load_params, params_to_dict
 from rvmsim.render import render_fisheye
 from rvmsim.robust import draw_samples, sample_camera, sample_images, variation_from_scene
 from rvmsim.scene import load_scene
@@ -126,3 +126,43 @@ def test_evaluate_on_it_reproduces_the_samples_ec_values(exported):
             assert value == pytest.approx(robust["value"], abs=tolerance[unit]), (ec, m)
             compared += 1
     assert compared >= 5
+
+
+def test_a_compensated_sample_exports_its_own_values_and_reproduces_its_verdict(tmp_path):
+    """With --compensation the car was judged with its per-car values: they are exported as
+    sample_N.params.yaml, and the recorded command (run as written, in the output folder)
+    reproduces the recorded verdict, which the platform values would not (the sample is
+    one that fails before compensation and passes after)."""
+    # half the sensor: a fisheye pixel is two of the 1280 × 720 image of record, so a fresh
+    # render's label borders move EC 2-3 by a few px at most (a quarter: by up to 8)
+    write_small_scene(tmp_path, "a", 0.5, name="scene.yaml", variation=VARIATION)
+    tuned, _ = load_params(Path(__file__).parents[1] / "eol" / "vehicle_a_tuned.yaml")
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(params_to_dict(
+        tuned.for_input_scale(0.5), OUTPUT)))
+    (tmp_path / "comp.yaml").write_text("station: {angle_sigma_deg: 0, position_sigma_mm: 0, "
+                                        "edge_sigma_px: 0}\n")
+    common = ["robustness", "scene.yaml", "--params", "params.yaml", "--samples", "12",
+              "--scales", "1", "--workers", "1", "--compensation", "comp.yaml",
+              "--no-progress"]
+    first = run_in_process(common + ["--out", "probe"], cwd=tmp_path)
+    assert first.code in (0, 1), first.stderr
+    rows = json.loads((tmp_path / "probe" / "robustness.json").read_text())["samples"]
+    # the clearest such car: the highest EC score after compensation
+    n = max((i for i, r in enumerate(rows) if r["passed"]
+             and not r["passed_before_compensation"]), key=lambda i: rows[i]["ec_score"])
+    run = run_in_process(common + ["--out", "out", "--export-sample", str(n)], cwd=tmp_path)
+    assert run.code in (0, 1), run.stderr
+    out = tmp_path / "out"
+    record = json.loads((out / f"sample_{n}.json").read_text())
+    assert record["params"] == f"sample_{n}.params.yaml" and record["passed"]
+    assert not record["passed_before_compensation"] and record["station"]["accepted"]
+    assert record["reproduce"] == (f"rvmsim evaluate sample_{n}.yaml --params "
+                                   f"sample_{n}.params.yaml")
+    written, _ = load_params(out / f"sample_{n}.params.yaml")
+    assert written.h_pan == pytest.approx(rows[n]["correction"]["values"]["h_pan"], abs=1e-5)
+    assert "reproduce: rvmsim evaluate" in (out / f"sample_{n}.params.yaml").read_text()
+    ev = run_in_process(record["reproduce"].split()[1:] + ["--out", "ev", "--no-progress"],
+                        cwd=out)
+    assert ev.code in (0, 1), ev.stderr
+    doc = json.loads((out / "ev" / "ec.json").read_text())
+    assert doc["passed"] == record["passed"], doc
