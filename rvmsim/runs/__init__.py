@@ -44,6 +44,8 @@ from .diverse import (
     candidates_json,
     run_space,
     store_candidates,
+    robust_keys,
+    FLAT_SCORE,
 )
 from .folder import (
     RUN_DB,
@@ -85,6 +87,8 @@ __all__ = [
     "candidates_json",
     "run_space",
     "store_candidates",
+    "robust_keys",
+    "FLAT_SCORE",
     "RUN_DB",
     "RUN_JSON",
     "recorded_path",

@@ -6,7 +6,11 @@ score show one view M times.  The candidates offered instead (docs/tuning.md, "T
 top-M"):
 
 1. **rank 1** is the best trial (highest EC score, then objective, then earliest): the
-   one ``best/`` shows;
+   one ``best/`` shows.  A robust run (``tune --robust``) ranks first by whether every
+   member passes, then whether the car as designed (the nominal members) passes, then by
+   its EC score where that is not flat, the yield over its samples and the nominal EC
+   score (:func:`robust_keys`): it never offers a setting that fails the nominal car above
+   one that passes it;
 2. then the **all-pass** trials, each next one the trial farthest from every candidate
    chosen so far (greedy farthest-point selection; ties to the higher score);
 3. only if fewer than M came from them: the failing trials whose EC score is within
@@ -44,7 +48,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Candidate", "select_diverse", "differs_text", "margins_of", "normalised",
            "POOLS", "candidates_json", "choose", "make_candidates", "run_space",
-           "store_candidates"]
+           "store_candidates", "robust_keys", "FLAT_SCORE"]
 
 #: Where a candidate came from (:attr:`Candidate.pool`), in the order they are drawn on.
 POOLS = ("all-pass", "score-tolerance", "by-score")
@@ -110,14 +114,16 @@ def normalised(space: SearchSpace, x: np.ndarray) -> np.ndarray:
 
 def choose(x: np.ndarray, score: np.ndarray, objective: np.ndarray, idx: np.ndarray,
            passed: np.ndarray, m: int, min_distance: float,
-           score_tolerance: float) -> list[tuple[int, str, float]]:
+           score_tolerance: float, keys: Sequence[np.ndarray] = ()) -> list[tuple[int, str, float]]:
     """The rule of the module docstring on arrays (one row per trial; ``x`` normalised):
     (row, pool, distance to rank 1) of each candidate in rank order.  Vectorised: M passes
-    over all rows, none over pairs."""
+    over all rows, none over pairs.  ``keys``: arrays ranked by before the EC score (the
+    first first, higher better; a robust run's, :func:`robust_keys`)."""
     n = len(score)
     if n == 0 or m < 1:
         return []
-    order = np.lexsort((idx, -objective, -score))  # best first; ties: objective, earliest
+    # best first; ties: objective, earliest
+    order = np.lexsort((idx, -objective, -score, *(-k for k in reversed(keys))))
     xs, sc, ok = x[order], score[order], passed[order]
     near = ~ok & (sc > 0) & (sc >= sc[0] * (1 - score_tolerance))  # a 0 is near nothing
     tiers = (ok, near, ~ok & ~near)
@@ -340,6 +346,43 @@ def run_space(store: RunStore, settings: RunSettings) -> SearchSpace:
     return settings.config.space(load_scene(settings.scene).fisheye_camera())
 
 
+#: A robust aggregate below this carries no ranking (where no setting passes a tenth of the
+#: samples, the 10 % quantile of their EC scores is ~0 for every trial).
+FLAT_SCORE = 1e-3
+
+
+def robust_keys(store: RunStore, settings: RunSettings, idx: np.ndarray, score: np.ndarray,
+                passed: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A robust run's ranking before its EC score (the robust aggregate), for trials
+    ``idx`` (with their ``score`` and all-members ``passed``): every member passes, then
+    every *nominal* member passes (a setting that fails the car as designed never ranks
+    above one that passes it), then the aggregate where it is not flat
+    (:data:`FLAT_SCORE`), then the yield over the samples, then the nominal EC score
+    (the worst scene's)."""
+    k = settings.robust_samples
+    t_idx, member, m_score, m_passed = store.member_table()
+    if k is None or not len(t_idx):
+        return ()
+    per = 1 + k
+    pos = {int(i): r for r, i in enumerate(idx)}
+    rows = np.array([pos.get(int(i), -1) for i in t_idx])
+    keep = rows >= 0
+    rows, member, m_score, m_passed = rows[keep], member[keep], m_score[keep], m_passed[keep]
+    nominal = member % per == 0
+    n = len(idx)
+    nom_pass = np.ones(n, bool)
+    np.logical_and.at(nom_pass, rows[nominal], m_passed[nominal])
+    nom_score = np.full(n, np.inf)
+    np.minimum.at(nom_score, rows[nominal], m_score[nominal])
+    counts = np.bincount(rows[~nominal], minlength=n).astype(np.float64)
+    hits = np.bincount(rows[~nominal], weights=m_passed[~nominal].astype(np.float64),
+                       minlength=n)
+    yields = np.divide(hits, counts, out=np.zeros(n), where=counts > 0)
+    return (passed.astype(np.float64), nom_pass.astype(np.float64),
+            np.where(score >= FLAT_SCORE, score, 0.0), yields,
+            np.where(np.isfinite(nom_score), nom_score, 0.0))
+
+
 def store_candidates(store: RunStore, settings: RunSettings, m: int | None = None,
                      min_distance: float | None = None, *, by_score: bool = False,
                      criteria: Criteria | None = None) -> list[tuple[Candidate, TrialRecord]]:
@@ -364,7 +407,8 @@ def store_candidates(store: RunStore, settings: RunSettings, m: int | None = Non
     else:
         idx, score, objective, passed, x = store.vectors(space.names)
         chosen = choose(normalised(space, x), score, objective, idx, passed, m, dmin,
-                        cfg.diverse.score_tolerance)
+                        cfg.diverse.score_tolerance,
+                        robust_keys(store, settings, idx, score, passed))
         recs = store.trials_at([int(idx[i]) for i, _, _ in chosen])
         picks = [(r, pool, d) for r, (_, pool, d) in zip(recs, chosen)]
     cands = make_candidates(picks, space, crit, cfg.output_spec())

@@ -113,6 +113,17 @@ class RunStore(SqliteStore):
     def _has_members(self, value: bool) -> None:
         self._members_table = value
 
+    def member_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Every member result at once: trial index, member, EC score and passed, (n,)
+        arrays each (empty for a one-scene run)."""
+        if not self._has_members:
+            z = np.zeros(0)
+            return z.astype(np.int64), z.astype(np.int64), z, z.astype(bool)
+        rows = self.rows("SELECT idx, member, score, passed FROM members")
+        arr = np.array(rows, dtype=np.float64).reshape(-1, 4)
+        return (arr[:, 0].astype(np.int64), arr[:, 1].astype(np.int64), arr[:, 2],
+                arr[:, 3].astype(bool))
+
     def member_results(self, idx: int) -> list[tuple[float, float, bool, dict[str, EcOutcome]]]:
         """Each member's (EC score, objective, passed, ECs) of trial ``idx``, in member
         order; empty for a one-scene run (or a trial without them)."""

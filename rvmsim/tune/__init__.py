@@ -88,9 +88,9 @@ from .run import (
     TuneResult,
     write_results,
     DISPLAY_SIZE,
-    summary_lines,
     remove_run,
 )
+from .summary import summary_lines
 
 __all__ = [
     "ParamRange",

@@ -124,10 +124,12 @@ def run_compensation(settings: RunSettings) -> CompensationModel | None:
 
 #: One trial's :func:`robust_summary` (a row of ``best/robust.json``'s ``top``): the worst
 #: nominal score and each scene's, whether every nominal member passes, the yield over the
-#: samples with its 95 % interval, and the number of samples.
+#: samples with its 95 % interval, the number of samples, and the EC that fails most often
+#: over them (None: none fails) with its failure rate.
 RobustSummary = TypedDict("RobustSummary", {
     "nominal_score": float, "nominal_scores": list[float], "nominal_passed": bool,
-    "yield": float, "yield_ci": list[float], "samples": int})
+    "yield": float, "yield_ci": list[float], "samples": int, "limiting_ec": str | None,
+    "limiting_rate": float})
 
 
 def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
@@ -146,9 +148,17 @@ def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
     import numpy as np
 
     y = yield_estimate(np.array(passed))
+    fails: dict[str, int] = {}
+    for j in range(n_scenes):
+        for i in range(samples):
+            for ec, cell in results[j * per + 1 + i][3].items():
+                fails[ec] = fails.get(ec, 0) + (not cell.passed)
+    worst = max(fails, key=lambda e: fails[e]) if fails and max(fails.values()) else None
     return {"nominal_score": min(nominal), "nominal_scores": nominal,
             "nominal_passed": all(bool(results[j * per][2]) for j in range(n_scenes)),
-            "yield": y.yield_, "yield_ci": list(y.ci), "samples": len(passed)}
+            "yield": y.yield_, "yield_ci": list(y.ci), "samples": len(passed),
+            "limiting_ec": worst,
+            "limiting_rate": fails[worst] / max(len(passed), 1) if worst else 0.0}
 
 
 def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,

@@ -31,9 +31,8 @@ from ..runs.records import RunSettings, RunStatus
 from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
 from .resumed import ResumeArgs, check_resume_args
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
-                     shared_problem_lines, write_member_results)
-from .markets import (check_market_arguments, market_summary_lines, markets_members,
-                      write_market_results)
+                     write_member_results)
+from .markets import check_market_arguments, markets_members, write_market_results
 from .members import check_cameras
 from ..runs.store import RunStore
 from ..search.strategies import Strategy, check_seed
@@ -48,7 +47,7 @@ if TYPE_CHECKING:
     from ..scene import Scene
 
 __all__ = ["tune", "resume", "TuneResult", "write_results",
-           "DISPLAY_SIZE", "summary_lines", "remove_run"]
+           "DISPLAY_SIZE", "remove_run"]
 
 #: The default RVM image of record (:data:`rvmsim.scene.RVM_IMAGE_OF_RECORD_PX`), under its
 #: old name; a scene's or criteria file's ``display.rvm_image_px`` sets a car's own.
@@ -412,40 +411,6 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
             progress.close()
     store.set_state(RunStatus.DONE, outcome.stopped)
     return outcome
-
-
-def summary_lines(result: TuneResult) -> list[str]:
-    """What ``rvmsim tune`` prints at the end: the search's counts and stop reason, and the
-    best candidate's EC table (as ``best/ec_table.txt`` holds it)."""
-    o, best = result.outcome, result.outcome.best
-    if best is None:
-        return ["no trials"]
-    robust = _robust_line(result.run_dir)
-    head = (f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
-            f"{o.seconds:.1f} s ({o.stopped}); best EC score {best.score:.4g} (trial {best.idx})")
-    markets = market_summary_lines(result.run_dir)
-    if markets:
-        return [head, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(), "",
-                *markets]
-    problems = shared_problem_lines(result.run_dir)
-    return [head, *robust, (result.run_dir / "best" / "ec_table.txt").read_text().rstrip(),
-            *(["", "no setting found passes every scene:", *(f"  {p}" for p in problems)]
-              if problems else [])]
-
-
-def _robust_line(run_dir: Path) -> list[str]:
-    """A robust run's best candidate as ``best/robust.json`` has it (none for other runs)."""
-    path = run_dir / "best" / "robust.json"
-    if not path.is_file():
-        return []
-    doc = json.loads(path.read_text())
-    if not doc.get("top"):
-        return []
-    t = doc["top"][0]
-    lo, hi = t["yield_ci"]
-    return [f"robust: nominal EC score {t['nominal_score']:.4g}, robust ({doc['aggregate']} "
-            f"of {t['samples']} samples and nominal) {t['robust_score']:.4g}, yield over the "
-            f"samples {100 * t['yield']:.0f} % (95 %: {100 * lo:.0f}–{100 * hi:.0f} %)"]
 
 
 def remove_run(run_dir: str | Path) -> None:

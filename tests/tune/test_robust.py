@@ -162,3 +162,47 @@ def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, 
     assert top["samples"] == 6 and len(top["nominal_scores"]) == 2
     # the nominal scores are the first member of each scene's block
     assert top["nominal_scores"] == pytest.approx([members[0][0], members[4][0]])
+
+
+#: ±2.5° on every angle: no setting passes a tenth of the samples, so the 10 % quantile of
+#: their EC scores (the robust aggregate) is flat at ~0.
+WIDE = {"mount": {a: {"uniform": {"half_width": 2.5}} for a in ("yaw_deg", "pitch_deg",
+                                                               "roll_deg")}}
+
+
+def test_a_flat_robust_aggregate_ranks_by_the_nominal_car_then_the_yield(tmp_path):
+    """Where the aggregate carries no ranking, rank 1 is a setting that passes the car as
+    designed (when one was evaluated), the one of those with the highest yield over the
+    samples; the run says that this yield is one setting's without end-of-line
+    compensation, naming the EC."""
+    from rvmsim.runs import FLAT_SCORE
+
+    scene = write_small_scene(tmp_path, name="wide.yaml", variation=WIDE,
+                              edit={"display": {"rvm_image_px": [320, 180]}})
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(json.dumps(CONFIG))
+    run = tmp_path / "run"
+    res = run_in_process(["tune", str(scene), "--robust", "--samples", "6", "--budget", "160",
+                          "--seed", "2", "--config", str(cfg), "--workers", "1", "--out",
+                          str(run), "--no-progress"],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    assert res.code in (0, 1), res.stderr
+    store = RunStore(run / "run.sqlite", readonly=True)
+    try:
+        idx, member, score, passed = store.member_table()
+        trial_scores = dict(store.rows("SELECT idx, score FROM trials"))
+    finally:
+        store.close()
+    per = 1 + 6
+    nominal_pass = {int(i) for i, m, p in zip(idx, member, passed) if m % per == 0 and p}
+    assert max(trial_scores.values()) < FLAT_SCORE, "the aggregate was not flat"
+    assert nominal_pass, "no trial passed the nominal car: nothing to rank by"
+    yields = {}
+    for i, m, p in zip(idx, member, passed):
+        if m % per:
+            yields.setdefault(int(i), []).append(bool(p))
+    best = json.loads((run / "best" / "ec.json").read_text())["trial"]
+    assert best in nominal_pass
+    assert np.mean(yields[best]) == max(np.mean(yields[i]) for i in nominal_pass)
+    assert "without end-of-line compensation: EC " in res.stdout, res.stdout
+    assert f"(trial {best})" in res.stdout
