@@ -140,7 +140,7 @@ class SplitEvaluator:
         self._parts: list[tuple[np.ndarray, CandidateEvaluator]] = []
         for mask in (~self.body, self.body):
             if mask.any():
-                ev = make_evaluator(image, record, criteria_subset(criteria, mask))
+                ev = make_evaluator(image, record, criteria_subset(criteria, mask), record=record)
                 assert isinstance(ev, CandidateEvaluator)  # one image at its size of record
                 self._parts.append((mask, ev))
 

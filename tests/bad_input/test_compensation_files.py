@@ -50,6 +50,16 @@ FILES = [
     ("load-state-unknown", "station: {measured_at: parked}\n", "station.measured_at"),
     ("not-a-mapping", "- tilt\n", "mapping"),
     ("bad-yaml", "params: [tilt\n", C),
+    ("unknown-law", "law: least-squares\n", "law"),
+    ("law-not-a-name", "law: [ec-solve]\n", "law"),
+    ("budget-zero", "budget: 0\n", "budget"),
+    ("budget-too-large", "budget: 100000\n", "budget"),
+    ("budget-not-a-number", "budget: lots\n", "budget"),
+    ("budget-fraction", "budget: 12.5\n", "budget"),
+    ("unknown-stop", "stop: sometimes\n", "stop"),
+    ("negative-edge-sigma", "station: {edge_sigma_px: -0.3}\n", "station.edge_sigma_px"),
+    ("unknown-marginal-policy", "station: {marginal: maybe}\n", "station.marginal"),
+    ("section-unknown-law", "compensation: {law: ec_solve}\n", "compensation.law"),
 ]
 CASES = [Case(f"compensation-{i}", _robustness(C), (C, key), _setup(text), keep=(OUT,))
          for i, text, key in FILES]
