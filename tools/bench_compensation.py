@@ -1,31 +1,35 @@
 """Benchmark: the yield after end-of-line compensation against the station's accuracy, for
-every bundled vehicle's nominal-tuned setting (not a test; issue #25's README table).
+every bundled vehicle's nominal-tuned setting (not a test; issues #25 and #41's README table).
 
     PYTHONPATH=$PWD python3 tools/bench_compensation.py [--vehicles a,b,c,d,e,f]
         [--samples 400] [--seed 0] [--eval-seed 1] [--sigmas 0,0.02,0.05,0.1]
-        [--mm-per-deg 10] [--budget N] [--workers 2] [--out out/yield_table]
-        [--law-cars 200] [--robust-samples K [--skip-nominal]] [--no-progress]
+        [--mm-per-deg 10] [--edge-per-deg 3] [--budget N] [--workers 2]
+        [--out out/yield_table] [--robust-samples K [--skip-nominal]] [--no-progress]
 
 For every vehicle:
 
 1. its nominal-tuned setting (``tools/yield_table.py``'s run folders under ``--out``: tuned
    once, then read back);
 2. :func:`rvmsim.robust.robustness` without compensation and with the default compensation
-   model at each station accuracy σ of ``--sigmas`` (angles, degrees; positions
-   ``--mm-per-deg`` × σ mm: 0.1° with 1 mm, the documented default), ``--samples`` samples
-   (Sobol seed ``--eval-seed``), tolerance scale 1 only, renders cached;
-3. the σ at which the yield after compensation reaches 99 % (linear between the measured
+   model (``law: ec-solve``) at each station accuracy σ of ``--sigmas`` (angles, degrees;
+   positions ``--mm-per-deg`` × σ mm; the body's edge on the capture ``--edge-per-deg`` × σ
+   px: 0.1° with 1 mm and 0.3 px, the documented default), ``--samples`` samples (Sobol seed
+   ``--eval-seed``), tolerance scale 1 only, renders cached; and with ``law:
+   reference-points`` (the law before #41) at the default σ, for comparison;
+3. per point: the yield with its Wilson 95 % interval, the cars the station names
+   infeasible, marginal (failed by the default policy), and the cars it passes that fail in
+   the field (escapes); the failing ECs;
+4. the σ at which the yield after compensation reaches 99 % (linear between the measured
    points; "< smallest" or "> largest" when outside them);
-4. the cost: robustness with compensation (σ = the default) over robustness without, both
-   with the renders cached; and the law's time per car (``--law-cars`` cars, median and
-   95th percentile, after one warm-up).
+5. the cost: robustness with compensation (σ = the default) over robustness without, both
+   with the renders cached, and the law's EC evaluations per car.
 
 With ``--robust-samples K`` each vehicle is also tuned with ``--robust --samples K
 --compensation default`` (the run folder ``OUT/<vehicle>/robust-comp-k<K>-s<seed>``) and
 that setting gets a row of its own.
 
 Prints a markdown table and the machine, and writes ``OUT/compensation.json`` (or
-``compensation_<vehicles>.json`` for a subset).
+``compensation_<vehicles>.json`` for a subset) and the curves as a PNG beside it.
 """
 
 from __future__ import annotations
@@ -71,29 +75,24 @@ def sigma_for(curve: list[tuple[float, float]], target: float = 0.99) -> str:
     return f"≥ {pts[-1][0]:g}°"
 
 
-def law_timing(scene: Any, params: Any, output: Any, n: int) -> dict[str, float]:
-    """The law's seconds per car on ``n`` cars of random deviations (±1°, ±5 mm)."""
-    import numpy as np
-
-    from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw, Deviation
-
-    law = CompensationLaw(scene, params, output, DEFAULT_COMPENSATION)
-    rng = np.random.default_rng(0)
-    devs = [Deviation.from_offsets(np.r_[rng.uniform(-5, 5, 3), rng.uniform(-1, 1, 3)])
-            for _ in range(n + 1)]
-    law.correct(devs[0])  # warm-up (imports)
-    times = []
-    for d in devs[1:]:
-        t0 = time.perf_counter()
-        law.correct(d)
-        times.append(time.perf_counter() - t0)
-    return {"median_ms": 1e3 * float(np.median(times)),
-            "p95_ms": 1e3 * float(np.percentile(times, 95))}
+def _point(r: Any) -> dict[str, Any]:
+    """One robustness result with compensation as a JSON-ready point of the curve."""
+    c = r.compensated
+    assert c is not None
+    field_ok = r.evaluation.all_passed
+    return {"yield": r.yield_, "ci95": list(r.ci),
+            "failing_ecs": {e.id: e.failure_rate for e in r.ecs if e.enabled and e.n_fail},
+            "infeasible": c.count("infeasible"), "marginal": c.count("marginal"),
+            "escaped": int((c.accepted & ~field_ok).sum()),
+            "out_of_range": int((~c.within_range).sum()),
+            "evaluations_per_car": c.distribution()["evaluations_per_car"]}
 
 
 def _vehicle(letter: str, label: str, path: Path, setting: dict[str, Any],
              sigmas: list[float], args: argparse.Namespace) -> tuple[str, dict[str, Any]]:
     """One tuned setting's yields before and after compensation, its costs."""
+    import dataclasses
+
     import yaml
 
     from rvmsim.compensation import DEFAULT_COMPENSATION
@@ -109,25 +108,24 @@ def _vehicle(letter: str, label: str, path: Path, setting: dict[str, Any],
     before, t_before = _robustness(scene, params, output, args, None)
     curve, after_docs, t_after = [], {}, None
     for s in sigmas:
-        model = DEFAULT_COMPENSATION.with_station(s, s * args.mm_per_deg)
+        model = DEFAULT_COMPENSATION.with_station(s, s * args.mm_per_deg, s * args.edge_per_deg)
         r, t = _robustness(scene, params, output, args, model)
         if abs(s - DEFAULT_COMPENSATION.angle_sigma_deg) < 1e-12:
             t_after = t
         curve.append((s, r.yield_))
-        assert r.compensated is not None
-        after_docs[f"{s:g}"] = {
-            "yield": r.yield_, "ci95": list(r.ci),
-            "failing_ecs": {e.id: e.failure_rate for e in r.ecs if e.enabled and e.n_fail},
-            "out_of_range": int((~r.compensated.within_range).sum())}
+        after_docs[f"{s:g}"] = _point(r)
+        say(f"  σ {s:g}°: {100 * r.yield_:.1f} % ({t:.1f} s)")
+    points = dataclasses.replace(DEFAULT_COMPENSATION, law="reference-points")
+    r_points, _ = _robustness(scene, params, output, args, points)
     return f"{letter} {label}", {
         "name": f"{scene.name}, {label}-tuned", "isp": setting["isp"],
         "best_score": setting.get("best_score"),
         "before": {"yield": before.yield_, "ci95": list(before.ci),
                    "failing_ecs": {e.id: e.failure_rate for e in before.ecs
                                    if e.enabled and e.n_fail}},
-        "after": after_docs, "sigma_for_99": sigma_for(curve),
-        "seconds_without": t_before, "seconds_with_default": t_after,
-        "law": law_timing(scene, params, output, args.law_cars)}
+        "after": after_docs, "reference_points_law": _point(r_points),
+        "sigma_for_99": sigma_for(curve),
+        "seconds_without": t_before, "seconds_with_default": t_after}
 
 
 def _row(d: dict[str, Any], sigmas: list[float]) -> str:
@@ -135,10 +133,11 @@ def _row(d: dict[str, Any], sigmas: list[float]) -> str:
     cells = []
     for s in sigmas:
         a = d["after"][f"{s:g}"]
-        cells.append(f"{100 * a['yield']:.1f} %" + (
-            f" ({100 * a['ci95'][0]:.1f})" if s == sigmas[-1] else ""))
+        cells.append(f"{100 * a['yield']:.1f} % ({100 * a['ci95'][0]:.1f})")
+    ref = d["reference_points_law"]
     return (f"| {d['name']} | {100 * d['before']['yield']:.1f} % ({100 * lo:.1f}–"
-            f"{100 * hi:.1f}) | " + " | ".join(cells) + f" | {d['sigma_for_99']} |")
+            f"{100 * hi:.1f}) | " + " | ".join(cells) + f" | {d['sigma_for_99']} | "
+            f"{100 * ref['yield']:.1f} % |")
 
 
 def plot_curves(doc: dict[str, Any], path: Path) -> None:
@@ -175,9 +174,10 @@ def main() -> None:
     ap.add_argument("--eval-seed", type=int, default=1, help="Sobol seed of the samples")
     ap.add_argument("--sigmas", default="0,0.02,0.05,0.1")
     ap.add_argument("--mm-per-deg", type=float, default=10.0)
+    ap.add_argument("--edge-per-deg", type=float, default=3.0,
+                    help="the body edge's σ on the capture, px per degree of station σ")
     ap.add_argument("--budget", type=int, default=None)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--law-cars", type=int, default=200)
     ap.add_argument("--robust-samples", type=int, default=None)
     ap.add_argument("--skip-nominal", action="store_true",
                     help="with --robust-samples: only the robust-tuned settings' rows")
@@ -205,27 +205,30 @@ def main() -> None:
             rows.append(_row(doc, sigmas))
             say(rows[-1])
     head = ("| vehicle | before (95 % CI) | " + " | ".join(
-        f"after, σ {s:g}° / {s * args.mm_per_deg:g} mm" for s in sigmas)
-        + " (lower 95 % bound)"
-        + " | σ for 99 % |")
+        f"σ {s:g}° / {s * args.mm_per_deg:g} mm / {s * args.edge_per_deg:g} px" for s in sigmas)
+        + " | σ for 99 % | reference-point law, default σ |")
     print(head)
-    print("|" + "---|" * (3 + len(sigmas)))
+    print("|" + "---|" * (4 + len(sigmas)))
     print("\n".join(rows))
+    print("(after compensation, the lower Wilson 95 % bound in brackets)")
     print()
     for letter, d in docs.items():
         ratio = (d["seconds_with_default"] / d["seconds_without"]
                  if d["seconds_with_default"] else float("nan"))
+        default = d["after"].get(f"{DEFAULT_COMPENSATION.angle_sigma_deg:g}", {})
         print(f"{d['name']}: robustness {d['seconds_without']:.1f} s without, "
               f"{d['seconds_with_default'] or float('nan'):.1f} s with compensation "
-              f"({ratio:.2f}x); law {d['law']['median_ms']:.2f} ms per car "
-              f"(p95 {d['law']['p95_ms']:.2f} ms)")
+              f"({ratio:.2f}x); at the default σ: {default.get('infeasible')} infeasible, "
+              f"{default.get('marginal')} marginal, {default.get('escaped')} escaped, "
+              f"evaluations per car {default.get('evaluations_per_car')}")
     machine = f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     print(f"\nmachine: {machine}; {args.samples} samples, Sobol seed {args.eval_seed}")
     name = ("compensation.json" if sorted(args.vehicles.replace(",", "")) == list("abcdef")
             and not args.robust_samples else f"compensation_{args.vehicles.replace(',', '')}"
             f"{'_k' + str(args.robust_samples) if args.robust_samples else ''}.json")
     doc = {"machine": machine, "samples": args.samples, "eval_seed": args.eval_seed,
-           "sigmas_deg": sigmas, "mm_per_deg": args.mm_per_deg, "vehicles": docs}
+           "sigmas_deg": sigmas, "mm_per_deg": args.mm_per_deg,
+           "edge_px_per_deg": args.edge_per_deg, "vehicles": docs}
     (args.out / name).write_text(json.dumps(doc, indent=1))
     plot_curves(doc, (args.out / name).with_suffix(".png"))
 
