@@ -38,9 +38,11 @@ def eol_page(result: StationResult) -> str:
 load state <b>{escape(load.get("name", ""))}</b> (height {load.get("height_mm", 0):+g} mm,
 pitch {load.get("pitch_deg", 0):+g}°). Platform setting {escape(result.params_file or "-")};
 ECs ({escape(result.criteria)}) on the {result.output[0]}×{result.output[1]} RVM image.</p>
-<p>Compensation ({escape(comp.get("source", ""))}): writes {escape(", ".join(result.written))};
-allowed offsets {escape(ranges)}; station σ {station.get("angle_sigma_deg", 0):g}° and
-{station.get("position_sigma_mm", 0):g} mm (assumed).</p>
+<p>Compensation ({escape(comp.get("source", ""))}, law {escape(str(comp.get("law", "")))}):
+writes {escape(", ".join(result.written))}; allowed offsets {escape(ranges)}; station σ
+{station.get("angle_sigma_deg", 0):g}° and {station.get("position_sigma_mm", 0):g} mm, the
+body's edge {station.get("edge_sigma_px", 0):g} px (assumed: what calls a car marginal).
+Cars: {", ".join(f"{n} {escape(st)}" for st, n in _statuses(result) if n)}.</p>
 <h2>Cars</h2>{_car_table(result)}
 <h2>ECs on each car's corrected picture</h2>{_ec_table(result)}
 <h2>Corrected pictures</h2><div class="gallery">{"".join(_card(c) for c in result.cars)}</div>
@@ -48,6 +50,12 @@ allowed offsets {escape(ranges)}; station σ {station.get("angle_sigma_deg", 0):
 setting up the station, {result.timings.get("cars", 0) / max(n, 1):.2f} s per car).</p>
 """
     return page(f"EOL station: {result.scene_name}", body)
+
+
+def _statuses(result: StationResult) -> list[tuple[str, int]]:
+    """The cars by the station's verdict (pass, marginal, infeasible, fail, no pose)."""
+    return [(st, result.count(st)) for st in ("pass", "marginal", "infeasible", "fail",
+                                              "no pose")]
 
 
 def _car_table(result: StationResult) -> str:
@@ -68,7 +76,7 @@ def _car_table(result: StationResult) -> str:
         resid = "-" if corr is None else f"{corr.residual_rms_px:.2f}"
         score = "-" if c.ec is None else f"{c.ec.score:.3f}"
         rows.append(f'<tr class="{"pass" if c.passed else "fail"}"><td>{escape(c.name)}</td>'
-                    f"<td>{c.verdict}</td><td class=\"num\">{pos}</td>"
+                    f"<td>{c.verdict} ({escape(c.status)})</td><td class=\"num\">{pos}</td>"
                     f"<td class=\"num\">{ang}</td><td class=\"num\">{fit}</td>{values}"
                     f"<td class=\"num\">{resid}</td><td class=\"num\">{score}</td>"
                     f"<td>{escape(c.reason)}</td></tr>")

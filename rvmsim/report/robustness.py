@@ -173,19 +173,50 @@ def _compensation_section(result: RobustnessResult) -> str:
         first = next(c for c in comp.corrections if c.exceeded)
         rows.append(f'<tr class="fail"><td>EOL range exceeded</td><td></td><td class="num">'
                     f'{n_out} cars (e.g. {escape(first.exceeded[0])})</td></tr>')
+    rows += _station_rows(result)
     m = comp.model
     values = data_uri(compensation_values_png(result))
+    how = (f"so that every EC passes on the car's picture with the largest margin its budget "
+           f"of {m.budget} EC evaluations finds (law ec-solve, from the values that keep "
+           f"{result.reference_points} reference ground points where the nominal car shows "
+           "them)" if m.law == "ec-solve" else
+           f"so that {result.reference_points} reference ground points land where the "
+           "nominal car shows them (law reference-points)")
     return f"""
 <h2>End-of-line compensation: before and after</h2>
 <p>Each car's camera deviation is measured at the end of the line (station σ
-{m.angle_sigma_deg:g}° and {m.position_sigma_mm:g} mm per axis, in load state
+{m.angle_sigma_deg:g}° and {m.position_sigma_mm:g} mm per axis, the body's edge on the
+capture {m.edge_sigma_px:g} px: assumptions, in load state
 {escape(m.measured_at or result.variation.load_states[0].name)}) and the EOL step writes
-{escape(", ".join(m.params))} so that {result.reference_points} reference ground points
-land where the nominal car shows them. Model: {escape(m.source)}.</p>
+{escape(", ".join(m.params))} {how}. A car whose margin is inside the station's uncertainty
+is marginal ({"failed" if m.marginal == "fail" else "accepted"} by the station's policy).
+Model: {escape(m.source)}.</p>
 <table><tr><th></th><th>before compensation</th><th>after compensation</th></tr>
 {"".join(rows)}</table>
 <figure><img src="{values}" alt="per-car values"><figcaption>Per-car offsets from the
 platform setting (red: the allowed range).</figcaption></figure>"""
+
+
+def _station_rows(result: RobustnessResult) -> list[str]:
+    """The station's verdicts that keep cars from the yield: infeasible (named apart),
+    marginal, and cars it let go that fail in the field."""
+    comp = result.compensated
+    assert comp is not None
+    rows = []
+    infeasible = [s for s in comp.solutions if s.status == "infeasible"]
+    if infeasible:
+        rows.append(f'<tr class="fail"><td>infeasible cars: no per-car setting in the '
+                    f'allowed ranges passes</td><td></td><td class="num">{len(infeasible)} '
+                    f'(e.g. {escape(infeasible[0].reasons[0])})</td></tr>')
+    marginal = comp.count("marginal")
+    if marginal:
+        rows.append(f'<tr><td>marginal cars (a margin inside the station\'s uncertainty)'
+                    f'</td><td></td><td class="num">{marginal}</td></tr>')
+    escaped = int((comp.accepted & ~result.evaluation.all_passed).sum())
+    if escaped:
+        rows.append(f'<tr class="fail"><td>passed by the station, failing in the field</td>'
+                    f'<td></td><td class="num">{escaped}</td></tr>')
+    return rows
 
 
 def _why(e: EcStats, n: int) -> str:
