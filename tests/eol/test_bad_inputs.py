@@ -154,3 +154,18 @@ def test_a_setting_whose_view_shows_no_ground_is_one_line(tmp_path: Path, good_c
                          env={"RVMSIM_CACHE": str(tmp_path / "cache")})
     _one_line(res, "reference", "only 0 reference ground points are in the RVM image")
     _unchanged(out)
+
+
+@pytest.mark.parametrize("bad", ["link", "folder"])
+def test_a_capture_folder_entry_that_is_not_a_file_is_refused(tmp_path: Path, good_capture,
+                                                             bad):
+    """A dangling link (or a folder named like a capture) beside a good capture is an
+    error naming it, not a car silently left out ("1 of 1 cars pass")."""
+    entry = good_capture.parent / "car_b.png"
+    if bad == "link":
+        entry.symlink_to(tmp_path / "gone.png")
+    else:
+        entry.mkdir()
+    res, out, _ = _eol(tmp_path, good_capture.parent)
+    _one_line(res, str(entry), "a link to a missing file" if bad == "link" else "not a file")
+    _unchanged(out)

@@ -129,3 +129,22 @@ def test_a_car_no_setting_can_pass_is_named_infeasible(platform, tmp_path):
                                                              tight)))
     assert sol.status == "infeasible"
     assert "infeasible car: 1-3 fails over the whole allowed range" in sol.reasons[0]
+
+
+def test_a_margin_inside_the_stations_uncertainty_is_marginal_and_the_policy_decides(
+        platform):
+    """With a station of 1.5° and 3 px (σ of every EC large), the nominal car passes every
+    EC but not by its σ: marginal, failed by the default policy, let go by ``accept``."""
+    scene, params, record, crit, _ = platform
+    nominal = render_fisheye(scene)
+    picture = ImagePicture(SplitEvaluator(nominal, record, crit))
+    rough = DEFAULT_COMPENSATION.with_station(1.5, 0.0, 3.0)
+    for policy, accepted in (("fail", False), ("accept", True)):
+        model = dataclasses.replace(rough, marginal=policy, budget=6)
+        law = make_law(scene, params, record, model, crit, picture, nominal.camera)
+        sol = law.solve(Deviation(), picture)
+        assert sol.status == "marginal", sol.reasons
+        assert any(r.startswith("marginal: EC ") for r in sol.reasons)
+        assert law.accepts(sol) is accepted
+        close = sol.margins < sol.uncertainty
+        assert close.any() and (sol.uncertainty[close] > 0).all()

@@ -5,16 +5,19 @@ of the run's settings."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw, compensation_from_dict
-from rvmsim.pipeline import make_evaluator
-from rvmsim.robust import (draw_samples, sample_images, station_readings, variation_from_scene)
-from rvmsim.runs import RunStore
+from rvmsim.criteria import default_criteria
+from rvmsim.isp import OutputSpec
+from rvmsim.percar import ImagePicture, SplitEvaluator, make_law
+from rvmsim.pipeline import record_output
+from rvmsim.render import render_fisheye
 from rvmsim.runs.records import RunSettings
-from rvmsim.scene import load_scene
-from rvmsim.tune import TuneRequest, TuningConfig, tune
+from rvmsim.tune import TuningConfig
 
 from ..cli_runner import run_in_process
 from .test_robust import small  # noqa: F401 - the fixture (a small scene, its own cache)
@@ -22,38 +25,60 @@ from .test_robust import small  # noqa: F401 - the fixture (a small scene, its o
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 2}
 
 
-def test_each_sample_is_judged_with_its_per_car_values(small, tmp_path):
-    cfg = TuningConfig.model_validate(CONFIG)
-    k = 3
-    run = tmp_path / "run"
-    tune(TuneRequest((small,), config=cfg, budget=40, seed=3, robust_samples=k,
-                     compensation=DEFAULT_COMPENSATION), run)
-    store = RunStore(run / "run.sqlite", readonly=True)
-    try:
-        rec = store.top(1)[0]
-        members = store.member_results(rec.idx)
-        settings = store.settings()
-    finally:
-        store.close()
-    assert settings.compensation == DEFAULT_COMPENSATION.as_dict()
-    # the stored sample members are the per-car values' scores, computed here anew
-    scene = load_scene(small)
-    var = variation_from_scene(scene)
-    samples = draw_samples(var, k, 3)
-    out = cfg.output_spec()
-    law = CompensationLaw(scene, rec.params, out, DEFAULT_COMPENSATION)
-    readings = station_readings(scene, samples, DEFAULT_COMPENSATION, 3, var.load_states[0])
-    for i, im in enumerate(sample_images(scene, samples, color=False)):
-        c = law.correct(readings[i])
-        ev = make_evaluator(im, out)
-        want = ev(c.params)
-        assert members[1 + i][0] == pytest.approx(want.score, rel=1e-9)
-        assert members[1 + i][2] == (want.passed and c.within_range)
-        # and not the platform setting's (the correction changed what the car shows)
-        assert ev.values(c.params).tolist() != ev.values(rec.params).tolist() or \
-            c.offsets["h_pan"] < 0.05
-    doc = json.loads((run / "best" / "robust.json").read_text())
-    assert doc["compensation"]["station"]["angle_sigma_deg"] == 0.1
+def test_each_sample_is_judged_with_the_values_its_law_writes():
+    """Robust tuning's scorer on two candidates, vehicle D's tuned setting (it passes the
+    nominal car) and one that fails it: each sample member's stored score is that of the
+    values the model's law writes for its car (rvmsim.percar, the call robustness and eol
+    make, computed here anew on the car's station reading), and, for the failing
+    candidate, of the reference-point start's values."""
+    import dataclasses
+
+    from rvmsim.isp import load_params
+    from rvmsim.tune import MembersScorer, member_evaluators
+    from rvmsim.tune.compensated import MembersCompensation
+    from rvmsim.tune.robust import robust_members
+
+    from ..percar.test_law import SCALE
+    from ..scenes import load_small_scene
+
+    scene = load_small_scene("d", SCALE)
+    good, _ = load_params(Path(__file__).parents[1] / "percar" / "vehicle_d_tuned.yaml")
+    good = good.for_input_scale(SCALE)
+    bad = dataclasses.replace(good, zoom=good.zoom * 0.8)
+    model = DEFAULT_COMPENSATION
+    k, seed = 3, 4
+    settings = RunSettings(str(scene.source), None, "v", "cmaes", seed, None, None,
+                           TuningConfig(), robust_samples=k, compensation=model.as_dict())
+    nominal = render_fisheye(scene)
+    members = robust_members([scene], [nominal], settings)
+    crit = default_criteria()
+    out = OutputSpec(640, 360)
+    evaluators = member_evaluators(members, out, crit)
+    record = record_output(crit, scene)
+    stations = [m.station for m in members]
+    comp = MembersCompensation(model, record, crit, [m.scene for m in members], stations, [0],
+                               [members[0]])
+    space = TuningConfig().space(nominal.camera)
+    scorer = MembersScorer(evaluators, space, compensation=comp)
+    batch = scorer([space.vector(good), space.vector(bad)])
+    picture = ImagePicture(SplitEvaluator(nominal, record, crit))
+    for i, params in enumerate((space.params(space.vector(good)),
+                                space.params(space.vector(bad)))):
+        rows = batch.members[i]
+        if i == 0:
+            assert rows[0][2], "the tuned setting fails the nominal car"
+            law = make_law(scene, params, record, model, crit, picture)
+            sols = [law.solve(st.measured, st.picture(record, crit)) for st in stations[1:]]
+            cars = [(s.params, law.accepts(s)) for s in sols]
+        else:
+            assert not rows[0][2], "the changed setting passes the nominal car"
+            ref = CompensationLaw(scene, params, record, model)
+            cars = [(c.params, c.within_range) for c in
+                    (ref.correct(st.measured) for st in stations[1:])]
+        for j, (car, accepted) in enumerate(cars):
+            want = evaluators[1 + j](car)
+            assert rows[1 + j][0] == pytest.approx(want.score, rel=1e-12), (i, j)
+            assert rows[1 + j][2] == (want.passed and accepted)
 
 
 def test_the_model_round_trips_through_the_run_settings():
