@@ -14,8 +14,8 @@ import pytest
 import rvmsim
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("storage", "camera", "scene", "render", "isp", "criteria", "robust", "search",
-            "runs", "tune", "batch", "validate", "eol", "report", "cli")
+PACKAGES = ("storage", "camera", "scene", "render", "isp", "criteria", "percar", "robust",
+            "search", "runs", "tune", "batch", "validate", "eol", "report", "cli")
 
 
 @pytest.mark.parametrize("name", rvmsim.__all__)

@@ -148,3 +148,21 @@ def test_a_margin_inside_the_stations_uncertainty_is_marginal_and_the_policy_dec
         assert law.accepts(sol) is accepted
         close = sol.margins < sol.uncertainty
         assert close.any() and (sol.uncertainty[close] > 0).all()
+
+
+def test_a_written_parameter_an_ec_pins_is_solved_not_searched(platform):
+    """Writing the advanced H shift too: EC 3-1's sub-solve sets it for every candidate
+    (guideline 2's centre on the image's centre), so the search has the pans and tilt
+    only, and the car's 3-1 is the solve's."""
+    scene, params, record, crit, _ = platform
+    model = dataclasses.replace(PERFECT, params=("h_pan", "v_pan", "tilt", "adv_h_shift"),
+                                ranges=(("h_pan", 0.0, 3.0), ("tilt", -3.0, 3.0),
+                                        ("adv_h_shift", -0.1, 0.1)))
+    law = make_law(scene, params, record, model, crit)
+    assert law.variables == ("pan_x", "pan_y", "tilt")
+    dev = CARS["x"]
+    image = render_fisheye(deviated_scene(dev))
+    sol = law.solve(dev, ImagePicture(SplitEvaluator(image, record, crit)))
+    j = crit.ids.index("3-1")
+    assert sol.status == "pass" and sol.values[j] <= 0.5
+    assert sol.params.adv_h_shift != params.adv_h_shift
