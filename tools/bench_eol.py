@@ -13,10 +13,10 @@ car's capture is the station rendered from its camera (through the render cache)
    ``--workers`` processes (default 2);
 2. per car: the recovered deviation minus the truth, the seconds of its station step, its
    verdict;
-3. what robustness predicts for the same cars: each car's values from its true deviation
-   (a perfect station), judged by ``rvmsim.robust.evaluate_samples`` on robustness's own
-   images of the car (its viewpoint rendered at the car's exact position, the rotation a
-   re-fold); the station's verdict should agree car for car.
+3. what robustness predicts for the same cars: each car through robustness's station step
+   with a perfect station (``rvmsim.robust.CarJudge``: the model's law on robustness's own
+   image of the car, its viewpoint rendered at the car's exact position, the rotation a
+   re-fold) and judged there; the station's verdict should agree car for car.
 """
 
 from __future__ import annotations
@@ -37,13 +37,15 @@ import numpy as np  # noqa: E402
 from _bench_common import cpu_model  # noqa: E402
 
 from rvmsim._io import write_png  # noqa: E402
-from rvmsim.compensation import (DEFAULT_COMPENSATION, CompensationLaw, Deviation,  # noqa: E402
-                                 loaded_deviation)
+from rvmsim.compensation import DEFAULT_COMPENSATION, Deviation  # noqa: E402
 from rvmsim.criteria import default_criteria  # noqa: E402
+from rvmsim.percar import ImagePicture, SplitEvaluator, make_law  # noqa: E402
+from rvmsim.pipeline import record_output  # noqa: E402
 from rvmsim.eol import (StationSettings, run_station, station_load,  # noqa: E402
                         synthetic_capture)
 from rvmsim.report import write_eol_page  # noqa: E402
-from rvmsim.robust import MountSample, evaluate_samples  # noqa: E402
+from rvmsim.robust import (CarJudge, MountSample, nominal_sample, refolder,  # noqa: E402
+                           sample_images, station_twin, variation_from_scene)
 from tests.eol import stations as S  # noqa: E402
 
 
@@ -55,17 +57,22 @@ def _deviations(n: int, seed: int) -> list[Deviation]:
 def _predicted(devs: list[Deviation]) -> tuple[np.ndarray, list[list[str]]]:
     """Robustness's verdict per car (perfect station) and the ECs it fails."""
     scene = S.station_scene(1.0)
-    params, output = S.platform(1.0)
+    params, _ = S.platform(1.0)
     crit = default_criteria()
-    load = station_load(scene, DEFAULT_COMPENSATION)
-    law = CompensationLaw(scene, params, output, DEFAULT_COMPENSATION)
-    corr = [law.correct(loaded_deviation(scene, d, load.height_mm, load.pitch_deg)) for d in devs]
+    model = DEFAULT_COMPENSATION.with_station(0.0, 0.0, 0.0)
+    load = station_load(scene, model)
+    record = record_output(crit, scene)
     samples = [MountSample(k, d.as_offsets(), (d.x_mm, d.y_mm, d.z_mm), load)
                for k, d in enumerate(devs)]
-    batch = evaluate_samples(scene, samples, [c.params for c in corr], output, crit)
-    ok = batch.all_passed & np.array([c.within_range for c in corr])
-    fails = [[i for i, p, e in zip(crit.ids, row, batch.enabled) if e and not p]
-             for row in batch.passed]
+    shared = refolder(scene, samples)
+    nominal = sample_images(scene, [station_twin(nominal_sample(variation_from_scene(scene)),
+                                                 load)], color=False, shared=shared)[0]
+    law = make_law(scene, params, record, model, crit,
+                   ImagePicture(SplitEvaluator(nominal, record, crit)), nominal.camera)
+    _, after, comp = CarJudge(scene, law, 0, load, crit, record)(samples, params, shared)
+    ok = after.all_passed & comp.accepted
+    fails = [[i for i, p, e in zip(crit.ids, row, after.enabled) if e and not p]
+             for row in after.passed]
     return ok, fails
 
 

@@ -252,7 +252,14 @@ def test_a_board_found_only_far_from_the_scenes_pose_is_a_detection_failure_sayi
         validate(scene, board_capture(), ValidationSettings(rerender=False))
     assert err.value.step == "detection"
     msg = str(err.value)
-    assert "the board was found (48 corners" in msg and "a pose 120°" in msg, msg
+    # 120° from the scene's, or its 180° twin: the 8 × 12 board's colours are symmetric
+    # under a half turn, and which twin the detector's corner order gives depends on the
+    # OpenCV build (5.1.0.95 gives 180°)
+    import re
+
+    found = re.search(r"a pose (\d+)° and", msg)
+    assert "the board was found (48 corners" in msg and found, msg
+    assert int(found.group(1)) in (120, 180), msg
     assert "is the scene's mount right?" in msg
     assert "checker corners are visible" in msg
     assert {"overlay", "edges", "landmarks", "board"} <= set(err.value.images)
