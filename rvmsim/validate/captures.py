@@ -43,18 +43,17 @@ def capture_files(paths: Sequence[Path]) -> list[Path]:
     Raises
     ------
     RvmsimError
-        A folder without any capture, or with an entry named as a capture that is not a
-        readable file (a dangling link, a folder).
+        A folder without any capture, or with a link named as a capture to a file that is
+        not there (a car would be left out silently).
     """
     out: list[Path] = []
     for p in paths:
         if p.is_dir():
             named = sorted(f for f in p.iterdir() if f.suffix.lower() in CAPTURE_SUFFIXES)
             for f in named:
-                if not f.is_file():  # a capture that is not there is not a car to skip
-                    what = "a link to a missing file" if f.is_symlink() else "not a file"
-                    raise RvmsimError(f"{f}: {what} (--capture {p})")
-            found = named
+                if f.is_symlink() and not f.exists():  # a car whose capture is gone
+                    raise RvmsimError(f"{f}: a link to a missing file (--capture {p})")
+            found = [f for f in named if f.is_file()]  # a folder named like one is not
             if not found:
                 raise RvmsimError(f"{p}: no captures ({', '.join(CAPTURE_SUFFIXES)}) in this "
                                   "folder (--capture)")
