@@ -8,15 +8,16 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .groups import LabelGroup, unique_groups
-from .measure import Measurements, MeasureOptions
-from .registry import EcDefinition, builtin_ecs
+from .hooks import SubSolve
+from .measure import Measurements, MeasureOptions, call_ec
+from .registry import EcDefinition, builtin_ecs, checked_solve_value
 from .sigmoid import Criterion, Sigmoid
 from .values import EcValue
 
@@ -95,6 +96,22 @@ class Criteria:
     def groups(self) -> tuple[LabelGroup, ...]:
         """The label groups the selected ECs read, each once."""
         return unique_groups(g for ec in self.ecs for g in ec.groups)
+
+    def sub_solves(self, params: Collection[str]) -> list[tuple[EcDefinition, SubSolve, float]]:
+        """(EC, its sub-solve, target) of every selected, enabled EC whose sub-solve sets one
+        of ``params`` and whose range has a target (:attr:`SubSolve.target`), in the
+        criteria's order (sort by :attr:`SubSolve.order` for the solve order)."""
+        found = []
+        for ec in self.ecs:
+            hook, criterion = ec.sub_solve, self.items[ec.id]
+            if hook is None or not criterion.enabled or hook.param not in params:
+                continue
+            target = checked_solve_value(ec, "target", call_ec(
+                ec, "sub-solve target", f"the criterion of {self.source}", hook.target,
+                criterion))
+            if target is not None:
+                found.append((ec, hook, target))
+        return found
 
     @functools.cached_property
     def arrays(self) -> tuple[np.ndarray, ...]:

@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..compensation import CompensationLaw, Correction, Deviation
-from ..criteria import (Criteria, EcDefinition, SubSolve, call_ec, checked_solve_value, outline_points,
-                        score_batch)
+from ..criteria import (Criteria, EcDefinition, SubSolve, call_ec, checked_solve_value,
+                        outline_points, score_batch)
 from ..isp import IspParams, OutputSpec, input_to_plane
 from .conflicts import GRID_LEVELS, conflicts_on_grid, grid_of
 from .margins import MarginScale
@@ -370,19 +370,11 @@ def _written_solves(criteria: Criteria, reference: CompensationLaw
     written = set(reference.variables) - {"pan_x", "pan_y", "tilt"}
     out: list[tuple[EcDefinition, SubSolve, float]] = []
     taken: set[str] = set()
-    for ec in criteria.ecs:
-        hook, criterion = ec.sub_solve, criteria.items[ec.id]
-        if hook is None or not criterion.enabled or hook.param not in written \
-                or hook.param in taken:
-            continue
-        target = checked_solve_value(ec, "target", call_ec(
-            ec, "sub-solve target", f"the criterion of {criteria.source}", hook.target,
-            criterion))
-        if target is None:
-            continue
-        taken.add(hook.param)
-        out.append((ec, hook, target))
-    return out
+    for ec, hook, target in criteria.sub_solves(written):
+        if hook.param not in taken:  # the first EC that pins a parameter sets it
+            taken.add(hook.param)
+            out.append((ec, hook, target))
+    return sorted(out, key=lambda t: t[1].order)
 
 
 class _Run:

@@ -163,15 +163,7 @@ def _applicable(criteria: Criteria, space: SearchSpace
     ranges = {r.name: r for r in space.ranges}
     found: list[tuple[EcDefinition, SubSolve, float, ParamRange]] = []
     setter: dict[str, str] = {}
-    for ec in criteria.ecs:
-        hook, criterion = ec.sub_solve, criteria.items[ec.id]
-        if hook is None or not criterion.enabled or hook.param not in ranges:
-            continue
-        target = checked_solve_value(ec, "target", call_ec(
-            ec, "sub-solve target", f"the criterion of {criteria.source}", hook.target,
-            criterion))
-        if target is None:
-            continue
+    for ec, hook, target in criteria.sub_solves(ranges):
         if hook.param in setter:
             raise CriteriaError(criteria.source, f"criteria.{ec.id}",
                                 f"ECs {setter[hook.param]} and {ec.id} both solve "
