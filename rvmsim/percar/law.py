@@ -105,12 +105,6 @@ class CarSolution:
         """The car's full ISP setting (full sensor)."""
         return self.correction.params
 
-    @property
-    def accepted(self) -> bool:
-        """Whether the station lets the car go: ``pass`` (a ``marginal`` car is accepted only
-        under the ``accept`` policy: :meth:`PerCarLaw.accepts`)."""
-        return self.status == "pass"
-
     def as_dict(self) -> dict[str, object]:
         """JSON-ready (robustness.json's and eol.json's per-car rows)."""
         def num(x: float) -> float | None:
@@ -276,7 +270,7 @@ class EcSolveLaw(PerCarLaw):
             infeasible, reasons = self._grid(run, picture)
             if infeasible and start.exceeded:  # what holding the site in place would need
                 reasons += [f"the reference points need more: {e}" for e in start.exceeded]
-        x = self._full(run.best_x, picture)
+        x = self._full(run.best_x, picture, run.outlines)
         correction = self.reference.correction_at(x, rms, worst)
         return self._solution(correction, run.best_values, run.count, start, reasons,
                               infeasible)
@@ -287,7 +281,7 @@ class EcSolveLaw(PerCarLaw):
         from scipy.optimize import minimize
 
         pts = grid_of(self.reference, self._free, GRID_LEVELS)
-        values = picture.values([self.params_at(x, picture) for x in pts])
+        values = picture.values([self.params_at(x, picture, run.outlines) for x in pts])
         run.count += len(pts)
         least = self.scale.least(values, self.uncertainty)
         passed = self.scale.passed(values)
@@ -305,7 +299,8 @@ class EcSolveLaw(PerCarLaw):
             pass  # the second budget is spent: the best values so far stand
         return False, []
 
-    def _full(self, free: np.ndarray, picture: CarPicture) -> np.ndarray:
+    def _full(self, free: np.ndarray, picture: CarPicture,
+              outlines: dict[tuple[int, ...], np.ndarray] | None = None) -> np.ndarray:
         """All of the reference law's variables: the searched ``free`` ones, clipped, and
         the sub-solved ones as their solves set them."""
         x = np.zeros(len(self._free))
@@ -313,7 +308,7 @@ class EcSolveLaw(PerCarLaw):
         x = self.reference.clip(x)
         if self._solves:
             p = self.reference.correction_at(x).params
-            solved = self._solved(p, picture)
+            solved = self._solved(p, picture, {} if outlines is None else outlines)
             names = self.reference.variables
             platform = self.reference.platform
             for i, n in enumerate(names):
@@ -322,11 +317,14 @@ class EcSolveLaw(PerCarLaw):
             x = self.reference.clip(x)
         return x
 
-    def params_at(self, free: np.ndarray, picture: CarPicture) -> IspParams:
-        """The car's setting at the searched variables ``free`` (sub-solves applied)."""
-        return self.reference.correction_at(self._full(free, picture)).params
+    def params_at(self, free: np.ndarray, picture: CarPicture,
+                  outlines: dict[tuple[int, ...], np.ndarray] | None = None) -> IspParams:
+        """The car's setting at the searched variables ``free`` (sub-solves applied;
+        ``outlines``: the picture's outline points by labels, kept between calls)."""
+        return self.reference.correction_at(self._full(free, picture, outlines)).params
 
-    def _solved(self, params: IspParams, picture: CarPicture) -> IspParams:
+    def _solved(self, params: IspParams, picture: CarPicture,
+                outlines: dict[tuple[int, ...], np.ndarray]) -> IspParams:
         """``params`` with each sub-solved parameter set by its EC's solve on the picture's
         outline of the EC's labels (left as is where the object is not seen)."""
         scale = picture.input_scale
@@ -334,7 +332,9 @@ class EcSolveLaw(PerCarLaw):
         size = (picture.fisheye.shape[1], picture.fisheye.shape[0])
         current = params
         for ec, hook, target in self._solves:
-            pts = _outline(picture, hook.labels)
+            if hook.labels not in outlines:
+                outlines[hook.labels] = outline_points(picture.fisheye, hook.labels)
+            pts = outlines[hook.labels]
             if len(pts) < 3:
                 continue
             xy, ok = input_to_plane(at.replace(**{hook.param: getattr(current, hook.param)}),
@@ -347,20 +347,6 @@ class EcSolveLaw(PerCarLaw):
             if value is not None:
                 current = current.replace(**{hook.param: float(value)})
         return current
-
-
-def _outline(picture: CarPicture, labels: tuple[int, ...]) -> np.ndarray:
-    """The fisheye outline points of ``labels`` on the picture (cached on it)."""
-    cache = getattr(picture, "_outlines", None)
-    if cache is None:
-        cache = {}
-        try:
-            setattr(picture, "_outlines", cache)
-        except AttributeError:  # a picture that takes no attributes recomputes them
-            pass
-    if labels not in cache:
-        cache[labels] = outline_points(picture.fisheye, labels)
-    return cache[labels]
 
 
 def _written_solves(criteria: Criteria, reference: CompensationLaw
@@ -390,6 +376,8 @@ class _Run:
         self.best_values = np.full(len(law.criteria.ids), np.nan)
         self.best_passed = False
         self._seen: dict[bytes, float] = {}
+        #: The picture's outline points by labels (the sub-solves read them).
+        self.outlines: dict[tuple[int, ...], np.ndarray] = {}
 
     def consider(self, x: np.ndarray, values: np.ndarray, least: float) -> None:
         """Keep ``x`` if it is the best so far (a tie keeps the earlier: smaller change)."""
@@ -407,7 +395,7 @@ class _Run:
             return self._seen[key]
         if self.count >= self.budget:
             raise _Budget
-        values = self.picture.values([law.params_at(x, self.picture)])[0]
+        values = self.picture.values([law.params_at(x, self.picture, self.outlines)])[0]
         self.count += 1
         least = float(law.scale.least(values, law.uncertainty)[0])
         self._seen[key] = least
