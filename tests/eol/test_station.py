@@ -77,6 +77,11 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
     assert doc["all_pass"] and doc["cars"] == 2 and doc["target"] == "station mat"
     assert doc["load_state"]["name"] == "curb" and doc["written_params"] == ["h_pan", "v_pan",
                                                                               "tilt"]
+    # the station's σ is the model's assumption, not a result of the run: labelled so
+    assert "angle_sigma_deg" not in doc["compensation"]["station"]
+    assert doc["assumed_station_sigma"]["angle_sigma_deg"] == 0.1
+    assert "assumption" in doc["assumed_station_sigma"]["note"]
+    assert doc["compensation"]["law"] == "ec-solve" and doc["by_status"]["pass"] == 2
     for k, (row, truth) in enumerate(zip(doc["results"], GOOD)):
         assert row["verdict"] == "PASS" and row["reasons"] == []
         got = [row["deviation"][a] for a in ("x_mm", "y_mm", "z_mm")]
