@@ -15,8 +15,8 @@ from .factory import LAWS, make_law
 from .law import (STATUSES, STOP_SIGMAS, STOP_TOLERANCE, CarSolution, EcSolveLaw, PerCarLaw,
                   ReferencePointsLaw)
 from .margins import FAIL_MARGIN, MarginScale
-from .picture import (CarPicture, EdgeWarp, ImagePicture, SplitEvaluator, StationView,
-                      TurnWarp, body_ecs, criteria_subset)
+from .picture import (WARP_GRID_PX, CarPicture, EdgeWarp, GridWarp, ImagePicture,
+                      SplitEvaluator, StationView, TurnWarp, body_ecs, criteria_subset)
 from .uncertainty import DRAWS, axis_turn, ec_uncertainty
 
 __all__ = [
@@ -24,7 +24,8 @@ __all__ = [
     "LAWS", "make_law",
     "CarSolution", "EcSolveLaw", "PerCarLaw", "ReferencePointsLaw", "STATUSES", "STOP_SIGMAS", "STOP_TOLERANCE",
     "FAIL_MARGIN", "MarginScale",
-    "CarPicture", "EdgeWarp", "ImagePicture", "SplitEvaluator", "StationView", "TurnWarp",
+    "CarPicture", "EdgeWarp", "GridWarp", "ImagePicture", "SplitEvaluator", "StationView",
+    "TurnWarp", "WARP_GRID_PX",
     "body_ecs", "criteria_subset",
     "DRAWS", "axis_turn", "ec_uncertainty",
 ]

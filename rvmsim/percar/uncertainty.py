@@ -27,7 +27,7 @@ import numpy as np
 from ..compensation import CompensationModel
 from ..isp import IspParams
 from ..camera import FisheyeCamera
-from .picture import EdgeWarp, ImagePicture, TurnWarp
+from .picture import EdgeWarp, GridWarp, ImagePicture, TurnWarp
 
 __all__ = ["ec_uncertainty", "DRAWS", "axis_turn"]
 
@@ -79,7 +79,8 @@ def ec_uncertainty(picture: ImagePicture, platform: IspParams, model: Compensati
         a = rng.standard_normal(3) * model.angle_sigma_deg
         e = rng.standard_normal(2) * model.edge_sigma_px
         turn = axis_turn(2, a[2]) @ axis_turn(1, a[1]) @ axis_turn(0, a[0])
-        site = None if model.angle_sigma_deg == 0 else TurnWarp(camera, turn)
+        site = None if model.angle_sigma_deg == 0 else GridWarp(
+            TurnWarp(camera, turn), (camera.width, camera.height))
         body = None if model.edge_sigma_px == 0 else EdgeWarp(e[0] * s, e[1] * s, camera.cx,
                                                              camera.width / 2.0)
         if site is None and body is None:
