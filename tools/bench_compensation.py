@@ -142,26 +142,28 @@ def _row(d: dict[str, Any], sigmas: list[float]) -> str:
 
 def plot_curves(doc: dict[str, Any], path: Path) -> None:
     """The yield after compensation against the station's σ, one line per setting (its
-    yield before as a dotted line at the left), as a PNG."""
+    yield before in the legend), as a PNG."""
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(6.4, 3.8))
     ax = fig.add_subplot()
+    lows = []
     for k, (key, d) in enumerate(doc["vehicles"].items()):
         sig = sorted(float(s) for s in d["after"])
         y = [100 * d["after"][f"{s:g}"]["yield"] for s in sig]
+        lows += y
         colour = f"C{k % 10}"
-        ax.plot(sig, y, "o-", color=colour, label=d["name"].replace(", nominal-tuned", ""))
-        ax.plot([0.0], [100 * d["before"]["yield"]], "x", color=colour)
+        name = d["name"].replace(", nominal-tuned", "")
+        ax.plot(sig, y, "o-", color=colour,
+                label=f"{name}: before {100 * d['before']['yield']:.0f} %")
     ax.axhline(99.0, color="red", lw=1, ls="--", label="99 %")
-    ax.set_xlabel(f"station σ per angle, degrees (position: {doc['mm_per_deg']:g} mm per "
-                  "degree)")
+    ax.set_xlabel(f"station σ per angle, degrees (position {doc['mm_per_deg']:g} mm and "
+                  f"edge {doc.get('edge_px_per_deg', 0):g} px per degree)")
     ax.set_ylabel("yield after compensation (%)")
-    ax.set_title(f"{doc['samples']} samples per point; x: the yield before compensation",
-                 fontsize=9)
+    ax.set_title(f"law ec-solve; {doc['samples']} samples per point", fontsize=9)
     ax.grid(True, alpha=0.3)
-    ax.set_ylim(0, 102)
-    ax.legend(fontsize=7, loc="lower right")
+    ax.set_ylim(min(90.0, min(lows) - 1.0), 100.5)
+    ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
 
