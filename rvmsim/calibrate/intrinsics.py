@@ -93,13 +93,6 @@ class Calibration:
     rms_px: float
     views: tuple[ViewFit, ...]
 
-    def lens_radius_px(self, theta_rad: np.ndarray) -> np.ndarray:
-        """Distance from the principal point along x (fx · θd(θ)), px, at incidence
-        angles ``theta_rad``."""
-        t = np.asarray(theta_rad, dtype=np.float64)
-        k1, k2, k3, k4 = self.D
-        return self.K[0, 0] * t * (1 + k1 * t**2 + k2 * t**4 + k3 * t**6 + k4 * t**8)
-
 
 def _flag(name: str) -> int:
     """A cv2.fisheye calibration flag (OpenCV 4 keeps them in cv2.fisheye, 5 in cv2)."""

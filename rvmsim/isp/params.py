@@ -171,10 +171,6 @@ class IspParams:
         return self.replace(rad=self.rad * factor, h_shift=self.h_shift * factor,
                             v_shift=self.v_shift * factor)
 
-    def as_array(self, names: tuple[str, ...] | None = None) -> np.ndarray:
-        """Parameter values in the order of ``names`` (default: all 14)."""
-        return np.array([getattr(self, n) for n in (names or self.names())], dtype=np.float64)
-
 
 @dataclass(frozen=True)
 class OutputSpec:

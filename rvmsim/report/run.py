@@ -27,6 +27,7 @@ from urllib.parse import quote
 import numpy as np
 
 from ..errors import RvmsimError
+from ..pipeline import record_output
 from ..runs import find_runs, is_run_folder
 from .market_rows import load_markets, markets_html
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
@@ -184,7 +185,8 @@ def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
     ]
     body = "".join(f"<figure>{img}<figcaption>{escape(cap)}</figcaption></figure>"
                    for img, cap in figs)
-    display = display_figure(r.images, r.top[0].params, r.output)
+    display = display_figure(r.images, r.top[0].params,
+                             record_output(r.criteria, r.scene, r.output.mirror))
     return f'<section id="images"><h2>Images</h2>{body}{display}</section>'
 
 

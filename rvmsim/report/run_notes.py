@@ -78,15 +78,14 @@ def signoff_note(run_dir: Path, report_dir: Path) -> str:
             f"<code>{escape(cmd)}</code> makes one (docs/signoff.md).</p>")
 
 
-def display_figure(images: FisheyeImages, params: IspParams, output: OutputSpec) -> str:
-    """The best candidate's picture at the display size (what the run writes as
-    ``best/rvm_display.png``), made from the images shown, so it always matches them."""
-    from ..isp import OutputSpec
+def display_figure(images: FisheyeImages, params: IspParams, record: OutputSpec) -> str:
+    """The best candidate's picture at the RVM image of record (the scene's or criteria's
+    ``display.rvm_image_px``: what the run writes as ``best/rvm_display.png``), made from
+    the images shown, so it always matches them."""
     from ..pipeline import rvm_color
-    from ..tune import DISPLAY_SIZE
 
-    w, h = DISPLAY_SIZE
-    picture = rvm_color(images, params, OutputSpec(w, h, output.mirror))
+    w, h = record.width, record.height
+    picture = rvm_color(images, params, record)
     return (f'<figure id="display">{img_tag(picture, "RVM picture at the display size")}'
             f"<figcaption>The RVM picture at the display's {w} × {h} px (the output of "
             "record; the run writes it as best/rvm_display.png).</figcaption></figure>")

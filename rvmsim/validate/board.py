@@ -109,12 +109,6 @@ class BoardLayout:
         height even): then colour alone cannot tell the board from its half-turned self."""
         return (self.grid[0] + self.grid[1]) % 2 == 0
 
-    def local_points(self) -> np.ndarray:
-        """The inner corners in the board's own plane (nx, ny, 3): (along a, along b, 0) m
-        from inner corner (0, 0)."""
-        d = self.corner_points - self.origin
-        return np.stack([d @ self.a, d @ self.b, np.zeros(self.grid)], axis=-1)
-
 
 def board_layout(scene: Scene, corners: tuple[CheckerCorner, ...]) -> BoardLayout | None:
     """The enabled board's layout, with its corners' indices in ``corners``; None when the

@@ -400,3 +400,19 @@ def test_annotated_text_is_legible_on_the_report_page(runs):
 
     px = shown_text_px(runs["report"], ("annotated EC image",))
     assert px["annotated EC image"] >= MIN_TEXT_PX, px
+
+
+def test_the_display_picture_is_at_the_scenes_size_of_record(tmp_path, monkeypatch):
+    """A scene whose display is 480 × 270 px: the report's display picture is drawn at that
+    size, the RVM image of record, not at a fixed 1280 × 720 (issue #42)."""
+    from rvmsim.tune import TuneRequest, TuningConfig, tune
+
+    from ..scenes import write_small_scene
+
+    monkeypatch.setenv("RVMSIM_CACHE", str(tmp_path / "cache"))
+    scene = write_small_scene(tmp_path, edit={"display": {"rvm_image_px": [480, 270]}})
+    cfg = TuningConfig.model_validate({"output": {"size": [320, 180]}, "top_m": 2})
+    run = tmp_path / "run"
+    tune(TuneRequest((scene,), "random", cfg, budget=12), run)
+    imgs = _parse(write_report(run).read_text(encoding="utf-8")).find("img")
+    assert _decode_data_png(imgs[3]["src"]).shape[:2] == (270, 480)
