@@ -28,6 +28,20 @@ SCENES = ROOT / "scenes"
 SHARED_FIXTURE_FOLDERS = ("batch", "calibrate", "console")
 
 
+@pytest.fixture(scope="session", autouse=True)
+def session_render_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One render cache per test session, under its temporary folder and never the user's
+    (issue #42): the suite's time and results do not depend on what an earlier run or the
+    user left in ``~/.cache/rvmsim``.  Under pytest-xdist the workers share it (the parent
+    of their temporary folders): a scene one renders, the others read.  Tests that need a
+    cache of their own still set ``RVMSIM_CACHE`` themselves."""
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    cache = root / "render-cache"
+    os.environ["RVMSIM_CACHE"] = str(cache)
+    return cache
+
+
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under pytest-xdist: each item's group (:data:`SHARED_FIXTURE_FOLDERS`, else its
