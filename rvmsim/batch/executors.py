@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING, TypeVar
 
 from ..errors import RvmsimError
+from .._procs import spawn_pool, stop_pool
 
 if TYPE_CHECKING:
     import distributed
@@ -72,8 +73,6 @@ class LocalExecutor(Executor):
             return
         from concurrent.futures import FIRST_COMPLETED, wait
         from concurrent.futures.process import BrokenProcessPool
-
-        from .._procs import spawn_pool, stop_pool
 
         todo = dict(items)
         rebuilds = 0

@@ -1,7 +1,6 @@
 """Sweeps over markets: every design point tuned to pass several markets at once.
 
 Sweep file::
-
     tune:
       markets: [fmvss111-full, unr158]   # instead of tune.criteria (not both)
 
@@ -40,6 +39,16 @@ from .._io import KeyPath
 from ..errors import InputFileError, RvmsimError
 from .axes import sweep_error
 from .payloads import InfeasibleDoc, MarketOutcomeDoc, PointResult, PointRun, PointTask
+from ..markets import market_criteria, market_members, parse_markets
+from ..criteria import bundled_criteria_text, record_size
+from ..scene import bundled_site, scene_from_dict
+from ..tune.markets import market_infeasible, render_market_members
+from .probes import RENDER_LOCK, probe_sensitivity, task_budget
+from ..isp import IspParams
+from ..runs import RunStore
+from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy,
+                    member_evaluators, search_members)
+from ..robust import RobustnessSettings, markets_robustness
 
 if TYPE_CHECKING:
     from ..isp import IspParams, OutputSpec
@@ -67,7 +76,6 @@ def sweep_markets(entries: Sequence[str] | None, criteria_given: bool, source: s
         empty, an unknown market, a repeat, a missing file.  A site or criteria file's own
         errors name that file.
     """
-    from ..markets import parse_markets
 
     if entries is None:
         return ()
@@ -88,8 +96,6 @@ def sweep_markets(entries: Sequence[str] | None, criteria_given: bool, source: s
 
 
 def _parsed(specs: Sequence[str]) -> tuple[Market, ...]:
-    from ..markets import parse_markets
-
     return parse_markets(list(specs))
 
 
@@ -104,8 +110,6 @@ def _text_of(name_or_file: str | None, bundled: str) -> str:
 def markets_fingerprint(specs: Sequence[str]) -> list[str]:
     """Per market, a hash of its spec, its site's definition and its criteria's text: a
     stored sweep resumes only with the same markets as they were."""
-    from ..criteria import bundled_criteria_text
-    from ..scene import bundled_site
 
     out = []
     for m in _parsed(specs):
@@ -119,8 +123,6 @@ def markets_fingerprint(specs: Sequence[str]) -> list[str]:
 
 @functools.lru_cache(maxsize=32)
 def _ec_ids(specs: tuple[str, ...]) -> tuple[str, ...]:
-    from ..markets import market_criteria
-
     ids = [ec for m in _parsed(specs) for ec in market_criteria(m).ids]
     return tuple(dict.fromkeys(ids))
 
@@ -141,10 +143,6 @@ def _members(task: PointTask
              ) -> tuple[list[MarketMember], list[FisheyeImages], list[Member]]:
     """The point's scene at every market's site, each rendered (cached, same sensor) and
     made a search member (:func:`rvmsim.tune.markets.render_market_members`)."""
-    from ..markets import market_members
-    from ..scene import scene_from_dict
-    from ..tune.markets import render_market_members
-    from .probes import RENDER_LOCK
 
     scene = scene_from_dict(task["scene"], source=task["label"])
     pairs = market_members([scene], _parsed(task.get("markets", ())))
@@ -157,7 +155,6 @@ def _infeasible(pairs: Sequence[MarketMember], renders: Sequence[FisheyeImages]
                 ) -> list[InfeasibleDoc]:
     """Per market, the ECs no setting can pass at its site, the reason naming the market
     (:func:`rvmsim.tune.markets.market_infeasible`)."""
-    from ..tune.markets import market_infeasible
 
     return [{"ec": f.ec, "market": p.market.name, "reason": f"{p.market.name}: {f.reason}",
              "short": f"{p.market.name} {f.short}"} for p, f in market_infeasible(pairs, renders)]
@@ -219,12 +216,6 @@ def _search(task: PointTask, pairs: Sequence[MarketMember],
     market makes infeasible is proven so before any search: one candidate fills its EC
     columns, and it gets neither a sensitivity probe nor a yield (as a one-criteria
     point, :func:`~rvmsim.batch.point.run_point`)."""
-    from ..criteria import record_size
-    from ..isp import IspParams
-    from ..runs import RunStore
-    from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy,
-                        member_evaluators, search_members)
-    from .probes import probe_sensitivity, task_budget
 
     config = TuningConfig.model_validate(task["config"]).at_record(
         record_size(pairs[0].criteria, pairs[0].scene))
@@ -302,8 +293,6 @@ def markets_yield(pairs: Sequence[MarketMember], params: IspParams, output: Outp
     render_scale : float
         Fraction of the sensor rendered (1, as the point's tuning renders it).
     """
-    from ..robust import RobustnessSettings, markets_robustness
-    from .probes import RENDER_LOCK
 
     t0 = time.perf_counter()
     try:

@@ -20,6 +20,7 @@ from .run import SweepResult, phase_seconds
 from .spec import DesignPoint, SweepSpec
 from .markets import market_names
 from .yields import YIELD_COLUMNS, yield_cells
+from ..isp import IspParams
 
 __all__ = ["Cell", "sweep_table", "csv_text", "sweep_json", "page_columns", "point_verdict"]
 
@@ -62,7 +63,6 @@ def sweep_table(spec: SweepSpec, points: list[DesignPoint], results: dict[str, M
     ``error``.  Deterministic content only (no timings), so the same sweep gives the same
     table on any executor.
     """
-    from ..isp import IspParams
 
     ec_ids = spec.ec_ids()
     param_names = IspParams.names()

@@ -19,6 +19,16 @@ from .executors import task_malloc
 from .payloads import (EcOutcomeDoc, PointError, PointResult, PointRun, PointTask,
                        YieldOnly, YieldTask)
 from .probes import RENDER_LOCK, sensitivity, task_budget
+from .markets import markets_yield, run_markets_point
+from ..isp import IspParams
+from .yields import point_yield
+from ..criteria import criteria_from_text, default_criteria, record_size
+from ..markets import market_members, parse_markets
+from ..scene import scene_from_dict
+from ..tune import SearchSettings, TuningConfig, candidate_evaluator, search_scene
+from ..render import cached_render
+from ..runs import RunStore
+from .feasibility import infeasible_ecs
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -60,8 +70,6 @@ def run_point(task: PointTask) -> PointResult:
     """
     with task_malloc():
         if task.get("markets"):
-            from .markets import run_markets_point
-
             return run_markets_point(task)
         return _run_point(task)
 
@@ -78,8 +86,6 @@ def _run_yield(task: YieldTask) -> YieldOnly | PointError:
     import os
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from ..isp import IspParams
-    from .yields import point_yield
 
     t0 = time.perf_counter()
     if task.get("markets"):
@@ -99,12 +105,6 @@ def _run_yield(task: YieldTask) -> YieldOnly | PointError:
 
 def _run_markets_yield(task: YieldTask) -> YieldOnly | PointError:
     """:func:`run_yield` for a markets sweep's point: the yield over every market."""
-    from ..criteria import record_size
-    from ..isp import IspParams
-    from ..markets import market_members, parse_markets
-    from ..scene import scene_from_dict
-    from ..tune import TuningConfig
-    from .markets import markets_yield
 
     t0 = time.perf_counter()
     try:
@@ -126,12 +126,6 @@ def _run_point(task: PointTask) -> PointResult:
     import os
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from ..render import cached_render
-    from ..isp import IspParams
-    from ..runs import RunStore
-    from ..tune import SearchSettings, candidate_evaluator, search_scene
-    from .feasibility import infeasible_ecs
-    from .yields import point_yield
 
     t0 = time.perf_counter()
     try:
@@ -210,9 +204,6 @@ def _run_doc(best: TrialRecord, space: SearchSpace, criteria: Criteria, n_eval: 
 
 def _task_inputs(task: PointTask) -> tuple[Scene, TuningConfig, Criteria]:
     """(scene, tuning config, criteria) of a point's task."""
-    from ..criteria import criteria_from_text, default_criteria, record_size
-    from ..scene import scene_from_dict
-    from ..tune import TuningConfig
 
     scene = scene_from_dict(task["scene"], source=task["label"])
     config = TuningConfig.model_validate(task["config"])

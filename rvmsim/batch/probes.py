@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .payloads import ParamSensitivity, PointTask, SensitivityDoc
+from ..tune import make_strategy, score_vectors
 
 if TYPE_CHECKING:
     from ..isp import IspParams
@@ -38,8 +39,6 @@ def task_budget(task: PointTask, images: FisheyeImages, config: TuningConfig) ->
     if factor == 1.0:
         return budget
     if budget is None:
-        from ..tune import make_strategy
-
         budget = make_strategy(task["strategy"], config.space(images.camera), config,
                                task["seed"]).total()
         if budget is None:
@@ -69,7 +68,6 @@ def sensitivity(evaluator: ImageEvaluator, space: SearchSpace, best: IspParams
         1 − (mean score at ±5 %) / optimum score; 0 if the parameter does not matter there,
         1 if a small change loses everything (None when the optimum scores 0).
     """
-    from ..tune import score_vectors
 
     return probe_sensitivity(lambda xs: score_vectors(evaluator, space, xs).score, space,
                              best)

@@ -1,7 +1,6 @@
 """The sweep file: loading and checking it, its axes, and the design points they span.
 
 Sweep file (YAML)::
-
     name: Vehicle A mount study
     base_scene: ../scenes/vehicle_a.yaml      # relative to the sweep file
     axes:                                      # in order; the table and maps follow it
@@ -42,7 +41,7 @@ from .._io import KeyPath, input_error_from_validation, key_lines, parse_yaml_ma
 from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
-from ..tune import DEFAULT_STRATEGY
+from ..tune import DEFAULT_STRATEGY, STRATEGIES, TuningConfig
 from .markets import market_ec_ids, markets_fingerprint, sweep_markets
 from .axes import AXES, MAX_AXIS_VALUES, POSITION_AXES, expand_axis, sweep_error as _error
 from .yields import YieldModel, YieldSettings
@@ -205,7 +204,6 @@ def _point_count(axes: tuple[tuple[str, tuple[object, ...]], ...], allow_large: 
 
 def _check_tuning(f: _SweepFile, source: str, lines: Mapping[KeyPath, int]) -> None:
     """The strategy is known and ``tune.config`` is a valid tuning config."""
-    from ..tune import STRATEGIES, TuningConfig
 
     if f.tune.strategy not in STRATEGIES:
         raise _error(source, lines, "tune.strategy",

@@ -18,6 +18,10 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import RvmsimError
 from .payloads import BatchError, BatchRun, BatchTask, SceneSummary, SceneSummaryError
+from ..tune import RunOptions, TuneRequest, TuningConfig, tune
+from ..criteria import bundled_criteria_text, criteria_from_text, criteria_reference, load_criteria
+from .executors import DaskExecutor, task_malloc
+from ..scene import absolute_mesh_paths, read_scene_document, scene_from_dict
 
 if TYPE_CHECKING:
     from ..tune import TuningConfig
@@ -114,7 +118,6 @@ def run_batch(scenes: Sequence[Path], out: Path, settings: BatchSettings, *,
 
 def _local_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings, progress: bool,
                 on_start: Callable[[int, Path], None] | None) -> Iterator[SceneRun]:
-    from ..tune import RunOptions, TuneRequest, tune
 
     for k, scene in enumerate(scenes, start=1):
         if on_start is not None:
@@ -135,8 +138,6 @@ def _local_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings, prog
 
 def _remote_runs(scenes: Sequence[Path], out: Path, settings: BatchSettings,
                  scheduler: str) -> Iterator[SceneRun]:
-    from ..criteria import bundled_criteria_text, criteria_reference
-    from .executors import DaskExecutor
 
     tasks: dict[str, BatchTask] = {}
     by_key: dict[str, Path] = {}
@@ -183,7 +184,6 @@ def summary_ec_ids(runs: Sequence[SceneRun], criteria_file: Path | None) -> tupl
     for r in runs:
         if r.ok:
             return tuple(r.ecs)
-    from ..criteria import load_criteria
 
     try:
         return load_criteria(criteria_file).ids
@@ -227,7 +227,6 @@ def write_summary(out: Path, runs: Sequence[SceneRun], table: str) -> list[Path]
 def portable_scene_doc(scene_file: str | Path) -> dict[str, Any]:
     """The scene file's document (YAML) with its mesh paths made absolute, so it loads from
     any folder (a task on a cluster worker builds its scene from it)."""
-    from ..scene import absolute_mesh_paths, read_scene_document
 
     _, doc = read_scene_document(scene_file)  # one-line errors here, not on a worker
     absolute_mesh_paths(doc, Path(scene_file).parent)
@@ -248,10 +247,6 @@ def tune_task(task: BatchTask) -> BatchRun | BatchError:
     import tempfile
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from ..criteria import criteria_from_text
-    from ..scene import scene_from_dict
-    from ..tune import RunOptions, TuneRequest, TuningConfig, tune
-    from .executors import task_malloc
 
     try:
         with tempfile.TemporaryDirectory(prefix="rvmsim-tune-") as tmp, task_malloc():

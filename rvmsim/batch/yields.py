@@ -3,7 +3,6 @@ setting passes every enabled EC (:func:`rvmsim.robust.robustness`), as the sweep
 tabulates it.
 
 Sweep file (top level)::
-
     robustness: {samples: 64, seed: 0}    # the defaults; samples: 0 turns the yield off
 
 A point gets a yield when its scene has a ``variation`` section (the base scene's, or one
@@ -24,6 +23,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ..errors import RvmsimError
 from .payloads import MergedPoint, PointRun, YieldDoc, YieldError
+from ..robust import RobustnessSettings, robustness
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -79,7 +79,6 @@ def point_yield(scene: Scene, params: IspParams, output: OutputSpec, criteria: C
     render_scale : float
         Fraction of the sensor rendered: 1, as the point's tuning renders it.
     """
-    from ..robust import RobustnessSettings, robustness
 
     t0 = time.perf_counter()
     settings = RobustnessSettings(output, criteria, samples=samples, seed=seed, scales=(1.0,),

@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import InputFileError, RvmsimError
 from ..scene.board import PatternBoard
 from ..validate.charuco import CharucoPattern
+from ..scene import load_scene
 
 __all__ = ["BoardSpec", "parse_board_spec", "CalibrationInputError"]
 
@@ -109,7 +110,6 @@ def _scene_board(path: Path) -> BoardSpec:
         The scene gives no ``test_site.board`` (the default board is not a board anybody
         captured), or its board is disabled (``enabled: false``): naming the file and key.
     """
-    from ..scene import load_scene
 
     site = load_scene(path).test_site
     if "board" not in site.model_fields_set:

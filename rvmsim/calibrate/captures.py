@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .board import CalibrationInputError
+from ..validate import load_capture
 
 __all__ = ["capture_files", "load_grey"]
 
@@ -46,7 +47,5 @@ def load_grey(path: str | Path) -> np.ndarray:
         One line naming the file: missing, unreadable, blank or over the pixel limit.
     """
     import cv2
-
-    from ..validate import load_capture
 
     return cv2.cvtColor(load_capture(path), cv2.COLOR_RGB2GRAY)

@@ -13,6 +13,7 @@ import numpy as np
 
 from .board import BoardSpec
 from .intrinsics import MIN_VIEW_CORNERS, BoardView
+from ..validate.charuco import detect_charuco
 
 __all__ = ["find_board_corners", "find_board_view"]
 
@@ -93,7 +94,6 @@ def find_board_view(image: np.ndarray, board: BoardSpec, name: str) -> BoardView
     if board.charuco is None:
         corners = find_board_corners(image, board)
         return None if corners is None else BoardView(name, corners)
-    from ..validate.charuco import detect_charuco
 
     det = detect_charuco(_grey(image), board.charuco)
     if det is None:

@@ -12,10 +12,11 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .._io import write_png
-from ..errors import RvmsimError
+from .._io import read_text, write_png
+from ..errors import RvmsimError, SceneError
 from .board import BoardSpec
 from .intrinsics import BoardView, Calibration
+from ..scene import read_scene_document, scene_from_dict
 
 __all__ = ["camera_block", "coverage_image", "replace_camera_values", "write_calibration_outputs",
            "write_scene_camera"]
@@ -105,10 +106,6 @@ def write_scene_camera(scene_file: str | Path, block: dict[str, Any]) -> Path:
         The scene cannot be read, or the result does not load.
     """
     import copy
-
-    from .._io import read_text
-    from ..errors import SceneError
-    from ..scene import read_scene_document, scene_from_dict
 
     path = Path(scene_file)
     _, doc = read_scene_document(path)

@@ -10,8 +10,15 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import RvmsimError
-from .board import BoardSpec, CalibrationInputError
-from .intrinsics import BoardView
+from .board import BoardSpec, CalibrationInputError, parse_board_spec
+from .intrinsics import MIN_VIEWS, BoardView, calibrate_fisheye
+from .captures import capture_files, load_grey
+from .outputs import camera_block, write_calibration_outputs
+from ..validate import check_captures
+from .counting import HINT_CAPTURES, counting_hint, other_counting
+from .detect import find_board_view
+from ..scene import CameraSpec, camera_problem
+from .imports import MAX_FIT_RMS_PX, fit_error_text, import_calibration
 
 __all__ = ["CalibrationSummary", "calibrate_captures", "import_camera"]
 
@@ -61,10 +68,6 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
         One line: a bad board spec, an unreadable capture, captures of different sizes, or
         too few usable views.
     """
-    from .board import parse_board_spec
-    from .captures import capture_files
-    from .intrinsics import calibrate_fisheye
-    from .outputs import camera_block, write_calibration_outputs
 
     board = parse_board_spec(board_spec)
     files = capture_files(list(captures))
@@ -97,7 +100,6 @@ def _check_captures(files: list[Path]) -> tuple[int, int]:
     RvmsimError
         One line naming the capture at fault, or the sizes met.
     """
-    from ..validate import check_captures
 
     sizes = check_captures(files)
     if len(set(sizes)) > 1:
@@ -122,10 +124,6 @@ def _find_views(files: list[Path], board: BoardSpec, spec: str
     RvmsimError
         The board (maybe) miscounted; too few views.
     """
-    from .captures import load_grey
-    from .counting import HINT_CAPTURES, counting_hint, other_counting
-    from .detect import find_board_view
-    from .intrinsics import MIN_VIEWS
 
     views: list[BoardView] = []
     missed: list[str] = []
@@ -185,10 +183,6 @@ def import_camera(file: str | Path, out: str | Path, fov_deg: float | None = Non
     """
     import yaml
     from pydantic import ValidationError
-
-    from ..scene import CameraSpec, camera_problem
-    from .imports import MAX_FIT_RMS_PX, fit_error_text, import_calibration
-    from .outputs import camera_block
 
     file, out = Path(file), Path(out)
     cam = import_calibration(file)

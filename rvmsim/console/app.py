@@ -42,6 +42,7 @@ from .inputs import ConsoleInputError, parse_flag, parse_label, parse_params
 from .outputs import save_params, write_setting_report
 from .pictures import PICTURE_KINDS, Pictures, params_key, parse_params_key
 from .session import ConsoleFrame, ConsoleSession, ec_margin, human_name
+from ..pipeline import evaluate_params
 
 __all__ = ["create_app", "session_json", "TOKEN_HEADER", "LOOPBACK_HOSTS", "MAX_BODY_BYTES",
            "MAX_TARGET_BYTES", "evaluate_command"]
@@ -130,7 +131,6 @@ def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any]
                 picture_url: Callable[[str, IspParams], str]) -> dict[str, Any]:
     """One ``/api/evaluate`` answer: the ECs at the RVM image of record, the ROI, and the
     draft or annotated picture when asked (``frame_id``: the answer's number)."""
-    from ..pipeline import evaluate_params
 
     params = parse_params(doc.get("params", {}), session.start)
     annotate = parse_flag(doc.get("annotate"), "annotate")
@@ -242,6 +242,5 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
 
 def _frame(session: ConsoleSession, params: IspParams) -> ConsoleFrame:
     """The ECs of ``params`` as a frame to save (no pictures)."""
-    from ..pipeline import evaluate_params
 
     return ConsoleFrame(params, session.ecs(params), b"", None, [], {})

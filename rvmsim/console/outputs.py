@@ -19,6 +19,8 @@ from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, draw_roi, params_to_dict
 from ..report import ec_section
 from ..report.page import escape, img_tag, page
+from ..pipeline import evaluate_params, rvm_color
+from .session import ConsoleFrame
 
 if TYPE_CHECKING:
     from ..isp import IspParams
@@ -111,8 +113,6 @@ def setting_page(session: ConsoleSession, frame: ConsoleFrame, annotated: np.nda
 def write_setting_report(session: ConsoleSession, params: IspParams, label: str = "") -> Path:
     """Write a review report of ``params`` (self-contained HTML) as a new file in the
     session's ``console/`` folder; returns its path."""
-    from ..pipeline import evaluate_params, rvm_color
-    from .session import ConsoleFrame
 
     full = evaluate_params(session.images, params, session.ec_output, session.criteria)
     frame = ConsoleFrame(params, full.ec, b"", None, [], {})

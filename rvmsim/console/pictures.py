@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec, RayCache, map_nodes, remap_xy
 from .inputs import ConsoleInputError
+from ..pipeline import evaluate_params
 
 if TYPE_CHECKING:
     from .session import ConsoleSession
@@ -172,8 +173,6 @@ class Pictures:
         data = self.cached("annotated", params)
         if data is None:
             if drawn is None:
-                from ..pipeline import evaluate_params
-
                 s = self.session
                 drawn = evaluate_params(s.images, params, s.ec_output, s.criteria).annotated
                 assert drawn is not None  # evaluate_params annotates by default

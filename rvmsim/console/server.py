@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable
 
 from ..errors import RvmsimError
+from .app import create_app
 
 if TYPE_CHECKING:
     import uvicorn
@@ -108,8 +109,6 @@ def console_url(host: str, port: int, token: str | None) -> str:
 def make_server(session: ConsoleSession, access: Access) -> uvicorn.Server:
     """A uvicorn server of the console app (not started)."""
     import uvicorn
-
-    from .app import create_app
 
     config = uvicorn.Config(create_app(session, token=access.token), log_level="warning",
                             access_log=False, lifespan="off", ws="none")

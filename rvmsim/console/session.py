@@ -26,6 +26,11 @@ from ..isp import PARAM_SPECS, IspParams, OutputSpec, roi_outline
 from ..runs import is_run_folder, open_run, run_inputs, run_settings, store_candidates
 from ..search import TuningConfig
 from .candidates import Candidate
+from ..criteria import load_criteria
+from ..render import cached_render
+from ..scene import load_scene
+from ..pipeline import evaluate_params, make_evaluator, record_output, rvm_color
+from ..criteria import annotate as annotate_ecs
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -133,8 +138,6 @@ class ConsoleSession:
         """The ECs of ``params`` at the RVM image of record (the requests' threads take
         turns: the evaluator's ray cache is not shared between threads)."""
         if self.evaluator is None:
-            from ..pipeline import evaluate_params
-
             return evaluate_params(self.images, params, self.ec_output, self.criteria,
                                    annotate=False).ec
         with self._evaluating:
@@ -192,9 +195,6 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         One line: no such run or scene, an unreadable run, scene or criteria file, a run
         without candidates.
     """
-    from ..criteria import load_criteria
-    from ..render import cached_render
-    from ..scene import load_scene
 
     source = Path(source)
     if source.is_dir():
@@ -221,7 +221,6 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         raise RvmsimError(f"{source}: no such run folder or scene file")
     scene = load_scene(scene_file)
     images, _ = cached_render(scene)
-    from ..pipeline import make_evaluator, record_output
 
     ec_output = record_output(criteria, scene, config.output.mirror)
     return ConsoleSession(
@@ -238,8 +237,6 @@ def evaluate_setting(session: ConsoleSession, params: IspParams, *,
     """Evaluate ``params`` as the page shows it: the ECs at the EC output size (the one
     evaluation path, :func:`rvmsim.pipeline.evaluate_params`), the picture at the display
     size, and, with ``annotate``, the EC image with its measurements drawn."""
-    from ..criteria import annotate as annotate_ecs
-    from ..pipeline import evaluate_params, rvm_color
 
     t0 = time.perf_counter()
     ec = session.ecs(params)

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .scoring import Criteria, EcBatch
+from ..scene import Display
 
 if TYPE_CHECKING:
     from ..scene import Display, Scene
@@ -46,7 +47,6 @@ NEAR_SCORE = 0.005
 def record_display(criteria: Criteria, scene: Scene | None = None) -> Display:
     """The display whose RVM image is of record: the scene's ``display`` section, else the
     criteria file's, else the defaults."""
-    from ..scene import Display
 
     return (scene.display if scene is not None else None) or criteria.display or Display()
 

@@ -36,6 +36,7 @@ from .measure import (EcFailedError, LabelSource, Measurement, MeasureOptions, e
                       measure_ecs, passes_through)
 from .sigmoid import Criterion, Sigmoid
 from .stack import LabelStack, StackMeasureFn, measure_stack_ecs
+from ..isp import IspParams, OutputSpec
 
 if TYPE_CHECKING:
     from .canvas import Canvas
@@ -385,7 +386,6 @@ def _probe(ec: EcDefinition, source: str) -> None:
 def _probe_sub_solve(ec: EcDefinition, hook: SubSolve, source: str) -> None:
     """Run a sub-solve's target on the EC's default criterion and its solve on a small
     square of plane points: both must return a finite number or None."""
-    from ..isp import IspParams, OutputSpec
 
     square = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
     try:

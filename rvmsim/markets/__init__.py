@@ -22,6 +22,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..errors import RvmsimError
+from ..scene import is_site_file, site_definition, site_scene
+from ..criteria import load_criteria
+from ..pipeline import record_output, render_rvm
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcValue
@@ -73,7 +76,6 @@ def _one(entry: str, base_dir: Path) -> Market:
         if not site or not crit:
             raise RvmsimError(f"--markets {entry!r}: give SITE:CRITERIA (each a bundled name "
                               "or a file)")
-        from ..scene import is_site_file
 
         for part, is_file in ((site, is_site_file(site)),
                               (crit, crit.lower().endswith((".yaml", ".yml")))):
@@ -106,7 +108,6 @@ def parse_markets(text: str | Sequence[str], base_dir: str | Path = ".") -> tupl
     if dup:
         raise RvmsimError(f"--markets: {', '.join(dup)} given twice")
     markets = tuple(_one(e, Path(base_dir)) for e in entries)
-    from ..scene import site_definition
 
     for m in markets:  # the site and the criteria load (one line each when they do not)
         market_criteria(m)
@@ -117,7 +118,6 @@ def parse_markets(text: str | Sequence[str], base_dir: str | Path = ".") -> tupl
 def market_scene(scene: Scene, market: Market) -> Scene:
     """``scene`` at the market's site (:func:`rvmsim.scene.site_scene`; a bundled site by
     name, so that a site file of the scene's own under that name replaces it)."""
-    from ..scene import is_site_file, site_definition, site_scene
 
     return site_scene(scene, site_definition(market.site) if is_site_file(market.site)
                       else market.site)
@@ -125,7 +125,6 @@ def market_scene(scene: Scene, market: Market) -> Scene:
 
 def market_criteria(market: Market) -> Criteria:
     """The market's criteria (:func:`rvmsim.criteria.load_criteria`)."""
-    from ..criteria import load_criteria
 
     return load_criteria(market.criteria)
 
@@ -219,7 +218,6 @@ def evaluate_markets(scene: Scene, params: IspParams, markets: Sequence[Market],
     mirror : bool
         Whether the RVM image is mirrored.
     """
-    from ..pipeline import record_output, render_rvm
 
     out = []
     for member in market_members([scene], markets):

@@ -22,6 +22,8 @@ import numpy as np
 
 from ..scene import DEFAULT_SITE, MeshPart, Scene, mesh_parts
 from .fisheye import FisheyeImages, render_fisheye
+from .._io import write_png
+from ..errors import RvmsimError
 
 __all__ = ["cache_dir", "scene_key", "file_scene_key", "same_scene", "cached_render",
            "RENDER_VERSION"]
@@ -140,8 +142,6 @@ def cached_render(scene: Scene, *, scale: float = 1.0,
     A cache folder that cannot be written (read-only, full disk) does not stop the caller:
     the images are returned and a ``RuntimeWarning`` says why they were not stored.
     """
-    from .._io import write_png
-    from ..errors import RvmsimError
 
     cam = scene.fisheye_camera()
     if scale != 1.0:

@@ -7,6 +7,7 @@ import math
 from typing import TYPE_CHECKING
 
 from .page import escape
+from ..criteria.canvas import unit_text
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -42,7 +43,6 @@ def margins_html(margins: dict[str, float], rec: TrialRecord, criteria: Criteria
     """A gallery card's row of EC margins: per enabled EC its id and margin (signed
     distance of its value inside the acceptable range, EC unit; ✓/✗ for binary ECs, n/a
     when not measured), coloured by pass/fail; the name, margin and unit on hover."""
-    from ..criteria.canvas import unit_text
 
     defs = {d.id: d for d in criteria.ecs}
     chips = []

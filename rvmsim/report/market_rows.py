@@ -16,6 +16,7 @@ from typing import Any
 
 from ..errors import RvmsimError
 from .page import data_uri, escape
+from ..tune.markets import MARKETS_JSON, market_problem_lines
 
 __all__ = ["load_markets", "markets_html", "markets_rows", "all_markets_pass",
            "markets_verdict_text"]
@@ -29,7 +30,6 @@ def load_markets(run_dir: str | Path) -> dict[str, Any] | None:
     RvmsimError
         One line naming the file: not JSON, or without its ``markets`` rows.
     """
-    from ..tune.markets import MARKETS_JSON
 
     path = Path(run_dir) / "best" / MARKETS_JSON
     if not path.is_file():
@@ -90,7 +90,6 @@ def markets_html(doc: dict[str, Any], run_dir: str | Path, *,
                  section_id: str = "markets") -> str:
     """The markets section: the verdict, one row per market, the reasons when not every
     market passes, and each market's annotated image."""
-    from ..tune.markets import market_problem_lines
 
     run_dir = Path(run_dir)
     ok = all_markets_pass(doc)

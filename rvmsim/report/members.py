@@ -14,6 +14,10 @@ from typing import TYPE_CHECKING, Callable, Sequence
 
 from ..errors import RvmsimError
 from .page import escape, img_tag
+from ..render import cached_render
+from ..scene import load_scene
+from ..pipeline import evaluate_params
+from ..tune.robust import robust_summary
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -50,8 +54,6 @@ def load_member_scenes(settings: RunSettings, run_dir: Path,
     RvmsimError
         One line: a scene file of the run not found.
     """
-    from ..render import cached_render
-    from ..scene import load_scene
 
     out = []
     for ref in settings.scenes:
@@ -71,7 +73,6 @@ def member_scores(store: RunStore, top: Sequence[TrialRecord]) -> dict[int, list
 def members_section(members: Sequence[MemberScene], params: IspParams, output: OutputSpec,
                     criteria: Criteria, aggregate: str) -> str:
     """The ``members`` section: a row per vehicle under ``params`` (rank 1)."""
-    from ..pipeline import evaluate_params
 
     ids = [c for c in criteria.ids if criteria.items[c].enabled]
     head = ("<tr><th>vehicle</th><th>RVM image</th><th>EC score</th>"
@@ -107,7 +108,6 @@ def robust_top(store: RunStore, top: Sequence[TrialRecord], settings: RunSetting
                ) -> list[RobustSummary | None]:
     """Each top trial's nominal score, robust score and sample yield (a robust run; empty
     for others), from its stored member results."""
-    from ..tune.robust import robust_summary
 
     if settings.robust_samples is None:
         return []

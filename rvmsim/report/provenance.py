@@ -18,6 +18,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .page import escape
+from ..errors import RvmsimError
+from ..scene import load_scene, mesh_parts
 
 __all__ = ["Provenance", "provenance", "sha256_file", "FileRecord", "file_record",
            "provenance_html", "files_table", "scene_records", "NOT_A_CHECKOUT"]
@@ -163,8 +165,6 @@ def files_table(records: list[FileRecord]) -> str:
 def scene_records(scene_file: str | Path, role: str = "scene") -> list[FileRecord]:
     """The scene file and every mesh file it names (resolved as the scene resolves them),
     each with its SHA-256.  A scene that no longer loads gives its own record only."""
-    from ..errors import RvmsimError
-    from ..scene import load_scene, mesh_parts
 
     records = [file_record(role, scene_file)]
     try:

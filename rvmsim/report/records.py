@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import RvmsimError
+from ..isp import IspParams
 
 __all__ = ["RobustnessRecord", "ValidationRecord", "EolRecord", "load_robustness",
            "load_validation", "load_eol", "read_json", "same_setting", "SIGNOFF_JSON",
@@ -165,7 +166,6 @@ def load_eol(folder: str | Path) -> EolRecord:
 def same_setting(isp: Mapping[str, Any], values: Mapping[str, Any]) -> bool:
     """Whether a recorded setting (``isp`` of a JSON file) has the 14 values of ``values``
     (a params dict), to a relative 1e-9."""
-    from ..isp import IspParams
 
     try:
         return all(math.isclose(float(isp[n]), float(values[n]), rel_tol=1e-9, abs_tol=1e-12)

@@ -24,6 +24,8 @@ from ..storage import json_default
 from .page import escape, figure_png, img_tag, page, data_uri
 from .provenance import FileRecord, file_record, files_table, scene_records
 from .setting import SettingRecord, by_load_html, setting_html, variation_html
+from ..criteria import bundled_criteria_text
+from ..isp import params_to_dict
 
 if TYPE_CHECKING:
     from ..pipeline import RvmFrame
@@ -247,7 +249,6 @@ def _sample_text(result: RobustnessResult) -> str:
 def _input_records(result: RobustnessResult, inputs: RobustnessInputs,
                    setting: SettingRecord) -> list[FileRecord]:
     """Every file the run read: params, scene and meshes, criteria, variation, compensation."""
-    from ..criteria import bundled_criteria_text
 
     records = [setting.file, *scene_records(result.scene_file)]
     crit = inputs.criteria_file
@@ -323,8 +324,6 @@ def _setting_file(result: RobustnessResult | MarketsRobustness, inputs: Robustne
     """The params file of the setting: the one given, else :data:`SETTING_FILE` written
     into ``out`` (the setting's values and output size)."""
     import yaml
-
-    from ..isp import params_to_dict
 
     if inputs.params_file is not None:
         return inputs.params_file

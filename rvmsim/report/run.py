@@ -27,8 +27,9 @@ from urllib.parse import quote
 import numpy as np
 
 from ..errors import RvmsimError
-from ..pipeline import record_output
-from ..runs import find_runs, is_run_folder
+from ..pipeline import evaluate_params, record_output, rvm_color
+from ..runs import (find_runs, is_run_folder, open_run, recorded_path, run_inputs, run_settings,
+                    run_state, store_candidates)
 from .market_rows import load_markets, markets_html
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
                       members_section, robust_section, robust_top)
@@ -38,6 +39,10 @@ from .plots import convergence_png, histogram_png
 from .provenance import provenance
 from .run_notes import display_figure, provenance_line, signoff_note, yield_note
 from .setting import ec_margin, fmt_margin
+from ..criteria import load_criteria
+from ..render import cached_render, same_scene
+from ..scene import load_scene
+from ..isp import PARAM_SPECS, IspParams, draw_roi
 
 if TYPE_CHECKING:
     from ..tune.robust import RobustSummary
@@ -96,12 +101,6 @@ class _Run:
 
 
 def _load_run(run_dir: Path) -> _Run:
-    from ..criteria import load_criteria
-    from ..render import cached_render, same_scene
-    from ..scene import load_scene
-    from ..runs import (open_run, recorded_path, run_inputs, run_settings, run_state,
-                        store_candidates)
-
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
@@ -170,7 +169,6 @@ def _scene_section(r: _Run) -> str:
 def _images_section(r: _Run, color: np.ndarray, annotated: np.ndarray) -> str:
     """The fisheye with the ROI, the RVM picture at the tuning size and at the display's,
     and the annotated EC image."""
-    from ..isp import draw_roi
 
     roi = draw_roi(r.images.color, r.top[0].params, r.output, thickness=3)
     figs = [
@@ -220,8 +218,6 @@ ec_section = _ec_section
 
 
 def _params_section(r: _Run) -> str:
-    from ..isp import PARAM_SPECS, IspParams
-
     space = r.config.space(r.scene.fisheye_camera())
     tuned = {pr.name: pr for pr in space.ranges}
     chosen = r.top[0].params
@@ -261,7 +257,6 @@ def _convergence_section(r: _Run) -> str:
 
 def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
     """The top-M cards; ``best_color`` is rank 1's RVM image, already made for the page."""
-    from ..pipeline import rvm_color
 
     cards = []
     first = r.top[0]
@@ -321,7 +316,6 @@ class _Summary:
 def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary]:
     """The report page of one run (to be written into ``report_dir``, default the run
     folder: links are relative to it), and the summary the batch index shows."""
-    from ..pipeline import evaluate_params
 
     r = _load_run(run_dir)
     report_dir = report_dir if report_dir is not None else run_dir

@@ -15,6 +15,8 @@ from urllib.parse import quote
 from .page import escape, img_tag
 from .provenance import Provenance
 from .records import known_yield, signoff_files
+from ..isp import params_to_dict
+from ..pipeline import rvm_color
 
 if TYPE_CHECKING:
     from ..isp import IspParams, OutputSpec
@@ -41,7 +43,6 @@ def yield_note(run_dir: Path, params: IspParams, nominal_passed: bool, *,
     """The yield of ``params`` when a sign-off or robustness result beside the run judged
     exactly them, else a neutral note that the verdict is the nominal one (``robust``: the
     run's own samples give a tuning yield, shown in its robust section)."""
-    from ..isp import params_to_dict
 
     known = known_yield(run_dir, params_to_dict(params))
     verdict = "all ECs pass" if nominal_passed else "not all ECs pass"
@@ -82,7 +83,6 @@ def display_figure(images: FisheyeImages, params: IspParams, record: OutputSpec)
     """The best candidate's picture at the RVM image of record (the scene's or criteria's
     ``display.rvm_image_px``: what the run writes as ``best/rvm_display.png``), made from
     the images shown, so it always matches them."""
-    from ..pipeline import rvm_color
 
     w, h = record.width, record.height
     picture = rvm_color(images, params, record)

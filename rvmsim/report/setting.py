@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from .page import escape
 from .provenance import FileRecord
+from ..isp import PARAM_SPECS
 
 if TYPE_CHECKING:
     from ..criteria import EcValue
@@ -44,7 +45,6 @@ class SettingRecord:
 
 def params_table(params: IspParams) -> str:
     """The 14 ISP parameters: name, the paper's name, value (full precision), unit."""
-    from ..isp import PARAM_SPECS
 
     rows = "".join(
         f"<tr><td>{escape(s.name)}</td><td>{escape(s.paper_name)}</td>"

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import RvmsimError
+from ..errors import ParamsFileError, RvmsimError
 from ..storage import json_default
 from .market_rows import all_markets_pass, load_markets, markets_rows, markets_verdict_text
 from .page import shrink
@@ -45,6 +45,10 @@ from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecor
 from .run import _load_run, _Run
 from .setting import SettingRecord
 from .signoff_page import SignoffContent, signoff_html
+from ..pipeline import make_evaluator, record_output
+from ..criteria import annotate, bundled_criteria_text
+from ..isp import load_params, params_to_dict, process
+from ..runs import rank_text
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -83,7 +87,6 @@ def _record_output(criteria: Criteria, scene: Scene, output: OutputSpec) -> Outp
     """The RVM output the ECs of record are judged at (:func:`rvmsim.pipeline.record_output`:
     the scene's or criteria's ``display.rvm_image_px``, default 1280 × 720), mirrored as the
     tuning output is."""
-    from ..pipeline import record_output
 
     return record_output(criteria, scene, output.mirror)
 
@@ -93,9 +96,6 @@ def _record_ecs(images: FisheyeImages, params: IspParams, output: OutputSpec,
                                              dict[str, np.ndarray]]:
     """The ECs at ``output`` on the full path, the RVM picture, every EC drawn on it, and
     each EC drawn alone (cropped to the picture, shrunk to :data:`EC_PICTURE_PX`)."""
-    from ..criteria import annotate
-    from ..isp import process
-    from ..pipeline import make_evaluator
 
     ec = make_evaluator(images, output, criteria, path="full")(params)
     color, labels = process(images.color, images.labels, params, output)
@@ -114,9 +114,6 @@ def _record_ecs(images: FisheyeImages, params: IspParams, output: OutputSpec,
 def _params_file(r: _Run, out: Path) -> Path:
     """The run's ``top/rank_1.yaml`` when it holds rank 1's values and output, else
     :data:`PARAMS_FILE` written into ``out``."""
-    from ..errors import ParamsFileError
-    from ..isp import load_params
-    from ..runs import rank_text
 
     best = r.top[0]
     searched = r.config.output_spec()  # a params file's output: the size the run searched at
@@ -144,8 +141,6 @@ def _dedupe(records: list[FileRecord]) -> list[FileRecord]:
 
 
 def _criteria_record(path: Path | str | None, role: str = "criteria") -> list[FileRecord]:
-    from ..criteria import bundled_criteria_text
-
     if path is None:
         return [FileRecord(role, "built-in (the paper's thresholds)", None, "no file")]
     if bundled_criteria_text(str(path)) is not None:
@@ -275,7 +270,6 @@ def _check_out(out: Path) -> None:
 
 def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any]:
     """signoff.json's document."""
-    from ..isp import params_to_dict
 
     rob: dict[str, Any] | None = None
     if res.robustness is not None:
@@ -382,7 +376,6 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
 def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRecord | None,
              eol: EolRecord | None, reviewer: str, bar: Any) -> SignoffContent:
     """Everything the page shows: the setting, its ECs of record, the files, the commands."""
-    from ..isp import params_to_dict
 
     out.mkdir(exist_ok=True)
     best = r.top[0]

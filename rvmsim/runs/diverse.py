@@ -40,6 +40,10 @@ import numpy as np
 from ..isp import PARAM_SPECS, IspParams, OutputSpec
 from ..search.space import SearchSpace
 from .records import TrialRecord
+from ..robust import ec_margins
+from ..isp.exact import map_points
+from ..scene import load_scene
+from ..criteria import load_criteria
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -203,7 +207,6 @@ def make_candidates(picks: Sequence[tuple[TrialRecord, str, float]], space: Sear
 def margins_of(rec: TrialRecord, criteria: Criteria) -> dict[str, float]:
     """EC id → margin of ``rec``'s value (:func:`rvmsim.robust.ec_margins`; NaN where not
     measured or the EC has no range), for the ECs of ``criteria`` the record holds."""
-    from ..robust import ec_margins
 
     out = {}
     for ec in criteria.ids:
@@ -248,7 +251,6 @@ def _view(p: IspParams, out: OutputSpec) -> tuple[float, float]:
     """Where the RVM image reads the fisheye image: the distance (px) between the input
     points of its left and right edge at its middle row (its width), and the input row of
     its centre."""
-    from ..isp.exact import map_points
 
     w, h = out.width - 1, out.height - 1
     u, v, _ = map_points(p, np.array([0.0, w, w / 2]), np.array([h / 2] * 3), (1, 1), out)
@@ -338,7 +340,6 @@ def run_space(store: RunStore, settings: RunSettings) -> SearchSpace:
     RvmsimError
         One line: a run without a recorded space whose scene file is gone or unreadable.
     """
-    from ..scene import load_scene
 
     space = store.space()
     if space is not None:
@@ -390,7 +391,6 @@ def store_candidates(store: RunStore, settings: RunSettings, m: int | None = Non
     instead), each with its trial record; ``m`` and ``min_distance`` default to the run's
     tuning config (``diverse``), ``criteria`` to the run's criteria file.  Reads every
     trial's parameters and scores at once, and the full records of the chosen only."""
-    from ..criteria import load_criteria
 
     cfg = settings.config
     m = cfg.diverse_m if m is None else m

@@ -21,6 +21,7 @@ from ..storage import FolderLock, json_default
 from .diverse import Candidate, candidates_json, store_candidates
 from .records import RunSettings, RunState, RunStatus, TrialRecord
 from .store import RunStore
+from ..criteria import bundled_criteria_text
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -180,7 +181,6 @@ def run_inputs(run_dir: str | Path, settings: RunSettings) -> tuple[Path, Path |
     RvmsimError
         One line naming the scene or criteria file that is gone.
     """
-    from ..criteria import bundled_criteria_text
 
     run_dir = Path(run_dir)
     scene_file = recorded_path(settings.scene, run_dir)

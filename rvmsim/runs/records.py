@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 
 from ..isp import IspParams, OutputSpec
 from ..search.config import TuningConfig
+from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 
 __all__ = ["RunStatus", "StopReason", "EcOutcome", "TrialRecord", "RunSettings", "RunState",
            "SceneRef",
@@ -134,7 +135,6 @@ class RunSettings:
     def record_px(self) -> tuple[int, int]:
         """(W, H) px of the RVM image of record (a run from before it was recorded: the
         default, :data:`rvmsim.scene.RVM_IMAGE_OF_RECORD_PX`)."""
-        from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 
         return self.judged_at or RVM_IMAGE_OF_RECORD_PX
 

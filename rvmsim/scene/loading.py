@@ -19,6 +19,7 @@ from .._io import (KeyPath, image_size_problem, input_error_from_validation, key
 from ..errors import SceneError
 from .schema import CameraSpec, MeshPart, Scene
 from .station import eol_problem
+from .sitedefs import scene_site_entry
 
 __all__ = [
     "load_scene",
@@ -92,7 +93,6 @@ def _check_sites(scene: Scene, lines: Mapping[KeyPath, int]) -> None:
     """Every site the scene names loads (:func:`~rvmsim.scene.sitedefs.scene_site_entry`:
     a bundled name, or a site file next to the scene, whose own errors name that file and
     its key), and none is named twice."""
-    from .sitedefs import scene_site_entry
 
     seen: set[str] = set()
     for i, entry in enumerate(scene.sites):

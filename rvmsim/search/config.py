@@ -25,6 +25,7 @@ from .strategies import (
     RandomSettings,
     Strategy,
 )
+from ..scene import RVM_IMAGE_OF_RECORD_PX
 
 __all__ = ["TuningConfig", "DiverseConfig", "load_tuning_config", "make_strategy"]
 
@@ -179,7 +180,6 @@ class TuningConfig(BaseModel):
     def output_spec(self) -> OutputSpec:
         """The RVM image the ECs are measured on while tuning (the search size; without
         ``output.size``: the default RVM image of record, :meth:`at_record` sets a scene's)."""
-        from ..scene import RVM_IMAGE_OF_RECORD_PX
 
         w, h = self.output.size or RVM_IMAGE_OF_RECORD_PX
         return OutputSpec(w, h, self.output.mirror)

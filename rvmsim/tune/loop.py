@@ -22,7 +22,7 @@ from .._procs import spawn_pool, stop_pool
 from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
-from ..pipeline import ImageEvaluator, make_evaluator
+from ..pipeline import ImageEvaluator, make_evaluator, record_output
 from ..search.config import TuningConfig, make_strategy
 from .objective import ScoredBatch, score_vectors
 from .members import (Aggregate, Member, MembersScorer, MembersSolver, check_members,
@@ -33,6 +33,7 @@ from .solve import EcSolver
 from ..search.space import SearchSpace
 from ..runs.store import RunStore
 from ..search.strategies import Strategy
+from .compensated import MembersCompensation as Compensation
 
 if TYPE_CHECKING:
     from ..render import FisheyeImages
@@ -320,8 +321,6 @@ def _members_compensation(members: Sequence[Member], settings: SearchSettings,
     """The per-car values of ``members`` under ``settings.compensation`` (None without)."""
     if settings.compensation is None:
         return None
-    from ..pipeline import record_output
-    from .compensated import MembersCompensation as Compensation
 
     nominal = [i for i, m in enumerate(members) if m.station is None]
     return Compensation(settings.compensation,

@@ -27,6 +27,13 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 from ..errors import RvmsimError
 from .members import Member, check_cameras, member_conflicts, member_passes
+from ..markets import binding_row, market_members, parse_markets
+from ..render import cached_render
+from ..criteria.infeasible import infeasible_ecs
+from ..pipeline import evaluate_params, record_output, write_frame
+from ..runs.folder import open_run, run_settings
+from .shared import resumed_scenes
+from ..scene import load_scene
 
 if TYPE_CHECKING:
     from ..criteria.infeasible import Infeasibility
@@ -69,7 +76,6 @@ def markets_members(scenes: Sequence[Scene], settings: RunSettings, *, progress:
                     ) -> tuple[list[MarketMember], list[FisheyeImages], list[Member]]:
     """The members of a markets run: every (scene, market) pair, each scene rendered at the
     market's site (cached), with the market's criteria."""
-    from ..markets import market_members, parse_markets
 
     pairs = market_members(scenes, parse_markets(list(settings.markets)))
     renders, members = render_market_members(pairs, progress=progress)
@@ -86,7 +92,6 @@ def render_market_members(pairs: Sequence[MarketMember], *, progress: bool = Fal
     RvmsimError
         One line naming the pair whose camera differs.
     """
-    from ..render import cached_render
 
     renders = [cached_render(p.scene, progress=progress)[0] for p in pairs]
     check_cameras([(p.name, im.camera) for p, im in zip(pairs, renders)])
@@ -99,7 +104,6 @@ def market_infeasible(pairs: Sequence[MarketMember], renders: Sequence[FisheyeIm
                       ) -> list[tuple[MarketMember, Infeasibility]]:
     """Per pair, the ECs no ISP setting can pass at its market's site, read from its fisheye
     labels (:func:`rvmsim.criteria.infeasible.infeasible_ecs`), in the pairs' order."""
-    from ..criteria.infeasible import infeasible_ecs
 
     return [(p, f) for p, im in zip(pairs, renders)
             for f in infeasible_ecs(p.scene, im.camera, im.labels, p.criteria)]
@@ -118,8 +122,6 @@ def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketM
     ``best/ec_table.txt``.  A run tuned otherwise and judged in markets afterwards
     (:func:`judge_run_in_markets`) gets no conflicts (it has no member results) and keeps
     its own EC table."""
-    from ..markets import binding_row
-    from ..pipeline import evaluate_params, record_output, write_frame
 
     top = store.top(1)
     if not top:
@@ -242,10 +244,6 @@ def judge_run_in_markets(run_dir: str | Path, markets: str) -> None:
     RvmsimError
         One line: no run there, bad markets, or a markets run given other markets.
     """
-    from ..markets import market_members, parse_markets
-    from ..render import cached_render
-    from ..runs.folder import open_run, run_settings
-    from .shared import resumed_scenes
 
     run_dir = Path(run_dir)
     chosen = parse_markets(markets)
@@ -258,7 +256,6 @@ def judge_run_in_markets(run_dir: str | Path, markets: str) -> None:
                                   f"{', '.join(settings.markets)}; give no --markets (its rows "
                                   "are shown) or the same markets")
             return
-        from ..scene import load_scene
 
         scenes = resumed_scenes(settings) if settings.shared else [load_scene(settings.scene)]
         pairs = market_members(scenes, chosen)

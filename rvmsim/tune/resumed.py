@@ -25,6 +25,14 @@ from pathlib import Path
 from ..errors import RvmsimError
 from ..runs.folder import RUN_DB, json_difference
 from ..runs.records import RunSettings, SceneRef
+from ..render import same_scene
+from ..scene import load_scene
+from ..compensation import compensation_for, compensation_from_dict
+from ..markets import parse_markets
+from .members import parse_aggregate
+from .robust import ROBUST_AGGREGATE
+from ..criteria import criteria_reference
+from ..search.config import load_tuning_config
 
 __all__ = ["ResumeArgs", "check_resume_args"]
 
@@ -71,9 +79,6 @@ def _same_file(given: Path, recorded: str) -> bool:
 
 
 def _check_scenes(db: Path, settings: RunSettings, scenes: tuple[Path, ...]) -> None:
-    from ..render import same_scene
-    from ..scene import load_scene
-
     stored = _stored_scenes(settings)
     if len(scenes) != len(stored):
         names = ", ".join(r.scene for r in stored)
@@ -101,10 +106,6 @@ def _kind(settings: RunSettings) -> str:
 
 def _check_members(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
     """--shared, --markets, --robust, --samples, --variation, --compensation, --aggregate."""
-    from ..compensation import compensation_for, compensation_from_dict
-    from ..markets import parse_markets
-    from .members import parse_aggregate
-    from .robust import ROBUST_AGGREGATE
 
     if a.shared and not (settings.shared and not settings.markets):
         raise _refuse("--shared", db, _kind(settings))
@@ -139,8 +140,6 @@ def _check_members(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
 
 def _check_search(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
     """--strategy, --seed, --budget, --config, --criteria."""
-    from ..criteria import criteria_reference
-    from ..search.config import load_tuning_config
 
     if a.strategy is not None and a.strategy != settings.strategy:
         raise _refuse("--strategy", db, f"with --strategy {settings.strategy}", a.strategy)

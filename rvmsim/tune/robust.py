@@ -28,6 +28,10 @@ from typing import TYPE_CHECKING, Sequence, TypedDict
 
 from ..errors import RvmsimError
 from .members import Member
+from ..robust import (draw_samples, read_at_station, refolder, sample_images, station_readings,
+                      station_twin, variation_for, yield_estimate)
+from ..compensation import compensation_from_dict, measured_load_index
+from ..runs.diverse import store_candidates
 
 if TYPE_CHECKING:
     from ..compensation import CompensationModel
@@ -59,7 +63,6 @@ def run_variations(scenes: Sequence[Scene], variation_file: str | None) -> list[
     RvmsimError
         One line: a bad variation file, or a scene without a variation section.
     """
-    from ..robust import variation_for
 
     return [variation_for(sc, variation_file) for sc in scenes]
 
@@ -82,9 +85,6 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
                    settings: RunSettings, *, progress: bool = False) -> list[Member]:
     """The members of a robust run: per scene its nominal image, then its samples' (with
     the station's reading of each when the run tunes for the yield after compensation)."""
-    from ..compensation import measured_load_index
-    from ..robust import (draw_samples, read_at_station, refolder, sample_images,
-                          station_readings, station_twin)
 
     k = settings.robust_samples
     if k is None:
@@ -117,7 +117,6 @@ def run_compensation(settings: RunSettings) -> CompensationModel | None:
     """The compensation model a robust run tunes for (None: the yield before compensation)."""
     if settings.compensation is None:
         return None
-    from ..compensation import compensation_from_dict
 
     return compensation_from_dict(settings.compensation)
 
@@ -136,7 +135,6 @@ def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
                    ) -> RobustSummary | None:
     """Nominal score(s), robust (aggregate) score and yield over the samples of trial
     ``idx``, from its stored member results (None when the store has none)."""
-    from ..robust import yield_estimate
 
     results = store.member_results(idx)
     if not results:
@@ -167,7 +165,6 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
     (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`)."""
     if settings.robust_samples is None:
         return
-    from ..runs.diverse import store_candidates
 
     rows = []
     compensation = settings.compensation

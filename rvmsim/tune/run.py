@@ -23,7 +23,7 @@ from ..search.config import TuningConfig, make_strategy
 from ..runs.folder import (RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock,
                            run_settings, write_top_files)
 from .loop import SearchOutcome, search_members, search_scene
-from .members import Member, parse_aggregate
+from .members import Member, check_cameras, parse_aggregate
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compensation,
                      run_variations, variation_key,
                      write_robust_results)
@@ -33,9 +33,16 @@ from .resumed import ResumeArgs, check_resume_args
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
                      write_member_results)
 from .markets import check_market_arguments, markets_members, write_market_results
-from .members import check_cameras
 from ..runs.store import RunStore
 from ..search.strategies import Strategy, check_seed
+from ..criteria import (Unsupported, check_supported, criteria_reference, load_criteria,
+                        record_size, supported_criteria)
+from ..render import cached_render, same_scene, scene_key
+from ..scene import Scene, load_scene
+from ..markets import market_criteria, parse_markets
+from ..compensation import measured_load_index
+from .._io import write_png
+from ..pipeline import evaluate_params, record_output, write_frame
 
 if TYPE_CHECKING:
     from .._progress import ProgressBar
@@ -74,9 +81,6 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
              ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
     every input is checked here, before anything in ``run_dir`` changes)."""
-    from ..criteria import criteria_reference, load_criteria, record_size
-    from ..render import scene_key
-    from ..scene import Scene, load_scene
 
     r = request
     check_seed(r.seed)
@@ -126,7 +130,6 @@ def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_support
                ) -> tuple[Criteria, tuple[str, ...]]:
     """The criteria every scene supports (:func:`rvmsim.criteria.check_supported`: refused
     before any work unless ``only_supported``) and the ECs that left out."""
-    from ..criteria import check_supported
 
     out = crit
     for recorded, sc in scenes:
@@ -137,9 +140,6 @@ def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_support
 def _markets_run(r: TuneRequest, aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
     """A new markets run's settings, scenes and its first market's criteria
     (:mod:`rvmsim.tune.markets`)."""
-    from ..criteria import record_size
-    from ..markets import market_criteria, parse_markets
-    from ..scene import Scene, load_scene
 
     check_market_arguments(r.markets if isinstance(r.markets, str) else ",".join(r.markets or ()),
                            r.criteria is not None or r.criteria_file is not None,
@@ -165,8 +165,6 @@ def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
     state checked against every variation); as they are without ``robust``."""
     import dataclasses
 
-    from ..compensation import measured_load_index
-
     if robust is None:
         return settings
     samples, variation_file = robust
@@ -188,9 +186,6 @@ def _resumed_run(run_dir: Path, given: ResumeArgs | None
     """The settings, scene and criteria of the run to resume in ``run_dir`` (read, not
     written), checking what the caller ``given`` against them (:mod:`.resumed`), its
     run.json against its store, and that its scene has not changed since."""
-    from ..criteria import Unsupported, load_criteria, supported_criteria
-    from ..render import same_scene
-    from ..scene import load_scene
 
     if not (run_dir / RUN_DB).is_file():
         raise RvmsimError(f"{run_dir}: no run to resume ({RUN_DB} missing)")
@@ -232,8 +227,6 @@ def _resumed_run(run_dir: Path, given: ResumeArgs | None
                           "since this run started; resuming would mix two sample sets "
                           "(start a new run)")
     if settings.markets:
-        from ..markets import market_criteria, parse_markets
-
         return settings, scenes, market_criteria(parse_markets(list(settings.markets))[0])
     crit = load_criteria(settings.criteria_file)
     if settings.left_out:  # tuned with --only-supported: the same ECs left out again
@@ -344,7 +337,6 @@ def resume(run_dir: str | Path, *, options: RunOptions = RunOptions(),
 def _run(run_dir: Path, lock: FolderLock, settings: RunSettings, scenes: list[Scene],
          crit: Criteria, options: RunOptions, *, resume: bool, force: bool) -> TuneResult:
     """Render, search into the run's store under its lock, write the results."""
-    from ..render import cached_render
 
     sc, cfg = scenes[0], settings.config
     # the strategy before the render: a bad config, strategy or seed fails in a moment
@@ -431,8 +423,6 @@ def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeI
     ``candidates.json``), and best/ (rank 1, the best trial): RVM image, annotated ECs and EC
     table at the RVM image of record (:func:`rvmsim.pipeline.record_output`), the verdict the
     run stored."""
-    from .._io import write_png
-    from ..pipeline import evaluate_params, record_output, write_frame
 
     settings = store.settings()
     if settings is None:

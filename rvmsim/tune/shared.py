@@ -25,6 +25,10 @@ from ..errors import RvmsimError
 from ..search.config import TuningConfig
 from .members import Member, check_cameras, member_conflicts
 from ..runs.records import RunSettings, SceneRef
+from ..scene import Scene, load_scene
+from ..criteria import criteria_reference
+from ..render import same_scene, scene_key
+from ..pipeline import make_evaluator
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -77,7 +81,6 @@ def load_shared_scenes(scenes: Sequence[str | Path | Scene]) -> list[tuple[str, 
     RvmsimError
         One line: fewer than two scenes, a bad scene file, or cameras that differ.
     """
-    from ..scene import Scene, load_scene
 
     if len(scenes) < 2:
         raise RvmsimError(f"--shared: give at least two scenes (got {len(scenes)}); tune one "
@@ -96,8 +99,6 @@ def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: in
                     budget: int | None, criteria_file: str | Path | None,
                     config: TuningConfig | None, aggregate: str) -> RunSettings:
     """The settings of a new shared run (the first scene is also ``scene``)."""
-    from ..criteria import criteria_reference
-    from ..render import scene_key
 
     refs = tuple(SceneRef(str(Path(rec).resolve()), scene_key(sc), sc.name)
                  for rec, sc in scenes)
@@ -116,8 +117,6 @@ def resumed_scenes(settings: RunSettings) -> list[Scene]:
     RvmsimError
         One line naming the scene that changed (or cannot be loaded).
     """
-    from ..render import same_scene
-    from ..scene import load_scene
 
     out = []
     for ref in settings.scenes:
@@ -141,7 +140,6 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
                          criteria: Criteria, aggregate: str) -> None:
     """``best/members.json`` (each scene's EC results under the best parameters, and the
     aggregate) and ``best/ec_table.txt`` (each scene's EC table under its vehicle name)."""
-    from ..pipeline import make_evaluator
 
     top = store.top(1)
     if not top:

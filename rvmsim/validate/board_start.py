@@ -41,7 +41,7 @@ from .board_detect import MIN_PATCH, GridDetection, detect_grids, view_basis
 from .capture import grey
 from .charuco import detect_charuco
 from .pose import fit_pose
-from .projection import project
+from .projection import corrected_pose, project
 
 __all__ = ["BoardStart", "BoardSearch", "board_outline", "find_board_start", "search_board",
            "ypr_from_rotation", "VIEWS", "predicted_shift_px"]
@@ -477,7 +477,6 @@ def predicted_shift_px(camera: FisheyeCamera, ypr0_deg: np.ndarray, x: np.ndarra
                        points: np.ndarray) -> float:
     """Largest image move of ``points`` (m) between the scene's pose and the correction
     ``x``, px."""
-    from .projection import corrected_pose
 
     before = project(camera, camera.position, camera.rotation, points)
     after = project(camera, *corrected_pose(camera, ypr0_deg, x), points)

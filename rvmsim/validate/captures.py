@@ -23,6 +23,8 @@ from ..errors import RvmsimError
 from .failure import ValidationFailure
 from .validation import ValidationSettings, validate
 from .verdict import Validation
+from .capture import check_captures, load_capture
+from .outputs import write_pictures
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -183,8 +185,6 @@ def validate_captures(
         missing, unreadable, corrupt, blank or of another size than the camera's
         (:func:`~.capture.check_captures`), naming it.
     """
-    from .capture import check_captures, load_capture
-    from .outputs import write_pictures
 
     if len(folders) != len(captures):
         raise ValueError(f"{len(captures)} captures but {len(folders)} output folders")

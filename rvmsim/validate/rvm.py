@@ -16,6 +16,7 @@ from ..isp import IspParams, OutputSpec, process
 from ..render import FisheyeImages
 from .outputs import compare_with_pictures
 from .verdict import RvmComparison
+from ..pipeline import evaluate_params
 
 __all__ = ["compare_rvm"]
 
@@ -75,7 +76,6 @@ def _rvm_images_and_ecs(capture: np.ndarray, synthetic: FisheyeImages,
     labels (the scene's when None) go through the ISP; the ECs are evaluated on both label
     images.
     """
-    from ..pipeline import evaluate_params
 
     rvm_cap = process(capture, None, params, output)[0]
     if rvm_cap is None:

@@ -28,7 +28,7 @@ from typing import Callable, Union
 import numpy as np
 
 from ..camera import ypr_from_rotation
-from ..criteria import Criteria
+from ..criteria import Criteria, default_criteria
 from ..isp import IspParams, OutputSpec
 from ..render import FisheyeImages, cached_render, render_fisheye
 from ..scene import Scene
@@ -46,6 +46,7 @@ from .scene_edit import mount_correction, scene_with_mount
 from .shade_search import MIN_SCORE as SHADE_MIN_SCORE
 from .shade_search import ShadeStart, search_pose_by_shade
 from .verdict import LandmarkMatch, PoseCorrection, Tolerances, Validation, judge
+from ..pipeline import record_output
 
 __all__ = ["validate", "ValidationSettings", "RERENDER_SHIFT_PX"]
 
@@ -185,8 +186,6 @@ def validate(scene: Scene, capture: np.ndarray,
     rvm = None
     if settings.params is not None:
         # the ECs judged at the RVM image of record, whatever size the params were searched at
-        from ..criteria import default_criteria
-        from ..pipeline import record_output
 
         mirror = settings.output.mirror if settings.output is not None else True
         record = record_output(settings.criteria or default_criteria(), scene, mirror)
