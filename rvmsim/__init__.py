@@ -69,7 +69,7 @@ from .errors import (
     VariationError,
 )
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 #: Public name → (module, name there).  Resolved on first use, so importing rvmsim stays
 #: cheap and never starts OpenGL.  Some names differ from the function's own: the

@@ -12,10 +12,12 @@ variable ``RVMSIM_MAX_IMAGE_PIXELS``.
 from __future__ import annotations
 
 import os
+import uuid
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import imageio.v3 as iio
 import numpy as np
 import yaml
 from pydantic import ValidationError
@@ -289,9 +291,6 @@ def write_png(path: str | Path, image: np.ndarray) -> Path:
     The file appears whole or not at all: it is written beside ``path`` under a temporary
     name and renamed over it, so a reader (another process sharing the render cache, a
     browser polling a picture) never sees half a file."""
-    import uuid
-
-    import imageio.v3 as iio
 
     path = Path(path)
     # a name of this writer's own (processes and threads may write one path at once); made

@@ -37,6 +37,7 @@ stderr.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import multiprocessing as mp
 import os
 import pickle
@@ -183,7 +184,6 @@ def die_with_parent(parent_pid: int, *, kernel: bool = True) -> None:
 
 def _kill_at_parent_death() -> None:
     """``prctl(PR_SET_PDEATHSIG, SIGKILL)`` through the C library."""
-    import ctypes
 
     try:
         libc = ctypes.CDLL(None, use_errno=True)

@@ -7,6 +7,7 @@ import doctest
 import importlib
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -59,3 +60,9 @@ def test_docstring_examples(tmp_path, monkeypatch):
         runner.run(t)
     res = runner.summarize(verbose=False)
     assert res.failed == 0 and res.attempted >= 10, res
+
+
+def test_version_matches_the_package_metadata():
+    """``rvmsim.__version__`` is what pyproject.toml declares (one version, two places)."""
+    declared = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    assert rvmsim.__version__ == declared["project"]["version"]

@@ -5,7 +5,12 @@
   or the line after it;
 - no import of a private name (``_x``) from another package of rvmsim;
 - no silent ``except``: a handler whose body is only ``pass`` / ``...`` / ``continue`` with no
-  comment saying why the error is expected there.
+  comment saying why the error is expected there;
+- data flows one way between the stages (:data:`LAYERS`);
+- imports of rvmsim's own modules stand at module top, outside ``cli/`` (whose commands
+  import their stage on use, so ``rvmsim --help`` stays fast): a function-level import
+  hides a dependency, and often a circle;
+- no import circle between the files of one package (``if TYPE_CHECKING:`` imports aside).
 
 Function length counts the lines from ``def`` to the end, less the docstring.
 """
@@ -13,6 +18,7 @@ Function length counts the lines from ``def`` to the end, less the docstring.
 from __future__ import annotations
 
 import ast
+import graphlib
 from pathlib import Path
 
 import pytest
@@ -22,7 +28,8 @@ MODULES = sorted(ROOT.rglob("*.py"))
 MAX_MODULE_LINES = 500
 MAX_FUNCTION_LINES = 80
 #: Private top-level modules every package may use (helpers below all the stages).
-_SHARED = ("rvmsim._io", "rvmsim._procs", "rvmsim._progress")
+_SHARED = ("rvmsim._io", "rvmsim._optional", "rvmsim._procs", "rvmsim._progress",
+           "rvmsim._version")
 
 
 def _package(path: Path) -> str:
@@ -118,7 +125,7 @@ def test_the_checks_see_violations(tmp_path: Path) -> None:
 #: The stages from the bottom up: a module may import from its own stage and those below it
 #: (imports under ``if TYPE_CHECKING:`` are for annotations only and do not count).
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "labels", "_io", "_procs", "_progress", "storage"),
+    ("errors", "labels", "_io", "_optional", "_procs", "_progress", "_version", "storage"),
     ("camera",),
     ("scene",),
     ("render", "isp"),
@@ -170,3 +177,81 @@ def test_the_layer_check_sees_an_upward_import() -> None:
     found = _runtime_imports(tree)
     assert [_resolve(ROOT / "tune" / "run.py", n) for n in found] == ["rvmsim.batch"]
     assert _LAYER["batch"] > _LAYER["tune"]
+
+
+def _module_name(path: Path) -> str:
+    parts = ["rvmsim", *path.relative_to(ROOT).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+_MODULE_NAMES = {_module_name(p) for p in MODULES}
+
+
+def _imported_modules(path: Path, tree: ast.AST, names: set[str] = _MODULE_NAMES) -> set[str]:
+    """The modules of ``names`` that ``tree`` (of ``path``) imports at run time (``from . import
+    x`` counts as module ``x`` when ``x`` is one)."""
+    found = set()
+    for node in _runtime_imports(tree):
+        target = _resolve(path, node)
+        if path.name == "__init__.py" and node.level:
+            target = _resolve(path.with_name("x.py"), node)  # a package's own level
+        for alias in node.names:
+            if f"{target}.{alias.name}" in names:
+                found.add(f"{target}.{alias.name}")
+            elif target in names:
+                found.add(target)
+    return found
+
+
+@pytest.mark.parametrize("path", [p for p in MODULES if _package(p) != "cli"],
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_own_imports_at_module_top(path: Path) -> None:
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    inner = []
+    for fn in _functions(tree):
+        for node in ast.walk(fn):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith(
+                    "rvmsim")):
+                inner.append(f"{_resolve(path, node)} (line {node.lineno})")
+            elif isinstance(node, ast.Import) and any(a.name.split(".")[0] == "rvmsim"
+                                                      for a in node.names):
+                inner.append(f"rvmsim (line {node.lineno})")
+    assert not inner, f"{path.relative_to(ROOT)}: function-level imports of rvmsim: {inner}"
+
+
+def _package_circle(package: str, sources: dict[Path, str]) -> list[str] | None:
+    """An import circle between the files of ``package`` (``sources``: path → text; the
+    package's ``__init__`` aside, as it gathers the package's names from every file), or
+    None."""
+    prefix = f"rvmsim.{package}."
+    names = {_module_name(p) for p in sources}
+    graph: dict[str, set[str]] = {}
+    for path, text in sources.items():
+        if _package(path) != package or path.name == "__init__.py":
+            continue
+        name = _module_name(path)
+        deps = _imported_modules(path, ast.parse(text), names)
+        graph[name] = {d for d in deps if d.startswith(prefix) and d != name
+                       and not (ROOT / d.removeprefix("rvmsim.").replace(".", "/")).is_dir()}
+    try:
+        tuple(graphlib.TopologicalSorter(graph).static_order())
+    except graphlib.CycleError as err:
+        return list(err.args[1])
+    return None
+
+
+@pytest.mark.parametrize("package", sorted({_package(p) for p in MODULES} - {""}))
+def test_no_import_circle_inside_a_package(package: str) -> None:
+    circle = _package_circle(package, {p: p.read_text(encoding="utf-8") for p in MODULES})
+    assert circle is None, f"{package}: import circle {' -> '.join(circle or [])}"
+
+
+def test_the_circle_check_sees_a_circle() -> None:
+    """A circle through ``from . import``, ``from .x import``, and not through TYPE_CHECKING."""
+    scene = ROOT / "scene"
+    files = {scene / "a.py": "from . import b\n", scene / "b.py": "from .c import y\n",
+             scene / "c.py": "if TYPE_CHECKING:\n    from .a import z\n"}
+    assert _package_circle("scene", files) is None
+    files[scene / "c.py"] = "import numpy\nfrom .a import z\n"
+    assert sorted(set(_package_circle("scene", files) or [])) == [
+        "rvmsim.scene.a", "rvmsim.scene.b", "rvmsim.scene.c"]

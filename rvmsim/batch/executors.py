@@ -17,13 +17,18 @@ as it arrives, so an interrupted run keeps everything finished.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import os
 import sys
+import uuid
 from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import FIRST_COMPLETED, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import TYPE_CHECKING, TypeVar
 
-from ..errors import RvmsimError
+from .._optional import import_distributed
 from .._procs import spawn_pool, stop_pool
+from ..errors import RvmsimError
 
 if TYPE_CHECKING:
     import distributed
@@ -71,8 +76,6 @@ class LocalExecutor(Executor):
             for key, arg in items.items():
                 yield key, fn(arg)
             return
-        from concurrent.futures import FIRST_COMPLETED, wait
-        from concurrent.futures.process import BrokenProcessPool
 
         todo = dict(items)
         rebuilds = 0
@@ -115,11 +118,7 @@ class DaskExecutor(Executor):
 
     def __init__(self, address: str | None = None, *,
                  client: distributed.Client | None = None, timeout_s: float = 10.0):
-        try:
-            import distributed
-        except ImportError:
-            raise RvmsimError("--scheduler needs the 'distributed' package "
-                              "(pip install distributed)") from None
+        distributed = import_distributed()
         self._own = client is None
         if client is None:
             try:
@@ -134,10 +133,7 @@ class DaskExecutor(Executor):
 
     def run(self, fn: Callable[[_Arg], _Result], items: Mapping[str, _Arg]
             ) -> Iterator[tuple[str, _Result]]:
-        import uuid
-
-        import distributed
-
+        distributed = import_distributed()
         # A fresh token per run: a key cancelled by an interrupted run may still be being
         # forgotten by the scheduler, and a new task under the same key would be cancelled
         # with it ("cancelled for reason: unknown") when the sweep is resumed at once.
@@ -191,8 +187,6 @@ def task_malloc(threshold_bytes: int = 256 * 1024 * 1024) -> Iterator[bool]:
     libc = None
     if env.isdigit() and int(env) < threshold_bytes and sys.platform.startswith("linux"):
         try:
-            import ctypes
-
             libc = ctypes.CDLL("libc.so.6")
             if (libc.mallopt(_M_TRIM_THRESHOLD, threshold_bytes) != 1
                     or libc.mallopt(_M_MMAP_THRESHOLD, min(threshold_bytes, 32 << 20)) != 1):

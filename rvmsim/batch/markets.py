@@ -29,32 +29,31 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import json
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-
 from .._io import KeyPath
+from ..criteria import bundled_criteria_text, record_size
 from ..errors import InputFileError, RvmsimError
+from ..isp import IspParams
+from ..markets import market_criteria, market_members, parse_markets
+from ..robust import RobustnessSettings, markets_robustness
+from ..runs import RunStore
+from ..scene import bundled_site, scene_from_dict
+from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy, member_evaluators,
+                    search_members)
+from ..tune.markets import market_infeasible, render_market_members
 from .axes import sweep_error
 from .payloads import InfeasibleDoc, MarketOutcomeDoc, PointResult, PointRun, PointTask
-from ..markets import market_criteria, market_members, parse_markets
-from ..criteria import bundled_criteria_text, record_size
-from ..scene import bundled_site, scene_from_dict
-from ..tune.markets import market_infeasible, render_market_members
 from .probes import RENDER_LOCK, probe_sensitivity, task_budget
-from ..isp import IspParams
-from ..runs import RunStore
-from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy,
-                    member_evaluators, search_members)
-from ..robust import RobustnessSettings, markets_robustness
 
 if TYPE_CHECKING:
-    from ..isp import IspParams, OutputSpec
+    from ..isp import OutputSpec
     from ..markets import Market, MarketMember
     from ..render import FisheyeImages
-    from ..runs import RunStore
     from ..tune import Member
     from .payloads import YieldDoc, YieldError
 
@@ -165,7 +164,6 @@ def market_outcomes(store: RunStore, idx: int, pairs: Sequence[MarketMember]
     """Per market (by name, in order), its own verdict on trial ``idx`` of a markets
     search (the store's ``members`` table): EC score, passed, the failing enabled ECs and
     the binding EC (the enabled EC with the least score)."""
-    import json
 
     rows = {int(k): (float(s), bool(ok), json.loads(ec)) for k, s, ok, ec in store.rows(
         "SELECT member, score, passed, ec FROM members WHERE idx = ?", (idx,))}

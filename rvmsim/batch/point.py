@@ -14,28 +14,27 @@ import time
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from ..errors import RvmsimError
-from .executors import task_malloc
-from .payloads import (EcOutcomeDoc, PointError, PointResult, PointRun, PointTask,
-                       YieldOnly, YieldTask)
-from .probes import RENDER_LOCK, sensitivity, task_budget
-from .markets import markets_yield, run_markets_point
-from ..isp import IspParams
-from .yields import point_yield
 from ..criteria import criteria_from_text, default_criteria, record_size
+from ..errors import RvmsimError
+from ..isp import IspParams
 from ..markets import market_members, parse_markets
-from ..scene import scene_from_dict
-from ..tune import SearchSettings, TuningConfig, candidate_evaluator, search_scene
 from ..render import cached_render
 from ..runs import RunStore
+from ..scene import scene_from_dict
+from ..tune import SearchSettings, TuningConfig, candidate_evaluator, search_scene
+from .executors import task_malloc
 from .feasibility import infeasible_ecs
+from .markets import markets_yield, run_markets_point
+from .payloads import (EcOutcomeDoc, PointError, PointResult, PointRun, PointTask, YieldOnly,
+                       YieldTask)
+from .probes import RENDER_LOCK, sensitivity, task_budget
+from .yields import point_yield
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
-    from ..isp import IspParams
     from ..runs import TrialRecord
     from ..scene import Scene
-    from ..tune import SearchSpace, TuningConfig
+    from ..tune import SearchSpace
     from .feasibility import Infeasibility
 
 __all__ = ["run_point", "run_yield"]
@@ -83,10 +82,6 @@ def run_yield(task: YieldTask) -> YieldOnly | PointError:
 
 
 def _run_yield(task: YieldTask) -> YieldOnly | PointError:
-    import os
-
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-
     t0 = time.perf_counter()
     if task.get("markets"):
         return _run_markets_yield(task)
@@ -123,10 +118,6 @@ def _run_markets_yield(task: YieldTask) -> YieldOnly | PointError:
 
 
 def _run_point(task: PointTask) -> PointResult:
-    import os
-
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-
     t0 = time.perf_counter()
     try:
         scene, config, criteria = _task_inputs(task)

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from tqdm import tqdm
+
 from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
 from .payloads import MergedResult, PointResult, PointTask, YieldDoc, YieldError, YieldTask
@@ -219,8 +221,6 @@ def _stream(executor: Executor, fn: Callable[[_Task], _Result], tasks: dict[str,
     ``progress``."""
     bar: ProgressBar | None = None
     if progress and tasks:
-        from tqdm import tqdm
-
         bar = tqdm(total=total, initial=total - len(tasks), unit="point", desc=desc)
     try:
         for task_key, result in executor.run(fn, tasks):

@@ -11,20 +11,20 @@ others still run.
 from __future__ import annotations
 
 import json
+import os
+import tempfile
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from ..errors import RvmsimError
-from .payloads import BatchError, BatchRun, BatchTask, SceneSummary, SceneSummaryError
-from ..tune import RunOptions, TuneRequest, TuningConfig, tune
 from ..criteria import bundled_criteria_text, criteria_from_text, criteria_reference, load_criteria
-from .executors import DaskExecutor, task_malloc
+from ..errors import RvmsimError
 from ..scene import absolute_mesh_paths, read_scene_document, scene_from_dict
+from ..tune import RunOptions, TuneRequest, TuningConfig, tune
+from .executors import DaskExecutor, task_malloc
+from .payloads import BatchError, BatchRun, BatchTask, SceneSummary, SceneSummaryError
 
-if TYPE_CHECKING:
-    from ..tune import TuningConfig
 
 __all__ = ["BatchSettings", "SceneRun", "run_batch", "summary_ec_ids", "summary_table",
            "write_summary", "tune_task", "portable_scene_doc"]
@@ -243,8 +243,6 @@ def tune_task(task: BatchTask) -> BatchRun | BatchError:
     and returned as ``{"files": {relative path: bytes}, "evaluated", "replayed",
     "seconds"}`` (or ``{"error": message}``), for the caller to write into its run folder.
     """
-    import os
-    import tempfile
 
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 

@@ -17,11 +17,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from pydantic import ValidationError
 
 from ..errors import InputFileError, RvmsimError
+from ..scene import load_scene
 from ..scene.board import PatternBoard
 from ..validate.charuco import CharucoPattern
-from ..scene import load_scene
 
 __all__ = ["BoardSpec", "parse_board_spec", "CalibrationInputError"]
 
@@ -80,7 +81,6 @@ _CHARUCO = re.compile(r"^\s*charuco\s*:\s*(\d+)\s*[xX]\s*(\d+)\s*:\s*([0-9.eE+-]
 def _charuco_spec(spec: str, m: re.Match[str]) -> BoardSpec:
     """The ChArUco board of ``charuco:COLSxROWS:SQUARE:MARKER[:DICTIONARY]``, checked as a
     scene's board is (marker below the square, a dictionary with enough markers)."""
-    from pydantic import ValidationError
 
     try:
         board = PatternBoard(pattern="charuco", squares=(int(m.group(1)), int(m.group(2))),

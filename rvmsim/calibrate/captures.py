@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
 import numpy as np
 
-from .board import CalibrationInputError
 from ..validate import load_capture
+from .board import CalibrationInputError
 
 __all__ = ["capture_files", "load_grey"]
 
@@ -46,6 +47,5 @@ def load_grey(path: str | Path) -> np.ndarray:
     RvmsimError
         One line naming the file: missing, unreadable, blank or over the pixel limit.
     """
-    import cv2
 
     return cv2.cvtColor(load_capture(path), cv2.COLOR_RGB2GRAY)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 from typing import Sequence
 
+import cv2
 import numpy as np
 
 from .board import BoardSpec
@@ -25,7 +26,6 @@ def _quick_found(grey: np.ndarray, inner: tuple[int, int]) -> bool:
     """Whether ``cv2.findChessboardCornersSB`` (no exhaustive search) finds a board of
     exactly ``inner`` corners on a copy of ``grey`` scaled to a longer side of
     :data:`QUICK_SIDE_PX` (at most 2× up)."""
-    import cv2
 
     scale = min(2.0, QUICK_SIDE_PX / max(grey.shape))
     img = grey if abs(scale - 1) < 0.05 else cv2.resize(

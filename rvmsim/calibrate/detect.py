@@ -9,17 +9,17 @@ to :data:`~.intrinsics.MIN_VIEW_CORNERS` corners not all on one line.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
+from ..validate.charuco import detect_charuco
 from .board import BoardSpec
 from .intrinsics import MIN_VIEW_CORNERS, BoardView
-from ..validate.charuco import detect_charuco
 
 __all__ = ["find_board_corners", "find_board_view"]
 
 
 def _grey(image: np.ndarray) -> np.ndarray:
-    import cv2
 
     if image.ndim == 3:
         image = cv2.cvtColor(np.ascontiguousarray(image[..., :3]), cv2.COLOR_RGB2GRAY)
@@ -31,7 +31,6 @@ def _grey(image: np.ndarray) -> np.ndarray:
 
 def _classic(grey: np.ndarray, inner: tuple[int, int]) -> np.ndarray | None:
     """cv2.findChessboardCorners + cornerSubPix, (N, 2) float64 or None."""
-    import cv2
 
     flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
     ok, c = cv2.findChessboardCorners(grey, inner, flags=flags)
@@ -62,7 +61,6 @@ def find_board_corners(image: np.ndarray, board: BoardSpec) -> np.ndarray | None
     Pixel centres at integer coordinates (as cv2); corners found on the 2× copy are mapped
     back by ``(p + 0.5) / 2 − 0.5``.
     """
-    import cv2
 
     grey = _grey(image)
     sb = cv2.CALIB_CB_ACCURACY | cv2.CALIB_CB_NORMALIZE_IMAGE

@@ -19,7 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
+from scipy.optimize import least_squares
 
 from .._io import image_size_problem, parse_yaml, read_text
 from ..scene import FOCAL_FACTORS
@@ -101,7 +103,6 @@ def _size(path: Path, key: str, value: object) -> tuple[int, int]:
 def _opencv(path: Path) -> ImportedCamera:
     """OpenCV FileStorage: ``camera_matrix``, ``dist_coeffs`` and ``resolution`` (or
     ``image_width`` and ``image_height``, as OpenCV's calibration sample writes them)."""
-    import cv2
 
     try:
         fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
@@ -308,7 +309,6 @@ def fit_kannala_brandt(theta: np.ndarray, dirs: np.ndarray, pixels: np.ndarray,
     -------
     K (3, 3), D (4,), RMS and largest pixel error of the fit (px).
     """
-    from scipy.optimize import least_squares
 
     def model(p: np.ndarray) -> np.ndarray:
         fx, fy, cx, cy, k1, k2, k3, k4 = p

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from ..errors import RvmsimError
@@ -96,7 +97,6 @@ class Calibration:
 
 def _flag(name: str) -> int:
     """A cv2.fisheye calibration flag (OpenCV 4 keeps them in cv2.fisheye, 5 in cv2)."""
-    import cv2
 
     return int(getattr(cv2.fisheye, name, None) or getattr(cv2, name))
 
@@ -107,7 +107,6 @@ def _fit(objs: list[np.ndarray], pts: list[np.ndarray],
     """cv2.fisheye.calibrate of the image points ``pts`` (board points ``objs``; views may
     differ in count) from its own start and from focal lengths of W/8 … W (cv2's start
     fails on wide views); the lowest RMS wins."""
-    import cv2
 
     flags = _flag("CALIB_RECOMPUTE_EXTRINSIC") | _flag("CALIB_FIX_SKEW")
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 300, 1e-12)
@@ -137,7 +136,6 @@ def _fit(objs: list[np.ndarray], pts: list[np.ndarray],
 def _residuals(obj: np.ndarray, corners: np.ndarray, K: np.ndarray, D: np.ndarray,
                rvec: np.ndarray, tvec: np.ndarray) -> np.ndarray:
     """(N, 2) reprojection residuals (projected − found), px."""
-    import cv2
 
     proj, _ = cv2.fisheye.projectPoints(obj.reshape(-1, 1, 3), rvec, tvec, K, D)
     return np.asarray(proj.reshape(-1, 2) - corners, np.float64)
@@ -230,7 +228,6 @@ def _result(objs: list[np.ndarray], views: list[BoardView], used: list[int],
             size: tuple[int, int]) -> Calibration:
     """Every view's fit, posed by solvePnP on its kept corners with the final K, D (a view
     with too few kept corners on all of them)."""
-    import cv2
 
     fits, sq = [], []
     for i, (v, obj) in enumerate(zip(views, objs)):

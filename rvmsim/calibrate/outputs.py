@@ -4,19 +4,21 @@ the camera section of a scene file (``--write-scene``)."""
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 import yaml
 
 from .._io import read_text, write_png
 from ..errors import RvmsimError, SceneError
+from ..scene import read_scene_document, scene_from_dict
 from .board import BoardSpec
 from .intrinsics import BoardView, Calibration
-from ..scene import read_scene_document, scene_from_dict
 
 __all__ = ["camera_block", "coverage_image", "replace_camera_values", "write_calibration_outputs",
            "write_scene_camera"]
@@ -42,7 +44,6 @@ def coverage_image(calib: Calibration, views: list[BoardView]) -> np.ndarray:
     """(H, W, 3) uint8: every view's corners on a dark canvas of the image size, used views
     in green (each view's outline in grey), rejected views in red, corners dropped as
     outliers ringed in orange."""
-    import cv2
 
     w, h = calib.image_size
     img = np.full((h, w, 3), 24, np.uint8)
@@ -105,7 +106,6 @@ def write_scene_camera(scene_file: str | Path, block: dict[str, Any]) -> Path:
     RvmsimError or SceneError
         The scene cannot be read, or the result does not load.
     """
-    import copy
 
     path = Path(scene_file)
     _, doc = read_scene_document(path)

@@ -8,17 +8,19 @@ from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+import yaml
+from pydantic import ValidationError
 
 from ..errors import RvmsimError
-from .board import BoardSpec, CalibrationInputError, parse_board_spec
-from .intrinsics import MIN_VIEWS, BoardView, calibrate_fisheye
-from .captures import capture_files, load_grey
-from .outputs import camera_block, write_calibration_outputs
+from ..scene import CameraSpec, camera_problem
 from ..validate import check_captures
+from .board import BoardSpec, CalibrationInputError, parse_board_spec
+from .captures import capture_files, load_grey
 from .counting import HINT_CAPTURES, counting_hint, other_counting
 from .detect import find_board_view
-from ..scene import CameraSpec, camera_problem
 from .imports import MAX_FIT_RMS_PX, fit_error_text, import_calibration
+from .intrinsics import MIN_VIEWS, BoardView, calibrate_fisheye
+from .outputs import camera_block, write_calibration_outputs
 
 __all__ = ["CalibrationSummary", "calibrate_captures", "import_camera"]
 
@@ -181,8 +183,6 @@ def import_camera(file: str | Path, out: str | Path, fov_deg: float | None = Non
         without an image size, or an OCamCalib fit over the limit (without
         ``accept_fit_error``).
     """
-    import yaml
-    from pydantic import ValidationError
 
     file, out = Path(file), Path(out)
     cam = import_calibration(file)

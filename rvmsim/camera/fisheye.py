@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from .equidistance import Equidistance
@@ -126,7 +127,6 @@ class FisheyeCamera:
     @property
     def rvec_tvec(self) -> tuple[np.ndarray, np.ndarray]:
         """Scene-to-camera pose as OpenCV (rvec, tvec), for cv2.fisheye.projectPoints."""
-        import cv2
 
         r_sc = self.rotation.T
         rvec, _ = cv2.Rodrigues(r_sc)

@@ -3,6 +3,8 @@ and the RVM image's ECs."""
 
 from __future__ import annotations
 
+import json
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -140,8 +142,6 @@ def _evaluate_markets(scene: Path, params: IspParams, mirror: bool, markets: str
                       scale: float, progress: bool) -> None:
     """``evaluate --markets``: each market's table and folder, the per-market rows, exit 1
     unless every market passes."""
-    import json
-    import sys
 
     from ..markets import binding_row, evaluate_markets, parse_markets
     from ..pipeline import write_evaluation

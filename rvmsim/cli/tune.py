@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import click
+from click.core import ParameterSource
+from tqdm import tqdm
 
 from .._progress import ProgressBar
 from ..tune import DEFAULT_STRATEGY, STRATEGIES
@@ -81,12 +83,11 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
     markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
-    from ..tune import (RunOptions, TuneRequest, check_tune_arguments, load_tuning_config,
-                        summary_lines)
+    from ..tune import RunOptions, TuneRequest, check_tune_arguments, load_tuning_config
     from ..tune import resume as resume_run
+    from ..tune import summary_lines
     from ..tune import tune as run_tune
     from ..tune.resumed import ResumeArgs
-    from ..tune.shared import shared_problem_lines
     from ..tune.robust import DEFAULT_SAMPLES
 
     check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
@@ -109,16 +110,12 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
         name = "+".join(s.stem for s in scenes) + ("" if markets is None else "@markets")
         result = run_tune(request, out or Path("runs") / name, options=options, force=force)
     click.echo("\n".join(summary_lines(result)))
-    best = result.outcome.best
-    if (result.run_dir / "best" / "markets.json").is_file() and (best is None or not best.passed):
-        sys.exit(1)  # no setting passes every market (the summary says why)
-    if shared_problem_lines(result.run_dir):
-        sys.exit(1)  # no setting passes every scene (the summary says which ECs where)
+    # 1 when a shared or markets run found no setting passing everywhere (the summary says why)
+    sys.exit(result.verdict.exit_status)
 
 
 def _given(ctx: click.Context) -> set[str]:
     """The options given on the command line (or in the environment), not defaulted."""
-    from click.core import ParameterSource
 
     return {name for name in ctx.params
             if ctx.get_parameter_source(name) not in (None, ParameterSource.DEFAULT)}
@@ -178,8 +175,6 @@ class _BatchProgress:
 
     def overall(self) -> ProgressBar | None:
         if self.show and self.bar is None:
-            from tqdm import tqdm
-
             self.bar = tqdm(total=self.n_scenes, unit="vehicle", desc="batch", position=0)
         return self.bar
 
@@ -227,8 +222,7 @@ def batch(scenes: tuple[Path, ...], out: Path, strategy: str, config_file: Path 
     Locally the scenes run one after another, each on --workers processes; with --scheduler
     each scene is one task on the cluster, and its run folder is written here as it finishes.
     """
-    from ..batch import (BatchSettings, run_batch, summary_ec_ids, summary_table,
-                         write_summary)
+    from ..batch import BatchSettings, run_batch, summary_ec_ids, summary_table, write_summary
     from ..tune import load_tuning_config
 
     settings = BatchSettings(strategy, load_tuning_config(config_file), criteria_file,

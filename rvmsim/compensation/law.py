@@ -34,9 +34,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import least_squares
 
-from ..errors import CompensationError
 from ..camera import FisheyeCamera, rotation_from_ypr, ypr_from_rotation
+from ..errors import CompensationError
 from ..isp import IspParams, OutputSpec, input_to_output
 from ..isp.exact import isp_rays, map_points, pixel_to_ray_matrix, plane_and_view, view_rotation
 from ..scene import Scene
@@ -373,7 +374,6 @@ class CompensationLaw:
         """The least-squares fit for a car whose camera deviates by ``deviation``: its
         variables (:attr:`variables`; before any range check) and the reference points'
         residual RMS and largest distance, RVM px."""
-        from scipy.optimize import least_squares
 
         rot, pos = deviated_pose(self.scene, deviation)
         uv, _ = self._camera.project_rays((self.points - pos) @ rot)

@@ -24,7 +24,7 @@ from .session import ConsoleFrame
 
 if TYPE_CHECKING:
     from ..isp import IspParams
-    from .session import ConsoleFrame, ConsoleSession
+    from .session import ConsoleSession
 
 __all__ = ["save_params", "write_setting_report", "params_text", "setting_page"]
 

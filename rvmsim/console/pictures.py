@@ -17,12 +17,13 @@ import threading
 from collections import OrderedDict
 from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
 
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec, RayCache, map_nodes, remap_xy
-from .inputs import ConsoleInputError
 from ..pipeline import evaluate_params
+from .inputs import ConsoleInputError
 
 if TYPE_CHECKING:
     from .session import ConsoleSession
@@ -71,7 +72,6 @@ def parse_params_key(text: str) -> IspParams:
 
 
 def _jpeg(bgr: np.ndarray, quality: int) -> bytes:
-    import cv2
 
     ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
     if not ok:
@@ -96,7 +96,6 @@ class Pictures:
     """The pictures of one console session (thread-safe)."""
 
     def __init__(self, session: ConsoleSession) -> None:
-        import cv2
 
         self.session = session
         self._bgr = cv2.cvtColor(session.images.color, cv2.COLOR_RGB2BGR)
@@ -133,7 +132,6 @@ class Pictures:
         """The RVM colour image of ``params`` at ``output`` (BGR uint8): the pixels of
         :func:`rvmsim.pipeline.rvm_color` (the same map and bilinear remap), channels
         swapped."""
-        import cv2
 
         size = (self._bgr.shape[1], self._bgr.shape[0])
         nodes = map_nodes(params, size, output, rays=self._rays)
@@ -155,7 +153,6 @@ class Pictures:
         """The draft picture: the EC image (``ec_color``, RGB, when the evaluation has just
         made it) when it is the same view, else the view at half the display size; JPEG at
         :data:`DRAFT_QUALITY`."""
-        import cv2
 
         data = self.cached("draft", params)
         if data is None:
@@ -168,7 +165,6 @@ class Pictures:
 
     def annotated(self, params: IspParams, drawn: np.ndarray | None = None) -> bytes:
         """The EC image with its measurements drawn (``drawn``, RGB, when already made)."""
-        import cv2
 
         data = self.cached("annotated", params)
         if data is None:

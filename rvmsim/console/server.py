@@ -13,15 +13,17 @@ import re
 import secrets
 import socket
 import threading
+import webbrowser
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable
+
+import cv2
+import uvicorn
 
 from ..errors import RvmsimError
 from .app import create_app
 
 if TYPE_CHECKING:
-    import uvicorn
-
     from .session import ConsoleSession
 
 __all__ = ["Access", "check_access", "is_loopback", "listen", "make_server", "serve",
@@ -108,7 +110,6 @@ def console_url(host: str, port: int, token: str | None) -> str:
 
 def make_server(session: ConsoleSession, access: Access) -> uvicorn.Server:
     """A uvicorn server of the console app (not started)."""
-    import uvicorn
 
     config = uvicorn.Config(create_app(session, token=access.token), log_level="warning",
                             access_log=False, lifespan="off", ws="none")
@@ -123,7 +124,6 @@ def serve(session: ConsoleSession, access: Access, port: int, *,
     ``on_ready`` runs only after uvicorn has taken over Ctrl-C, so a Ctrl-C any time after
     the URL is printed is a clean shutdown (KeyboardInterrupt, nothing on stderr).
     """
-    import cv2
 
     # Requests are evaluated in parallel threads (a page's ECs and its picture, several
     # pages); OpenCV's own thread pool on top of that oversubscribes the cores, and under
@@ -140,8 +140,6 @@ def serve(session: ConsoleSession, access: Access, port: int, *,
         if server.started:
             on_ready(url)
             if open_browser:
-                import webbrowser
-
                 threading.Timer(0.5, webbrowser.open, args=(url,)).start()
         await serving
 

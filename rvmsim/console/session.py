@@ -19,18 +19,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import cv2
 import numpy as np
 
+from ..criteria import annotate as annotate_ecs
+from ..criteria import load_criteria
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams, OutputSpec, roi_outline
+from ..pipeline import evaluate_params, make_evaluator, record_output, rvm_color
+from ..render import cached_render
 from ..runs import is_run_folder, open_run, run_inputs, run_settings, store_candidates
+from ..scene import load_scene
 from ..search import TuningConfig
 from .candidates import Candidate
-from ..criteria import load_criteria
-from ..render import cached_render
-from ..scene import load_scene
-from ..pipeline import evaluate_params, make_evaluator, record_output, rvm_color
-from ..criteria import annotate as annotate_ecs
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -160,7 +161,6 @@ class ConsoleFrame:
 
 def jpeg_bytes(image: np.ndarray, quality: int = JPEG_QUALITY) -> bytes:
     """``image`` ((H, W, 3) RGB uint8) encoded as JPEG."""
-    import cv2
 
     ok, buf = cv2.imencode(".jpg", cv2.cvtColor(image, cv2.COLOR_RGB2BGR),
                            [cv2.IMWRITE_JPEG_QUALITY, int(quality)])

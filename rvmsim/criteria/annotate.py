@@ -25,7 +25,9 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
+from PIL import Image, ImageDraw
 
 from .canvas import FAIL, INK, OFF, PASS, Canvas, Colour, Label, font, unit_text
 from .measure import call_ec
@@ -141,7 +143,6 @@ def annotation(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult,
     -------
     Annotation
     """
-    import cv2
 
     h, w = rvm_labels.shape
     canvas = Canvas(np.ascontiguousarray(rvm_color.copy()), rvm_labels,
@@ -273,7 +274,6 @@ def _write_labels(picture: np.ndarray, texts: Sequence[Label], scale: float, siz
     """Place ``texts`` (points in RVM px) on ``picture`` (``scale`` px per RVM px) and
     write them: leader lines, then translucent dark boxes edged in the label's colour,
     then the text in a light tint of it."""
-    from PIL import Image, ImageDraw
 
     ph, pw = picture.shape[:2]
     points = [((x + 0.5) * scale - 0.5, (y + 0.5) * scale - 0.5) for x, y in
@@ -385,7 +385,6 @@ def _panel_image(rows: Sequence[tuple[str, ...]], result: EcResult, size_px: int
     """The panel as an RGB image exactly as tall as its text.  With ``width`` (under the
     picture) it is that wide: the rows go in two blocks side by side when they fit, else
     the criterion column is shortened with … to fit."""
-    from PIL import Image, ImageDraw
 
     f, fb = font(size_px), font(size_px, True)
     line = _text_size("Ag", size_px)[1] + 4

@@ -31,13 +31,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import cv2
 import numpy as np
 
 from .. import labels as L
 from ..isp import IspParams, MapNodes, RayCache, map_nodes, remap_xy
 from .context import IspView
-from .evaluator import (BoxedSource, CandidateEvaluator, box_holding, merge_windows,
-                        remap_labels, union_windows)
+from .evaluator import (BoxedSource, CandidateEvaluator, box_holding, merge_windows, remap_labels,
+                        union_windows)
 from .groups import Window
 from .measure import LabelSource, Measurements, measure_ecs
 from .scoring import values_array
@@ -63,8 +64,6 @@ class _Planes:
         """Box ``k`` of every image: (h, w, K) uint8, channel c the image of channel c."""
         got = self.made.get(k)
         if got is None:
-            import cv2
-
             got = remap_xy(self.stack, self.nodes.window(self.boxes[k]), cv2.INTER_NEAREST,
                            (L.VOID,) * 4)
             got = self.made[k] = got.reshape(*got.shape[:2], self.stack.shape[2])
@@ -121,8 +120,6 @@ class _BatchStack(LabelStack):
             return np.zeros((0, 0, self.n), np.uint8)
         k = box_holding(self.planes.boxes, win)
         if k is None:
-            import cv2
-
             got = remap_xy(self.planes.stack, self.planes.nodes.window(win),
                            cv2.INTER_NEAREST, (L.VOID,) * 4)
             got = got.reshape(*got.shape[:2], self.planes.stack.shape[2])

@@ -42,35 +42,19 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import cv2
 import numpy as np
 
 from .. import labels as L
 # The package's public API, exactly as a customer's plugin imports it.
-from . import (
-    FAIL,
-    INK,
-    PASS,
-    Canvas,
-    EcDefinition,
-    EcValue,
-    LabelGroup,
-    LabelSource,
-    Measurement,
-    LabelsAbsent,
-    MeasureOptions,
-    Sigmoid,
-    SubSolve,
-    Window,
-    bounding_box,
-    count_label,
-    label_mask,
-    offset,
-    range_zero,
-)
-from .feasibility import fg_patches_reason
-from .builtin_groups import (ABC, BLOCKERS, BOARD, F, FG as _FG, G, GUIDE2, GUIDE3,
-                             UPPER_BODY, bumper_spans)
+from . import (FAIL, INK, PASS, Canvas, EcDefinition, EcValue, LabelGroup, LabelsAbsent,
+               LabelSource, Measurement, MeasureOptions, Sigmoid, SubSolve, Window, bounding_box,
+               count_label, label_mask, offset, range_zero)
+from .builtin_groups import ABC, BLOCKERS, BOARD
+from .builtin_groups import FG as _FG
+from .builtin_groups import GUIDE2, GUIDE3, UPPER_BODY, F, G, bumper_spans
 from .builtin_stack import STACK_MEASURES
+from .feasibility import fg_patches_reason
 from .solves import (board_aspect_scale, board_aspect_scale_stack, guide_centre_shift,
                      guide_centre_shift_stack, guide_height_shift, guide_height_shift_stack)
 
@@ -83,7 +67,6 @@ _LUT_BLOCKERS = L.lut(BLOCKERS)
 # ---------------------------------------------------------------------------- EC 1: FMVSS 111
 def _patch_visible(sub: np.ndarray, win: Window, label: int, shape: tuple[int, int]) -> bool:
     """Present (≥ 4 px), not touching the image border, no void/body pixel next to it."""
-    import cv2
 
     if sub.size == 0:
         return False
@@ -111,7 +94,6 @@ def _measure_1_1(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_1_1(canvas: Canvas, item: EcValue, visible: dict[str, bool]) -> None:
-    import cv2
 
     for c in "FG":
         patch = (canvas.labels == L.object_patch(c)).astype(np.uint8)
@@ -137,7 +119,6 @@ def _draw_1_2(canvas: Canvas, item: EcValue, detail: object) -> None:
 
 def _measure_1_3(src: LabelSource, options: MeasureOptions) -> Measurement:
     """Highest point of A, B, C (all three must be in the image)."""
-    import cv2
 
     win = src.window(ABC)
     sub = src.pixels(win)
@@ -150,7 +131,6 @@ def _measure_1_3(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_1_3(canvas: Canvas, item: EcValue, top_row: int | None) -> None:
-    import cv2
 
     if top_row is None:
         return
@@ -216,7 +196,6 @@ _BUMPER_NAMES = {"t_l": "bumper height, left edge", "t_r": "bumper height, right
 def _draw_bumper(canvas: Canvas, item: EcValue, cols: BumperColumns, names: tuple[str, ...]
                  ) -> None:
     """Each bumper height as a thick line up from the bottom, labelled at its top."""
-    import cv2
 
     h, w = canvas.shape
     for name in names:
@@ -244,7 +223,6 @@ def _draw_2_3(canvas: Canvas, item: EcValue, cols: BumperColumns) -> None:
 
 def _measure_2_4(src: LabelSource, options: MeasureOptions) -> Measurement:
     """No garnish/trunk in the upper region."""
-    import cv2
 
     rows = options.upper_rows(src.shape[0])
     x0, y0, x1, y1 = src.window(UPPER_BODY)
@@ -256,7 +234,6 @@ def _measure_2_4(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_2_4(canvas: Canvas, item: EcValue, rows: int) -> None:
-    import cv2
 
     cv2.line(canvas.image, (0, rows), (canvas.shape[1] - 1, rows), canvas.status(item),
              canvas.line_width)
@@ -293,7 +270,6 @@ def _measure_3_2(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 def _draw_guide(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None,
                 marker: int, label: str) -> None:
-    import cv2
 
     if centre is None:
         return
@@ -306,7 +282,6 @@ def _draw_guide(canvas: Canvas, item: EcValue, centre: tuple[float, float] | Non
 
 def _draw_3_1(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None) -> None:
     """Guideline 2's centre and the image's dashed centre line."""
-    import cv2
 
     h, w = canvas.shape
     cx = int((w - 1) / 2.0)
@@ -317,7 +292,6 @@ def _draw_3_1(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None)
 
 def _draw_3_2(canvas: Canvas, item: EcValue, centre: tuple[float, float] | None) -> None:
     """Guideline 3's centre and the dashed 45 % and 55 % rows."""
-    import cv2
 
     h, w = canvas.shape
     for frac in (0.45, 0.55):
@@ -338,7 +312,6 @@ def _measure_4_1(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_4_1(canvas: Canvas, item: EcValue, board: tuple[int, int, int, int] | None) -> None:
-    import cv2
 
     if board is None:
         return

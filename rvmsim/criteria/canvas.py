@@ -14,14 +14,13 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+import matplotlib
 import numpy as np
+from PIL import ImageFont
 
 from .values import EcValue
 
-if TYPE_CHECKING:
-    from PIL import ImageFont
 
 __all__ = ["Canvas", "Colour", "Label", "PASS", "FAIL", "OFF", "INK", "font", "font_path",
            "unit_text"]
@@ -125,7 +124,6 @@ def unit_text(unit: str) -> str:
 def font_path() -> Path:
     """The TrueType font the annotation writes with: DejaVu Sans as matplotlib (a
     dependency) ships it, so every machine draws the same pixels; it has ‰, °, ×, ≥, ′."""
-    import matplotlib
 
     return Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
 
@@ -133,7 +131,6 @@ def font_path() -> Path:
 @functools.lru_cache(maxsize=16)
 def font(size_px: int, bold: bool = False) -> ImageFont.FreeTypeFont:
     """DejaVu Sans (Bold) at ``size_px`` px per em (Pillow)."""
-    from PIL import ImageFont
 
     path = font_path()
     if bold:

@@ -33,10 +33,12 @@ tests check this on random candidates.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -70,7 +72,6 @@ def _group_distances(labels: np.ndarray, groups: tuple[LabelGroup, ...]) -> np.n
     whose byte k is the smallest Chebyshev distance (px, capped at ``_FAR_PX``) from a pixel
     of the block to the nearest pixel of ``groups[k]`` (at most eight groups).  (rows, cols)
     uint64; small enough (~0.6 MB) to stay in the cache."""
-    import cv2
 
     if len(groups) > 8:
         raise ValueError("at most 8 label groups per distance image")
@@ -105,7 +106,6 @@ _K2 = np.ones((2, 2), np.uint8)
 def _node_reach(grid: np.ndarray) -> np.ndarray:
     """Per node, the largest extent (px, along x or y) of the up to four cells around it:
     (rows, cols) float32.  ``grid`` is (rows, cols, 2) float32 node positions."""
-    import cv2
 
     # cell (i, j) has corners (i..i+1, j..j+1): max/min over a 2×2 window anchored top-left
     hi = cv2.dilate(grid, _K2, anchor=(0, 0), borderType=cv2.BORDER_REPLICATE)
@@ -152,7 +152,6 @@ def merge_windows(windows: list[Window]) -> list[Window]:
 def remap_labels(fisheye: np.ndarray, nodes: MapNodes, win: Window) -> np.ndarray:
     """The label pixels of output window ``win`` through the map ``nodes`` (nearest
     neighbour; outside the fisheye image :data:`rvmsim.labels.VOID`)."""
-    import cv2
 
     return remap_xy(fisheye, nodes.window(win), cv2.INTER_NEAREST, L.VOID)
 
@@ -299,7 +298,6 @@ class CandidateEvaluator:
     def node_lookup(self, nodes: MapNodes) -> NodeLookup | None:
         """What :meth:`windows_at` reads of a candidate's node grid: the same for every
         evaluator of this input size and output (None: the windows are the whole image)."""
-        import cv2
 
         # nearest rounding (1 px) + distances are block minima: a node's own distance is at
         # least its block's minimum − the block size
@@ -334,7 +332,6 @@ class CandidateEvaluator:
 
     def _window(self, flags: np.ndarray, c: float, group: LabelGroup) -> Window:
         """The output window of the cells between a group's flagged nodes."""
-        import cv2
 
         w, h = self.output.width, self.output.height
         jx, jy, nw, nh = cv2.boundingRect(flags)
@@ -390,7 +387,6 @@ def union_windows(evaluators: Sequence[CandidateEvaluator]) -> CandidateEvaluato
 
     Exact for the same reason as :meth:`windows_at` (module docstring): a group pixel of
     any image is within the stored distance of every node of a cell that shows it."""
-    import copy
 
     if not evaluators:
         return None

@@ -26,23 +26,16 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
 
 from ..scene import fmvss111 as rule
-from . import (
-    Canvas,
-    EcDefinition,
-    EcValue,
-    IspView,
-    LabelSource,
-    Measurement,
-    MeasureOptions,
-    SceneContext,
-    Sigmoid,
-)
+from . import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
+               SceneContext, Sigmoid)
 
 if TYPE_CHECKING:
     from ..scene import Display
+
 from .objects import silhouette_fractions, width_edges
 
 __all__ = ["ECS", "FULL_VIEW_OBJECTS", "SIZE_OBJECTS", "MAX_MAGNIFICATION",
@@ -82,7 +75,6 @@ def _measure_1_5(src: LabelSource, options: MeasureOptions) -> Measurement:
 
 
 def _draw_1_5(canvas: Canvas, item: EcValue, detail: _SilhouetteDetail | None) -> None:
-    import cv2
 
     if detail is None or item.value is None:
         return
@@ -163,7 +155,6 @@ def _draw_widths(canvas: Canvas, item: EcValue, widths: ObjectWidths | None,
                  keys: tuple[str, ...]) -> None:
     """Each object's figures as a label at the object (1-6: at the middle of its width,
     drawn as a line across it; 6-1: at its axis)."""
-    import cv2
 
     if not widths:
         return

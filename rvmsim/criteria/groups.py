@@ -17,6 +17,7 @@ import functools
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -116,7 +117,6 @@ def group_windows(labels: np.ndarray, groups: Sequence[LabelGroup]) -> dict[str,
     dict
         Group name → window (:data:`EMPTY_WINDOW` where the group has no pixel).
     """
-    import cv2
 
     h, w = labels.shape
     gh, gw = -(-h // _BLOCK), -(-w // _BLOCK)

@@ -20,6 +20,7 @@ from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple, Protocol, TypeVar
 
+import cv2
 import numpy as np
 
 from ..errors import CriteriaError
@@ -323,7 +324,6 @@ def _checked_value(ec: MeasuredEc, value: object) -> float | None:
 # ---------------------------------------------------------------------------- helpers
 def label_mask(sub: np.ndarray, label: int) -> np.ndarray:
     """255 where ``sub == label``, else 0 (uint8, same shape)."""
-    import cv2
 
     if sub.size <= 1:  # OpenCV takes a 1×1 image for a scalar
         return (sub == label).astype(np.uint8) * 255
@@ -332,14 +332,12 @@ def label_mask(sub: np.ndarray, label: int) -> np.ndarray:
 
 def count_label(sub: np.ndarray, label: int) -> int:
     """Pixels of ``sub`` equal to ``label``."""
-    import cv2
 
     return 0 if sub.size == 0 else int(cv2.countNonZero(label_mask(sub, label)))
 
 
 def bounding_box(mask: np.ndarray) -> tuple[int, int, int, int] | None:
     """``(x, y, w, h)`` px of the non-zero pixels of a uint8 mask, ``None`` if there are none."""
-    import cv2
 
     if mask.size == 0:
         return None

@@ -15,6 +15,7 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -109,7 +110,6 @@ def _bounds(camera: FisheyeCamera, cyl: tuple[float, float, float, float]
 
 
 def _compute_silhouette(ctx: SceneContext, letter: str) -> ObjectSilhouette | None:
-    import cv2
 
     cyl = object_cylinder(ctx.scene, letter)
     cam = ctx.camera
@@ -221,7 +221,6 @@ def silhouette_fractions(src: LabelSource, names: Iterable[str]
     wholly outside the lens's field are left out.  Needs ``src.context`` and ``src.isp``
     (empty results without).
     """
-    import cv2
 
     ctx, isp = src.context, src.isp
     if ctx is None or isp is None:

@@ -32,7 +32,7 @@ from .scoring import Criteria, EcBatch
 from ..scene import Display
 
 if TYPE_CHECKING:
-    from ..scene import Display, Scene
+    from ..scene import Scene
 
 __all__ = ["NEAR_SCORE", "record_size", "record_display", "pixel_scales", "to_record_units",
            "could_pass"]

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -143,7 +144,6 @@ def largest_square_cells(mask: np.ndarray, wrap_columns: bool = True,
     """Side, in cells, of the largest all-true square of ``mask`` (rows × columns), its
     columns wrapping around (a cylinder's azimuth) when ``wrap_columns``; ``at_most``: a
     known upper bound (tried first)."""
-    import cv2
 
     if not mask.any():
         return 0
@@ -187,7 +187,6 @@ class ShownArea:
 def _shown(view: SurfaceView, poly: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
     """Which seen side and top samples lie inside the footprint polygon; None when every
     seen sample does (no polygon, or the polygon holds the samples' whole box)."""
-    import cv2
 
     if poly is None or view.box is None:
         return None
@@ -233,7 +232,6 @@ def hidden_reason(ctx: SceneContext, name: str) -> str | None:
     """Why part of object ``name``'s silhouette can never show: a phrase after its name
     ("is partly hidden behind the bumper", "is cut by the sensor border", …) from the
     fisheye labels over its hidden pixels; None when the whole silhouette shows."""
-    import cv2
 
     sil = silhouette(ctx, name)
     if sil is None:

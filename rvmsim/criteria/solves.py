@@ -22,6 +22,7 @@ plane y → row ``(y − adv_v_shift) · s_v · half + (H − 1)/2``.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from ..isp import IspParams, OutputSpec
@@ -44,7 +45,6 @@ def outline_points(labels: np.ndarray, ids: tuple[int, ...]) -> np.ndarray:
     ----------
     The corners of the outline's pixels (centre ± 0.5 px), so that the points bound the
     region's area, whose image the nearest-neighbour remap samples."""
-    import cv2
 
     hit = (labels == ids[0]) if len(ids) == 1 else np.isin(labels, ids)
     mask = np.asarray(hit, dtype=np.uint8)

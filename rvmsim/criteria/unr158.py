@@ -29,14 +29,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import cv2
 import numpy as np
 
-from . import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement,
-               MeasureOptions, SceneContext, Sigmoid)
+from . import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
+               SceneContext, Sigmoid)
 from .fmvss111 import _draw_widths, object_widths
 from .objects import silhouette, silhouette_fractions
-from .siteobjects import hidden_reason, row_objects, shown_area
 from .sigmoid import Criterion
+from .siteobjects import hidden_reason, row_objects, shown_area
 
 __all__ = ["ECS", "AREA_M", "ROW_AREA", "ROW_WHOLE", "FAR_ROW", "EACH_ARCMIN",
            "area_ec", "whole_ec", "size_ec"]
@@ -97,7 +98,6 @@ def _draw_margins(canvas: Canvas, item: EcValue, detail: _AreaDetail | None,
                   text: Callable[[str, float], str]) -> None:
     """Each object's outline and its figure next to it: objects that meet the EC's limit in
     a light blue, the others in the EC's status colour."""
-    import cv2
 
     if detail is None:
         return

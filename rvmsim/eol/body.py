@@ -36,7 +36,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .. import labels as L
 
@@ -88,7 +90,6 @@ class BodyEdge:
 def outline(labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The body's outline pixels in a label image and their normals (the module
     docstring, step 1): (rows, cols) of the pixels and (n, 2) unit normals (x, y)."""
-    import cv2
 
     body = np.isin(labels, L.BODY_LABELS)
     scene = ~body & (labels != L.VOID)
@@ -110,7 +111,6 @@ def _profiles(image: np.ndarray, points: np.ndarray, normals: np.ndarray,
               steps: np.ndarray) -> np.ndarray:
     """The image sampled (bilinear) at ``points + t·normals`` for every ``t`` of
     ``steps``: (n, len(steps), channels) float32."""
-    import cv2
 
     xy = points[:, None, :] + steps[None, :, None] * normals[:, None, :]
     maps = xy.astype(np.float32)
@@ -215,7 +215,6 @@ def find_body_edge(capture: np.ndarray, labels: np.ndarray, *, search_px: int = 
 def _smoothed(points: np.ndarray, found: np.ndarray, radius: float) -> np.ndarray:
     """The offsets used: each the median of the found ones within ``radius``; a found one
     within :data:`_OUTLIER_PX` of that median kept as found."""
-    from scipy.spatial import cKDTree
 
     ok = np.isfinite(found)
     if not ok.any():
@@ -237,9 +236,7 @@ def capture_labels(labels: np.ndarray, edge: BodyEdge, band_px: int = SEARCH_PX
     scene pixel just outside that point."""
     if not len(edge.points):
         return labels.copy()
-    from scipy.spatial import cKDTree
 
-    import cv2
 
     h, w = labels.shape
     pts = edge.points

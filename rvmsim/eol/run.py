@@ -18,6 +18,8 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from tqdm import tqdm
+
 from .._procs import spawn_pool, stop_pool
 from ..errors import RvmsimError
 from ..scene import Scene
@@ -83,7 +85,6 @@ def _cars(station: Station, captures: Sequence[Path], names: Sequence[str],
 def _bar(total: int, progress: bool) -> ProgressBar | None:
     if not progress:
         return None
-    from tqdm import tqdm
 
     bar: ProgressBar = tqdm(total=total, desc="eol", unit="car", leave=False)
     return bar

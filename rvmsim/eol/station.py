@@ -37,9 +37,10 @@ import dataclasses
 import math
 import time
 from collections.abc import Sequence
-from pathlib import Path
 from dataclasses import dataclass
+from pathlib import Path
 
+import cv2
 import numpy as np
 
 from .._io import key_lines, line_of
@@ -53,8 +54,7 @@ from ..pipeline import evaluate_params, record_output, rvm_pixels
 from ..render import FisheyeImages
 from ..robust import Variation, body_pose
 from ..scene import Scene, station_scene
-from ..validate import (Tolerances, Validation, ValidationFailure, ValidationSettings,
-                        validate)
+from ..validate import Tolerances, Validation, ValidationFailure, ValidationSettings, validate
 from ..validate.landmarks import visible_landmarks
 from .body import capture_labels, find_body_edge
 from .frames import PoseRenderer
@@ -201,7 +201,6 @@ class Station:
         setting shows, grown by what the per-car values may turn the view by (the allowed
         turn and roll at the image's corner, + 8 px); only their labels are rendered,
         unless an EC reads the scene's fisheye labels elsewhere (None)."""
-        import cv2
 
         if self.criteria.uses_scene:
             return None

@@ -19,6 +19,7 @@ from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Protocol
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -57,7 +58,6 @@ def _ray_planes(params: IspParams, output: OutputSpec, cell: int) -> tuple[np.nd
     OpenCV's fast ``phase`` (≈ 1e-4 rad) refined by one Newton step, θ += sin(θ_true − θ),
     to ≈ 1e-7 rad (≈ 1e-4 px), a tenth of the time of ``np.arctan2``.
     """
-    import cv2
 
     nx, ny = -(-output.width // cell), -(-output.height // cell)
     ju = (np.arange(nx + 4) - 1.5) * cell - 0.5
@@ -91,7 +91,6 @@ def _nodes(
     ``rays``: :func:`_ray_planes` of these parameters, when already known.  ``grid`` is
     (rows, cols, 2) float32.
     """
-    import cv2
 
     nx, ny = -(-output.width // cell), -(-output.height // cell)
     gx, gy = rays if rays is not None else _ray_planes(params, output, cell)
@@ -149,7 +148,6 @@ def _interpolation_error(grid: np.ndarray, input_size: tuple[int, int]) -> float
     (|Δ²_u f| + |Δ²_v f|) / 8 bounds the error without evaluating anything new.  Only nodes
     whose map lands in (or near) the input image count.  ``grid`` is (rows, cols, 2) float32.
     """
-    import cv2
 
     w, h = input_size
     g = np.ascontiguousarray(grid, dtype=np.float32)
@@ -261,7 +259,6 @@ class MapNodes:
         x'' = u − (ja − 2)·cell; bilinear weights depend only on x'' mod cell, so every window
         is bit-identical to the same pixels of the whole map.
         """
-        import cv2
 
         x0, y0, x1, y1 = win
         if self.exact is not None:
@@ -334,7 +331,6 @@ def apply_map(image: np.ndarray, isp_map: IspMap, *, labels: bool | None = None)
     -------
     (H_o, W_o[, 3]) uint8
     """
-    import cv2
 
     img = np.asarray(image)
     if img.shape[1::-1] != tuple(isp_map.input_size):
@@ -373,7 +369,6 @@ def remap_xy(image: np.ndarray, xy: np.ndarray, interpolation: int,
     ----------
     Pixel centres at integer coordinates (OpenCV).
     """
-    import cv2
 
     # map2 None: xy holds both coordinates (OpenCV 4's stubs do not know that form; 5's do)
     return cv2.remap(image, xy, None, interpolation,  # type: ignore[call-overload, unused-ignore]

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 
 from .exact import map_points, plane_and_view
@@ -166,7 +167,6 @@ def draw_roi(fisheye: np.ndarray, params: IspParams, output: OutputSpec = Output
     ----------
     The outline of :func:`roi_outline`, drawn anti-aliased at 1/16 px precision.
     """
-    import cv2
 
     img = np.ascontiguousarray(fisheye.copy())
     poly = roi_outline(params, (img.shape[1], img.shape[0]), output)

@@ -33,10 +33,10 @@ three write the same values for the same car and picture.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import minimize
 
 from ..compensation import CompensationLaw, Correction, Deviation
 from ..criteria import (Criteria, EcDefinition, SubSolve, call_ec, checked_solve_value,
@@ -242,7 +242,6 @@ class EcSolveLaw(PerCarLaw):
 
     def solve(self, measured: Deviation, picture: CarPicture) -> CarSolution:
         """The values for a car the station reads as ``measured``, judged on ``picture``."""
-        from scipy.optimize import minimize
 
         x_ref, rms, worst = self.reference.fit(measured)
         start = self.reference.correction_at(x_ref, rms, worst)
@@ -278,7 +277,6 @@ class EcSolveLaw(PerCarLaw):
     def _grid(self, run: _Run, picture: CarPicture) -> tuple[bool, list[str]]:
         """A failing car's grid check: a passing grid point restarts the search from it
         (with a fresh budget); none passing: infeasible, with the conflicting ECs."""
-        from scipy.optimize import minimize
 
         pts = grid_of(self.reference, self._free, GRID_LEVELS)
         values = picture.values([self.params_at(x, picture, run.outlines) for x in pts])

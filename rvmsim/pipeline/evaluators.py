@@ -37,11 +37,12 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Protocol, overload, runtime_checkable
 
 import numpy as np
+from tqdm import tqdm
 
 from ..camera import FisheyeCamera
-from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measurements,
-                        could_pass, default_criteria, measure_labels, pixel_scales,
-                        record_size, scene_context, score, score_batch, values_array)
+from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measurements, could_pass,
+                        default_criteria, measure_labels, pixel_scales, record_size, scene_context,
+                        score, score_batch, values_array)
 from ..isp import IspParams, OutputSpec, process
 from ..scene import Scene
 from .frame import evaluate_rvm_labels
@@ -331,7 +332,6 @@ def _bar(desc: str | None, total: int) -> ProgressBar | None:
     """A tqdm bar, or None without a description."""
     if desc is None:
         return None
-    from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit="image", leave=False)
 

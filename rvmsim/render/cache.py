@@ -18,12 +18,13 @@ import os
 import warnings
 from pathlib import Path
 
+import imageio.v3 as iio
 import numpy as np
 
-from ..scene import DEFAULT_SITE, MeshPart, Scene, mesh_parts
-from .fisheye import FisheyeImages, render_fisheye
 from .._io import write_png
 from ..errors import RvmsimError
+from ..scene import DEFAULT_SITE, MeshPart, Scene, mesh_parts
+from .fisheye import FisheyeImages, render_fisheye
 
 __all__ = ["cache_dir", "scene_key", "file_scene_key", "same_scene", "cached_render",
            "RENDER_VERSION"]
@@ -100,7 +101,6 @@ def file_scene_key(scene: Scene, scene_file: str | Path, scale: float = 1.0) -> 
 def _read_entry(folder: Path, width: int, height: int) -> tuple[np.ndarray, np.ndarray] | None:
     """The cached (colour, labels) in ``folder``, or None if absent, damaged or of the wrong
     size (a damaged entry is rendered again, with a warning)."""
-    import imageio.v3 as iio
 
     color_p, labels_p = folder / "fisheye_color.png", folder / "fisheye_labels.png"
     if not (color_p.is_file() and labels_p.is_file()):

@@ -17,6 +17,7 @@ where no geometry is hit (atlas label 0) are ``SKY``.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -99,7 +100,6 @@ def fold_color(layout: CubeLayout, color_atlas: np.ndarray, taps: int = AA_TAPS)
     ----------
     Map direction dst → src (fisheye pixel → atlas), pixel centres at integer coordinates.
     """
-    import cv2
 
     ax, ay = layout.atlas_x, layout.atlas_y
     jxx, jxy = _step(ax, 1), _step(ax, 0)

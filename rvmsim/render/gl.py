@@ -15,14 +15,15 @@ platform is EGL unless ``PYOPENGL_PLATFORM`` says otherwise (``osmesa``).
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from tqdm import tqdm
 
+from .._optional import import_pyrender
 from ..camera import FisheyeCamera
 from ..scene import Part
 from .cube import CubeLayout, FaceCrop, face_rotation
@@ -49,12 +50,6 @@ def _asphalt_texture(size: int = 256, seed: int = 7) -> np.ndarray:
     img = 0.8 + 0.10 * fine + 0.12 * coarse / (coarse.std() + 1e-9)
     img = np.clip(img, 0.4, 1.0)
     return (np.repeat(img[..., None], 3, axis=2) * 255).astype(np.uint8)
-
-
-def _ensure_gl_platform() -> None:
-    """Headless GL through EGL unless ``PYOPENGL_PLATFORM`` says otherwise (before pyrender
-    is imported)."""
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 
 #: Lights baked into vertex colours: (direction the light travels, scene frame; intensity).
@@ -84,8 +79,7 @@ def _linear_to_srgb(x: np.ndarray) -> np.ndarray:
 def _primitive(part: Part, texture: pyrender.Texture | None) -> pyrender.Primitive:
     """A pyrender primitive with lighting baked into vertex colours (rendered FLAT: the GL
     lighting shader is the slow part on llvmpipe, and the scene's lights never move)."""
-    import pyrender
-
+    pyrender = import_pyrender()
     m = part.mesh
     positions: np.ndarray
     indices: np.ndarray | None
@@ -121,12 +115,11 @@ def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]
     """The pyrender scene of ``parts`` (lighting baked, see :func:`_primitive`) under a sky of
     linear colour ``sky``, and the segmentation colour of each mesh node (its label: low
     byte in red, high byte in green)."""
-    import pyrender
-
+    pyrender = import_pyrender()
     sky_srgb = _linear_to_srgb(np.asarray(sky, dtype=np.float64))
     scene = pyrender.Scene(bg_color=[*sky_srgb, 1.0])
-    seg: dict[pyrender.Node, np.ndarray] = {}
-    textures: dict[str, pyrender.Texture] = {}
+    seg: dict[Any, np.ndarray] = {}  # pyrender.Node -> label colour
+    textures: dict[str, Any] = {}  # texture name -> pyrender.Texture
     for part in parts:
         tex = None
         if part.texture is not None:
@@ -202,9 +195,7 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     ``[0, height)``, in the face's pixel grid (pixel centres at integer coordinates).
     """
     t0 = time.perf_counter()
-    _ensure_gl_platform()
-    import pyrender
-
+    pyrender = import_pyrender()
     pscene, seg = _pyrender_scene(parts, sky)
     half = layout.face_size / 2.0
     first = layout.crops[0]
@@ -216,8 +207,6 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     label_atlas = np.zeros((atlas_h, atlas_w), np.uint8)
     crops: Iterable[FaceCrop] = layout.crops
     if progress:
-        from tqdm import tqdm
-
         crops = tqdm(crops, desc="render cube faces", unit="face", leave=False)
     flags = pyrender.RenderFlags
     try:

@@ -32,7 +32,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol, TypedDict, TypeVar
 
+import cv2
+import imageio.v3 as iio
 import numpy as np
+from tqdm import tqdm
 
 from .. import labels as L
 from ..camera import FisheyeCamera
@@ -75,8 +78,6 @@ def _read(folder: Path, shape: tuple[int, int],
           color: bool) -> tuple[np.ndarray | None, np.ndarray] | None:
     """The stored (colour or None, labels), or None if absent, damaged or of the wrong size.
     Labels are decoded with OpenCV (faster than pillow for one channel)."""
-    import cv2
-    import imageio.v3 as iio
 
     color_p, labels_p = folder / "cube_color.png", folder / "cube_labels.png"
     if not labels_p.is_file() or (color and not color_p.is_file()):
@@ -156,7 +157,6 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
 
 def _png(image: np.ndarray) -> bytes:
     """PNG bytes of an (H, W) or RGB (H, W, 3) uint8 image (OpenCV's encoder, fast level)."""
-    import cv2
 
     img = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_RGB2BGR)
     ok, buf = cv2.imencode(".png", np.ascontiguousarray(img), [cv2.IMWRITE_PNG_COMPRESSION, 1])
@@ -284,8 +284,6 @@ def render_cubes(scene: Scene, views: Sequence[CubeView], *, scale: float = 1.0,
         (k, cube_task(t)) for k, t in items.items())
     bar = None
     if progress:
-        from tqdm import tqdm
-
         bar = tqdm(total=len(items), desc="render viewpoints", unit="view", leave=False)
     try:
         for key, out in results:

@@ -10,7 +10,10 @@ import html
 import io
 from typing import TYPE_CHECKING
 
+import cv2
+import imageio.v3 as iio
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -51,14 +54,12 @@ def escape(value: object) -> str:
 
 def png_bytes(image: np.ndarray) -> bytes:
     """``image`` ((H, W) or (H, W, 3) uint8) encoded as PNG."""
-    import imageio.v3 as iio
 
     return iio.imwrite("<bytes>", np.ascontiguousarray(image), extension=".png")
 
 
 def shrink(image: np.ndarray, max_px: int) -> np.ndarray:
     """Downscale so the longest side is at most ``max_px`` (never enlarges)."""
-    import cv2
 
     h, w = image.shape[:2]
     f = max_px / max(h, w)
@@ -82,7 +83,6 @@ def img_tag(image: np.ndarray, alt: str, max_px: int | None = None) -> str:
 
 def figure_png(fig: Figure) -> bytes:
     """A matplotlib figure as PNG bytes (Agg canvas, 100 dpi)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     FigureCanvasAgg(fig)
     buf = io.BytesIO()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from .page import figure_png
 
@@ -27,7 +28,6 @@ def convergence_png(curve: list[tuple[int, float, str]]) -> bytes:
     bytes
         A PNG image.
     """
-    from matplotlib.figure import Figure
 
     fig = Figure(figsize=(6.4, 3.6))
     ax = fig.add_subplot()
@@ -65,7 +65,6 @@ def histogram_png(scores: np.ndarray) -> bytes:
     bytes
         A PNG image.
     """
-    from matplotlib.figure import Figure
 
     scores = np.asarray(scores, dtype=float)
     zeros = int(np.sum(scores <= 0))

@@ -15,11 +15,13 @@ import platform
 import subprocess
 from dataclasses import dataclass
 from datetime import datetime, timezone
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-from .page import escape
+from .._version import __version__
 from ..errors import RvmsimError
 from ..scene import load_scene, mesh_parts
+from .page import escape
 
 __all__ = ["Provenance", "provenance", "sha256_file", "FileRecord", "file_record",
            "provenance_html", "files_table", "scene_records", "NOT_A_CHECKOUT"]
@@ -64,11 +66,6 @@ class Provenance:
 
 def _version() -> str:
     """rvmsim's version: the installed package's metadata, else ``rvmsim.__version__``."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    import rvmsim
-
-    __version__ = rvmsim.__version__
     try:
         installed = version("rvmsim")
     except PackageNotFoundError:

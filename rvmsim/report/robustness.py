@@ -17,15 +17,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
+import yaml
+from matplotlib.figure import Figure
 
+from ..criteria import bundled_criteria_text
 from ..errors import RvmsimError
+from ..isp import params_to_dict
 from ..robust import EcStats, MarketsRobustness, RobustnessResult
 from ..storage import json_default
-from .page import escape, figure_png, img_tag, page, data_uri
+from .page import data_uri, escape, figure_png, img_tag, page
 from .provenance import FileRecord, file_record, files_table, scene_records
 from .setting import SettingRecord, by_load_html, setting_html, variation_html
-from ..criteria import bundled_criteria_text
-from ..isp import params_to_dict
 
 if TYPE_CHECKING:
     from ..pipeline import RvmFrame
@@ -69,7 +71,6 @@ def _picture(frame: RvmFrame, alt: str) -> str:
 def margin_histograms_png(ecs: tuple[EcStats, ...]) -> bytes:
     """One small histogram per enabled EC with a range: the samples' margins (EC unit; the
     red line is the range's edge, left of it fails)."""
-    from matplotlib.figure import Figure
 
     shown = [e for e in ecs if e.enabled and np.isfinite(np.asarray(e.margins)).any()]
     cols = 4
@@ -90,7 +91,6 @@ def margin_histograms_png(ecs: tuple[EcStats, ...]) -> bytes:
 
 def yield_curve_png(result: RobustnessResult) -> bytes:
     """Yield (with its 95 % interval) against the tolerance scale factor."""
-    from matplotlib.figure import Figure
 
     pts = result.scale_curve
     s = np.array([p.scale for p in pts])
@@ -131,7 +131,6 @@ def _ec_rows(result: RobustnessResult) -> str:
 def compensation_values_png(result: RobustnessResult) -> bytes:
     """Histograms of the per-car offsets the EOL step wrote (one per written parameter; the
     red lines are the allowed range)."""
-    from matplotlib.figure import Figure
 
     comp = result.compensated
     assert comp is not None
@@ -323,7 +322,6 @@ def _setting_file(result: RobustnessResult | MarketsRobustness, inputs: Robustne
                   out: Path) -> Path:
     """The params file of the setting: the one given, else :data:`SETTING_FILE` written
     into ``out`` (the setting's values and output size)."""
-    import yaml
 
     if inputs.params_file is not None:
         return inputs.params_file

@@ -34,8 +34,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from tqdm import tqdm
 
+from .._optional import import_playwright_sync_api
+from ..criteria import annotate, bundled_criteria_text
 from ..errors import ParamsFileError, RvmsimError
+from ..isp import load_params, params_to_dict, process
+from ..pipeline import make_evaluator, record_output
+from ..runs import rank_text
 from ..storage import json_default
 from .market_rows import all_markets_pass, load_markets, markets_rows, markets_verdict_text
 from .page import shrink
@@ -45,10 +51,6 @@ from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecor
 from .run import _load_run, _Run
 from .setting import SettingRecord
 from .signoff_page import SignoffContent, signoff_html
-from ..pipeline import make_evaluator, record_output
-from ..criteria import annotate, bundled_criteria_text
-from ..isp import load_params, params_to_dict, process
-from ..runs import rank_text
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -239,11 +241,9 @@ def print_pdf(html: Path, pdf: Path, browser: str) -> Path:
     RvmsimError
         Chromium did not start or print (one line).
     """
-    from playwright.sync_api import Error as PlaywrightError
-    from playwright.sync_api import sync_playwright
-
+    sync_api = import_playwright_sync_api()
     try:
-        with sync_playwright() as p:
+        with sync_api.sync_playwright() as p:
             b = p.chromium.launch(executable_path=browser, args=["--no-sandbox"])
             try:
                 page = b.new_page()
@@ -253,7 +253,7 @@ def print_pdf(html: Path, pdf: Path, browser: str) -> Path:
                                  "right": "12mm"})
             finally:
                 b.close()
-    except PlaywrightError as err:
+    except sync_api.Error as err:
         first = (str(err).strip().splitlines() or ["failed"])[0]
         raise RvmsimError(f"{pdf}: Chromium ({browser}) could not print the PDF: "
                           f"{first}") from None
@@ -330,7 +330,6 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         its result file, a corrupt result file, an output folder whose parent is missing,
         no Chromium for the PDF.
     """
-    from tqdm import tqdm
 
     run_dir, out = Path(run_dir), Path(out)
     _check_out(out)

@@ -24,10 +24,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from matplotlib import colormaps
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import ListedColormap, Normalize
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch, Rectangle
 
 from ..batch import (VERDICTS, Cell, DesignPoint, MergedPoint, MergedResult, SweepResult,
-                     SweepSpec, csv_text, market_names, page_columns, point_verdict,
-                     sweep_json, sweep_table, yield_cells)
+                     SweepSpec, csv_text, market_names, page_columns, point_verdict, sweep_json,
+                     sweep_table, yield_cells)
 from ..errors import RvmsimError
 from ..storage import json_default
 from .page import data_uri, escape, figure_png, page
@@ -178,14 +183,6 @@ def feasibility_png(spec: SweepSpec, points: list[DesignPoint],
     score, the pass region outlined in black; not-found cells amber with the best score,
     the limiting EC and the evaluations spent; infeasible cells grey and hatched with a
     short reason; a legend below."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib import colormaps
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import ListedColormap, Normalize
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Patch, Rectangle
 
     g = feasibility_grid(spec, points, results)
     fig = Figure(figsize=(2.4 + 1.25 * len(g.xs), 2.2 + 0.9 * len(g.ys)))
@@ -247,14 +244,7 @@ def yield_png(spec: SweepSpec, points: list[DesignPoint],
     g = feasibility_grid(spec, points, results)
     if g.yield_ is None or g.yield_ci is None or g.yield_ec is None or np.isnan(g.yield_).all():
         return None
-    import matplotlib
 
-    matplotlib.use("Agg")
-    from matplotlib import colormaps
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Rectangle
 
     cmap = colormaps["RdYlGn"]
     fig = Figure(figsize=(2.4 + 1.25 * len(g.xs), 2.2 + 0.9 * len(g.ys)))
@@ -288,10 +278,6 @@ def sensitivity_png(points: list[DesignPoint], results: Mapping[str, MergedResul
     point's optimum (median and maximum over the passing points, or over all scoring points
     when none passes), and the score curves of the best point (PNG bytes; None when no point
     has a sensitivity probe and a score above 0)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
 
     runs = [r for r in (results.get(p.key) for p in points)
             if r is not None and "error" not in r]

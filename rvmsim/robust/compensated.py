@@ -28,9 +28,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from tqdm import tqdm
 
-from ..compensation import (CompensationModel, Correction, Deviation, deviated_pose,
-                            edge_error, loaded_deviation, measured_deviation)
+from ..compensation import (CompensationModel, Correction, Deviation, deviated_pose, edge_error,
+                            loaded_deviation, measured_deviation)
 from ..criteria import Criteria, EcBatch, score_batch
 from ..isp import IspParams, OutputSpec
 from ..percar import CarSolution, PerCarLaw, SplitEvaluator, StationView
@@ -278,6 +279,5 @@ class CarJudge:
 def _bar(progress: bool, total: int):  # type: ignore[no-untyped-def]
     if not progress:
         return None
-    from tqdm import tqdm
 
     return tqdm(total=total, desc="cars through the station", unit="car", leave=False)

@@ -30,18 +30,20 @@ import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from tqdm import tqdm
 
-from ..camera import FisheyeCamera, rotation_from_ypr
 from .. import labels as L
+from ..camera import FisheyeCamera, rotation_from_ypr
+from ..errors import SceneError
 from ..pipeline import FisheyeLabels, RvmPixels
 from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, TaskRunner, cached_cube,
-                      cover_layout, fold, fold_labels, nearest_labels, read_cube,
-                      refold_coords, refold_layout, render_cubes)
-from ..errors import SceneError
+                      cover_layout, fold, fold_labels, nearest_labels, read_cube, refold_coords,
+                      refold_layout, render_cubes)
 from ..scene import Scene, body_motion, build_parts
 from .samples import MountSample
 from .variation import LoadState
@@ -250,7 +252,6 @@ def sample_images(scene: Scene, samples: Sequence[MountSample], *, scale: float 
 def _bar(progress: bool, total: int, desc: str) -> ProgressBar | None:
     if not progress:
         return None
-    from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, unit="sample", leave=False)
 
@@ -260,7 +261,6 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
                                                np.ndarray]]:
     """Per distinct viewpoint of ``samples``: the indices of its samples, the camera its cube
     is rendered for, and the cube's atlas (colour None when not asked for and cached)."""
-    from concurrent.futures import ThreadPoolExecutor
 
     parts = functools.lru_cache(maxsize=1)(lambda: build_parts(scene))
     groups = viewpoint_groups(samples)

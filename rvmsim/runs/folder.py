@@ -15,13 +15,15 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import yaml
+
+from ..criteria import bundled_criteria_text
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from ..storage import FolderLock, json_default
 from .diverse import Candidate, candidates_json, store_candidates
 from .records import RunSettings, RunState, RunStatus, TrialRecord
 from .store import RunStore
-from ..criteria import bundled_criteria_text
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -285,7 +287,6 @@ def rank_text(rec: TrialRecord, rank: int, output: OutputSpec, vehicle: str | No
     comment line naming its rank, EC score, trial and stage (and, given ``differs``, a
     second one saying how it differs from rank 1; given ``judged_at``, the RVM image of
     record its verdict refers to, also as ``output.judged_at``)."""
-    import yaml
 
     of = "" if vehicle is None else f" of {vehicle}"
     how = "" if not differs else f"# differs from rank 1: {' '.join(differs.split())}\n"

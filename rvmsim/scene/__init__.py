@@ -71,12 +71,11 @@ from .sitedefs import (
     site_definition,
     scene_site,
     scene_sites,
-    site_scene,
-    scene_vehicle_width,
     is_site_file,
     scene_site_entry,
 )
 from .meshes import build_parts
+from .placement import scene_vehicle_width, site_scene
 from .landmarks import Landmark, CheckerCorner, site_landmarks, checker_corners
 
 __all__ = [

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
+import cv2
 from pydantic import Field, model_validator
 
 from .fields import Angle180, NonNegFloat, PositiveFloat, Vec3, _Model
@@ -73,7 +74,6 @@ class PatternBoard(_Model):
             return self
         if self.marker_size is None or self.marker_size >= self.square_size:
             raise ValueError("pattern charuco needs marker_size (m) below square_size")
-        import cv2
 
         code = getattr(cv2.aruco, self.aruco_dictionary, None)
         if not self.aruco_dictionary.startswith("DICT_") or not isinstance(code, int):

@@ -11,9 +11,14 @@ driver's side), ``z`` behind the plane of the rearmost point of the bumper, metr
 
 from __future__ import annotations
 
+import functools
+from typing import Any
+
 from .sitedefs import bundled_site
 
 __all__ = [
+    "SITE_VALUE_NAMES",
+    "site_values",
     "OBJECT_HEIGHT_M",
     "OBJECT_DIAMETER_M",
     "STRIPE_WIDTH_M",
@@ -31,31 +36,51 @@ __all__ = [
     "IMAGE_SIZE_MIN_ARCMIN",
 ]
 
-#: The site file these come from (``rvmsim/scene/sites/fmvss111.yaml``: the one place to
-#: correct them; its ⚠ marks are the confidence of each value).
-_SITE = bundled_site("fmvss111")
-_ROWS = {row.name: row for row in _SITE.rows}
+#: The values read from the bundled site file (``rvmsim/scene/sites/fmvss111.yaml``: the one
+#: place to correct them; its ⚠ marks are the confidence of each value), by name.  They are
+#: read on first use (:func:`site_values`), not when this module is imported:
+#:
+#: - ``OBJECT_HEIGHT_M``: test object height, 0.8 m (32 in), confirmed; exact S14 figure ⚠️H;
+#: - ``OBJECT_DIAMETER_M``: external diameter, 0.3 m (12 in), confirmed; exact figure ⚠️H;
+#: - ``STRIPE_WIDTH_M``: the horizontal band (A–E) and the vertical stripe (F, G), 150 mm ⚠️M;
+#: - ``HORIZONTAL_STRIPE_TOP_M``: the A–E band sits at the top of the cylinder ⚠️M;
+#: - ``LOWER_PATCH_HEIGHT_M``: the lower portion of the F/G stripe that S5.5.1(a) / EC 1-1
+#:   look at ⚠️M;
+#: - ``OBJECT_POSITIONS_M``: object positions (x lateral, z behind the bumper plane), metres.
+#:   ⚠️M for the whole table: the row order (A–C far, D–E middle, F–G near) and the sides
+#:   carrying A, D, F are the facts sheet's best reading of Figure 5, not verified;
+#: - ``OBJECT_POSITION_REFERENCE``: whether those distances run to the cylinder centre or to
+#:   its nearest surface ("centre" or "surface") ⚠️L.
+SITE_VALUE_NAMES = ("OBJECT_HEIGHT_M", "OBJECT_DIAMETER_M", "STRIPE_WIDTH_M",
+                    "HORIZONTAL_STRIPE_TOP_M", "LOWER_PATCH_HEIGHT_M", "OBJECT_POSITIONS_M",
+                    "OBJECT_POSITION_REFERENCE")
 
-#: Test object height: 0.8 m (32 in), confirmed; exact S14 figure ⚠️H.
-OBJECT_HEIGHT_M = _ROWS["far"].height
-#: Test object external diameter: 0.3 m (12 in), confirmed; exact S14 figure ⚠️H.
-OBJECT_DIAMETER_M = _ROWS["far"].diameter
-#: Width of the horizontal band (A–E) and of the vertical stripe (F, G): 150 mm. ⚠️M
-STRIPE_WIDTH_M = _ROWS["far"].marking.top_band
-#: The A–E band sits at the top of the cylinder (its upper edge at the top). ⚠️M
-HORIZONTAL_STRIPE_TOP_M = OBJECT_HEIGHT_M
-#: Height of the lower portion of the F/G stripe that S5.5.1(a) / EC 1-1 look at. ⚠️M
-LOWER_PATCH_HEIGHT_M = _ROWS["near"].marking.lower_patch
 
-#: Object positions (x lateral, z behind the bumper plane), metres.  ⚠️M for the whole table:
-#: the row order (A–C far, D–E middle, F–G near) and the sides carrying A, D, F are the facts
-#: sheet's best reading of Figure 5, not verified.
-OBJECT_POSITIONS_M: dict[str, tuple[float, float]] = {
-    name: (x, row.z) for row in _SITE.rows
-    for name, x in zip(row.names or (), row.lateral(0.0))}
-#: Whether the distances above run to the cylinder centre or to its nearest surface. ⚠️L
-#: ("centre" or "surface").
-OBJECT_POSITION_REFERENCE = _SITE.position_reference
+@functools.cache
+def site_values() -> dict[str, Any]:
+    """The site-file values above (:data:`SITE_VALUE_NAMES`), read once per process."""
+    site = bundled_site("fmvss111")
+    rows = {row.name: row for row in site.rows}
+    height = rows["far"].height
+    return {
+        "OBJECT_HEIGHT_M": height,
+        "OBJECT_DIAMETER_M": rows["far"].diameter,
+        "STRIPE_WIDTH_M": rows["far"].marking.top_band,
+        "HORIZONTAL_STRIPE_TOP_M": height,
+        "LOWER_PATCH_HEIGHT_M": rows["near"].marking.lower_patch,
+        "OBJECT_POSITIONS_M": {name: (x, row.z) for row in site.rows
+                               for name, x in zip(row.names or (), row.lateral(0.0))},
+        "OBJECT_POSITION_REFERENCE": site.position_reference,
+    }
+
+
+def __getattr__(name: str) -> Any:
+    """The site-file values by their constant names (``fmvss111.OBJECT_HEIGHT_M``)."""
+    if name in SITE_VALUE_NAMES:
+        return site_values()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 #: Which way the F/G vertical stripe faces. ⚠️L.  "vehicle_centreline": toward x = 0 at the
 #: object's own z; alternatives in the scene file are "vehicle" (toward −Z), "camera", or an
 #: azimuth in degrees.

@@ -9,22 +9,20 @@ built here.  Geometry is in the scene frame (metres, Y toward the ground).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
+import trimesh
 
 from .. import labels as L
 from .._io import env_limit
 from ..errors import SceneError
-from .primitives import Part, swept_block
 from .fields import MAX_METRES
+from .primitives import Part, swept_block
 from .schema import BlockPart, MeshPart, Rgb, Scene
 from .site import site_parts
 
-if TYPE_CHECKING:
-    import trimesh  # imported where meshes are made: ~1 s, not needed to read a scene
 
-__all__ = ["build_parts", "DEFAULT_MAX_MESH_VERTICES", "MESH_BYTES_PER_VERTEX",
+__all__ = ["build_parts", "load_mesh_part", "DEFAULT_MAX_MESH_VERTICES", "MESH_BYTES_PER_VERTEX",
            "max_mesh_vertices"]
 
 #: Most vertices of one mesh file unless ``RVMSIM_MAX_MESH_VERTICES`` says otherwise.
@@ -43,7 +41,6 @@ def max_mesh_vertices() -> int:
 def _read_mesh_file(path: Path) -> trimesh.Trimesh:
     """The mesh file at ``path`` as one unprocessed Trimesh, or the reason it is unusable
     (raised as ValueError, one line)."""
-    import trimesh
 
     limit = max_mesh_vertices()
     try:
@@ -77,7 +74,7 @@ GARNISH_COLOR = (0.08, 0.08, 0.09)
 EXTRA_COLOR = (0.2, 0.2, 0.2)
 
 
-def _load_mesh_part(scene: Scene, key: str, part: MeshPart) -> trimesh.Trimesh:
+def load_mesh_part(scene: Scene, key: str, part: MeshPart) -> trimesh.Trimesh:
     """The mesh file of ``part`` (at dotted ``key`` of the scene), moved into the scene frame."""
     path = scene.resolve_path(part.mesh)
     try:
@@ -102,7 +99,7 @@ def _body_part(scene: Scene, name: str, label: int, default_color: Rgb) -> list[
     if isinstance(spec, BlockPart):
         mesh = swept_block(spec)
     else:
-        mesh = _load_mesh_part(scene, f"vehicle.{name}.mesh", spec)
+        mesh = load_mesh_part(scene, f"vehicle.{name}.mesh", spec)
     color = spec.color if spec.color is not None else default_color
     return [Part(name, label, mesh, color)]
 
@@ -125,7 +122,7 @@ def build_parts(scene: Scene) -> list[Part]:
     parts += _body_part(scene, "garnish", L.GARNISH, GARNISH_COLOR)
     parts += _body_part(scene, "trunk", L.TRUNK, v.paint)
     for i, extra in enumerate(v.extra):
-        mesh = _load_mesh_part(scene, f"vehicle.extra.{i}.mesh", extra)
+        mesh = load_mesh_part(scene, f"vehicle.extra.{i}.mesh", extra)
         color = extra.color if extra.color is not None else EXTRA_COLOR
         parts.append(Part(f"extra_{i}", L.EXTRA_PART_BASE + i, mesh, color))
     motion = scene.body_motion()

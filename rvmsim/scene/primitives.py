@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast
+from typing import cast
 
 import numpy as np
+import trimesh
 
 from .schema import BlockPart, Rgb
 
-if TYPE_CHECKING:
-    import trimesh  # imported where meshes are made: ~1 s, not needed to read a scene
 
 __all__ = ["Part", "cylinder_side", "disk", "quad", "ground_rect", "swept_block",
            "concatenate", "CIRCLE_SECTIONS"]
@@ -63,7 +62,6 @@ def cylinder_side(
 ) -> trimesh.Trimesh:
     """Part of a vertical cylinder's side between heights ``h0`` < ``h1`` (metres above the
     ground) and azimuths ``az0_deg`` < ``az1_deg``; faces point outward."""
-    import trimesh
 
     span = math.radians(az1_deg - az0_deg)
     n = max(2, int(math.ceil(span / (2 * math.pi / CIRCLE_SECTIONS))) + 1)
@@ -83,7 +81,6 @@ def cylinder_side(
 
 def disk(radius: float, height: float, centre_xz: tuple[float, float]) -> trimesh.Trimesh:
     """Horizontal disk at ``height`` metres above ground, facing up (−Y)."""
-    import trimesh
 
     n = CIRCLE_SECTIONS
     az = np.linspace(0, 2 * math.pi, n, endpoint=False)
@@ -99,7 +96,6 @@ def disk(radius: float, height: float, centre_xz: tuple[float, float]) -> trimes
 
 def quad(corners: np.ndarray) -> trimesh.Trimesh:
     """A planar quadrilateral from 4 corners (in order around it)."""
-    import trimesh
 
     c = np.asarray(corners, dtype=np.float64).reshape(4, 3)
     return trimesh.Trimesh(c, [[0, 1, 2], [0, 2, 3]], process=False)
@@ -107,7 +103,6 @@ def quad(corners: np.ndarray) -> trimesh.Trimesh:
 
 def swept_block(part: BlockPart, *, sections: int = 48) -> trimesh.Trimesh:
     """Closed mesh of a parametric body part (see :class:`~rvmsim.scene.BlockPart`)."""
-    import trimesh
 
     x = np.linspace(-part.width / 2, part.width / 2, sections)
     z_rear = -part.setback - part.sweep * (2 * x / part.width) ** 2
@@ -142,6 +137,5 @@ def ground_rect(x0: float, x1: float, z0: float, z1: float, lift: float) -> trim
 
 def concatenate(meshes: list[trimesh.Trimesh]) -> trimesh.Trimesh:
     """The meshes as one mesh (``trimesh.util.concatenate``, typed)."""
-    import trimesh
 
     return cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))

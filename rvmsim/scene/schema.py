@@ -308,11 +308,17 @@ class TestSite(_Model):
 
     __test__ = False
     fmvss: bool = True
-    object_height: PositiveFloat = fmvss111.OBJECT_HEIGHT_M
-    object_diameter: PositiveFloat = fmvss111.OBJECT_DIAMETER_M
-    stripe_width: PositiveFloat = fmvss111.STRIPE_WIDTH_M
-    lower_patch_height: PositiveFloat = fmvss111.LOWER_PATCH_HEIGHT_M
-    position_reference: Literal["centre", "surface"] = fmvss111.OBJECT_POSITION_REFERENCE
+    # The FMVSS values come from the bundled site file, read on first use.
+    object_height: PositiveFloat = Field(
+        default_factory=lambda: fmvss111.site_values()["OBJECT_HEIGHT_M"])
+    object_diameter: PositiveFloat = Field(
+        default_factory=lambda: fmvss111.site_values()["OBJECT_DIAMETER_M"])
+    stripe_width: PositiveFloat = Field(
+        default_factory=lambda: fmvss111.site_values()["STRIPE_WIDTH_M"])
+    lower_patch_height: PositiveFloat = Field(
+        default_factory=lambda: fmvss111.site_values()["LOWER_PATCH_HEIGHT_M"])
+    position_reference: Literal["centre", "surface"] = Field(
+        default_factory=lambda: fmvss111.site_values()["OBJECT_POSITION_REFERENCE"])
     vertical_stripe_facing: StripeFacing = fmvss111.VERTICAL_STRIPE_FACING  # type: ignore[assignment]
     objects: dict[Literal["A", "B", "C", "D", "E", "F", "G"], TestObject] = {}
     guidelines: Guidelines = Guidelines()
@@ -355,7 +361,7 @@ class TestSite(_Model):
         override = self.objects.get(letter)  # type: ignore[call-overload]
         if override is not None and not override.enabled:
             return None
-        x, z = fmvss111.OBJECT_POSITIONS_M[letter]
+        x, z = fmvss111.site_values()["OBJECT_POSITIONS_M"][letter]
         if override is not None and override.position is not None:
             x, z = override.position
         if self.position_reference == "surface":
@@ -393,7 +399,7 @@ class Scene(_Model):
     description: str = ""
     camera: CameraSpec
     vehicle: Vehicle | None = None
-    test_site: TestSite = TestSite()
+    test_site: TestSite = Field(default_factory=TestSite)
     render: RenderSettings = RenderSettings()
     #: The display the driver sees (EC 1-6, :mod:`rvmsim.scene.display`); None: the criteria
     #: file's, else the defaults.  Not part of the render cache's key.

@@ -9,17 +9,16 @@ ground is ``y = -h``.  Azimuth on a test object (degrees): 0 faces +Z (away from
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
+import trimesh
 
 from .. import labels as L
 from ..camera import rotation_from_ypr
 from .primitives import Part, concatenate, cylinder_side, disk, ground_rect, quad
 from .schema import GroundPattern, PatternBoard, Rect, Rgb, Scene
 
-if TYPE_CHECKING:
-    import trimesh  # imported where meshes are made: ~1 s, not needed to read a scene
 
 __all__ = [
     "site_parts",
@@ -231,7 +230,6 @@ def _charuco_markers(board: PatternBoard) -> trimesh.Trimesh:
     is the board's row ``squares[1] − 1 − r`` along v, its column c is column c along u;
     marker ids 0, 1, … go through the white squares row by row from cv2's top row.
     """
-    import cv2
 
     d = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, board.aruco_dictionary))
     cells = d.markerSize + 2
@@ -377,7 +375,6 @@ def pattern_shade(pattern: GroundPattern, x: np.ndarray, z: np.ndarray) -> np.nd
 
 def _ground(scene: Scene) -> Part:
     """The asphalt ground: a square of ``ground_size`` m, UV-mapped for its texture."""
-    import trimesh
 
     size = scene.test_site.ground_size
     z0 = -min(10.0, size / 4)

@@ -41,7 +41,6 @@ left to right as written; object ``k`` is named ``<row>.<i>`` (``row1.1``), i fr
 from __future__ import annotations
 
 import functools
-import math
 import re
 from importlib import resources
 from pathlib import Path
@@ -60,8 +59,7 @@ if TYPE_CHECKING:
 
 __all__ = ["SiteDefinition", "SiteRow", "Lateral", "Marking", "SiteObject", "BUNDLED_SITES",
            "DEFAULT_SITE", "load_site", "bundled_site", "site_definition", "place_objects",
-           "vehicle_width", "SiteError", "scene_site", "scene_sites", "scene_vehicle_width",
-           "site_scene", "is_site_file", "scene_site_entry"]
+           "SiteError", "scene_site", "scene_sites", "is_site_file", "scene_site_entry"]
 
 #: Site definitions shipped with rvmsim: name → file in ``rvmsim/scene/sites``.
 BUNDLED_SITES: dict[str, str] = {"fmvss111": "fmvss111.yaml", "unr158": "unr158.yaml",
@@ -286,24 +284,6 @@ def site_definition(entry: str, base_dir: str | Path = ".") -> SiteDefinition:
     return bundled_site(entry)  # raises: unknown name
 
 
-def vehicle_width(vehicle: object) -> float | None:
-    """The vehicle's overall width, metres: ``vehicle.width`` when given, else its widest
-    body part; None without a vehicle, or when a part is a mesh (the caller measures the
-    meshes, which need loading: :func:`scene_vehicle_width`)."""
-    from .schema import BlockPart, MeshPart, Vehicle
-
-    if not isinstance(vehicle, Vehicle):
-        return None
-    if vehicle.width is not None:
-        return float(vehicle.width)
-    if any(isinstance(p, MeshPart)
-           for p in (vehicle.bumper, vehicle.garnish, vehicle.trunk, *vehicle.extra)):
-        return None
-    widths = [p.width for p in (vehicle.bumper, vehicle.garnish, vehicle.trunk)
-              if isinstance(p, BlockPart)]
-    return max(widths) if widths else None
-
-
 def scene_site(scene: Scene, name: str) -> SiteDefinition:
     """The site ``name`` as ``scene`` defines it: a site file the scene names under
     ``sites:`` whose ``name`` is ``name``, else the bundled site of that name.
@@ -345,66 +325,3 @@ def scene_site_entry(scene: Scene, i: int, entry: str, line: int | None = None
 def scene_sites(scene: Scene) -> list[SiteDefinition]:
     """Every site ``scene`` names (``sites:``), in order."""
     return [scene_site_entry(scene, i, entry) for i, entry in enumerate(scene.sites)]
-
-
-def scene_vehicle_width(scene: Scene) -> float:
-    """The width (metres) a site places its objects by (:func:`vehicle_width`; mesh parts
-    measured from their files).
-
-    Raises
-    ------
-    RvmsimError
-        A scene without a vehicle and without ``vehicle.width``.
-    """
-    width = vehicle_width(scene.vehicle)
-    if width is not None:
-        return width
-    if scene.vehicle is None:
-        raise RvmsimError(f"{scene.source}: vehicle: a site placed by the vehicle's width "
-                          "needs a vehicle (or vehicle.width)")
-    from .loading import mesh_parts
-    from .meshes import _load_mesh_part
-    from .schema import BlockPart
-
-    v = scene.vehicle
-    widths = [p.width for p in (v.bumper, v.garnish, v.trunk) if isinstance(p, BlockPart)]
-    for key, part in mesh_parts(scene):  # the widest part, block or mesh
-        x = _load_mesh_part(scene, key, part).bounds[:, 0]
-        widths.append(float(x[1] - x[0]))
-    if not widths:
-        raise RvmsimError(f"{scene.source}: vehicle: a site placed by the vehicle's width "
-                          "needs a body part (or vehicle.width)")
-    return max(widths)
-
-
-def site_scene(scene: Scene, site: str | SiteDefinition) -> Scene:
-    """``scene`` at ``site``: the same car and camera, with the site's objects placed behind
-    it and nothing else of the FMVSS test site (no objects A–G, guidelines, board or ground
-    patterns); ``scene`` itself at its FMVSS site (``kind: fmvss111``).
-
-    Raises
-    ------
-    RvmsimError
-        An unknown site, a bad site file, or a scene already at another site asked for the
-        FMVSS site.
-    """
-    from .board import PatternBoard
-    from .schema import TestSite
-
-    definition = site if isinstance(site, SiteDefinition) else scene_site(scene, site)
-    current = scene.test_site.site
-    if definition.kind == "fmvss111":
-        if current != DEFAULT_SITE:
-            raise RvmsimError(f"{scene.source}: this scene is at site {current!r}; load the "
-                              "scene file again for its FMVSS site")
-        return scene
-    if current == definition.name:
-        return scene
-    if current != DEFAULT_SITE:
-        raise RvmsimError(f"{scene.source}: this scene is at site {current!r} already")
-    objects = place_objects(definition, scene_vehicle_width(scene))
-    ts = scene.test_site
-    site_ts = TestSite(fmvss=False, board=PatternBoard(enabled=False),
-                       ground_size=ts.ground_size, ground_color=ts.ground_color,
-                       site=definition.name, site_objects=objects)
-    return scene.model_copy(update={"test_site": site_ts})

@@ -41,6 +41,7 @@ from abc import ABC, abstractmethod
 from typing import Annotated, ClassVar, Generator, Sequence, TypeVar
 
 import numpy as np
+from cmaes import CMA
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..errors import RvmsimError
@@ -299,7 +300,6 @@ class CmaEs(Strategy):
         ``grow`` times the previous one's (1: the default size every time).  With
         ``stagnation``, a restart also ends when its best objective has not improved for
         ``10 + ⌈30·dim/popsize⌉`` generations (Hansen's stagnation rule)."""
-        from cmaes import CMA
 
         names = self.space.names
         free = np.array([i for i, n in enumerate(names) if n not in self.solved], dtype=int)

@@ -86,10 +86,11 @@ from .run import (
     tune,
     resume,
     TuneResult,
-    write_results,
     DISPLAY_SIZE,
-    remove_run,
 )
+from .results import remove_run, write_results
+from .kinds import (Verdict, Built, MemberSet, Single, Shared, Robust, Compensated, Markets,
+                    member_set)
 from .summary import summary_lines
 
 __all__ = [
@@ -160,5 +161,14 @@ __all__ = [
     "write_results",
     "DISPLAY_SIZE",
     "summary_lines",
+    "Verdict",
+    "Built",
+    "MemberSet",
+    "Single",
+    "Shared",
+    "Robust",
+    "Compensated",
+    "Markets",
+    "member_set",
     "remove_run",
 ]

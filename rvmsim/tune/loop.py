@@ -11,11 +11,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from dataclasses import dataclass
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Sequence
 
+import cv2
 import numpy as np
 
 from .._procs import spawn_pool, stop_pool
@@ -23,17 +24,17 @@ from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
 from ..pipeline import ImageEvaluator, make_evaluator, record_output
-from ..search.config import TuningConfig, make_strategy
-from .objective import ScoredBatch, score_vectors
-from .members import (Aggregate, Member, MembersScorer, MembersSolver, check_members,
-                      member_evaluators, parse_aggregate)
 from ..runs.records import StopReason, TrialRecord
-from .requests import SearchOptions, SearchSettings
-from .solve import EcSolver
-from ..search.space import SearchSpace
 from ..runs.store import RunStore
+from ..search.config import TuningConfig, make_strategy
+from ..search.space import SearchSpace
 from ..search.strategies import Strategy
 from .compensated import MembersCompensation as Compensation
+from .members import (Aggregate, Member, MembersScorer, MembersSolver, check_members,
+                      member_evaluators, parse_aggregate)
+from .objective import ScoredBatch, score_vectors
+from .requests import SearchOptions, SearchSettings
+from .solve import EcSolver
 
 if TYPE_CHECKING:
     from ..render import FisheyeImages
@@ -64,7 +65,6 @@ class VectorScorer:
 
 def _init_worker(scorer: Callable[[list[np.ndarray]], ScoredBatch]) -> None:
     global _WORKER
-    import cv2
 
     cv2.setNumThreads(1)
     _WORKER = scorer

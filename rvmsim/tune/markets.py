@@ -47,7 +47,7 @@ if TYPE_CHECKING:
 __all__ = ["check_market_arguments", "markets_members", "render_market_members",
            "market_infeasible", "write_market_results",
            "judge_run_in_markets",
-           "market_verdict", "market_summary_lines", "market_problem_lines", "MARKETS_JSON"]
+           "market_verdict", "market_summary_lines", "market_table_lines", "market_problem_lines", "MARKETS_JSON"]
 
 #: The per-market results of a markets run, in its ``best/`` folder.
 MARKETS_JSON = "markets.json"
@@ -115,17 +115,18 @@ def _slug(name: str) -> str:
 
 def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketMember],
                          renders: Sequence[FisheyeImages], config: TuningConfig, *,
-                         searched: bool = True) -> None:
+                         searched: bool = True) -> tuple[dict[str, Any], str] | None:
     """``best/markets/<member>/`` (each member's RVM image and annotated ECs under the best
     setting, at the RVM image of record), ``best/markets.json`` (see the module docstring)
     and, for a run that searched these markets (``searched``), ``best/members.json`` and
     ``best/ec_table.txt``.  A run tuned otherwise and judged in markets afterwards
     (:func:`judge_run_in_markets`) gets no conflicts (it has no member results) and keeps
-    its own EC table."""
+    its own EC table.  Returns the ``markets.json`` document and the EC table (empty when
+    not ``searched``); None without trials."""
 
     top = store.top(1)
     if not top:
-        return
+        return None
     best = top[0]
     best_dir = run_dir / "best"
     rows, docs, tables, scores = [], [], [], []
@@ -147,17 +148,20 @@ def write_market_results(run_dir: Path, store: RunStore, pairs: Sequence[MarketM
     passed = all(r["passed"] for r in rows)
     verdict = market_verdict(store, pairs, renders, passed, conflicts=searched)
     rec = record_output(pairs[0].criteria, pairs[0].scene)
-    (best_dir / MARKETS_JSON).write_text(json.dumps(
-        {"trial": best.idx, "ec_score": best.score if searched else min(scores), "passed": passed, "judged_at": [rec.width, rec.height],
-         "searched": searched, "markets": rows, **verdict}, indent=2))
+    doc = {"trial": best.idx, "ec_score": best.score if searched else min(scores),
+           "passed": passed, "judged_at": [rec.width, rec.height], "searched": searched,
+           "markets": rows, **verdict}
+    (best_dir / MARKETS_JSON).write_text(json.dumps(doc, indent=2))
     if not searched:
-        return
+        return doc, ""
     (best_dir / "members.json").write_text(json.dumps(
         {"trial": best.idx, "ec_score": best.score, "passed": best.passed, "members": docs},
         indent=2))
     head = (f"one setting for {len(pairs)} markets, EC score {best.score:.4g}, "
             f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}")
-    (best_dir / "ec_table.txt").write_text(head + "\n\n" + "\n\n".join(tables) + "\n")
+    table = head + "\n\n" + "\n\n".join(tables) + "\n"
+    (best_dir / "ec_table.txt").write_text(table)
+    return doc, table
 
 
 def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
@@ -185,7 +189,12 @@ def market_summary_lines(run_dir: Path) -> list[str]:
     path = run_dir / "best" / MARKETS_JSON
     if not path.is_file():
         return []
-    doc = json.loads(path.read_text())
+    return market_table_lines(json.loads(path.read_text()))
+
+
+def market_table_lines(doc: dict[str, Any]) -> list[str]:
+    """:func:`market_summary_lines` from a ``markets.json`` document (what
+    :func:`write_market_results` returns)."""
     lines = [f"{'market':<24} {'EC score':>8}  {'result':<6}  binding criterion"]
     for r in doc["markets"]:
         b = r.get("binding") or {}

@@ -22,29 +22,32 @@ seed), so a resumed run judges the same members.
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Sequence, TypedDict
+from typing import TYPE_CHECKING, Any, Sequence, TypedDict
 
+import numpy as np
+
+from ..compensation import compensation_from_dict, measured_load_index
 from ..errors import RvmsimError
-from .members import Member
 from ..robust import (draw_samples, read_at_station, refolder, sample_images, station_readings,
                       station_twin, variation_for, yield_estimate)
-from ..compensation import compensation_from_dict, measured_load_index
 from ..runs.diverse import store_candidates
+from .members import Member
 
 if TYPE_CHECKING:
     from ..compensation import CompensationModel
-    from ..robust import StationReading
     from ..render import FisheyeImages
-    from ..robust import Variation
-    from ..scene import Scene
+    from ..robust import StationReading, Variation
     from ..runs.records import RunSettings
     from ..runs.store import RunStore
+    from ..scene import Scene
 
 __all__ = ["ROBUST_AGGREGATE", "DEFAULT_SAMPLES", "MAX_SAMPLES", "run_variations", "variation_key",
            "robust_members", "run_compensation", "check_samples",
-           "RobustSummary", "robust_summary", "write_robust_results"]
+           "RobustSummary", "robust_summary", "write_robust_results", "robust_line"]
 
 #: How a robust run combines its members when ``--aggregate`` is not given (see above).
 ROBUST_AGGREGATE = "quantile 0.1"
@@ -70,8 +73,6 @@ def run_variations(scenes: Sequence[Scene], variation_file: str | None) -> list[
 def variation_key(variations: Sequence[Variation]) -> str:
     """A fingerprint of the variations (every axis, load state and weight; not where they
     were read from)."""
-    import dataclasses
-    import hashlib
 
     docs = []
     for v in variations:
@@ -143,7 +144,6 @@ def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
     nominal = [results[j * per][0] for j in range(n_scenes)]
     passed = [bool(results[j * per + 1 + i][2]) for j in range(n_scenes)
               for i in range(samples)]
-    import numpy as np
 
     y = yield_estimate(np.array(passed))
     fails: dict[str, int] = {}
@@ -160,11 +160,12 @@ def robust_summary(store: RunStore, idx: int, n_scenes: int, samples: int
 
 
 def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
-                         n_scenes: int) -> None:
+                         n_scenes: int) -> dict[str, Any] | None:
     """``best/robust.json``: the nominal score, robust score and sample yield of the top-M
-    (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`)."""
+    (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`); returns what it holds
+    (None: not a robust run)."""
     if settings.robust_samples is None:
-        return
+        return None
 
     rows = []
     compensation = settings.compensation
@@ -175,10 +176,29 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
             rows.append({"rank": rank, "trial": rec.idx, "robust_score": rec.score,
                          "passed_all": bool(rec.passed), **s})
     (run_dir / "best").mkdir(parents=True, exist_ok=True)
-    (run_dir / "best" / "robust.json").write_text(json.dumps(
-        {"samples_per_scene": settings.robust_samples, "seed": settings.seed,
-         "variation_file": settings.variation_file, "aggregate": settings.aggregate,
-         "compensation": compensation, "top": rows}, indent=2))
+    doc = {"samples_per_scene": settings.robust_samples, "seed": settings.seed,
+           "variation_file": settings.variation_file, "aggregate": settings.aggregate,
+           "compensation": compensation, "top": rows}
+    (run_dir / "best" / "robust.json").write_text(json.dumps(doc, indent=2))
+    return doc
+
+
+def robust_line(doc: dict[str, Any] | None) -> list[str]:
+    """A robust run's best candidate as ``best/robust.json`` (``doc``) has it: its yield
+    over the samples and, without compensation, the EC limiting it (none for other runs)."""
+    if not doc or not doc.get("top"):
+        return []
+    t = doc["top"][0]
+    lo, hi = t["yield_ci"]
+    lines = [f"robust: nominal EC score {t['nominal_score']:.4g}, robust ({doc['aggregate']} "
+             f"of {t['samples']} samples and nominal) {t['robust_score']:.4g}, yield over the "
+             f"samples {100 * t['yield']:.0f} % (95 %: {100 * lo:.0f}–{100 * hi:.0f} %)"]
+    if doc.get("compensation") is None and t["yield"] < 1.0 and t.get("limiting_ec"):
+        lines.append(f"robust: this yield is what one setting reaches without end-of-line "
+                     f"compensation: EC {t['limiting_ec']} fails on "
+                     f"{100 * t['limiting_rate']:.0f} % of the samples (per-car values: "
+                     "tune --robust --compensation default)")
+    return lines
 
 
 def check_samples(samples: int) -> int:

@@ -11,50 +11,42 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Sequence
 
-from ..errors import RvmsimError
-from ..isp import params_to_dict
-from ..scene.display import RVM_IMAGE_OF_RECORD_PX
-from ..search.config import TuningConfig, make_strategy
-from ..runs.folder import (RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock,
-                           run_settings, write_top_files)
-from .loop import SearchOutcome, search_members, search_scene
-from .members import Member, check_cameras, parse_aggregate
-from .robust import (ROBUST_AGGREGATE, check_samples, robust_members, run_compensation,
-                     run_variations, variation_key,
-                     write_robust_results)
-from ..runs.records import RunSettings, RunStatus
-from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
-from .resumed import ResumeArgs, check_resume_args
-from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_settings,
-                     write_member_results)
-from .markets import check_market_arguments, markets_members, write_market_results
-from ..runs.store import RunStore
-from ..search.strategies import Strategy, check_seed
+from tqdm import tqdm
+
+from ..compensation import measured_load_index
 from ..criteria import (Unsupported, check_supported, criteria_reference, load_criteria,
                         record_size, supported_criteria)
-from ..render import cached_render, same_scene, scene_key
-from ..scene import Scene, load_scene
+from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
-from ..compensation import measured_load_index
-from .._io import write_png
-from ..pipeline import evaluate_params, record_output, write_frame
+from ..render import same_scene, scene_key
+from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock, run_settings
+from ..runs.records import RunSettings, RunStatus
+from ..runs.store import RunStore
+from ..scene import Scene, load_scene
+from ..scene.display import RVM_IMAGE_OF_RECORD_PX
+from ..search.config import TuningConfig, make_strategy
+from ..search.strategies import Strategy, check_seed
+from .kinds import Built, MemberSet, Verdict, member_set
+from .loop import SearchOutcome
+from .markets import check_market_arguments
+from .members import check_cameras, parse_aggregate
+from .requests import RunOptions, SearchOptions, TuneRequest
+from .resumed import ResumeArgs, check_resume_args
+from .results import remove_run
+from .robust import ROBUST_AGGREGATE, check_samples, run_variations, variation_key
+from .shared import load_shared_scenes, resumed_scenes, shared_settings
 
 if TYPE_CHECKING:
     from .._progress import ProgressBar
+    from ..compensation import CompensationModel
     from ..criteria import Criteria
     from ..storage import FolderLock
-    from ..render import FisheyeImages
-    from ..compensation import CompensationModel
-    from ..markets import MarketMember
-    from ..scene import Scene
 
-__all__ = ["tune", "resume", "TuneResult", "write_results",
-           "DISPLAY_SIZE", "remove_run"]
+__all__ = ["tune", "resume", "TuneResult", "DISPLAY_SIZE"]
 
 #: The default RVM image of record (:data:`rvmsim.scene.RVM_IMAGE_OF_RECORD_PX`), under its
 #: old name; a scene's or criteria file's ``display.rvm_image_px`` sets a car's own.
@@ -63,12 +55,14 @@ DISPLAY_SIZE = RVM_IMAGE_OF_RECORD_PX
 
 @dataclass(frozen=True)
 class TuneResult:
-    """A finished (or stopped) tuning run: its folder, what the search did, and the
-    evaluations the strategy planned (None: unknown in advance)."""
+    """A finished (or stopped) tuning run: its folder, what the search did, the evaluations
+    the strategy planned (None: unknown in advance) and the verdict on its best setting
+    (:class:`rvmsim.tune.kinds.Verdict`: ``verdict.exit_status`` is ``rvmsim tune``'s)."""
 
     run_dir: Path
     outcome: SearchOutcome
     total: int | None
+    verdict: Verdict
 
 
 def _check_out(run_dir: Path) -> None:
@@ -163,7 +157,6 @@ def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
     """``settings`` made robust (``robust`` = (samples, variation file or None)), with the
     variations checked and fingerprinted, and the compensation model recorded (its load
     state checked against every variation); as they are without ``robust``."""
-    import dataclasses
 
     if robust is None:
         return settings
@@ -264,8 +257,6 @@ def _progress_bar(on: bool, total: int | None, vehicle: str,
     """A tqdm bar (or None when ``on`` is false) and the search's ``on_batch`` updating it."""
     bar = None
     if on:
-        from tqdm import tqdm
-
         bar = tqdm(total=total, unit="eval", desc=f"tune {vehicle}", smoothing=0.1,
                    position=position, leave=position == 0)
 
@@ -336,43 +327,29 @@ def resume(run_dir: str | Path, *, options: RunOptions = RunOptions(),
 
 def _run(run_dir: Path, lock: FolderLock, settings: RunSettings, scenes: list[Scene],
          crit: Criteria, options: RunOptions, *, resume: bool, force: bool) -> TuneResult:
-    """Render, search into the run's store under its lock, write the results."""
+    """Render, search into the run's store under its lock, write the results: one path for
+    every run kind (:func:`rvmsim.tune.kinds.member_set`)."""
 
     sc, cfg = scenes[0], settings.config
     # the strategy before the render: a bad config, strategy or seed fails in a moment
     strat = make_strategy(settings.strategy, cfg.space(sc.fisheye_camera()), cfg,
                           settings.seed, settings.budget)
-    pairs: list[MarketMember] = []
-    members: list[Member] | None
-    if settings.markets:  # each scene at each market's site, with its criteria
-        pairs, renders, members = markets_members(scenes, settings, progress=options.progress)
-    else:
-        renders = [cached_render(s, progress=options.progress)[0] for s in scenes]
-        members = (robust_members(scenes, renders, settings, progress=options.progress)
-                   if settings.robust else None)
+    kind = member_set(settings)
+    built = kind.build(scenes, progress=options.progress)
     with lock:
         store = _writable_store(run_dir, settings, resume, force)
         try:
-            outcome = _search(store, renders, scenes, settings, strat, crit, members, options,
+            outcome = _search(store, kind, built, settings, strat, crit, options,
                               _progress_bar(options.progress, strat.total(), sc.name,
                                             options.progress_position))
-            if pairs:
-                write_results(run_dir, store, pairs[0].scene, renders[0], cfg, crit)
-                write_market_results(run_dir, store, pairs, renders, cfg)
-                return TuneResult(run_dir, outcome, strat.total())
-            write_results(run_dir, store, sc, renders[0], cfg, crit)
-            if settings.shared:
-                write_member_results(run_dir, store, scenes, renders, cfg, crit,
-                                     settings.aggregate or "min")
-            write_robust_results(run_dir, store, settings, len(scenes))
+            verdict = kind.write_results(run_dir, store, scenes, built, crit)
         finally:
             store.close()
-    return TuneResult(run_dir, outcome, strat.total())
+    return TuneResult(run_dir, outcome, strat.total(), verdict)
 
 
-def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[Scene],
-            settings: RunSettings, strat: Strategy, crit: Criteria,
-            members: Sequence[Member] | None, options: RunOptions,
+def _search(store: RunStore, kind: MemberSet, built: Built, settings: RunSettings,
+            strat: Strategy, crit: Criteria, options: RunOptions,
             bar: tuple[ProgressBar | None, Callable[[int, float, str], None]]) -> SearchOutcome:
     """Search into ``store``, recording the run's state: running, then done, interrupted
     (Ctrl-C) or failed (an error, passed on as it is)."""
@@ -382,16 +359,9 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
     store.write_space(strat.space)  # the space the diverse top-M measures distances in
     progress, on_batch = bar
     try:
-        how = SearchSettings(settings.config, crit, strat,
-                             aggregate=settings.aggregate or "min",
-                             compensation=run_compensation(settings))
-        opts = SearchOptions(options.workers, options.max_time, options.target_score,
-                             on_batch)
-        if settings.shared or members is not None:
-            outcome = search_members(members or scene_members(scenes, renders), how, store,
-                                     options=opts)
-        else:
-            outcome = search_scene(renders[0], how, store, options=opts)
+        outcome = kind.search(built, kind.search_settings(settings.config, crit, strat), store,
+                              SearchOptions(options.workers, options.max_time,
+                                            options.target_score, on_batch))
     except KeyboardInterrupt:
         store.set_state(RunStatus.INTERRUPTED)
         raise
@@ -403,44 +373,3 @@ def _search(store: RunStore, renders: Sequence[FisheyeImages], scenes: Sequence[
             progress.close()
     store.set_state(RunStatus.DONE, outcome.stopped)
     return outcome
-
-
-def remove_run(run_dir: str | Path) -> None:
-    """Delete the run in ``run_dir``: its store, run.json, ``top/``, ``best/`` and its
-    report (what ``tune --force`` does, holding the run's lock, once the new run's inputs
-    have all loaded), so that nothing of it mixes with a new run there."""
-    run_dir = Path(run_dir)
-    for name in (RUN_DB, f"{RUN_DB}-wal", f"{RUN_DB}-shm", RUN_JSON, "report.html"):
-        (run_dir / name).unlink(missing_ok=True)
-    for name in ("top", "best"):
-        if (run_dir / name).is_dir():
-            shutil.rmtree(run_dir / name)
-
-
-def write_results(run_dir: Path, store: RunStore, scene: Scene, images: FisheyeImages,
-                  config: TuningConfig, criteria: Criteria) -> None:
-    """top/: the diverse top-M (:func:`rvmsim.runs.write_top_files`: ``rank_K.yaml`` and
-    ``candidates.json``), and best/ (rank 1, the best trial): RVM image, annotated ECs and EC
-    table at the RVM image of record (:func:`rvmsim.pipeline.record_output`), the verdict the
-    run stored."""
-
-    settings = store.settings()
-    if settings is None:
-        raise RvmsimError(f"{store.path}: no run settings recorded")  # tune() writes them first
-    cands = write_top_files(run_dir, store, settings, scene.name, criteria)
-    if not cands:
-        return
-    top = store.trials_at([cands[0].trial])
-    out = config.output_spec()
-    record = record_output(criteria, scene, out.mirror)
-    best = top[0]
-    frame = evaluate_params(images, best.params, record, criteria)
-    write_frame(frame, run_dir / "best")
-    (run_dir / "best" / "ec.json").write_text(json.dumps(
-        {"vehicle": scene.name, "trial": best.idx, **frame.ec.as_dict(),
-         "judged_at": [record.width, record.height],
-         "isp": params_to_dict(best.params, out, judged_at=record)}, indent=2))
-    (run_dir / "best" / "ec_table.txt").write_text(frame.ec.table() + "\n")
-    # The display's picture (the view is defined in normalised coordinates, so only the pixel
-    # count differs from the search size's; aspect ratios differing crop or extend it).
-    write_png(run_dir / "best" / "rvm_display.png", frame.color)

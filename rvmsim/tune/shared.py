@@ -33,11 +33,10 @@ from ..pipeline import make_evaluator
 if TYPE_CHECKING:
     from ..criteria import Criteria
     from ..render import FisheyeImages
-    from ..scene import Scene
     from ..runs.store import RunStore
 
 __all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "resumed_scenes", "scene_members",
-           "write_member_results", "shared_problem_lines"]
+           "write_member_results", "shared_problem_lines", "shared_problems"]
 
 
 def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
@@ -137,13 +136,15 @@ def scene_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages]) -> 
 
 def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                          renders: Sequence[FisheyeImages], config: TuningConfig,
-                         criteria: Criteria, aggregate: str) -> None:
+                         criteria: Criteria, aggregate: str
+                         ) -> tuple[dict[str, Any], str] | None:
     """``best/members.json`` (each scene's EC results under the best parameters, and the
-    aggregate) and ``best/ec_table.txt`` (each scene's EC table under its vehicle name)."""
+    aggregate) and ``best/ec_table.txt`` (each scene's EC table under its vehicle name);
+    returns what they hold (None: no trials)."""
 
     top = store.top(1)
     if not top:
-        return
+        return None
     best = top[0]
     out = config.output_spec()
     docs, tables = [], []
@@ -153,13 +154,14 @@ def write_member_results(run_dir: Path, store: RunStore, scenes: Sequence[Scene]
         tables.append(f"{sc.name}:\n{ec.table()}")
     (run_dir / "best").mkdir(parents=True, exist_ok=True)
     conflicts = [] if best.passed else member_conflicts(store, [sc.name for sc in scenes])
-    (run_dir / "best" / "members.json").write_text(json.dumps(
-        {"trial": best.idx, "aggregate": aggregate, "ec_score": best.score,
-         "passed": best.passed, "members": docs, "conflicts": conflicts}, indent=2))
-    (run_dir / "best" / "ec_table.txt").write_text(
-        f"shared by {len(scenes)} scenes, EC score ({aggregate}) {best.score:.4g}, "
-        f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}\n\n"
-        + "\n\n".join(tables) + "\n")
+    doc = {"trial": best.idx, "aggregate": aggregate, "ec_score": best.score,
+           "passed": best.passed, "members": docs, "conflicts": conflicts}
+    table = (f"shared by {len(scenes)} scenes, EC score ({aggregate}) {best.score:.4g}, "
+             f"{'all pass' if best.passed else 'fails ' + ','.join(best.failing())}\n\n"
+             + "\n\n".join(tables) + "\n")
+    (run_dir / "best" / "members.json").write_text(json.dumps(doc, indent=2))
+    (run_dir / "best" / "ec_table.txt").write_text(table)
+    return doc, table
 
 
 def _limit(ec: dict[str, Any]) -> str:
@@ -181,12 +183,17 @@ def shared_problem_lines(run_dir: Path) -> list[str]:
     and 5.5 px on B, passes on C; needs ≤ 5 px``), then the pairs of scenes that each pass
     alone in some trial but never together, with their conflicting ECs."""
     path = run_dir / "best" / "members.json"
-    if not path.is_file():
+    if not path.is_file() or (run_dir / "best" / "markets.json").is_file():
         return []
-    doc = json.loads(path.read_text())
+    return shared_problems(json.loads(path.read_text()))
+
+
+def shared_problems(doc: dict[str, Any]) -> list[str]:
+    """:func:`shared_problem_lines` from a ``members.json`` document (what
+    :func:`write_member_results` returns)."""
     members = doc.get("members") or []
     # every scene passes (a robust shared run may still fail on a sample: robust.json says)
-    if all(m.get("passed") for m in members) or (run_dir / "best" / "markets.json").is_file():
+    if all(m.get("passed") for m in members):
         return []
     rows: dict[str, list[tuple[str, dict[str, Any]]]] = {}
     for m in members:

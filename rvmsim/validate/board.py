@@ -22,7 +22,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .. import labels as L
 from ..camera import FisheyeCamera
@@ -157,7 +159,6 @@ def _local_levels(pix: np.ndarray, grey: np.ndarray, black: np.ndarray,
     uneven light do not shift the threshold; and whether
     the board shows contrast there (at least :data:`MIN_LOCAL_CONTRAST` of the board's
     overall): where it is hidden, both colours look alike and the sample says nothing."""
-    from scipy.spatial import cKDTree
 
     at = np.flatnonzero(where)
     levels = []
@@ -248,7 +249,6 @@ class BoardShade:
         """The correlation (-1..1) of the squares' colours with the capture's grey level
         at their projections from the pose (position m, camera-to-scene rotation); -1 when
         fewer than 8 samples fall inside the image or their colour is constant."""
-        import cv2
 
         rays = (self.layout.square_points - position) @ rotation
         uv, in_fov = self.camera.project_rays(rays)
@@ -281,7 +281,6 @@ class BoardShade:
         -------
         LatticeEvidence
         """
-        import cv2
 
         lay = self.layout
         h, w = self.grey.shape

@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterator
 
+import cv2
 import numpy as np
 
 from ..camera import FisheyeCamera
@@ -82,7 +83,6 @@ class GridDetection:
 
 
 def _flags() -> int:
-    import cv2
 
     return cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_EXHAUSTIVE | cv2.CALIB_CB_ACCURACY
 
@@ -93,7 +93,6 @@ def _grids_in(img: np.ndarray, grid: tuple[int, int], pinhole: bool,
     ``whole_first``), else the part of it the detector grows from :data:`MIN_PATCH` (or, when
     that is not a plane's grid, from one size larger); (corners (rows, cols, 2) in ``img`` px,
     whole).  In a ``pinhole`` view a grid must be a plane's (:func:`_regular`)."""
-    import cv2
 
     if whole_first:
         ok, found = cv2.findChessboardCornersSB(img, grid, flags=_flags())
@@ -125,7 +124,6 @@ def _regular(det: np.ndarray) -> np.ndarray | None:
     """``det`` (rows, cols, 2) px if one homography maps the grid onto it (residuals within
     :data:`MAX_GRID_RESIDUAL` of the spacing), else with its worst outer rows and columns
     dropped until it does; None when less than :data:`MIN_PATCH` is left."""
-    import cv2
 
     while min(det.shape[:2]) >= min(MIN_PATCH):
         r, c = np.mgrid[0:det.shape[0], 0:det.shape[1]]
@@ -167,7 +165,6 @@ class _View:
 
     def image(self, grey_u8: np.ndarray, camera: FisheyeCamera) -> np.ndarray:
         """The view rendered from the capture (bilinear; black outside the lens's field)."""
-        import cv2
 
         c = (self.n - 1) / 2
         vv, uu = np.mgrid[0:self.n, 0:self.n].astype(np.float64)
@@ -225,7 +222,6 @@ class _PlaneView:
 
     def image(self, grey_u8: np.ndarray, camera: FisheyeCamera) -> np.ndarray:
         """The view rendered from the capture (bilinear; black outside the lens's field)."""
-        import cv2
 
         w, h = self.size
         yy, xx = np.mgrid[0:h, 0:w].astype(np.float64)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from ..camera import FisheyeCamera, ypr_from_rotation
@@ -195,7 +196,6 @@ def _pnp(camera: FisheyeCamera, layout: BoardLayout, ij: np.ndarray, found: np.n
     """Camera (position m, camera-to-scene rotation) from the corners ``found`` (K, 2) px
     at the board's lattice indices ``ij`` (K, 2), by planar PnP in a pinhole view along their
     mean ray (``rays``: their camera-frame rays, when already known)."""
-    import cv2
 
     if rays is None:
         rays, _ = camera.pixel_rays(found)

@@ -8,16 +8,15 @@ import warnings
 import zlib
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
+from PIL import Image, UnidentifiedImageError
 
 from .._io import max_image_pixels
 from ..camera import FisheyeCamera
 from ..errors import InputFileError, RvmsimError
 
-if TYPE_CHECKING:
-    from PIL import Image
 
 __all__ = ["load_capture", "check_captures", "check_capture_size", "grey", "capture_header_size"]
 
@@ -98,7 +97,6 @@ def capture_header_size(path: Path) -> tuple[int, int]:
         One line naming the file: missing, empty, unreadable or not an image, or a header
         so large that PIL refuses it as a decompression bomb.
     """
-    from PIL import Image, UnidentifiedImageError
 
     if not path.exists():
         raise InputFileError(str(path), "", "capture not found")
@@ -127,7 +125,6 @@ def capture_header_size(path: Path) -> tuple[int, int]:
 def _decode(path: Path) -> np.ndarray:
     """The file's pixels as 8-bit RGB (PIL decodes them: unlike OpenCV's, its decoders
     report a truncated or corrupt file as an exception, not as lines on stderr)."""
-    from PIL import Image
 
     try:
         with warnings.catch_warnings():
@@ -173,6 +170,5 @@ def check_capture_size(capture: np.ndarray, camera: FisheyeCamera, capture_name:
 
 def grey(rgb: np.ndarray) -> np.ndarray:
     """Grey levels (0..255, float32, (H, W)) of an (H, W, 3) uint8 RGB image."""
-    import cv2
 
     return np.asarray(cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), dtype=np.float32)

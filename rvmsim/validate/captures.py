@@ -27,8 +27,6 @@ from .capture import check_captures, load_capture
 from .outputs import write_pictures
 
 if TYPE_CHECKING:
-    from ..criteria import Criteria
-    from ..isp import IspParams, OutputSpec
     from ..scene import Scene
 
 __all__ = ["CAPTURE_SUFFIXES", "capture_files", "capture_folders", "CaptureOutcome",

@@ -19,12 +19,10 @@ i = k mod (cols − 1) and j = rows − 2 − k div (cols − 1).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
+import cv2
 import numpy as np
 
-if TYPE_CHECKING:
-    import cv2
 
 __all__ = ["CharucoPattern", "detect_charuco", "UPSAMPLE"]
 
@@ -56,7 +54,6 @@ class CharucoPattern:
     def cv2_board(self) -> cv2.aruco.CharucoBoard:
         """The ``cv2.aruco.CharucoBoard``, with cv2's legacy square order when ``rows`` is
         even, as the scene draws it."""
-        import cv2
 
         dic = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))
         board = cv2.aruco.CharucoBoard(self.squares, self.square_size, self.marker_size, dic)
@@ -103,7 +100,6 @@ def detect_charuco(grey_u8: np.ndarray, pattern: CharucoPattern,
     Upsampled pixel centres sit at (p + ½)·f − ½; the corners are given back in ``grey_u8``'s
     pixels.
     """
-    import cv2
 
     detector = cv2.aruco.CharucoDetector(pattern.cv2_board())
     best: tuple[np.ndarray, np.ndarray] | None = None

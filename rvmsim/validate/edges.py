@@ -11,6 +11,7 @@ Images are indexed ``[v, u]`` (row, column); distances are in px between pixel c
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from .. import labels as L
@@ -38,7 +39,6 @@ def edge_map(rgb: np.ndarray, mask: np.ndarray) -> np.ndarray:
     -------
     (H, W) bool
     """
-    import cv2
 
     g = grey(rgb)
     vals = g[mask]
@@ -67,7 +67,6 @@ def compare_edges(a: np.ndarray, b: np.ndarray,
     edges_a, edges_b : (H, W) bool
         The edge maps, for drawing.
     """
-    import cv2
 
     ea, eb = edge_map(a, mask), edge_map(b, mask)
 
@@ -99,7 +98,6 @@ def model_mask(labels: np.ndarray) -> np.ndarray:
     -------
     (H, W) bool
     """
-    import cv2
 
     m = ((labels != L.VOID) & (labels != L.SKY)).astype(np.uint8)
     return np.asarray(cv2.erode(m, np.ones((9, 9), np.uint8)) > 0)

@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from .. import labels as L
 from ..render import FisheyeImages
@@ -59,7 +61,6 @@ def _match_local(cap: np.ndarray, syn: np.ndarray, p_syn: np.ndarray, p_pred: np
     vertex (a ChArUco corner, whose window holds marker edges that would pull cornerSubPix
     off it).  Returns the capture pixel (None: not found) and the NCC.
     """
-    import cv2
 
     h, w = cap.shape
     half = int(np.clip(round(0.45 * spacing), 4, 24))
@@ -98,8 +99,6 @@ def _match_board(cap_u8: np.ndarray, scene: Scene, idx: list[int], pred: np.ndar
     detector's corners are assigned to them and accepted when they agree up to one common
     shift ≤ ``radius`` + 2 px.  Returns {corner index: capture pixel}; {} when not found.
     """
-    import cv2
-    from scipy.optimize import linear_sum_assignment
 
     board = scene.test_site.board
     nx, ny = board.squares[0] - 1, board.squares[1] - 1

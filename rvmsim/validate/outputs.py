@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from .._io import make_output_folder, write_png
@@ -47,7 +48,6 @@ def landmark_picture(capture: np.ndarray, matches: tuple[LandmarkMatch, ...]) ->
     errors show), found inliers (green o), outliers (orange x), corrected reprojection of
     the inliers (cyan dot).
     """
-    import cv2
 
     out = capture.copy()
     for m in matches:
@@ -72,7 +72,6 @@ def board_picture(capture: np.ndarray, corners: np.ndarray | None,
     the outlines of the board where the readings of them put it (the first green, the others
     magenta: an ambiguous lattice's rivals).  ``corners`` (K, 2) px; each outline (M, 2) px,
     a closed polyline."""
-    import cv2
 
     out = capture.copy()
     for k, line in enumerate(outlines):

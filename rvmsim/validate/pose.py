@@ -24,8 +24,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.optimize import least_squares, minimize
 
 from .. import labels as L
 from ..camera import FisheyeCamera
@@ -83,7 +85,6 @@ def fit_pose(camera: FisheyeCamera, ypr_deg: ArrayLike, points: np.ndarray,
     sigma : (6,) float
         One standard error of each component of ``x`` (same units).
     """
-    from scipy.optimize import least_squares
 
     points = np.asarray(points, dtype=np.float64)
     found_px = np.asarray(found_px, dtype=np.float64)
@@ -250,7 +251,6 @@ class GroundShade:
         """Sample the ground pixels of ``labels`` (the scene's label image; None: every
         pixel in the lens's field) in ``capture``, every ``step`` px both ways, the
         capture's grey level blurred by a Gaussian of ``blur_px`` (σ, px; 0: not)."""
-        import cv2
 
         vv, uu = np.mgrid[0:cam.height:step, 0:cam.width:step]
         keep = (np.ones(vv.shape, bool) if labels is None
@@ -308,7 +308,6 @@ def dense_align(shade: GroundShade, cam: FisheyeCamera, ypr0_deg: np.ndarray, *,
     1°), at most ``max_evaluations`` poses scored; ``x0`` if that does not improve the
     correlation.
     """
-    from scipy.optimize import minimize
 
     def cost(x: np.ndarray) -> float:
         return -shade(*corrected_pose(cam, ypr0_deg, x))

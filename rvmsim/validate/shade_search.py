@@ -32,7 +32,9 @@ import math
 from dataclasses import dataclass
 from typing import Callable, Protocol
 
+import cv2
 import numpy as np
+from cmaes import CMA
 
 from ..camera import FisheyeCamera
 from ..scene import Scene
@@ -129,7 +131,6 @@ def level_shades(scene: Scene, cam: FisheyeCamera, capture: np.ndarray,
                  layout: BoardLayout | None, level: SearchLevel) -> list[Shade]:
     """The scores at one level: the ground patterns' (sampled over the lens field) and the
     board's squares' (``layout``), on the capture blurred as ``level`` says."""
-    import cv2
 
     px_per_deg = _px_per_deg(cam)
     blur = level.blur_deg * px_per_deg
@@ -237,7 +238,6 @@ def _agree(runs: list[tuple[float, np.ndarray]]) -> bool:
 def _cma(cost: Callable[[np.ndarray], float], mean: np.ndarray, sigma: float, seed: int,
          generations: int) -> tuple[float, np.ndarray, int]:
     """One CMA-ES run: (best cost, its point, evaluations)."""
-    from cmaes import CMA
 
     opt = CMA(mean=np.clip(mean, -BOUND + 1e-6, BOUND - 1e-6), sigma=sigma,
               bounds=np.tile([-BOUND, BOUND], (6, 1)), seed=seed, population_size=POPULATION)

@@ -13,7 +13,7 @@ from rvmsim.criteria.siteobjects import SAMPLE_STEP_M, shown_area
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye
-from rvmsim.scene.sitedefs import site_scene
+from rvmsim.scene import site_scene
 
 from ..scenes import load_small_scene
 

@@ -20,7 +20,7 @@ from rvmsim.isp import IspParams, OutputSpec, input_to_output
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye
 from rvmsim.scene import build_parts
-from rvmsim.scene.sitedefs import BUNDLED_SITES, load_site, site_scene
+from rvmsim.scene import BUNDLED_SITES, load_site, site_scene
 
 from ..scenes import load_small_scene
 

@@ -1,0 +1,100 @@
+"""Run kinds as objects (:mod:`rvmsim.tune.kinds`): the settings choose the kind, and a run's
+verdict is its kind's, given in memory, agreeing with what the run wrote (small real renders,
+real searches)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+import yaml
+
+from rvmsim.compensation import DEFAULT_COMPENSATION
+from rvmsim.runs import RunSettings
+from rvmsim.runs.records import SceneRef
+from rvmsim.tune import (Compensated, Markets, Robust, Shared, Single, TuneRequest,
+                         TuningConfig, member_set, tune)
+from rvmsim.tune.markets import market_summary_lines
+from rvmsim.tune.shared import shared_problem_lines
+
+from ..scenes import write_small_scene
+
+DISPLAY = {"display": {"rvm_image_px": [320, 180]}}
+CONFIG = {"tuned": ["zoom", "adv_v_shift", "adv_v_scale"], "output": {"size": [160, 90]},
+          "top_m": 3, "batch": 20}
+
+
+@pytest.fixture(scope="module")
+def scene(cache, tmp_path_factory):
+    return write_small_scene(tmp_path_factory.mktemp("scene"), "a", edit=DISPLAY)
+
+
+def _criteria(folder, name, low, high):
+    """A criteria file judging EC 3-2 (guideline 3's height, %) alone in [low, high]."""
+    path = folder / f"{name}.yaml"
+    path.write_text(yaml.safe_dump({"name": name, "ecs": ["3-2"],
+                                    "criteria": {"3-2": {"range": [low, high],
+                                                         "tolerance": 2.0}}}))
+    return path
+
+
+def test_the_settings_choose_the_run_kind():
+    base = RunSettings(scene="a.yaml", scene_key=None, vehicle="a", strategy="random", seed=0,
+                       budget=None, criteria_file=None, config=TuningConfig())
+    two = (SceneRef("a.yaml", None, "a"), SceneRef("b.yaml", None, "b"))
+    comp = DEFAULT_COMPENSATION.as_dict()
+    cases = [
+        (base, Single, None),
+        (dataclasses.replace(base, scenes=two), Shared, None),
+        (dataclasses.replace(base, robust_samples=4), Robust, Single),
+        (dataclasses.replace(base, scenes=two, robust_samples=4), Robust, Shared),
+        (dataclasses.replace(base, robust_samples=4, compensation=comp), Compensated, Single),
+        (dataclasses.replace(base, scenes=two, markets=("fmvss111",)), Markets, None),
+    ]
+    for settings, kind, inner in cases:
+        chosen = member_set(settings)
+        assert type(chosen) is kind, (settings, chosen)
+        if inner is not None:
+            assert type(chosen.inner) is inner
+    assert member_set(cases[4][0]).compensation is not None
+    assert member_set(cases[2][0]).compensation is None
+
+
+def test_a_single_run_reports_its_verdict_and_does_not_gate(scene, tmp_path):
+    """A single run whose only EC cannot pass: its verdict fails, names the EC, and the
+    exit status stays 0 (a single run reports its best; ``evaluate`` judges)."""
+    impossible = _criteria(tmp_path, "impossible", 99.0, 100.0)
+    res = tune(TuneRequest((scene,), "random", TuningConfig.model_validate(CONFIG),
+                           criteria_file=impossible, seed=1, budget=20), tmp_path / "run")
+    ec = json.loads((tmp_path / "run" / "best" / "ec.json").read_text())
+    assert res.verdict.passed is ec["passed"] is False
+    assert res.verdict.problems == ("EC 3-2 fails",)
+    assert res.verdict.exit_status == 0
+    table = (tmp_path / "run" / "best" / "ec_table.txt").read_text().rstrip()
+    assert res.verdict.lines == (table,)
+
+
+def test_a_markets_verdict_gates_and_agrees_with_what_the_run_wrote(scene, tmp_path):
+    low = _criteria(tmp_path, "low", 20.0, 40.0)
+    high = _criteria(tmp_path, "high", 60.0, 80.0)
+    run = tmp_path / "run"
+    res = tune(TuneRequest((scene,), "random", TuningConfig.model_validate(CONFIG), seed=1,
+                           budget=100, markets=f"fmvss111:{low},fmvss111:{high}"), run)
+    doc = json.loads((run / "best" / "markets.json").read_text())
+    assert res.verdict.passed is doc["passed"] is False
+    assert res.verdict.gate and res.verdict.exit_status == 1
+    # the lines printed from memory are those the file gives a later reader
+    assert list(res.verdict.lines[2:]) == market_summary_lines(run)
+    assert all(p in res.verdict.lines for p in (f"  {q}" for q in res.verdict.problems))
+
+
+def test_a_shared_verdict_agrees_with_what_the_run_wrote(cache, tmp_path):
+    a = write_small_scene(tmp_path, "a", edit=DISPLAY)
+    b = write_small_scene(tmp_path, "b", edit=DISPLAY)
+    impossible = _criteria(tmp_path, "impossible", 99.0, 100.0)
+    run = tmp_path / "run"
+    res = tune(TuneRequest((a, b), "random", TuningConfig.model_validate(CONFIG),
+                           criteria_file=impossible, seed=1, budget=20), run)
+    assert res.verdict.passed is False and res.verdict.exit_status == 1
+    assert list(res.verdict.problems) == shared_problem_lines(run) != []
