@@ -2,9 +2,11 @@
 chooses among them.
 
 Modules: :mod:`.frame` (:func:`evaluate_params`, the full path: one candidate's RVM colour
-and label images, ECs and annotated image; :func:`render_rvm`), :mod:`.evaluators`
-(:func:`make_evaluator`: the evaluator of one image for many candidates, or of a batch of
-images for one setting, on the fastest exact path the criteria allow), :mod:`.pixels` (the
+and label images, ECs and annotated image; :func:`render_rvm`), :mod:`.factory`
+(:func:`make_evaluator`: the evaluator of one image for many candidates, of a batch of
+images for one setting, or of a run's members, on the fastest exact path the criteria
+allow; the classes in :mod:`.evaluators`), :mod:`.record_rule` (search size → size of
+record), :mod:`.pixels` (the
 fisheye pixels an RVM image shows), :mod:`.files` (what ``render``, ``process`` and
 ``evaluate`` write).
 """
@@ -22,9 +24,9 @@ from .evaluators import (
     ImageEvaluator,
     RecordEvaluator,
     SetEvaluator,
-    make_evaluator,
-    record_output,
 )
+from .factory import make_evaluator, record_output
+from .record_rule import RecordRule
 from .files import write_evaluation, write_fisheye, write_frame, write_processed
 
 __all__ = [
@@ -44,6 +46,7 @@ __all__ = [
     "RecordEvaluator",
     "SetEvaluator",
     "make_evaluator",
+    "RecordRule",
     "record_output",
     "write_evaluation",
     "write_fisheye",

@@ -60,15 +60,31 @@ class ImagesEvaluator:
 
     def __init__(self, evaluators: Sequence[ImageEvaluator]):
         self.evaluators = list(evaluators)
-        by_key: dict[tuple[object, ...], list[int]] = {}
         self._alone: list[int] = []
-        for m, ev in enumerate(self.evaluators):
-            key = _key(ev)
-            if key is None:
-                self._alone.append(m)
-            else:
-                by_key.setdefault(key, []).append(m)
-        self._groups = [self._group(tuple(ms)) for ms in by_key.values()]
+        #: The batches, made on first use (in the process that evaluates: not pickled).
+        self._groups: list[_Group] | None = None
+
+    def __getstate__(self) -> dict[str, object]:
+        return {"evaluators": self.evaluators}
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__init__(state["evaluators"])  # type: ignore[misc]
+
+    def __len__(self) -> int:
+        return len(self.evaluators)
+
+    def _grouped(self) -> list[_Group]:
+        if self._groups is None:
+            by_key: dict[tuple[object, ...], list[int]] = {}
+            self._alone = []
+            for m, ev in enumerate(self.evaluators):
+                key = _key(ev)
+                if key is None:
+                    self._alone.append(m)
+                else:
+                    by_key.setdefault(key, []).append(m)
+            self._groups = [self._group(tuple(ms)) for ms in by_key.values()]
+        return self._groups
 
     def _group(self, members: tuple[int, ...]) -> _Group:
         evs = [self.evaluators[m] for m in members]
@@ -82,7 +98,7 @@ class ImagesEvaluator:
         """Each member's values of ``params`` ((k_m,) in its criteria's ``ids`` order, NaN
         where not measured), as its evaluator's ``values`` gives them."""
         out: list[np.ndarray | None] = [None] * len(self.evaluators)
-        for g in self._groups:
+        for g in self._grouped():
             found = g.search.values(params)
             if g.record is None:
                 for m, v in zip(g.members, found):

@@ -1,58 +1,35 @@
-"""One factory for every evaluator: a candidate's ECs on one fisheye image, or one setting's
-ECs on a batch of images (variation samples today, cars off the line next).
-
-:func:`make_evaluator` is the only place an evaluator is chosen.  It takes what is judged
-and the criteria, and picks the path from what the criteria declare:
-
-==================  ==========================================================================
-source              path
-==================  ==========================================================================
-one image           ``windowed`` (:class:`rvmsim.criteria.CandidateEvaluator`): the map's
-                    node grid, only the windows of the label groups the ECs declare; built
-                    once per image, for many candidates (tuning).
-a batch of images   ``rvm-pixels``: one map per setting, each image's labels only at the
-                    fisheye pixels the RVM image shows (:class:`RvmPixels`) — when no EC
-                    reads the scene (:attr:`rvmsim.criteria.Criteria.uses_scene`); else
-                    ``full``: each image's whole fisheye labels through the full path.
-==================  ==========================================================================
-
-``path="full"`` asks for the full path (:func:`rvmsim.pipeline.evaluate_rvm_labels` on the
-whole remapped label image, what ``rvmsim evaluate`` measures) whatever the criteria: the
-reference the fast paths are tested against, EC value for EC value.
-
-Criteria whose ECs read the scene (1-5, 1-6, 6-1) are refused for images that carry no
-scene: those ECs would come out "not measured" and fail every candidate.
+"""The evaluators :func:`rvmsim.pipeline.make_evaluator` chooses among (its module,
+:mod:`rvmsim.pipeline.factory`, says which it picks for what).
 
 Every evaluator judges at the RVM image of record (:mod:`rvmsim.criteria.record`: the
-display output, default 1280 × 720).  Asked to measure at another size, it converts the
-pixel-unit values to pixels of record and measures again at the size of record every
-candidate (or image) that passes or fails only near its limits: a pass is a pass on the
-display, whatever size the search measures at.
+display output, default 1280 × 720).  Asked to measure at another size, it judges by
+:class:`rvmsim.pipeline.record_rule.RecordRule`: a pass is a pass on the display, whatever
+size the search measures at.
 """
 
 from __future__ import annotations
 
 import enum
 from collections.abc import Callable, Iterator, Sequence
-from typing import TYPE_CHECKING, Protocol, overload, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 from tqdm import tqdm
 
 from ..camera import FisheyeCamera
-from ..criteria import (CandidateEvaluator, Criteria, EcBatch, EcResult, Measurements, could_pass,
-                        default_criteria, measure_labels, pixel_scales, record_size, scene_context,
-                        score, score_batch, values_array)
+from ..criteria import (Criteria, EcBatch, EcResult, Measurements, measure_labels,
+                        scene_context, score, score_batch, values_array)
 from ..isp import IspParams, OutputSpec, process
 from ..scene import Scene
 from .frame import evaluate_rvm_labels
 from .pixels import RayTable, RvmPixels, ray_table, rvm_pixels
+from .record_rule import RecordRule
 
 if TYPE_CHECKING:
     from .._progress import ProgressBar
 
 __all__ = ["EvaluationPath", "FisheyeLabels", "FisheyeSet", "ImageEvaluator", "FullEvaluator",
-           "RecordEvaluator", "SetEvaluator", "make_evaluator", "record_output"]
+           "RecordEvaluator", "SetEvaluator"]
 
 #: Images of a batch held at once (bounds the memory of label images in flight).
 _CHUNK = 32
@@ -175,12 +152,8 @@ class RecordEvaluator:
         self.record_output = record.output
         self.fisheye = search.fisheye
         self.path = getattr(search, "path", EvaluationPath.WINDOWED)
-        self._scales = pixel_scales(self.criteria, (search.output.width, search.output.height),
-                                    (record.output.width, record.output.height))
-
-    def _decided(self, values: np.ndarray) -> bool:
-        """Whether the converted ``values`` decide the verdict (a clear fail)."""
-        return not bool(could_pass(score_batch(values[None, :], self.criteria))[0])
+        self.rule = RecordRule(self.criteria, (search.output.width, search.output.height),
+                               (record.output.width, record.output.height))
 
     def values(self, params: IspParams) -> np.ndarray:
         """The values of record, (k,) in ``criteria.ids`` order, NaN where not measured."""
@@ -191,14 +164,14 @@ class RecordEvaluator:
         """``search``'s values of a candidate in units of record when they decide its
         verdict (a clear fail), else None: the candidate is measured at the size of
         record."""
-        v = search_values * self._scales
-        return v if self._decided(v) else None
+        v, undecided = self.rule.judge(search_values[None, :])
+        return None if undecided[0] else v[0]
 
     def measure(self, params: IspParams) -> Measurements:
         """The measurements of record (a clear fail: the search size's, values converted)."""
         m = self.search.measure(params)
-        v = values_array(m, self.criteria.ids) * self._scales
-        if not self._decided(v):
+        v = self.decided_values(values_array(m, self.criteria.ids))
+        if v is None:
             return self.record.measure(params)
         converted = {ec: None if np.isnan(x) else float(x) for ec, x in zip(self.criteria.ids, v)}
         return Measurements(converted, m.image_size, m.details)
@@ -219,8 +192,8 @@ class SetEvaluator:
         self.path = path
         #: The RVM image of record the verdicts refer to (default: ``output``).
         self.record_output = record or output
-        self._scales = pixel_scales(criteria, (output.width, output.height),
-                                    (self.record_output.width, self.record_output.height))
+        self.rule = RecordRule(criteria, (output.width, output.height),
+                               (self.record_output.width, self.record_output.height))
         self._table: RayTable | None = None
 
     def __call__(self, params: IspParams | Sequence[IspParams], *,
@@ -256,13 +229,11 @@ class SetEvaluator:
             step = _CHUNK_EACH if self.path is EvaluationPath.RVM_PIXELS else _CHUNK
             chunks = [(list(range(a, min(a + step, len(idx)))), None)
                       for a in range(0, len(idx), step)]
-        at_record = (self.output.width, self.output.height) == (self.record_output.width,
-                                                                  self.record_output.height)
         for chunk, setting in chunks:
             at = [idx[r] for r in chunk]
             values[chunk] = (self._values(setting, at, self.output) if setting is not None else
                              self._values_each([per_image[r] for r in chunk], at, self.output))
-            if not at_record:  # in units of record; near ones measured there
+            if not self.rule.at_record:  # in units of record; near ones measured there
                 values[chunk] = self._judged(values[chunk], setting,
                                              [per_image[r] for r in chunk], at)
             if bar is not None:
@@ -275,8 +246,8 @@ class SetEvaluator:
                 indices: list[int]) -> np.ndarray:
         """Values of a chunk measured at the search size → the values of record (``setting``:
         the chunk's one setting, else one per image in ``params``)."""
-        values = values * self._scales
-        near = np.flatnonzero(could_pass(score_batch(values, self.criteria)))
+        values, undecided = self.rule.judge(values)
+        near = np.flatnonzero(undecided)
         if len(near):
             at = [indices[r] for r in near]
             values[near] = (self._values(setting, at, self.record_output) if setting is not None
@@ -334,86 +305,3 @@ def _bar(desc: str | None, total: int) -> ProgressBar | None:
         return None
 
     return tqdm(total=total, desc=desc, unit="image", leave=False)
-
-
-@overload
-def make_evaluator(source: FisheyeSet, output: OutputSpec, criteria: Criteria | None = ...,
-                   *, path: EvaluationPath | str | None = ...,
-                   record: OutputSpec | None = ...) -> SetEvaluator: ...
-
-
-@overload
-def make_evaluator(source: FisheyeLabels, output: OutputSpec, criteria: Criteria | None = ...,
-                   *, path: EvaluationPath | str | None = ...,
-                   record: OutputSpec | None = ...) -> ImageEvaluator: ...
-
-
-def make_evaluator(source: FisheyeLabels | FisheyeSet, output: OutputSpec,
-                   criteria: Criteria | None = None, *,
-                   path: EvaluationPath | str | None = None,
-                   record: OutputSpec | None = None) -> ImageEvaluator | SetEvaluator:
-    """The evaluator of ``criteria`` on ``source``, on the path the criteria allow.
-
-    Parameters
-    ----------
-    source : FisheyeLabels or FisheyeSet
-        One fisheye label image (e.g. :class:`rvmsim.render.FisheyeImages`), judged for many
-        candidates, or a batch of images judged for one setting at a time.
-    output : OutputSpec
-        The RVM image size (px) and mirroring the ECs are measured at (the search size).
-    criteria : Criteria, optional
-        Default: the paper's (:func:`rvmsim.criteria.default_criteria`).
-    path : EvaluationPath or str, optional
-        Default: the fastest exact path (the module docstring's table); ``"full"`` for the
-        reference.  One image takes ``windowed`` or ``full``; a batch ``rvm-pixels`` (only
-        when no EC reads the scene) or ``full``.
-    record : OutputSpec, optional
-        The RVM image of record the verdicts refer to (default: :func:`record_output` of the
-        criteria and ``source``'s scene, mirrored as ``output``).  When its size differs from
-        ``output``'s, the evaluator converts and re-measures (the module docstring).
-
-    Returns
-    -------
-    ImageEvaluator or SetEvaluator
-
-    Raises
-    ------
-    ValueError
-        The criteria read the scene but ``source`` carries none; or ``path`` does not fit.
-    """
-    crit = criteria if criteria is not None else default_criteria()
-    chosen = None if path is None else EvaluationPath(path)
-    if crit.uses_scene and source.scene is None:
-        ids = ", ".join(ec.id for ec in crit.ecs if ec.uses_scene)
-        raise ValueError(f"criteria {crit.name!r}: ECs {ids} read the scene, but the images "
-                         "carry none")
-    if isinstance(source, FisheyeSet):
-        chosen = chosen or (EvaluationPath.FULL if crit.uses_scene else EvaluationPath.RVM_PIXELS)
-        if chosen is EvaluationPath.WINDOWED or (chosen is EvaluationPath.RVM_PIXELS
-                                                 and crit.uses_scene):
-            raise ValueError(f"a batch of images cannot take the {chosen.value} path"
-                             + (" with ECs that read the scene" if crit.uses_scene else ""))
-        rec = record or record_output(crit, source.scene, output.mirror)
-        return SetEvaluator(source, output, crit, chosen, rec)
-    chosen = chosen or EvaluationPath.WINDOWED
-    if chosen is EvaluationPath.RVM_PIXELS:
-        raise ValueError("one image takes the windowed or the full path")
-    rec = record or record_output(crit, source.scene, output.mirror)
-
-    def at(out: OutputSpec) -> ImageEvaluator:
-        if chosen is EvaluationPath.FULL:
-            return FullEvaluator(source, out, crit)
-        return CandidateEvaluator(source.labels, out, crit, scene=source.scene,
-                                  camera=source.camera)
-
-    if (rec.width, rec.height) == (output.width, output.height):
-        return at(output)
-    return RecordEvaluator(at(output), at(OutputSpec(rec.width, rec.height, output.mirror)))
-
-
-def record_output(criteria: Criteria, scene: Scene | None = None, mirror: bool = True
-                  ) -> OutputSpec:
-    """The RVM image of record (:func:`rvmsim.criteria.record_size`: the scene's or criteria
-    file's ``display.rvm_image_px``, default 1280 × 720), mirrored as given."""
-    w, h = record_size(criteria, scene)
-    return OutputSpec(w, h, mirror)

@@ -358,7 +358,7 @@ def search_members(members: Sequence[Member], settings: SearchSettings, store: R
         strat = make_strategy(settings.strategy, config.space(members[0].camera), config,
                               settings.seed, settings.budget)
     if len(members) == 1:
-        evaluator = member_evaluators(members, config.output_spec(), criteria)[0]
+        evaluator = member_evaluators(members, config.output_spec(), criteria).evaluators[0]
         batch_eval = _one_scene(strat, evaluator, options.workers)
     else:
         batch_eval = BatchEvaluator(None, strat.space, options.workers,
@@ -381,7 +381,7 @@ def members_scorer(members: Sequence[Member], strat: Strategy, settings: SearchS
         # with compensation every car is corrected toward the nominal one: solve there
         solver = MembersSolver([EcSolver(ev.fisheye, output, m.criteria or settings.criteria,
                                          strat.space)
-                                for m, ev in zip(members, evaluators)],
+                                for m, ev in zip(members, evaluators.evaluators)],
                                "first" if comp is not None else settings.solve)
         strat.solved = solver.names
     return MembersScorer(evaluators, strat.space, solver, strat.objective, agg,

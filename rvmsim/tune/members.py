@@ -234,7 +234,8 @@ class MembersScorer:
     :class:`~rvmsim.tune.BatchEvaluator` runs in its workers for a multi-member search.
     Picklable (each worker holds every member's evaluator)."""
 
-    def __init__(self, evaluators: Sequence[ImageEvaluator], space: SearchSpace,
+    def __init__(self, evaluators: Sequence[ImageEvaluator] | ImagesEvaluator,
+                 space: SearchSpace,
                  solver: Callable[[IspParams], IspParams] | None = None,
                  objective: str = "log-score", aggregate: Aggregate = Aggregate(),
                  combine: str = OBJECTIVE_COMBINE,
@@ -242,15 +243,17 @@ class MembersScorer:
         check_objective(objective)
         if combine not in COMBINES:
             raise ValueError(f"unknown combine {combine!r} (known: {', '.join(COMBINES)})")
-        self.evaluators = list(evaluators)
+        #: Every member's evaluation of a candidate with one map (its batches made on
+        #: first use, in the worker).
+        self.images = (evaluators if isinstance(evaluators, ImagesEvaluator)
+                       else ImagesEvaluator(evaluators))
+        self.evaluators = self.images.evaluators
         self.space = space
         self.solver = solver
         self.objective = objective
         self.aggregate = aggregate
         self.combine = combine
         self.compensation = compensation
-        #: Every member's evaluation of a candidate with one map (made on first use).
-        self.images: ImagesEvaluator | None = None
 
     def __call__(self, xs: Sequence[np.ndarray]) -> ScoredBatch:
         params = [self.space.params(x) for x in xs]
@@ -277,9 +280,7 @@ class MembersScorer:
         """Each member's scores of the candidates: with compensation, each sample member
         judged with its per-car values, failing where the station rejects the car."""
         if self.compensation is None:  # one map per candidate for every member
-            images = ImagesEvaluator(self.evaluators) if self.images is None else self.images
-            self.images = images
-            found = [images.values(p) for p in params]
+            found = [self.images.values(p) for p in params]
             return [score_values(np.array([row[m] for row in found]).reshape(
                 len(params), len(ev.criteria.ids)), ev.criteria)
                 for m, ev in enumerate(self.evaluators)]
@@ -301,10 +302,10 @@ class MembersScorer:
 
 
 def member_evaluators(members: Sequence[Member], output: OutputSpec,
-                      criteria: Criteria) -> list[ImageEvaluator]:
-    """One evaluator per member (:func:`rvmsim.pipeline.make_evaluator`) on the run's RVM
-    ``output``, with the member's own criteria or else ``criteria``."""
-    return [make_evaluator(m, output, m.criteria or criteria) for m in members]
+                      criteria: Criteria) -> ImagesEvaluator:
+    """The members' evaluator (:func:`rvmsim.pipeline.make_evaluator`) on the run's RVM
+    ``output``: each member judged by its own criteria or else ``criteria``."""
+    return make_evaluator(list(members), output, criteria)
 
 
 # ---------------------------------------------------------------------------- conflicts

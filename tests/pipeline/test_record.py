@@ -12,14 +12,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rvmsim.criteria import (NEAR_SCORE, criteria_from_text, default_criteria, pixel_scales,
-                             record_size, score_batch, to_record_units)
+from rvmsim.criteria import (NEAR_SCORE, could_pass, criteria_from_text, default_criteria,
+                             pixel_scales, record_size, score_batch, to_record_units)
 from rvmsim.isp import OutputSpec
-from rvmsim.pipeline import RecordEvaluator, make_evaluator, record_output
+from rvmsim.pipeline import (ImagesEvaluator, RecordEvaluator, RecordRule, make_evaluator,
+                             record_output)
 from rvmsim.robust import AxisDistribution, SampleSet, Variation, draw_samples
 from rvmsim.runs import RunSettings, RunStore, store_candidates
 from rvmsim.scene import Display
-from rvmsim.tune import SearchSettings, TuningConfig, default_space, search_scene
+from rvmsim.tune import Member, SearchSettings, TuningConfig, default_space, search_scene
 
 from ..conftest import bundled_scene, small_render
 
@@ -139,3 +140,47 @@ def test_a_batch_of_images_is_judged_at_the_size_of_record():
     assert np.array_equal(a.all_passed, b.all_passed)
     near = a.all_passed
     assert np.array_equal(a.values[near], b.values[near])
+
+
+def test_one_rule_converts_and_sends_near_candidates_to_the_size_of_record():
+    """RecordRule: values in units of record (pixel ECs scaled, others as measured) and the
+    rows that could pass sent to the size of record; none at the size of record itself."""
+    crit = default_criteria()
+    rule = RecordRule(crit, (320, 180), (1280, 720))
+    images = small_render("a")
+    ev = make_evaluator(images, QUARTER_SEARCH, crit, record=QUARTER_SEARCH)
+    space = default_space(images.camera)
+    rng = np.random.default_rng(3)
+    rows = np.array([ev.values(space.params(space.low + rng.random(len(space.low))
+                                             * (space.high - space.low))) for _ in range(12)])
+    values, undecided = rule.judge(rows)
+    scales = pixel_scales(crit, (320, 180), (1280, 720))
+    np.testing.assert_array_equal(values, rows * scales)
+    np.testing.assert_array_equal(undecided, could_pass(score_batch(values, crit)))
+    same = RecordRule(crit, (1280, 720), (1280, 720))
+    assert same.at_record and not same.judge(rows)[1].any()
+    # the evaluator measuring at a search size judges by the same rule
+    rec = make_evaluator(images, QUARTER_SEARCH, crit, record=RECORD)
+    for row, near in zip(rows, undecided):
+        decided = rec.decided_values(row)
+        assert (decided is None) == bool(near)
+
+
+def test_make_evaluator_judges_a_runs_members_each_by_its_own_criteria():
+    """A sequence of members → one evaluator giving each member's values as its own
+    evaluator does, with a member's own criteria where it has them."""
+    a, b = small_render("a"), small_render("b")
+    own = criteria_from_text("name: own\necs: ['3-2']\n")
+    members = [Member("a", a.labels, a.camera, a.scene),
+               Member("b", b.labels, b.camera, b.scene, None, own)]
+    evs = make_evaluator(members, QUARTER_SEARCH, default_criteria(), record=RECORD)
+    assert isinstance(evs, ImagesEvaluator) and len(evs) == 2
+    assert evs.evaluators[1].criteria.ids == own.ids != default_criteria().ids
+    space = default_space(a.camera)
+    for x in (space.low, space.high, (space.low + space.high) / 2):
+        p = space.params(x)
+        got = evs.values(p)
+        want = [make_evaluator(a, QUARTER_SEARCH, default_criteria(), record=RECORD).values(p),
+                make_evaluator(b, QUARTER_SEARCH, own, record=RECORD).values(p)]
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)

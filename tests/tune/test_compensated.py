@@ -53,7 +53,7 @@ def test_each_sample_is_judged_with_the_values_its_law_writes():
     members = robust_members([scene], [nominal], settings)
     crit = default_criteria()
     out = OutputSpec(640, 360)
-    evaluators = member_evaluators(members, out, crit)
+    evaluators = member_evaluators(members, out, crit).evaluators
     record = record_output(crit, scene)
     stations = [m.station for m in members]
     comp = MembersCompensation(model, record, crit, [m.scene for m in members], stations, [0],
