@@ -213,7 +213,7 @@ def test_strategy_choices_come_from_the_registry():
 
 
 COMMANDS = ("render", "process", "evaluate", "tune", "batch", "status", "select", "report",
-            "validate", "sweep")
+            "judge", "validate", "sweep")
 
 
 def _main(*args):

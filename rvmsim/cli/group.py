@@ -15,7 +15,7 @@ from .console import console
 from .eol import eol
 from .errors import Group, fail, fail_os, interrupted_status, stopped_line, usage_error_line
 from .render import evaluate, process, render
-from .report import report
+from .report import judge, report
 from .robust import robustness
 from .signoff import signoff
 from .sweep import sweep
@@ -26,8 +26,8 @@ __all__ = ["cli", "main", "COMMANDS"]
 
 #: Every command of ``rvmsim``, in the order the modules list them.
 COMMANDS: tuple[click.Command, ...] = (render, process, evaluate, tune, batch, status, select,
-                                       report, validate, sweep, robustness, calibrate, console, eol,
-                                       signoff)
+                                       report, judge, validate, sweep, robustness, calibrate,
+                                       console, eol, signoff)
 
 
 @click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},

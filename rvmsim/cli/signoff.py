@@ -40,8 +40,9 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
     from ..report import signoff as write_signoff
     from ..tune.markets import judge_run_in_markets
 
-    if markets is not None:
+    if markets is not None:  # the judge step (`rvmsim judge`), then the sheet reads the run
         judge_run_in_markets(run, markets)
+        click.echo(f"judged in {markets}: wrote {run / 'best' / 'markets.json'}")
     result = write_signoff(run, out, robustness=robustness_dir, validation=validation_dir,
                            eol=eol_dir, reviewer=reviewer, pdf=pdf, progress=progress)
     yield_text = ("robustness not run" if result.yield_ is None

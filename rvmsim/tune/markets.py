@@ -47,7 +47,7 @@ if TYPE_CHECKING:
 __all__ = ["check_market_arguments", "markets_members", "render_market_members",
            "market_infeasible", "write_market_results",
            "judge_run_in_markets",
-           "market_verdict", "market_summary_lines", "market_table_lines", "market_problem_lines", "MARKETS_JSON"]
+           "market_verdict", "market_summary_lines", "market_table_lines", "load_markets_doc", "market_problem_lines", "MARKETS_JSON"]
 
 #: The per-market results of a markets run, in its ``best/`` folder.
 MARKETS_JSON = "markets.json"
@@ -241,12 +241,13 @@ def market_problem_lines(doc: dict[str, Any]) -> list[str]:
     return lines
 
 
-def judge_run_in_markets(run_dir: str | Path, markets: str) -> None:
+def judge_run_in_markets(run_dir: str | Path, markets: str) -> dict[str, Any]:
     """Judge the best setting of a finished run in ``markets`` (``report`` and ``signoff``
     with ``--markets``): each scene of the run at each market's site, with the market's
     criteria, written as a markets run writes them (``best/markets.json``,
     ``best/markets/<member>/``); the run's own results stay as they are.  A run tuned for
-    markets keeps its rows: give no ``--markets``, or its own.
+    markets keeps its rows: give no ``--markets``, or its own.  Returns the ``markets.json``
+    document (:func:`market_table_lines` prints it).
 
     Raises
     ------
@@ -264,11 +265,34 @@ def judge_run_in_markets(run_dir: str | Path, markets: str) -> None:
                 raise RvmsimError(f"{run_dir}: this run was tuned for the markets "
                                   f"{', '.join(settings.markets)}; give no --markets (its rows "
                                   "are shown) or the same markets")
-            return
+            return load_markets_doc(run_dir)
 
         scenes = resumed_scenes(settings) if settings.shared else [load_scene(settings.scene)]
         pairs = market_members(scenes, chosen)
         renders = [cached_render(p.scene)[0] for p in pairs]
-        write_market_results(run_dir, store, pairs, renders, settings.config, searched=False)
+        written = write_market_results(run_dir, store, pairs, renders, settings.config,
+                                       searched=False)
     finally:
         store.close()
+    if written is None:
+        raise RvmsimError(f"{run_dir}: the run has no trials to judge")
+    return written[0]
+
+
+def load_markets_doc(run_dir: str | Path) -> dict[str, Any]:
+    """A run's ``best/markets.json``.
+
+    Raises
+    ------
+    RvmsimError
+        It is missing or unreadable (one line naming the file).
+    """
+    path = Path(run_dir) / "best" / MARKETS_JSON
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, ValueError, RecursionError) as err:
+        raise RvmsimError(f"{path}: cannot read the run's market verdicts ({err})") from None
+    if not isinstance(doc, dict) or not isinstance(doc.get("markets"), list):
+        raise RvmsimError(f"{path}: markets: not a markets verdict (written by another "
+                          "version?)")
+    return doc

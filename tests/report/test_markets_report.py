@@ -124,6 +124,20 @@ def test_a_plain_run_is_judged_in_markets_by_report_and_signoff(run, tmp_path):
     doc = json.loads((tmp_path / "plain" / "best" / "markets.json").read_text())
     assert doc["searched"] is False and doc["conflicts"] == []
     assert (tmp_path / "plain" / "best" / "ec_table.txt").read_bytes() == table
+    # the judge step alone writes the same verdicts into the run, exits by them, and the
+    # report then only reads them
+    written = (tmp_path / "plain" / "best" / "markets.json").read_bytes()
+    (tmp_path / "plain" / "best" / "markets.json").unlink()
+    judge = run_in_process(["judge", "plain", "--markets", ",".join(MARKETS)], cwd=tmp_path)
+    assert judge.code == (0 if doc["passed"] else 1), judge.stderr
+    assert (tmp_path / "plain" / "best" / "markets.json").read_bytes() == written
+    assert all(m in judge.stdout for m in MARKETS)
+    before = {f: f.stat().st_mtime_ns for f in (tmp_path / "plain").rglob("*") if f.is_file()
+              and f.name != "report.html"}
+    rep = run_in_process(["report", "plain"], cwd=tmp_path)
+    assert rep.code == 0 and _market_rows((tmp_path / "plain" / "report.html").read_text()) \
+        == MARKETS
+    assert {f: f.stat().st_mtime_ns for f in before} == before
     # the same verdicts as evaluate gives the run's rank-1 setting in those markets
     ev = run_in_process(["evaluate", "scene.yaml", "--params", "plain/top/rank_1.yaml",
                          "--markets", ",".join(MARKETS), "--out", "ev", "--no-progress"],
