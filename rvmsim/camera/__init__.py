@@ -1,9 +1,10 @@
 """Camera models: the fisheye camera, its lens models (equidistance, Kannala-Brandt; one
-module each, on the :class:`LensModel` interface) and the mount rotation."""
+module each, on the :class:`LensModel` interface, registered by name in :data:`LENS_MODELS`)
+and the mount rotation."""
 
 from __future__ import annotations
 
-from .lens import LensModel, newton_undistort
+from .lens import LENS_MODELS, LensFactory, LensModel, make_lens, newton_undistort, register_lens_model
 from .equidistance import Equidistance
 from .kannala_brandt import (
     KannalaBrandt,
@@ -19,6 +20,10 @@ __all__ = [
     "rotation_from_ypr",
     "ypr_from_rotation",
     "LensModel",
+    "LensFactory",
+    "LENS_MODELS",
+    "make_lens",
+    "register_lens_model",
     "newton_undistort",
     "Equidistance",
     "KannalaBrandt",

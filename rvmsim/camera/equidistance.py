@@ -7,11 +7,12 @@ k1 = … = k4 = 0 (:mod:`.kannala_brandt`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import ClassVar
 
 import numpy as np
 
-from .lens import LensModel
+from .lens import LensModel, register_lens_model
 
 __all__ = ["Equidistance"]
 
@@ -33,3 +34,12 @@ class Equidistance(LensModel):
     def undistort(self, theta_d: np.ndarray, *, theta_max: float) -> np.ndarray:
         """θ = θ_d (a new float64 array), radians; the lens reaches every angle."""
         return np.array(theta_d, dtype=np.float64)
+
+
+def _equidistance(k: Sequence[float] | None) -> Equidistance:
+    if k is not None and any(k):
+        raise ValueError("model equidistance takes no k (use model: kannala_brandt)")
+    return Equidistance()
+
+
+register_lens_model(Equidistance.name, _equidistance)

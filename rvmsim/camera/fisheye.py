@@ -13,9 +13,9 @@ the optical axis) of a ray with azimuth φ to the distorted angle θ_d, and
     u   = fx · (θ_d·cos φ + skew · θ_d·sin φ) + cx
     v   = fy ·  θ_d·sin φ + cy
 
-The camera's ``k`` = (k1..k4) selects the model: Kannala-Brandt exactly as ``cv2.fisheye``
-defines it (:mod:`rvmsim.camera.kannala_brandt`), or with ``k = 0`` the equidistance lens
-r = f·θ (:mod:`rvmsim.camera.equidistance`, the paper's equation (3)).  Unlike
+The camera's ``lens_model`` names the model (no coefficient sniffing): Kannala-Brandt with
+``k`` = (k1..k4) exactly as ``cv2.fisheye`` defines it (:mod:`rvmsim.camera.kannala_brandt`),
+or the equidistance lens r = f·θ (:mod:`rvmsim.camera.equidistance`, the paper's equation (3)).  Unlike
 ``cv2.fisheye.projectPoints`` (which uses θ = atan(r/z) and so breaks down behind the
 camera's principal plane), θ = atan2(√(x²+y²), z) here, so rays beyond 90° — which a 190°
 lens sees — project correctly.
@@ -23,14 +23,14 @@ lens sees — project correctly.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
-from .equidistance import Equidistance
-from .kannala_brandt import KannalaBrandt
-from .lens import LensModel
+from . import equidistance, kannala_brandt  # noqa: F401 - they register their models
+from .lens import LensModel, make_lens
 
 __all__ = ["FisheyeCamera"]
 
@@ -62,6 +62,11 @@ class FisheyeCamera:
         Camera-to-scene rotation (see :func:`~rvmsim.camera.rotation_from_ypr`).
     position : (3,) float
         Optical centre in scene coordinates, metres.
+    lens_model : str
+        The lens model's name (:data:`rvmsim.camera.LENS_MODELS`), built with ``k``
+        (:func:`rvmsim.camera.make_lens`).  Default ``kannala_brandt``, cv2.fisheye's model
+        that ``k`` describes; a scene's ``camera.lens.model`` sets it (its default is
+        ``equidistance``, the paper's).
     """
 
     width: int
@@ -75,6 +80,7 @@ class FisheyeCamera:
     fov_deg: float = 190.0
     rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     position: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    lens_model: str = "kannala_brandt"
 
     def __post_init__(self) -> None:
         if self.width <= 0 or self.height <= 0:
@@ -94,6 +100,7 @@ class FisheyeCamera:
         object.__setattr__(self, "rotation", rot)
         object.__setattr__(self, "position", pos)
         object.__setattr__(self, "k", tuple(float(x) for x in self.k))
+        make_lens(self.lens_model, self.k)  # an unknown model or unfit k: ValueError here
         # The distortion polynomial must be one-to-one over the lens's field.
         if not self.lens.is_monotonic(self.theta_max):
             raise ValueError(
@@ -103,9 +110,8 @@ class FisheyeCamera:
     # ------------------------------------------------------------------ properties
     @property
     def lens(self) -> LensModel:
-        """The lens model ``k`` describes: :class:`~rvmsim.camera.Equidistance` when every
-        coefficient is 0, else :class:`~rvmsim.camera.KannalaBrandt`."""
-        return KannalaBrandt(self.k) if any(self.k) else Equidistance()
+        """The lens: the model :attr:`lens_model` names, with coefficients ``k``."""
+        return make_lens(self.lens_model, self.k)
 
     @property
     def theta_max(self) -> float:
@@ -142,19 +148,9 @@ class FisheyeCamera:
         w = max(1, int(round(self.width * factor)))
         h = max(1, int(round(self.height * factor)))
         sx, sy = w / self.width, h / self.height
-        return FisheyeCamera(
-            width=w,
-            height=h,
-            fx=self.fx * sx,
-            fy=self.fy * sy,
-            cx=(self.cx + 0.5) * sx - 0.5,
-            cy=(self.cy + 0.5) * sy - 0.5,
-            k=self.k,
-            skew=self.skew * sy / sx,
-            fov_deg=self.fov_deg,
-            rotation=self.rotation,
-            position=self.position,
-        )
+        return dataclasses.replace(self, width=w, height=h, fx=self.fx * sx, fy=self.fy * sy,
+                                   cx=(self.cx + 0.5) * sx - 0.5, cy=(self.cy + 0.5) * sy - 0.5,
+                                   skew=self.skew * sy / sx)
 
     # ------------------------------------------------------------------ projection
     def scene_to_camera(self, points: np.ndarray) -> np.ndarray:

@@ -13,7 +13,7 @@ from typing import ClassVar, Sequence
 
 import numpy as np
 
-from .lens import LensModel, newton_undistort
+from .lens import LensModel, newton_undistort, register_lens_model
 
 __all__ = ["KannalaBrandt", "distort_theta", "distort_theta_derivative", "undistort_theta"]
 
@@ -76,3 +76,13 @@ class KannalaBrandt(LensModel):
     def undistort(self, theta_d: np.ndarray, *, theta_max: float) -> np.ndarray:
         """θ (radians) of θ_d (radians); see :func:`undistort_theta`."""
         return undistort_theta(theta_d, np.asarray(self.k), theta_max=theta_max)
+
+
+def _kannala_brandt(k: Sequence[float] | None) -> KannalaBrandt:
+    if k is None:
+        raise ValueError("model kannala_brandt needs k: [k1, k2, k3, k4]")
+    k1, k2, k3, k4 = (float(x) for x in k)
+    return KannalaBrandt((k1, k2, k3, k4))
+
+
+register_lens_model(KannalaBrandt.name, _kannala_brandt)

@@ -3,8 +3,9 @@
 A radial lens model maps the incidence angle θ of a ray (radians, from the optical axis) to
 the distorted angle θ_d (radians): the ray lands at ``f · θ_d`` px from the principal point,
 in the direction of its azimuth (see :class:`~rvmsim.camera.FisheyeCamera`).  Each model is
-its own module (:mod:`.equidistance`, :mod:`.kannala_brandt`); a new one subclasses
-:class:`LensModel`.
+its own module (:mod:`.equidistance`, :mod:`.kannala_brandt`) and registers under its name
+(:func:`register_lens_model`); a new one subclasses :class:`LensModel` and registers too
+(docs/extending.md).
 
 Convention
 ----------
@@ -15,11 +16,13 @@ Convention
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Callable, ClassVar
+from collections.abc import Sequence
+from typing import Callable, ClassVar, Optional
 
 import numpy as np
 
-__all__ = ["LensModel", "newton_undistort"]
+__all__ = ["LensModel", "newton_undistort", "LENS_MODELS", "LensFactory", "register_lens_model",
+           "make_lens"]
 
 
 class LensModel(ABC):
@@ -89,3 +92,43 @@ def newton_undistort(
     # report those as out of range.
     bad = np.abs(distort(theta) - theta_d) > 1e-9 * np.maximum(1.0, theta_d)
     return np.where(bad, limit, theta)
+
+
+# ---------------------------------------------------------------------------- registry
+#: Builds a lens from the camera's coefficients ``k`` (None: none given); raises ValueError
+#: with a one-line reason when the coefficients do not fit the model.
+LensFactory = Callable[[Optional[Sequence[float]]], LensModel]
+
+#: Every lens model by the name scene files give it (``camera.lens.model``), in
+#: registration order: ``equidistance`` (the paper's, and the ISP's own lens) and
+#: ``kannala_brandt`` (cv2.fisheye's).  :func:`register_lens_model` adds one.
+LENS_MODELS: dict[str, LensFactory] = {}
+
+
+def register_lens_model(name: str, factory: LensFactory) -> LensFactory:
+    """Add a lens model under ``name`` (new; letters, digits and ``_``): a scene's
+    ``camera.lens.model: NAME`` then builds its lens with ``factory(k)``.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is empty, malformed or taken.
+    """
+    if not name or not name.replace("_", "").isalnum() or name in LENS_MODELS:
+        raise ValueError(f"lens model name {name!r} is empty, malformed or taken")
+    LENS_MODELS[name] = factory
+    return factory
+
+
+def make_lens(name: str, k: Sequence[float] | None) -> LensModel:
+    """The lens model ``name`` (:data:`LENS_MODELS`) with coefficients ``k``.
+
+    Raises
+    ------
+    ValueError
+        An unknown model, or coefficients the model does not take (one line).
+    """
+    factory = LENS_MODELS.get(name)
+    if factory is None:
+        raise ValueError(f"unknown lens model {name!r} (known: {', '.join(LENS_MODELS)})")
+    return factory(k)

@@ -29,6 +29,7 @@ the law's ``output`` (pixel centres at integers).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -99,8 +100,7 @@ def deviated_camera(scene: Scene, deviation: Deviation) -> FisheyeCamera:
     """The scene's camera (full sensor) at the pose :func:`deviated_pose` gives."""
     cam = scene.camera.to_camera()
     rot, pos = deviated_pose(scene, deviation)
-    return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
-                         cam.skew, cam.fov_deg, rot, pos)
+    return dataclasses.replace(cam, rotation=rot, position=pos)
 
 
 def loaded_deviation(scene: Scene, deviation: Deviation, height_mm: float,

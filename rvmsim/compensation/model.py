@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +77,13 @@ class CompensationModel:
     edge_sigma_px: float = 0.3
     marginal: str = "fail"
     stop: str = "nominal"
+    #: Where the model's keys sit in ``source`` (``compensation`` for a section; "" at the
+    #: top level), for messages naming a key.
+    key_prefix: str = field(default="", compare=False)
+
+    def key(self, name: str) -> str:
+        """``name``'s key as ``source`` spells it (``compensation.law``)."""
+        return f"{self.key_prefix}.{name}" if self.key_prefix else name
 
     def range_of(self, name: str) -> tuple[float, float]:
         """The allowed offset of parameter ``name`` (±inf for ``v_pan``)."""
@@ -115,14 +122,16 @@ class CompensationModel:
 DEFAULT_COMPENSATION = CompensationModel()
 
 
-def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>") -> CompensationModel:
-    """The dataclass of a validated :class:`~rvmsim.scene.CompensationSpec`."""
+def compensation_from_spec(spec: CompensationSpec, source: str = "<dict>",
+                           key_prefix: str = "") -> CompensationModel:
+    """The dataclass of a validated :class:`~rvmsim.scene.CompensationSpec` (its keys under
+    ``key_prefix`` in ``source``)."""
     params = tuple(spec.params)
     ranges = tuple((n, *spec.ranges.get(n, DEFAULT_RANGES[n])) for n in params if n != "v_pan")
     st = spec.station
     return CompensationModel(params, ranges, st.angle_sigma_deg, st.position_sigma_mm,
                              st.measured_at, spec.reference, source, spec.law, spec.budget,
-                             st.edge_sigma_px, st.marginal, spec.stop)
+                             st.edge_sigma_px, st.marginal, spec.stop, key_prefix)
 
 
 def compensation_from_dict(doc: dict[str, Any]) -> CompensationModel:
@@ -177,7 +186,7 @@ def load_compensation(path: str | Path) -> CompensationModel:
             key = ".".join(prefix + ((e.key,) if e.key else ()))
             raise CompensationError(e.file, key, e.message, e.line) from None
         raise e from None
-    return compensation_from_spec(spec, str(path))
+    return compensation_from_spec(spec, str(path), ".".join(prefix))
 
 
 def compensation_for(value: str | Path | None) -> CompensationModel | None:

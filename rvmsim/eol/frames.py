@@ -62,8 +62,7 @@ class PoseRenderer:
 
     def _at(self, pose: FisheyeCamera) -> FisheyeCamera:
         cam = self.camera
-        return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
-                             cam.skew, cam.fov_deg, pose.rotation, pose.position)
+        return dataclasses.replace(cam, rotation=pose.rotation, position=pose.position)
 
     def frame(self, pose: FisheyeCamera, *, progress: bool = False) -> FisheyeImages:
         """Colour and labels from ``pose``'s position and rotation, through the render

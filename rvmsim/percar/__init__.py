@@ -11,7 +11,7 @@ margins on one scale), :mod:`.uncertainty` (the station's σ of each EC), :mod:`
 from __future__ import annotations
 
 from .conflicts import GRID_LEVELS, conflicts_on_grid, grid_of
-from .factory import LAWS, make_law
+from .factory import LAWS, check_law, make_law, register_law
 from .law import (STATUSES, STOP_SIGMAS, STOP_TOLERANCE, CarSolution, EcSolveLaw, PerCarLaw,
                   ReferencePointsLaw)
 from .margins import FAIL_MARGIN, MarginScale
@@ -21,7 +21,7 @@ from .uncertainty import DRAWS, axis_turn, ec_uncertainty
 
 __all__ = [
     "GRID_LEVELS", "conflicts_on_grid", "grid_of",
-    "LAWS", "make_law",
+    "LAWS", "make_law", "register_law", "check_law",
     "CarSolution", "EcSolveLaw", "PerCarLaw", "ReferencePointsLaw", "STATUSES", "STOP_SIGMAS", "STOP_TOLERANCE",
     "FAIL_MARGIN", "MarginScale",
     "CarPicture", "EdgeWarp", "GridWarp", "ImagePicture", "SplitEvaluator", "StationView",

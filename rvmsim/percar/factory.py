@@ -3,6 +3,8 @@ setting."""
 
 from __future__ import annotations
 
+from typing import Callable, TypeVar
+
 from ..compensation import CompensationLaw, CompensationModel
 from ..criteria import Criteria
 from ..errors import CompensationError
@@ -13,11 +15,49 @@ from ..camera import FisheyeCamera
 from .picture import ImagePicture
 from .uncertainty import ec_uncertainty
 
-__all__ = ["LAWS", "make_law"]
+__all__ = ["LAWS", "make_law", "register_law", "check_law"]
 
-#: ``law:`` name → the law's class.
-LAWS: dict[str, type[PerCarLaw]] = {"ec-solve": EcSolveLaw,
-                                    "reference-points": ReferencePointsLaw}
+#: ``law:`` name → the law's class, in registration order (the built-ins: ``ec-solve``, the
+#: default, and ``reference-points``).  :func:`register_law` adds one (docs/extending.md).
+LAWS: dict[str, type[PerCarLaw]] = {}
+
+_L = TypeVar("_L", bound=type[PerCarLaw])
+
+
+def register_law(name: str) -> Callable[[_L], _L]:
+    """Class decorator: add a :class:`~rvmsim.percar.PerCarLaw` subclass to :data:`LAWS`
+    under ``name`` (new), which a compensation model's ``law:`` then names.  The class is
+    built as ``cls(reference, criteria, output)`` (:func:`make_law`) and answers
+    ``solve(measured, picture)`` and ``accepts(solution)``.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is empty or taken.
+    """
+    def add(cls: _L) -> _L:
+        if not name or name in LAWS:
+            raise ValueError(f"law name {name!r} is empty or taken")
+        LAWS[name] = cls
+        return cls
+    return add
+
+
+register_law("ec-solve")(EcSolveLaw)
+register_law("reference-points")(ReferencePointsLaw)
+
+
+def check_law(model: CompensationModel) -> None:
+    """Refuse a compensation model whose ``law`` is not registered.
+
+    Raises
+    ------
+    CompensationError
+        One line naming the model's file and the key ``law``.
+    """
+    if model.law not in LAWS:
+        raise CompensationError(model.source, model.key("law"), f"unknown law {model.law!r} "
+                                f"(known: {', '.join(LAWS)})")
 
 
 def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: CompensationModel,
@@ -49,10 +89,8 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
     CompensationError
         An unknown law, or too few reference points for the start.
     """
-    cls = LAWS.get(model.law)
-    if cls is None:
-        raise CompensationError(model.source, "law", f"unknown law {model.law!r} (known: "
-                                f"{', '.join(LAWS)})")
+    check_law(model)
+    cls = LAWS[model.law]
     reference = CompensationLaw(scene, platform, output, model)
     law = cls(reference, criteria, output)
     if nominal is not None:

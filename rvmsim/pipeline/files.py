@@ -76,6 +76,7 @@ def write_fisheye(images: FisheyeImages, folder: str | Path, *, scene_file: str 
         "image_size": [cam.width, cam.height],
         "K": cam.K.tolist(),
         "D": cam.D.ravel().tolist(),
+        "lens_model": cam.lens_model,
         "fov_deg": cam.fov_deg,
         "face_size_px": images.face_size,
         "faces": list(images.faces),

@@ -156,7 +156,7 @@ def cached_render(scene: Scene, *, scale: float = 1.0,
         write_png(folder / "fisheye_labels.png", images.labels)
         (folder / "camera.json").write_text(json.dumps(
             {"scene": scene.source, "K": cam.K.tolist(), "D": cam.D.ravel().tolist(),
-             "size": [cam.width, cam.height]}, indent=2))
+             "lens_model": cam.lens_model, "size": [cam.width, cam.height]}, indent=2))
     except (OSError, RvmsimError) as err:
         warnings.warn(f"{folder}: cannot store the render in the cache ({err})",
                       RuntimeWarning, stacklevel=2)

@@ -153,7 +153,7 @@ def _scene_section(r: _Run) -> str:
         ("Intrinsics", f"fx {cam.fx:.2f}, fy {cam.fy:.2f} px/rad; cx {cam.cx:.2f}, "
                        f"cy {cam.cy:.2f} px; skew {cam.skew:g}"),
         ("Lens model", f"{lens.model}, field of view {lens.fov_deg:g}°"
-                       + (f", k = [{k}]" if lens.model == "kannala_brandt" else "")),
+                       + (f", k = [{k}]" if lens.k is not None else "")),
         ("Mount position", "({:g}, {:g}, {:g}) m".format(*m.position)),
         ("Mount angles", f"yaw {m.yaw_deg:g}°, pitch {m.pitch_deg:g}°, roll {m.roll_deg:g}°"),
         ("Criteria", f"{r.criteria.name} — "

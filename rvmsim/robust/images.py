@@ -26,6 +26,7 @@ position ``p₀ + R_b · δp + (0, −height_mm, 0)`` (scene frame, Y toward the
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 import math
@@ -110,8 +111,7 @@ def sample_camera(scene: Scene, sample: MountSample, *, scale: float = 1.0,
     d = np.asarray(sample.render_position_mm if rendered else sample.position_mm) / 1000.0
     pos = (np.asarray(m.position, dtype=np.float64) + rb @ d
            + np.array([0.0, -sample.load.height_mm / 1000.0, 0.0]))
-    return FisheyeCamera(cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.k,
-                         cam.skew, cam.fov_deg, rot, pos)
+    return dataclasses.replace(cam, rotation=rot, position=pos)
 
 
 def _viewpoint_camera(scene: Scene, sample: MountSample, scale: float) -> FisheyeCamera:

@@ -28,7 +28,7 @@ from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params, make_evaluator, record_output
 from ..scene import Scene
 from ..render import TaskRunner
-from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, make_law
+from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, check_law, make_law
 from .compensated import CarJudge, CompensatedSamples, station_twin
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
@@ -400,6 +400,8 @@ def robustness(scene: Scene, params: IspParams,
     RobustnessResult
     """
     t0 = time.perf_counter()
+    if settings.compensation is not None:
+        check_law(settings.compensation)
     crit = settings.criteria if settings.criteria is not None else default_criteria()
     var = settings.variation if settings.variation is not None else variation_from_scene(scene)
     seed, output, render_scale = settings.seed, settings.output, settings.render_scale

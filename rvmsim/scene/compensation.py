@@ -77,7 +77,8 @@ class CompensationSpec(_Model):
     ranges: dict[str, tuple[float, float]] = {}
     station: StationSpec = StationSpec()
     reference: Literal["site", "ground"] = "site"
-    law: Literal["ec-solve", "reference-points"] = "ec-solve"
+    #: A registered law's name (:data:`rvmsim.percar.LAWS`; checked where the model is used).
+    law: Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9_-]{0,39}$")] = "ec-solve"
     budget: Annotated[int, Field(ge=4, le=2000)] = 24
     stop: Literal["nominal", "never"] = "nominal"
 

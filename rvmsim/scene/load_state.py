@@ -24,6 +24,7 @@ centre, not the sample's camera).
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated
 
 import numpy as np
@@ -88,10 +89,9 @@ class SceneLoadState(_Model):
     def camera(self, camera: FisheyeCamera, mount_position: Vec3) -> FisheyeCamera:
         """``camera`` (its pose on the unloaded body) moved with the body."""
         pose = self.motion(mount_position)
-        return FisheyeCamera(camera.width, camera.height, camera.fx, camera.fy, camera.cx,
-                             camera.cy, camera.k, camera.skew, camera.fov_deg,
-                             pose[:3, :3] @ camera.rotation,
-                             pose[:3, :3] @ np.asarray(camera.position) + pose[:3, 3])
+        return dataclasses.replace(
+            camera, rotation=pose[:3, :3] @ camera.rotation,
+            position=pose[:3, :3] @ np.asarray(camera.position) + pose[:3, 3])
 
     def mount_of(self, position_m: np.ndarray, rotation: np.ndarray,
                  mount_position: Vec3) -> tuple[tuple[float, float, float], np.ndarray]:

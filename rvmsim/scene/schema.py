@@ -24,7 +24,7 @@ import numpy as np
 from pydantic import Discriminator, Field, Tag, model_validator
 
 from . import fmvss111
-from ..camera import FisheyeCamera, rotation_from_ypr
+from ..camera import FisheyeCamera, make_lens, rotation_from_ypr
 from .display import Display
 from .eol import EolSpec
 from .load_state import SceneLoadState
@@ -128,18 +128,17 @@ class Intrinsics(_Model):
 
 
 class Lens(_Model):
-    """Lens model: equidistance (r = f·θ) or Kannala-Brandt k1..k4 as in cv2.fisheye."""
+    """Lens model by name: ``equidistance`` (r = f·θ), ``kannala_brandt`` (k1..k4 as in
+    cv2.fisheye), or one registered with :func:`rvmsim.camera.register_lens_model`."""
 
-    model: Literal["equidistance", "kannala_brandt"] = "equidistance"
+    #: A registered lens model's name (:data:`rvmsim.camera.LENS_MODELS`).
+    model: str = "equidistance"
     k: tuple[float, float, float, float] | None = None
     fov_deg: Annotated[float, Field(gt=0, le=360)] = 190.0
 
     @model_validator(mode="after")
     def _k_matches_model(self) -> Lens:
-        if self.model == "kannala_brandt" and self.k is None:
-            raise ValueError("model kannala_brandt needs k: [k1, k2, k3, k4]")
-        if self.model == "equidistance" and self.k is not None and any(self.k):
-            raise ValueError("model equidistance takes no k (use model: kannala_brandt)")
+        make_lens(self.model, self.k)  # ValueError: an unknown model, or k that does not fit
         return self
 
 
@@ -174,6 +173,7 @@ class CameraSpec(_Model):
             fov_deg=self.lens.fov_deg,
             rotation=rotation_from_ypr(m.yaw_deg, m.pitch_deg, m.roll_deg),
             position=np.asarray(m.position, dtype=np.float64),
+            lens_model=self.lens.model,
         )
 
 

@@ -22,6 +22,7 @@ from ..criteria import (Unsupported, check_supported, criteria_reference, load_c
                         record_size, supported_criteria)
 from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
+from ..percar import check_law
 from ..render import same_scene, scene_key
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock, run_settings
 from ..runs.records import RunSettings, RunStatus
@@ -166,6 +167,7 @@ def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
     variations = run_variations(scenes, vfile)
     key = variation_key(variations)
     if compensation is not None:
+        check_law(compensation)
         for v in variations:
             measured_load_index(compensation, [s.name for s in v.load_states])
     return dataclasses.replace(settings, robust_samples=samples, variation_file=vfile,

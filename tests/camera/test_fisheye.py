@@ -105,6 +105,13 @@ def test_camera_is_frozen():
         cam.rotation[0, 0] = 2.0
 
 
-def test_k_selects_the_lens_model():
-    assert _camera().lens == Equidistance()
+def test_the_lens_model_is_named_not_read_from_k():
+    """``lens_model`` chooses the lens; k = 0 does not turn a Kannala-Brandt camera into
+    an equidistance one, and an equidistance camera refuses coefficients."""
+    assert _camera(lens_model="equidistance").lens == Equidistance()
+    assert _camera().lens == KannalaBrandt((0.0, 0.0, 0.0, 0.0))
     assert _camera(k=KB).lens == KannalaBrandt(KB)
+    with pytest.raises(ValueError, match="takes no k"):
+        _camera(k=KB, lens_model="equidistance")
+    with pytest.raises(ValueError, match="unknown lens model"):
+        _camera(lens_model="fish")

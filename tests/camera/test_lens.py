@@ -1,11 +1,17 @@
 """The lens-model interface: a model written against it (here a stereographic lens, which
-rvmsim does not ship) gets a working inverse from the shared Newton solver."""
+rvmsim does not ship) gets a working inverse from the shared Newton solver, and registered
+by name a scene chooses it with ``camera.lens.model``."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from rvmsim.camera import LensModel, newton_undistort
+from rvmsim.camera import LENS_MODELS, LensModel, make_lens, newton_undistort, register_lens_model
+from rvmsim.errors import SceneError
+from rvmsim.scene import load_scene
+
+from ..scenes import load_small_scene, small_scene_text
 
 
 class Stereographic(LensModel):
@@ -41,3 +47,55 @@ def test_monotonic_check_uses_the_derivative():
 
     assert Stereographic().is_monotonic(2.0)
     assert Folding().is_monotonic(1.5) and not Folding().is_monotonic(1.6)
+
+
+@pytest.fixture
+def stereographic():
+    """The stereographic lens registered under its name for one test (then removed)."""
+    def build(k):
+        if k is not None and any(k):
+            raise ValueError("model stereographic takes no k")
+        return Stereographic()
+
+    register_lens_model("stereographic", build)
+    yield
+    LENS_MODELS.pop("stereographic")
+
+
+def test_a_registered_lens_model_is_chosen_by_name_and_projects_as_it_says(stereographic):
+    """A scene's ``camera.lens.model`` chooses the lens by name (no coefficient sniffing):
+    the stereographic lens projects points where r = f·2·tan(θ/2) puts them."""
+    scene = load_small_scene("a", edit={"camera.lens.model": "stereographic"})
+    cam = scene.fisheye_camera()
+    assert cam.lens_model == "stereographic" and isinstance(cam.lens, Stereographic)
+    rng = np.random.default_rng(0)
+    rays = rng.normal(size=(200, 3))
+    rays[:, 2] = np.abs(rays[:, 2]) + 0.2  # in front of the lens
+    world = cam.position + 3.0 * (rays / np.linalg.norm(rays, axis=1, keepdims=True)) @ cam.rotation.T
+    uv, ok = cam.project(world)
+    local = (world - cam.position) @ cam.rotation  # camera frame
+    theta = np.arctan2(np.hypot(local[:, 0], local[:, 1]), local[:, 2])
+    phi = np.arctan2(local[:, 1], local[:, 0])
+    r = 2.0 * np.tan(theta / 2.0)
+    want = np.stack([cam.fx * r * np.cos(phi) + cam.skew * cam.fx * r * np.sin(phi) + cam.cx,
+                     cam.fy * r * np.sin(phi) + cam.cy], axis=1)
+    np.testing.assert_allclose(uv[ok], want[ok], atol=1e-6)
+    # the scene's equidistance camera is not the same lens
+    plain = load_small_scene("a").fisheye_camera()
+    assert plain.lens_model == "equidistance" and not np.allclose(plain.project(world)[0], uv)
+    # the camera copies made for load states and scaled sensors keep the model
+    assert cam.scaled(0.5).lens_model == "stereographic"
+
+
+def test_an_unknown_lens_model_is_one_line_naming_the_key(tmp_path):
+    path = tmp_path / "scene.yaml"
+    path.write_text(small_scene_text("a", edit={"camera.lens.model": "pinhole9"}))
+    with pytest.raises(SceneError) as err:
+        load_scene(path)
+    text = str(err.value)
+    assert "camera.lens" in text and "unknown lens model 'pinhole9'" in text
+    assert "equidistance" in text and len(text.splitlines()) == 1
+    with pytest.raises(ValueError, match="unknown lens model"):
+        make_lens("pinhole9", None)
+    with pytest.raises(ValueError, match="taken"):
+        register_lens_model("equidistance", lambda k: Stereographic())

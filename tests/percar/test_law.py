@@ -12,7 +12,9 @@ import pytest
 from rvmsim.compensation import DEFAULT_COMPENSATION, Deviation
 from rvmsim.criteria import default_criteria, load_criteria
 from rvmsim.isp import load_params
-from rvmsim.percar import ImagePicture, SplitEvaluator, make_law
+from rvmsim.errors import CompensationError
+from rvmsim.percar import (LAWS, ImagePicture, ReferencePointsLaw, SplitEvaluator, check_law,
+                           make_law, register_law)
 from rvmsim.pipeline import evaluate_params, record_output
 from rvmsim.render import render_fisheye
 
@@ -166,3 +168,31 @@ def test_a_written_parameter_an_ec_pins_is_solved_not_searched(platform):
     j = crit.ids.index("3-1")
     assert sol.status == "pass" and sol.values[j] <= 0.5
     assert sol.params.adv_h_shift != params.adv_h_shift
+
+
+def test_a_registered_law_is_the_one_a_model_names(platform):
+    """Laws register like strategies: a model's ``law:`` names the class make_law builds;
+    an unknown name is one line naming the model's file and key."""
+    scene, params, record, crit, laws = platform
+
+    class HoldLaw(ReferencePointsLaw):
+        """The reference-point law under another name (a customer's law)."""
+
+    register_law("hold-points")(HoldLaw)
+    try:
+        law = make_law(scene, params, record, dataclasses.replace(PERFECT, law="hold-points"),
+                       crit)
+        assert type(law) is HoldLaw
+        car = Deviation(yaw_deg=1.0)
+        picture = ImagePicture(SplitEvaluator(render_fisheye(deviated_scene(car)), record, crit))
+        assert law.solve(car, picture).params == \
+            laws["reference-points"].solve(car, picture).params
+        with pytest.raises(ValueError, match="taken"):
+            register_law("hold-points")(HoldLaw)
+    finally:
+        LAWS.pop("hold-points")
+    unknown = dataclasses.replace(PERFECT, law="hold-points", source="c.yaml",
+                                  key_prefix="compensation")
+    with pytest.raises(CompensationError) as err:
+        check_law(unknown)
+    assert str(err.value).startswith("c.yaml: compensation.law: unknown law 'hold-points'")
