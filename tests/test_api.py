@@ -1,10 +1,16 @@
-"""The public API of ``rvmsim``: every listed name resolves, the examples run, and importing
-the package starts no OpenGL."""
+"""The public API of ``rvmsim``: every listed name resolves, the examples run, importing the
+package starts no OpenGL, the lazy top level has its types, every name has one home, and the
+surface changes only on purpose (a snapshot, ``tests/api_surface.txt``: after a deliberate
+change, ``RVMSIM_UPDATE_API=1 pytest tests/test_api.py`` writes it anew, and the diff shows
+the change in review)."""
 
 from __future__ import annotations
 
+import ast
 import doctest
 import importlib
+import os
+import pkgutil
 import subprocess
 import sys
 import tomllib
@@ -15,8 +21,9 @@ import pytest
 import rvmsim
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("storage", "camera", "scene", "render", "isp", "criteria", "percar", "robust",
-            "search", "runs", "tune", "batch", "validate", "eol", "report", "cli")
+#: Every subpackage of rvmsim.
+PACKAGES = tuple(sorted(m.name for m in pkgutil.iter_modules(rvmsim.__path__) if m.ispkg))
+SURFACE = Path(__file__).with_name("api_surface.txt")
 
 
 @pytest.mark.parametrize("name", rvmsim.__all__)
@@ -66,3 +73,46 @@ def test_version_matches_the_package_metadata():
     """``rvmsim.__version__`` is what pyproject.toml declares (one version, two places)."""
     declared = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
     assert rvmsim.__version__ == declared["project"]["version"]
+
+
+def _surface() -> list[str]:
+    """``rvmsim: NAME`` and ``rvmsim.PACKAGE: NAME`` for every public name, sorted."""
+    rows = [f"rvmsim: {n}" for n in rvmsim.__all__]
+    for package in PACKAGES:
+        rows += [f"rvmsim.{package}: {n}"
+                 for n in importlib.import_module(f"rvmsim.{package}").__all__]
+    return sorted(rows)
+
+
+def test_the_public_surface_changes_only_on_purpose():
+    now = _surface()
+    if os.environ.get("RVMSIM_UPDATE_API"):
+        SURFACE.write_text("\n".join(now) + "\n")
+    recorded = SURFACE.read_text().splitlines()
+    added, removed = sorted(set(now) - set(recorded)), sorted(set(recorded) - set(now))
+    assert not added and not removed, (
+        f"public names added {added}, removed {removed}; if deliberate, run "
+        "RVMSIM_UPDATE_API=1 pytest tests/test_api.py and commit tests/api_surface.txt")
+
+
+def test_every_public_name_has_one_home():
+    homes: dict[str, list[str]] = {}
+    for package in PACKAGES:
+        for n in importlib.import_module(f"rvmsim.{package}").__all__:
+            homes.setdefault(n, []).append(package)
+    twice = {n: h for n, h in homes.items() if len(h) > 1}
+    assert not twice, f"names exported by several subpackages: {twice}"
+
+
+def test_the_stub_types_every_lazy_name_as_it_resolves():
+    """``rvmsim/__init__.pyi`` imports each lazy name from the module ``_LAZY`` resolves it
+    from, and nothing else: type checkers see what ``rvmsim.NAME`` returns."""
+    stub = ast.parse((REPO / "rvmsim" / "__init__.pyi").read_text())
+    typed = {}
+    for node in stub.body:
+        if isinstance(node, ast.ImportFrom):
+            for a in node.names:
+                typed[a.asname or a.name] = (f"rvmsim.{node.module}", a.name)
+    lazy = {n: target for n, target in rvmsim._LAZY.items()}
+    assert {n: typed[n] for n in lazy if n in typed} == lazy
+    assert set(typed) - {"__version__"} == set(rvmsim.__all__)

@@ -198,7 +198,7 @@ def test_strategy_choices_come_from_the_registry():
     from click.testing import CliRunner
 
     from rvmsim.cli import cli
-    from rvmsim.tune import STRATEGIES
+    from rvmsim.search import STRATEGIES
 
     runner = CliRunner()
     for command in ("tune", "batch"):

@@ -11,7 +11,7 @@ import numpy as np
 from rvmsim.isp import IspParams
 
 if TYPE_CHECKING:
-    from rvmsim.tune import SearchSpace, TuningConfig
+    from rvmsim.search import SearchSpace, TuningConfig
 
 #: Ranges a tuning run explores around the paper's defaults (inside Table 2's ranges), for
 #: the 1280×960 bundled sensors.
@@ -41,7 +41,7 @@ def cpu_model() -> str:
 def protocol_candidates(space: SearchSpace, config: TuningConfig, n: int) -> list[np.ndarray]:
     """``n`` parameter vectors like the paper protocol's: half drawn from its 3⁹ coarse grid,
     half fine-stage-like (uniform draws one grid step around the grid's centre), seed 0."""
-    from rvmsim.tune import make_strategy  # here: the other tools need not import tuning
+    from rvmsim.search import make_strategy
 
     strat = make_strategy("grid-random", space, config, 0, 2000)
     gen = strat.batches()

@@ -41,7 +41,7 @@ from rvmsim.isp import (IspParams, MapNodes, OutputSpec, RayCache, apply_map,  #
                         build_map, map_nodes)
 from rvmsim.render import cached_render  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
-from rvmsim.tune import TuningConfig  # noqa: E402
+from rvmsim.search import TuningConfig
 
 #: 4,000 evaluations/s on 2 workers: ms of one core per candidate.
 BUDGET_MS = 2 * 1e3 / 4000

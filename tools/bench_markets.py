@@ -44,7 +44,7 @@ def _setup(scene_path: str, markets: str) -> Any:
         from rvmsim.criteria import record_size
         from rvmsim.markets import market_members, parse_markets
         from rvmsim.scene import load_scene
-        from rvmsim.tune import TuningConfig
+        from rvmsim.search import TuningConfig
         from rvmsim.tune.markets import render_market_members
 
         cv2.setNumThreads(1)
@@ -61,7 +61,8 @@ def run_one(scene_path: str, markets: str, strategy: str, seed: int,
     """One search to its first all-pass or its budget."""
     import numpy as np
 
-    from rvmsim.tune import SearchSettings, make_strategy, members_scorer
+    from rvmsim.tune import SearchSettings, members_scorer
+    from rvmsim.search import make_strategy
     from rvmsim.tune.markets import market_infeasible
 
     cfg, pairs, renders, members = _setup(scene_path, markets)

@@ -40,7 +40,8 @@ def _setup(scene_path: str) -> Any:
         from rvmsim.criteria import default_criteria
         from rvmsim.render import cached_render
         from rvmsim.scene import load_scene
-        from rvmsim.tune import TuningConfig, candidate_evaluator, load_tuning_config
+        from rvmsim.tune import candidate_evaluator
+        from rvmsim.search import TuningConfig, load_tuning_config
 
         cv2.setNumThreads(1)
         cfg = (TuningConfig() if not os.environ.get("BENCH_TUNE_CONFIG") else
@@ -55,7 +56,8 @@ def run_one(scene_path: str, strategy: str, seed: int, budget: int | None,
             full: bool = False) -> dict[str, Any]:
     """One search to its first all-pass (or its budget; with ``full``, always to its
     budget): evaluations used, first all-pass, best EC score."""
-    from rvmsim.tune import make_strategy, strategy_scorer
+    from rvmsim.tune import strategy_scorer
+    from rvmsim.search import make_strategy
 
     cfg, images, criteria, evaluator = _setup(scene_path)
     space = cfg.space(images.camera)

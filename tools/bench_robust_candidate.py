@@ -32,8 +32,9 @@ from rvmsim.render import cached_render  # noqa: E402
 from rvmsim.robust import draw_samples, sample_images, variation_for  # noqa: E402
 from rvmsim.runs import RunStore  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
-from rvmsim.tune import (Member, SearchSettings, TuningConfig, candidate_evaluator,  # noqa: E402
-                         make_strategy, members_scorer, search_scene, solver_for)
+from rvmsim.tune import (Member, SearchSettings, candidate_evaluator, members_scorer,
+                         search_scene, solver_for)
+from rvmsim.search import TuningConfig, make_strategy
 from rvmsim.tune.loop import VectorScorer  # noqa: E402
 
 _BATCH = 32

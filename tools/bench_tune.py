@@ -23,7 +23,8 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim.tune import RunOptions, TuneRequest, TuningConfig, tune  # noqa: E402
+from rvmsim.tune import RunOptions, TuneRequest, tune
+from rvmsim.search import TuningConfig
 
 
 def main() -> None:

@@ -23,7 +23,8 @@ from rvmsim.criteria import default_criteria
 from rvmsim.pipeline import make_evaluator
 from rvmsim.render import cached_render
 from rvmsim.scene import load_scene
-from rvmsim.tune import COMBINES, SOLVE_MODES, Member, TuningConfig, score_params
+from rvmsim.tune import COMBINES, SOLVE_MODES, Member, score_params
+from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore
 from rvmsim.tune import SearchSettings, search_members
 

@@ -43,7 +43,8 @@ from rvmsim.criteria import default_criteria  # noqa: E402
 from rvmsim.render import cached_render  # noqa: E402
 from rvmsim.runs import RunStore  # noqa: E402
 from rvmsim.scene import load_scene  # noqa: E402
-from rvmsim.tune import TuningConfig, candidate_evaluator, make_strategy, solver_for  # noqa: E402
+from rvmsim.tune import candidate_evaluator, solver_for
+from rvmsim.search import TuningConfig, make_strategy
 from rvmsim.tune.loop import VectorScorer  # noqa: E402
 
 _BATCH = 256

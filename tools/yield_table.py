@@ -116,7 +116,8 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
     from rvmsim.isp import load_params, params_to_dict
     from rvmsim.render import scene_key
     from rvmsim.scene import load_scene
-    from rvmsim.tune import DEFAULT_STRATEGY, RunOptions, TuneRequest, resume, tune
+    from rvmsim.tune import RunOptions, TuneRequest, resume, tune
+    from rvmsim.search import DEFAULT_STRATEGY
     from rvmsim.tune.robust import run_variations, variation_key
 
     scene = load_scene(scene_path)
@@ -351,7 +352,7 @@ def main() -> None:
         ap.error("--scale: give a fraction in (0, 1]")
     args.scales = tuple(float(s) for s in args.scales.split(","))
     args.eval_seed = args.seed if args.eval_seed is None else args.eval_seed
-    from rvmsim.tune import DEFAULT_STRATEGY
+    from rvmsim.search import DEFAULT_STRATEGY
 
     from rvmsim.errors import RvmsimError
 

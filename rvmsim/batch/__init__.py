@@ -57,8 +57,6 @@ from .markets import (
 )
 from .feasibility import (
     Infeasibility,
-    PatchView,
-    patch_view,
     infeasible_ecs,
 )
 from .recheck import (
@@ -140,8 +138,6 @@ __all__ = [
     "markets_yield",
     "run_markets_point",
     "Infeasibility",
-    "PatchView",
-    "patch_view",
     "infeasible_ecs",
     "VERDICTS",
     "grid_index",

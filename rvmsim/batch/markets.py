@@ -43,8 +43,8 @@ from ..markets import market_criteria, market_members, parse_markets
 from ..robust import RobustnessSettings, markets_robustness
 from ..runs import RunStore
 from ..scene import bundled_site, scene_from_dict
-from ..tune import (MembersScorer, SearchSettings, TuningConfig, make_strategy, member_evaluators,
-                    search_members)
+from ..tune import MembersScorer, SearchSettings, member_evaluators, search_members
+from ..search import TuningConfig, make_strategy
 from ..tune.markets import market_infeasible, render_market_members
 from .axes import sweep_error
 from .payloads import InfeasibleDoc, MarketOutcomeDoc, PointResult, PointRun, PointTask

@@ -21,7 +21,8 @@ from ..markets import market_members, parse_markets
 from ..render import cached_render
 from ..runs import RunStore
 from ..scene import scene_from_dict
-from ..tune import SearchSettings, TuningConfig, candidate_evaluator, search_scene
+from ..tune import SearchSettings, candidate_evaluator, search_scene
+from ..search import TuningConfig
 from .executors import task_malloc
 from .feasibility import infeasible_ecs
 from .markets import markets_yield, run_markets_point
@@ -34,7 +35,7 @@ if TYPE_CHECKING:
     from ..criteria import Criteria
     from ..runs import TrialRecord
     from ..scene import Scene
-    from ..tune import SearchSpace
+    from ..search import SearchSpace
     from .feasibility import Infeasibility
 
 __all__ = ["run_point", "run_yield"]

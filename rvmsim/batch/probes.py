@@ -12,13 +12,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .payloads import ParamSensitivity, PointTask, SensitivityDoc
-from ..tune import make_strategy, score_vectors
+from ..tune import score_vectors
+from ..search import make_strategy
 
 if TYPE_CHECKING:
     from ..isp import IspParams
     from ..pipeline import ImageEvaluator
     from ..render import FisheyeImages
-    from ..tune import SearchSpace, TuningConfig
+    from ..search import SearchSpace, TuningConfig
 
 __all__ = ["RENDER_LOCK", "task_budget", "sensitivity", "probe_sensitivity",
            "SENSITIVITY_STEPS"]

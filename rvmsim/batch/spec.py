@@ -41,7 +41,7 @@ from .._io import KeyPath, input_error_from_validation, key_lines, parse_yaml_ma
 from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
-from ..tune import DEFAULT_STRATEGY, STRATEGIES, TuningConfig
+from ..search import DEFAULT_STRATEGY, STRATEGIES, TuningConfig
 from .markets import market_ec_ids, markets_fingerprint, sweep_markets
 from .axes import AXES, MAX_AXIS_VALUES, POSITION_AXES, expand_axis, sweep_error as _error
 from .yields import YieldModel, YieldSettings

@@ -21,7 +21,8 @@ from typing import Any
 from ..criteria import bundled_criteria_text, criteria_from_text, criteria_reference, load_criteria
 from ..errors import RvmsimError
 from ..scene import absolute_mesh_paths, read_scene_document, scene_from_dict
-from ..tune import RunOptions, TuneRequest, TuningConfig, tune
+from ..tune import RunOptions, TuneRequest, tune
+from ..search import TuningConfig
 from .executors import DaskExecutor, task_malloc
 from .payloads import BatchError, BatchRun, BatchTask, SceneSummary, SceneSummaryError
 

@@ -13,7 +13,7 @@ See ``docs/calibration.md``.
 from __future__ import annotations
 
 from .board import BoardSpec, CalibrationInputError, parse_board_spec
-from .captures import capture_files, load_grey
+from .captures import board_images, load_grey
 from .detect import find_board_corners, find_board_view
 from .imports import ImportedCamera, fit_kannala_brandt, import_calibration
 from .intrinsics import BoardView, Calibration, ViewFit, calibrate_fisheye
@@ -22,7 +22,7 @@ from .run import CalibrationSummary, calibrate_captures, import_camera
 
 __all__ = [
     "BoardSpec", "CalibrationInputError", "parse_board_spec",
-    "capture_files", "load_grey", "find_board_corners", "find_board_view",
+    "board_images", "load_grey", "find_board_corners", "find_board_view",
     "ImportedCamera", "fit_kannala_brandt", "import_calibration",
     "BoardView", "Calibration", "ViewFit", "calibrate_fisheye",
     "camera_block", "coverage_image", "write_calibration_outputs", "write_scene_camera",

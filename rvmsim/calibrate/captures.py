@@ -10,12 +10,12 @@ import numpy as np
 from ..validate import load_capture
 from .board import CalibrationInputError
 
-__all__ = ["capture_files", "load_grey"]
+__all__ = ["board_images", "load_grey"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp")
 
 
-def capture_files(paths: list[str | Path]) -> list[Path]:
+def board_images(paths: list[str | Path]) -> list[Path]:
     """The image files among ``paths``, a folder standing for its images (sorted).
 
     Raises

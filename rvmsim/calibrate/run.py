@@ -15,7 +15,7 @@ from ..errors import RvmsimError
 from ..scene import CameraSpec, camera_problem
 from ..validate import check_captures
 from .board import BoardSpec, CalibrationInputError, parse_board_spec
-from .captures import capture_files, load_grey
+from .captures import board_images, load_grey
 from .counting import HINT_CAPTURES, counting_hint, other_counting
 from .detect import find_board_view
 from .imports import MAX_FIT_RMS_PX, fit_error_text, import_calibration
@@ -72,7 +72,7 @@ def calibrate_captures(captures: Sequence[str | Path], board_spec: str, out: str
     """
 
     board = parse_board_spec(board_spec)
-    files = capture_files(list(captures))
+    files = board_images(list(captures))
     size = _check_captures(files)
     views, missed = _find_views(files, board, board_spec)
     calib = calibrate_fisheye(views, board, size)

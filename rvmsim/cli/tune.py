@@ -12,7 +12,7 @@ from click.core import ParameterSource
 from tqdm import tqdm
 
 from .._progress import ProgressBar
-from ..tune import DEFAULT_STRATEGY, STRATEGIES
+from ..search import DEFAULT_STRATEGY, STRATEGIES
 from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 from .errors import Command
 from .params import (DEFAULT_WORKERS, ONLY_SUPPORTED, SEED, FiniteFloat, Integer, OutputFile,
@@ -83,7 +83,8 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
     markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
-    from ..tune import RunOptions, TuneRequest, check_tune_arguments, load_tuning_config
+    from ..tune import RunOptions, TuneRequest, check_tune_arguments
+    from ..search import load_tuning_config
     from ..tune import resume as resume_run
     from ..tune import summary_lines
     from ..tune import tune as run_tune
@@ -223,7 +224,7 @@ def batch(scenes: tuple[Path, ...], out: Path, strategy: str, config_file: Path 
     each scene is one task on the cluster, and its run folder is written here as it finishes.
     """
     from ..batch import BatchSettings, run_batch, summary_ec_ids, summary_table, write_summary
-    from ..tune import load_tuning_config
+    from ..search import load_tuning_config
 
     settings = BatchSettings(strategy, load_tuning_config(config_file), criteria_file,
                              seed, budget, workers)

@@ -11,7 +11,9 @@ origin, JSON writes, size limits), :mod:`.app` (the FastAPI app),
 
 from __future__ import annotations
 
-from .candidates import Candidate, candidate_json
+from .candidates import (
+    candidate_json,
+)
 from .session import (
     CONSOLE_DIR,
     ConsoleFrame,
@@ -31,7 +33,6 @@ from .app import create_app, session_json, TOKEN_HEADER, LOOPBACK_HOSTS
 from .server import Access, check_access, is_loopback, listen, make_server, serve, console_url
 
 __all__ = [
-    "Candidate",
     "candidate_json",
     "CONSOLE_DIR",
     "ConsoleFrame",

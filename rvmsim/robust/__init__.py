@@ -20,7 +20,6 @@ from .variation import (
     variation_from_spec,
     variation_for,
     NOMINAL_LOAD,
-    MOUNT_AXES,
 )
 from .samples import MountSample, draw_samples, nominal_sample, position_levels_at
 from .images import (sample_images, sample_camera, body_pose, cover_for, Refolder, refolder,
@@ -57,7 +56,6 @@ __all__ = [
     "variation_from_spec",
     "variation_for",
     "NOMINAL_LOAD",
-    "MOUNT_AXES",
     "MountSample",
     "draw_samples",
     "nominal_sample",

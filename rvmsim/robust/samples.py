@@ -33,7 +33,7 @@ class MountSample:
     index : int
         Position in the drawn sequence.
     offsets : (6,) tuple of float
-        Drawn mount offsets in :data:`~rvmsim.robust.MOUNT_AXES` order: x, y, z (mm, scene
+        Drawn mount offsets in :data:`~rvmsim.scene.MOUNT_AXES` order: x, y, z (mm, scene
         frame) and yaw, pitch, roll (degrees).
     render_position_mm : (3,) tuple of float
         The position offset the sample is rendered at (see the module docstring).

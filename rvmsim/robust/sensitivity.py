@@ -332,7 +332,7 @@ def fit_sensitivity(values: np.ndarray, axes: Mapping[str, np.ndarray],
     values : (n,) float
         The EC's value per sample, EC unit; NaN (not measured) is left out.
     axes : dict
-        Mount axis name (:data:`~rvmsim.robust.MOUNT_AXES`) → (n,) offsets the EC saw (mm,
+        Mount axis name (:data:`~rvmsim.scene.MOUNT_AXES`) → (n,) offsets the EC saw (mm,
         degrees; :func:`sensitivity_axes`).  Axes that do not vary are left out.
     loads : (n,) str, optional
         Each sample's load state.

@@ -14,29 +14,6 @@ What is searched and how (the search space, the strategies, the tuning config) i
 
 from __future__ import annotations
 
-from ..search import (
-    ParamRange,
-    SearchSpace,
-    default_space,
-    Strategy,
-    GridToRandom,
-    CmaEs,
-    CmaEsSolved,
-    RandomSearch,
-    STRATEGIES,
-    register_strategy,
-    GridRandomSettings,
-    CmaesSettings,
-    CmaesSolvedSettings,
-    RandomSettings,
-    SEED_MAX,
-    DEFAULT_STRATEGY,
-    check_seed,
-    TuningConfig,
-    DiverseConfig,
-    load_tuning_config,
-    make_strategy,
-)
 from .objective import (
     OBJECTIVE_FLOOR,
     OBJECTIVES,
@@ -94,27 +71,6 @@ from .kinds import (Verdict, Built, MemberSet, Single, Shared, Robust, Compensat
 from .summary import summary_lines
 
 __all__ = [
-    "ParamRange",
-    "SearchSpace",
-    "default_space",
-    "Strategy",
-    "GridToRandom",
-    "CmaEs",
-    "CmaEsSolved",
-    "RandomSearch",
-    "STRATEGIES",
-    "register_strategy",
-    "GridRandomSettings",
-    "CmaesSettings",
-    "CmaesSolvedSettings",
-    "RandomSettings",
-    "SEED_MAX",
-    "DEFAULT_STRATEGY",
-    "check_seed",
-    "TuningConfig",
-    "DiverseConfig",
-    "load_tuning_config",
-    "make_strategy",
     "OBJECTIVE_FLOOR",
     "OBJECTIVES",
     "PASS_WEIGHT",

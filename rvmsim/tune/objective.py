@@ -35,7 +35,7 @@ __all__ = ["OBJECTIVE_FLOOR", "OBJECTIVES", "PASS_WEIGHT", "MAX_VIOLATION", "Sco
 
 #: Floor of each EC score inside the objective's logarithm.
 OBJECTIVE_FLOOR = 1e-4
-#: The objectives a strategy can ask for (:attr:`rvmsim.tune.Strategy.objective`).
+#: The objectives a strategy can ask for (:attr:`rvmsim.search.Strategy.objective`).
 OBJECTIVES = ("log-score", "pass-first")
 #: Weight of the summed range violations in the ``pass-first`` objective.
 PASS_WEIGHT = 10.0

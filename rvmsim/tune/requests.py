@@ -39,12 +39,12 @@ class SearchSettings:
         The tuned parameters, their ranges, the RVM output size and the strategies' settings.
     criteria : Criteria
     strategy : str or Strategy
-        A name in :data:`rvmsim.tune.STRATEGIES` (made with :func:`rvmsim.tune.make_strategy`
+        A name in :data:`rvmsim.search.STRATEGIES` (made with :func:`rvmsim.search.make_strategy`
         from ``config``, ``seed`` and ``budget`` on the config's space), or a strategy already
         made (its space is used; ``seed``, ``budget`` and ``starts`` are then ignored).
     seed : int
     budget : int, optional
-        ``--budget`` (see :func:`rvmsim.tune.make_strategy`).
+        ``--budget`` (see :func:`rvmsim.search.make_strategy`).
     starts : tuple of IspParams
         Parameter sets to start from (e.g. neighbouring design points' optima), evaluated
         first by the strategies that use them (:attr:`Strategy.starts`).
@@ -110,7 +110,7 @@ class TuneRequest:
         parameter set for all; the space is fitted to the first scene's camera, and every
         scene's camera must have its sensor size).  One scene may be given alone.
     strategy : str
-        A name in :data:`rvmsim.tune.STRATEGIES`.
+        A name in :data:`rvmsim.search.STRATEGIES`.
     config : TuningConfig, optional
         Default: ``TuningConfig()`` (ranges fitted to the camera).
     criteria : Criteria, optional

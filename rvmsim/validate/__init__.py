@@ -29,8 +29,12 @@ Modules, in the order :func:`validate` uses them:
 from __future__ import annotations
 
 from .board import BoardLayout, BoardShade, LatticeEvidence, board_layout
-from .board_start import (BoardSearch, BoardStart, find_board_start, search_board,
-                          ypr_from_rotation)
+from .board_start import (
+    BoardSearch,
+    BoardStart,
+    find_board_start,
+    search_board,
+)
 from .capture import check_captures, load_capture
 from .captures import (CAPTURE_SUFFIXES, CaptureOutcome, capture_files, capture_folders,
                        validate_captures)
@@ -78,7 +82,6 @@ __all__ = [
     "LatticeEvidence",
     "find_board_start",
     "search_board",
-    "ypr_from_rotation",
     "write_pictures",
     "CAPTURE_SUFFIXES",
     "CaptureOutcome",

@@ -12,7 +12,8 @@ import pytest
 import yaml
 
 from rvmsim import labels as L
-from rvmsim.batch import LocalExecutor, infeasible_ecs, load_sweep, patch_view, run_sweep
+from rvmsim.batch import LocalExecutor, infeasible_ecs, load_sweep, run_sweep
+from rvmsim.criteria import patch_view
 from rvmsim.criteria import criteria_from_text, default_criteria
 from rvmsim.render import cached_render
 from rvmsim.scene import scene_from_dict

@@ -19,7 +19,7 @@ from rvmsim.render import cached_render
 from rvmsim.report import write_sweep_outputs
 from rvmsim.report.sweep import feasibility_grid
 from rvmsim.scene import scene_from_dict
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process
 from .conftest import write_sweep

@@ -19,7 +19,7 @@ from rvmsim.isp import IspParams
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.scene import scene_from_dict
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process, start_in_child
 from .conftest import write_sweep

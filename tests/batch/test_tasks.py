@@ -12,7 +12,7 @@ import pytest
 from rvmsim.batch import (BatchSettings, SceneRun, run_batch, summary_ec_ids, summary_table,
                           write_summary)
 from rvmsim.criteria import default_criteria
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_child, run_in_process
 from ..scenes import small_scene_text

@@ -23,7 +23,7 @@ from rvmsim.isp import IspParams
 from rvmsim.report import write_sweep_outputs
 from rvmsim.robust import RobustnessSettings, robustness
 from rvmsim.scene import scene_from_dict
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process, start_in_child
 from .conftest import write_sweep

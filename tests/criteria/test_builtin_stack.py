@@ -12,7 +12,7 @@ from rvmsim import labels as L
 from rvmsim.criteria import LabelSource, LabelStack, default_criteria, measure_stack_ecs
 from rvmsim.criteria.measure import measure_ecs
 from rvmsim.isp import OutputSpec, apply_map, build_map
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 
 from ..conftest import small_render
 from .views import VIEWS, rvm

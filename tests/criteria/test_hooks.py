@@ -30,7 +30,8 @@ from rvmsim.criteria import (
 from rvmsim.errors import CriteriaError
 from rvmsim.isp import OutputSpec, process
 from rvmsim.runs import RunStore
-from rvmsim.tune import EcSolver, SearchOptions, SearchSettings, TuningConfig, search_scene
+from rvmsim.tune import EcSolver, SearchOptions, SearchSettings, search_scene
+from rvmsim.search import TuningConfig
 
 from ..batch.conftest import small_scene_text
 from ..conftest import small_render

@@ -22,7 +22,7 @@ from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.pipeline import (EvaluationPath, FullEvaluator, SetEvaluator, evaluate_params,
                              make_evaluator)
 from rvmsim.robust import AxisDistribution, SampleSet, Variation, draw_samples, sample_images
-from rvmsim.tune import default_space
+from rvmsim.search import default_space
 
 from ..conftest import bundled_scene, small_render
 

@@ -20,7 +20,8 @@ from rvmsim.pipeline import (ImagesEvaluator, RecordEvaluator, RecordRule, make_
 from rvmsim.robust import AxisDistribution, SampleSet, Variation, draw_samples
 from rvmsim.runs import RunSettings, RunStore, store_candidates
 from rvmsim.scene import Display
-from rvmsim.tune import Member, SearchSettings, TuningConfig, default_space, search_scene
+from rvmsim.tune import Member, SearchSettings, search_scene
+from rvmsim.search import TuningConfig, default_space
 
 from ..conftest import bundled_scene, small_render
 

@@ -94,7 +94,8 @@ def _assert_self_contained(text: str, doc: _Collector) -> None:
 def runs(tmp_path_factory):
     """Two real tiny runs in one folder: an evil-named copy of vehicle A (custom criteria with
     4-1 off, CMA-ES) and vehicle B (random search)."""
-    from rvmsim.tune import TuneRequest, TuningConfig, tune
+    from rvmsim.tune import TuneRequest, tune
+    from rvmsim.search import TuningConfig
 
     root = tmp_path_factory.mktemp("report")
     old = os.environ.get("RVMSIM_CACHE")
@@ -405,7 +406,8 @@ def test_annotated_text_is_legible_on_the_report_page(runs):
 def test_the_display_picture_is_at_the_scenes_size_of_record(tmp_path, monkeypatch):
     """A scene whose display is 480 × 270 px: the report's display picture is drawn at that
     size, the RVM image of record, not at a fixed 1280 × 720 (issue #42)."""
-    from rvmsim.tune import TuneRequest, TuningConfig, tune
+    from rvmsim.tune import TuneRequest, tune
+    from rvmsim.search import TuningConfig
 
     from ..scenes import write_small_scene
 

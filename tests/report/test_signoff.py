@@ -23,7 +23,8 @@ from rvmsim.render import cached_render
 from rvmsim.report import signoff, write_report
 from rvmsim.report.signoff_page import NO_ROBUSTNESS, SECTION_IDS
 from rvmsim.scene import load_scene
-from rvmsim.tune import DISPLAY_SIZE, TuneRequest, TuningConfig, tune
+from rvmsim.tune import DISPLAY_SIZE, TuneRequest, tune
+from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process
 from ..eol.stations import write_capture, write_inputs

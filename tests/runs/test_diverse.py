@@ -12,7 +12,7 @@ import pytest
 
 from rvmsim.criteria import default_criteria
 from rvmsim.isp import IspParams
-from rvmsim.tune import ParamRange, SearchSpace
+from rvmsim.search import ParamRange, SearchSpace
 from rvmsim.runs import POOLS, EcOutcome, TrialRecord, differs_text, select_diverse
 
 SPACE = SearchSpace((ParamRange("fov", 180.0, 150.0, 210.0, 20.0),

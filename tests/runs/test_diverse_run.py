@@ -13,7 +13,8 @@ import pytest
 
 from rvmsim.isp import load_params
 from rvmsim.scene import load_scene
-from rvmsim.tune import TuneRequest, TuningConfig, tune
+from rvmsim.tune import TuneRequest, tune
+from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore, diverse_candidates, rank_params_text, status_lines
 
 from ..cli_runner import run_in_process

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from rvmsim.isp import IspParams
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 from rvmsim.runs import (EcOutcome, RunSettings, RunState, RunStatus, StopReason, TrialRecord,
                          ec_json, ecs_from_json, params_json)
 

@@ -10,7 +10,7 @@ import pytest
 
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import IspParams
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 from rvmsim.runs import (EcOutcome, RunSettings, RunStatus, RunStore, StopReason, ec_json,
                          params_json)
 

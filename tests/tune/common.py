@@ -9,7 +9,8 @@ from pathlib import Path
 
 from rvmsim.criteria import CandidateEvaluator, default_criteria
 from rvmsim.isp import OutputSpec
-from rvmsim.tune import SearchSpace, Strategy, default_space, run_search, score_vectors
+from rvmsim.tune import run_search, score_vectors
+from rvmsim.search import SearchSpace, Strategy, default_space
 from rvmsim.runs import RunStore
 
 from ..conftest import small_render

@@ -6,7 +6,8 @@ import os
 
 import pytest
 
-from rvmsim.tune import TuneRequest, TuningConfig, tune
+from rvmsim.tune import TuneRequest, tune
+from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore
 
 from ..conftest import SCENES

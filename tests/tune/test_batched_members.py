@@ -16,8 +16,8 @@ from rvmsim.render import cached_render
 from rvmsim.robust import draw_samples, sample_images, variation_from_scene
 from rvmsim.runs import RunStore
 from rvmsim.scene import load_scene
-from rvmsim.tune import (Member, SearchSettings, TuningConfig, make_strategy, members_scorer,
-                         score_params, search_scene)
+from rvmsim.tune import Member, SearchSettings, members_scorer, score_params, search_scene
+from rvmsim.search import TuningConfig, make_strategy
 
 from .test_robust import small  # noqa: F401 - the fixture (a small scene, its own cache)
 

@@ -17,7 +17,7 @@ from rvmsim.percar import ImagePicture, SplitEvaluator, make_law
 from rvmsim.pipeline import record_output
 from rvmsim.render import render_fisheye
 from rvmsim.runs.records import RunSettings
-from rvmsim.tune import TuningConfig
+from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process
 from .test_robust import small  # noqa: F401 - the fixture (a small scene, its own cache)

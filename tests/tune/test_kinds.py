@@ -13,8 +13,8 @@ import yaml
 from rvmsim.compensation import DEFAULT_COMPENSATION
 from rvmsim.runs import RunSettings
 from rvmsim.runs.records import SceneRef
-from rvmsim.tune import (Compensated, Markets, Robust, Shared, Single, TuneRequest,
-                         TuningConfig, member_set, tune)
+from rvmsim.tune import Compensated, Markets, Robust, Shared, Single, TuneRequest, member_set, tune
+from rvmsim.search import TuningConfig
 from rvmsim.tune.markets import market_summary_lines
 from rvmsim.tune.shared import shared_problem_lines
 

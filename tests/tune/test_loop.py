@@ -23,7 +23,7 @@ def test_batches_split_into_shrinking_chunks_that_cover_them():
 
 def _problem():
     from rvmsim.criteria import default_criteria
-    from rvmsim.tune import TuningConfig
+    from rvmsim.search import TuningConfig
 
     from ..conftest import small_render
 
@@ -37,8 +37,8 @@ def _problem():
 def test_search_scene_is_the_loop_over_the_config_strategy_and_evaluator():
     """search_scene = make_strategy + run_search with score_vectors, on one process or two."""
     from rvmsim.criteria import CandidateEvaluator
-    from rvmsim.tune import (SearchOptions, SearchSettings, make_strategy, run_search,
-                             score_vectors, search_scene)
+    from rvmsim.tune import SearchOptions, SearchSettings, run_search, score_vectors, search_scene
+    from rvmsim.search import make_strategy
     from rvmsim.runs import RunStore, StopReason
 
     images, config, criteria = _problem()

@@ -13,9 +13,9 @@ from rvmsim.errors import RvmsimError
 from rvmsim.isp import OutputSpec
 from rvmsim.pipeline import make_evaluator
 from rvmsim.tune import (Aggregate, EcSolver, Member, MembersScorer, MembersSolver, SearchOptions,
-                         SearchSettings, TuningConfig, check_members, make_strategy,
-                         parse_aggregate, score_params, score_vectors, search_members,
-                         search_scene, worst_ec_json)
+                         SearchSettings, check_members, parse_aggregate, score_params,
+                         score_vectors, search_members, search_scene, worst_ec_json)
+from rvmsim.search import TuningConfig, make_strategy
 from rvmsim.runs import RunStore, ec_json
 
 from ..conftest import small_render

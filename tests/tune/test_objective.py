@@ -12,7 +12,8 @@ import pytest
 from rvmsim.criteria import CandidateEvaluator, criteria_from_text
 from rvmsim.isp import OutputSpec
 from rvmsim.pipeline import evaluate_params
-from rvmsim.tune import OBJECTIVE_FLOOR, default_space, score_vectors
+from rvmsim.tune import OBJECTIVE_FLOOR, score_vectors
+from rvmsim.search import default_space
 from rvmsim.runs import ecs_from_json
 
 from ..conftest import small_render

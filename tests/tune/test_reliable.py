@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from rvmsim.criteria import default_criteria, score_batch
-from rvmsim.tune import (MAX_VIOLATION, CmaEs, CmaEsSolved, TuningConfig, default_space,
-                         make_strategy, run_search, solver_for, strategy_scorer, violations)
+from rvmsim.tune import MAX_VIOLATION, run_search, solver_for, strategy_scorer, violations
+from rvmsim.search import CmaEs, CmaEsSolved, TuningConfig, default_space, make_strategy
 from rvmsim.runs import RunStore
 
 from ..conftest import small_render

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from rvmsim.scene import load_scene
-from rvmsim.tune import TuneRequest, TuningConfig, tune
+from rvmsim.tune import TuneRequest, tune
+from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore
 
 from ..cli_runner import run_in_process, start_in_child

@@ -17,8 +17,8 @@ import pytest
 import yaml
 
 from rvmsim.batch import portable_scene_doc, tune_task
-from rvmsim.tune import (STRATEGIES, Strategy, TuneRequest, TuningConfig, register_strategy,
-                         resume, tune)
+from rvmsim.tune import TuneRequest, resume, tune
+from rvmsim.search import STRATEGIES, Strategy, TuningConfig, register_strategy
 from rvmsim.runs import RunStatus, RunStore, StopReason, run_settings, status_lines
 
 from ..cli_runner import run_in_process, start_in_child

@@ -18,7 +18,8 @@ from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.report import write_report
 from rvmsim.scene import load_scene
-from rvmsim.tune import TuneRequest, TuningConfig, resume, tune
+from rvmsim.tune import TuneRequest, resume, tune
+from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore, rank_params_text, status_lines
 
 from ..cli_runner import run_in_process, start_in_child

@@ -11,7 +11,8 @@ from rvmsim import labels as L
 from rvmsim.criteria import criteria_from_text, default_criteria
 from rvmsim.isp import OutputSpec
 from rvmsim.pipeline import evaluate_params
-from rvmsim.tune import EcSolver, TuningConfig
+from rvmsim.tune import EcSolver
+from rvmsim.search import TuningConfig
 
 from ..conftest import small_render
 

@@ -11,7 +11,8 @@ from rvmsim import labels as L
 from rvmsim.criteria import default_criteria
 from rvmsim.errors import CriteriaError
 from rvmsim.isp import IspParams
-from rvmsim.tune import EcSolver, MembersSolver, TuningConfig
+from rvmsim.tune import EcSolver, MembersSolver
+from rvmsim.search import TuningConfig
 from rvmsim.tune.stacked_solve import StackedSolves
 
 from .test_batched_members import members  # noqa: F401 - the fixture

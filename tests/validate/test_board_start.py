@@ -10,7 +10,8 @@ from rvmsim.camera import rotation_from_ypr
 from rvmsim.render import render_fisheye
 from rvmsim.scene import checker_corners
 from rvmsim.validate import (BoardShade, ValidationSettings, board_layout, find_board_start,
-                             validate, ypr_from_rotation)
+                             validate)
+from rvmsim.camera import ypr_from_rotation
 from rvmsim.validate.capture import grey
 from rvmsim.validate.landmarks import visible_landmarks
 from rvmsim.validate.pose import PoseSearch, find_pose
