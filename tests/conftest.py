@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from rvmsim.testing.captures import BAIC
+
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 if os.environ.get("PYTEST_XDIST_WORKER"):
     # pytest-xdist already runs one test process per core: one thread per library in each
@@ -20,6 +22,11 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
+
+#: Tests of the real BAIC EU5 capture run where it is (``rvmsim.testing.captures.BAIC``).
+needs_real = pytest.mark.skipif(not BAIC.is_file(),
+                                reason=f"real capture not found at {BAIC} "
+                                       "(set RVMSIM_REAL_CAPTURES)")
 
 #: Test folders whose files share fixtures of package or session scope (a sweep run and a
 #: Dask cluster, rendered board views, a tuning run and a browser): under pytest-xdist

@@ -14,7 +14,7 @@ from rvmsim import labels as L
 
 from .cli_runner import run_in_process
 from .conftest import SCENES
-from .scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 
 def test_render_writes_color_labels_preview_and_metadata(tmp_path):

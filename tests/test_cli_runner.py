@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from .cli_runner import MEMORY_CAP_BYTES, REPO, child_env, run_in_child, run_in_process
-from .scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 
 @pytest.fixture

@@ -140,6 +140,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("batch", "validate", "calibrate", "eol"),
     ("report",),
     ("console",),
+    ("testing",),  # what tests and benchmarks share: nothing in the product imports it
     ("cli", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}

@@ -30,7 +30,7 @@ import pytest
 from rvmsim.runs import RunStatus, RunStore
 
 from .cli_runner import REPO, child_env, run_in_process, start_in_child
-from .scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 #: The guarantee: every child has ended this long after its parent (s).
 GRACE_S = 2.0

@@ -24,7 +24,6 @@ import time
 from pathlib import Path
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import numpy as np  # noqa: E402
 from _bench_common import cpu_model  # noqa: E402
@@ -33,7 +32,7 @@ import rvmsim.validate as V  # noqa: E402
 from rvmsim.errors import RvmsimError  # noqa: E402
 from rvmsim.render import cached_render  # noqa: E402
 from rvmsim.scene import Scene  # noqa: E402
-from tests.validate import captures as T  # noqa: E402
+from rvmsim.testing import captures as T  # noqa: E402
 
 POS_M, ANG_DEG = 0.3, 10.0
 MAX_MM, MAX_DEG = 5.0, 0.1

@@ -2,7 +2,7 @@
 
     python tools/bench_eol.py [--cars 20] [--seed 0] [--keep DIR]
 
-The station of the tests (``tests/eol/stations.py``: bundled vehicle A, 1280 × 960, a
+The station of the tests (``rvmsim/testing/stations.py``: bundled vehicle A, 1280 × 960, a
 station mat of 0.3 m squares behind the car, vehicle A's tuned setting) and ``--cars`` cars
 whose camera mount deviates uniformly within ±1° and ±5 mm on every axis (seeded).  Each
 car's capture is the station rendered from its camera (through the render cache).  Then:
@@ -30,7 +30,6 @@ import time
 from pathlib import Path
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import numpy as np  # noqa: E402
 
@@ -46,7 +45,7 @@ from rvmsim.eol import (StationSettings, run_station, station_load,  # noqa: E40
 from rvmsim.report import write_eol_page  # noqa: E402
 from rvmsim.robust import (CarJudge, MountSample, nominal_sample, refolder,  # noqa: E402
                            sample_images, station_twin, variation_from_scene)
-from tests.eol import stations as S  # noqa: E402
+from rvmsim.testing import stations as S  # noqa: E402
 
 
 def _deviations(n: int, seed: int) -> list[Deviation]:

@@ -21,8 +21,8 @@ negation), and ``rvmsim.validate.validate`` runs from each with
 - **crash**: any other exception (a bug: the command would end in a traceback).
 
 Captures (``--cases``, comma-separated names or groups): ``hard`` (every case of
-tests/validate/hard_captures.py, or ``hard:<name>``), ``base`` and ``perturbed`` (the mat
-scene of tests/validate/captures.py, its own render and the degraded perturbed capture),
+rvmsim/testing/hard_captures.py, or ``hard:<name>``), ``base`` and ``perturbed`` (the mat
+scene of rvmsim/testing/captures.py, its own render and the degraded perturbed capture),
 ``board`` (the board-only capture), ``baic`` (the real BAIC EU5 frame; skipped when
 missing).  Prints one row per capture and the totals; ``--json`` writes every run.
 Workers are spawned processes that end when this process ends.
@@ -45,7 +45,6 @@ from pathlib import Path
 from typing import Any
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from _bench_common import cpu_model  # noqa: E402
 
@@ -93,7 +92,7 @@ def starts(n: int, corners: int, seed: int) -> list[tuple[tuple[float, ...], tup
 
 
 def _moved(mount: dict, d_pos: tuple[float, ...], d_ypr: tuple[float, ...]) -> dict:
-    from tests.validate.hard_captures import moved
+    from rvmsim.testing.hard_captures import moved
 
     return moved(mount, d_pos, d_ypr)
 
@@ -101,8 +100,8 @@ def _moved(mount: dict, d_pos: tuple[float, ...], d_ypr: tuple[float, ...]) -> d
 def _case(name: str) -> tuple[Callable[..., Any], Any, dict]:
     """(scene at a start, capture, true mount) of capture ``name`` (in a worker)."""
     from rvmsim.validate import ValidationSettings, validate
-    from tests.validate import captures as T
-    from tests.validate import hard_captures as H
+    from rvmsim.testing import captures as T
+    from rvmsim.testing import hard_captures as H
 
     if name.startswith("hard:"):
         hard = name[5:]
@@ -195,8 +194,8 @@ def _die_with_parent() -> None:
 def capture_names(spec: str) -> list[str]:
     """The captures ``--cases`` names (groups expanded; BAIC dropped when its frame is
     missing)."""
-    from tests.validate import captures as T
-    from tests.validate import hard_captures as H
+    from rvmsim.testing import captures as T
+    from rvmsim.testing import hard_captures as H
 
     names: list[str] = []
     for part in (p.strip() for p in spec.split(",") if p.strip()):

@@ -3,7 +3,7 @@
     python tools/bench_validate.py
 
 Builds the same captures as the tests in ``tests/validate/`` (their scene and degradations
-are imported from ``tests/validate/captures.py``): unperturbed, perturbed by a known pose
+are imported from ``rvmsim/testing/captures.py``): unperturbed, perturbed by a known pose
 error with other textures and sensor effects, a scene 60 mm / 3° off, and the real BAIC EU5
 frame with the bundled scene and from its README's rough pose.  Prints the landmark errors, the recovered pose error
 against the truth, and the seconds per validation (render excluded, re-render included).
@@ -13,18 +13,15 @@ from __future__ import annotations
 
 import os
 import platform
-import sys
 import time
-from pathlib import Path
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from _bench_common import cpu_model  # noqa: E402
 
 import rvmsim.validate as V  # noqa: E402
 from rvmsim.render import render_fisheye  # noqa: E402
-from tests.validate import captures as T  # noqa: E402
+from rvmsim.testing import captures as T  # noqa: E402
 
 
 def show(name: str, res: V.Validation, seconds: float) -> None:

@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from ..cli_runner import run_in_process
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 #: The file name of the small scene (vehicle A on a 320×240 sensor) in a case folder.
 SMALL_SCENE = "scene.yaml"

@@ -10,7 +10,7 @@ import pytest
 
 from rvmsim.batch import LocalExecutor, RecheckSettings, load_sweep, run_sweep
 
-from ..scenes import small_scene_text
+from rvmsim.testing.scenes import small_scene_text
 
 SWEEP = """\
 name: tiny mount study

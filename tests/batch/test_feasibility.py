@@ -18,7 +18,7 @@ from rvmsim.criteria import criteria_from_text, default_criteria
 from rvmsim.render import cached_render
 from rvmsim.scene import scene_from_dict
 
-from ..scenes import small_scene_doc
+from rvmsim.testing.scenes import small_scene_doc
 from .conftest import write_sweep
 
 

@@ -15,7 +15,7 @@ from rvmsim.criteria import default_criteria
 from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_child, run_in_process
-from ..scenes import small_scene_text
+from rvmsim.testing.scenes import small_scene_text
 
 
 def test_local_batch_runs_good_scenes_and_reports_bad_ones(tmp_path):

@@ -11,7 +11,7 @@ from rvmsim.camera import LENS_MODELS, LensModel, make_lens, newton_undistort, r
 from rvmsim.errors import SceneError
 from rvmsim.scene import load_scene
 
-from ..scenes import load_small_scene, small_scene_text
+from rvmsim.testing.scenes import load_small_scene, small_scene_text
 
 
 class Stereographic(LensModel):

@@ -18,7 +18,7 @@ from rvmsim.isp import IspParams, OutputSpec, process
 from rvmsim.render import render_fisheye
 from rvmsim.robust import LoadState, MountSample, sample_camera
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 SCALE = 1.0
 OUTPUT = OutputSpec(1280, 720)  # the display size: thin lines wide enough to compare

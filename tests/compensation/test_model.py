@@ -9,7 +9,7 @@ from rvmsim.compensation import (DEFAULT_COMPENSATION, compensation_for, load_co
                                  measured_load_index)
 from rvmsim.errors import CompensationError
 
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 
 def test_the_three_places_a_model_is_read_from(tmp_path):

@@ -12,7 +12,7 @@ from typing import Iterator
 
 import pytest
 
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 CHROMIUM = Path("/usr/bin/chromium")
 

@@ -195,7 +195,7 @@ def test_non_loopback_host_needs_the_token(small_run, browser):
 
 
 def test_user_strings_are_shown_as_text(tmp_path, browser):
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     name = '<img src=x id=injected onerror="window.pwned=1">'
     scene = write_small_scene(tmp_path, name="scene.yaml",

@@ -40,7 +40,7 @@ def test_a_console_folder_leading_outside_is_refused(run_copy, tmp_path):
 
 
 def test_the_report_escapes_the_scene_strings(tmp_path):
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     scene = write_small_scene(tmp_path, name="scene.yaml",
                               edit={"name": "<script>alert(1)</script>",

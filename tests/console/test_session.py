@@ -43,7 +43,7 @@ def test_a_scene_starts_at_the_papers_defaults(small_run, tmp_path):
 
 def test_missing_and_wrong_sources_are_one_line_errors(tmp_path):
     from rvmsim.tune import TuneRequest, tune
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     with pytest.raises(RvmsimError, match="no such run folder or scene file"):
         open_session(tmp_path / "nope")
@@ -70,7 +70,7 @@ def test_a_run_tuned_with_a_bundled_criteria_set_opens(tmp_path):
     """A run records a bundled set by its name (``fmvss111-full``), not as a file: the
     console finds it as ``report`` does, with the run's 14 ECs."""
     from rvmsim.tune import TuneRequest, tune
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     scene = write_small_scene(tmp_path, name="scene.yaml")
     tune(TuneRequest((scene,), "random", criteria_file="fmvss111-full", budget=4),

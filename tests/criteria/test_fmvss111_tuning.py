@@ -10,7 +10,7 @@ import pytest
 from rvmsim.criteria import EC_IDS
 
 from ..cli_runner import run_in_process
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 
 def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):

@@ -17,7 +17,7 @@ from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye
 from rvmsim.scene import site_scene
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 OUT = OutputSpec(320, 180)
 

@@ -22,7 +22,7 @@ from rvmsim.render import render_fisheye
 from rvmsim.scene import build_parts
 from rvmsim.scene import BUNDLED_SITES, load_site, site_scene
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 ARCMIN = 180.0 * 60.0 / math.pi
 OUT = OutputSpec(320, 180)
@@ -222,7 +222,7 @@ def test_tune_markets_writes_one_row_per_market(tmp_path):
     import json
 
     from ..cli_runner import run_in_process
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     small = write_small_scene(tmp_path)
     out = tmp_path / "run"
@@ -250,7 +250,7 @@ def test_tune_markets_writes_one_row_per_market(tmp_path):
 ])
 def test_bad_markets_are_one_line_and_exit_2(tmp_path, args, words):
     from ..cli_runner import run_in_process
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     small = write_small_scene(tmp_path)
     res = run_in_process(["tune", small, "--budget", "4", "--out", tmp_path / "r", *args],

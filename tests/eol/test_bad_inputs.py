@@ -11,7 +11,7 @@ import pytest
 from rvmsim.compensation import Deviation
 
 from ..cli_runner import run_in_process
-from .stations import STATION_MAT, capture, write_capture, write_inputs
+from rvmsim.testing.stations import STATION_MAT, capture, write_capture, write_inputs
 
 #: What a previous run left in the output folder: must stay as it is.
 OLD = {"eol.json": '{"old": true}\n', "eol.csv": "old\n", "car.yaml": "# old\n",

@@ -12,7 +12,8 @@ from rvmsim.isp import IspParams, OutputSpec, load_params, params_to_dict
 
 from ..cli_runner import run_in_process
 from ..conftest import SCENES
-from ..validate.captures import BAIC, needs_real
+from rvmsim.testing.captures import BAIC
+from ..conftest import needs_real
 
 
 @needs_real

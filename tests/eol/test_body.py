@@ -18,8 +18,9 @@ from rvmsim.robust import nominal_sample, refolder, sample_images, variation_fro
 from rvmsim.scene import load_scene
 
 from ..conftest import SCENES
-from ..scenes import load_small_scene
-from ..validate.captures import BAIC, needs_real
+from rvmsim.testing.scenes import load_small_scene
+from rvmsim.testing.captures import BAIC
+from ..conftest import needs_real
 
 HAND = Path(__file__).with_name("baic_bumper_edge.yaml")
 

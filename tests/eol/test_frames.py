@@ -10,7 +10,7 @@ from rvmsim.eol import car_camera
 from rvmsim.eol.frames import PoseRenderer, restricted_layout
 from rvmsim.pipeline import rvm_pixels
 
-from .stations import platform, station_scene
+from rvmsim.testing.stations import platform, station_scene
 
 
 def test_the_shown_pixels_alone_render_as_in_the_whole_frame():

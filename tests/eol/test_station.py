@@ -14,7 +14,7 @@ from rvmsim.eol import Station, StationSettings
 from rvmsim.isp import load_params
 
 from ..cli_runner import run_in_process
-from .stations import capture, platform, station_scene, write_capture, write_inputs
+from rvmsim.testing.stations import capture, platform, station_scene, write_capture, write_inputs
 
 #: Cars at the corners of the tolerance box (±5 mm, ±1° on every axis).
 CORNERS = [Deviation(5, 5, 5, 1, 1, 1), Deviation(5, -5, 5, -1, 1, -1),

@@ -18,7 +18,7 @@ from rvmsim.percar import (LAWS, ImagePicture, ReferencePointsLaw, SplitEvaluato
 from rvmsim.pipeline import evaluate_params, record_output
 from rvmsim.render import render_fisheye
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 SCALE = 0.5  # a fisheye pixel is two of the 1280 × 720 image of record
 PERFECT = DEFAULT_COMPENSATION.with_station(0.0, 0.0, 0.0)

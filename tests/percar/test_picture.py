@@ -15,7 +15,7 @@ from rvmsim.percar import (EdgeWarp, ImagePicture, SplitEvaluator, TurnWarp, bod
 from rvmsim.pipeline import make_evaluator
 from rvmsim.render import render_fisheye
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 
 @pytest.fixture(scope="module")

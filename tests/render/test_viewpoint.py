@@ -12,7 +12,7 @@ from rvmsim.render import CubeView, cached_cube, cube_key, render_cubes
 from rvmsim.robust import body_pose, cover_for, draw_samples, variation_from_scene
 from rvmsim.robust.images import viewpoint_groups
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 VARIATION = {"mount": {"x_mm": {"uniform": {"half_width": 5}},
                        "yaw_deg": {"uniform": {"half_width": 1.0}}},

@@ -13,7 +13,7 @@ import pytest
 
 from ..cli_runner import run_in_process
 from ..robust.conftest import ANGLES_ONLY
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 MARKETS = ["fmvss111", "unr158"]
 

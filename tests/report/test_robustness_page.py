@@ -14,7 +14,7 @@ from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.report import write_robustness_outputs
 from rvmsim.robust import RobustnessSettings, robustness
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 from .test_run import shown_text_px
 
 #: ±1° on the mount's angles: one viewpoint, so a handful of samples cost one render.

@@ -409,7 +409,7 @@ def test_the_display_picture_is_at_the_scenes_size_of_record(tmp_path, monkeypat
     from rvmsim.tune import TuneRequest, tune
     from rvmsim.search import TuningConfig
 
-    from ..scenes import write_small_scene
+    from rvmsim.testing.scenes import write_small_scene
 
     monkeypatch.setenv("RVMSIM_CACHE", str(tmp_path / "cache"))
     scene = write_small_scene(tmp_path, edit={"display": {"rvm_image_px": [480, 270]}})

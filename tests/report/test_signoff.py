@@ -27,8 +27,8 @@ from rvmsim.tune import DISPLAY_SIZE, TuneRequest, tune
 from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process
-from ..eol.stations import write_capture, write_inputs
-from ..scenes import write_small_scene
+from rvmsim.testing.stations import write_capture, write_inputs
+from rvmsim.testing.scenes import write_small_scene
 from .test_run import _assert_self_contained, _decode_data_png, _parse
 
 #: A scene file name and vehicle name a page must escape.

@@ -10,7 +10,7 @@ import numpy as np
 from rvmsim.report.validation import SUMMARY_COLUMNS, summary_table, write_validation_summary
 from rvmsim.validate import CaptureOutcome, ValidationFailure, ValidationSettings, validate
 
-from ..validate.captures import base
+from rvmsim.testing.captures import base
 
 
 def _outcomes(tmp_path):

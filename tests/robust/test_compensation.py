@@ -17,7 +17,7 @@ from rvmsim.robust import (RobustnessSettings, SampleSet, draw_samples, robustne
                            station_readings, variation_from_scene)
 
 from ..cli_runner import run_in_process
-from ..scenes import load_small_scene, write_small_scene
+from rvmsim.testing.scenes import load_small_scene, write_small_scene
 from .conftest import ANGLES_ONLY
 from .test_robustness import settings  # noqa: F401 - the fixture
 

@@ -14,11 +14,12 @@ import yaml
 from rvmsim.criteria import default_criteria
 from rvmsim.isp import IspParams, OutputSpec, build_map, load_params, params_to_dict
 from rvmsim.render import render_fisheye
+from rvmsim.testing.stations import TUNED
 from rvmsim.robust import draw_samples, sample_camera, sample_images, variation_from_scene
 from rvmsim.scene import load_scene
 
 from ..cli_runner import run_in_process
-from ..scenes import QUARTER, write_small_scene
+from rvmsim.testing.scenes import QUARTER, write_small_scene
 
 #: ±1° on every angle, ±4 mm on every position axis (rendered at ±2 mm), two load states.
 VARIATION = {"mount": {**{a: {"uniform": {"half_width": 1.0}}
@@ -136,7 +137,7 @@ def test_a_compensated_sample_exports_its_own_values_and_reproduces_its_verdict(
     # half the sensor: a fisheye pixel is two of the 1280 × 720 image of record, so a fresh
     # render's label borders move EC 2-3 by a few px at most (a quarter: by up to 8)
     write_small_scene(tmp_path, "a", 0.5, name="scene.yaml", variation=VARIATION)
-    tuned, _ = load_params(Path(__file__).parents[1] / "eol" / "vehicle_a_tuned.yaml")
+    tuned, _ = load_params(TUNED)
     (tmp_path / "params.yaml").write_text(yaml.safe_dump(params_to_dict(
         tuned.for_input_scale(0.5), OUTPUT)))
     (tmp_path / "comp.yaml").write_text("station: {angle_sigma_deg: 0, position_sigma_mm: 0, "

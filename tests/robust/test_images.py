@@ -15,7 +15,7 @@ from rvmsim.robust import (LoadState, MountSample, body_pose, draw_samples, samp
 from rvmsim.scene import checker_corners
 from rvmsim.validate.landmarks import spacing_px, usable_corners
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 from .conftest import ANGLES_ONLY
 
 

@@ -19,7 +19,7 @@ from rvmsim.robust import nominal_sample, refolder, sample_images, variation_fro
 from rvmsim.scene import site_scene
 
 from ..cli_runner import run_in_process
-from ..scenes import load_small_scene, write_small_scene
+from rvmsim.testing.scenes import load_small_scene, write_small_scene
 from .conftest import ANGLES_ONLY
 
 OUTPUT = OutputSpec(640, 360)

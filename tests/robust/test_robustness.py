@@ -16,7 +16,7 @@ from rvmsim.report import write_robustness_outputs
 from rvmsim.robust import RobustnessSettings, robustness
 
 from ..cli_runner import run_in_process
-from ..scenes import load_small_scene, write_small_scene
+from rvmsim.testing.scenes import load_small_scene, write_small_scene
 from .conftest import ANGLES_ONLY, ROOT
 
 OUTPUT = OutputSpec(640, 360)

@@ -10,7 +10,7 @@ from rvmsim.errors import SceneError, VariationError
 from rvmsim.robust import load_variation, variation_from_scene
 from rvmsim.scene import load_scene
 
-from ..scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 from .conftest import ROOT
 
 GOOD = """\

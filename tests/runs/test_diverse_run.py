@@ -18,7 +18,7 @@ from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore, diverse_candidates, rank_params_text, status_lines
 
 from ..cli_runner import run_in_process
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 10, "batch": 50,
           "diverse": {"min_distance": 0.08}}

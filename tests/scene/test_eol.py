@@ -9,7 +9,7 @@ from rvmsim.errors import SceneError
 from rvmsim.render import scene_key
 from rvmsim.scene import load_scene, scene_from_dict, station_scene, station_target
 
-from ..scenes import SCENES, small_scene_doc
+from rvmsim.testing.scenes import SCENES, small_scene_doc
 
 MAT = {"name": "station mat", "origin": [-3.0, 0.3], "square_size": 0.3,
        "checker": [[0, 0, 6, 2.4]]}

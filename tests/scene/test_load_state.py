@@ -15,7 +15,7 @@ from rvmsim.robust import RobustnessSettings
 from rvmsim.isp import IspParams
 from rvmsim.scene import build_parts, scene_from_dict
 
-from ..scenes import load_small_scene, small_scene_doc
+from rvmsim.testing.scenes import load_small_scene, small_scene_doc
 from .conftest import minimal_scene
 
 FULL = {"name": "full load", "height_mm": -45.0, "pitch_deg": 0.9}

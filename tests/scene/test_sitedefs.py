@@ -22,7 +22,7 @@ from rvmsim.scene.placement import scene_vehicle_width, site_scene
 from rvmsim.scene.sitedefs import (BUNDLED_SITES, SiteError, bundled_site, load_site,
                                    place_objects, scene_site, scene_sites)
 
-from ..scenes import SCENES, load_small_scene, small_scene_doc
+from rvmsim.testing.scenes import SCENES, load_small_scene, small_scene_doc
 
 FT, INCH = 0.3048, 0.0254
 

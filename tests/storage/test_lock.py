@@ -23,7 +23,7 @@ from rvmsim.storage import FolderLock, Writer
 
 from ..bad_input.harness import folder_digest
 from ..cli_runner import Outcome, run_in_process, start_in_child
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 SMALL_SCENE = "scene.yaml"
 CONFIG = {"tuned": ["fov", "rad", "zoom", "adv_v_shift"], "batch": 40, "top_m": 5,

@@ -39,7 +39,7 @@ def test_each_sample_is_judged_with_the_values_its_law_writes():
     from rvmsim.tune.robust import robust_members
 
     from ..percar.test_law import SCALE
-    from ..scenes import load_small_scene
+    from rvmsim.testing.scenes import load_small_scene
 
     scene = load_small_scene("d", SCALE)
     good, _ = load_params(Path(__file__).parents[1] / "percar" / "vehicle_d_tuned.yaml")

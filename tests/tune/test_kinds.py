@@ -18,7 +18,7 @@ from rvmsim.search import TuningConfig
 from rvmsim.tune.markets import market_summary_lines
 from rvmsim.tune.shared import shared_problem_lines
 
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 DISPLAY = {"display": {"rvm_image_px": [320, 180]}}
 CONFIG = {"tuned": ["zoom", "adv_v_shift", "adv_v_scale"], "output": {"size": [160, 90]},

@@ -19,7 +19,7 @@ from rvmsim.scene import bundled_site, load_scene, site_scene
 
 from ..cli_runner import run_in_process, start_in_child
 from .common import stored_trials, wait_for_trials
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 #: The RVM image of record of the small scenes (their search size: quick).
 DISPLAY = {"display": {"rvm_image_px": [320, 180]}}

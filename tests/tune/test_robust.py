@@ -19,7 +19,7 @@ from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore
 
 from ..cli_runner import run_in_process, start_in_child
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 3}
 

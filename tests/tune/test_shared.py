@@ -24,7 +24,7 @@ from rvmsim.runs import RunStore, rank_params_text, status_lines
 
 from ..cli_runner import run_in_process, start_in_child
 from .common import stored_trials, wait_for_trials
-from ..scenes import write_small_scene
+from rvmsim.testing.scenes import write_small_scene
 
 CONFIG = {"output": {"size": [320, 180]}, "batch": 20}
 

@@ -16,9 +16,9 @@ from rvmsim.validate.capture import grey
 from rvmsim.validate.landmarks import visible_landmarks
 from rvmsim.validate.pose import PoseSearch, find_pose
 
-from .captures import (BOARD_MOUNT, BOARD_SQUARE_M, MOUNT, board_capture, board_scene,
-                       base, make_scene, moved_mount, perturbed, perturbed_mount,
-                       scene_dict)
+from rvmsim.testing.captures import (BOARD_MOUNT, BOARD_SQUARE_M, MOUNT, board_capture,
+                                     board_scene, base, make_scene, moved_mount, perturbed,
+                                     perturbed_mount, scene_dict)
 
 
 def _pose_error(res, mount: dict) -> tuple[np.ndarray, np.ndarray]:

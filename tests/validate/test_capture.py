@@ -10,7 +10,7 @@ from rvmsim.errors import RvmsimError
 from rvmsim.validate import load_capture
 from rvmsim.validate.capture import check_capture_size
 
-from .captures import base
+from rvmsim.testing.captures import base
 
 
 def test_load_capture_formats(tmp_path):

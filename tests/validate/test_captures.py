@@ -14,7 +14,7 @@ from rvmsim.errors import RvmsimError
 from rvmsim.validate import (CaptureOutcome, Validation, capture_files, capture_folders,
                              validate_captures)
 
-from .captures import make_scene, scene_dict
+from rvmsim.testing.captures import make_scene, scene_dict
 
 
 def test_capture_files_expand_folders_by_name_and_keep_files(tmp_path: Path):

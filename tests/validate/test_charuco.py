@@ -18,7 +18,7 @@ from rvmsim.validate.capture import grey
 from rvmsim.validate.charuco import detect_charuco
 
 from ..conftest import ROOT
-from .captures import degrade
+from rvmsim.testing.captures import degrade
 
 BOARD_ONLY = ROOT / "docs" / "examples" / "board_only.yaml"
 #: 7 × 10 squares of 0.08 m with 0.06 m markers (10 rows: cv2's legacy square order), 1 m

@@ -12,7 +12,7 @@ import pytest
 from rvmsim.scene import load_scene
 
 from ..cli_runner import Outcome, run_in_process
-from .captures import perturbed, write_scene
+from rvmsim.testing.captures import perturbed, write_scene
 
 
 def _run(*args: str, env: dict | None = None) -> Outcome:
@@ -118,7 +118,7 @@ def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path, cache_env)
 def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
     """A folder plus a file: three captures, one passing (the scene's own frame), one failing
     its checks (the perturbed capture), one unrelated (an error, with its pictures)."""
-    from .captures import base
+    from rvmsim.testing.captures import base
 
     folder = tmp_path / "caps"
     folder.mkdir()
@@ -158,7 +158,7 @@ def test_cli_several_captures_a_failure_whose_pictures_cannot_be_written_is_a_ro
     """Several captures: one fails detection and its output folder cannot be made (a file
     is in the way). It is that capture's ERROR row and one line, not a traceback, and the
     other capture is still validated."""
-    from .captures import base
+    from rvmsim.testing.captures import base
 
     same = tmp_path / "a_same.png"
     cv2.imwrite(str(same), base()[1].color[..., ::-1])

@@ -8,7 +8,7 @@ from rvmsim import labels as L
 from rvmsim.validate import CHAMFER_TRUNCATE_PX, compare_edges
 from rvmsim.validate.edges import edge_overlay, model_mask
 
-from .captures import base
+from rvmsim.testing.captures import base
 
 
 def test_identical_images_have_no_edge_distance_and_shifts_show():

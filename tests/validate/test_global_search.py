@@ -14,8 +14,9 @@ from rvmsim.validate import Validation, ValidationSettings, validate
 from rvmsim.validate.projection import corrected_pose
 from rvmsim.validate.shade_search import search_pose_by_shade
 
-from .captures import (BAIC, MOUNT, baic, base, make_scene, moved_mount, needs_real,
-                       perturbed, perturbed_mount, scene_dict)
+from rvmsim.testing.captures import (BAIC, MOUNT, baic, base, make_scene, moved_mount, perturbed,
+                                     perturbed_mount, scene_dict)
+from ..conftest import needs_real
 
 FAST = ValidationSettings(rerender=False)
 

@@ -1,4 +1,4 @@
-"""Hard board captures (tests/validate/hard_captures.py) and `validate` from hard starts on
+"""Hard board captures (rvmsim/testing/hard_captures.py) and `validate` from hard starts on
 them (issue 28): the board close and cut by the image border, at the fisheye rim, partly
 beyond the lens's field, and close boards of each symmetry kind.
 
@@ -19,8 +19,8 @@ from rvmsim import labels as L
 from rvmsim.scene import checker_corners
 from rvmsim.validate import Validation, ValidationFailure, ValidationSettings, validate
 
-from .hard_captures import (CASES, board_inner_corners, corner_view, hard_capture, hard_scene,
-                            hard_truth, whole_board_detected)
+from rvmsim.testing.hard_captures import (CASES, board_inner_corners, corner_view, hard_capture,
+                                          hard_scene, hard_truth, whole_board_detected)
 
 #: Two starts at the corners of the ±0.3 m / ±10° box: (Δposition m, Δyaw/pitch/roll °).
 HARD_STARTS = {

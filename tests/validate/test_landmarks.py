@@ -10,7 +10,7 @@ from rvmsim.errors import RvmsimError
 from rvmsim.scene import checker_corners
 from rvmsim.validate.landmarks import spacing_px, usable_corners, visible_landmarks
 
-from .captures import base, make_scene, scene_dict
+from rvmsim.testing.captures import base, make_scene, scene_dict
 
 
 def test_checker_corners_project_like_cv2_and_lie_on_rendered_saddles():

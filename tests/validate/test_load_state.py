@@ -9,7 +9,7 @@ import pytest
 from rvmsim.render import render_fisheye
 from rvmsim.validate import ValidationSettings, validate
 
-from .captures import make_scene, scene_dict
+from rvmsim.testing.captures import make_scene, scene_dict
 
 FULL = {"name": "full load", "height_mm": -45.0, "pitch_deg": 0.9}
 

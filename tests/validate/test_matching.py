@@ -7,7 +7,7 @@ import numpy as np
 from rvmsim.validate import find_landmarks
 from rvmsim.validate.landmarks import visible_landmarks
 
-from .captures import base, perturbed_validation
+from rvmsim.testing.captures import base, perturbed_validation
 
 
 def test_corners_of_the_synthetic_frame_are_found_where_predicted():

@@ -12,7 +12,7 @@ from rvmsim.storage import json_default
 from rvmsim.report import write_validation_outputs as write_outputs
 from rvmsim.validate.outputs import blend, landmark_picture
 
-from .captures import perturbed_validation
+from rvmsim.testing.captures import perturbed_validation
 
 
 def test_write_outputs_writes_json_page_and_pictures(tmp_path):

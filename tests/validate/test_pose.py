@@ -17,8 +17,9 @@ from rvmsim.validate.landmarks import visible_landmarks
 from rvmsim.validate.pose import GroundShade, dense_align
 from rvmsim.validate.projection import corrected_pose, project
 
-from .captures import (BAIC, D_POS_MM, D_YPR_DEG, MOUNT, baic, baic_rough_scene, base,
-                       needs_real, perturbed, perturbed_validation, wrong_scene)
+from rvmsim.testing.captures import (BAIC, D_POS_MM, D_YPR_DEG, MOUNT, baic, baic_rough_scene,
+                                     base, perturbed, perturbed_validation, wrong_scene)
+from ..conftest import needs_real
 
 
 def test_fit_pose_recovers_an_exact_correction():

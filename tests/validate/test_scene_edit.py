@@ -9,7 +9,7 @@ from rvmsim.errors import SceneError
 from rvmsim.scene import load_scene
 from rvmsim.validate import PoseCorrection, scene_with_mount, write_corrected_scene
 
-from .captures import base, scene_dict
+from rvmsim.testing.captures import base, scene_dict
 
 CORRECTION = PoseCorrection((1.0, 2.0, 3.0), 0.1, 0.2, 0.3, (0, 0, 0), (0, 0, 0),
                             (0.021, -0.968, -0.117), 0.6, 36.2, -0.2)

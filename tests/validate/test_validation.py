@@ -8,7 +8,8 @@ import pytest
 from rvmsim.errors import RvmsimError
 from rvmsim.validate import ValidationSettings, validate
 
-from .captures import BAIC, baic, base, needs_real, perturbed
+from rvmsim.testing.captures import BAIC, baic, base, perturbed
+from ..conftest import needs_real
 
 
 def test_unperturbed_capture_gives_no_correction():

@@ -1,4 +1,4 @@
-"""Small scenes for tests: a bundled vehicle on a fraction of its sensor.
+"""Small scenes for tests and benchmarks: a bundled vehicle on a fraction of its sensor.
 
 Every test that wants a quick render builds its scene here, so every small scene is the
 bundled one with the sensor resampled the way ``rvmsim render --scale`` resamples it
@@ -27,7 +27,10 @@ import yaml
 
 from rvmsim.scene import Scene, scene_from_dict
 
-SCENES: Final = Path(__file__).resolve().parent.parent / "scenes"
+#: The source checkout these helpers serve (they read its bundled scenes).
+ROOT: Final = Path(__file__).resolve().parents[2]
+#: The bundled scenes' folder.
+SCENES: Final = ROOT / "scenes"
 #: The default fraction of the sensor: 1280 × 960 → 320 × 240 px.
 QUARTER: Final = 0.25
 #: ``variation=KEEP``: the bundled scene's own ``variation`` section stays.

@@ -1,4 +1,4 @@
-"""The small scenes of the tests (tests/scenes.py): every bundled vehicle on a fraction of its
+"""The small scenes of the tests (rvmsim/testing/scenes.py): every bundled vehicle on a fraction of its
 sensor is the camera ``rvmsim render --scale`` makes, whatever form its intrinsics take."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import yaml
 
 from rvmsim.scene import load_scene
 
-from .conftest import bundled_scene
-from .scenes import apply_edits, load_small_scene, small_scene_doc, write_small_scene
+from ..conftest import bundled_scene
+from rvmsim.testing.scenes import apply_edits, load_small_scene, small_scene_doc, write_small_scene
 
 LETTERS = "abcdef"  # fx/fy; fx/fy/cx/cy; horizontal fov; K; mm and µm; a mesh bumper
 

@@ -29,8 +29,8 @@ from scipy.spatial.transform import Rotation
 from rvmsim.render import FisheyeImages, render_fisheye
 from rvmsim.scene import Scene
 
-from ..conftest import SCENES
 from .captures import degrade, make_scene
+from .scenes import SCENES
 
 #: The squares stand this far in front of an upright board's plate, and a ground board's
 #: plate lies this far above the ground (m; rvmsim/scene/site.py's BOARD_SQUARE_LIFT_M and

@@ -1,5 +1,4 @@
-"""The captures the validation tests use (not a test module; tools/bench_validate.py uses it
-too): synthetic captures from perturbed scenes with known pose errors (rendered with
+"""The captures the validation tests and benchmarks use: synthetic captures from perturbed scenes with known pose errors (rendered with
 pyrender, then degraded like a real sensor), and the real BAIC EU5 frame in
 ../shared/reference/real-captures."""
 
@@ -9,10 +8,10 @@ import copy
 import functools
 import os
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
-import pytest
 import yaml
 
 from rvmsim import labels as L
@@ -20,7 +19,7 @@ from rvmsim.render import FisheyeImages, render_fisheye
 from rvmsim.scene import Scene, checker_corners, load_scene, scene_from_dict
 from rvmsim.validate import Validation, ValidationSettings, load_capture, validate
 
-from ..conftest import ROOT, SCENES
+from .scenes import ROOT, SCENES
 
 
 def _real_captures() -> Path:
@@ -37,11 +36,7 @@ def _real_captures() -> Path:
 
 BAIC = _real_captures() / "baic-eu5-rear" / "back.png"
 
-needs_real = pytest.mark.skipif(not BAIC.is_file(),
-                                reason=f"real capture not found at {BAIC} "
-                                       "(set RVMSIM_REAL_CAPTURES)")
-
-MOUNT = {"position": [0.02, -0.97, -0.12], "yaw_deg": 0.5, "pitch_deg": 36.0, "roll_deg": -0.3}
+MOUNT: dict[str, Any] = {"position": [0.02, -0.97, -0.12], "yaw_deg": 0.5, "pitch_deg": 36.0, "roll_deg": -0.3}
 #: The pose error of the perturbed capture: mm and degrees.
 D_POS_MM = (6.0, -4.0, 8.0)
 D_YPR_DEG = (0.8, -0.7, 0.5)
@@ -107,7 +102,7 @@ def _paving(shape: tuple[int, int], seed: int) -> np.ndarray:
 def degrade(color: np.ndarray, labels: np.ndarray, seed: int = 0) -> np.ndarray:
     """Sensor-like capture: other ground texture, other exposure and gamma, vignetting,
     blur and noise."""
-    img = color.astype(np.float32)
+    img: np.ndarray = color.astype(np.float32)
     ground = labels == L.GROUND
     img[ground] *= _paving(labels.shape, seed)[ground][:, None] * 1.2
     img = 255.0 * (np.clip(img, 0, 255) / 255.0) ** 1.25 * 0.8 + 6.0  # exposure, gamma, black
@@ -116,7 +111,7 @@ def degrade(color: np.ndarray, labels: np.ndarray, seed: int = 0) -> np.ndarray:
     r2 = ((xx - w / 2) ** 2 + (yy - h / 2) ** 2) / (w / 2) ** 2
     img *= (1.0 - 0.35 * r2)[..., None]
     img = cv2.GaussianBlur(img, (0, 0), 0.8)
-    img += np.random.default_rng(seed).normal(0, 4.0, img.shape)
+    np.add(img, np.random.default_rng(seed).normal(0, 4.0, img.shape), out=img)  # as +=
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
@@ -180,7 +175,7 @@ def write_scene(tmp_path: Path, mount: dict = MOUNT, name: str = "mat.yaml") -> 
 
 
 #: The board-only scene's true mount and board (7 × 9 squares of 0.08 m: 48 inner corners).
-BOARD_MOUNT = {"position": [0.03, -1.0, -0.1], "yaw_deg": 1.0, "pitch_deg": 25.0,
+BOARD_MOUNT: dict[str, Any] = {"position": [0.03, -1.0, -0.1], "yaw_deg": 1.0, "pitch_deg": 25.0,
                "roll_deg": 0.5}
 BOARD_SQUARE_M = 0.08
 

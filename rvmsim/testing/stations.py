@@ -20,7 +20,7 @@ from rvmsim.eol import synthetic_capture
 from rvmsim.isp import IspParams, OutputSpec, load_params, params_to_dict
 from rvmsim.scene import Scene, scene_from_dict
 
-from ..scenes import SCENES, small_scene_doc
+from .scenes import SCENES, small_scene_doc
 
 HERE = Path(__file__).resolve().parent
 #: Vehicle A's tuned platform setting (full sensor).
