@@ -60,7 +60,7 @@ def test_the_file_loads_anywhere_and_keeps_everything_else(tmp_path: Path) -> No
 
 def test_variation_kept_removed_or_replaced() -> None:
     assert small_scene_doc("a")["variation"] == yaml.safe_load(
-        (Path(__file__).parents[1] / "scenes" / "vehicle_a.yaml").read_text())["variation"]
+        (Path(__file__).parents[2] / "scenes" / "vehicle_a.yaml").read_text())["variation"]
     assert "variation" not in small_scene_doc("a", variation=None)
     mine = {"mount": {"yaw_deg": {"uniform": {"half_width": 2.0}}}}
     assert small_scene_doc("a", variation=mine)["variation"] == mine
