@@ -25,33 +25,42 @@ robust run's samples is its *limiting* EC.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
-from ..render import cached_render
+from ..compensation import measured_load_index
+from ..criteria import (Criteria, check_supported, criteria_reference, load_criteria,
+                        record_size)
+from ..errors import RvmsimError
+from ..markets import market_criteria, parse_markets
+from ..percar import check_law
+from ..render import cached_render, scene_key
 from ..runs.records import RunSettings
 from ..runs.store import RunStore
-from ..scene import Scene
+from ..scene import Scene, load_scene
+from ..search.config import TuningConfig
 from .loop import SearchOutcome, search_members, search_scene
-from .markets import market_problem_lines, market_table_lines, markets_members, write_market_results
-from .members import Member
-from .requests import SearchOptions, SearchSettings
-from .robust import robust_line, robust_members, run_compensation, write_robust_results
-from .shared import scene_members, shared_problems, write_member_results
+from .markets import (check_market_arguments, market_problem_lines, market_table_lines,
+                      markets_members, write_market_results)
+from .members import Member, check_cameras, parse_aggregate
+from .requests import SearchOptions, SearchSettings, TuneRequest
+from .robust import (ROBUST_AGGREGATE, check_samples, robust_line, robust_members,
+                     run_compensation, run_variations, variation_key, write_robust_results)
+from .shared import (load_shared_scenes, scene_members, shared_problems, shared_settings,
+                     write_member_results)
 from .results import write_results
 
 if TYPE_CHECKING:
     from ..compensation import CompensationModel
-    from ..criteria import Criteria
     from ..markets import MarketMember
     from ..render import FisheyeImages
-    from ..search.config import TuningConfig
     from ..search.strategies import Strategy
 
 __all__ = ["Verdict", "Built", "MemberSet", "Single", "Shared", "Robust", "Compensated",
-           "Markets", "member_set"]
+           "Markets", "member_set", "new_run_settings"]
 
 
 @dataclass(frozen=True)
@@ -136,6 +145,29 @@ class Single:
     settings: RunSettings
     name: str = "single"
 
+    @classmethod
+    def new_settings(cls, r: TuneRequest, aggregate: str
+                     ) -> tuple[RunSettings, list[Scene], Criteria]:
+        """A new run's settings, scenes and criteria from request ``r``: its criteria (each
+        scene's support checked, :func:`_supported`), its scene loaded and fingerprinted,
+        the config at the size of record."""
+        crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
+        scene = r.scenes[0]
+        recorded: str | Path
+        if isinstance(scene, Scene):
+            sc, recorded = scene, r.scene_file or scene.source
+        else:
+            recorded, sc = scene, load_scene(scene)
+        crit, left_out = _supported(crit, [(str(recorded), sc)], r.only_supported)
+        settings = RunSettings(
+            scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
+            strategy=r.strategy, seed=r.seed, budget=r.budget,
+            criteria_file=(None if r.criteria_file is None
+                           else criteria_reference(r.criteria_file)),
+            config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
+            judged_at=record_size(crit, sc), left_out=left_out)
+        return settings, [sc], crit
+
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         return Built([cached_render(s, progress=progress)[0] for s in scenes])
 
@@ -168,6 +200,21 @@ class Shared(Single):
 
     name: str = "shared"
 
+    @classmethod
+    def new_settings(cls, r: TuneRequest, aggregate: str
+                     ) -> tuple[RunSettings, list[Scene], Criteria]:
+        """A new shared run's: every scene loaded (one sensor size), the criteria every
+        scene supports, the size of record of the first scene."""
+        crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
+        scenes = load_shared_scenes(r.scenes)
+        crit, left_out = _supported(crit, scenes, r.only_supported)
+        record = record_size(crit, scenes[0][1])
+        settings = dataclasses.replace(
+            shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
+                            (r.config or TuningConfig()).at_record(record), aggregate),
+            judged_at=record, left_out=left_out)
+        return settings, [sc for _, sc in scenes], crit
+
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         renders = super().build(scenes, progress=progress).renders
         return Built(renders, scene_members(scenes, renders))
@@ -196,6 +243,28 @@ class Robust:
     settings: RunSettings
     inner: Single
     name: str = "robust"
+
+    @staticmethod
+    def new_settings_from(settings: RunSettings, scenes: Sequence[Scene], r: TuneRequest,
+                          aggregate: str) -> RunSettings:
+        """``settings`` (a single or shared run's) made robust: the samples checked, the
+        variations checked and fingerprinted, and the compensation model recorded (its law
+        registered, its load state checked against every variation)."""
+        assert r.robust_samples is not None
+        check_samples(r.robust_samples)
+        vfile = None if r.variation_file is None else str(Path(r.variation_file).resolve())
+        variations = run_variations(scenes, vfile)
+        key = variation_key(variations)
+        compensation = r.compensation
+        if compensation is not None:
+            check_law(compensation)
+            for v in variations:
+                measured_load_index(compensation, [s.name for s in v.load_states])
+        return dataclasses.replace(settings, robust_samples=r.robust_samples,
+                                   variation_file=vfile, variation_key=key,
+                                   aggregate=aggregate,
+                                   compensation=None if compensation is None
+                                   else compensation.as_dict())
 
     @property
     def compensation(self) -> CompensationModel | None:
@@ -248,6 +317,27 @@ class Markets:
     settings: RunSettings
     name: str = "markets"
 
+    @classmethod
+    def new_settings(cls, r: TuneRequest, aggregate: str
+                     ) -> tuple[RunSettings, list[Scene], Criteria]:
+        """A new markets run's settings, scenes and its first market's criteria (no
+        criteria of its own, no ``--robust``: :func:`check_market_arguments`)."""
+        check_market_arguments(r.markets if isinstance(r.markets, str)
+                               else ",".join(r.markets or ()),
+                               r.criteria is not None or r.criteria_file is not None,
+                               r.robust_samples is not None)
+        markets = parse_markets(r.markets or ())
+        loaded = [(str(r.scene_file or s.source) if isinstance(s, Scene) else str(s),
+                   s if isinstance(s, Scene) else load_scene(s)) for s in r.scenes]
+        check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in loaded])
+        crit = market_criteria(markets[0])
+        record = record_size(crit, loaded[0][1])
+        settings = dataclasses.replace(
+            shared_settings(loaded, r.strategy, r.seed, r.budget, None,
+                            (r.config or TuningConfig()).at_record(record), aggregate),
+            judged_at=record, markets=tuple(m.spec for m in markets))
+        return settings, [sc for _, sc in loaded], crit
+
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         pairs, renders, members = markets_members(scenes, self.settings, progress=progress)
         return Built(renders, members, pairs)
@@ -287,3 +377,32 @@ def member_set(settings: RunSettings) -> MemberSet:
     if settings.compensation is not None:
         return Compensated(settings, base)
     return Robust(settings, base)
+
+
+def new_run_settings(r: TuneRequest) -> tuple[RunSettings, list[Scene], Criteria]:
+    """A new run's settings, scenes and criteria from request ``r``, every input checked:
+    what the request asks of its kind (``--compensation`` needs ``--robust``), then the
+    kind's own checks (:meth:`Single.new_settings`, :meth:`Shared.new_settings`,
+    :meth:`Markets.new_settings`, made robust by :meth:`Robust.new_settings_from`)."""
+    aggregate = parse_aggregate(r.aggregate or (ROBUST_AGGREGATE if r.robust_samples is not None
+                                                else "min")).text
+    if r.compensation is not None and r.robust_samples is None:
+        raise RvmsimError("--compensation: tuning for the yield after compensation needs "
+                          "--robust")
+    if r.markets is not None:  # one parameter set for every market (and scene)
+        return Markets.new_settings(r, aggregate)
+    base = Shared if r.shared else Single
+    settings, scenes, crit = base.new_settings(r, aggregate)
+    if r.robust_samples is not None:
+        settings = Robust.new_settings_from(settings, scenes, r, aggregate)
+    return settings, scenes, crit
+
+
+def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_supported: bool
+               ) -> tuple[Criteria, tuple[str, ...]]:
+    """The criteria every scene supports (:func:`rvmsim.criteria.check_supported`: refused
+    before any work unless ``only_supported``) and the ECs that left out."""
+    out = crit
+    for recorded, sc in scenes:
+        out = check_supported(sc, out, recorded, only_supported=only_supported)
+    return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)

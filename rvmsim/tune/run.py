@@ -9,41 +9,35 @@ image, annotated EC image and EC table).
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Sequence
+from typing import TYPE_CHECKING, Callable
 
 from tqdm import tqdm
 
-from ..compensation import measured_load_index
-from ..criteria import (Unsupported, check_supported, criteria_reference, load_criteria,
-                        record_size, supported_criteria)
+from ..criteria import Unsupported, load_criteria, supported_criteria
 from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
-from ..percar import check_law
-from ..render import same_scene, scene_key
+from ..render import same_scene
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock, run_settings
 from ..runs.records import RunSettings, RunStatus
 from ..runs.store import RunStore
 from ..scene import Scene, load_scene
 from ..scene.display import RVM_IMAGE_OF_RECORD_PX
-from ..search.config import TuningConfig, make_strategy
+from ..search.config import make_strategy
 from ..search.strategies import Strategy, check_seed
-from .kinds import Built, MemberSet, Verdict, member_set
+from .kinds import Built, MemberSet, Verdict, member_set, new_run_settings
 from .loop import SearchOutcome
-from .markets import check_market_arguments
-from .members import check_cameras, parse_aggregate
+from .members import parse_aggregate
 from .requests import RunOptions, SearchOptions, TuneRequest
 from .resumed import ResumeArgs, check_resume_args
 from .results import remove_run
-from .robust import ROBUST_AGGREGATE, check_samples, run_variations, variation_key
-from .shared import load_shared_scenes, resumed_scenes, shared_settings
+from .robust import run_variations, variation_key
+from .shared import resumed_scenes
 
 if TYPE_CHECKING:
     from .._progress import ProgressBar
-    from ..compensation import CompensationModel
     from ..criteria import Criteria
     from ..storage import FolderLock
 
@@ -75,7 +69,8 @@ def _check_out(run_dir: Path) -> None:
 def _new_run(run_dir: Path, request: TuneRequest, force: bool
              ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
-    every input is checked here, before anything in ``run_dir`` changes)."""
+    every input is checked here, before anything in ``run_dir`` changes; each kind checks
+    its own, :func:`rvmsim.tune.kinds.new_run_settings`)."""
 
     r = request
     check_seed(r.seed)
@@ -85,95 +80,7 @@ def _new_run(run_dir: Path, request: TuneRequest, force: bool
     if not force and (run_dir / RUN_DB).exists():
         raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it, "
                           "or --force to replace it")
-    agg = parse_aggregate(r.aggregate or (ROBUST_AGGREGATE if r.robust_samples is not None
-                                          else "min")).text
-    robust = None if r.robust_samples is None else (
-        r.robust_samples, None if r.variation_file is None else str(r.variation_file))
-    if r.compensation is not None and robust is None:
-        raise RvmsimError("--compensation: tuning for the yield after compensation needs "
-                          "--robust")
-    if r.markets is not None:  # one parameter set for every market (and scene)
-        return _markets_run(r, agg)
-    crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
-    if r.shared:  # one parameter set for every scene
-        scenes = load_shared_scenes(r.scenes)
-        crit, left_out = _supported(crit, scenes, r.only_supported)
-        record = record_size(crit, scenes[0][1])
-        settings = dataclasses.replace(
-            shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
-                            (r.config or TuningConfig()).at_record(record), agg),
-            judged_at=record, left_out=left_out)
-        return (_robust_settings(settings, [sc for _, sc in scenes], robust, agg,
-                                 r.compensation), [sc for _, sc in scenes], crit)
-    scene = r.scenes[0]
-    recorded: str | Path
-    if isinstance(scene, Scene):
-        sc, recorded = scene, r.scene_file or scene.source
-    else:
-        recorded, sc = scene, load_scene(scene)
-    crit, left_out = _supported(crit, [(str(recorded), sc)], r.only_supported)
-    settings = RunSettings(
-        scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
-        strategy=r.strategy, seed=r.seed, budget=r.budget,
-        criteria_file=None if r.criteria_file is None else criteria_reference(r.criteria_file),
-        config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
-        judged_at=record_size(crit, sc), left_out=left_out)
-    return _robust_settings(settings, [sc], robust, agg, r.compensation), [sc], crit
-
-
-def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_supported: bool
-               ) -> tuple[Criteria, tuple[str, ...]]:
-    """The criteria every scene supports (:func:`rvmsim.criteria.check_supported`: refused
-    before any work unless ``only_supported``) and the ECs that left out."""
-
-    out = crit
-    for recorded, sc in scenes:
-        out = check_supported(sc, out, recorded, only_supported=only_supported)
-    return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)
-
-
-def _markets_run(r: TuneRequest, aggregate: str) -> tuple[RunSettings, list[Scene], Criteria]:
-    """A new markets run's settings, scenes and its first market's criteria
-    (:mod:`rvmsim.tune.markets`)."""
-
-    check_market_arguments(r.markets if isinstance(r.markets, str) else ",".join(r.markets or ()),
-                           r.criteria is not None or r.criteria_file is not None,
-                           r.robust_samples is not None)
-    markets = parse_markets(r.markets or ())
-    loaded = [(str(r.scene_file or s.source) if isinstance(s, Scene) else str(s),
-               s if isinstance(s, Scene) else load_scene(s)) for s in r.scenes]
-    check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in loaded])
-    crit = market_criteria(markets[0])
-    record = record_size(crit, loaded[0][1])
-    settings = dataclasses.replace(
-        shared_settings(loaded, r.strategy, r.seed, r.budget, None,
-                        (r.config or TuningConfig()).at_record(record), aggregate),
-        judged_at=record, markets=tuple(m.spec for m in markets))
-    return settings, [sc for _, sc in loaded], crit
-
-
-def _robust_settings(settings: RunSettings, scenes: Sequence[Scene],
-                     robust: tuple[int, str | None] | None, aggregate: str,
-                     compensation: CompensationModel | None = None) -> RunSettings:
-    """``settings`` made robust (``robust`` = (samples, variation file or None)), with the
-    variations checked and fingerprinted, and the compensation model recorded (its load
-    state checked against every variation); as they are without ``robust``."""
-
-    if robust is None:
-        return settings
-    samples, variation_file = robust
-    check_samples(samples)
-    vfile = None if variation_file is None else str(Path(variation_file).resolve())
-    variations = run_variations(scenes, vfile)
-    key = variation_key(variations)
-    if compensation is not None:
-        check_law(compensation)
-        for v in variations:
-            measured_load_index(compensation, [s.name for s in v.load_states])
-    return dataclasses.replace(settings, robust_samples=samples, variation_file=vfile,
-                               variation_key=key, aggregate=aggregate,
-                               compensation=None if compensation is None
-                               else compensation.as_dict())
+    return new_run_settings(r)
 
 
 def _resumed_run(run_dir: Path, given: ResumeArgs | None
