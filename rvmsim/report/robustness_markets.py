@@ -1,7 +1,7 @@
 """The robustness page of a setting in several markets (``rvmsim robustness --markets``).
 
 The yield over all markets (a car passes when it passes every market) with its 95 %
-interval, one row per market (its yield and interval, the binding EC: the one that fails
+interval, one row per market (its yield and interval, the limiting EC: the one that fails
 most often there), the setting and input files, the tolerances and the all-markets yield
 per load state; then per market what the one-market page shows (ECs over the samples,
 margins, yield curve, nominal and worst sample).  Every string from a user's files is
@@ -37,7 +37,7 @@ def _ci_cell(yield_: float, ci: tuple[float, float], n_pass: int, n: int) -> str
 
 def _market_row(m: MarketYield) -> str:
     """One row of the markets table."""
-    r, b = m.result, m.binding
+    r, b = m.result, m.limiting
     est = r.estimate
     bind = "no EC fails" if b is None else (
         f"{escape(b.id)} {escape(b.name)}: fails on {100 * b.failure_rate:.1f} % (worst "
@@ -90,7 +90,7 @@ every enabled EC of every market{badge}. Each sample is judged at each market's 
 its criteria. Variation: {escape(result.variation.source)}; seed {result.seed}.</p>
 <h2 id="markets">Yield per market</h2>
 <table><tr><th>market</th><th>title</th><th>criteria</th><th>yield</th><th>95 % interval</th>
-<th>samples passing</th><th>binding EC (fails most often)</th><th>nominal car</th></tr>
+<th>samples passing</th><th>limiting EC (fails most often)</th><th>nominal car</th></tr>
 {"".join(_market_row(m) for m in result.markets)}
 <tr class="{"pass" if est.n_pass == est.n else "fail"} all-markets"><td><b>all markets</b></td>
 <td>passes every market</td><td></td>{_ci_cell(est.yield_, est.ci, est.n_pass, est.n)}

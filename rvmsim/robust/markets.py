@@ -7,8 +7,10 @@ same car, the site's objects standing on the ground) goes through :func:`robustn
 one-market run, on the same samples (the same variation and seed), so each market's
 evaluation is the batch one of a single market.  A car passes *all markets* when it passes
 every one of them; the all-markets yield is the share of such samples, with its 95 %
-Wilson interval, and can be no larger than any market's.  A market's *binding* EC is the
-enabled EC that fails most often there (ties: the one with the least worst margin).
+Wilson interval, and can be no larger than any market's.  A market's *limiting* EC is the
+enabled EC that fails most often there (ties: the one with the least worst margin); its
+*binding* EC is, as everywhere, the one with the least score under a setting
+(:func:`rvmsim.markets.binding_ec`).
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ class MarketYield:
     result: RobustnessResult
 
     @property
-    def binding(self) -> EcStats | None:
+    def limiting(self) -> EcStats | None:
         """The enabled EC that fails on most samples (ties: the least worst margin); None
         when no EC fails."""
         failing = [e for e in self.result.ecs if e.enabled and e.n_fail]
@@ -58,11 +60,11 @@ class MarketYield:
 
     def as_dict(self) -> dict[str, Any]:
         """The market's row of robustness.json (``markets``)."""
-        r, b = self.result, self.binding
+        r, b = self.result, self.limiting
         return {"market": self.name, "title": self.title, "site": self.site,
                 "criteria": self.criteria,
                 "criteria_name": r.criteria_name, **r.estimate.as_dict(),
-                "binding": None if b is None else {
+                "limiting": None if b is None else {
                     "ec": b.id, "name": b.name, "unit": b.unit, "n_fail": b.n_fail,
                     "failure_rate": b.failure_rate, "worst_value": b.worst_value,
                     "worst_margin": b.worst_margin},
@@ -147,7 +149,7 @@ class MarketsRobustness(YieldVerdict):
 
     def summary(self) -> str:
         """A few lines for the terminal: the all-markets yield, then one line per market
-        with its yield and binding EC."""
+        with its yield and limiting EC."""
         est = self.estimate
         lo, hi = est.ci
         lines = [f"{self.scene_name}: yield over all markets {100 * est.yield_:.1f} % "
@@ -157,9 +159,9 @@ class MarketsRobustness(YieldVerdict):
         for m in self.markets:
             e = m.result.estimate
             mlo, mhi = e.ci
-            b = m.binding
+            b = m.limiting
             bind = ("no EC fails" if b is None else
-                    f"binding EC {b.id} {b.name} fails on {100 * b.failure_rate:.1f} % "
+                    f"limiting EC {b.id} {b.name} fails on {100 * b.failure_rate:.1f} % "
                     f"(worst {_num(b.worst_value)} {b.unit})")
             lines.append(f"  {m.name:<{width}}  {100 * e.yield_:5.1f} % (95 % CI "
                          f"{100 * mlo:.1f}–{100 * mhi:.1f} %)  {bind}")

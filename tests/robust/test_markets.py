@@ -101,7 +101,7 @@ def test_the_yield_per_market_and_over_all_markets(case):
     assert all(doc["yield"] <= y for y in yields)
     # different drivers (yaw/roll, pitch): some cars fail only one market, so fewer pass both
     assert 0 < doc["yield"] < min(yields) and max(yields) < 1
-    assert [m["binding"]["ec"] for m in doc["markets"]] == ["3-1", "R158-2"]
+    assert [m["limiting"]["ec"] for m in doc["markets"]] == ["3-1", "R158-2"]
     axes = {e["market"]: e["driver"] for e in doc["ecs"] if e["n_fail"]}
     assert axes["fmvss111:centring.yaml"].split("_")[0] in ("yaw", "roll")
     assert axes["unr158:row2.yaml"].startswith("pitch")
@@ -123,8 +123,8 @@ def test_the_page_and_summary_have_a_row_per_market(case):
     assert html.count("data:image/png;base64,") == 8  # per market: 2 plots, 2 frames
     lines = both.stdout.splitlines()
     assert lines[0].startswith("Vehicle A") and "yield over all markets" in lines[0]
-    assert lines[1].split()[0] == "fmvss111:centring.yaml" and "binding EC 3-1" in lines[1]
-    assert lines[2].split()[0] == "unr158:row2.yaml" and "binding EC R158-2" in lines[2]
+    assert lines[1].split()[0] == "fmvss111:centring.yaml" and "limiting EC 3-1" in lines[1]
+    assert lines[2].split()[0] == "unr158:row2.yaml" and "limiting EC R158-2" in lines[2]
 
 
 @pytest.mark.parametrize("extra, needle", [
