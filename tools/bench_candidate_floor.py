@@ -35,8 +35,9 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 import numpy as np  # noqa: E402
 from _bench_common import cpu_model, protocol_candidates  # noqa: E402
 
-from rvmsim.criteria import CandidateEvaluator, Criteria, default_criteria, record_size  # noqa: E402
-from rvmsim.criteria.evaluator import merge_windows, remap_labels  # noqa: E402
+from rvmsim.criteria import Criteria, default_criteria, record_size
+from rvmsim.pipeline import CandidateEvaluator
+from rvmsim.pipeline.candidate import merge_windows, remap_labels
 from rvmsim.isp import (IspParams, MapNodes, OutputSpec, RayCache, apply_map,  # noqa: E402
                         build_map, map_nodes)
 from rvmsim.render import cached_render  # noqa: E402

@@ -53,8 +53,8 @@ _BATCH = 256
 #: ``ECs`` is ``measure_ecs`` without the remaps it asks for.
 _CUMULATIVE = {
     "map": [("isp/map.py", "map_nodes")],
-    "windows": [("criteria/evaluator.py", "windows"), ("criteria/evaluator.py", "merge_windows")],
-    "remap": [("criteria/evaluator.py", "remap_labels")],
+    "windows": [("pipeline/candidate.py", "windows"), ("pipeline/candidate.py", "merge_windows")],
+    "remap": [("pipeline/candidate.py", "remap_labels")],
     "ECs": [("criteria/measure.py", "measure_ecs")],
     "scoring": [("tune/objective.py", "score_values"), ("runs/records.py", "params_json")],
 }

@@ -121,10 +121,6 @@ from .annotate import (
     Canvas,
     annotate,
 )
-from .evaluator import (
-    CandidateEvaluator,
-)
-from .batched import CandidateBatch
 from .record import (
     NEAR_SCORE,
     could_pass,
@@ -207,8 +203,6 @@ __all__ = [
     "FAIL",
     "OFF",
     "INK",
-    "CandidateEvaluator",
-    "CandidateBatch",
     "NEAR_SCORE",
     "record_display",
     "record_size",

@@ -4,7 +4,7 @@ An EC declares the label groups it looks at (:attr:`rvmsim.criteria.EcDefinition
 measurements then read each group inside its *window*, a box that holds every pixel of the
 group and the pixels next to them.  Whole-image measurement finds the windows from the label
 image (:func:`group_windows`); the fast tuning evaluator derives them from the ISP map
-(:class:`rvmsim.criteria.CandidateEvaluator`).  Both give windows that contain every group
+(:class:`rvmsim.pipeline.CandidateEvaluator`).  Both give windows that contain every group
 pixel, so a measurement that reads through its windows gives the same value either way.
 
 Convention: a window is ``(x0, y0, x1, y1)`` in output px, ``x1``/``y1`` exclusive; the empty

@@ -37,7 +37,8 @@ import numpy as np
 
 from .. import labels as L
 from ..camera import FisheyeCamera
-from ..criteria import CandidateEvaluator, Criteria, ec_needs
+from ..criteria import Criteria, ec_needs
+from ..pipeline import CandidateEvaluator
 from ..isp import InputWarp, IspParams, OutputSpec
 from ..pipeline import FisheyeLabels, make_evaluator
 

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from .frame import RvmFrame, evaluate_params, evaluate_rvm_labels, render_rvm, rvm_color
 from .pixels import RvmPixels, rvm_pixels
+from .candidate import CandidateEvaluator
+from .candidate_batch import CandidateBatch
 from .batched import ImagesEvaluator
 from .evaluators import (
     EvaluationPath,
@@ -30,6 +32,8 @@ from .record_rule import RecordRule
 from .files import write_evaluation, write_fisheye, write_frame, write_processed
 
 __all__ = [
+    "CandidateEvaluator",
+    "CandidateBatch",
     "ImagesEvaluator",
     "RvmFrame",
     "evaluate_params",

@@ -4,8 +4,8 @@ tuning's vehicles of one sensor size).
 
 :class:`ImagesEvaluator` takes the members' evaluators as :func:`make_evaluator` made them
 and groups those that can share a candidate's map: windowed evaluators
-(:class:`rvmsim.criteria.CandidateEvaluator`) of one fisheye size and RVM output, judged
-together by a :class:`rvmsim.criteria.CandidateBatch`; and evaluators measuring at a search
+(:class:`rvmsim.pipeline.CandidateEvaluator`) of one fisheye size and RVM output, judged
+together by a :class:`rvmsim.pipeline.CandidateBatch`; and evaluators measuring at a search
 size for a size of record (:class:`RecordEvaluator`), whose search measurements are batched
 the same way and whose undecided members are measured at the size of record in one batch
 too.  Any other evaluator is asked on its own.  The values are those of each member's own
@@ -19,8 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..criteria import CandidateBatch, CandidateEvaluator
 from ..isp import IspParams
+from .candidate import CandidateEvaluator
+from .candidate_batch import CandidateBatch
 from .evaluators import ImageEvaluator, RecordEvaluator
 
 __all__ = ["ImagesEvaluator"]

@@ -7,7 +7,7 @@ and the criteria, and picks the path from what the criteria declare:
 ==================  ==========================================================================
 source              path
 ==================  ==========================================================================
-one image           ``windowed`` (:class:`rvmsim.criteria.CandidateEvaluator`): the map's
+one image           ``windowed`` (:class:`rvmsim.pipeline.CandidateEvaluator`): the map's
                     node grid, only the windows of the label groups the ECs declare; built
                     once per image, for many candidates (tuning).
 a batch of images   ``rvm-pixels``: one map per setting, each image's labels only at the
@@ -39,10 +39,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import overload
 
-from ..criteria import CandidateEvaluator, Criteria, default_criteria, record_size
+from ..criteria import Criteria, default_criteria, record_size
 from ..isp import OutputSpec
 from ..scene import Scene
 from .batched import ImagesEvaluator
+from .candidate import CandidateEvaluator
 from .evaluators import (EvaluationPath, FisheyeLabels, FisheyeSet, FullEvaluator,
                          ImageEvaluator, RecordEvaluator, SetEvaluator)
 

@@ -6,23 +6,10 @@ import numpy as np
 import pytest
 
 from rvmsim import labels as L
-from rvmsim.criteria import (
-    EC_IDS,
-    CandidateEvaluator,
-    Criteria,
-    EcDefinition,
-    EcFailedError,
-    LabelGroup,
-    LabelSource,
-    Measurement,
-    MeasureOptions,
-    Sigmoid,
-    count_label,
-    default_criteria,
-    evaluate,
-    load_criteria,
-    load_plugin,
-)
+from rvmsim.criteria import (EC_IDS, Criteria, EcDefinition, EcFailedError, LabelGroup,
+                             LabelSource, Measurement, MeasureOptions, Sigmoid, count_label,
+                             default_criteria, evaluate, load_criteria, load_plugin)
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map
 
 from ..conftest import small_render

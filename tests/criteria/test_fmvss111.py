@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 import yaml
 
-from rvmsim.criteria import CandidateEvaluator, IspView, SceneContext, load_criteria
+from rvmsim.criteria import IspView, SceneContext, load_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye

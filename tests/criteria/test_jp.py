@@ -7,7 +7,8 @@ import functools
 
 import pytest
 
-from rvmsim.criteria import CandidateEvaluator, load_criteria
+from rvmsim.criteria import load_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.criteria.jp import ADJACENT_AREA_M, PROXIMITY_LEAST_PERCENT
 from rvmsim.criteria.siteobjects import SAMPLE_STEP_M, shown_area
 from rvmsim.isp import IspParams, OutputSpec

@@ -6,13 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rvmsim.criteria import (
-    EC_IDS,
-    CandidateEvaluator,
-    SceneContext,
-    criteria_reference,
-    load_criteria,
-)
+from rvmsim.criteria import EC_IDS, SceneContext, criteria_reference, load_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.errors import CriteriaError
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.scene import Display

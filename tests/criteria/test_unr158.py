@@ -15,7 +15,8 @@ import yaml
 
 from rvmsim import labels as L
 from rvmsim.batch.feasibility import infeasible_ecs
-from rvmsim.criteria import CandidateEvaluator, SceneContext, load_criteria
+from rvmsim.criteria import SceneContext, load_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec, input_to_output
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye

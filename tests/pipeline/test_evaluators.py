@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rvmsim.criteria import CandidateEvaluator, default_criteria, load_criteria
+from rvmsim.criteria import default_criteria, load_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.pipeline import (EvaluationPath, FullEvaluator, SetEvaluator, evaluate_params,
                              make_evaluator)

@@ -12,7 +12,8 @@ import pytest
 import yaml
 
 from rvmsim import labels as L
-from rvmsim.criteria import CandidateEvaluator, load_criteria
+from rvmsim.criteria import load_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec, params_to_dict
 from rvmsim.render import render_fisheye
 from rvmsim.robust import nominal_sample, refolder, sample_images, variation_from_scene

@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rvmsim.criteria import CandidateEvaluator, Criteria, default_criteria
+from rvmsim.criteria import Criteria, default_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.render import render_fisheye
 from rvmsim.report import write_robustness_outputs

@@ -7,7 +7,8 @@ import json
 import sqlite3
 from pathlib import Path
 
-from rvmsim.criteria import CandidateEvaluator, default_criteria
+from rvmsim.criteria import default_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import OutputSpec
 from rvmsim.tune import run_search, score_vectors
 from rvmsim.search import SearchSpace, Strategy, default_space

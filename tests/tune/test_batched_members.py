@@ -1,4 +1,4 @@
-"""A robust run's candidates judged on every member with one map (criteria.CandidateBatch,
+"""A robust run's candidates judged on every member with one map (pipeline.CandidateBatch,
 pipeline.ImagesEvaluator, the members' sub-solves in one mapping): the same verdicts, value
 for value, as judging each member on its own (real renders of a small scene and its
 variation samples)."""
@@ -10,7 +10,8 @@ import pickle
 import numpy as np
 import pytest
 
-from rvmsim.criteria import CandidateBatch, CandidateEvaluator, default_criteria
+from rvmsim.criteria import default_criteria
+from rvmsim.pipeline import CandidateBatch, CandidateEvaluator
 from rvmsim.pipeline import RecordEvaluator
 from rvmsim.render import cached_render
 from rvmsim.robust import draw_samples, sample_images, variation_from_scene

@@ -36,7 +36,7 @@ def _problem():
 
 def test_search_scene_is_the_loop_over_the_config_strategy_and_evaluator():
     """search_scene = make_strategy + run_search with score_vectors, on one process or two."""
-    from rvmsim.criteria import CandidateEvaluator
+    from rvmsim.pipeline import CandidateEvaluator
     from rvmsim.tune import SearchOptions, SearchSettings, run_search, score_vectors, search_scene
     from rvmsim.search import make_strategy
     from rvmsim.runs import RunStore, StopReason

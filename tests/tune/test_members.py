@@ -8,7 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from rvmsim.criteria import CandidateEvaluator, default_criteria
+from rvmsim.criteria import default_criteria
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import OutputSpec
 from rvmsim.pipeline import make_evaluator

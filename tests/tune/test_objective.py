@@ -9,7 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from rvmsim.criteria import CandidateEvaluator, criteria_from_text
+from rvmsim.criteria import criteria_from_text
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import OutputSpec
 from rvmsim.pipeline import evaluate_params
 from rvmsim.tune import OBJECTIVE_FLOOR, score_vectors

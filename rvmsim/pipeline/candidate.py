@@ -43,13 +43,13 @@ import numpy as np
 
 from .. import labels as L
 from ..camera import FisheyeCamera
+from ..criteria.config import default_criteria
+from ..criteria.context import IspView, SceneContext, scene_context
+from ..criteria.groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks, group_window
+from ..criteria.measure import LabelSource, Measurements, call_ec, measure_ecs
+from ..criteria.scoring import Criteria, EcResult, score, values_array
 from ..isp import InputWarp, IspParams, MapNodes, OutputSpec, RayCache, map_nodes, remap_xy
 from ..scene import Scene
-from .config import default_criteria
-from .context import IspView, SceneContext, scene_context
-from .groups import EMPTY_WINDOW, LabelGroup, Window, group_chunks, group_window
-from .measure import LabelSource, Measurements, call_ec, measure_ecs
-from .scoring import Criteria, EcResult, score, values_array
 
 __all__ = ["CandidateEvaluator", "NodeLookup", "BoxedSource", "box_holding", "group_window",
            "merge_windows", "remap_labels", "union_windows"]

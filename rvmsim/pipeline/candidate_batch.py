@@ -35,14 +35,14 @@ import cv2
 import numpy as np
 
 from .. import labels as L
+from ..criteria.context import IspView
+from ..criteria.groups import Window
+from ..criteria.measure import LabelSource, Measurements, measure_ecs
+from ..criteria.scoring import values_array
+from ..criteria.stack import LabelStack, measure_stack_ecs
 from ..isp import IspParams, MapNodes, RayCache, map_nodes, remap_xy
-from .context import IspView
-from .evaluator import (BoxedSource, CandidateEvaluator, box_holding, merge_windows, remap_labels,
+from .candidate import (BoxedSource, CandidateEvaluator, box_holding, merge_windows, remap_labels,
                         union_windows)
-from .groups import Window
-from .measure import LabelSource, Measurements, measure_ecs
-from .scoring import values_array
-from .stack import LabelStack, measure_stack_ecs
 
 __all__ = ["CandidateBatch"]
 
