@@ -131,6 +131,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render", "isp"),
     ("compensation",),
     ("criteria",),
+    ("regulations",),
     ("pipeline", "markets"),
     ("percar",),
     ("robust",),

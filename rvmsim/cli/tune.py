@@ -98,9 +98,11 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     if resume_dir is not None:
         given = _given(click.get_current_context())
         result = resume_run(resume_dir, options=options, given=ResumeArgs(
-            scenes, shared, markets, robust, samples, variation_file, compensation, aggregate,
-            strategy if "strategy" in given else None, seed if "seed" in given else None,
-            budget, config_file, criteria_file, out, force, only_supported))
+            scenes=tuple(scenes), shared=shared, markets=markets, robust=robust,
+            samples=samples, variation_file=variation_file, compensation=compensation,
+            aggregate=aggregate, strategy=strategy if "strategy" in given else None,
+            seed=seed if "seed" in given else None, budget=budget, config_file=config_file,
+            criteria_file=criteria_file, out=out, force=force, only_supported=only_supported))
     else:
         request = TuneRequest(
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,

@@ -42,10 +42,11 @@ __all__ = ["load_criteria", "default_criteria", "criteria_from_text", "BUNDLED_C
            "bundled_criteria_text", "criteria_reference"]
 
 #: Criteria sets shipped with rvmsim, selected by name (``--criteria fmvss111-full``, a sweep
-#: file's ``criteria:``): name → file in this package.
-BUNDLED_CRITERIA: dict[str, str] = {"fmvss111-full": "criteria_fmvss111_full.yaml",
-                                    "unr158": "criteria_unr158.yaml",
-                                    "jp": "criteria_jp.yaml"}
+#: file's ``criteria:``): name → the regulation package holding it as ``criteria.yaml``
+#: (:mod:`rvmsim.regulations`, read as data).
+BUNDLED_CRITERIA: dict[str, str] = {"fmvss111-full": "rvmsim.regulations.fmvss111",
+                                    "unr158": "rvmsim.regulations.unr158",
+                                    "jp": "rvmsim.regulations.jp"}
 
 
 def _not_nan(value: float) -> float:
@@ -256,7 +257,7 @@ def bundled_criteria_text(name: str | Path) -> str | None:
     key = str(name)
     if key not in BUNDLED_CRITERIA or Path(key).exists():
         return None
-    return resources.files("rvmsim.criteria").joinpath(BUNDLED_CRITERIA[key]).read_text("utf-8")
+    return resources.files(BUNDLED_CRITERIA[key]).joinpath("criteria.yaml").read_text("utf-8")
 
 
 def criteria_reference(value: str | Path) -> str:

@@ -289,10 +289,19 @@ def load_plugin(source: str) -> tuple[EcDefinition, ...]:
     return ecs
 
 
+#: Plugin modules of the bundled regulations under the names criteria files written before
+#: they moved to :mod:`rvmsim.regulations` (2026-12-05) give them: such files, and the runs
+#: that recorded them, still load.
+MOVED_PLUGINS: dict[str, str] = {"rvmsim.criteria.fmvss111": "rvmsim.regulations.fmvss111.ecs",
+                                 "rvmsim.criteria.unr158": "rvmsim.regulations.unr158.ecs",
+                                 "rvmsim.criteria.jp": "rvmsim.regulations.jp.ecs"}
+
+
 def _import(source: str) -> object:
     if source.endswith(".py"):
         return _import_file(Path(source))
     module_name, _, attr = source.partition(":")
+    module_name = MOVED_PLUGINS.get(module_name, module_name)
     try:
         obj: object = importlib.import_module(module_name)
     except ImportError as err:

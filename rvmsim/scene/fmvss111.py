@@ -36,7 +36,7 @@ __all__ = [
     "IMAGE_SIZE_MIN_ARCMIN",
 ]
 
-#: The values read from the bundled site file (``rvmsim/scene/sites/fmvss111.yaml``: the one
+#: The values read from the bundled site file (``rvmsim/regulations/fmvss111/site.yaml``: the one
 #: place to correct them; its ⚠ marks are the confidence of each value), by name.  They are
 #: read on first use (:func:`site_values`), not when this module is imported:
 #:

@@ -61,9 +61,11 @@ __all__ = ["SiteDefinition", "SiteRow", "Lateral", "Marking", "SiteObject", "BUN
            "DEFAULT_SITE", "load_site", "bundled_site", "site_definition", "place_objects",
            "SiteError", "scene_site", "scene_sites", "is_site_file", "scene_site_entry"]
 
-#: Site definitions shipped with rvmsim: name → file in ``rvmsim/scene/sites``.
-BUNDLED_SITES: dict[str, str] = {"fmvss111": "fmvss111.yaml", "unr158": "unr158.yaml",
-                                 "jp": "jp.yaml"}
+#: Site definitions shipped with rvmsim: name → the regulation package holding it as
+#: ``site.yaml`` (:mod:`rvmsim.regulations`, read as data).
+BUNDLED_SITES: dict[str, str] = {"fmvss111": "rvmsim.regulations.fmvss111",
+                                 "unr158": "rvmsim.regulations.unr158",
+                                 "jp": "rvmsim.regulations.jp"}
 #: The site a scene is at unless it names others.
 DEFAULT_SITE = "fmvss111"
 
@@ -262,7 +264,7 @@ def bundled_site(name: str) -> SiteDefinition:
     if name not in BUNDLED_SITES:
         raise RvmsimError(f"site {name!r}: unknown (bundled sites: "
                           f"{', '.join(BUNDLED_SITES)}; or give a site file)")
-    text = resources.files(__package__).joinpath("sites", BUNDLED_SITES[name]).read_text(
+    text = resources.files(BUNDLED_SITES[name]).joinpath("site.yaml").read_text(
         encoding="utf-8")
     return _definition(text, f"<bundled site {name}>")
 

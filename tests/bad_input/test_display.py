@@ -42,9 +42,9 @@ FILES = [
     ("height-nan", "display: {height_mm: .nan}\n", "display.height_mm"),
     ("eye-distance-negative", "display: {eye_distance_mm: -700}\n", "display.eye_distance_mm"),
     ("resolution-nan", "display: {resolution_px: [.nan, 480]}\n", "display.resolution_px.0"),
-    ("parameter-unknown", "plugins: [rvmsim.criteria.fmvss111]\n"
+    ("parameter-unknown", "plugins: [rvmsim.regulations.fmvss111.ecs]\n"
      "criteria: {6-1: {parameters: {max_zoom: 2}}}\n", "criteria.6-1.parameters.max_zoom"),
-    ("parameter-nan", "plugins: [rvmsim.criteria.fmvss111]\n"
+    ("parameter-nan", "plugins: [rvmsim.regulations.fmvss111.ecs]\n"
      "criteria: {6-1: {parameters: {max_magnification: .nan}}}\n",
      "criteria.6-1.parameters.max_magnification"),
 ]

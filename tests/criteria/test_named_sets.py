@@ -13,7 +13,7 @@ from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.scene import Display
 
 from ..conftest import SCENES
-from .test_fmvss111 import level_scene, pinhole_params
+from ..regulations.test_fmvss111 import level_scene, pinhole_params
 
 NEW = ("1-5", "1-6", "6-1")
 
@@ -47,7 +47,7 @@ def test_runs_record_a_name_as_given_and_a_file_absolute(tmp_path, monkeypatch):
 
 def test_parameters_and_display_of_a_criteria_file(tmp_path):
     path = tmp_path / "c.yaml"
-    path.write_text("plugins: [rvmsim.criteria.fmvss111]\n"
+    path.write_text("plugins: [rvmsim.regulations.fmvss111.ecs]\n"
                     "display: {eye_distance_mm: 500, width_mm: 200}\n"
                     "criteria:\n  6-1: {parameters: {max_magnification: 4.0}}\n")
     crit = load_criteria(path)
@@ -107,3 +107,12 @@ def test_plugin_ecs_unpickle_in_workers():
     p = IspParams(fov=180.0, rad=612.6, zoom=1.0)
     again = pickle.loads(pickle.dumps(ev))
     assert np.array_equal(again.values(p), ev.values(p), equal_nan=True)
+
+
+def test_a_criteria_file_naming_a_plugin_where_it_used_to_be_still_loads(tmp_path):
+    """Criteria files (and the runs that recorded them) from before the regulations moved
+    name ``rvmsim.criteria.fmvss111``: they load the same ECs from the new home."""
+    old, new = tmp_path / "old.yaml", tmp_path / "new.yaml"
+    old.write_text("plugins: [rvmsim.criteria.fmvss111]\n")
+    new.write_text("plugins: [rvmsim.regulations.fmvss111.ecs]\n")
+    assert load_criteria(old).ids == load_criteria(new).ids == EC_IDS + NEW

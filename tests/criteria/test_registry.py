@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from rvmsim import criteria as C
+from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.criteria import (
     BUILTIN_PLUGIN,
     EC_IDS,
@@ -89,7 +90,7 @@ def test_criteria_and_evaluator_pickle_with_plugin_ecs(tmp_path):
     assert again.ecs[1] is c.ecs[1]
     labels = np.full((30, 60), 2, np.uint8)
     labels[10:20, 40:50] = BOARD.labels[0]
-    ev = C.CandidateEvaluator(labels, criteria=c)
+    ev = CandidateEvaluator(labels, criteria=c)
     assert pickle.loads(pickle.dumps(ev)).criteria.ids == c.ids
 
 

@@ -69,7 +69,7 @@ def case(tmp_path_factory):
                                  scene=r158)(params)["R158-2"].value
     assert nominal is not None and 50 < nominal < 100
     (root / "row2.yaml").write_text(yaml.safe_dump({
-        "name": "row 2 strict", "plugins": ["rvmsim.criteria.unr158"], "ecs": ["R158-2"],
+        "name": "row 2 strict", "plugins": ["rvmsim.regulations.unr158.ecs"], "ecs": ["R158-2"],
         "criteria": {"R158-2": {"range": [float(nominal), None]}}}))
     markets = "fmvss111:centring.yaml,unr158:row2.yaml"
     args = ["robustness", "scene.yaml", "--params", "params.yaml", "--samples", "24",

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import functools
 import math
-from importlib import resources
 from pathlib import Path
 
 import cv2
@@ -25,6 +24,8 @@ from rvmsim.scene.sitedefs import (BUNDLED_SITES, SiteError, bundled_site, load_
 from rvmsim.testing.scenes import SCENES, load_small_scene, small_scene_doc
 
 FT, INCH = 0.3048, 0.0254
+#: The bundled regulations' folder, read as files (independently of the loader).
+REGULATIONS = Path(__file__).resolve().parents[2] / "rvmsim" / "regulations"
 
 
 # ---------------------------------------------------------------------------- loading
@@ -32,8 +33,7 @@ FT, INCH = 0.3048, 0.0254
 def test_every_bundled_site_loads_with_its_rows_as_written(name):
     site = bundled_site(name)
     # the file itself, read independently of the loader
-    raw = yaml.safe_load(resources.files("rvmsim.scene").joinpath(
-        "sites", BUNDLED_SITES[name]).read_text(encoding="utf-8"))
+    raw = yaml.safe_load((REGULATIONS / name / "site.yaml").read_text(encoding="utf-8"))
     assert site.name == raw["name"] == name
     assert [r.name for r in site.rows] == [r["name"] for r in raw["rows"]]
     objects = place_objects(site, 1.8)
@@ -122,8 +122,7 @@ def test_a_mesh_part_is_measured_by_its_x_extent():
 
 # ---------------------------------------------------------------------------- FMVSS site
 def test_the_fmvss_site_file_holds_the_fmvss111_constants():
-    raw = yaml.safe_load(resources.files("rvmsim.scene").joinpath(
-        "sites", "fmvss111.yaml").read_text(encoding="utf-8"))
+    raw = yaml.safe_load((REGULATIONS / "fmvss111" / "site.yaml").read_text(encoding="utf-8"))
     rows = {r["name"]: r for r in raw["rows"]}
     for row in rows.values():
         assert row["diameter"] == fmvss111.OBJECT_DIAMETER_M

@@ -32,12 +32,12 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 
-from . import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
-               SceneContext, Sigmoid)
-from .fmvss111 import _draw_widths, object_widths
-from .objects import silhouette, silhouette_fractions
-from .sigmoid import Criterion
-from .siteobjects import hidden_reason, row_objects, shown_area
+from ...criteria import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
+                         SceneContext, Sigmoid)
+from ...criteria.sigmoid import Criterion
+from ..fmvss111.ecs import _draw_widths, object_widths
+from ..objects import silhouette, silhouette_fractions
+from ..siteobjects import hidden_reason, row_objects, shown_area
 
 __all__ = ["ECS", "AREA_M", "ROW_AREA", "ROW_WHOLE", "FAR_ROW", "EACH_ARCMIN",
            "area_ec", "whole_ec", "size_ec"]
@@ -122,7 +122,7 @@ def area_ec(ec_id: str, row: str, area_m: float, name: str, description: str,
             top: bool = True) -> EcDefinition:
     """An EC: min over ``row``'s objects of max(shown square / ``area_m``, shown top
     fraction) (``top``; the square alone without, see
-    :func:`rvmsim.criteria.siteobjects.shown_area`)."""
+    :func:`rvmsim.regulations.siteobjects.shown_area`)."""
     return EcDefinition(
         id=ec_id, name=name, unit="x", groups=(),
         measure=_area_measure(ec_id, row, area_m, top),
@@ -197,7 +197,7 @@ def _size_measure(ec_id: str, row: str, each: float
 def size_ec(ec_id: str, row: str, each_arcmin: float, name: str, description: str
             ) -> EcDefinition:
     """An EC: min over ``row``'s objects of the visual angle of its width on the display
-    (from the driver's eye point, :func:`rvmsim.criteria.fmvss111.object_widths`) /
+    (from the driver's eye point, :func:`rvmsim.regulations.fmvss111.ecs.object_widths`) /
     ``each_arcmin``."""
     return EcDefinition(
         id=ec_id, name=name, unit="x", groups=(), measure=_size_measure(ec_id, row, each_arcmin),

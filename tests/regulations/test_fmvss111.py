@@ -1,4 +1,4 @@
-"""ECs 1-5, 1-6 and 6-1 (rvmsim/criteria/fmvss111.py) against analytic figures, on real
+"""ECs 1-5, 1-6 and 6-1 (rvmsim/regulations/fmvss111/ecs.py) against analytic figures, on real
 scenes, cameras, ISP maps and renders."""
 
 from __future__ import annotations

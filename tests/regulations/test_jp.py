@@ -1,4 +1,4 @@
-"""Japan's ECs (rvmsim/criteria/jp.py) on a small real render of vehicle A at the jp site:
+"""Japan's ECs (rvmsim/regulations/jp/ecs.py) on a small real render of vehicle A at the jp site:
 JP-3 is the shown square alone (no top alternative), JP-4 passes when any part shows."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import pytest
 
 from rvmsim.criteria import load_criteria
 from rvmsim.pipeline import CandidateEvaluator
-from rvmsim.criteria.jp import ADJACENT_AREA_M, PROXIMITY_LEAST_PERCENT
-from rvmsim.criteria.siteobjects import SAMPLE_STEP_M, shown_area
+from rvmsim.regulations.jp.ecs import ADJACENT_AREA_M, PROXIMITY_LEAST_PERCENT
+from rvmsim.regulations.siteobjects import SAMPLE_STEP_M, shown_area
 from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye

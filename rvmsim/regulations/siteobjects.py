@@ -3,14 +3,14 @@ which part of each cylinder's surface the RVM image shows, and why a part can ne
 
 Written against the public API (:class:`~rvmsim.criteria.SceneContext`,
 :class:`~rvmsim.criteria.IspView`), like :mod:`.objects`, for the plugins
-:mod:`rvmsim.criteria.unr158` and :mod:`rvmsim.criteria.jp`.
+:mod:`rvmsim.regulations.unr158.ecs` and :mod:`rvmsim.regulations.jp.ecs`.
 
 A cylinder's side is sampled on a grid of ``step_m`` (arc length × height, cell centres)
 and its top face on rings ``step_m`` apart.  Per scene (once, :meth:`SceneContext.shared`),
 each sample is *seen* when its surface faces the camera, it projects into the lens's field
 and onto the sensor, and the rendered label image shows the object at its pixel (nothing in
 front of it but, possibly, another of the site's objects: each object is judged as if it
-stood alone, :func:`rvmsim.criteria.objects.standing_alone_labels`).  Per candidate it is *shown* when it is seen and its pixel lies
+stood alone, :func:`rvmsim.regulations.objects.standing_alone_labels`).  Per candidate it is *shown* when it is seen and its pixel lies
 inside the RVM image's footprint.  A row-1 cylinder of R158 passes when a square of
 ``area_m`` × ``area_m`` of its side is wholly shown, or its whole top face
 (:func:`shown_area`).
@@ -31,8 +31,8 @@ import numpy as np
 
 from .. import labels as L
 from ..scene import SiteObject
-from .context import SceneContext
-from .measure import LabelSource
+from ..criteria.context import SceneContext
+from ..criteria.measure import LabelSource
 from .objects import silhouette, standing_alone_labels
 
 __all__ = ["SAMPLE_STEP_M", "row_objects", "SurfaceView", "surface_view", "ShownArea",

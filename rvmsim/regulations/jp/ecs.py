@@ -19,7 +19,7 @@ criteria file changes.
 
 from __future__ import annotations
 
-from .unr158 import area_ec, size_ec, whole_ec
+from ..unr158.ecs import area_ec, size_ec, whole_ec
 
 __all__ = ["ECS", "VISUAL_ANGLE_ARCMIN", "ADJACENT_AREA_M", "PROXIMITY_LEAST_PERCENT"]
 

@@ -1,4 +1,4 @@
-"""UN R158's ECs (rvmsim/criteria/unr158.py) on small real renders of vehicle A at the unr158
+"""UN R158's ECs (rvmsim/regulations/unr158/ecs.py) on small real renders of vehicle A at the unr158
 site, against independent figures: ray casting (our own cylinder intersection, trimesh's
 against the body), the inverse ISP map and the pinhole formula."""
 
@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import functools
 import math
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +30,6 @@ ARCMIN = 180.0 * 60.0 / math.pi
 OUT = OutputSpec(320, 180)
 #: A view of the small vehicle A in which every object of the unr158 site shows whole.
 WIDE = IspParams(fov=180.0, rad=160.0, zoom=0.45, adv_v_shift=0.15)
-SITES = Path(__file__).resolve().parents[2] / "rvmsim" / "scene" / "sites"
 
 
 @functools.lru_cache(maxsize=None)
@@ -41,7 +41,8 @@ def _at_site(bumper_top: float | None = None, row2_z: float | None = None, tmp: 
         site = scene
         at = site_scene(site, "unr158")
     else:
-        doc = yaml.safe_load((SITES / BUNDLED_SITES["unr158"]).read_text())
+        doc = yaml.safe_load(resources.files(BUNDLED_SITES["unr158"]).joinpath("site.yaml")
+                             .read_text())
         doc["rows"][1]["z"] = row2_z
         path = Path(tmp) / "unr158_near_row2.yaml"
         path.write_text(yaml.safe_dump(doc))

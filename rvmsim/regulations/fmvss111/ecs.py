@@ -29,14 +29,14 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from ..scene import fmvss111 as rule
-from . import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
-               SceneContext, Sigmoid)
+from ...criteria import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
+                         SceneContext, Sigmoid)
+from ...scene import fmvss111 as rule
 
 if TYPE_CHECKING:
-    from ..scene import Display
+    from ...scene import Display
 
-from .objects import silhouette_fractions, width_edges
+from ..objects import silhouette_fractions, width_edges
 
 __all__ = ["ECS", "FULL_VIEW_OBJECTS", "SIZE_OBJECTS", "MAX_MAGNIFICATION",
            "MIN_PIXELS_PER_DEGREE", "object_widths", "ObjectWidths"]

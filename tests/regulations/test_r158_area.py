@@ -11,7 +11,7 @@ import pytest
 
 from rvmsim.criteria import LabelSource, SceneContext, load_criteria
 from rvmsim.criteria.context import IspView
-from rvmsim.criteria.siteobjects import SAMPLE_STEP_M, shown_area, surface_view
+from rvmsim.regulations.siteobjects import SAMPLE_STEP_M, shown_area, surface_view
 from rvmsim.isp import IspParams, OutputSpec, input_to_output
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import render_fisheye

@@ -21,8 +21,8 @@ import numpy as np
 from .. import labels as L
 from ..camera import FisheyeCamera
 from ..scene import Scene
-from .context import SceneContext
-from .measure import LabelSource
+from ..criteria.context import SceneContext
+from ..criteria.measure import LabelSource
 
 __all__ = ["ObjectSilhouette", "WidthEdges", "silhouette", "width_edges", "object_cylinder",
            "silhouette_fractions", "standing_alone_labels"]
