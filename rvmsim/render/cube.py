@@ -196,7 +196,7 @@ def cube_layout(
     max_face_size : int
         Upper bound for the automatic size.
     cube_rotation : (3, 3) float, optional
-        Turn the cube relative to the camera (moves the seams; used by tests).
+        Turn the cube relative to the camera: the seams move, the fisheye image must not.
 
     Returns
     -------

@@ -87,7 +87,8 @@ def render_fisheye(
     face_size : int, optional
         Cube face size (px); default from ``scene.render.face_size_px`` or automatic.
     cube_rotation : (3, 3) float, optional
-        Turn the cube about the camera (moves the seams; for tests).
+        Turn the cube about the camera: the faces' seams move, the image must not (how the
+        fold is checked seam-free; default: the cube aligned with the camera).
     progress : bool
         Show a progress bar over the cube faces.
 
