@@ -32,12 +32,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
 from ..compensation import measured_load_index
-from ..criteria import (Criteria, check_supported, criteria_reference, load_criteria,
-                        record_size)
+from ..criteria import (Criteria, Unsupported, check_supported, criteria_reference,
+                        load_criteria, record_size, supported_criteria)
 from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
 from ..percar import check_law
-from ..render import cached_render, scene_key
+from ..render import cached_render, same_scene, scene_key
 from ..runs.records import RunSettings
 from ..runs.store import RunStore
 from ..scene import Scene, load_scene
@@ -49,8 +49,8 @@ from .members import Member, check_cameras, parse_aggregate
 from .requests import SearchOptions, SearchSettings, TuneRequest
 from .robust import (ROBUST_AGGREGATE, check_samples, robust_line, robust_members,
                      run_compensation, run_variations, variation_key, write_robust_results)
-from .shared import (load_shared_scenes, scene_members, shared_problems, shared_settings,
-                     write_member_results)
+from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_problems,
+                     shared_settings, write_member_results)
 from .results import write_results
 
 if TYPE_CHECKING:
@@ -117,6 +117,15 @@ class MemberSet(Protocol):
         """The kind's name, as messages call it (``single``, ``shared``, ``robust``, …)."""
         ...
 
+    def resumed_scenes(self, db: Path) -> list[Scene]:
+        """The scenes of the stored run (``db``: its store, for messages), each checked
+        unchanged since the run started (a changed one refused with one line)."""
+        ...
+
+    def resumed_criteria(self) -> Criteria:
+        """The criteria of the stored run (the same ECs left out again)."""
+        ...
+
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         """Render the members (cached) and make them search members."""
         ...
@@ -168,6 +177,22 @@ class Single:
             judged_at=record_size(crit, sc), left_out=left_out)
         return settings, [sc], crit
 
+    def resumed_scenes(self, db: Path) -> list[Scene]:
+        st = self.settings
+        sc = load_scene(st.scene)
+        if st.scene_key is not None and not same_scene(st.scene_key, sc, st.scene):
+            raise RvmsimError(f"{st.scene}: the scene changed since this run started; "
+                              "resuming would mix two scenes (start a new run)")
+        return [sc]
+
+    def resumed_criteria(self) -> Criteria:
+        st = self.settings
+        crit = load_criteria(st.criteria_file)
+        if st.left_out:  # tuned with --only-supported: the same ECs left out again
+            crit = supported_criteria(crit, [Unsupported(k, ()) for k in st.left_out
+                                             if k in crit.items])
+        return crit
+
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         return Built([cached_render(s, progress=progress)[0] for s in scenes])
 
@@ -214,6 +239,10 @@ class Shared(Single):
                             (r.config or TuningConfig()).at_record(record), aggregate),
             judged_at=record, left_out=left_out)
         return settings, [sc for _, sc in scenes], crit
+
+    def resumed_scenes(self, db: Path) -> list[Scene]:
+        _check_stored_aggregate(self.settings, db)
+        return resumed_scenes(self.settings)
 
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         renders = super().build(scenes, progress=progress).renders
@@ -270,6 +299,19 @@ class Robust:
     def compensation(self) -> CompensationModel | None:
         """The compensation model the run tunes for (None: the yield before it)."""
         return None
+
+    def resumed_scenes(self, db: Path) -> list[Scene]:
+        st = self.settings
+        _check_stored_aggregate(st, db)
+        scenes = self.inner.resumed_scenes(db)
+        if variation_key(run_variations(scenes, st.variation_file)) != st.variation_key:
+            raise RvmsimError(f"{st.variation_file or st.scene}: the variation changed since "
+                              "this run started; resuming would mix two sample sets (start a "
+                              "new run)")
+        return scenes
+
+    def resumed_criteria(self) -> Criteria:
+        return self.inner.resumed_criteria()
 
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         renders = [cached_render(s, progress=progress)[0] for s in scenes]
@@ -337,6 +379,13 @@ class Markets:
                             (r.config or TuningConfig()).at_record(record), aggregate),
             judged_at=record, markets=tuple(m.spec for m in markets))
         return settings, [sc for _, sc in loaded], crit
+
+    def resumed_scenes(self, db: Path) -> list[Scene]:
+        _check_stored_aggregate(self.settings, db)
+        return resumed_scenes(self.settings)
+
+    def resumed_criteria(self) -> Criteria:
+        return market_criteria(parse_markets(list(self.settings.markets))[0])
 
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         pairs, renders, members = markets_members(scenes, self.settings, progress=progress)
@@ -406,3 +455,12 @@ def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_support
     for recorded, sc in scenes:
         out = check_supported(sc, out, recorded, only_supported=only_supported)
     return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)
+
+
+def _check_stored_aggregate(settings: RunSettings, db: Path) -> None:
+    """Refuse a stored multi-member run whose aggregate this version cannot read."""
+    try:
+        parse_aggregate(settings.aggregate or "min")
+    except RvmsimError:
+        raise RvmsimError(f"{db}: aggregate: {settings.aggregate!r} is not min or quantile Q "
+                          "(written by another rvmsim version?)") from None

@@ -16,25 +16,19 @@ from typing import TYPE_CHECKING, Callable
 
 from tqdm import tqdm
 
-from ..criteria import Unsupported, load_criteria, supported_criteria
 from ..errors import RvmsimError
-from ..markets import market_criteria, parse_markets
-from ..render import same_scene
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock, run_settings
 from ..runs.records import RunSettings, RunStatus
 from ..runs.store import RunStore
-from ..scene import Scene, load_scene
+from ..scene import Scene
 from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 from ..search.config import make_strategy
 from ..search.strategies import Strategy, check_seed
 from .kinds import Built, MemberSet, Verdict, member_set, new_run_settings
 from .loop import SearchOutcome
-from .members import parse_aggregate
 from .requests import RunOptions, SearchOptions, TuneRequest
 from .resumed import ResumeArgs, check_resume_args
 from .results import remove_run
-from .robust import run_variations, variation_key
-from .shared import resumed_scenes
 
 if TYPE_CHECKING:
     from .._progress import ProgressBar
@@ -108,33 +102,9 @@ def _resumed_run(run_dir: Path, given: ResumeArgs | None
         raise RvmsimError(f"{differs}: the settings live in {RUN_DB} and {RUN_JSON} only "
                           f"exports them; restore {RUN_JSON}, or delete it to resume with the "
                           "stored settings (it is written anew)")
-    if settings.shared or settings.robust:
-        try:
-            parse_aggregate(settings.aggregate or "min")
-        except RvmsimError:
-            raise RvmsimError(f"{run_dir / RUN_DB}: aggregate: {settings.aggregate!r} is not "
-                              "min or quantile Q (written by another rvmsim version?)") from None
-    if settings.shared:
-        scenes = resumed_scenes(settings)
-    else:
-        sc = load_scene(settings.scene)
-        if settings.scene_key is not None and not same_scene(settings.scene_key, sc,
-                                                             settings.scene):
-            raise RvmsimError(f"{settings.scene}: the scene changed since this run started; "
-                              "resuming would mix two scenes (start a new run)")
-        scenes = [sc]
-    if settings.robust and variation_key(run_variations(scenes, settings.variation_file)) \
-            != settings.variation_key:
-        raise RvmsimError(f"{settings.variation_file or settings.scene}: the variation changed "
-                          "since this run started; resuming would mix two sample sets "
-                          "(start a new run)")
-    if settings.markets:
-        return settings, scenes, market_criteria(parse_markets(list(settings.markets))[0])
-    crit = load_criteria(settings.criteria_file)
-    if settings.left_out:  # tuned with --only-supported: the same ECs left out again
-        crit = supported_criteria(crit, [Unsupported(k, ()) for k in settings.left_out
-                                         if k in crit.items])
-    return settings, scenes, crit
+    kind = member_set(settings)
+    scenes = kind.resumed_scenes(run_dir / RUN_DB)
+    return settings, scenes, kind.resumed_criteria()
 
 
 def _writable_store(run_dir: Path, settings: RunSettings, resume: bool, force: bool) -> RunStore:
