@@ -47,6 +47,7 @@ from .loading import (
     scene_from_dict,
     absolute_mesh_paths,
     mesh_parts,
+    scene_site_entry,
 )
 from .primitives import Part, cylinder_side, disk, swept_block, quad
 from .site import (
@@ -69,13 +70,10 @@ from .sitedefs import (
     load_site,
     bundled_site,
     site_definition,
-    scene_site,
-    scene_sites,
     is_site_file,
-    scene_site_entry,
 )
 from .meshes import build_parts
-from .placement import scene_vehicle_width, site_scene
+from .placement import scene_site, scene_sites, scene_vehicle_width, site_scene
 from .landmarks import Landmark, CheckerCorner, site_landmarks, checker_corners
 
 __all__ = [

@@ -19,9 +19,10 @@ from .._io import (KeyPath, image_size_problem, input_error_from_validation, key
 from ..errors import SceneError
 from .schema import CameraSpec, MeshPart, Scene
 from .station import eol_problem
-from .sitedefs import scene_site_entry
+from .sitedefs import BUNDLED_SITES, SiteDefinition, SiteError, is_site_file, site_definition
 
 __all__ = [
+    "scene_site_entry",
     "load_scene",
     "read_scene_document",
     "scene_from_dict",
@@ -90,7 +91,7 @@ def scene_from_dict(
 
 
 def _check_sites(scene: Scene, lines: Mapping[KeyPath, int]) -> None:
-    """Every site the scene names loads (:func:`~rvmsim.scene.sitedefs.scene_site_entry`:
+    """Every site the scene names loads (:func:`scene_site_entry`:
     a bundled name, or a site file next to the scene, whose own errors name that file and
     its key), and none is named twice."""
 
@@ -197,3 +198,23 @@ def read_scene_document(path: str | Path) -> tuple[Scene, dict[str, Any]]:
     text = read_text(path, SceneError)
     data = parse_yaml(text, str(path), SceneError)
     return scene_from_dict(data, base_dir=path.parent, source=str(path), text=text), data
+
+
+def scene_site_entry(scene: Scene, i: int, entry: str, line: int | None = None
+                     ) -> SiteDefinition:
+    """Entry ``i`` of the scene's ``sites:`` (the scene loader checks every entry with it).
+
+    Raises
+    ------
+    SiteError
+        A missing site file or an unknown name, naming the scene file (``line`` of it) and
+        the key ``sites.<i>``; a bad site file names that file and its key.
+    """
+    if entry not in BUNDLED_SITES:
+        if not is_site_file(entry):
+            raise SiteError(scene.source, f"sites.{i}", f"unknown site {entry!r} (bundled: "
+                            f"{', '.join(BUNDLED_SITES)}; or a site file, .yaml)", line)
+        path = scene.resolve_path(entry)
+        if not path.is_file():
+            raise SiteError(scene.source, f"sites.{i}", f"site file not found: {path}", line)
+    return site_definition(entry, scene.base_dir)

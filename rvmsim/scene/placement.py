@@ -15,12 +15,12 @@ from __future__ import annotations
 
 from ..errors import RvmsimError
 from .board import PatternBoard
-from .loading import mesh_parts
+from .loading import mesh_parts, scene_site_entry
 from .meshes import load_mesh_part
 from .schema import BlockPart, MeshPart, Scene, TestSite, Vehicle
-from .sitedefs import DEFAULT_SITE, SiteDefinition, place_objects, scene_site
+from .sitedefs import BUNDLED_SITES, DEFAULT_SITE, SiteDefinition, bundled_site, place_objects
 
-__all__ = ["vehicle_width", "scene_vehicle_width", "site_scene"]
+__all__ = ["vehicle_width", "scene_vehicle_width", "site_scene", "scene_site", "scene_sites"]
 
 
 def vehicle_width(vehicle: object) -> float | None:
@@ -93,3 +93,26 @@ def site_scene(scene: Scene, site: str | SiteDefinition) -> Scene:
                        ground_size=ts.ground_size, ground_color=ts.ground_color,
                        site=definition.name, site_objects=objects)
     return scene.model_copy(update={"test_site": site_ts})
+
+
+def scene_site(scene: Scene, name: str) -> SiteDefinition:
+    """The site ``name`` as ``scene`` defines it: a site file the scene names under
+    ``sites:`` whose ``name`` is ``name``, else the bundled site of that name.
+
+    Raises
+    ------
+    RvmsimError
+        An unknown site, or a bad site file (one line naming the file and key).
+    """
+    for i, entry in enumerate(scene.sites):
+        if entry in BUNDLED_SITES:
+            continue
+        site = scene_site_entry(scene, i, entry)
+        if site.name == name:
+            return site
+    return bundled_site(name)
+
+
+def scene_sites(scene: Scene) -> list[SiteDefinition]:
+    """Every site ``scene`` names (``sites:``), in order."""
+    return [scene_site_entry(scene, i, entry) for i, entry in enumerate(scene.sites)]

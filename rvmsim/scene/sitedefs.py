@@ -11,7 +11,7 @@ width), the cylinders' size and marking.  Three ship with rvmsim (:data:`BUNDLED
 - ``jp``: Japan's rear-view monitor assessment (JNCAP's poles) where it asks more than R158.
 
 A scene names its sites (``sites: [fmvss111, unr158]``; a name, or a site file relative to
-the scene file); :func:`site_scene` gives the scene *at* a site: the same car and camera,
+the scene file); :func:`rvmsim.scene.site_scene` gives the scene *at* a site: the same car and camera,
 with the site's objects placed behind the car (:class:`SiteObject`, each with its own
 labels, :func:`rvmsim.labels.site_object_labels`) and nothing else of the FMVSS site (no
 A–G, guidelines, board or ground patterns).  Each site's scene renders once per viewpoint
@@ -44,7 +44,7 @@ import functools
 import re
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Literal
+from typing import Annotated, Literal
 
 from pydantic import (Field, ValidationError, ValidationInfo, field_validator,
                       model_validator)
@@ -54,12 +54,10 @@ from .._io import input_error_from_validation, key_lines, parse_yaml, read_text
 from ..errors import RvmsimError, SceneError
 from .fields import Metres, NonNegFloat, _Model
 
-if TYPE_CHECKING:
-    from .schema import Scene
 
 __all__ = ["SiteDefinition", "SiteRow", "Lateral", "Marking", "SiteObject", "BUNDLED_SITES",
            "DEFAULT_SITE", "load_site", "bundled_site", "site_definition", "place_objects",
-           "SiteError", "scene_site", "scene_sites", "is_site_file", "scene_site_entry"]
+           "SiteError", "is_site_file"]
 
 #: Site definitions shipped with rvmsim: name → the regulation package holding it as
 #: ``site.yaml`` (:mod:`rvmsim.regulations`, read as data).
@@ -284,46 +282,3 @@ def site_definition(entry: str, base_dir: str | Path = ".") -> SiteDefinition:
         p = Path(entry).expanduser()
         return load_site(p if p.is_absolute() else Path(base_dir) / p)
     return bundled_site(entry)  # raises: unknown name
-
-
-def scene_site(scene: Scene, name: str) -> SiteDefinition:
-    """The site ``name`` as ``scene`` defines it: a site file the scene names under
-    ``sites:`` whose ``name`` is ``name``, else the bundled site of that name.
-
-    Raises
-    ------
-    RvmsimError
-        An unknown site, or a bad site file (one line naming the file and key).
-    """
-    for i, entry in enumerate(scene.sites):
-        if entry in BUNDLED_SITES:
-            continue
-        site = scene_site_entry(scene, i, entry)
-        if site.name == name:
-            return site
-    return bundled_site(name)
-
-
-def scene_site_entry(scene: Scene, i: int, entry: str, line: int | None = None
-                     ) -> SiteDefinition:
-    """Entry ``i`` of the scene's ``sites:`` (the scene loader checks every entry with it).
-
-    Raises
-    ------
-    SiteError
-        A missing site file or an unknown name, naming the scene file (``line`` of it) and
-        the key ``sites.<i>``; a bad site file names that file and its key.
-    """
-    if entry not in BUNDLED_SITES:
-        if not is_site_file(entry):
-            raise SiteError(scene.source, f"sites.{i}", f"unknown site {entry!r} (bundled: "
-                            f"{', '.join(BUNDLED_SITES)}; or a site file, .yaml)", line)
-        path = scene.resolve_path(entry)
-        if not path.is_file():
-            raise SiteError(scene.source, f"sites.{i}", f"site file not found: {path}", line)
-    return site_definition(entry, scene.base_dir)
-
-
-def scene_sites(scene: Scene) -> list[SiteDefinition]:
-    """Every site ``scene`` names (``sites:``), in order."""
-    return [scene_site_entry(scene, i, entry) for i, entry in enumerate(scene.sites)]

@@ -17,9 +17,8 @@ import yaml
 from rvmsim import labels as L
 from rvmsim.render import render_fisheye, scene_key
 from rvmsim.scene import fmvss111
-from rvmsim.scene.placement import scene_vehicle_width, site_scene
-from rvmsim.scene.sitedefs import (BUNDLED_SITES, SiteError, bundled_site, load_site,
-                                   place_objects, scene_site, scene_sites)
+from rvmsim.scene.placement import scene_site, scene_sites, scene_vehicle_width, site_scene
+from rvmsim.scene.sitedefs import BUNDLED_SITES, SiteError, bundled_site, load_site, place_objects
 
 from rvmsim.testing.scenes import SCENES, load_small_scene, small_scene_doc
 
