@@ -391,15 +391,9 @@ class Markets:
         pairs, renders, members = markets_members(scenes, self.settings, progress=progress)
         return Built(renders, members, pairs)
 
-    def search_settings(self, config: TuningConfig, criteria: Criteria,
-                        strategy: Strategy) -> SearchSettings:
-        return SearchSettings(config, criteria, strategy,
-                              aggregate=self.settings.aggregate or "min")
-
-    def search(self, built: Built, settings: SearchSettings, store: RunStore,
-               options: SearchOptions) -> SearchOutcome:
-        assert built.members is not None  # build() made them
-        return search_members(built.members, settings, store, options=options)
+    # searched as a shared run is: one setting for every member
+    search_settings = Single.search_settings
+    search = Single.search
 
     def write_results(self, run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                       built: Built, criteria: Criteria) -> Verdict:

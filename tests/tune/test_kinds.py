@@ -7,8 +7,6 @@ from __future__ import annotations
 import dataclasses
 import json
 
-import pytest
-import yaml
 
 from rvmsim.compensation import DEFAULT_COMPENSATION
 from rvmsim.runs import RunSettings
@@ -20,23 +18,10 @@ from rvmsim.tune.shared import shared_problem_lines
 
 from rvmsim.testing.scenes import write_small_scene
 
-DISPLAY = {"display": {"rvm_image_px": [320, 180]}}
+from .test_markets import DISPLAY, _criteria, scene  # noqa: F401 - scene is a fixture
+
 CONFIG = {"tuned": ["zoom", "adv_v_shift", "adv_v_scale"], "output": {"size": [160, 90]},
           "top_m": 3, "batch": 20}
-
-
-@pytest.fixture(scope="module")
-def scene(cache, tmp_path_factory):
-    return write_small_scene(tmp_path_factory.mktemp("scene"), "a", edit=DISPLAY)
-
-
-def _criteria(folder, name, low, high):
-    """A criteria file judging EC 3-2 (guideline 3's height, %) alone in [low, high]."""
-    path = folder / f"{name}.yaml"
-    path.write_text(yaml.safe_dump({"name": name, "ecs": ["3-2"],
-                                    "criteria": {"3-2": {"range": [low, high],
-                                                         "tolerance": 2.0}}}))
-    return path
 
 
 def test_the_settings_choose_the_run_kind():
