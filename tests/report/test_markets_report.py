@@ -27,12 +27,20 @@ def run(tmp_path_factory):
     tuned = run_in_process(["tune", "scene.yaml", "--markets", ",".join(MARKETS), "--budget",
                             "24", "--out", "run", "--no-progress"], cwd=root)
     assert tuned.code in (0, 1), tuned.stderr
+    before = _mtimes(root / "run")
     rep = run_in_process(["report", "run"], cwd=root)
     assert rep.code == 0, rep.stderr
+    assert _mtimes(root / "run") == before  # a report only reads the run
     sign = run_in_process(["signoff", "run", "--out", "so", "--no-pdf", "--no-progress"],
                           cwd=root)
     assert sign.code == 0, sign.stderr
     return root, json.loads((root / "run" / "best" / "markets.json").read_text()), sign
+
+
+def _mtimes(run):
+    """Every file of ``run`` but its report, with its modification time (ns)."""
+    return {f: f.stat().st_mtime_ns for f in run.rglob("*")
+            if f.is_file() and f.name != "report.html"}
 
 
 def _market_rows(html: str) -> list[str]:
@@ -124,20 +132,14 @@ def test_a_plain_run_is_judged_in_markets_by_report_and_signoff(run, tmp_path):
     doc = json.loads((tmp_path / "plain" / "best" / "markets.json").read_text())
     assert doc["searched"] is False and doc["conflicts"] == []
     assert (tmp_path / "plain" / "best" / "ec_table.txt").read_bytes() == table
-    # the judge step alone writes the same verdicts into the run, exits by them, and the
-    # report then only reads them
+    # the judge step alone writes the same verdicts into the run and exits by them (the
+    # fixture checks that a report then only reads the run)
     written = (tmp_path / "plain" / "best" / "markets.json").read_bytes()
     (tmp_path / "plain" / "best" / "markets.json").unlink()
     judge = run_in_process(["judge", "plain", "--markets", ",".join(MARKETS)], cwd=tmp_path)
     assert judge.code == (0 if doc["passed"] else 1), judge.stderr
     assert (tmp_path / "plain" / "best" / "markets.json").read_bytes() == written
     assert all(m in judge.stdout for m in MARKETS)
-    before = {f: f.stat().st_mtime_ns for f in (tmp_path / "plain").rglob("*") if f.is_file()
-              and f.name != "report.html"}
-    rep = run_in_process(["report", "plain"], cwd=tmp_path)
-    assert rep.code == 0 and _market_rows((tmp_path / "plain" / "report.html").read_text()) \
-        == MARKETS
-    assert {f: f.stat().st_mtime_ns for f in before} == before
     # the same verdicts as evaluate gives the run's rank-1 setting in those markets
     ev = run_in_process(["evaluate", "scene.yaml", "--params", "plain/top/rank_1.yaml",
                          "--markets", ",".join(MARKETS), "--out", "ev", "--no-progress"],
