@@ -1,4 +1,5 @@
-"""The windowed candidate evaluator gives exactly the whole-image evaluation."""
+"""The windowed candidate evaluator (rvmsim/pipeline/candidate.py) gives exactly the whole-image
+evaluation."""
 
 from __future__ import annotations
 
