@@ -1,5 +1,5 @@
 """Benchmark: the yield after end-of-line compensation against the station's accuracy, for
-every bundled vehicle's nominal-tuned setting (not a test; issues #25 and #41's README table).
+every bundled vehicle's nominal-tuned setting (not a test; the compensation table of docs/guide.md, issues #25 and #41).
 
     PYTHONPATH=$PWD python3 tools/bench_compensation.py [--vehicles a,b,c,d,e,f]
         [--samples 400] [--seed 0] [--eval-seed 1] [--sigmas 0,0.02,0.05,0.1]

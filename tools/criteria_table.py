@@ -1,4 +1,4 @@
-"""Tune the bundled vehicles with the criteria set ``fmvss111-full`` and print the README table
+"""Tune the bundled vehicles with the criteria set ``fmvss111-full`` and print the table in docs/guide.md
 (not a test): per vehicle, whether the best setting passes all fourteen ECs, and for those
 that do not, which EC fails and why, with its values.
 

@@ -1,5 +1,5 @@
 """Table: the yield of the nominal-tuned and the robust-tuned setting of every bundled vehicle
-(not a test; issue #16's README table).
+(not a test; issue #16's table in docs/guide.md).
 
     PYTHONPATH=$PWD python3 tools/yield_table.py [--vehicles a,b,c,d,e,f] [--samples 200]
         [--robust-samples 16] [--seed 0] [--eval-seed S] [--budget N] [--scale 1.0]
@@ -281,7 +281,7 @@ def _secs(x: float) -> str:
 
 
 def markdown(doc: dict[str, Any]) -> str:
-    """The README table, the notes under it, the machine and the wall times."""
+    """The table in docs/guide.md, the notes under it, the machine and the wall times."""
     m = doc["settings"]
     agg = doc["rows"][0]["robust_tuned"]["aggregate"] if doc["rows"] else "?"
     lines = [

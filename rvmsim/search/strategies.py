@@ -52,7 +52,7 @@ __all__ = ["Strategy", "GridToRandom", "RandomSearch", "CmaEs", "CmaEsSolved", "
            "CmaesSolvedSettings", "Batches", "Told", "SEED_MAX", "check_seed", "DEFAULT_STRATEGY"]
 
 #: The strategy ``rvmsim tune``, ``batch`` and ``sweep`` use when none is named: the most
-#: reliable one by ``tools/bench_reliability.py`` (README, "Reliability").
+#: reliable one by ``tools/bench_reliability.py`` (docs/guide.md, "Reliability").
 DEFAULT_STRATEGY = "cmaes-solved"
 
 #: The largest seed: numpy's 32-bit seed range, so a seed means the same to every generator.
