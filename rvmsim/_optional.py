@@ -27,31 +27,22 @@ def import_pyrender() -> ModuleType:
     return importlib.import_module("pyrender")
 
 
-def import_distributed() -> ModuleType:
-    """The ``distributed`` (Dask) module.
-
-    Raises
-    ------
-    RvmsimError
-        It is not installed (one line saying how to install it).
-    """
+def _installed(module: str, missing: str) -> ModuleType:
+    """``module``, or an RvmsimError with the one line ``missing`` when it is not installed."""
     try:
-        return importlib.import_module("distributed")
+        return importlib.import_module(module)
     except ImportError:
-        raise RvmsimError("--scheduler needs the 'distributed' package "
-                          "(pip install distributed)") from None
+        raise RvmsimError(missing) from None
+
+
+def import_distributed() -> ModuleType:
+    """The ``distributed`` (Dask) module; RvmsimError (how to install it) when it is missing."""
+    return _installed("distributed", "--scheduler needs the 'distributed' package "
+                                     "(pip install distributed)")
 
 
 def import_playwright_sync_api() -> ModuleType:
-    """``playwright.sync_api``.
-
-    Raises
-    ------
-    RvmsimError
-        Playwright is not installed (one line saying how to install it).
-    """
-    try:
-        return importlib.import_module("playwright.sync_api")
-    except ImportError:
-        raise RvmsimError("printing the PDF needs Playwright (pip install playwright) and "
-                          "Debian's chromium, or give --no-pdf") from None
+    """``playwright.sync_api``; RvmsimError (how to install it, or --no-pdf) when it is
+    missing."""
+    return _installed("playwright.sync_api", "printing the PDF needs Playwright (pip install "
+                                             "playwright) and Debian's chromium, or give --no-pdf")

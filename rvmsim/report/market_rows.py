@@ -14,36 +14,11 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..errors import RvmsimError
 from .page import data_uri, escape
-from ..tune.markets import MARKETS_JSON, market_problem_lines
+from ..tune.markets import market_problem_lines
 
-__all__ = ["load_markets", "markets_html", "markets_rows", "all_markets_pass",
+__all__ = ["markets_html", "markets_rows", "all_markets_pass",
            "markets_verdict_text"]
-
-
-def load_markets(run_dir: str | Path) -> dict[str, Any] | None:
-    """The run's ``best/markets.json`` (None: not a markets run).
-
-    Raises
-    ------
-    RvmsimError
-        One line naming the file: not JSON, or without its ``markets`` rows.
-    """
-
-    path = Path(run_dir) / "best" / MARKETS_JSON
-    if not path.is_file():
-        return None
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as err:
-        raise RvmsimError(f"{path}: not a readable markets file ({err})") from None
-    rows = doc.get("markets") if isinstance(doc, dict) else None
-    if not isinstance(rows, list) or not rows or not all(
-            isinstance(r, dict) and isinstance(r.get("passed"), bool) and "member" in r
-            for r in rows):
-        raise RvmsimError(f"{path}: markets: not a list of market rows (member, passed, …)")
-    return doc
 
 
 def all_markets_pass(doc: dict[str, Any]) -> bool:

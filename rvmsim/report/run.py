@@ -30,7 +30,8 @@ from ..errors import RvmsimError
 from ..pipeline import evaluate_params, record_output, rvm_color
 from ..runs import (find_runs, is_run_folder, open_run, recorded_path, run_inputs, run_settings,
                     run_state, store_candidates)
-from .market_rows import load_markets, markets_html
+from ..tune.markets import load_markets
+from .market_rows import markets_html
 from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
                       members_section, robust_section, robust_top)
 from .page import data_uri, escape, img_tag, page, shrink

@@ -43,7 +43,8 @@ from ..isp import load_params, params_to_dict, process
 from ..pipeline import make_evaluator, record_output
 from ..runs import rank_text
 from ..storage import json_default
-from .market_rows import all_markets_pass, load_markets, markets_rows, markets_verdict_text
+from ..tune.markets import load_markets
+from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
 from .page import shrink
 from .provenance import FileRecord, file_record, provenance, scene_records
 from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,

@@ -47,7 +47,7 @@ if TYPE_CHECKING:
 __all__ = ["check_market_arguments", "markets_members", "render_market_members",
            "market_infeasible", "write_market_results",
            "judge_run_in_markets",
-           "market_verdict", "market_summary_lines", "market_table_lines", "load_markets_doc", "market_problem_lines", "MARKETS_JSON"]
+           "market_verdict", "market_summary_lines", "market_table_lines", "load_markets", "market_problem_lines", "MARKETS_JSON"]
 
 #: The per-market results of a markets run, in its ``best/`` folder.
 MARKETS_JSON = "markets.json"
@@ -186,10 +186,8 @@ def market_verdict(store: RunStore, pairs: Sequence[MarketMember],
 
 def market_summary_lines(run_dir: Path) -> list[str]:
     """The per-market table ``rvmsim tune`` prints (none for other runs)."""
-    path = run_dir / "best" / MARKETS_JSON
-    if not path.is_file():
-        return []
-    return market_table_lines(json.loads(path.read_text()))
+    doc = load_markets(run_dir)
+    return [] if doc is None else market_table_lines(doc)
 
 
 def market_table_lines(doc: dict[str, Any]) -> list[str]:
@@ -265,7 +263,11 @@ def judge_run_in_markets(run_dir: str | Path, markets: str) -> dict[str, Any]:
                 raise RvmsimError(f"{run_dir}: this run was tuned for the markets "
                                   f"{', '.join(settings.markets)}; give no --markets (its rows "
                                   "are shown) or the same markets")
-            return load_markets_doc(run_dir)
+            doc = load_markets(run_dir)
+            if doc is None:
+                raise RvmsimError(f"{run_dir / 'best' / MARKETS_JSON}: missing; resume the run "
+                                  "to write its market verdicts")
+            return doc
 
         scenes = resumed_scenes(settings) if settings.shared else [load_scene(settings.scene)]
         pairs = market_members(scenes, chosen)
@@ -279,20 +281,25 @@ def judge_run_in_markets(run_dir: str | Path, markets: str) -> dict[str, Any]:
     return written[0]
 
 
-def load_markets_doc(run_dir: str | Path) -> dict[str, Any]:
-    """A run's ``best/markets.json``.
+def load_markets(run_dir: str | Path) -> dict[str, Any] | None:
+    """The run's ``best/markets.json`` (None: not a markets run).
 
     Raises
     ------
     RvmsimError
-        It is missing or unreadable (one line naming the file).
+        One line naming the file: not JSON, or without its ``markets`` rows.
     """
+
     path = Path(run_dir) / "best" / MARKETS_JSON
+    if not path.is_file():
+        return None
     try:
-        doc = json.loads(path.read_text())
-    except (OSError, ValueError, RecursionError) as err:
-        raise RvmsimError(f"{path}: cannot read the run's market verdicts ({err})") from None
-    if not isinstance(doc, dict) or not isinstance(doc.get("markets"), list):
-        raise RvmsimError(f"{path}: markets: not a markets verdict (written by another "
-                          "version?)")
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as err:
+        raise RvmsimError(f"{path}: not a readable markets file ({err})") from None
+    rows = doc.get("markets") if isinstance(doc, dict) else None
+    if not isinstance(rows, list) or not rows or not all(
+            isinstance(r, dict) and isinstance(r.get("passed"), bool) and "member" in r
+            for r in rows):
+        raise RvmsimError(f"{path}: markets: not a list of market rows (member, passed, …)")
     return doc
