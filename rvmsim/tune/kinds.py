@@ -323,10 +323,7 @@ class Robust:
                               aggregate=self.settings.aggregate or "min",
                               compensation=self.compensation)
 
-    def search(self, built: Built, settings: SearchSettings, store: RunStore,
-               options: SearchOptions) -> SearchOutcome:
-        assert built.members is not None  # build() made them
-        return search_members(built.members, settings, store, options=options)
+    search = Single.search  # its members always (build() makes them)
 
     def write_results(self, run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                       built: Built, criteria: Criteria) -> Verdict:
