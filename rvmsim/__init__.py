@@ -5,7 +5,8 @@ RVM image → ECs] per candidate → run store → report.  One subpackage per s
 :mod:`rvmsim.camera`, :mod:`rvmsim.scene`, :mod:`rvmsim.render`, :mod:`rvmsim.isp`,
 :mod:`rvmsim.criteria`, :mod:`rvmsim.robust`, :mod:`rvmsim.search` (space, strategies,
 tuning config), :mod:`rvmsim.runs` (run model, store, folders), :mod:`rvmsim.tune`,
-:mod:`rvmsim.batch`, :mod:`rvmsim.validate`, :mod:`rvmsim.eol` (the end-of-line station),
+:mod:`rvmsim.batch`, :mod:`rvmsim.pose` (the mount pose in a capture),
+:mod:`rvmsim.validate`, :mod:`rvmsim.eol` (the end-of-line station),
 :mod:`rvmsim.report`; :mod:`rvmsim.pipeline`
 joins render, ISP and ECs, and :mod:`rvmsim.storage` holds what stores and locks share.  The main entry
 points are importable from here (lazily: ``import rvmsim`` starts no OpenGL).
@@ -121,7 +122,7 @@ _LAZY: dict[str, tuple[str, str]] = {
     "run_sweep": ("rvmsim.batch", "run_sweep"),
     # validation against real captures
     "validate_capture": ("rvmsim.validate", "validate"),
-    "load_capture": ("rvmsim.validate", "load_capture"),
+    "load_capture": ("rvmsim.pose", "load_capture"),
     # the end-of-line station
     "run_station": ("rvmsim.eol", "run_station"),
     "StationSettings": ("rvmsim.eol", "StationSettings"),

@@ -76,9 +76,7 @@ from .tune import (
     RunOptions as RunOptions,
     resume as resume_run,
 )
-from .validate import (
-    validate as validate_capture,
-    load_capture as load_capture,
-)
+from .pose import load_capture as load_capture
+from .validate import validate as validate_capture
 
 __all__: list[str]

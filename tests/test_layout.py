@@ -129,6 +129,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("camera",),
     ("scene",),
     ("render", "isp"),
+    ("pose",),
     ("compensation",),
     ("criteria",),
     ("regulations",),

@@ -22,7 +22,7 @@ from pydantic import ValidationError
 from ..errors import InputFileError, RvmsimError
 from ..scene import load_scene
 from ..scene.board import PatternBoard
-from ..validate.charuco import CharucoPattern
+from ..pose import CharucoPattern
 
 __all__ = ["BoardSpec", "parse_board_spec", "CalibrationInputError"]
 

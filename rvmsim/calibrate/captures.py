@@ -7,7 +7,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from ..validate import load_capture
+from ..pose import load_capture
 from .board import CalibrationInputError
 
 __all__ = ["board_images", "load_grey"]

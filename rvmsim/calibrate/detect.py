@@ -3,7 +3,7 @@
 A checkerboard: OpenCV's sector-based detector, then the classic detector with sub-pixel
 refinement, each on the capture and on a 2× upsampled copy (small boards); the board is
 found whole or not at all.  A ChArUco board: its markers (``cv2.aruco.CharucoDetector``,
-:func:`rvmsim.validate.charuco.detect_charuco`), so a view may hold any part of it, down
+:func:`rvmsim.pose.detect_charuco`), so a view may hold any part of it, down
 to :data:`~.intrinsics.MIN_VIEW_CORNERS` corners not all on one line.
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from ..validate.charuco import detect_charuco
+from ..pose import detect_charuco
 from .board import BoardSpec
 from .intrinsics import MIN_VIEW_CORNERS, BoardView
 

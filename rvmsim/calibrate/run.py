@@ -13,7 +13,7 @@ from pydantic import ValidationError
 
 from ..errors import RvmsimError
 from ..scene import CameraSpec, camera_problem
-from ..validate import check_captures
+from ..pose import check_captures
 from .board import BoardSpec, CalibrationInputError, parse_board_spec
 from .captures import board_images, load_grey
 from .counting import HINT_CAPTURES, counting_hint, other_counting

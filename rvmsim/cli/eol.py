@@ -58,7 +58,7 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
     from ..report import write_eol_page
     from ..robust import load_variation
     from ..scene import load_scene
-    from ..validate import capture_files
+    from ..pose import capture_files
 
     captures = capture_files(capture_paths)
     sc = load_scene(scene)

@@ -66,8 +66,8 @@ def validate(scene: Path, capture_paths: tuple[Path, ...], params_file: Path | N
     from ..criteria import load_criteria
     from ..report import write_validation_outputs
     from ..scene import load_scene
-    from ..validate import (Tolerances, ValidationSettings, capture_files, capture_folders,
-                            validate_captures)
+    from ..pose import capture_files, capture_folders
+    from ..validate import Tolerances, ValidationSettings, validate_captures
 
     captures = capture_files(capture_paths)
     several = len(captures) != 1 or any(p.is_dir() for p in capture_paths)

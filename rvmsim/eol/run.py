@@ -23,7 +23,7 @@ from tqdm import tqdm
 from .._procs import spawn_pool, stop_pool
 from ..errors import RvmsimError
 from ..scene import Scene
-from ..validate import capture_folders, check_captures, load_capture
+from ..pose import capture_folders, check_captures, load_capture
 from .outputs import Staging, write_car, write_tables
 from .records import CarResult, StationResult
 from .station import Station, StationSettings

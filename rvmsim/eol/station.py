@@ -3,7 +3,8 @@ per-car ISP values and the ECs on its corrected picture.
 
 For each capture (:meth:`Station.car`):
 
-1. **Pose.** ``rvmsim validate``'s pose recovery (:func:`rvmsim.validate.validate`) on the
+1. **Pose.** The pose search ``rvmsim validate`` uses too (:func:`rvmsim.pose.find_mount`;
+   no edge comparison, pictures or verdict of a validation) on the
    station scene (:func:`rvmsim.scene.station_scene`: the car in front of the target) with
    the camera at its nominal pose at the station's load state: the target's checker corners
    matched and the mount pose fitted (fisheye PnP).  A car is usually within a few px of its
@@ -54,8 +55,8 @@ from ..pipeline import evaluate_params, record_output, rvm_pixels
 from ..render import FisheyeImages
 from ..robust import Variation, body_pose
 from ..scene import Scene, station_scene
-from ..validate import Tolerances, Validation, ValidationFailure, ValidationSettings, validate
-from ..validate.landmarks import visible_landmarks
+from ..pose import (LandmarkMatch, MountFit, PoseFailure, PoseSettings, blend, find_mount,
+                    landmark_picture, visible_landmarks)
 from .body import capture_labels, find_body_edge
 from .frames import PoseRenderer
 from .geometry import deviation_of, mount_at, moved_camera, station_load
@@ -219,23 +220,31 @@ class Station:
                           cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))) > 0
 
     def _pose(self, capture: np.ndarray, capture_name: str, *, dense: bool
-              ) -> Validation | tuple[str, int, float | None, dict[str, np.ndarray]]:
-        """The validation that recovers the car's pose, or why it does not (reason,
-        landmarks, RMS px, pictures): too few corners found, or a fit worse than
-        ``max_rms_px`` (corners matched to their neighbours)."""
+              ) -> MountFit | tuple[str, int, float | None, dict[str, np.ndarray]]:
+        """The car's pose found on the target, or why it is not (reason, landmarks, RMS px,
+        pictures: the capture blended with the nominal frame and the corners predicted and
+        found): too few corners found, or a fit worse than ``max_rms_px`` (corners matched
+        to their neighbours)."""
         s = self.settings
-        vs = ValidationSettings(tolerances=Tolerances(min_landmarks=s.min_landmarks),
-                                search_px=s.search_px, rerender=False, dense_align=dense)
+        ps = PoseSettings(min_landmarks=s.min_landmarks, search_px=s.search_px,
+                          dense_align=dense)
         try:
-            v = validate(self.station, capture, vs, synthetic=self.frame,
-                         capture_name=capture_name)
-        except ValidationFailure as fail:
-            return (f"pose not recovered ({fail.step}): {fail.detail}", 0, None, fail.images)
-        if v.rms_after_px > s.max_rms_px:
+            fit = find_mount(self.station, capture, self.frame, ps, capture_name=capture_name)
+        except PoseFailure as fail:
+            return (f"pose not recovered ({fail.step}): {fail.detail}", 0, None,
+                    self._pictures(capture, fail.landmarks))
+        if fit.rms_after_px > s.max_rms_px:
             return (f"pose not recovered: the target's corners fit it with RMS "
-                    f"{v.rms_after_px:.2f} px > {s.max_rms_px:g} px", v.n_inliers,
-                    v.rms_after_px, v.images)
-        return v
+                    f"{fit.rms_after_px:.2f} px > {s.max_rms_px:g} px", fit.n_inliers,
+                    fit.rms_after_px, self._pictures(capture, fit.landmarks))
+        return fit
+
+    def _pictures(self, capture: np.ndarray,
+                  landmarks: tuple[LandmarkMatch, ...]) -> dict[str, np.ndarray]:
+        """A car without a pose: its capture blended with the nominal frame (``overlay``)
+        and the target's corners predicted and found (``landmarks``)."""
+        return {"overlay": blend(capture, self.frame.color),
+                "landmarks": landmark_picture(capture, landmarks)}
 
     def car(self, capture: np.ndarray, capture_name: str, name: str) -> CarResult:
         """One car's station step on its ``capture`` ((H, W, 3) uint8 RGB, the camera's

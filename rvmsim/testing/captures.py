@@ -17,7 +17,8 @@ import yaml
 from rvmsim import labels as L
 from rvmsim.render import FisheyeImages, render_fisheye
 from rvmsim.scene import Scene, checker_corners, load_scene, scene_from_dict
-from rvmsim.validate import Validation, ValidationSettings, load_capture, validate
+from rvmsim.pose import load_capture
+from rvmsim.validate import Validation, ValidationSettings, validate
 
 from .scenes import ROOT, SCENES
 

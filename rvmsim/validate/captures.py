@@ -1,6 +1,6 @@
 """Capture files validated one after another (``rvmsim validate --capture …``).
 
-:func:`capture_files` turns the paths given (files, or folders of them) into capture files;
+:func:`rvmsim.pose.capture_files` turns the paths given (files, or folders of them) into capture files;
 :func:`validate_captures` reads every capture first (one that cannot be read is refused
 before any work), then validates each into its own output folder and returns one
 :class:`CaptureOutcome` per capture: its validation, or the error that stopped it (a capture
@@ -23,59 +23,13 @@ from ..errors import RvmsimError
 from .failure import ValidationFailure
 from .validation import ValidationSettings, validate
 from .verdict import Validation
-from .capture import check_captures, load_capture
+from ..pose import check_captures, load_capture
 from .outputs import write_pictures
 
 if TYPE_CHECKING:
     from ..scene import Scene
 
-__all__ = ["CAPTURE_SUFFIXES", "capture_files", "capture_folders", "CaptureOutcome",
-           "validate_captures"]
-
-#: File endings of the captures a folder given to ``--capture`` holds.
-CAPTURE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
-
-
-def capture_files(paths: Sequence[Path]) -> list[Path]:
-    """The capture files: each path given, or the images (:data:`CAPTURE_SUFFIXES`, sorted
-    by name) in each folder given.
-
-    Raises
-    ------
-    RvmsimError
-        A folder without any capture, or with a link named as a capture to a file that is
-        not there (a car would be left out silently).
-    """
-    out: list[Path] = []
-    for p in paths:
-        if p.is_dir():
-            named = sorted(f for f in p.iterdir() if f.suffix.lower() in CAPTURE_SUFFIXES)
-            for f in named:
-                if f.is_symlink() and not f.exists():  # a car whose capture is gone
-                    raise RvmsimError(f"{f}: a link to a missing file (--capture {p})")
-            found = [f for f in named if f.is_file()]  # a folder named like one is not
-            if not found:
-                raise RvmsimError(f"{p}: no captures ({', '.join(CAPTURE_SUFFIXES)}) in this "
-                                  "folder (--capture)")
-            out += found
-        else:
-            out.append(p)
-    return out
-
-
-def capture_folders(captures: Sequence[Path], out_dir: Path) -> list[Path]:
-    """One output folder per capture: ``out_dir/<capture name>``, a name met again numbered
-    (``front``, ``front_2``, …)."""
-    used: set[str] = set()
-    out: list[Path] = []
-    for cap in captures:
-        name, n = cap.stem, 2
-        while name in used:
-            name, n = f"{cap.stem}_{n}", n + 1
-        used.add(name)
-        out.append(out_dir / name)
-    return out
-
+__all__ = ["CaptureOutcome", "validate_captures"]
 
 @dataclass(frozen=True)
 class CaptureOutcome:

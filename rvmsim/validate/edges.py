@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from .. import labels as L
-from .capture import grey
+from ..pose import grey
 from .verdict import EdgeComparison
 
 __all__ = ["CHAMFER_TRUNCATE_PX", "edge_map", "compare_edges", "model_mask", "edge_overlay"]

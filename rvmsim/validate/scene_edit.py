@@ -1,4 +1,5 @@
-"""Scenes with the corrected mount pose: in memory, and as a rewritten copy of the file.
+"""A scene file rewritten with the corrected mount pose (in memory:
+:func:`rvmsim.pose.scene_with_mount`).
 
 The file is rewritten line by line, not re-dumped, so that its comments and layout stay:
 only the ``camera.mount`` values change.
@@ -8,18 +9,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
 from .._io import KeyPath, key_lines, read_text
-from ..camera import rotation_from_ypr
 from ..errors import SceneError
 from ..scene import Scene, load_scene
-from .verdict import PoseCorrection
+from ..pose import PoseCorrection
 
-__all__ = ["scene_with_mount", "write_corrected_scene", "mount_correction"]
+__all__ = ["write_corrected_scene"]
 
 _MOUNT_KEYS = ("position", "yaw_deg", "pitch_deg", "roll_deg")
 #: ``key: value  # comment`` on one line; groups: head, value, comment (with its leading
@@ -27,41 +24,6 @@ _MOUNT_KEYS = ("position", "yaw_deg", "pitch_deg", "roll_deg")
 _VALUE_LINE = r"^([ \t]*{key}[ \t]*:[ \t]*)([^#\r\n]*?)([ \t]*(#[^\r\n]*)?)(\r?\n)?$"
 #: One number of a block-style list: ``- 0.02``.
 _BLOCK_ITEM = r"^[ \t]*-[ \t]*[-+.\deE]+[ \t]*(#.*)?\r?\n?$"
-
-
-def scene_with_mount(scene: Scene, correction: PoseCorrection) -> Scene:
-    """A copy of ``scene`` with the corrected mount pose (position m, angles degrees; on the
-    unloaded body, :func:`mount_correction`).  Under a ``load_state`` the body stays where
-    it was: its pivot is pinned to the old mount position when the scene left it to the
-    mount."""
-    old = scene.camera.mount
-    mount = old.model_copy(update={
-        "position": correction.position_m, "yaw_deg": correction.yaw_deg,
-        "pitch_deg": correction.pitch_deg, "roll_deg": correction.roll_deg})
-    camera = scene.camera.model_copy(update={"mount": mount})
-    load = scene.load_state
-    if load is not None and load.pivot_m is None:
-        load = load.model_copy(update={"pivot_m": old.position})
-    return scene.model_copy(update={"camera": camera, "load_state": load})
-
-
-def mount_correction(scene: Scene, correction: PoseCorrection) -> PoseCorrection:
-    """``correction`` with its corrected pose as the scene's mount values.
-
-    The pose search works on the camera as the scene shows it; under a ``load_state`` that
-    is the camera moved with the body, so its corrected pose (``position_m`` and the
-    angles, scene frame) is taken back to the unloaded body (what ``camera.mount`` holds).
-    The changes (``d_*``) stay those of the camera in the scene frame.  Without a load
-    state, ``correction`` itself.
-    """
-    load = scene.load_state
-    if load is None:
-        return correction
-    rot = rotation_from_ypr(correction.yaw_deg, correction.pitch_deg, correction.roll_deg)
-    pos, ypr = load.mount_of(np.asarray(correction.position_m), rot,
-                             scene.camera.mount.position)
-    return replace(correction, position_m=pos, yaw_deg=float(ypr[0]),
-                   pitch_deg=float(ypr[1]), roll_deg=float(ypr[2]))
 
 
 def write_corrected_scene(scene_file: str | Path, correction: PoseCorrection,

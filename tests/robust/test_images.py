@@ -13,7 +13,7 @@ from rvmsim.render import CameraRays, cover_layout, refold_layout, render_fishey
 from rvmsim.robust import (LoadState, MountSample, body_pose, draw_samples, sample_camera,
                            sample_images, variation_from_scene)
 from rvmsim.scene import checker_corners
-from rvmsim.validate.landmarks import spacing_px, usable_corners
+from rvmsim.pose.landmarks import spacing_px, usable_corners
 
 from rvmsim.testing.scenes import load_small_scene
 from .conftest import ANGLES_ONLY

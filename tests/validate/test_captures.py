@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from rvmsim.errors import RvmsimError
-from rvmsim.validate import (CaptureOutcome, Validation, capture_files, capture_folders,
-                             validate_captures)
+from rvmsim.pose import capture_files, capture_folders
+from rvmsim.validate import CaptureOutcome, Validation, validate_captures
 
 from rvmsim.testing.captures import make_scene, scene_dict
 

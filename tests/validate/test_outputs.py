@@ -10,7 +10,6 @@ import numpy as np
 
 from rvmsim.storage import json_default
 from rvmsim.report import write_validation_outputs as write_outputs
-from rvmsim.validate.outputs import blend, landmark_picture
 
 from rvmsim.testing.captures import perturbed_validation
 
@@ -32,16 +31,3 @@ def test_write_outputs_writes_json_page_and_pictures(tmp_path):
     assert "&lt;b&gt;mat &amp; board&lt;/b&gt;" in html and "<b>mat" not in html
     assert html.count("data:image/png;base64,") == len(res.images)
     assert "pose_angle_correction_deg" in html and ": FAIL</h1>" in html
-
-
-def test_pictures():
-    a = np.full((4, 4, 3), 10, np.uint8)
-    b = np.full((4, 4, 3), 251, np.uint8)
-    assert (blend(a, b) == 130).all()
-    res, _ = perturbed_validation()
-    cap = np.zeros((480, 640, 3), np.uint8)
-    pic = landmark_picture(cap, res.landmarks)
-    m = next(m for m in res.landmarks if m.inlier)
-    u, v = (int(round(x)) for x in m.corrected_px)
-    assert tuple(pic[v, u]) == (0, 220, 255)  # the corrected reprojection: a cyan dot
-    assert not cap.any()  # the capture is not drawn on

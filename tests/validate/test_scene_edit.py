@@ -7,7 +7,8 @@ import yaml
 
 from rvmsim.errors import SceneError
 from rvmsim.scene import load_scene
-from rvmsim.validate import PoseCorrection, scene_with_mount, write_corrected_scene
+from rvmsim.pose import PoseCorrection, scene_with_mount
+from rvmsim.validate import write_corrected_scene
 
 from rvmsim.testing.captures import base, scene_dict
 

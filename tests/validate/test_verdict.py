@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from rvmsim.validate import Check, EdgeComparison, PoseCorrection, Tolerances
+from rvmsim.pose import PoseCorrection
+from rvmsim.validate import Check, EdgeComparison, Tolerances
 from rvmsim.validate.verdict import judge
 
 CORRECTION = PoseCorrection((3.0, 4.0, 0.0), 0.1, -0.6, 0.2, (0, 0, 0), (0, 0, 0),

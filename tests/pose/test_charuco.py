@@ -13,9 +13,10 @@ import yaml
 
 from rvmsim.render import render_fisheye
 from rvmsim.scene import Scene, checker_corners, scene_from_dict
-from rvmsim.validate import BoardShade, ValidationSettings, board_layout, validate
-from rvmsim.validate.capture import grey
-from rvmsim.validate.charuco import detect_charuco
+from rvmsim.pose import BoardShade, board_layout
+from rvmsim.validate import ValidationSettings, validate
+from rvmsim.pose.capture import grey
+from rvmsim.pose.charuco import detect_charuco
 
 from ..conftest import ROOT
 from rvmsim.testing.captures import degrade

@@ -36,11 +36,11 @@ from ..render import FisheyeImages
 from ..scene import PATTERN_LIFT_M, GroundPattern, Scene, pattern_axes, pattern_shade
 from .board import BoardShade
 from .capture import grey
-from .failure import ValidationFailure
+from .failure import PoseFailure
 from .landmarks import VisibleLandmarks
 from .matching import find_landmarks
 from .projection import corrected_pose, project
-from .verdict import PoseCorrection
+from .records import PoseCorrection
 
 #: At the fitted pose, the board's squares must correlate this well with the capture.
 MIN_BOARD_SCORE = 0.5
@@ -196,7 +196,7 @@ class PoseSearch:
                 rotation=rot, radius_px=radius, usable=lm.usable, named=self.named)
             ok = np.isfinite(found[:, 0])
             if ok.sum() < need:
-                raise ValidationFailure(
+                raise PoseFailure(
                     "detection",
                     f"{self.capture_name}: too few landmarks found: {int(ok.sum())} of "
                     f"{lm.n_usable} predicted checker corners (need {need}) within "
@@ -212,7 +212,7 @@ class PoseSearch:
             x, res_i, sigma = fit_pose(cam, self.ypr0_deg, pts[idx[keep]], found[idx[keep]],
                                        robust=False, x0=x_r)
             if not (np.all(np.isfinite(x)) and np.all(np.isfinite(sigma))):
-                raise ValidationFailure(
+                raise PoseFailure(
                     "pose fit", f"{self.capture_name}: the {int(keep.sum())} matched "
                     "landmarks do not determine the mount pose (they lie on a line or too "
                     "close together)", found=found)
@@ -351,7 +351,7 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
 
     Raises
     ------
-    ValidationFailure
+    PoseFailure
         Too few landmarks found from the starting pose (step ``detection``); the board's
         corners were matched but its squares' colours do not fit the pose, i.e. a
         one-square alias that no shift resolves, or a shift of the board fits as well (an
@@ -397,7 +397,7 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
     if board is not None and board_index is not None and fit.inliers[board_index].sum() >= 4:
         board_score = board(*search.pose(fit.x))
         if board_score < MIN_BOARD_SCORE:
-            raise ValidationFailure(
+            raise PoseFailure(
                 "correspondence",
                 f"{search.capture_name}: the board's corners were matched, but its squares' "
                 f"colours do not fit the pose (correlation {board_score:.2f} < "
@@ -405,7 +405,7 @@ def find_pose(search: PoseSearch, board: BoardShade | None = None,
         _check_board_lattice(search, fit, board, [sh for sh in shades if sh is not board])
     usable = int(search.landmarks.n_usable)
     if fit.inliers.sum() < MIN_FIT_SHARE * usable:
-        raise ValidationFailure(
+        raise PoseFailure(
             "correspondence",
             f"{search.capture_name}: the fitted pose explains only {int(fit.inliers.sum())} of "
             f"the {usable} checker corners it predicts in view (need {MIN_FIT_SHARE:.0%}): "
@@ -451,7 +451,7 @@ def _check_board_lattice(search: PoseSearch, fit: PoseFit, board: BoardShade,
                f"{ev.n_differ} samples tell them apart ({ev.share_1:.0%} favour the fit, need "
                f"{LATTICE_SHARE:.0%} of at least {LATTICE_VOTES})" if ev.n_differ else
                "nothing in view tells them apart")
-        raise ValidationFailure(
+        raise PoseFailure(
             "correspondence",
             f"{search.capture_name}: the board's lattice is ambiguous: its corners fit as well "
             f"{du:+d}, {dv:+d} squares along its width and height ({why}); the board's edges "

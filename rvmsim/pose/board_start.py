@@ -41,7 +41,7 @@ from .board import BoardLayout, BoardShade, LatticeEvidence
 from .board_detect import MIN_PATCH, GridDetection, detect_grids, view_basis
 from .capture import grey
 from .charuco import detect_charuco
-from .pose import fit_pose
+from .fit import fit_pose
 from .projection import corrected_pose, project
 
 __all__ = ["BoardStart", "BoardSearch", "board_outline", "find_board_start", "search_board",

@@ -1,4 +1,4 @@
-"""rvmsim.validate.shade_search: the global coarse-to-fine pose search on the patterns' shade,
+"""rvmsim.pose.shade_search: the global coarse-to-fine pose search on the patterns' shade,
 and validate() from ±10° / ±0.3 m starts where no board detector helps (the real BAIC frame,
 and a rendered capture whose scene has no board)."""
 
@@ -11,8 +11,8 @@ import pytest
 
 from rvmsim.scene import Scene
 from rvmsim.validate import Validation, ValidationSettings, validate
-from rvmsim.validate.projection import corrected_pose
-from rvmsim.validate.shade_search import search_pose_by_shade
+from rvmsim.pose.projection import corrected_pose
+from rvmsim.pose.shade_search import search_pose_by_shade
 
 from rvmsim.testing.captures import (BAIC, MOUNT, baic, base, make_scene, moved_mount, perturbed,
                                      perturbed_mount, scene_dict)

@@ -1,4 +1,4 @@
-"""rvmsim.validate.capture: reading captures and checking their size."""
+"""rvmsim.pose.capture: reading captures and checking their size."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from rvmsim.errors import RvmsimError
-from rvmsim.validate import load_capture
-from rvmsim.validate.capture import check_capture_size
+from rvmsim.pose import load_capture
+from rvmsim.pose.capture import check_capture_size
 
 from rvmsim.testing.captures import base
 

@@ -40,7 +40,7 @@ from ..camera import FisheyeCamera
 from ..scene import Scene
 from .board import BoardLayout, BoardShade
 from .capture import grey
-from .pose import GroundShade, dense_align
+from .fit import GroundShade, dense_align
 from .projection import corrected_pose
 
 __all__ = ["POSE_SCALE", "SearchLevel", "LEVELS", "ShadeStart", "search_pose_by_shade"]

@@ -1,4 +1,4 @@
-"""rvmsim.validate.board_start and .board: the global start from the board the chessboard
+"""rvmsim.pose.board_start and .board: the global start from the board the chessboard
 detector finds, and the one-square alias."""
 
 from __future__ import annotations
@@ -9,12 +9,12 @@ import pytest
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.render import render_fisheye
 from rvmsim.scene import checker_corners
-from rvmsim.validate import (BoardShade, ValidationSettings, board_layout, find_board_start,
-                             validate)
+from rvmsim.pose import BoardShade, board_layout, find_board_start
+from rvmsim.validate import ValidationSettings, validate
 from rvmsim.camera import ypr_from_rotation
-from rvmsim.validate.capture import grey
-from rvmsim.validate.landmarks import visible_landmarks
-from rvmsim.validate.pose import PoseSearch, find_pose
+from rvmsim.pose.capture import grey
+from rvmsim.pose.landmarks import visible_landmarks
+from rvmsim.pose.fit import PoseSearch, find_pose
 
 from rvmsim.testing.captures import (BOARD_MOUNT, BOARD_SQUARE_M, MOUNT, board_capture,
                                      board_scene, base, make_scene, moved_mount, perturbed,
@@ -78,10 +78,10 @@ def test_degraded_capture_from_10_degrees_off_finds_its_pose():
 def test_without_the_global_start_such_a_pose_is_a_detection_failure():
     """Neither the board start nor the mat's shade search (``dense_align=False``; with it,
     the mat alone finds this pose: tests/validate/test_global_search.py)."""
-    from rvmsim.validate import ValidationFailure
+    from rvmsim.pose import PoseFailure
 
     scene = make_scene(scene_dict(moved_mount((0.3, -0.3, 0.3), (10.0, -10.0, 10.0))))
-    with pytest.raises(ValidationFailure) as err:
+    with pytest.raises(PoseFailure) as err:
         validate(scene, base()[1].color,
                  ValidationSettings(rerender=False, global_start=False, dense_align=False))
     assert err.value.step == "detection" and "(step failed: detection)" in str(err.value)
@@ -168,8 +168,8 @@ def _exact_start(det_ij: np.ndarray, scene):
     """:func:`_best_start` from ``scene``'s pose on a 'detection' that is the exact
     projections, at the true pose (:data:`MOUNT`), of the board's lattice points ``det_ij``
     (rows, cols, 2)."""
-    from rvmsim.validate.board_start import _best_start
-    from rvmsim.validate.projection import project
+    from rvmsim.pose.board_start import _best_start
+    from rvmsim.pose.projection import project
 
     truth = base()[0].fisheye_camera()
     layout = board_layout(scene, tuple(checker_corners(scene)))
@@ -223,7 +223,7 @@ def test_corners_matched_on_squares_of_the_wrong_colours_are_refused():
     painted over with noise), and no same-colour shift does better: the fit is refused, not
     accepted, with what was found."""
     from rvmsim import labels as L
-    from rvmsim.validate import ValidationFailure
+    from rvmsim.pose import PoseFailure
 
     scene = board_scene()
     search, syn, lm = _board_search(scene, "painted")
@@ -234,7 +234,7 @@ def test_corners_matched_on_squares_of_the_wrong_colours_are_refused():
     painted = grey(cap).astype(np.float32)
     board = syn.labels == L.BOARD
     painted[board] = np.random.default_rng(1).uniform(0, 255, int(board.sum()))
-    with pytest.raises(ValidationFailure) as err:
+    with pytest.raises(PoseFailure) as err:
         find_pose(search, BoardShade(layout, syn.camera, painted), layout.corner_index.ravel())
     assert err.value.step == "correspondence" and "one square off" in str(err.value)
     assert err.value.found is not None and np.isfinite(err.value.found[:, 0]).sum() >= 30
@@ -246,10 +246,10 @@ def test_a_board_found_only_far_from_the_scenes_pose_is_a_detection_failure_sayi
     mount is that far off), and the scene's view has no corners.  It is a ``detection``
     failure naming that cause, with the pictures (the board's corners drawn), not a bare
     error."""
-    from rvmsim.validate import ValidationFailure
+    from rvmsim.pose import PoseFailure
 
     scene = board_scene(d_ypr_deg=(120.0, 0.0, 0.0))
-    with pytest.raises(ValidationFailure) as err:
+    with pytest.raises(PoseFailure) as err:
         validate(scene, board_capture(), ValidationSettings(rerender=False))
     assert err.value.step == "detection"
     msg = str(err.value)

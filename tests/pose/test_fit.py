@@ -1,4 +1,4 @@
-"""rvmsim.validate.pose: the pose fit, the dense pre-alignment and the checker-shift
+"""rvmsim.pose.fit: the pose fit, the dense pre-alignment and the checker-shift
 disambiguation, on perturbed synthetic captures and on the real frame."""
 
 from __future__ import annotations
@@ -12,10 +12,11 @@ import pytest
 from rvmsim import labels as L
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.scene import pattern_shade
-from rvmsim.validate import ValidationSettings, fit_pose, validate
-from rvmsim.validate.landmarks import visible_landmarks
-from rvmsim.validate.pose import GroundShade, dense_align
-from rvmsim.validate.projection import corrected_pose, project
+from rvmsim.pose import fit_pose
+from rvmsim.validate import ValidationSettings, validate
+from rvmsim.pose.landmarks import visible_landmarks
+from rvmsim.pose.fit import GroundShade, dense_align
+from rvmsim.pose.projection import corrected_pose, project
 
 from rvmsim.testing.captures import (BAIC, D_POS_MM, D_YPR_DEG, MOUNT, baic, baic_rough_scene,
                                      base, perturbed, perturbed_validation, wrong_scene)

@@ -18,7 +18,8 @@ from ..camera import FisheyeCamera
 from ..errors import InputFileError, RvmsimError
 
 
-__all__ = ["load_capture", "check_captures", "check_capture_size", "grey", "capture_header_size"]
+__all__ = ["load_capture", "check_captures", "check_capture_size", "grey", "capture_header_size",
+           "CAPTURE_SUFFIXES", "capture_files", "capture_folders"]
 
 
 def load_capture(path: str | Path, camera: FisheyeCamera | None = None) -> np.ndarray:
@@ -172,3 +173,48 @@ def grey(rgb: np.ndarray) -> np.ndarray:
     """Grey levels (0..255, float32, (H, W)) of an (H, W, 3) uint8 RGB image."""
 
     return np.asarray(cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), dtype=np.float32)
+
+
+#: File endings of the captures a folder given to ``--capture`` holds.
+CAPTURE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff")
+
+
+def capture_files(paths: Sequence[Path]) -> list[Path]:
+    """The capture files: each path given, or the images (:data:`CAPTURE_SUFFIXES`, sorted
+    by name) in each folder given.
+
+    Raises
+    ------
+    RvmsimError
+        A folder without any capture, or with a link named as a capture to a file that is
+        not there (a car would be left out silently).
+    """
+    out: list[Path] = []
+    for p in paths:
+        if p.is_dir():
+            named = sorted(f for f in p.iterdir() if f.suffix.lower() in CAPTURE_SUFFIXES)
+            for f in named:
+                if f.is_symlink() and not f.exists():  # a car whose capture is gone
+                    raise RvmsimError(f"{f}: a link to a missing file (--capture {p})")
+            found = [f for f in named if f.is_file()]  # a folder named like one is not
+            if not found:
+                raise RvmsimError(f"{p}: no captures ({', '.join(CAPTURE_SUFFIXES)}) in this "
+                                  "folder (--capture)")
+            out += found
+        else:
+            out.append(p)
+    return out
+
+
+def capture_folders(captures: Sequence[Path], out_dir: Path) -> list[Path]:
+    """One output folder per capture: ``out_dir/<capture name>``, a name met again numbered
+    (``front``, ``front_2``, …)."""
+    used: set[str] = set()
+    out: list[Path] = []
+    for cap in captures:
+        name, n = cap.stem, 2
+        while name in used:
+            name, n = f"{cap.stem}_{n}", n + 1
+        used.add(name)
+        out.append(out_dir / name)
+    return out

@@ -1,11 +1,11 @@
-"""rvmsim.validate.matching: finding the landmarks in a capture."""
+"""rvmsim.pose.matching: finding the landmarks in a capture."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from rvmsim.validate import find_landmarks
-from rvmsim.validate.landmarks import visible_landmarks
+from rvmsim.pose import find_landmarks
+from rvmsim.pose.landmarks import visible_landmarks
 
 from rvmsim.testing.captures import base, perturbed_validation
 

@@ -1,4 +1,4 @@
-"""rvmsim.validate.landmarks: which checker corners the synthetic frame shows usably."""
+"""rvmsim.pose.landmarks: which checker corners the synthetic frame shows usably."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 
 from rvmsim.errors import RvmsimError
 from rvmsim.scene import checker_corners
-from rvmsim.validate.landmarks import spacing_px, usable_corners, visible_landmarks
+from rvmsim.pose.landmarks import spacing_px, usable_corners, visible_landmarks
 
 from rvmsim.testing.captures import base, make_scene, scene_dict
 
