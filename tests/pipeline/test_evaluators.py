@@ -2,7 +2,7 @@
 
 The full path is what ``rvmsim evaluate`` measures: the whole fisheye label image remapped
 (:func:`rvmsim.isp.process`) and every EC measured on it.  Each fast path must give every EC
-value exactly (all six bundled vehicles, the paper's criteria and fmvss111-full):
+value exactly (all six bundled vehicles; the paper's criteria, fmvss111-full and custom ECs):
 
 - one image, many candidates: the windowed path (tuning);
 - a batch of images, one setting: the RVM-pixel path (variation samples: only the fisheye
@@ -26,9 +26,13 @@ from rvmsim.robust import AxisDistribution, SampleSet, Variation, draw_samples, 
 from rvmsim.search import default_space
 
 from ..conftest import bundled_scene, small_render
+from .custom_ecs import custom_criteria
 
 LETTERS = "abcdef"
-CRITERIA = {"paper": default_criteria, "fmvss111-full": lambda: load_criteria("fmvss111-full")}
+#: The paper's ECs, FMVSS 111's, and custom ones (more groups than one distance image holds,
+#: an upper-region group, a fixed region, a plugin's EC).
+CRITERIA = {"paper": default_criteria, "fmvss111-full": lambda: load_criteria("fmvss111-full"),
+            "custom": custom_criteria}
 OUT = OutputSpec(320, 180)
 
 
