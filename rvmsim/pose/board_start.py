@@ -4,9 +4,9 @@ The scene's pose only says roughly where the board is.  :func:`find_board_start`
 OpenCV's chessboard detector (``cv2.findChessboardCornersSB``) on the whole capture and, where
 that fails, on a perspective (pinhole) view of the fisheye capture centred on the board's
 predicted direction and wide enough for the board to be anywhere within ±20° of it.  The
-detected corners are back-projected through the lens (our own inverse of the projection;
-for a Kannala-Brandt lens that is ``cv2.fisheye.undistortPoints``), and ``cv2.solvePnP``
-(IPPE, planar) on them gives the camera pose, which our fisheye PnP (:func:`.pose.fit_pose`)
+detected corners are back-projected through the camera's own lens model
+(:meth:`rvmsim.camera.FisheyeCamera.pixel_rays`, any registered model), and ``cv2.solvePnP``
+(IPPE, planar) on them gives the camera pose, which our fisheye PnP (:func:`.fit.fit_pose`)
 then polishes.
 
 Correspondence: the detector gives a grid of the board's size, not which end is which,

@@ -1,6 +1,6 @@
 """A global, coarse-to-fine search for the mount pose on the shade of the scene's patterns.
 
-The local pre-alignment (:func:`.pose.dense_align`, Nelder-Mead from the scene's pose)
+The local pre-alignment (:func:`.fit.dense_align`, Nelder-Mead from the scene's pose)
 holds for a pose a few degrees or a few cm off; 0.15 m of height on the real BAIC frame
 already puts it in a local optimum.  :func:`search_pose_by_shade` finds the pose from
 ±10° / ±0.3 m:
