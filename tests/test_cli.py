@@ -249,6 +249,8 @@ def test_top_level_help_and_version_still_work():
      "rvmsim select: --rnak: no such option (did you mean --rank?)"),
     (("validate", "s.yaml"), "rvmsim validate: --capture: required option not given"),
     (("report", "a", "b"), "rvmsim report: got unexpected extra argument (b)"),
+    (("tune", "s.yaml", "--force=yes"), "rvmsim tune: option '--force' does not take a value"),
+    (("tune", "--resume"), "rvmsim tune: option '--resume' requires an argument"),
     (("tune", "s.yaml", "--max-time", "nan"),
      "rvmsim tune: --max-time: 'nan' is not a finite number"),
 ])
