@@ -35,8 +35,15 @@ def finished_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture
-def case_dir(tmp_path: Path, finished_run: Path) -> Path:
-    """A fresh case folder holding ``scene.yaml`` (valid) and ``run/`` (a finished run)."""
+def case_dir(tmp_path: Path, request: pytest.FixtureRequest) -> Path:
+    """A fresh case folder holding ``scene.yaml`` (valid), and ``run/`` (a finished run) when
+    the test's ``case`` names it (:meth:`~.harness.Case.gives`) or the test has no ``case``."""
+    callspec = getattr(request.node, "callspec", None)
+    case = None if callspec is None else callspec.params.get("case")
+    if case is not None and not case.gives("run"):
+        small_scene(tmp_path)
+        return tmp_path
+    finished_run: Path = request.getfixturevalue("finished_run")
     shutil.copy(finished_run / SMALL_SCENE, tmp_path / SMALL_SCENE)
     shutil.copytree(finished_run / "run", tmp_path / "run")
     return tmp_path

@@ -43,8 +43,10 @@ class Case:
     ``args`` are ``rvmsim``'s arguments (paths inside the case folder may be given relative
     to it: the command runs there).  ``setup(folder)`` writes the bad files into the case
     folder before the run.  ``names`` must all appear in the one stderr line (file name,
-    key or option).  ``keep`` are folders (relative to the case folder) whose bytes must not
-    change.  ``env``: environment variables of the run.  ``isolate``: why the case needs a
+    key or option).  ``keep`` are the stored folders the command is given (relative to the
+    case folder, named in ``args``: a folder the command does not read is not kept) whose
+    bytes must not change; the case folder holds the finished run only when the case names
+    it (:meth:`gives`).  ``env``: environment variables of the run.  ``isolate``: why the case needs a
     child process of its own (one of :data:`MEMORY`, :data:`ENDLESS`, :data:`DASK`,
     :data:`SERVER`); empty: it runs in this process.
     """
@@ -56,6 +58,10 @@ class Case:
     keep: tuple[str, ...] = ()
     env: dict[str, str] = field(default_factory=dict)
     isolate: str = ""
+
+    def gives(self, folder: str) -> bool:
+        """Whether the command is given ``folder`` or a path inside it."""
+        return any(a == folder or str(a).startswith(folder + "/") for a in self.args)
 
 
 def run_case(case: Case, folder: Path) -> Outcome:
@@ -86,6 +92,8 @@ def assert_clean_failure(out: Outcome, names: Sequence[str]) -> None:
 def check_case(case: Case, folder: Path) -> Outcome:
     """Set the case up in ``folder``, run it, and assert a clean failure that changed none of
     ``case.keep``."""
+    unread = [k for k in case.keep if not case.gives(k)]
+    assert not unread, f"keep= names folders the command is not given: {unread}"
     if case.setup is not None:
         case.setup(folder)
     before = {k: folder_digest(folder / k) for k in case.keep}

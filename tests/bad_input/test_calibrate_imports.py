@@ -82,16 +82,15 @@ FILES = [
     ("ocam-no-rays", T, _ocam("3 0 0 0"), ("polynomial",)),
     ("ocam-centre-far", T, _ocam(centre="12000 16000"), ("centre",)),
 ]
-CASES = [Case(f"import-{i}", CAL + (name,), (name, *names), _write(name, text), keep=("keep",))
+CASES = [Case(f"import-{i}", CAL + (name,), (name, *names), _write(name, text))
          for i, name, text, names in FILES]
 TRUNCATED_AT = (40, 100, 150, 200, 230)
 CASES += [Case(f"import-opencv-truncated-{n}", CAL + (O,), (O,),
-               _write(O, _opencv()[:n]), keep=("keep",)) for n in TRUNCATED_AT]
+               _write(O, _opencv()[:n])) for n in TRUNCATED_AT]
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
 def test_bad_import(case, tmp_path):
-    (tmp_path / "keep").mkdir()
     out = check_case(case, tmp_path)
     assert not (tmp_path / "o").exists(), out.stderr  # nothing written
 

@@ -78,10 +78,9 @@ FILES = [
 #: Cases run in a child of their own: headers of a gigabyte or more of pixels.
 ISOLATED = {"png-100000": MEMORY, "png-20000": MEMORY, "jpeg-65000": MEMORY,
             "tiff-100000": MEMORY, "bmp-100000": MEMORY}
-CASES = [Case(f"capture-{i}", VALIDATE + (name,), (name,), _file(name, data), keep=("run",),
+CASES = [Case(f"capture-{i}", VALIDATE + (name,), (name,), _file(name, data),
               isolate=ISOLATED.get(i, "")) for i, name, data in FILES]
-CASES += [Case("capture-missing", VALIDATE + ("gone.png",), ("gone.png", "not found"),
-               keep=("run",))]
+CASES += [Case("capture-missing", VALIDATE + ("gone.png",), ("gone.png", "not found"))]
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
@@ -108,13 +107,13 @@ def _folder_with_a_corrupt_capture(folder):
 #: whose only capture is unreadable (its error is one stderr line; the summary is written).
 CASES_SEVERAL = [
     Case("capture-folder-without-captures", VALIDATE + ("caps",), ("caps", "no captures"),
-         _folder_without_captures, keep=("run",)),
+         _folder_without_captures),
     Case("write-scene-with-two-captures",
          ("validate", SMALL_SCENE, "--out", "v", "--no-progress", "--capture", "a.png",
           "--capture", "b.png", "--write-scene", "fixed.yaml"), ("--write-scene", "2 given"),
-         _two_captures, keep=("run",)),
+         _two_captures),
     Case("capture-folder-with-a-corrupt-capture", VALIDATE + ("caps",), ("x.png",),
-         _folder_with_a_corrupt_capture, keep=("run",)),
+         _folder_with_a_corrupt_capture),
 ]
 
 
@@ -155,8 +154,7 @@ BAD_AMONG_GOOD = [
 CASES_AMONG_GOOD = [
     Case(f"validate-{i}-among-good", ("validate", SMALL_SCENE, "--out", "v", "--no-progress",
                                       "--capture", "good1.png", "--capture", "good2.png",
-                                      "--capture", name), (name,), _good_then(name, data),
-         keep=("run",)) for i, name, data in BAD_AMONG_GOOD]
+                                      "--capture", name), (name,), _good_then(name, data)) for i, name, data in BAD_AMONG_GOOD]
 
 
 @pytest.mark.parametrize("case", CASES_AMONG_GOOD, ids=[c.id for c in CASES_AMONG_GOOD])

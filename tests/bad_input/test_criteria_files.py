@@ -31,15 +31,13 @@ FILES = [
     ("upper-fraction-nan", "upper_region_fraction: .nan\n", "upper_region_fraction"),
     ("edge-columns-400-digits", "edge_columns: " + "9" * 400 + "\n", "edge_columns"),
 ]
-CASES = [Case(f"criteria-{i}", EVALUATE, (C, key), _file(text), keep=("run",))
+CASES = [Case(f"criteria-{i}", EVALUATE, (C, key), _file(text))
          for i, text, key in FILES]
-CASES += [Case(f"criteria-yaml-{i}", EVALUATE, (C, "limit"), _file("name: x\n" + text),
-               keep=("run",), isolate=why) for i, text, why in BOMBS]
+CASES += [Case(f"criteria-yaml-{i}", EVALUATE, (C, "limit"), _file("name: x\n" + text), isolate=why) for i, text, why in BOMBS]
 CASES += [
     Case("criteria-tune-range-nan", ("tune", SMALL_SCENE, "--criteria", C, "--out", "new",
                                      "--no-progress"),
-         (C, "criteria.2-1.range.0"), _file("criteria: {2-1: {range: [.nan, 9]}}\n"),
-         keep=("run",)),
+         (C, "criteria.2-1.range.0"), _file("criteria: {2-1: {range: [.nan, 9]}}\n")),
 ]
 
 

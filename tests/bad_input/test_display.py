@@ -35,7 +35,7 @@ SCENE_VALUES = [
     ("unknown-key", "diagonal_in", 7.0),
 ]
 CASES = [Case(f"display-scene-{i}", _evaluate("fmvss111-full"), (SMALL_SCENE, f"display.{key}"),
-              _scene(key, value), keep=("run",)) for i, key, value in SCENE_VALUES]
+              _scene(key, value)) for i, key, value in SCENE_VALUES]
 #: (case id, criteria file text, key named)
 FILES = [
     ("width-zero", "display: {width_mm: 0}\n", "display.width_mm"),
@@ -48,12 +48,12 @@ FILES = [
      "criteria: {6-1: {parameters: {max_magnification: .nan}}}\n",
      "criteria.6-1.parameters.max_magnification"),
 ]
-CASES += [Case(f"display-criteria-{i}", _evaluate(C), (C, key), _file(text), keep=("run",))
+CASES += [Case(f"display-criteria-{i}", _evaluate(C), (C, key), _file(text))
           for i, text, key in FILES]
 CASES += [
     Case("display-tune-width-zero", ("tune", SMALL_SCENE, "--criteria", "fmvss111-full", "--out",
                                      "new", "--no-progress"),
-         (SMALL_SCENE, "display.width_mm"), _scene("width_mm", 0.0), keep=("run",)),
+         (SMALL_SCENE, "display.width_mm"), _scene("width_mm", 0.0)),
 ]
 
 

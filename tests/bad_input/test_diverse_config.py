@@ -62,7 +62,7 @@ FILES = [
     ("unknown-key", "diverse: {spread: 3}\n", "diverse.spread"),
     ("not-a-mapping", "diverse: 5\n", "diverse"),
 ]
-CASES = [Case(f"diverse-config-{i}", TUNE, (T, key), _file(text), keep=K)
+CASES = [Case(f"diverse-config-{i}", TUNE, (T, key), _file(text))
          for i, text, key in FILES]
 CASES += [
     Case("diverse-status-min-distance-zero", ("status", "run", "--min-distance", "0"),

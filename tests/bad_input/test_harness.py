@@ -21,7 +21,7 @@ def test_the_small_scene_is_valid(tmp_path):
 
 def test_a_clean_failure_passes(case_dir):
     case = Case("missing-key", ("render", SMALL_SCENE, "--out", "r"), (SMALL_SCENE, "camera"),
-                setup=lambda d: small_scene(d, {"camera": None}), keep=("run",))
+                setup=lambda d: small_scene(d, {"camera": None}))
     check_case(case, case_dir)
 
 
@@ -46,7 +46,14 @@ def test_a_changed_run_folder_is_caught(case_dir, monkeypatch):
 
     monkeypatch.setattr(harness, "run_case", spoiling_run)
     with pytest.raises(AssertionError, match="run changed"):
-        check_case(Case("spoils", ("render",), (SMALL_SCENE,), keep=("run",)), case_dir)
+        check_case(Case("spoils", ("report", "run"), (SMALL_SCENE,), keep=("run",)), case_dir)
+
+
+def test_keep_names_only_folders_the_command_is_given(case_dir):
+    """A kept folder the command is not given would be checked for nothing."""
+    with pytest.raises(AssertionError, match="not given: \\['run'\\]"):
+        check_case(Case("unread", ("render", SMALL_SCENE), (SMALL_SCENE,), keep=("run",)),
+                   case_dir)
 
 
 # ---------------------------------------------------------------------------- real failures

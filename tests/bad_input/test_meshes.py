@@ -94,29 +94,26 @@ FILES = [
 
 #: Cases run in a child of their own: a header counting 10⁹ triangles (50 GB if believed).
 ISOLATED = {"stl-header-lies": MEMORY}
-CASES = [Case(f"mesh-{i}", RENDER, (SMALL_SCENE, BUMPER, msg), _mesh_scene(name, data),
-              keep=("run",), isolate=ISOLATED.get(i, "")) for i, name, data, msg in FILES]
+CASES = [Case(f"mesh-{i}", RENDER, (SMALL_SCENE, BUMPER, msg), _mesh_scene(name, data), isolate=ISOLATED.get(i, "")) for i, name, data, msg in FILES]
 CASES += [
     Case("mesh-missing", RENDER, (SMALL_SCENE, BUMPER, "gone.stl"),
-         lambda f: small_scene(f, {"vehicle.bumper": {"mesh": "gone.stl"}}), keep=("run",)),
+         lambda f: small_scene(f, {"vehicle.bumper": {"mesh": "gone.stl"}})),
     Case("mesh-units-mm-far", RENDER, (SMALL_SCENE, BUMPER, "coordinates"),
-         _mesh_scene("b.stl", _export("b.stl", _box(1e7)), units="mm"), keep=("run",)),
+         _mesh_scene("b.stl", _export("b.stl", _box(1e7)), units="mm")),
     Case("mesh-translation-nan", RENDER, (SMALL_SCENE, "vehicle.bumper.translation.1"),
-         _mesh_scene("b.stl", _export("b.stl", _box()), translation=[0, math.nan, 0]),
-         keep=("run",)),
+         _mesh_scene("b.stl", _export("b.stl", _box()), translation=[0, math.nan, 0])),
     Case("mesh-vertex-limit", RENDER, (SMALL_SCENE, BUMPER, "RVMSIM_MAX_MESH_VERTICES"),
-         _mesh_scene("b.obj", _export("b.obj", _box())), keep=("run",),
+         _mesh_scene("b.obj", _export("b.obj", _box())),
          env={"RVMSIM_MAX_MESH_VERTICES": "6"}),
     Case("mesh-size-limit", RENDER, (SMALL_SCENE, BUMPER, "RVMSIM_MAX_MESH_VERTICES"),
-         _mesh_scene("b.stl", _export("b.stl", _box())), keep=("run",),
+         _mesh_scene("b.stl", _export("b.stl", _box())),
          env={"RVMSIM_MAX_MESH_VERTICES": "1"}),
     Case("mesh-extra-junk", RENDER, (SMALL_SCENE, "vehicle.extra.0.mesh", "e.ply"),
-         _mesh_scene("e.ply", b"ply\n", key="vehicle.extra"), keep=("run",)),
+         _mesh_scene("e.ply", b"ply\n", key="vehicle.extra")),
     Case("mesh-garnish-empty", RENDER, (SMALL_SCENE, "vehicle.garnish.mesh", "g.obj"),
-         _mesh_scene("g.obj", b"", key="vehicle.garnish"), keep=("run",)),
+         _mesh_scene("g.obj", b"", key="vehicle.garnish")),
     Case("mesh-process-1e38", ("process", SMALL_SCENE, "--out", "p", "--no-progress"),
-         (SMALL_SCENE, BUMPER, "b.stl"), _mesh_scene("b.stl", _binary_stl(STL_TRIANGLE * 1e38)),
-         keep=("run",)),
+         (SMALL_SCENE, BUMPER, "b.stl"), _mesh_scene("b.stl", _binary_stl(STL_TRIANGLE * 1e38))),
 ]
 
 

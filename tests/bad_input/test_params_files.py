@@ -41,15 +41,15 @@ FILES = [
 ]
 #: Cases run in a child of their own: RVM images over the pixel limit.
 ISOLATED = {"size-huge": MEMORY, "size-pixels": MEMORY, "json-size-huge": MEMORY}
-CASES = [Case(f"params-{i}", _process(name), (name, key), _file(name, text), keep=("run",),
+CASES = [Case(f"params-{i}", _process(name), (name, key), _file(name, text),
               isolate=ISOLATED.get(i, "")) for i, name, text, key in FILES]
 CASES += [Case(f"params-yaml-{i}", _process(P_YAML), (P_YAML, "limit"),
-               _file(P_YAML, "rad: 600\n" + text), keep=("run",), isolate=why)
+               _file(P_YAML, "rad: 600\n" + text), isolate=why)
           for i, text, why in BOMBS]
 CASES += [
     Case("params-evaluate-rad-400-digits",
          ("evaluate", SMALL_SCENE, "--params", P_YAML, "--out", "e", "--no-progress"),
-         (P_YAML, "rad"), _file(P_YAML, f"rad: {BIG}\n"), keep=("run",)),
+         (P_YAML, "rad"), _file(P_YAML, f"rad: {BIG}\n")),
 ]
 
 

@@ -78,5 +78,5 @@ def test_a_failing_plugin_is_one_line(case_id, args, source, names_ec, case_dir,
     module = plugin_module(source)
     (case_dir / C).write_text(f"plugins: [{module}]\n")
     names = (module, EC, SMALL_SCENE) if names_ec else (C, module)
-    out = check_case(Case(case_id, args, names, keep=("run",)), case_dir)
+    out = check_case(Case(case_id, args, names), case_dir)
     assert not (case_dir / "e" / "ec.json").exists(), out.stderr

@@ -21,24 +21,23 @@ def _bad_variation_file(folder):
 
 
 CASES = [
-    Case("robust-samples-without-robust", ("tune", S, "--samples", "4", *NEW), ("--samples",),
-         keep=("run",)),
+    Case("robust-samples-without-robust", ("tune", S, "--samples", "4", *NEW), ("--samples",)),
     Case("robust-variation-without-robust", ("tune", S, "--variation", "v.yaml", *NEW),
-         ("--variation",), keep=("run",)),
+         ("--variation",)),
     Case("robust-samples-zero", ("tune", S, "--robust", "--samples", "0", *NEW),
-         ("--samples",), keep=("run",)),
+         ("--samples",)),
     Case("robust-samples-too-many", ("tune", S, "--robust", "--samples", "100000", *NEW),
-         ("--samples",), keep=("run",), isolate=ENDLESS),
+         ("--samples",), isolate=ENDLESS),
     Case("robust-with-resume", ("tune", "--robust", "--resume", "run", "--no-progress"),
          ("--resume",), keep=("run",)),
     Case("robust-scene-without-variation", ("tune", S, "--robust", *NEW),
-         (S, "variation"), _no_variation, keep=("run",)),
+         (S, "variation"), _no_variation),
     Case("robust-variation-file-missing", ("tune", S, "--robust", "--variation", "none.yaml",
-                                           *NEW), ("none.yaml",), keep=("run",)),
+                                           *NEW), ("none.yaml",)),
     Case("robust-variation-file-bad", ("tune", S, "--robust", "--variation", "v.yaml", *NEW),
-         ("v.yaml", "yaw_deg"), _bad_variation_file, keep=("run",)),
+         ("v.yaml", "yaw_deg"), _bad_variation_file),
     Case("robust-aggregate-bad", ("tune", S, "--robust", "--aggregate", "median", *NEW),
-         ("--aggregate",), keep=("run",)),
+         ("--aggregate",)),
 ]
 
 

@@ -221,7 +221,7 @@ RUN_CASES = [
     Case("resume-legacy-no-run-json", RESUME, ("run.json",), _legacy(drop_run_json=True), K),
     # tune --out: a file, a run already there; --force with bad inputs keeps the old run
     Case("tune-out-is-a-file", (*TUNE_NEW, "--out", "f"), ("f", "folder"),
-         _text("f", "not a folder\n"), K),
+         _text("f", "not a folder\n")),
     Case("tune-out-holds-a-run", (*TUNE_NEW, "--out", "run"), ("run", "--force"), None, K),
     Case("force-junk-scene", FORCE, (SMALL_SCENE,), _text(SMALL_SCENE, "camera: [\n"), K),
     Case("force-empty-scene", FORCE, (SMALL_SCENE,), _text(SMALL_SCENE, ""), K),
@@ -237,11 +237,10 @@ RUN_CASES = [
          ("run.json", "folder"), None, K),
     # seeds (issue group 4): refused before a run starts
     Case("tune-negative-seed", (*TUNE_NEW, "--out", "new", "--seed", "-7"),
-         ("--seed", "-7", "4294967295"), None, K),
+         ("--seed", "-7", "4294967295")),
     Case("tune-cmaes-seed-beyond-range",
          ("tune", SMALL_SCENE, "--strategy", "cmaes", "--budget", "10", "--workers", "1",
-          "--no-progress", "--out", "new", "--seed", str(2**40)), ("--seed", "4294967295"),
-         None, K),
+          "--no-progress", "--out", "new", "--seed", str(2**40)), ("--seed", "4294967295")),
 ]
 
 
@@ -298,7 +297,7 @@ SWEEP_CASES = [
     Case("sweep-of-another-sweep", SWEEP_RUN, ("sw", "--force"),
          _meta(SWEEP_DB, "fingerprint", '"another"'), KS),
     Case("sweep-out-is-a-file", (*SWEEP_RUN[:2], "--out", "f", *SWEEP_RUN[4:]), ("f", "folder"),
-         _text("f", "x\n"), KS),
+         _text("f", "x\n")),
     Case("sweep-force-junk-sweep-file", (*SWEEP_RUN, "--force"), (SWEEP_FILE,),
          _text(SWEEP_FILE, "axes: [[[\n"), KS),
     Case("sweep-force-out-is-a-file", ("sweep", SWEEP_FILE, "--out", "sw/sweep.csv", "--force",

@@ -104,30 +104,26 @@ def _yaml_bomb(text: str):
 
 
 CASES = (
-    [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit(k, v), keep=("run",),
+    [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit(k, v),
           isolate=ISOLATED.get(i, "")) for i, k, v, key in VALUES]
-    + [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit("camera.intrinsics", v),
-            keep=("run",), isolate=ISOLATED.get(i, "")) for i, v, key in INTRINSICS]
-    + [Case(f"scene-yaml-{i}", RENDER, (SMALL_SCENE, "limit"), _yaml_bomb(text), keep=("run",),
+    + [Case(f"scene-{i}", RENDER, (SMALL_SCENE, key), _edit("camera.intrinsics", v), isolate=ISOLATED.get(i, "")) for i, v, key in INTRINSICS]
+    + [Case(f"scene-yaml-{i}", RENDER, (SMALL_SCENE, "limit"), _yaml_bomb(text),
             isolate=why) for i, text, why in BOMBS]
     + [
         Case("process-fx-inf", ("process", SMALL_SCENE, "--out", "p", "--no-progress"),
-             (SMALL_SCENE, "camera.intrinsics.fx"), _edit("camera.intrinsics.fx", math.inf),
-             keep=("run",)),
+             (SMALL_SCENE, "camera.intrinsics.fx"), _edit("camera.intrinsics.fx", math.inf)),
         Case("evaluate-position-nan", ("evaluate", SMALL_SCENE, "--out", "e", "--no-progress"),
              (SMALL_SCENE, "camera.mount.position.1"),
-             _edit("camera.mount.position", [0.0, math.nan, 0.1]), keep=("run",)),
+             _edit("camera.mount.position", [0.0, math.nan, 0.1])),
         Case("tune-size-huge", ("tune", SMALL_SCENE, "--out", "new", "--budget", "4",
                                 "--strategy", "random", "--workers", "1", "--no-progress"),
-             (SMALL_SCENE, "camera.image_size"), _edit("camera.image_size", [100000, 100000]),
-             keep=("run",), isolate=MEMORY),
+             (SMALL_SCENE, "camera.image_size"), _edit("camera.image_size", [100000, 100000]), isolate=MEMORY),
         Case("validate-cx-far", ("validate", SMALL_SCENE, "--capture", "cap.png",
                                  "--no-progress"),
-             (SMALL_SCENE, "camera.intrinsics.cx"), _edit("camera.intrinsics.cx", 1.0e6),
-             keep=("run",)),
+             (SMALL_SCENE, "camera.intrinsics.cx"), _edit("camera.intrinsics.cx", 1.0e6)),
         Case("render-scaled-over-the-limit", RENDER + ("--scale", "4"),
              (SMALL_SCENE, "camera.image_size", "RVMSIM_MAX_IMAGE_PIXELS"),
-             _edit("name", "scaled"), keep=("run",), env={"RVMSIM_MAX_IMAGE_PIXELS": "1000000"}),
+             _edit("name", "scaled"), env={"RVMSIM_MAX_IMAGE_PIXELS": "1000000"}),
     ]
 )
 

@@ -52,16 +52,15 @@ FILES = [
 ISOLATED = {"step-endless": ENDLESS, "million-points": ENDLESS, "points-over-limit": ENDLESS,
             "list-too-long": ENDLESS, "output-size-huge": MEMORY, "output-size-pixels": MEMORY,
             "scene-size-huge": MEMORY}
-CASES = [Case(f"sweep-{i}", SWEEP, (S, key), _file(axes), keep=("run",),
+CASES = [Case(f"sweep-{i}", SWEEP, (S, key), _file(axes),
               isolate=ISOLATED.get(i, "")) for i, axes, key in FILES]
 CASES += [Case(f"sweep-yaml-{i}", SWEEP, (S, "limit"),
-               _file("  pitch_deg: [28]\n" + text), keep=("run",), isolate=why)
+               _file("  pitch_deg: [28]\n" + text), isolate=why)
           for i, text, why in BOMBS]
 CASES += [
     Case("sweep-tune-config-size", SWEEP, (S, "tune.config.output.size"),
          _file("  pitch_deg: [28]\n", HEAD.replace("budget: 4", "budget: 4, config: "
-                                                   "{output: {size: [8192, 8192]}}")),
-         keep=("run",), isolate=MEMORY),
+                                                   "{output: {size: [8192, 8192]}}")), isolate=MEMORY),
 ]
 
 

@@ -41,7 +41,7 @@ FILES = [
 #: Cases run in a child of their own: endless re-check rounds or budgets.
 ISOLATED = {"rounds-huge": ENDLESS, "rounds-400-digits": ENDLESS, "factor-inf": ENDLESS,
             "factor-huge": ENDLESS}
-CASES = [Case(f"sweep-recheck-{i}", SWEEP, (S, key), _file(value), keep=("run",),
+CASES = [Case(f"sweep-recheck-{i}", SWEEP, (S, key), _file(value),
               isolate=ISOLATED.get(i, "")) for i, value, key in FILES]
 
 

@@ -41,7 +41,7 @@ FILES = [
 ]
 #: Cases run in a child of their own: endless sample counts.
 ISOLATED = {"samples-huge": ENDLESS, "samples-400-digits": ENDLESS}
-CASES = [Case(f"sweep-yield-{i}", SWEEP, (S, key), _file(value), keep=("run",),
+CASES = [Case(f"sweep-yield-{i}", SWEEP, (S, key), _file(value),
               isolate=ISOLATED.get(i, "")) for i, value, key in FILES]
 
 

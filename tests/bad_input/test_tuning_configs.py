@@ -49,18 +49,17 @@ FILES = [
 ]
 #: Cases run in a child of their own: RVM images over the pixel limit.
 ISOLATED = {"size-huge": MEMORY, "size-pixels": MEMORY}
-CASES = [Case(f"tuning-{i}", TUNE, (T, key), _file(text), keep=("run",),
+CASES = [Case(f"tuning-{i}", TUNE, (T, key), _file(text),
               isolate=ISOLATED.get(i, "")) for i, text, key in FILES]
-CASES += [Case(f"tuning-yaml-{i}", TUNE, (T, "limit"), _file("top_m: 5\n" + text),
-               keep=("run",), isolate=why) for i, text, why in BOMBS]
+CASES += [Case(f"tuning-yaml-{i}", TUNE, (T, "limit"), _file("top_m: 5\n" + text), isolate=why) for i, text, why in BOMBS]
 CASES += [
     Case("tuning-init-outside-camera-range", TUNE, (T, "parameters.rad.init"),
-         _file("parameters: {rad: {init: 1900}}\n"), keep=("run",)),
+         _file("parameters: {rad: {init: 1900}}\n")),
     Case("tuning-default-strategy", TUNE[:6] + TUNE[8:], (T, "cmaes_solved.sigma0"),
-         _file("cmaes_solved: {sigma0: 0}\n"), keep=("run",)),
+         _file("cmaes_solved: {sigma0: 0}\n")),
     Case("tuning-batch-command", ("batch", SMALL_SCENE, "--config", T, "--out", "b",
                                   "--no-progress"),
-         (T, "fixed.tilt"), _file("fixed: {tilt: .nan}\n"), keep=("run",)),
+         (T, "fixed.tilt"), _file("fixed: {tilt: .nan}\n")),
 ]
 
 
