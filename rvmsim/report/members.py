@@ -17,7 +17,6 @@ from .page import escape, img_tag
 from ..render import cached_render
 from ..scene import load_scene
 from ..pipeline import evaluate_params
-from ..tune.robust import robust_summary
 
 if TYPE_CHECKING:
     from ..criteria import Criteria
@@ -27,8 +26,8 @@ if TYPE_CHECKING:
     from ..runs import RunSettings, RunStore, TrialRecord
     from ..tune.robust import RobustSummary
 
-__all__ = ["MemberScene", "load_member_scenes", "member_scores", "members_section",
-           "member_scores_html", "MEMBER_THUMB_PX", "robust_top", "robust_section"]
+__all__ = ["MemberScene", "load_member_scenes", "members_section", "member_scores_html",
+           "MEMBER_THUMB_PX", "robust_section"]
 
 #: Longest side of a member's thumbnail (px).
 MEMBER_THUMB_PX = 240
@@ -65,11 +64,6 @@ def load_member_scenes(settings: RunSettings, run_dir: Path,
     return out
 
 
-def member_scores(store: RunStore, top: Sequence[TrialRecord]) -> dict[int, list[float]]:
-    """Each top trial's stored per-member EC scores (by trial index)."""
-    return {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}
-
-
 def members_section(members: Sequence[MemberScene], params: IspParams, output: OutputSpec,
                     criteria: Criteria, aggregate: str) -> str:
     """The ``members`` section: a row per vehicle under ``params`` (rank 1)."""
@@ -102,17 +96,6 @@ def member_scores_html(members: Sequence[MemberScene], scores: Sequence[float]) 
         return ""
     items = "".join(f"<li>{escape(m.vehicle)}: {s:.4g}</li>" for m, s in zip(members, scores))
     return f'<ul class="member-scores">{items}</ul>'
-
-
-def robust_top(store: RunStore, top: Sequence[TrialRecord], settings: RunSettings
-               ) -> list[RobustSummary | None]:
-    """Each top trial's nominal score, robust score and sample yield (a robust run; empty
-    for others), from its stored member results."""
-
-    if settings.robust_samples is None:
-        return []
-    n_scenes = max(1, len(settings.scenes))
-    return [robust_summary(store, rec.idx, n_scenes, settings.robust_samples) for rec in top]
 
 
 def robust_section(top: Sequence[TrialRecord], rows: Sequence[RobustSummary | None],

@@ -30,10 +30,11 @@ from ..errors import RvmsimError
 from ..pipeline import evaluate_params, record_output, rvm_color
 from ..runs import (find_runs, is_run_folder, open_run, recorded_path, run_inputs, run_settings,
                     run_state, store_candidates)
+from ..tune import member_set
 from ..tune.markets import load_markets
 from .market_rows import markets_html
-from .members import (MemberScene, load_member_scenes, member_scores, member_scores_html,
-                      members_section, robust_section, robust_top)
+from .members import (MemberScene, load_member_scenes, member_scores_html, members_section,
+                      robust_section)
 from .page import data_uri, escape, img_tag, page, shrink
 from .gallery import differences, margins_html
 from .plots import convergence_png, histogram_png
@@ -113,8 +114,7 @@ def _load_run(run_dir: Path) -> _Run:
         curve = store.best_curve()
         scores = np.array(store.scores(), dtype=float)
         count = store.count()
-        member_top = member_scores(store, top) if settings.shared else {}
-        robust_rows = robust_top(store, top, settings)
+        rows = member_set(settings).top_rows(store, top)  # what the run's kind says of each
     finally:
         store.close()
     scene = load_scene(scene_file)
@@ -125,8 +125,8 @@ def _load_run(run_dir: Path) -> _Run:
     scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
                 crit_file, settings.record_output(), top, curve, scores, count,
-                scene_changed, load_member_scenes(settings, run_dir, recorded_path), member_top,
-                robust_rows, [c for c, _ in pairs])
+                scene_changed, load_member_scenes(settings, run_dir, recorded_path),
+                rows.member_scores, rows.robust, [c for c, _ in pairs])
 
 
 # ---------------------------------------------------------------------------- sections

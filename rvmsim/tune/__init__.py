@@ -66,8 +66,8 @@ from .run import (
     DISPLAY_SIZE,
 )
 from .results import remove_run, write_results
-from .kinds import (Verdict, Built, MemberSet, Single, Shared, Robust, Compensated, Markets,
-                    member_set)
+from .kinds import (Verdict, Built, TopRows, MemberSet, Single, Shared, Robust, Compensated,
+                    Markets, member_set)
 from .summary import summary_lines
 
 __all__ = [
@@ -126,5 +126,6 @@ __all__ = [
     "Compensated",
     "Markets",
     "member_set",
+    "TopRows",
     "remove_run",
 ]

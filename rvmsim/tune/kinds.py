@@ -15,8 +15,10 @@ path through it for every kind:
 Each kind builds its members and renders (:meth:`MemberSet.build`), searches them
 (:meth:`MemberSet.search`, through :func:`rvmsim.tune.search_members` and
 :func:`rvmsim.pipeline.make_evaluator`), writes its own result rows under ``best/`` and gives
-its :class:`Verdict` (:meth:`MemberSet.write_results`).  The verdict is what ``rvmsim tune``'s
-exit status comes from; nothing is read back from disk for it.
+its :class:`Verdict` (:meth:`MemberSet.write_results`), and tells the report what it says of
+each top candidate (:meth:`MemberSet.top_rows`: member scores, robust summaries).  The
+verdict is what ``rvmsim tune``'s exit status comes from; nothing is read back from disk for
+it.
 
 "Binding EC" has one meaning everywhere: the enabled EC with the lowest score under the
 setting judged (:func:`rvmsim.criteria.binding_row`).  The EC that fails most often over a
@@ -38,7 +40,7 @@ from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
 from ..percar import check_law
 from ..render import cached_render, same_scene, scene_key
-from ..runs.records import RunSettings
+from ..runs.records import RunSettings, TrialRecord
 from ..runs.store import RunStore
 from ..scene import Scene, load_scene
 from ..search.config import TuningConfig
@@ -47,8 +49,9 @@ from .markets import (check_market_arguments, market_problem_lines, market_table
                       markets_members, write_market_results)
 from .members import Member, check_cameras, parse_aggregate
 from .requests import SearchOptions, SearchSettings, TuneRequest
-from .robust import (ROBUST_AGGREGATE, check_samples, robust_line, robust_members,
-                     run_compensation, run_variations, variation_key, write_robust_results)
+from .robust import (ROBUST_AGGREGATE, RobustSummary, check_samples, robust_line,
+                     robust_members, robust_summary, run_compensation, run_variations,
+                     variation_key, write_robust_results)
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_problems,
                      shared_settings, write_member_results)
 from .results import write_results
@@ -59,8 +62,8 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..search.strategies import Strategy
 
-__all__ = ["Verdict", "Built", "MemberSet", "Single", "Shared", "Robust", "Compensated",
-           "Markets", "member_set", "new_run_settings"]
+__all__ = ["Verdict", "Built", "TopRows", "MemberSet", "Single", "Shared", "Robust",
+           "Compensated", "Markets", "member_set", "new_run_settings"]
 
 
 @dataclass(frozen=True)
@@ -109,6 +112,17 @@ class Built:
     pairs: list[MarketMember] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class TopRows:
+    """What a run's kind says of each of its top candidates, read from its store (for the
+    report): each one's EC score on every member (by trial index; a shared or markets run),
+    and each one's nominal score, robust score and sample yield (a robust run; None where
+    the store holds no member results)."""
+
+    member_scores: dict[int, list[float]] = field(default_factory=dict)
+    robust: list[RobustSummary | None] = field(default_factory=list)
+
+
 class MemberSet(Protocol):
     """A run kind (see the module docstring)."""
 
@@ -144,6 +158,10 @@ class MemberSet(Protocol):
     def write_results(self, run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                       built: Built, criteria: Criteria) -> Verdict:
         """Write ``top/`` and ``best/`` and judge the best setting."""
+        ...
+
+    def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
+        """What the kind says of each of ``top`` (its stored member results)."""
         ...
 
 
@@ -217,6 +235,9 @@ class Single:
         return Verdict(best.passed, lines=(best.table(),),
                        problems=tuple(f"EC {k} fails" for k in failing))
 
+    def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
+        return TopRows()  # one scene, its own image: nothing beyond the trial's score
+
 
 @dataclass(frozen=True)
 class Shared(Single):
@@ -247,6 +268,9 @@ class Shared(Single):
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         renders = super().build(scenes, progress=progress).renders
         return Built(renders, scene_members(scenes, renders))
+
+    def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
+        return TopRows(member_scores=_member_scores(store, top))
 
     def write_results(self, run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                       built: Built, criteria: Criteria) -> Verdict:
@@ -335,6 +359,14 @@ class Robust:
         return Verdict(inner.passed, inner.gate, inner.problems,
                        (*robust_line(doc), *inner.lines), shown)
 
+    def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
+        st = self.settings
+        assert st.robust_samples is not None  # member_set made it robust for them
+        n_scenes = max(1, len(st.scenes))
+        rows = self.inner.top_rows(store, top)
+        return TopRows(rows.member_scores, [robust_summary(store, rec.idx, n_scenes,
+                                                           st.robust_samples) for rec in top])
+
 
 @dataclass(frozen=True)
 class Compensated(Robust):
@@ -405,6 +437,9 @@ class Markets:
         return Verdict(bool(doc["passed"]), gate=True, problems=tuple(problems),
                        lines=(table.rstrip(), "", *market_table_lines(doc)))
 
+    def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
+        return TopRows(member_scores=_member_scores(store, top))
+
 
 def member_set(settings: RunSettings) -> MemberSet:
     """The run kind ``settings`` describe: markets, or a single or shared run, made robust
@@ -446,6 +481,11 @@ def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_support
     for recorded, sc in scenes:
         out = check_supported(sc, out, recorded, only_supported=only_supported)
     return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)
+
+
+def _member_scores(store: RunStore, top: Sequence[TrialRecord]) -> dict[int, list[float]]:
+    """Each of ``top``'s stored per-member EC scores (by trial index)."""
+    return {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}
 
 
 def _check_stored_aggregate(settings: RunSettings, db: Path) -> None:

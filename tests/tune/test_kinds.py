@@ -9,9 +9,10 @@ import json
 
 
 from rvmsim.compensation import DEFAULT_COMPENSATION
-from rvmsim.runs import RunSettings
+from rvmsim.runs import RunSettings, RunStore
 from rvmsim.runs.records import SceneRef
-from rvmsim.tune import Compensated, Markets, Robust, Shared, Single, TuneRequest, member_set, tune
+from rvmsim.tune import (Compensated, Markets, Robust, Shared, Single, TopRows, TuneRequest,
+                         member_set, tune)
 from rvmsim.search import TuningConfig
 from rvmsim.tune.markets import market_summary_lines
 from rvmsim.tune.shared import shared_problem_lines
@@ -58,6 +59,12 @@ def test_a_single_run_reports_its_verdict_and_does_not_gate(scene, tmp_path):
     assert res.verdict.exit_status == 0
     table = (tmp_path / "run" / "best" / "ec_table.txt").read_text().rstrip()
     assert res.verdict.lines == (table,)
+    # one scene on its own image: the kind has nothing to add to a top candidate's score
+    store = RunStore(tmp_path / "run" / "run.sqlite", readonly=True)
+    try:
+        assert member_set(store.settings()).top_rows(store, store.top(3)) == TopRows()
+    finally:
+        store.close()
 
 
 def test_a_markets_verdict_gates_and_agrees_with_what_the_run_wrote(scene, tmp_path):

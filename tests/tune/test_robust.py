@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from rvmsim.scene import load_scene
-from rvmsim.tune import TuneRequest, tune
+from rvmsim.tune import TuneRequest, member_set, tune
 from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore
 
@@ -163,6 +163,18 @@ def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, 
     assert top["samples"] == 6 and len(top["nominal_scores"]) == 2
     # the nominal scores are the first member of each scene's block
     assert top["nominal_scores"] == pytest.approx([members[0][0], members[4][0]])
+    # what the run's kind tells the report of its top candidates: every member's score and
+    # the robust summary robust.json holds
+    store = RunStore(run / "run.sqlite", readonly=True)
+    try:
+        best = store.top(3)
+        rows = member_set(store.settings()).top_rows(store, best)
+    finally:
+        store.close()
+    assert rows.member_scores[rec.idx] == pytest.approx([m[0] for m in members])
+    assert len(rows.robust) == len(best) and best[0].idx == rec.idx == top["trial"]
+    assert rows.robust[0]["nominal_scores"] == pytest.approx(top["nominal_scores"])
+    assert rows.robust[0]["yield"] == pytest.approx(top["yield"])
 
 
 #: ±2.5° on every angle: no setting passes a tenth of the samples, so the 10 % quantile of
