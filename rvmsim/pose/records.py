@@ -1,12 +1,11 @@
-"""What finding the pose gives: the landmarks matched and the mount pose change.
-
-Every record is a frozen dataclass.  Lengths in the image are px, lengths in the scene mm
-(corrections) or m (poses), angles degrees.
+"""The pose search's records: each landmark predicted, found and reprojected
+(:class:`LandmarkMatch`), and the mount change it gives (:class:`PoseCorrection`).
 
 Convention
 ----------
-Pixel coordinates are (u, v) = (column, row) with pixel centres at integer coordinates, as in
-:mod:`rvmsim.camera`.  Positions are in the scene frame (x driver side, y down, z rearward).
+Landmark positions are (u, v) px, column then row, pixel centres at integer coordinates (as
+in :mod:`rvmsim.camera`); mount changes are mm and degrees in the scene frame (x driver
+side, y down, z rearward), corrected poses m and degrees.
 """
 
 from __future__ import annotations
