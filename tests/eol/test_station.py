@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from rvmsim.compensation import Deviation
-from rvmsim.eol import Station, StationSettings
+from rvmsim.eol import CarResult, Station, StationSettings
 from rvmsim.isp import load_params
 
 from ..cli_runner import run_in_process
@@ -36,11 +36,17 @@ def station() -> Station:
     return Station(station_scene(), StationSettings(params, output))
 
 
-@pytest.mark.parametrize("truth", CORNERS, ids=lambda d: "{:+g},{:+g},{:+g}mm".format(
-    d.x_mm, d.y_mm, d.z_mm))
-def test_a_synthetic_cars_deviation_is_recovered(station: Station, truth: Deviation):
+@pytest.fixture(scope="module")
+def corner_cars(station: Station) -> list[CarResult]:
+    """The station's step on each of :data:`CORNERS`, in this process (once per module)."""
+    return [station.car(capture(truth), "car", "car") for truth in CORNERS]
+
+
+@pytest.mark.parametrize("k", range(len(CORNERS)), ids=["{:+g},{:+g},{:+g}mm".format(
+    d.x_mm, d.y_mm, d.z_mm) for d in CORNERS])
+def test_a_synthetic_cars_deviation_is_recovered(corner_cars: list[CarResult], k: int):
     """Within 1 mm and 0.05° on every axis (the station's own corners only, 640 × 480)."""
-    car = station.car(capture(truth), "car", "car")
+    car, truth = corner_cars[k], CORNERS[k]
     assert car.deviation is not None, car.reason
     err = np.array(car.deviation.as_offsets()) - np.array(truth.as_offsets())
     assert np.abs(err[:3]).max() <= 1.0, err
@@ -168,8 +174,8 @@ def test_a_car_measured_in_a_load_state_reads_the_load_too():
     assert car.deviation.pitch_deg == pytest.approx(-0.4 + 0.9, abs=0.05)
 
 
-def test_cars_shared_out_to_workers_give_the_same_results(tmp_path: Path, station: Station,
-                                                          env):
+def test_cars_shared_out_to_workers_give_the_same_results(tmp_path: Path,
+                                                          corner_cars: list[CarResult], env):
     caps = tmp_path / "caps"
     for k, d in enumerate(CORNERS):
         write_capture(caps / f"car{k}.png", d)
@@ -177,8 +183,7 @@ def test_cars_shared_out_to_workers_give_the_same_results(tmp_path: Path, statio
     assert res.code in (0, 1), res.stdout + res.stderr
     doc = json.loads((tmp_path / "out" / "eol.json").read_text())
     assert [r["name"] for r in doc["results"]] == [f"car{k}" for k in range(4)]
-    for row, truth in zip(doc["results"], CORNERS):
-        here = station.car(capture(truth), "car", "car")
+    for row, here in zip(doc["results"], corner_cars):  # the same cars, in this process
         assert here.deviation is not None and here.correction is not None
         assert row["deviation"] == pytest.approx(here.deviation.as_dict(), abs=1e-4)
         assert row["correction"]["values"] == pytest.approx(
