@@ -34,8 +34,8 @@ from typing import Callable, Protocol
 
 import cv2
 import numpy as np
+from cmaes import CMA
 
-from .._optional import cma_class
 from ..camera import FisheyeCamera
 from ..scene import Scene
 from .board import BoardLayout, BoardShade
@@ -239,7 +239,7 @@ def _cma(cost: Callable[[np.ndarray], float], mean: np.ndarray, sigma: float, se
          generations: int) -> tuple[float, np.ndarray, int]:
     """One CMA-ES run: (best cost, its point, evaluations)."""
 
-    opt = cma_class()(mean=np.clip(mean, -BOUND + 1e-6, BOUND - 1e-6), sigma=sigma,
+    opt = CMA(mean=np.clip(mean, -BOUND + 1e-6, BOUND - 1e-6), sigma=sigma,
               bounds=np.tile([-BOUND, BOUND], (6, 1)), seed=seed, population_size=POPULATION)
     best_f, best_z, n = math.inf, mean, 0
     for _ in range(generations):

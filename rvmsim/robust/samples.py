@@ -14,8 +14,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import qmc
 
-from .._optional import scipy_stats
 from .variation import MOUNT_AXES, LoadState, Variation
 
 __all__ = ["MountSample", "draw_samples", "nominal_sample", "position_levels_at"]
@@ -73,7 +73,7 @@ def _unit_points(n: int, seed: int) -> np.ndarray:
     """The first ``n`` points of a scrambled Sobol sequence in (0, 1)^_DIMS (a power of two
     is drawn, so the balance properties hold for the whole block)."""
 
-    sobol = scipy_stats().qmc.Sobol(d=_DIMS, scramble=True, seed=np.random.default_rng(seed))
+    sobol = qmc.Sobol(d=_DIMS, scramble=True, seed=np.random.default_rng(seed))
     u = sobol.random_base2(max(0, math.ceil(math.log2(max(n, 1)))))[:n]
     return np.clip(u, 1e-12, 1.0 - 1e-12)
 

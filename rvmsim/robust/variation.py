@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 from pydantic import ValidationError
+from scipy.stats import truncnorm
 
-from .._optional import scipy_stats
 from .._io import input_error_from_validation, key_lines, parse_yaml_mapping, read_text
 from ..errors import VariationError
 from ..scene import MOUNT_AXES, AxisSpec, Scene, VariationSpec
@@ -52,7 +52,7 @@ class AxisDistribution:
         if self.kind == "uniform":
             return (2.0 * u - 1.0) * self.half_width
         if self.kind == "normal" and self.sigma > 0:
-            return np.asarray(scipy_stats().truncnorm.ppf(u, -self.truncate, self.truncate)) * self.sigma
+            return np.asarray(truncnorm.ppf(u, -self.truncate, self.truncate)) * self.sigma
         return np.zeros_like(u)
 
 

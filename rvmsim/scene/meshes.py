@@ -9,21 +9,17 @@ built here.  Geometry is in the scene frame (metres, Y toward the ground).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
+import trimesh
 
 from .. import labels as L
 from .._io import env_limit
-from .._optional import import_trimesh
 from ..errors import SceneError
 from .fields import MAX_METRES
 from .primitives import Part, swept_block
 from .schema import BlockPart, MeshPart, Rgb, Scene
 from .site import site_parts
-
-if TYPE_CHECKING:
-    import trimesh
 
 
 __all__ = ["build_parts", "load_mesh_part", "DEFAULT_MAX_MESH_VERTICES", "MESH_BYTES_PER_VERTEX",
@@ -58,12 +54,12 @@ def _read_mesh_file(path: Path) -> trimesh.Trimesh:
                          f" ({MESH_BYTES_PER_VERTEX} per vertex of the limit of {limit} vertices; "
                          "raise it with the environment variable RVMSIM_MAX_MESH_VERTICES)")
     try:
-        loaded = import_trimesh().load(str(path), force="mesh", process=False)
+        loaded = trimesh.load(str(path), force="mesh", process=False)
     except Exception as err:  # noqa: BLE001 - trimesh raises many kinds for bad files
         first = (str(err).strip().splitlines() or [""])[0][:200]
         raise ValueError(f"cannot load mesh file {path}: {type(err).__name__}"
                          + (f": {first}" if first else "")) from None
-    if not isinstance(loaded, import_trimesh().Trimesh) or len(loaded.faces) == 0:
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"mesh file {path} holds no triangles")
     if len(loaded.vertices) > limit:
         raise ValueError(f"mesh file {path} has {len(loaded.vertices)} vertices, over the limit "

@@ -8,15 +8,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast
+from typing import cast
 
 import numpy as np
+import trimesh
 
-from .._optional import import_trimesh
 from .schema import BlockPart, Rgb
-
-if TYPE_CHECKING:
-    import trimesh
 
 
 __all__ = ["Part", "cylinder_side", "disk", "quad", "ground_rect", "swept_block",
@@ -79,7 +76,7 @@ def cylinder_side(
     faces = np.concatenate(
         [np.stack([i, i + n, i + 1], axis=1), np.stack([i + 1, i + n, i + n + 1], axis=1)]
     )
-    return import_trimesh().Trimesh(verts, faces, process=False)
+    return trimesh.Trimesh(verts, faces, process=False)
 
 
 def disk(radius: float, height: float, centre_xz: tuple[float, float]) -> trimesh.Trimesh:
@@ -94,14 +91,14 @@ def disk(radius: float, height: float, centre_xz: tuple[float, float]) -> trimes
     verts = np.concatenate([[[centre_xz[0], -height, centre_xz[1]]], ring])
     i = np.arange(n)
     faces = np.stack([np.zeros(n, int), 1 + (i + 1) % n, 1 + i], axis=1)
-    return import_trimesh().Trimesh(verts, faces, process=False)
+    return trimesh.Trimesh(verts, faces, process=False)
 
 
 def quad(corners: np.ndarray) -> trimesh.Trimesh:
     """A planar quadrilateral from 4 corners (in order around it)."""
 
     c = np.asarray(corners, dtype=np.float64).reshape(4, 3)
-    return import_trimesh().Trimesh(c, [[0, 1, 2], [0, 2, 3]], process=False)
+    return trimesh.Trimesh(c, [[0, 1, 2], [0, 2, 3]], process=False)
 
 
 def swept_block(part: BlockPart, *, sections: int = 48) -> trimesh.Trimesh:
@@ -127,8 +124,8 @@ def swept_block(part: BlockPart, *, sections: int = 48) -> trimesh.Trimesh:
     faces += [[0, n, 2 * n], [0, 2 * n, 3 * n]]  # end caps
     e = n - 1
     faces += [[e, 2 * n + e, n + e], [e, 3 * n + e, 2 * n + e]]
-    mesh = import_trimesh().Trimesh(verts, np.asarray(faces), process=True)
-    import_trimesh().repair.fix_normals(mesh)
+    mesh = trimesh.Trimesh(verts, np.asarray(faces), process=True)
+    trimesh.repair.fix_normals(mesh)
     return mesh
 
 
@@ -141,4 +138,4 @@ def ground_rect(x0: float, x1: float, z0: float, z1: float, lift: float) -> trim
 def concatenate(meshes: list[trimesh.Trimesh]) -> trimesh.Trimesh:
     """The meshes as one mesh (``trimesh.util.concatenate``, typed)."""
 
-    return cast("trimesh.Trimesh", import_trimesh().util.concatenate(meshes))
+    return cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))

@@ -9,19 +9,15 @@ ground is ``y = -h``.  Azimuth on a test object (degrees): 0 faces +Z (away from
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
+import trimesh
 
 from .. import labels as L
-from .._optional import import_trimesh
 from ..camera import rotation_from_ypr
 from .primitives import Part, concatenate, cylinder_side, disk, ground_rect, quad
 from .schema import GroundPattern, PatternBoard, Rect, Rgb, Scene
-
-if TYPE_CHECKING:
-    import trimesh
 
 
 __all__ = [
@@ -385,7 +381,7 @@ def _ground(scene: Scene) -> Part:
     mesh = ground_rect(-size / 2, size / 2, z0, z0 + size, 0.0)
     tile = 2.0  # metres per texture repeat
     uv = np.stack([mesh.vertices[:, 0] / tile, mesh.vertices[:, 2] / tile], axis=1)
-    mesh.visual = import_trimesh().visual.TextureVisuals(uv=uv)
+    mesh.visual = trimesh.visual.TextureVisuals(uv=uv)
     return Part("ground", L.GROUND, mesh, scene.test_site.ground_color, texture="asphalt")
 
 

@@ -41,9 +41,9 @@ from abc import ABC, abstractmethod
 from typing import Annotated, ClassVar, Generator, Sequence, TypeVar
 
 import numpy as np
+from cmaes import CMA
 from pydantic import BaseModel, ConfigDict, Field
 
-from .._optional import cma_class
 from ..errors import RvmsimError
 from .space import SearchSpace
 
@@ -331,7 +331,7 @@ class CmaEs(Strategy):
         popsize = self.popsize
         while used < self.budget:
             start = starts[restart] if restart < len(starts) else rng.uniform(0.1, 0.9, dim)
-            opt = cma_class()(mean=np.clip(start, 0.0, 1.0), sigma=self.sigma0,
+            opt = CMA(mean=np.clip(start, 0.0, 1.0), sigma=self.sigma0,
                       bounds=np.tile([0.0, 1.0], (dim, 1)), seed=_cma_seed(self.seed, restart),
                       population_size=popsize)
             patience = 10 + math.ceil(30 * dim / opt.population_size)
