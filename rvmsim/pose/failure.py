@@ -29,7 +29,7 @@ class PoseFailure(RvmsimError):
         What went wrong (starts with the capture's name).
     images : dict of str to (H, W, 3) uint8, optional
         Pictures (``overlay``, ``edges``, ``landmarks``) to write for the user (a caller
-        that draws them adds them: :meth:`with_images`).
+        that draws them, :class:`rvmsim.validate.ValidationFailure`).
     found : (N, 2) float, optional
         The landmarks found before the failure (NaN: not found), px.
     landmarks : tuple of LandmarkMatch
@@ -55,9 +55,3 @@ class PoseFailure(RvmsimError):
         self.landmarks = landmarks
         self.board_corners = board_corners
         self.board_outlines = board_outlines
-
-    def with_images(self, images: dict[str, np.ndarray]) -> PoseFailure:
-        """The same failure (of the same class) carrying ``images``."""
-        return type(self)(self.step, self.detail, images, self.found,
-                          landmarks=self.landmarks, board_corners=self.board_corners,
-                          board_outlines=self.board_outlines)
