@@ -31,7 +31,6 @@ from _bench_common import cpu_model  # noqa: E402
 import rvmsim.validate as V  # noqa: E402
 from rvmsim.errors import RvmsimError  # noqa: E402
 from rvmsim.render import cached_render  # noqa: E402
-from rvmsim.scene import Scene  # noqa: E402
 from rvmsim.testing import captures as T  # noqa: E402
 
 POS_M, ANG_DEG = 0.3, 10.0
@@ -61,15 +60,6 @@ def starts(n_random: int, seed: int) -> list[tuple[float, ...]]:
     return out
 
 
-def moved(sc: Scene, d: tuple[float, ...]) -> Scene:
-    m = sc.camera.mount
-    mount = m.model_copy(update={
-        "position": tuple(p + dp for p, dp in zip(m.position, d[:3])),
-        "yaw_deg": m.yaw_deg + d[3], "pitch_deg": m.pitch_deg + d[4],
-        "roll_deg": m.roll_deg + d[5]})
-    return sc.model_copy(update={"camera": sc.camera.model_copy(update={"mount": mount})})
-
-
 def pose_of(res: V.Validation) -> np.ndarray:
     c = res.correction
     return np.array([*c.position_m, c.yaw_deg, c.pitch_deg, c.roll_deg])
@@ -94,7 +84,7 @@ def main() -> None:
           f"{'deg off':>7} | {'s':>5} | ok")
     ok, seconds = 0, []
     for d in starts(args.starts, args.seed):
-        start = moved(sc, d)
+        start = T.moved_scene(sc, d)
         frame = cached_render(start)[0]
         t = time.perf_counter()
         try:

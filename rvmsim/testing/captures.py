@@ -213,6 +213,17 @@ def board_capture() -> np.ndarray:
     return degrade(truth.color, truth.labels, seed=3)
 
 
+def moved_scene(sc: Scene, d: tuple[float, ...]) -> Scene:
+    """``sc`` with its mount moved by ``d[:3]`` (m, scene frame: y down) and turned by
+    ``d[3:]`` (yaw, pitch, roll, degrees): a pose search's start that far off."""
+    m = sc.camera.mount
+    mount = m.model_copy(update={
+        "position": tuple(p + dp for p, dp in zip(m.position, d[:3])),
+        "yaw_deg": m.yaw_deg + d[3], "pitch_deg": m.pitch_deg + d[4],
+        "roll_deg": m.roll_deg + d[5]})
+    return sc.model_copy(update={"camera": sc.camera.model_copy(update={"mount": mount})})
+
+
 def moved_mount(d_position_m: tuple[float, float, float],
                 d_ypr_deg: tuple[float, float, float]) -> dict:
     """:data:`MOUNT` moved by ``d_position_m`` (m) and turned by ``d_ypr_deg`` (degrees)."""

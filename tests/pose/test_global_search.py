@@ -14,21 +14,11 @@ from rvmsim.validate import Validation, ValidationSettings, validate
 from rvmsim.pose.projection import corrected_pose
 from rvmsim.pose.shade_search import search_pose_by_shade
 
-from rvmsim.testing.captures import (BAIC, MOUNT, baic, base, make_scene, moved_mount, perturbed,
-                                     perturbed_mount, scene_dict)
+from rvmsim.testing.captures import (BAIC, MOUNT, baic, base, make_scene, moved_mount,
+                                     moved_scene, perturbed, perturbed_mount, scene_dict)
 from ..conftest import needs_real
 
 FAST = ValidationSettings(rerender=False)
-
-
-def _moved(sc: Scene, d: tuple[float, ...]) -> Scene:
-    """``sc`` with its mount moved by d[:3] (m, scene frame: y down) and turned by d[3:] (°)."""
-    m = sc.camera.mount
-    mount = m.model_copy(update={
-        "position": tuple(p + dp for p, dp in zip(m.position, d[:3])),
-        "yaw_deg": m.yaw_deg + d[3], "pitch_deg": m.pitch_deg + d[4],
-        "roll_deg": m.roll_deg + d[5]})
-    return sc.model_copy(update={"camera": sc.camera.model_copy(update={"mount": mount})})
 
 
 def _mount(res: Validation) -> np.ndarray:
@@ -54,7 +44,7 @@ def test_real_capture_from_a_rough_mount_finds_the_exact_pose_result(d):
     result from the scene's own mount (before the shade search these stopped 7–800 mm off
     or at `detection`)."""
     sc, cap, _ = baic()
-    start = _moved(sc, d)
+    start = moved_scene(sc, d)
     res = validate(start, cap, FAST, capture_name=str(BAIC))
     got, want = _mount(res), _baic_reference()
     assert np.linalg.norm(got[:3] - want[:3]) * 1000 <= 5.0, (got, want)
@@ -69,7 +59,7 @@ def _rendered_case(d: tuple[float, ...]) -> tuple[Scene, np.ndarray, np.ndarray]
     truth = perturbed_mount()
     d_scene = scene_dict(truth)
     d_scene["test_site"]["board"] = {"enabled": False}
-    sc = _moved(make_scene(d_scene), d)
+    sc = moved_scene(make_scene(d_scene), d)
     _, cap = perturbed()
     want = np.array([*truth["position"], truth["yaw_deg"], truth["pitch_deg"],
                      truth["roll_deg"]])
@@ -98,7 +88,7 @@ def test_shade_search_is_deterministic_and_lands_near_the_true_pose():
     d = (-0.2, 0.2, 0.15, -8.0, 6.0, 4.0)
     sc, cap, _ = _rendered_case(d)
     cam = sc.fisheye_camera()
-    true_cam = _moved(sc, tuple(-v for v in d)).fisheye_camera()
+    true_cam = moved_scene(sc, tuple(-v for v in d)).fisheye_camera()
     m = sc.camera.mount
     ypr0 = np.array([m.yaw_deg, m.pitch_deg, m.roll_deg])
     first = search_pose_by_shade(sc, cam, ypr0, cap)
