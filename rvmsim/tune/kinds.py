@@ -48,7 +48,7 @@ from .loop import SearchOutcome, search_members, search_scene
 from .markets import (check_market_arguments, market_problem_lines, market_table_lines,
                       markets_members, write_market_results)
 from .members import Member, check_cameras, parse_aggregate
-from .requests import SearchOptions, SearchSettings, TuneRequest
+from .requests import SceneArg, SearchOptions, SearchSettings, TuneRequest
 from .robust import (ROBUST_AGGREGATE, RobustSummary, check_samples, robust_line,
                      robust_members, robust_summary, run_compensation, run_variations,
                      variation_key, write_robust_results)
@@ -179,13 +179,8 @@ class Single:
         scene's support checked, :func:`_supported`), its scene loaded and fingerprinted,
         the config at the size of record."""
         crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
-        scene = r.scenes[0]
-        recorded: str | Path
-        if isinstance(scene, Scene):
-            sc, recorded = scene, r.scene_file or scene.source
-        else:
-            recorded, sc = scene, load_scene(scene)
-        crit, left_out = _supported(crit, [(str(recorded), sc)], r.only_supported)
+        recorded, sc = _loaded(r.scenes[0], r.scene_file)
+        crit, left_out = _supported(crit, [(recorded, sc)], r.only_supported)
         settings = RunSettings(
             scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
             strategy=r.strategy, seed=r.seed, budget=r.budget,
@@ -398,8 +393,7 @@ class Markets:
                                r.criteria is not None or r.criteria_file is not None,
                                r.robust_samples is not None)
         markets = parse_markets(r.markets or ())
-        loaded = [(str(r.scene_file or s.source) if isinstance(s, Scene) else str(s),
-                   s if isinstance(s, Scene) else load_scene(s)) for s in r.scenes]
+        loaded = [_loaded(s, r.scene_file) for s in r.scenes]
         check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in loaded])
         crit = market_criteria(markets[0])
         record = record_size(crit, loaded[0][1])
@@ -471,6 +465,14 @@ def new_run_settings(r: TuneRequest) -> tuple[RunSettings, list[Scene], Criteria
     if r.robust_samples is not None:
         settings = Robust.new_settings_from(settings, scenes, r, aggregate)
     return settings, scenes, crit
+
+
+def _loaded(scene: SceneArg, scene_file: str | Path | None) -> tuple[str, Scene]:
+    """(the file recorded for ``scene``, the Scene): a file is loaded and recorded as given;
+    a loaded Scene is recorded by ``scene_file``, else by its own source."""
+    if isinstance(scene, Scene):
+        return str(scene_file or scene.source), scene
+    return str(scene), load_scene(scene)
 
 
 def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_supported: bool
