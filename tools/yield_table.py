@@ -97,11 +97,13 @@ def _check_run(run_dir: Path, want: dict[str, Any]) -> None:
         s = run_settings(run_dir, store)
     finally:
         store.close()
+    robust = s.kind.robust
     have = {"scene": s.scene, "scene_key": s.scene_key, "strategy": s.strategy,
-            "seed": s.seed, "budget": s.budget, "robust_samples": s.robust_samples,
-            "variation_key": s.variation_key}
-    if s.compensation is not None:
-        have["compensation"] = s.compensation
+            "seed": s.seed, "budget": s.budget,
+            "robust_samples": None if robust is None else robust.samples,
+            "variation_key": None if robust is None else robust.variation_key}
+    if robust is not None and robust.compensation is not None:
+        have["compensation"] = robust.compensation
     if have != want:
         raise SystemExit(f"{run_dir}: holds a run with other settings ({have}, wanted {want});"
                          " delete it or give another --out")
@@ -116,7 +118,7 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
     from rvmsim.isp import load_params, params_to_dict
     from rvmsim.render import scene_key
     from rvmsim.scene import load_scene
-    from rvmsim.tune import RunOptions, TuneRequest, resume, tune
+    from rvmsim.tune import Robust, RunOptions, TuneRequest, resume, tune
     from rvmsim.search import DEFAULT_STRATEGY
     from rvmsim.tune.robust import run_variations, variation_key
 
@@ -143,8 +145,9 @@ def tuned(scene_path: Path, run_dir: Path, robust_samples: int | None,
     else:
         say(f"  tuning into {run_dir}")
         result = tune(TuneRequest((scene_path,), DEFAULT_STRATEGY, seed=args.seed,
-                                  budget=args.budget, robust_samples=robust_samples,
-                                  compensation=compensation), run_dir,
+                                  budget=args.budget,
+                                  kind=None if robust_samples is None else Robust(
+                                      robust_samples, compensation=compensation)), run_dir,
                       options=RunOptions(args.workers, progress=args.progress))
     seconds = time.perf_counter() - t0
     params, output = load_params(rank_1)

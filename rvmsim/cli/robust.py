@@ -151,8 +151,8 @@ def _inputs(scene: Path, params_file: Path | None, criteria_file: Path | None,
         settings = run_settings(run, store)
     finally:
         store.close()
-    if markets is None and settings.markets:
-        markets = ",".join(settings.markets)
+    if markets is None and settings.kind.markets:
+        markets = ",".join(settings.kind.markets)
     if scene == run:
         scene, crit = run_inputs(run, settings)
         criteria_file = criteria_file if criteria_file is not None or markets else crit

@@ -83,13 +83,13 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
     markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
-    from ..tune import RunOptions, TuneRequest, check_tune_arguments
+    from ..tune import Markets, Robust, RunOptions, Shared, TuneRequest, check_tune_arguments
     from ..search import load_tuning_config
     from ..tune import resume as resume_run
     from ..tune import summary_lines
     from ..tune import tune as run_tune
     from ..tune.resumed import ResumeArgs
-    from ..tune.robust import DEFAULT_SAMPLES
+    from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 
     check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
                          resume_dir is not None, robust, samples, variation_file, compensation,
@@ -104,12 +104,17 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
             seed=seed if "seed" in given else None, budget=budget, config_file=config_file,
             criteria_file=criteria_file, out=out, force=force, only_supported=only_supported))
     else:
+        kind: Shared | Robust | Markets | None = None
+        if markets is not None:
+            kind = Markets(markets, aggregate or "min")
+        elif robust:
+            kind = Robust(samples or DEFAULT_SAMPLES, variation_file,
+                          compensation_for(compensation), aggregate or ROBUST_AGGREGATE)
+        elif shared:
+            kind = Shared(aggregate or "min")
         request = TuneRequest(
             tuple(scenes), strategy, load_tuning_config(config_file), criteria_file=criteria_file,
-            seed=seed, budget=budget, aggregate=aggregate,
-            robust_samples=(samples or DEFAULT_SAMPLES) if robust else None,
-            variation_file=variation_file, compensation=compensation_for(compensation),
-            markets=markets, only_supported=only_supported)
+            seed=seed, budget=budget, kind=kind, only_supported=only_supported)
         name = "+".join(s.stem for s in scenes) + ("" if markets is None else "@markets")
         result = run_tune(request, out or Path("runs") / name, options=options, force=force)
     click.echo("\n".join(summary_lines(result)))

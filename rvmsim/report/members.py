@@ -114,11 +114,13 @@ def robust_section(top: Sequence[TrialRecord], rows: Sequence[RobustSummary | No
             f'<td class="num {"pass" if rec.passed else "fail"}">{rec.score:.4g}</td>'
             f'<td class="num">{100 * row["yield"]:.1f} % ({100 * lo:.0f}–{100 * hi:.0f} %)</td>'
             "</tr>")
-    source = settings.variation_file or "the scene's variation section"
+    robust = settings.kind.robust
+    assert robust is not None  # a robust run's section
+    source = robust.variation_file or "the scene's variation section"
     return (f'<section id="robust"><h2>Robust tuning</h2><p class="muted">Each candidate was '
-            f'judged on the nominal scene and {settings.robust_samples} variation samples '
+            f'judged on the nominal scene and {robust.samples} variation samples '
             f'(Sobol, seed {settings.seed}, from {escape(source)}); its robust score is their '
-            f'{escape(settings.aggregate or "min")}. The yield is the share of the samples '
+            f'{escape(settings.kind.aggregate or "min")}. The yield is the share of the samples '
             "where every EC passes, with its 95 % Wilson interval; <code>rvmsim robustness"
             "</code> measures it on many more samples.</p><table><tr><th>rank</th>"
             "<th>trial</th><th>nominal score</th><th>robust score</th><th>yield (95 %)</th>"

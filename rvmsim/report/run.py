@@ -348,7 +348,7 @@ def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary
         header += markets_html(markets, run_dir)
     if r.members:
         header += members_section(r.members, r.top[0].params, r.output, r.criteria,
-                                  r.settings.aggregate or "min")
+                                  r.settings.kind.aggregate or "min")
     if r.robust_rows:
         header += robust_section(r.top, r.robust_rows, r.settings)
     body = (header + _scene_section(r) + _images_section(r, color, annotated)

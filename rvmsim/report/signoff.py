@@ -173,9 +173,10 @@ def _files(r: _Run, setting: SettingRecord, rob: RobustnessRecord | None,
                                                                        list[str]]:
     """Every input file with its SHA-256 (see the module docstring), and the changed ones."""
     files = [setting.file, *scene_records(r.scene_file), *_criteria_record(r.criteria_file)]
-    if r.settings.variation_file:
-        files.append(file_record("variation (robust tuning)", r.settings.variation_file))
-    comp = r.settings.compensation
+    robust = r.settings.kind.robust
+    if robust is not None and robust.variation_file:
+        files.append(file_record("variation (robust tuning)", robust.variation_file))
+    comp = None if robust is None else robust.compensation
     if comp and Path(str(comp.get("source", ""))).is_file():
         files.append(file_record("compensation (robust tuning)", str(comp["source"])))
     changed: list[str] = []

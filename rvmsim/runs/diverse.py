@@ -360,11 +360,11 @@ def robust_keys(store: RunStore, settings: RunSettings, idx: np.ndarray, score: 
     above one that passes it), then the aggregate where it is not flat
     (:data:`FLAT_SCORE`), then the yield over the samples, then the nominal EC score
     (the worst scene's)."""
-    k = settings.robust_samples
+    robust = settings.kind.robust
     t_idx, member, m_score, m_passed = store.member_table()
-    if k is None or not len(t_idx):
+    if robust is None or not len(t_idx):
         return ()
-    per = 1 + k
+    per = 1 + robust.samples
     pos = {int(i): r for r, i in enumerate(idx)}
     rows = np.array([pos.get(int(i), -1) for i in t_idx])
     keep = rows >= 0

@@ -20,7 +20,7 @@ from ..search.config import TuningConfig
 from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 
 __all__ = ["RunStatus", "StopReason", "EcOutcome", "TrialRecord", "RunSettings", "RunState",
-           "SceneRef",
+           "SceneRef", "RunKind", "RobustRecord",
            "params_json", "ec_json", "ecs_from_json"]
 
 
@@ -90,16 +90,70 @@ class SceneRef:
 
 
 @dataclass(frozen=True)
+class RobustRecord:
+    """A robust run as recorded: ``samples`` variation samples per scene, drawn with the
+    run's seed from ``variation_file`` (None: each scene's own ``variation`` section), whose
+    fingerprint was ``variation_key`` when the run started (``--resume`` checks it), judged
+    after end-of-line compensation with ``compensation``
+    (:meth:`rvmsim.compensation.CompensationModel.as_dict`; None: before it)."""
+
+    samples: int
+    variation_file: str | None = None
+    variation_key: str | None = None
+    compensation: dict[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class RunKind:
+    """What kind of run, as recorded (:class:`RunSettings`\\ ``.kind``; the run kinds'
+    behaviour is :mod:`rvmsim.tune.kinds`).
+
+    Attributes
+    ----------
+    aggregate : str, optional
+        How a run of several members combines their EC scores (``min`` or ``quantile Q``,
+        :func:`rvmsim.tune.parse_aggregate`); None for a one-scene run that is not robust.
+    robust : RobustRecord, optional
+        A robust run's samples and compensation (None: judged on the nominal images only).
+    markets : tuple of str
+        A run for several markets (:mod:`rvmsim.markets`): their recorded forms
+        (:attr:`rvmsim.markets.Market.spec`), each a member per scene of the run's
+        ``scenes``; (): the run's criteria at each scene's own site.
+    """
+
+    aggregate: str | None = None
+    robust: RobustRecord | None = None
+    markets: tuple[str, ...] = ()
+
+    def as_json(self, shared: bool) -> dict[str, Any]:
+        """The keys a run's stored settings hold for its kind (``markets`` aside, which
+        follows ``judged_at``): ``aggregate`` for a run of several scenes (``shared``) or a
+        robust one, and ``robust``."""
+        doc: dict[str, Any] = {}
+        if shared:
+            doc["aggregate"] = self.aggregate
+        if self.robust is not None:  # (the keys in the order rvmsim has always written them)
+            doc["robust"] = {"samples": self.robust.samples,
+                             "variation_file": self.robust.variation_file,
+                             "variation_key": self.robust.variation_key}
+            if self.robust.compensation is not None:
+                doc["robust"]["compensation"] = self.robust.compensation
+            doc["aggregate"] = self.aggregate
+        return doc
+
+
+@dataclass(frozen=True)
 class RunSettings:
     """What a run is: everything ``--resume`` needs to continue it exactly.
 
     ``scene`` and ``criteria_file`` are the files as recorded (absolute paths);
     ``scene_key`` is the scene's fingerprint when the run started
     (:func:`rvmsim.render.scene_key`); ``budget`` the ``--budget`` given (None: the
-    config's).  A shared run (several scenes, one parameter set) records every scene in
-    ``scenes`` (the first is ``scene``) and how their scores combine in ``aggregate``
-    (:func:`rvmsim.tune.parse_aggregate`); a one-scene run has neither, and its stored
-    form is that of rvmsim before shared tuning."""
+    config's).  A shared or markets run (one parameter set for several members) records
+    every scene in ``scenes`` (the first is ``scene``); a one-scene run has none, and its
+    stored form is that of rvmsim before shared tuning.  What else defines the run's kind
+    (how members' scores combine, the robust samples, the markets) is ``kind``; its stored
+    form keeps the keys it always had (``aggregate``, ``robust``, ``markets``)."""
 
     scene: str
     scene_key: str | None
@@ -110,23 +164,13 @@ class RunSettings:
     criteria_file: str | None
     config: TuningConfig
     scenes: tuple[SceneRef, ...] = ()
-    aggregate: str | None = None
-    #: A robust run: the variation samples per scene (None: not robust), drawn with
-    #: ``seed`` from ``variation_file`` (None: each scene's own ``variation`` section).
-    robust_samples: int | None = None
-    variation_file: str | None = None
-    #: Fingerprint of the variations the samples were drawn from (``--resume`` checks it).
-    variation_key: str | None = None
-    #: A robust run for the yield after end-of-line compensation: the compensation model
-    #: (:meth:`rvmsim.compensation.CompensationModel.as_dict`); None: no compensation.
-    compensation: dict[str, Any] | None = None
+    #: What kind of run: a shared, robust (and compensated) or markets run's own settings
+    #: (:class:`RunKind`; the default: one scene on its own image, or a shared run's
+    #: scenes with the ``min`` aggregate).
+    kind: RunKind = RunKind()
     #: The RVM image of record (W, H px) the run's verdicts refer to
     #: (:mod:`rvmsim.criteria.record`); None: a run from before it was recorded.
     judged_at: tuple[int, int] | None = None
-    #: A run for several markets (:mod:`rvmsim.markets`): their recorded forms
-    #: (:attr:`rvmsim.markets.Market.spec`), each a member per scene of ``scenes``; ():
-    #: the run's criteria at each scene's own site.
-    markets: tuple[str, ...] = ()
     #: ECs left out because the scene cannot support them (``tune --only-supported``,
     #: :func:`rvmsim.criteria.unsupported_ecs`): not scored, not in the verdict; ().
     left_out: tuple[str, ...] = ()
@@ -151,7 +195,7 @@ class RunSettings:
     @property
     def robust(self) -> bool:
         """Whether this is a robust run (judged on variation samples)."""
-        return self.robust_samples is not None
+        return self.kind.robust is not None
 
     def as_json(self) -> dict[str, Any]:
         """The settings as ``run.json`` holds them (and ``run.sqlite``'s meta table)."""
@@ -162,18 +206,11 @@ class RunSettings:
                                "config": self.config.model_dump(mode="json")}
         if self.scenes:
             doc["scenes"] = [r.as_json() for r in self.scenes]
-            doc["aggregate"] = self.aggregate
-        if self.robust_samples is not None:
-            doc["robust"] = {"samples": self.robust_samples,
-                             "variation_file": self.variation_file,
-                             "variation_key": self.variation_key}
-            if self.compensation is not None:
-                doc["robust"]["compensation"] = self.compensation
-            doc["aggregate"] = self.aggregate
+        doc.update(self.kind.as_json(bool(self.scenes)))
         if self.judged_at is not None:
             doc["judged_at"] = list(self.judged_at)
-        if self.markets:
-            doc["markets"] = list(self.markets)
+        if self.kind.markets:
+            doc["markets"] = list(self.kind.markets)
         if self.left_out:
             doc["only_supported"] = {"left_out": list(self.left_out)}
         return doc
@@ -218,24 +255,22 @@ class RunSettings:
         robust = doc.get("robust")
         if robust is not None and not isinstance(robust, Mapping):
             raise ValueError(f"robust: {str(robust)[:40]!r} is not an object")
-        samples = None if robust is None else whole("robust: samples", robust.get("samples"))
-        if samples is not None and samples < 1:
+        samples = 0 if robust is None else whole("robust: samples", robust.get("samples"))
+        if robust is not None and samples < 1:
             raise ValueError(f"robust: samples: {samples} is not at least 1")
         return cls(str(text("scene", need("scene"))), text("scene_key", doc.get("scene_key")),
                    str(text("vehicle", doc.get("vehicle", "")) or ""),
                    str(text("strategy", need("strategy"))), whole("seed", need("seed")),
                    None if budget is None else whole("budget", budget),
                    text("criteria_file", doc.get("criteria_file")), config, refs,
-                   text("aggregate", doc.get("aggregate")) if refs or robust else None,
-                   samples,
-                   None if robust is None else text("robust: variation_file",
-                                                    robust.get("variation_file")),
-                   None if robust is None else text("robust: variation_key",
-                                                    robust.get("variation_key")),
-                   None if robust is None else _mapping("robust: compensation",
-                                                        robust.get("compensation")),
+                   RunKind(text("aggregate", doc.get("aggregate")) if refs or robust else None,
+                           None if robust is None else RobustRecord(
+                               samples,
+                               text("robust: variation_file", robust.get("variation_file")),
+                               text("robust: variation_key", robust.get("variation_key")),
+                               _mapping("robust: compensation", robust.get("compensation"))),
+                           _texts("markets", doc.get("markets"))),
                    _size("judged_at", doc.get("judged_at")),
-                   _texts("markets", doc.get("markets")),
                    _texts("only_supported: left_out",
                           (_mapping("only_supported", doc.get("only_supported"))
                            or {}).get("left_out")))

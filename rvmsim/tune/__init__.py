@@ -52,7 +52,8 @@ from .loop import (
     solver_for,
     strategy_scorer,
 )
-from .requests import RunOptions, SearchOptions, SearchSettings, TuneRequest
+from .requests import (Markets, Robust, RunKindRequest, RunOptions, SearchOptions,
+                       SearchSettings, Shared, TuneRequest)
 from .solve import EcSolver
 from .shared import (
     check_tune_arguments,
@@ -66,8 +67,8 @@ from .run import (
     DISPLAY_SIZE,
 )
 from .results import remove_run, write_results
-from .kinds import (Verdict, Built, TopRows, MemberSet, Single, Shared, Robust, Compensated,
-                    Markets, member_set)
+from .kinds import (Verdict, Built, TopRows, MemberSet, SingleSet, SharedSet, RobustSet,
+                    CompensatedSet, MarketsSet, member_set)
 from .summary import summary_lines
 
 __all__ = [
@@ -107,6 +108,10 @@ __all__ = [
     "SearchSettings",
     "SearchOptions",
     "TuneRequest",
+    "Shared",
+    "Robust",
+    "Markets",
+    "RunKindRequest",
     "RunOptions",
     "check_tune_arguments",
     "load_shared_scenes",
@@ -120,11 +125,11 @@ __all__ = [
     "Verdict",
     "Built",
     "MemberSet",
-    "Single",
-    "Shared",
-    "Robust",
-    "Compensated",
-    "Markets",
+    "SingleSet",
+    "SharedSet",
+    "RobustSet",
+    "CompensatedSet",
+    "MarketsSet",
     "member_set",
     "TopRows",
     "remove_run",

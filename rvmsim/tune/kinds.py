@@ -1,24 +1,23 @@
-"""Run kinds as objects: what a tuning run searches over, how it writes its results, and what
-it judges.
+"""Member sets: what a tuning run of each kind searches over, how it writes its results, and
+what it judges.
 
-A run's settings name one kind (:func:`member_set`), and :func:`rvmsim.tune.tune` takes one
-path through it for every kind:
+A request names its kind with an object (:class:`~rvmsim.tune.Shared`,
+:class:`~rvmsim.tune.Robust`, :class:`~rvmsim.tune.Markets`; none: one scene);
+:func:`new_run_settings` has that kind check its inputs and record itself
+(:class:`rvmsim.runs.RunKind`), and :func:`member_set` makes the stored settings a member set,
+through which :func:`rvmsim.tune.tune` takes one path for every kind:
 
-- :class:`Single`: one scene, searched on its own image;
-- :class:`Shared`: one parameter set for several scenes (a member per scene);
-- :class:`Robust`: a single or shared run judged over mount and load variations (a member
-  per scene's nominal image and per sample); with a compensation model it is
-  :class:`Compensated`, judged after the end-of-line per-car values;
-- :class:`Markets`: one parameter set for every (scene, market) pair, each with its
-  market's criteria at its market's site.
+- :class:`SingleSet`: one scene, searched on its own image;
+- :class:`SharedSet`: one parameter set for several scenes (a member per scene);
+- :class:`RobustSet`: a single or shared run judged over mount and load variations (a member
+  per scene's nominal image and per sample); :class:`CompensatedSet` judges them after the
+  end-of-line per-car values;
+- :class:`MarketsSet`: one parameter set for every (scene, market) pair.
 
-Each kind builds its members and renders (:meth:`MemberSet.build`), searches them
-(:meth:`MemberSet.search`, through :func:`rvmsim.tune.search_members` and
-:func:`rvmsim.pipeline.make_evaluator`), writes its own result rows under ``best/`` and gives
-its :class:`Verdict` (:meth:`MemberSet.write_results`), and tells the report what it says of
-each top candidate (:meth:`MemberSet.top_rows`: member scores, robust summaries).  The
-verdict is what ``rvmsim tune``'s exit status comes from; nothing is read back from disk for
-it.
+Each builds its members and renders, searches them (through :func:`rvmsim.tune.search_members`
+and :func:`rvmsim.pipeline.make_evaluator`), writes its own rows under ``best/``, gives its
+:class:`Verdict` (``rvmsim tune``'s exit status; nothing is read back from disk for it) and
+tells the report what it says of each top candidate (:meth:`MemberSet.top_rows`).
 
 "Binding EC" has one meaning everywhere: the enabled EC with the lowest score under the
 setting judged (:func:`rvmsim.criteria.binding_row`).  The EC that fails most often over a
@@ -40,18 +39,18 @@ from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
 from ..percar import check_law
 from ..render import cached_render, same_scene, scene_key
-from ..runs.records import RunSettings, TrialRecord
+from ..runs.records import RobustRecord, RunKind, RunSettings, TrialRecord
 from ..runs.store import RunStore
 from ..scene import Scene, load_scene
 from ..search.config import TuningConfig
 from .loop import SearchOutcome, search_members, search_scene
-from .markets import (check_market_arguments, market_problem_lines, market_table_lines,
+from .markets import (market_problem_lines, market_table_lines,
                       markets_members, write_market_results)
 from .members import Member, check_cameras, parse_aggregate
-from .requests import SceneArg, SearchOptions, SearchSettings, TuneRequest
-from .robust import (ROBUST_AGGREGATE, RobustSummary, check_samples, robust_line,
-                     robust_members, robust_summary, run_compensation, run_variations,
-                     variation_key, write_robust_results)
+from .requests import (Markets, Robust, SceneArg, SearchOptions, SearchSettings, Shared,
+                       TuneRequest)
+from .robust import (RobustSummary, check_samples, robust_line, robust_members, robust_summary,
+                     run_compensation, run_variations, variation_key, write_robust_results)
 from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_problems,
                      shared_settings, write_member_results)
 from .results import write_results
@@ -62,8 +61,8 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..search.strategies import Strategy
 
-__all__ = ["Verdict", "Built", "TopRows", "MemberSet", "Single", "Shared", "Robust",
-           "Compensated", "Markets", "member_set", "new_run_settings"]
+__all__ = ["Verdict", "Built", "TopRows", "MemberSet", "SingleSet", "SharedSet", "RobustSet",
+           "CompensatedSet", "MarketsSet", "member_set", "new_run_settings"]
 
 
 @dataclass(frozen=True)
@@ -166,14 +165,14 @@ class MemberSet(Protocol):
 
 
 @dataclass(frozen=True)
-class Single:
+class SingleSet:
     """One scene, searched on its own image."""
 
     settings: RunSettings
     name: str = "single"
 
     @classmethod
-    def new_settings(cls, r: TuneRequest, aggregate: str
+    def new_settings(cls, r: TuneRequest, aggregate: str | None
                      ) -> tuple[RunSettings, list[Scene], Criteria]:
         """A new run's settings, scenes and criteria from request ``r``: its criteria (each
         scene's support checked, :func:`_supported`), its scene loaded and fingerprinted,
@@ -187,7 +186,7 @@ class Single:
             criteria_file=(None if r.criteria_file is None
                            else criteria_reference(r.criteria_file)),
             config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
-            judged_at=record_size(crit, sc), left_out=left_out)
+            kind=RunKind(aggregate), judged_at=record_size(crit, sc), left_out=left_out)
         return settings, [sc], crit
 
     def resumed_scenes(self, db: Path) -> list[Scene]:
@@ -212,7 +211,7 @@ class Single:
     def search_settings(self, config: TuningConfig, criteria: Criteria,
                         strategy: Strategy) -> SearchSettings:
         return SearchSettings(config, criteria, strategy,
-                              aggregate=self.settings.aggregate or "min")
+                              aggregate=self.settings.kind.aggregate or "min")
 
     def search(self, built: Built, settings: SearchSettings, store: RunStore,
                options: SearchOptions) -> SearchOutcome:
@@ -235,14 +234,14 @@ class Single:
 
 
 @dataclass(frozen=True)
-class Shared(Single):
+class SharedSet(SingleSet):
     """One parameter set for several scenes: a member per scene; passes where every scene
     passes."""
 
     name: str = "shared"
 
     @classmethod
-    def new_settings(cls, r: TuneRequest, aggregate: str
+    def new_settings(cls, r: TuneRequest, aggregate: str | None
                      ) -> tuple[RunSettings, list[Scene], Criteria]:
         """A new shared run's: every scene loaded (one sensor size), the criteria every
         scene supports, the size of record of the first scene."""
@@ -252,8 +251,8 @@ class Shared(Single):
         record = record_size(crit, scenes[0][1])
         settings = dataclasses.replace(
             shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
-                            (r.config or TuningConfig()).at_record(record), aggregate),
-            judged_at=record, left_out=left_out)
+                            (r.config or TuningConfig()).at_record(record)),
+            kind=RunKind(aggregate or "min"), judged_at=record, left_out=left_out)
         return settings, [sc for _, sc in scenes], crit
 
     def resumed_scenes(self, db: Path) -> list[Scene]:
@@ -272,7 +271,7 @@ class Shared(Single):
         first = super().write_results(run_dir, store, scenes, built, criteria)
         written = write_member_results(run_dir, store, scenes, built.renders,
                                        self.settings.config, criteria,
-                                       self.settings.aggregate or "min")
+                                       self.settings.kind.aggregate or "min")
         if written is None:
             return Verdict(False, gate=True, problems=first.problems)
         doc, table = written
@@ -283,36 +282,35 @@ class Shared(Single):
 
 
 @dataclass(frozen=True)
-class Robust:
+class RobustSet:
     """A single or shared run (``inner``) judged over the variation's samples: per scene its
     nominal image, then its samples'.  Its verdict is ``inner``'s; the yield over the
     samples is reported with it (``best/robust.json``)."""
 
     settings: RunSettings
-    inner: Single
+    inner: SingleSet
     name: str = "robust"
 
     @staticmethod
-    def new_settings_from(settings: RunSettings, scenes: Sequence[Scene], r: TuneRequest,
-                          aggregate: str) -> RunSettings:
-        """``settings`` (a single or shared run's) made robust: the samples checked, the
-        variations checked and fingerprinted, and the compensation model recorded (its law
-        registered, its load state checked against every variation)."""
-        assert r.robust_samples is not None
-        check_samples(r.robust_samples)
-        vfile = None if r.variation_file is None else str(Path(r.variation_file).resolve())
+    def new_settings_from(settings: RunSettings, scenes: Sequence[Scene], robust: Robust
+                          ) -> RunSettings:
+        """``settings`` (a single or shared run's) made robust as ``robust`` asks: its
+        samples and aggregate checked, the variations checked and fingerprinted, and the
+        compensation model recorded (its law registered, its load state checked against
+        every variation)."""
+        check_samples(robust.samples)
+        aggregate = parse_aggregate(robust.aggregate).text
+        vfile = (None if robust.variation_file is None
+                 else str(Path(robust.variation_file).resolve()))
         variations = run_variations(scenes, vfile)
-        key = variation_key(variations)
-        compensation = r.compensation
+        compensation = robust.compensation
         if compensation is not None:
             check_law(compensation)
             for v in variations:
                 measured_load_index(compensation, [s.name for s in v.load_states])
-        return dataclasses.replace(settings, robust_samples=r.robust_samples,
-                                   variation_file=vfile, variation_key=key,
-                                   aggregate=aggregate,
-                                   compensation=None if compensation is None
-                                   else compensation.as_dict())
+        record = RobustRecord(robust.samples, vfile, variation_key(variations),
+                              None if compensation is None else compensation.as_dict())
+        return dataclasses.replace(settings, kind=RunKind(aggregate, record))
 
     @property
     def compensation(self) -> CompensationModel | None:
@@ -323,8 +321,10 @@ class Robust:
         st = self.settings
         _check_stored_aggregate(st, db)
         scenes = self.inner.resumed_scenes(db)
-        if variation_key(run_variations(scenes, st.variation_file)) != st.variation_key:
-            raise RvmsimError(f"{st.variation_file or st.scene}: the variation changed since "
+        rec = st.kind.robust
+        assert rec is not None  # member_set made it robust for them
+        if variation_key(run_variations(scenes, rec.variation_file)) != rec.variation_key:
+            raise RvmsimError(f"{rec.variation_file or st.scene}: the variation changed since "
                               "this run started; resuming would mix two sample sets (start a "
                               "new run)")
         return scenes
@@ -339,10 +339,10 @@ class Robust:
     def search_settings(self, config: TuningConfig, criteria: Criteria,
                         strategy: Strategy) -> SearchSettings:
         return SearchSettings(config, criteria, strategy,
-                              aggregate=self.settings.aggregate or "min",
+                              aggregate=self.settings.kind.aggregate or "min",
                               compensation=self.compensation)
 
-    search = Single.search  # its members always (build() makes them)
+    search = SingleSet.search  # its members always (build() makes them)
 
     def write_results(self, run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                       built: Built, criteria: Criteria) -> Verdict:
@@ -356,15 +356,16 @@ class Robust:
 
     def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
         st = self.settings
-        assert st.robust_samples is not None  # member_set made it robust for them
+        assert st.kind.robust is not None  # member_set made it robust for them
         n_scenes = max(1, len(st.scenes))
         rows = self.inner.top_rows(store, top)
         return TopRows(rows.member_scores, [robust_summary(store, rec.idx, n_scenes,
-                                                           st.robust_samples) for rec in top])
+                                                           st.kind.robust.samples)
+                                            for rec in top])
 
 
 @dataclass(frozen=True)
-class Compensated(Robust):
+class CompensatedSet(RobustSet):
     """A robust run judged after end-of-line compensation: each sample's picture with the
     per-car values the station writes for it (the run's compensation model)."""
 
@@ -376,7 +377,7 @@ class Compensated(Robust):
 
 
 @dataclass(frozen=True)
-class Markets:
+class MarketsSet:
     """One parameter set for every (scene, market) pair: each scene at the market's site,
     judged by the market's criteria; passes where every pair passes."""
 
@@ -384,23 +385,22 @@ class Markets:
     name: str = "markets"
 
     @classmethod
-    def new_settings(cls, r: TuneRequest, aggregate: str
+    def new_settings(cls, r: TuneRequest, markets_kind: Markets
                      ) -> tuple[RunSettings, list[Scene], Criteria]:
-        """A new markets run's settings, scenes and its first market's criteria (no
-        criteria of its own, no ``--robust``: :func:`check_market_arguments`)."""
-        check_market_arguments(r.markets if isinstance(r.markets, str)
-                               else ",".join(r.markets or ()),
-                               r.criteria is not None or r.criteria_file is not None,
-                               r.robust_samples is not None)
-        markets = parse_markets(r.markets or ())
+        """A new markets run's settings, scenes and its first market's criteria."""
+        if r.criteria is not None or r.criteria_file is not None:  # each market has its own
+            raise RvmsimError("--criteria: give no criteria with --markets (a market may be "
+                              "SITE:CRITERIA with your criteria file)")
+        aggregate = parse_aggregate(markets_kind.aggregate).text
+        markets = parse_markets(markets_kind.markets)
         loaded = [_loaded(s, r.scene_file) for s in r.scenes]
         check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in loaded])
         crit = market_criteria(markets[0])
         record = record_size(crit, loaded[0][1])
         settings = dataclasses.replace(
             shared_settings(loaded, r.strategy, r.seed, r.budget, None,
-                            (r.config or TuningConfig()).at_record(record), aggregate),
-            judged_at=record, markets=tuple(m.spec for m in markets))
+                            (r.config or TuningConfig()).at_record(record)),
+            kind=RunKind(aggregate, markets=tuple(m.spec for m in markets)), judged_at=record)
         return settings, [sc for _, sc in loaded], crit
 
     def resumed_scenes(self, db: Path) -> list[Scene]:
@@ -408,15 +408,15 @@ class Markets:
         return resumed_scenes(self.settings)
 
     def resumed_criteria(self) -> Criteria:
-        return market_criteria(parse_markets(list(self.settings.markets))[0])
+        return market_criteria(parse_markets(list(self.settings.kind.markets))[0])
 
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         pairs, renders, members = markets_members(scenes, self.settings, progress=progress)
         return Built(renders, members, pairs)
 
     # searched as a shared run is: one setting for every member
-    search_settings = Single.search_settings
-    search = Single.search
+    search_settings = SingleSet.search_settings
+    search = SingleSet.search
 
     def write_results(self, run_dir: Path, store: RunStore, scenes: Sequence[Scene],
                       built: Built, criteria: Criteria) -> Verdict:
@@ -438,32 +438,33 @@ class Markets:
 def member_set(settings: RunSettings) -> MemberSet:
     """The run kind ``settings`` describe: markets, or a single or shared run, made robust
     (and compensated) when the settings say so."""
-    if settings.markets:
-        return Markets(settings)
-    base = Shared(settings) if settings.shared else Single(settings)
-    if not settings.robust:
+    if settings.kind.markets:
+        return MarketsSet(settings)
+    base = SharedSet(settings) if settings.shared else SingleSet(settings)
+    robust = settings.kind.robust
+    if robust is None:
         return base
-    if settings.compensation is not None:
-        return Compensated(settings, base)
-    return Robust(settings, base)
+    if robust.compensation is not None:
+        return CompensatedSet(settings, base)
+    return RobustSet(settings, base)
 
 
 def new_run_settings(r: TuneRequest) -> tuple[RunSettings, list[Scene], Criteria]:
-    """A new run's settings, scenes and criteria from request ``r``, every input checked:
-    what the request asks of its kind (``--compensation`` needs ``--robust``), then the
-    kind's own checks (:meth:`Single.new_settings`, :meth:`Shared.new_settings`,
-    :meth:`Markets.new_settings`, made robust by :meth:`Robust.new_settings_from`)."""
-    aggregate = parse_aggregate(r.aggregate or (ROBUST_AGGREGATE if r.robust_samples is not None
-                                                else "min")).text
-    if r.compensation is not None and r.robust_samples is None:
-        raise RvmsimError("--compensation: tuning for the yield after compensation needs "
-                          "--robust")
-    if r.markets is not None:  # one parameter set for every market (and scene)
-        return Markets.new_settings(r, aggregate)
-    base = Shared if r.shared else Single
-    settings, scenes, crit = base.new_settings(r, aggregate)
-    if r.robust_samples is not None:
-        settings = Robust.new_settings_from(settings, scenes, r, aggregate)
+    """A new run's settings, scenes and criteria from request ``r``, every input checked by
+    the kind it asks for (``r.kind``): :meth:`SingleSet.new_settings` (one scene),
+    :meth:`SharedSet.new_settings` (several, or :class:`~rvmsim.tune.Shared`),
+    :meth:`MarketsSet.new_settings` (:class:`~rvmsim.tune.Markets`), made robust by
+    :meth:`RobustSet.new_settings_from` (:class:`~rvmsim.tune.Robust`)."""
+    kind = r.kind
+    if isinstance(kind, Markets):  # one parameter set for every market (and scene)
+        return MarketsSet.new_settings(r, kind)
+    if isinstance(kind, Shared) or r.shared:
+        aggregate = parse_aggregate(kind.aggregate if isinstance(kind, Shared) else "min").text
+        settings, scenes, crit = SharedSet.new_settings(r, aggregate)
+    else:
+        settings, scenes, crit = SingleSet.new_settings(r, None)
+    if isinstance(kind, Robust):
+        settings = RobustSet.new_settings_from(settings, scenes, kind)
     return settings, scenes, crit
 
 
@@ -486,14 +487,13 @@ def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_support
 
 
 def _member_scores(store: RunStore, top: Sequence[TrialRecord]) -> dict[int, list[float]]:
-    """Each of ``top``'s stored per-member EC scores (by trial index)."""
-    return {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}
+    return {rec.idx: [m[0] for m in store.member_results(rec.idx)] for rec in top}  # by trial
 
 
 def _check_stored_aggregate(settings: RunSettings, db: Path) -> None:
     """Refuse a stored multi-member run whose aggregate this version cannot read."""
     try:
-        parse_aggregate(settings.aggregate or "min")
+        parse_aggregate(settings.kind.aggregate or "min")
     except RvmsimError:
-        raise RvmsimError(f"{db}: aggregate: {settings.aggregate!r} is not min or quantile Q "
+        raise RvmsimError(f"{db}: aggregate: {settings.kind.aggregate!r} is not min or quantile Q "
                           "(written by another rvmsim version?)") from None

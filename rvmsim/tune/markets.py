@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from ..scene import Scene
     from ..search.config import TuningConfig
 
-__all__ = ["check_market_arguments", "markets_members", "render_market_members",
+__all__ = ["markets_members", "render_market_members",
            "market_infeasible", "write_market_results",
            "judge_run_in_markets",
            "market_verdict", "market_summary_lines", "market_table_lines", "load_markets", "market_problem_lines", "MARKETS_JSON"]
@@ -53,31 +53,12 @@ __all__ = ["check_market_arguments", "markets_members", "render_market_members",
 MARKETS_JSON = "markets.json"
 
 
-def check_market_arguments(markets: str | None, criteria_given: bool, robust: bool) -> None:
-    """``--markets`` against the other flags of ``rvmsim tune``.
-
-    Raises
-    ------
-    RvmsimError
-        One line: ``--criteria`` or ``--robust`` with ``--markets``.
-    """
-    if markets is None:
-        return
-    if criteria_given:
-        raise RvmsimError("--criteria: give no criteria with --markets (each market has its "
-                          "own; a market may be SITE:CRITERIA with your criteria file)")
-    if robust:
-        raise RvmsimError("--markets with --robust: not supported; tune for the markets, "
-                          "then measure the yield per market with rvmsim robustness "
-                          "RUN --markets …")
-
-
 def markets_members(scenes: Sequence[Scene], settings: RunSettings, *, progress: bool = False
                     ) -> tuple[list[MarketMember], list[FisheyeImages], list[Member]]:
     """The members of a markets run: every (scene, market) pair, each scene rendered at the
     market's site (cached), with the market's criteria."""
 
-    pairs = market_members(scenes, parse_markets(list(settings.markets)))
+    pairs = market_members(scenes, parse_markets(list(settings.kind.markets)))
     renders, members = render_market_members(pairs, progress=progress)
     return pairs, renders, members
 
@@ -258,10 +239,10 @@ def judge_run_in_markets(run_dir: str | Path, markets: str) -> dict[str, Any]:
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
-        if settings.markets:
-            if tuple(m.spec for m in chosen) != settings.markets:
+        if settings.kind.markets:
+            if tuple(m.spec for m in chosen) != settings.kind.markets:
                 raise RvmsimError(f"{run_dir}: this run was tuned for the markets "
-                                  f"{', '.join(settings.markets)}; give no --markets (its rows "
+                                  f"{', '.join(settings.kind.markets)}; give no --markets (its rows "
                                   "are shown) or the same markets")
             doc = load_markets(run_dir)
             if doc is None:

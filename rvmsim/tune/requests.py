@@ -17,13 +17,15 @@ from ..criteria import Criteria
 from ..isp import IspParams
 from ..search.config import TuningConfig
 from .members import OBJECTIVE_COMBINE, Aggregate
+from .robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 from ..search.strategies import DEFAULT_STRATEGY, Strategy
 
 if TYPE_CHECKING:
     from ..compensation import CompensationModel
     from ..scene import Scene
 
-__all__ = ["SearchSettings", "SearchOptions", "TuneRequest", "RunOptions", "SceneArg"]
+__all__ = ["SearchSettings", "SearchOptions", "TuneRequest", "RunOptions", "SceneArg", "Shared",
+           "Robust", "Markets", "RunKindRequest"]
 
 #: A scene as a tuning run takes it: its file, or a loaded Scene.
 SceneArg = Union[str, Path, "Scene"]
@@ -121,24 +123,14 @@ class TuneRequest:
     budget : int, optional
         Evaluations for ``cmaes-solved``/``cmaes``/``random``; for ``grid-random`` the fine
         trials per seed (T), replacing the config's value (a shortened protocol).
-    aggregate : str, optional
-        How a shared or robust run combines its members' EC scores: ``min`` or ``quantile
-        Q`` (:func:`rvmsim.tune.parse_aggregate`); default ``min`` for a shared run and
-        :data:`rvmsim.tune.robust.ROBUST_AGGREGATE` for a robust one.
-    robust_samples : int, optional
-        A robust run (:mod:`rvmsim.tune.robust`): judge every candidate on each scene's
-        nominal image and this many variation samples of it (``--robust --samples K``).
-    variation_file : path, optional
-        The variation to draw them from (default: each scene's ``variation`` section).
-    compensation : CompensationModel, optional
-        A robust run for the yield after end-of-line compensation: each sample is judged
-        with its per-car values (``--robust --compensation``, :mod:`rvmsim.tune.compensated`).
+    kind : Shared, Robust or Markets, optional
+        What kind of run, with its own settings: :class:`Shared` (how several scenes'
+        scores combine), :class:`Robust` (judged over mount and load variation samples,
+        optionally after end-of-line compensation) or :class:`Markets` (one setting for
+        several markets).  Default: one scene on its own image, or several scenes as
+        ``Shared()``.
     scene_file : path, optional
         The path recorded for a loaded Scene given alone.
-    markets : str or sequence of str, optional
-        One setting for several markets (:mod:`rvmsim.markets`, ``--markets
-        fmvss111-full,unr158``): each scene at each market's site, judged with the
-        market's criteria (then give no ``criteria``).
     only_supported : bool
         Tune only the ECs the scenes support (``--only-supported``): those whose measured
         objects a scene leaves out (:func:`rvmsim.criteria.unsupported_ecs`) are disabled
@@ -152,23 +144,87 @@ class TuneRequest:
     criteria_file: str | Path | None = None
     seed: int = 0
     budget: int | None = None
-    aggregate: str | None = None
-    robust_samples: int | None = None
-    variation_file: str | Path | None = None
+    kind: RunKindRequest | None = None
     scene_file: str | Path | None = None
-    compensation: CompensationModel | None = None
-    markets: str | tuple[str, ...] | None = None
     only_supported: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.scenes, (tuple, list)) or not self.scenes:
             raise TypeError("TuneRequest.scenes: give a tuple of one or more scenes")
         object.__setattr__(self, "scenes", tuple(self.scenes))
+        if self.kind is not None and not isinstance(self.kind, (Shared, Robust, Markets)):
+            raise TypeError(f"TuneRequest.kind: {self.kind!r} is not Shared, Robust or Markets")
 
     @property
     def shared(self) -> bool:
         """Several scenes: one parameter set for all."""
         return len(self.scenes) > 1
+
+
+@dataclass(frozen=True)
+class Shared:
+    """One parameter set for several scenes (``rvmsim tune --shared``): a member per
+    scene, passing where every scene passes (:mod:`rvmsim.tune.shared`).
+
+    Parameters
+    ----------
+    aggregate : str
+        How the scenes' EC scores combine: ``min`` or ``quantile Q``
+        (:func:`rvmsim.tune.parse_aggregate`).
+    """
+
+    aggregate: str = "min"
+
+
+@dataclass(frozen=True)
+class Robust:
+    """A run judged over production variation (``rvmsim tune --robust``,
+    :mod:`rvmsim.tune.robust`): every candidate on each scene's nominal image and
+    ``samples`` mount and load samples of it; one scene or several (then shared).
+
+    Parameters
+    ----------
+    samples : int
+        Variation samples per scene (``--samples K``), 1 to
+        :data:`rvmsim.tune.robust.MAX_SAMPLES`.
+    variation_file : path, optional
+        The variation to draw them from (``--variation``; default: each scene's
+        ``variation`` section).
+    compensation : CompensationModel, optional
+        Tune for the yield after end-of-line compensation: each sample judged with the
+        per-car values a station writes for it (``--compensation``,
+        :mod:`rvmsim.tune.compensated`).
+    aggregate : str
+        How the members' EC scores combine (default
+        :data:`rvmsim.tune.robust.ROBUST_AGGREGATE`).
+    """
+
+    samples: int = DEFAULT_SAMPLES
+    variation_file: str | Path | None = None
+    compensation: CompensationModel | None = None
+    aggregate: str = ROBUST_AGGREGATE
+
+
+@dataclass(frozen=True)
+class Markets:
+    """One setting for several markets (``rvmsim tune --markets fmvss111-full,unr158``,
+    :mod:`rvmsim.markets`): each scene at each market's site, judged with the market's
+    criteria (so the request gives no criteria); passes where every pair passes.
+
+    Parameters
+    ----------
+    markets : str or sequence of str
+        The markets (:func:`rvmsim.markets.parse_markets`): comma-separated, or a list.
+    aggregate : str
+        How the (scene, market) pairs' EC scores combine.
+    """
+
+    markets: str | tuple[str, ...]
+    aggregate: str = "min"
+
+
+#: What :attr:`TuneRequest.kind` takes.
+RunKindRequest = Union[Shared, Robust, Markets]
 
 
 @dataclass(frozen=True)

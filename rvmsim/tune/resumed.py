@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from ..errors import RvmsimError
 from ..runs.folder import RUN_DB, json_difference
-from ..runs.records import RunSettings, SceneRef
+from ..runs.records import RobustRecord, RunSettings, SceneRef
 from ..render import same_scene
 from ..scene import load_scene
 from ..compensation import compensation_for, compensation_from_dict
@@ -97,8 +97,8 @@ def _check_scenes(db: Path, settings: RunSettings, scenes: tuple[Path, ...]) -> 
 
 def _kind(settings: RunSettings) -> str:
     """What kind of run ``settings`` are, for a refusal."""
-    if settings.markets:
-        return f"for the markets {','.join(settings.markets)}"
+    if settings.kind.markets:
+        return f"for the markets {','.join(settings.kind.markets)}"
     if settings.shared:
         return f"for {len(settings.scenes)} scenes (--shared)"
     return "for one scene"
@@ -107,35 +107,43 @@ def _kind(settings: RunSettings) -> str:
 def _check_members(db: Path, settings: RunSettings, a: ResumeArgs) -> None:
     """--shared, --markets, --robust, --samples, --variation, --compensation, --aggregate."""
 
-    if a.shared and not (settings.shared and not settings.markets):
+    kind = settings.kind
+    if a.shared and not (settings.shared and not kind.markets):
         raise _refuse("--shared", db, _kind(settings))
     if a.markets is not None and tuple(m.spec for m in parse_markets(a.markets)) \
-            != tuple(settings.markets):
+            != tuple(kind.markets):
         raise _refuse("--markets", db, _kind(settings), a.markets)
+    robust = kind.robust
     if (a.robust or a.samples is not None or a.variation_file is not None
-            or a.compensation is not None) and not settings.robust:
+            or a.compensation is not None) and robust is None:
         raise _refuse("--robust", db, "without --robust")
-    if a.samples is not None and a.samples != settings.robust_samples:
-        raise _refuse("--samples", db, f"with --samples {settings.robust_samples}", str(a.samples))
-    if a.variation_file is not None and str(a.variation_file.resolve()) != settings.variation_file:
-        raise _refuse("--variation", db, "with " + (
-            f"--variation {settings.variation_file}" if settings.variation_file
-            else "each scene's own variation section"), str(a.variation_file))
-    if a.compensation is not None:
-        model = compensation_for(a.compensation)
-        recorded = (compensation_from_dict(settings.compensation).as_dict()
-                    if settings.compensation else None)
-        if model is None or model.as_dict() != recorded:
-            raise _refuse("--compensation", db, "with another compensation model"
-                          if settings.compensation else "without --compensation",
-                          a.compensation)
+    if robust is not None:
+        _check_robust(db, robust, a)
     if a.aggregate is not None:
         if not (settings.shared or settings.robust):
             raise _refuse("--aggregate", db, "for one scene without --robust (no members to "
                           "aggregate)", a.aggregate)
-        stored = settings.aggregate or (ROBUST_AGGREGATE if settings.robust else "min")
+        stored = kind.aggregate or (ROBUST_AGGREGATE if settings.robust else "min")
         if parse_aggregate(a.aggregate).text != parse_aggregate(stored).text:
             raise _refuse("--aggregate", db, f"with --aggregate '{stored}'", f"'{a.aggregate}'")
+
+
+def _check_robust(db: Path, robust: RobustRecord, a: ResumeArgs) -> None:
+    """--samples, --variation, --compensation against a robust run's."""
+    if a.samples is not None and a.samples != robust.samples:
+        raise _refuse("--samples", db, f"with --samples {robust.samples}", str(a.samples))
+    if a.variation_file is not None and str(a.variation_file.resolve()) != robust.variation_file:
+        raise _refuse("--variation", db, "with " + (
+            f"--variation {robust.variation_file}" if robust.variation_file
+            else "each scene's own variation section"), str(a.variation_file))
+    if a.compensation is not None:
+        model = compensation_for(a.compensation)
+        recorded = (compensation_from_dict(robust.compensation).as_dict()
+                    if robust.compensation else None)
+        if model is None or model.as_dict() != recorded:
+            raise _refuse("--compensation", db, "with another compensation model"
+                          if robust.compensation else "without --compensation",
+                          a.compensation)
 
 
 def _check_search(db: Path, settings: RunSettings, a: ResumeArgs) -> None:

@@ -87,12 +87,13 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
     """The members of a robust run: per scene its nominal image, then its samples' (with
     the station's reading of each when the run tunes for the yield after compensation)."""
 
-    k = settings.robust_samples
-    if k is None:
+    robust = settings.kind.robust
+    if robust is None:
         raise ValueError("not a robust run")
+    k = robust.samples
     comp = run_compensation(settings)
     out: list[Member] = []
-    for sc, im, var in zip(scenes, renders, run_variations(scenes, settings.variation_file)):
+    for sc, im, var in zip(scenes, renders, run_variations(scenes, robust.variation_file)):
         out.append(Member(f"{sc.name} nominal", im.labels, im.camera, sc))
         samples = draw_samples(var, k, settings.seed)
         shared = refolder(sc, samples)
@@ -116,10 +117,10 @@ def robust_members(scenes: Sequence[Scene], renders: Sequence[FisheyeImages],
 
 def run_compensation(settings: RunSettings) -> CompensationModel | None:
     """The compensation model a robust run tunes for (None: the yield before compensation)."""
-    if settings.compensation is None:
+    robust = settings.kind.robust
+    if robust is None or robust.compensation is None:
         return None
-
-    return compensation_from_dict(settings.compensation)
+    return compensation_from_dict(robust.compensation)
 
 
 #: One trial's :func:`robust_summary` (a row of ``best/robust.json``'s ``top``): the worst
@@ -164,21 +165,21 @@ def write_robust_results(run_dir: Path, store: RunStore, settings: RunSettings,
     """``best/robust.json``: the nominal score, robust score and sample yield of the top-M
     (the diverse top-M of ``top/``, :mod:`rvmsim.tune.diverse`); returns what it holds
     (None: not a robust run)."""
-    if settings.robust_samples is None:
+    robust = settings.kind.robust
+    if robust is None:
         return None
 
     rows = []
-    compensation = settings.compensation
     for cand, rec in store_candidates(store, settings):
         rank = cand.rank
-        s = robust_summary(store, rec.idx, n_scenes, settings.robust_samples)
+        s = robust_summary(store, rec.idx, n_scenes, robust.samples)
         if s is not None:
             rows.append({"rank": rank, "trial": rec.idx, "robust_score": rec.score,
                          "passed_all": bool(rec.passed), **s})
     (run_dir / "best").mkdir(parents=True, exist_ok=True)
-    doc = {"samples_per_scene": settings.robust_samples, "seed": settings.seed,
-           "variation_file": settings.variation_file, "aggregate": settings.aggregate,
-           "compensation": compensation, "top": rows}
+    doc = {"samples_per_scene": robust.samples, "seed": settings.seed,
+           "variation_file": robust.variation_file, "aggregate": settings.kind.aggregate,
+           "compensation": robust.compensation, "top": rows}
     (run_dir / "best" / "robust.json").write_text(json.dumps(doc, indent=2))
     return doc
 

@@ -57,6 +57,10 @@ def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
                 else "compensation")
         raise RvmsimError(f"--{flag}: only with --robust (tune on production variation "
                           "samples)")
+    if markets and robust:
+        raise RvmsimError("--markets with --robust: not supported; tune for the markets, "
+                          "then measure the yield per market with rvmsim robustness "
+                          "RUN --markets …")
     if resume:  # each given option is checked against the run's own settings
         return  # (rvmsim.tune.resumed, once the run's store is read)
     if not n_scenes:
@@ -96,8 +100,9 @@ def load_shared_scenes(scenes: Sequence[str | Path | Scene]) -> list[tuple[str, 
 
 def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: int,
                     budget: int | None, criteria_file: str | Path | None,
-                    config: TuningConfig | None, aggregate: str) -> RunSettings:
-    """The settings of a new shared run (the first scene is also ``scene``)."""
+                    config: TuningConfig | None) -> RunSettings:
+    """The settings of a new shared run (the first scene is also ``scene``; its kind is the
+    caller's to add)."""
 
     refs = tuple(SceneRef(str(Path(rec).resolve()), scene_key(sc), sc.name)
                  for rec, sc in scenes)
@@ -105,7 +110,7 @@ def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: in
         scene=refs[0].scene, scene_key=refs[0].scene_key, vehicle=refs[0].vehicle,
         strategy=strategy, seed=seed, budget=budget,
         criteria_file=None if criteria_file is None else criteria_reference(criteria_file),
-        config=config or TuningConfig(), scenes=refs, aggregate=aggregate)
+        config=config or TuningConfig(), scenes=refs)
 
 
 def resumed_scenes(settings: RunSettings) -> list[Scene]:

@@ -16,7 +16,7 @@ from rvmsim.isp import OutputSpec
 from rvmsim.percar import ImagePicture, SplitEvaluator, make_law
 from rvmsim.pipeline import record_output
 from rvmsim.render import render_fisheye
-from rvmsim.runs.records import RunSettings
+from rvmsim.runs.records import RobustRecord, RunKind, RunSettings
 from rvmsim.search import TuningConfig
 
 from ..cli_runner import run_in_process
@@ -48,7 +48,8 @@ def test_each_sample_is_judged_with_the_values_its_law_writes():
     model = DEFAULT_COMPENSATION
     k, seed = 3, 4
     settings = RunSettings(str(scene.source), None, "v", "cmaes", seed, None, None,
-                           TuningConfig(), robust_samples=k, compensation=model.as_dict())
+                           TuningConfig(),
+                           kind=RunKind("min", RobustRecord(k, compensation=model.as_dict())))
     nominal = render_fisheye(scene)
     members = robust_members([scene], [nominal], settings)
     crit = default_criteria()
@@ -86,9 +87,9 @@ def test_the_model_round_trips_through_the_run_settings():
     doc = model.as_dict()
     assert compensation_from_dict(doc) == model
     s = RunSettings("s.yaml", None, "v", "cmaes", 0, None, None, TuningConfig(),
-                    robust_samples=4, compensation=doc)
+                    kind=RunKind("min", RobustRecord(4, compensation=doc)))
     back = RunSettings.from_json(json.loads(json.dumps(s.as_json())))
-    assert back == s and back.compensation == doc
+    assert back == s and back.kind.robust is not None and back.kind.robust.compensation == doc
 
 
 def test_cli_refuses_compensation_without_robust_and_records_it_with(small, tmp_path):

@@ -7,12 +7,13 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import pytest
 
 from rvmsim.compensation import DEFAULT_COMPENSATION
 from rvmsim.runs import RunSettings, RunStore
-from rvmsim.runs.records import SceneRef
-from rvmsim.tune import (Compensated, Markets, Robust, Shared, Single, TopRows, TuneRequest,
-                         member_set, tune)
+from rvmsim.runs.records import RobustRecord, RunKind, SceneRef
+from rvmsim.tune import (CompensatedSet, Markets, MarketsSet, RobustSet, SharedSet, SingleSet,
+                         TopRows, TuneRequest, member_set, tune)
 from rvmsim.search import TuningConfig
 from rvmsim.tune.markets import market_summary_lines
 from rvmsim.tune.shared import shared_problem_lines
@@ -30,13 +31,16 @@ def test_the_settings_choose_the_run_kind():
                        budget=None, criteria_file=None, config=TuningConfig())
     two = (SceneRef("a.yaml", None, "a"), SceneRef("b.yaml", None, "b"))
     comp = DEFAULT_COMPENSATION.as_dict()
+    robust = RunKind("min", RobustRecord(4))
     cases = [
-        (base, Single, None),
-        (dataclasses.replace(base, scenes=two), Shared, None),
-        (dataclasses.replace(base, robust_samples=4), Robust, Single),
-        (dataclasses.replace(base, scenes=two, robust_samples=4), Robust, Shared),
-        (dataclasses.replace(base, robust_samples=4, compensation=comp), Compensated, Single),
-        (dataclasses.replace(base, scenes=two, markets=("fmvss111",)), Markets, None),
+        (base, SingleSet, None),
+        (dataclasses.replace(base, scenes=two), SharedSet, None),
+        (dataclasses.replace(base, kind=robust), RobustSet, SingleSet),
+        (dataclasses.replace(base, scenes=two, kind=robust), RobustSet, SharedSet),
+        (dataclasses.replace(base, kind=RunKind("min", RobustRecord(4, compensation=comp))),
+         CompensatedSet, SingleSet),
+        (dataclasses.replace(base, scenes=two, kind=RunKind("min", markets=("fmvss111",))),
+         MarketsSet, None),
     ]
     for settings, kind, inner in cases:
         chosen = member_set(settings)
@@ -45,6 +49,53 @@ def test_the_settings_choose_the_run_kind():
             assert type(chosen.inner) is inner
     assert member_set(cases[4][0]).compensation is not None
     assert member_set(cases[2][0]).compensation is None
+
+
+def test_each_kind_is_stored_under_the_keys_runs_have_always_had():
+    """``RunSettings.kind`` groups what the stored form keeps at its top level
+    (``aggregate``, ``robust``, ``markets``): documents in that form, written by hand as
+    rvmsim has stored them since shared, robust and markets runs began, read back as their
+    kinds and are written again unchanged."""
+    head = {"scene": "/r/a.yaml", "scene_key": None, "vehicle": "a", "strategy": "random",
+            "seed": 0, "budget": None, "criteria_file": None,
+            "config": TuningConfig().model_dump(mode="json")}
+    two = [{"scene": "/r/a.yaml", "scene_key": None, "vehicle": "a"},
+           {"scene": "/r/b.yaml", "scene_key": "k", "vehicle": "b"}]
+    comp = DEFAULT_COMPENSATION.as_dict()
+    robust = {"samples": 4, "variation_file": "/r/v.yaml", "variation_key": "abc"}
+    cases = [
+        ({}, RunKind()),
+        ({"scenes": two, "aggregate": "quantile 0.25"}, RunKind("quantile 0.25")),
+        ({"robust": robust, "aggregate": "quantile 0.1"},
+         RunKind("quantile 0.1", RobustRecord(4, "/r/v.yaml", "abc"))),
+        ({"scenes": two, "aggregate": "min", "robust": {**robust, "compensation": comp}},
+         RunKind("min", RobustRecord(4, "/r/v.yaml", "abc", comp))),
+        ({"scenes": two, "aggregate": "min", "markets": ["fmvss111", "unr158"]},
+         RunKind("min", markets=("fmvss111", "unr158"))),
+    ]
+    for extra, kind in cases:
+        doc = {**head, **extra}
+        settings = RunSettings.from_json(json.loads(json.dumps(doc)))
+        assert settings.kind == kind, extra
+        assert settings.as_json() == doc
+        assert list(settings.as_json()) == list(doc)  # in the same order
+
+
+def test_a_request_takes_its_kind_as_an_object(scene, tmp_path):
+    """What a request's kind asks for is what the run records: a markets kind's markets
+    and aggregate; a kind that is not one is refused at once."""
+    res = tune(TuneRequest((scene,), "random", TuningConfig.model_validate(CONFIG), seed=1,
+                           budget=20, kind=Markets(("fmvss111", "unr158"),
+                                                   aggregate="quantile 0.5")),
+               tmp_path / "run")
+    store = RunStore(res.run_dir / "run.sqlite", readonly=True)
+    try:
+        kind = store.settings().kind
+    finally:
+        store.close()
+    assert kind == RunKind("quantile 0.5", markets=("fmvss111", "unr158"))
+    with pytest.raises(TypeError, match="TuneRequest.kind"):
+        TuneRequest((scene,), kind="robust")  # type: ignore[arg-type]
 
 
 def test_a_single_run_reports_its_verdict_and_does_not_gate(scene, tmp_path):
@@ -72,7 +123,7 @@ def test_a_markets_verdict_gates_and_agrees_with_what_the_run_wrote(scene, tmp_p
     high = _criteria(tmp_path, "high", 60.0, 80.0)
     run = tmp_path / "run"
     res = tune(TuneRequest((scene,), "random", TuningConfig.model_validate(CONFIG), seed=1,
-                           budget=100, markets=f"fmvss111:{low},fmvss111:{high}"), run)
+                           budget=100, kind=Markets(f"fmvss111:{low},fmvss111:{high}")), run)
     doc = json.loads((run / "best" / "markets.json").read_text())
     assert res.verdict.passed is doc["passed"] is False
     assert res.verdict.gate and res.verdict.exit_status == 1

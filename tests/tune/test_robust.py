@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from rvmsim.scene import load_scene
-from rvmsim.tune import TuneRequest, member_set, tune
+from rvmsim.tune import Robust, TuneRequest, member_set, tune
 from rvmsim.search import TuningConfig
 from rvmsim.runs import RunStore
 
@@ -63,7 +63,7 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
 
     cfg = TuningConfig.model_validate(CONFIG)
     nominal = tune(TuneRequest((small,), config=cfg, budget=600, seed=1), tmp_path / "nominal")
-    tune(TuneRequest((small,), config=cfg, budget=600, seed=1, robust_samples=8),
+    tune(TuneRequest((small,), config=cfg, budget=600, seed=1, kind=Robust(8)),
          tmp_path / "robust")
     out = OutputSpec(320, 180)
     scene = load_scene(small)
@@ -87,8 +87,9 @@ def test_robust_tuning_raises_the_yield_on_fresh_samples(small, tmp_path):
     # the robust score is the members' 10 % quantile (the default), here the lowest of nine
     assert len(members) == 9 and rec.score == pytest.approx(
         float(np.quantile([m[0] for m in members], 0.1, method="lower")))
-    assert settings.aggregate == "quantile 0.1"
-    assert settings.robust_samples == 8 and settings.variation_key
+    assert settings.kind.aggregate == "quantile 0.1"
+    assert settings.kind.robust is not None
+    assert settings.kind.robust.samples == 8 and settings.kind.robust.variation_key
     # the report puts nominal score, robust score and yield side by side
     from rvmsim.report import write_report
 
@@ -154,9 +155,10 @@ def test_shared_and_robust_together_judge_every_scene_on_its_own_samples(small, 
     cfg = TuningConfig.model_validate(CONFIG)
     run = tmp_path / "both"
     tune(TuneRequest((small, tmp_path / "b.yaml"), config=cfg, budget=60, seed=2,
-                     robust_samples=3), run)
+                     kind=Robust(3)), run)
     rec, members, settings = _best_members(run)
-    assert settings.shared and settings.robust_samples == 3
+    assert settings.shared and settings.kind.robust is not None
+    assert settings.kind.robust.samples == 3
     assert len(members) == 2 * (1 + 3)
     doc = json.loads((run / "best" / "robust.json").read_text())
     top = doc["top"][0]

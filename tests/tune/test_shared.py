@@ -88,7 +88,7 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     store = RunStore(run / "run.sqlite", readonly=True)
     s = store.settings()
     store.close()
-    assert s is not None and s.shared and s.aggregate == "min"
+    assert s is not None and s.shared and s.kind.aggregate == "min"
     assert [r.scene for r in s.scenes] == [str(f.resolve()) for f in scenes]
     assert s.scene == s.scenes[0].scene
     assert json.loads((run / "run.json").read_text())["scenes"][1]["vehicle"] == \
