@@ -14,6 +14,7 @@ from tqdm import tqdm
 from .._progress import ProgressBar
 from ..search import DEFAULT_STRATEGY, STRATEGIES
 from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
+from ..errors import RvmsimError
 from .errors import Command
 from .params import (DEFAULT_WORKERS, ONLY_SUPPORTED, SEED, FiniteFloat, Integer, OutputFile,
                      OutputFolder, SchedulerAddress)
@@ -83,17 +84,15 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
     markets (--markets), or --resume RUN."""
     from ..compensation import compensation_for
-    from ..tune import Markets, Robust, RunOptions, Shared, TuneRequest, check_tune_arguments
+    from ..tune import Markets, Robust, RunOptions, Shared, TuneRequest
     from ..search import load_tuning_config
     from ..tune import resume as resume_run
     from ..tune import summary_lines
     from ..tune import tune as run_tune
     from ..tune.resumed import ResumeArgs
-    from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 
-    check_tune_arguments(len(scenes), shared or markets is not None, aggregate,
-                         resume_dir is not None, robust, samples, variation_file, compensation,
-                         markets=markets is not None)
+    _check_flags(len(scenes), shared or markets is not None, aggregate, resume_dir is not None,
+                 robust, samples, variation_file, compensation, markets=markets is not None)
     options = RunOptions(workers, max_time, target_score, progress)
     if resume_dir is not None:
         given = _given(click.get_current_context())
@@ -104,7 +103,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
             seed=seed if "seed" in given else None, budget=budget, config_file=config_file,
             criteria_file=criteria_file, out=out, force=force, only_supported=only_supported))
     else:
-        kind: Shared | Robust | Markets | None = None
+        kind: Shared | Robust | Markets | None = None  # the run's kind, as its flags name it
         if markets is not None:
             kind = Markets(markets, aggregate or "min")
         elif robust:
@@ -120,6 +119,35 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
     click.echo("\n".join(summary_lines(result)))
     # 1 when a shared or markets run found no setting passing everywhere (the summary says why)
     sys.exit(result.verdict.exit_status)
+
+
+def _check_flags(n_scenes: int, shared: bool, aggregate: str | None, resume: bool,
+                 robust: bool, samples: int | None, variation: object, compensation: object,
+                 *, markets: bool) -> None:
+    """``rvmsim tune``'s scene arguments against its flags (what each run kind checks of
+    its own values is the kind's: :func:`rvmsim.tune.new_run_settings`)."""
+    if not robust and (samples is not None or variation is not None
+                       or compensation is not None):
+        flag = ("samples" if samples is not None else "variation" if variation is not None
+                else "compensation")
+        raise RvmsimError(f"--{flag}: only with --robust (tune on production variation "
+                          "samples)")
+    if markets and robust:
+        raise RvmsimError("--markets with --robust: not supported; tune for the markets, "
+                          "then measure the yield per market with rvmsim robustness "
+                          "RUN --markets …")
+    if resume:  # each given option is checked against the run's own settings
+        return  # (rvmsim.tune.resumed, once the run's store is read)
+    if not n_scenes:
+        raise RvmsimError("tune: give a SCENE file, or --resume RUN")
+    if shared and n_scenes < 2 and not markets:
+        raise RvmsimError(f"--shared: give at least two scenes (got {n_scenes}); tune one "
+                          "scene without --shared")
+    if not shared and n_scenes > 1:
+        raise RvmsimError(f"tune: {n_scenes} scenes given: add --shared to tune one "
+                          "parameter set for all, or use rvmsim batch to tune each")
+    if aggregate is not None and not (shared or robust):
+        raise RvmsimError("--aggregate: only with --shared (several scenes) or --robust")
 
 
 def _given(ctx: click.Context) -> set[str]:

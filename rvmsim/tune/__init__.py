@@ -55,11 +55,8 @@ from .loop import (
 from .requests import (Markets, Robust, RunKindRequest, RunOptions, SearchOptions,
                        SearchSettings, Shared, TuneRequest)
 from .solve import EcSolver
-from .shared import (
-    check_tune_arguments,
-    load_shared_scenes,
-    write_member_results,
-)
+from .shared import write_member_results
+from .new_run import load_shared_scenes, new_run_settings
 from .run import (
     tune,
     resume,
@@ -113,8 +110,8 @@ __all__ = [
     "Markets",
     "RunKindRequest",
     "RunOptions",
-    "check_tune_arguments",
     "load_shared_scenes",
+    "new_run_settings",
     "write_member_results",
     "tune",
     "resume",

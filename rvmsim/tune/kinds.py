@@ -2,9 +2,9 @@
 what it judges.
 
 A request names its kind with an object (:class:`~rvmsim.tune.Shared`,
-:class:`~rvmsim.tune.Robust`, :class:`~rvmsim.tune.Markets`; none: one scene);
-:func:`new_run_settings` has that kind check its inputs and record itself
-(:class:`rvmsim.runs.RunKind`), and :func:`member_set` makes the stored settings a member set,
+:class:`~rvmsim.tune.Robust`, :class:`~rvmsim.tune.Markets`; none: one scene), which
+:func:`rvmsim.tune.new_run_settings` checks against the scenes and records
+(:class:`rvmsim.runs.RunKind`); :func:`member_set` makes the stored settings a member set,
 through which :func:`rvmsim.tune.tune` takes one path for every kind:
 
 - :class:`SingleSet`: one scene, searched on its own image;
@@ -26,33 +26,27 @@ robust run's samples is its *limiting* EC.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
-from ..compensation import measured_load_index
-from ..criteria import (Criteria, Unsupported, check_supported, criteria_reference,
-                        load_criteria, record_size, supported_criteria)
+from ..criteria import Criteria, Unsupported, load_criteria, supported_criteria
 from ..errors import RvmsimError
 from ..markets import market_criteria, parse_markets
-from ..percar import check_law
-from ..render import cached_render, same_scene, scene_key
-from ..runs.records import RobustRecord, RunKind, RunSettings, TrialRecord
+from ..render import cached_render, same_scene
+from ..runs.records import RunSettings, TrialRecord
 from ..runs.store import RunStore
 from ..scene import Scene, load_scene
 from ..search.config import TuningConfig
 from .loop import SearchOutcome, search_members, search_scene
 from .markets import (market_problem_lines, market_table_lines,
                       markets_members, write_market_results)
-from .members import Member, check_cameras, parse_aggregate
-from .requests import (Markets, Robust, SceneArg, SearchOptions, SearchSettings, Shared,
-                       TuneRequest)
-from .robust import (RobustSummary, check_samples, robust_line, robust_members, robust_summary,
+from .members import Member, parse_aggregate
+from .requests import SearchOptions, SearchSettings
+from .robust import (RobustSummary, robust_line, robust_members, robust_summary,
                      run_compensation, run_variations, variation_key, write_robust_results)
-from .shared import (load_shared_scenes, resumed_scenes, scene_members, shared_problems,
-                     shared_settings, write_member_results)
+from .shared import resumed_scenes, scene_members, shared_problems, write_member_results
 from .results import write_results
 
 if TYPE_CHECKING:
@@ -62,7 +56,7 @@ if TYPE_CHECKING:
     from ..search.strategies import Strategy
 
 __all__ = ["Verdict", "Built", "TopRows", "MemberSet", "SingleSet", "SharedSet", "RobustSet",
-           "CompensatedSet", "MarketsSet", "member_set", "new_run_settings"]
+           "CompensatedSet", "MarketsSet", "member_set"]
 
 
 @dataclass(frozen=True)
@@ -171,24 +165,6 @@ class SingleSet:
     settings: RunSettings
     name: str = "single"
 
-    @classmethod
-    def new_settings(cls, r: TuneRequest, aggregate: str | None
-                     ) -> tuple[RunSettings, list[Scene], Criteria]:
-        """A new run's settings, scenes and criteria from request ``r``: its criteria (each
-        scene's support checked, :func:`_supported`), its scene loaded and fingerprinted,
-        the config at the size of record."""
-        crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
-        recorded, sc = _loaded(r.scenes[0], r.scene_file)
-        crit, left_out = _supported(crit, [(recorded, sc)], r.only_supported)
-        settings = RunSettings(
-            scene=str(Path(recorded).resolve()), scene_key=scene_key(sc), vehicle=sc.name,
-            strategy=r.strategy, seed=r.seed, budget=r.budget,
-            criteria_file=(None if r.criteria_file is None
-                           else criteria_reference(r.criteria_file)),
-            config=(r.config or TuningConfig()).at_record(record_size(crit, sc)),
-            kind=RunKind(aggregate), judged_at=record_size(crit, sc), left_out=left_out)
-        return settings, [sc], crit
-
     def resumed_scenes(self, db: Path) -> list[Scene]:
         st = self.settings
         sc = load_scene(st.scene)
@@ -240,21 +216,6 @@ class SharedSet(SingleSet):
 
     name: str = "shared"
 
-    @classmethod
-    def new_settings(cls, r: TuneRequest, aggregate: str | None
-                     ) -> tuple[RunSettings, list[Scene], Criteria]:
-        """A new shared run's: every scene loaded (one sensor size), the criteria every
-        scene supports, the size of record of the first scene."""
-        crit = r.criteria if r.criteria is not None else load_criteria(r.criteria_file)
-        scenes = load_shared_scenes(r.scenes)
-        crit, left_out = _supported(crit, scenes, r.only_supported)
-        record = record_size(crit, scenes[0][1])
-        settings = dataclasses.replace(
-            shared_settings(scenes, r.strategy, r.seed, r.budget, r.criteria_file,
-                            (r.config or TuningConfig()).at_record(record)),
-            kind=RunKind(aggregate or "min"), judged_at=record, left_out=left_out)
-        return settings, [sc for _, sc in scenes], crit
-
     def resumed_scenes(self, db: Path) -> list[Scene]:
         _check_stored_aggregate(self.settings, db)
         return resumed_scenes(self.settings)
@@ -290,27 +251,6 @@ class RobustSet:
     settings: RunSettings
     inner: SingleSet
     name: str = "robust"
-
-    @staticmethod
-    def new_settings_from(settings: RunSettings, scenes: Sequence[Scene], robust: Robust
-                          ) -> RunSettings:
-        """``settings`` (a single or shared run's) made robust as ``robust`` asks: its
-        samples and aggregate checked, the variations checked and fingerprinted, and the
-        compensation model recorded (its law registered, its load state checked against
-        every variation)."""
-        check_samples(robust.samples)
-        aggregate = parse_aggregate(robust.aggregate).text
-        vfile = (None if robust.variation_file is None
-                 else str(Path(robust.variation_file).resolve()))
-        variations = run_variations(scenes, vfile)
-        compensation = robust.compensation
-        if compensation is not None:
-            check_law(compensation)
-            for v in variations:
-                measured_load_index(compensation, [s.name for s in v.load_states])
-        record = RobustRecord(robust.samples, vfile, variation_key(variations),
-                              None if compensation is None else compensation.as_dict())
-        return dataclasses.replace(settings, kind=RunKind(aggregate, record))
 
     @property
     def compensation(self) -> CompensationModel | None:
@@ -384,25 +324,6 @@ class MarketsSet:
     settings: RunSettings
     name: str = "markets"
 
-    @classmethod
-    def new_settings(cls, r: TuneRequest, markets_kind: Markets
-                     ) -> tuple[RunSettings, list[Scene], Criteria]:
-        """A new markets run's settings, scenes and its first market's criteria."""
-        if r.criteria is not None or r.criteria_file is not None:  # each market has its own
-            raise RvmsimError("--criteria: give no criteria with --markets (a market may be "
-                              "SITE:CRITERIA with your criteria file)")
-        aggregate = parse_aggregate(markets_kind.aggregate).text
-        markets = parse_markets(markets_kind.markets)
-        loaded = [_loaded(s, r.scene_file) for s in r.scenes]
-        check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in loaded])
-        crit = market_criteria(markets[0])
-        record = record_size(crit, loaded[0][1])
-        settings = dataclasses.replace(
-            shared_settings(loaded, r.strategy, r.seed, r.budget, None,
-                            (r.config or TuningConfig()).at_record(record)),
-            kind=RunKind(aggregate, markets=tuple(m.spec for m in markets)), judged_at=record)
-        return settings, [sc for _, sc in loaded], crit
-
     def resumed_scenes(self, db: Path) -> list[Scene]:
         _check_stored_aggregate(self.settings, db)
         return resumed_scenes(self.settings)
@@ -447,43 +368,6 @@ def member_set(settings: RunSettings) -> MemberSet:
     if robust.compensation is not None:
         return CompensatedSet(settings, base)
     return RobustSet(settings, base)
-
-
-def new_run_settings(r: TuneRequest) -> tuple[RunSettings, list[Scene], Criteria]:
-    """A new run's settings, scenes and criteria from request ``r``, every input checked by
-    the kind it asks for (``r.kind``): :meth:`SingleSet.new_settings` (one scene),
-    :meth:`SharedSet.new_settings` (several, or :class:`~rvmsim.tune.Shared`),
-    :meth:`MarketsSet.new_settings` (:class:`~rvmsim.tune.Markets`), made robust by
-    :meth:`RobustSet.new_settings_from` (:class:`~rvmsim.tune.Robust`)."""
-    kind = r.kind
-    if isinstance(kind, Markets):  # one parameter set for every market (and scene)
-        return MarketsSet.new_settings(r, kind)
-    if isinstance(kind, Shared) or r.shared:
-        aggregate = parse_aggregate(kind.aggregate if isinstance(kind, Shared) else "min").text
-        settings, scenes, crit = SharedSet.new_settings(r, aggregate)
-    else:
-        settings, scenes, crit = SingleSet.new_settings(r, None)
-    if isinstance(kind, Robust):
-        settings = RobustSet.new_settings_from(settings, scenes, kind)
-    return settings, scenes, crit
-
-
-def _loaded(scene: SceneArg, scene_file: str | Path | None) -> tuple[str, Scene]:
-    """(the file recorded for ``scene``, the Scene): a file is loaded and recorded as given;
-    a loaded Scene is recorded by ``scene_file``, else by its own source."""
-    if isinstance(scene, Scene):
-        return str(scene_file or scene.source), scene
-    return str(scene), load_scene(scene)
-
-
-def _supported(crit: Criteria, scenes: Sequence[tuple[str, Scene]], only_supported: bool
-               ) -> tuple[Criteria, tuple[str, ...]]:
-    """The criteria every scene supports (:func:`rvmsim.criteria.check_supported`: refused
-    before any work unless ``only_supported``) and the ECs that left out."""
-    out = crit
-    for recorded, sc in scenes:
-        out = check_supported(sc, out, recorded, only_supported=only_supported)
-    return out, tuple(k for k in crit.ids if crit.items[k].enabled and not out.items[k].enabled)
 
 
 def _member_scores(store: RunStore, top: Sequence[TrialRecord]) -> dict[int, list[float]]:

@@ -16,8 +16,9 @@ from typing import TYPE_CHECKING, Union
 from ..criteria import Criteria
 from ..isp import IspParams
 from ..search.config import TuningConfig
-from .members import OBJECTIVE_COMBINE, Aggregate
-from .robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
+from ..markets import parse_markets
+from .members import OBJECTIVE_COMBINE, Aggregate, parse_aggregate
+from .robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE, check_samples
 from ..search.strategies import DEFAULT_STRATEGY, Strategy
 
 if TYPE_CHECKING:
@@ -175,6 +176,9 @@ class Shared:
 
     aggregate: str = "min"
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "aggregate", parse_aggregate(self.aggregate).text)
+
 
 @dataclass(frozen=True)
 class Robust:
@@ -204,6 +208,10 @@ class Robust:
     compensation: CompensationModel | None = None
     aggregate: str = ROBUST_AGGREGATE
 
+    def __post_init__(self) -> None:
+        check_samples(self.samples)
+        object.__setattr__(self, "aggregate", parse_aggregate(self.aggregate).text)
+
 
 @dataclass(frozen=True)
 class Markets:
@@ -221,6 +229,10 @@ class Markets:
 
     markets: str | tuple[str, ...]
     aggregate: str = "min"
+
+    def __post_init__(self) -> None:
+        parse_markets(self.markets)  # a market this version does not know: refused now
+        object.__setattr__(self, "aggregate", parse_aggregate(self.aggregate).text)
 
 
 #: What :attr:`TuneRequest.kind` takes.

@@ -24,8 +24,9 @@ from ..scene import Scene
 from ..scene.display import RVM_IMAGE_OF_RECORD_PX
 from ..search.config import make_strategy
 from ..search.strategies import Strategy, check_seed
-from .kinds import Built, MemberSet, Verdict, member_set, new_run_settings
+from .kinds import Built, MemberSet, Verdict, member_set
 from .loop import SearchOutcome
+from .new_run import new_run_settings
 from .requests import RunOptions, SearchOptions, TuneRequest
 from .resumed import ResumeArgs, check_resume_args
 from .results import remove_run
@@ -63,18 +64,13 @@ def _check_out(run_dir: Path) -> None:
 def _new_run(run_dir: Path, request: TuneRequest, force: bool
              ) -> tuple[RunSettings, list[Scene], Criteria]:
     """The settings, scenes and criteria of a new run in ``run_dir`` (nothing written yet:
-    every input is checked here, before anything in ``run_dir`` changes; each kind checks
-    its own, :func:`rvmsim.tune.kinds.new_run_settings`)."""
+    every input is checked, before anything in ``run_dir`` changes, by
+    :func:`rvmsim.tune.new_run.new_run_settings`)."""
 
-    r = request
-    check_seed(r.seed)
-    if r.budget is not None and (not isinstance(r.budget, int) or isinstance(r.budget, bool)
-                                 or r.budget < 1):
-        raise RvmsimError(f"--budget {r.budget!r}: give a whole number of at least 1")
     if not force and (run_dir / RUN_DB).exists():
         raise RvmsimError(f"{run_dir}: a run exists here already; use --resume to continue it, "
                           "or --force to replace it")
-    return new_run_settings(r)
+    return new_run_settings(request)
 
 
 def _resumed_run(run_dir: Path, given: ResumeArgs | None

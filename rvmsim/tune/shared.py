@@ -24,10 +24,9 @@ from typing import TYPE_CHECKING, Any, Sequence
 from ..errors import RvmsimError
 from ..search.config import TuningConfig
 from .members import Member, check_cameras, member_conflicts
-from ..runs.records import RunSettings, SceneRef
+from ..runs.records import RunSettings
 from ..scene import Scene, load_scene
-from ..criteria import criteria_reference
-from ..render import same_scene, scene_key
+from ..render import same_scene
 from ..pipeline import make_evaluator
 
 if TYPE_CHECKING:
@@ -35,82 +34,7 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..runs.store import RunStore
 
-__all__ = ["check_tune_arguments", "load_shared_scenes", "shared_settings", "resumed_scenes", "scene_members",
-           "write_member_results", "shared_problem_lines", "shared_problems"]
-
-
-def check_tune_arguments(n_scenes: int, shared: bool, aggregate: str | None,
-                         resume: bool, robust: bool = False, samples: int | None = None,
-                         variation: object = None, compensation: object = None, *,
-                         markets: bool = False) -> None:
-    """``rvmsim tune``'s scene arguments against its flags (``--shared``, ``--aggregate``,
-    ``--resume``).
-
-    Raises
-    ------
-    RvmsimError
-        One line for a bad combination.
-    """
-    if not robust and (samples is not None or variation is not None
-                       or compensation is not None):
-        flag = ("samples" if samples is not None else "variation" if variation is not None
-                else "compensation")
-        raise RvmsimError(f"--{flag}: only with --robust (tune on production variation "
-                          "samples)")
-    if markets and robust:
-        raise RvmsimError("--markets with --robust: not supported; tune for the markets, "
-                          "then measure the yield per market with rvmsim robustness "
-                          "RUN --markets …")
-    if resume:  # each given option is checked against the run's own settings
-        return  # (rvmsim.tune.resumed, once the run's store is read)
-    if not n_scenes:
-        raise RvmsimError("tune: give a SCENE file, or --resume RUN")
-    if shared and n_scenes < 2 and not markets:
-        raise RvmsimError(f"--shared: give at least two scenes (got {n_scenes}); tune one "
-                          "scene without --shared")
-    if not shared and n_scenes > 1:
-        raise RvmsimError(f"tune: {n_scenes} scenes given: add --shared to tune one "
-                          "parameter set for all, or use rvmsim batch to tune each")
-    if aggregate is not None and not (shared or robust):
-        raise RvmsimError("--aggregate: only with --shared (several scenes) or --robust")
-
-
-def load_shared_scenes(scenes: Sequence[str | Path | Scene]) -> list[tuple[str, Scene]]:
-    """The scenes of a shared run as (recorded file, Scene): at least two, with cameras of
-    one sensor size.
-
-    Raises
-    ------
-    RvmsimError
-        One line: fewer than two scenes, a bad scene file, or cameras that differ.
-    """
-
-    if len(scenes) < 2:
-        raise RvmsimError(f"--shared: give at least two scenes (got {len(scenes)}); tune one "
-                          "scene without --shared")
-    out = []
-    for s in scenes:
-        if isinstance(s, Scene):
-            out.append((str(s.source or s.name), s))
-        else:
-            out.append((str(s), load_scene(s)))
-    check_cameras([(f"{rec} ({sc.name})", sc.fisheye_camera()) for rec, sc in out])
-    return out
-
-
-def shared_settings(scenes: Sequence[tuple[str, Scene]], strategy: str, seed: int,
-                    budget: int | None, criteria_file: str | Path | None,
-                    config: TuningConfig | None) -> RunSettings:
-    """The settings of a new shared run (the first scene is also ``scene``; its kind is the
-    caller's to add)."""
-
-    refs = tuple(SceneRef(str(Path(rec).resolve()), scene_key(sc), sc.name)
-                 for rec, sc in scenes)
-    return RunSettings(
-        scene=refs[0].scene, scene_key=refs[0].scene_key, vehicle=refs[0].vehicle,
-        strategy=strategy, seed=seed, budget=budget,
-        criteria_file=None if criteria_file is None else criteria_reference(criteria_file),
-        config=config or TuningConfig(), scenes=refs)
+__all__ = ["resumed_scenes", "scene_members", "write_member_results", "shared_problem_lines", "shared_problems"]
 
 
 def resumed_scenes(settings: RunSettings) -> list[Scene]:

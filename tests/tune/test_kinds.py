@@ -12,8 +12,10 @@ import pytest
 from rvmsim.compensation import DEFAULT_COMPENSATION
 from rvmsim.runs import RunSettings, RunStore
 from rvmsim.runs.records import RobustRecord, RunKind, SceneRef
-from rvmsim.tune import (CompensatedSet, Markets, MarketsSet, RobustSet, SharedSet, SingleSet,
-                         TopRows, TuneRequest, member_set, tune)
+from rvmsim.errors import RvmsimError
+from rvmsim.tune import (CompensatedSet, Markets, MarketsSet, Robust, RobustSet, Shared,
+                         SharedSet, SingleSet, TopRows, TuneRequest, member_set, tune)
+from rvmsim.tune.robust import ROBUST_AGGREGATE
 from rvmsim.search import TuningConfig
 from rvmsim.tune.markets import market_summary_lines
 from rvmsim.tune.shared import shared_problem_lines
@@ -96,6 +98,24 @@ def test_a_request_takes_its_kind_as_an_object(scene, tmp_path):
     assert kind == RunKind("quantile 0.5", markets=("fmvss111", "unr158"))
     with pytest.raises(TypeError, match="TuneRequest.kind"):
         TuneRequest((scene,), kind="robust")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("make, says", [
+    (lambda: Robust(0), "--samples 0"),
+    (lambda: Robust(4, aggregate="median"), "median"),
+    (lambda: Shared("quantile 2"), "quantile 2"),
+    (lambda: Markets("fmvss111,eu2030"), "eu2030"),
+    (lambda: Markets(("unr158", "unr158")), "unr158"),
+])
+def test_a_kind_checks_its_own_values_when_it_is_made(make, says):
+    """A bad value of a kind is one line naming it, before any scene is read."""
+    with pytest.raises(RvmsimError, match=says):
+        make()
+
+
+def test_a_kind_normalises_its_aggregate():
+    assert Shared("quantile  0.25").aggregate == Shared("quantile 0.25").aggregate
+    assert Robust(4).aggregate == ROBUST_AGGREGATE
 
 
 def test_a_single_run_reports_its_verdict_and_does_not_gate(scene, tmp_path):
