@@ -122,11 +122,7 @@ def _case(name: str) -> tuple[Callable[..., Any], Any, dict]:
 
         def scene_at(p: tuple[float, ...], a: tuple[float, ...]) -> Any:
             m = _moved(own, p, a)
-            mount = sc.camera.mount.model_copy(update={
-                "position": tuple(m["position"]), "yaw_deg": m["yaw_deg"],
-                "pitch_deg": m["pitch_deg"], "roll_deg": m["roll_deg"]})
-            return sc.model_copy(update={"camera": sc.camera.model_copy(
-                update={"mount": mount})})
+            return sc.with_mount(m["position"], m["yaw_deg"], m["pitch_deg"], m["roll_deg"])
         return scene_at, cap, truth
     raise ValueError(f"unknown capture {name!r} (groups: {', '.join(GROUPS)})")
 

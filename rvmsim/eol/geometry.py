@@ -85,7 +85,4 @@ def mount_at(scene: Scene, camera: FisheyeCamera) -> Scene:
     """``scene`` with its camera mounted at ``camera``'s pose (position m; the angles that
     make its rotation, :func:`rvmsim.camera.ypr_from_rotation`)."""
     yaw, pitch, roll = (float(a) for a in ypr_from_rotation(camera.rotation))
-    mount = scene.camera.mount.model_copy(update={
-        "position": tuple(float(p) for p in camera.position), "yaw_deg": yaw,
-        "pitch_deg": pitch, "roll_deg": roll})
-    return scene.model_copy(update={"camera": scene.camera.model_copy(update={"mount": mount})})
+    return scene.with_mount(camera.position, yaw, pitch, roll)

@@ -18,15 +18,12 @@ def scene_with_mount(scene: Scene, correction: PoseCorrection) -> Scene:
     unloaded body, :func:`mount_correction`).  Under a ``load_state`` the body stays where
     it was: its pivot is pinned to the old mount position when the scene left it to the
     mount."""
-    old = scene.camera.mount
-    mount = old.model_copy(update={
-        "position": correction.position_m, "yaw_deg": correction.yaw_deg,
-        "pitch_deg": correction.pitch_deg, "roll_deg": correction.roll_deg})
-    camera = scene.camera.model_copy(update={"mount": mount})
+    moved = scene.with_mount(correction.position_m, correction.yaw_deg, correction.pitch_deg,
+                             correction.roll_deg)
     load = scene.load_state
     if load is not None and load.pivot_m is None:
-        load = load.model_copy(update={"pivot_m": old.position})
-    return scene.model_copy(update={"camera": camera, "load_state": load})
+        load = load.model_copy(update={"pivot_m": scene.camera.mount.position})
+    return moved.model_copy(update={"load_state": load})
 
 
 def mount_correction(scene: Scene, correction: PoseCorrection) -> PoseCorrection:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from collections.abc import Iterable
 from typing import Annotated, Literal, Union
 
 import numpy as np
@@ -427,6 +428,17 @@ class Scene(_Model):
     def guidelines_shown(self) -> bool:
         """Whether the scene has the painted guidelines (enabled, and an FMVSS site)."""
         return self.test_site.fmvss and self.test_site.guidelines.enabled
+
+    def with_mount(self, position_m: Iterable[float], yaw_deg: float, pitch_deg: float,
+                   roll_deg: float) -> Scene:
+        """A copy of the scene with the camera mounted at ``position_m`` (m, scene frame)
+        and turned to ``yaw_deg``, ``pitch_deg``, ``roll_deg`` (degrees, the ``mount``
+        section's angles); nothing else changes (a load state keeps its pivot)."""
+        mount = self.camera.mount.model_copy(update={
+            "position": tuple(float(p) for p in position_m), "yaw_deg": float(yaw_deg),
+            "pitch_deg": float(pitch_deg), "roll_deg": float(roll_deg)})
+        return self.model_copy(update={"camera": self.camera.model_copy(
+            update={"mount": mount})})
 
     def fisheye_camera(self) -> FisheyeCamera:
         """The rear-view camera as a :class:`~rvmsim.camera.FisheyeCamera`: at its mount

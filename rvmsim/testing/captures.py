@@ -160,10 +160,7 @@ def baic() -> tuple[Scene, np.ndarray, FisheyeImages]:
 
 def baic_rough_scene(sc: Scene) -> Scene:
     """``sc`` with the capture README's rough pose (0.97 m, 38°, no yaw or roll, centred)."""
-    rough = sc.camera.mount.model_copy(update={"position": (0.0, -0.97, -0.10),
-                                               "yaw_deg": 0.0, "pitch_deg": 38.0,
-                                               "roll_deg": 0.0})
-    return sc.model_copy(update={"camera": sc.camera.model_copy(update={"mount": rough})})
+    return sc.with_mount((0.0, -0.97, -0.10), 0.0, 38.0, 0.0)
 
 
 def write_scene(tmp_path: Path, mount: dict = MOUNT, name: str = "mat.yaml") -> Path:
@@ -217,11 +214,8 @@ def moved_scene(sc: Scene, d: tuple[float, ...]) -> Scene:
     """``sc`` with its mount moved by ``d[:3]`` (m, scene frame: y down) and turned by
     ``d[3:]`` (yaw, pitch, roll, degrees): a pose search's start that far off."""
     m = sc.camera.mount
-    mount = m.model_copy(update={
-        "position": tuple(p + dp for p, dp in zip(m.position, d[:3])),
-        "yaw_deg": m.yaw_deg + d[3], "pitch_deg": m.pitch_deg + d[4],
-        "roll_deg": m.roll_deg + d[5]})
-    return sc.model_copy(update={"camera": sc.camera.model_copy(update={"mount": mount})})
+    return sc.with_mount([p + dp for p, dp in zip(m.position, d[:3])], m.yaw_deg + d[3],
+                         m.pitch_deg + d[4], m.roll_deg + d[5])
 
 
 def moved_mount(d_position_m: tuple[float, float, float],

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
+from rvmsim.camera import rotation_from_ypr
 from rvmsim.scene import fmvss111, scene_from_dict
 
 from ..conftest import SCENES, bundled_scene
@@ -96,3 +97,19 @@ def test_documented_example_is_a_valid_scene():
     assert scene.camera.intrinsics.fx == 390.0
     assert scene.test_site.object_centre("D") is None
     assert scene.vehicle.trunk.units == "mm"
+
+
+def test_with_mount_places_the_camera_where_asked_and_changes_nothing_else():
+    """The camera of ``Scene.with_mount`` is at the given position, with the rotation the
+    angles make (:func:`rvmsim.camera.rotation_from_ypr`, independent of the scene code), and
+    a scene read from a document with that mount is the same scene."""
+    doc = _minimal()
+    sc = scene_from_dict(doc)
+    moved = sc.with_mount((0.05, -1.1, -0.2), 2.5, 31.0, -1.25)
+    cam = moved.fisheye_camera()
+    np.testing.assert_allclose(cam.position, (0.05, -1.1, -0.2), atol=1e-12)
+    np.testing.assert_allclose(cam.rotation, rotation_from_ypr(2.5, 31.0, -1.25), atol=1e-12)
+    doc["camera"]["mount"] = {"position": [0.05, -1.1, -0.2], "yaw_deg": 2.5,
+                              "pitch_deg": 31.0, "roll_deg": -1.25}
+    assert moved == scene_from_dict(doc)
+    assert sc.camera.mount != moved.camera.mount  # the original is left as it was
