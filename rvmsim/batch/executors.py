@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import os
+import socket
 import sys
 import uuid
 from collections.abc import Callable, Iterator, Mapping
@@ -110,6 +111,23 @@ class LocalExecutor(Executor):
                                       f"{len(todo)} tasks not run")
 
 
+def _refused(address: str | None, timeout_s: float) -> OSError | None:
+    """Why a ``tcp://HOST:PORT`` scheduler address takes no connection now (refused, no
+    such host; None: it takes one, or the address is another kind, which the Dask client's
+    own connection attempts judge).  A refusal comes back at once, where the client would
+    retry it for ``timeout_s``."""
+    if not address or not address.startswith("tcp://"):
+        return None
+    host, _, port = address[len("tcp://"):].rpartition(":")
+    if not host or not port.isdigit():
+        return None  # the client says what is wrong with it
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s).close()
+    except OSError as err:
+        return err
+    return None
+
+
 class DaskExecutor(Executor):
     """Tasks on an existing Dask distributed cluster at ``address`` (``tcp://HOST:PORT``),
     or on a given ``client``."""
@@ -121,6 +139,9 @@ class DaskExecutor(Executor):
         distributed = import_distributed()
         self._own = client is None
         if client is None:
+            refused = _refused(address, timeout_s)
+            if refused is not None:  # said at once, not after the client's timeout_s
+                raise RvmsimError(f"{address}: cannot reach the Dask scheduler ({refused})")
             try:
                 client = distributed.Client(address, timeout=timeout_s)
             except (OSError, TimeoutError, ValueError) as err:
