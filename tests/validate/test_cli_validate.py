@@ -21,6 +21,8 @@ def _run(*args: str, env: dict | None = None) -> Outcome:
 
 @pytest.fixture
 def cache_env(tmp_path):
+    """A render cache of the test's own (the other tests share the session's: the same
+    scene, rendered once)."""
     return {"RVMSIM_CACHE": str(tmp_path / "cache")}
 
 
@@ -57,17 +59,17 @@ def test_cli_writes_outputs_and_a_corrected_scene_that_then_passes(tmp_path, cac
     assert "verdict: PASS" in res2.stdout
 
 
-def test_cli_tolerances_gate_the_exit_status(tmp_path, cache_env):
+def test_cli_tolerances_gate_the_exit_status(tmp_path):
     _, cap = perturbed()
     cap_file = tmp_path / "capture.png"
     cv2.imwrite(str(cap_file), cap[..., ::-1])
     scene_file = write_scene(tmp_path)
     res = _run("validate", str(scene_file), "--capture", str(cap_file), "--out",
-               str(tmp_path / "v"), "--max-angle-deg", "1.0", "--no-progress", env=cache_env)
+               str(tmp_path / "v"), "--max-angle-deg", "1.0", "--no-progress")
     assert res.code == 0, res.stdout + res.stderr
     res = _run("validate", str(scene_file), "--capture", str(cap_file), "--out",
                str(tmp_path / "v"), "--max-angle-deg", "1.0", "--max-rms-px", "0.01",
-               "--no-progress", env=cache_env)
+               "--no-progress")
     assert res.code == 1
     assert "FAIL landmark_rms_after_correction_px" in res.stdout
 
@@ -75,7 +77,7 @@ def test_cli_tolerances_gate_the_exit_status(tmp_path, cache_env):
 #: A capture that reads but shows nothing of the scene is a failed step, not a bad capture:
 #: test_cli_failure_writes_its_pictures_and_names_the_step.
 @pytest.mark.parametrize("case", ["missing", "text", "empty", "blank", "size"])
-def test_cli_bad_captures_are_one_line_errors(tmp_path, cache_env, case):
+def test_cli_bad_captures_are_one_line_errors(tmp_path, case):
     scene_file = write_scene(tmp_path)
     cap = tmp_path / "cap.png"
     if case == "text":
@@ -90,20 +92,20 @@ def test_cli_bad_captures_are_one_line_errors(tmp_path, cache_env, case):
               "empty": "empty file", "blank": "blank", "size": "960×640 px but the scene's "
               "camera.image_size is 640×480"}[case]
     res = _run("validate", str(scene_file), "--capture", str(cap), "--out", str(tmp_path / "v"),
-               "--no-progress", env=cache_env)
+               "--no-progress")
     assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
     assert expect in lines[0] and str(cap) in lines[0]
 
 
-def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path, cache_env):
+def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path):
     scene_file = write_scene(tmp_path)
     cap = tmp_path / "noise.png"
     cv2.imwrite(str(cap), np.random.default_rng(1).integers(0, 255, (480, 640), np.uint8))
     out = tmp_path / "v"
     res = _run("validate", str(scene_file), "--capture", str(cap), "--out", str(out),
-               "--no-progress", env=cache_env)
+               "--no-progress")
     assert res.code == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "(step failed: detection)" in lines[0], res.stderr
@@ -115,7 +117,7 @@ def test_cli_failure_writes_its_pictures_and_names_the_step(tmp_path, cache_env)
     assert not (out / "validation.json").exists()
 
 
-def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
+def test_cli_several_captures_give_one_table_and_one_page(tmp_path):
     """A folder plus a file: three captures, one passing (the scene's own frame), one failing
     its checks (the perturbed capture), one unrelated (an error, with its pictures)."""
     from rvmsim.testing.captures import base
@@ -130,7 +132,7 @@ def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
     scene_file = write_scene(tmp_path)
     out = tmp_path / "v"
     res = _run("validate", str(scene_file), "--capture", str(folder), "--capture", str(noise),
-               "--out", str(out), "--no-progress", env=cache_env)
+               "--out", str(out), "--no-progress")
     assert res.code == 2, res.stdout + res.stderr  # one capture is an error
     err = res.stderr.strip().splitlines()
     assert len(err) == 1 and "noise.png" in err[0] and "step failed: detection" in err[0]
@@ -154,7 +156,7 @@ def test_cli_several_captures_give_one_table_and_one_page(tmp_path, cache_env):
 
 
 def test_cli_several_captures_a_failure_whose_pictures_cannot_be_written_is_a_row(
-        tmp_path, cache_env):
+        tmp_path):
     """Several captures: one fails detection and its output folder cannot be made (a file
     is in the way). It is that capture's ERROR row and one line, not a traceback, and the
     other capture is still validated."""
@@ -169,7 +171,7 @@ def test_cli_several_captures_a_failure_whose_pictures_cannot_be_written_is_a_ro
     out.mkdir()
     (out / "noise").write_text("in the way")
     res = _run("validate", str(scene_file), "--capture", str(same), "--capture", str(noise),
-               "--out", str(out), "--no-progress", env=cache_env)
+               "--out", str(out), "--no-progress")
     assert res.code == 2, res.stdout + res.stderr
     assert "Traceback" not in res.stderr
     err = res.stderr.strip().splitlines()
