@@ -49,14 +49,6 @@ def session_render_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return cache
 
 
-@pytest.fixture(scope="session", autouse=True)
-def one_worker_by_default() -> None:
-    """Commands run with one worker unless a test asks for more (``--workers 2``, as the
-    process-lifetime and worker tests do): the suite already runs one test per core, and a
-    pool's start (each worker importing rvmsim, cmaes and scipy) would only add to it."""
-    os.environ["RVMSIM_WORKERS"] = "1"
-
-
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under pytest-xdist: each item's group (:data:`SHARED_FIXTURE_FOLDERS`, else its

@@ -43,7 +43,6 @@ __all__ = ["robustness"]
               help="Samples per tolerance scale factor of the yield curve (default: "
                    "min(--samples, 64)).")
 @click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
-              envvar="RVMSIM_WORKERS", show_envvar=True,
               show_default=True, help="Local processes rendering the viewpoints not yet in "
                                       "the render cache.")
 @click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",

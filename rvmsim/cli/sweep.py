@@ -20,7 +20,6 @@ __all__ = ["sweep"]
               callback=default_folder("sweep_file", lambda f: Path("runs") / f"sweep_{f.stem}"),
               help="Output folder (default: runs/sweep_<sweep file name>).")
 @click.option("--workers", type=Integer(1, 256), default=os.cpu_count() or 1,
-              envvar="RVMSIM_WORKERS", show_envvar=True,
               show_default=True, help="Local processes (one design point each).")
 @click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
               help="Run the design points on this Dask distributed cluster instead.")

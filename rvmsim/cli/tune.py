@@ -62,7 +62,6 @@ _STRATEGY_HELP = "; ".join(f"{name}: {cls.summary}" for name, cls in STRATEGIES.
                    "SITE:CRITERIA (docs/markets.md); exits 1 when none passes all.")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
 @click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
-              envvar="RVMSIM_WORKERS", show_envvar=True,
               show_default=True, help="Worker processes.")
 @click.option("--budget", type=Integer(1), default=None,
               help="Evaluations (cmaes-solved, cmaes, random) or fine trials T per seed (grid-random).")
@@ -244,7 +243,6 @@ class _BatchProgress:
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None)
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Random seed.")
 @click.option("--workers", type=Integer(1, 64), default=DEFAULT_WORKERS,
-              envvar="RVMSIM_WORKERS", show_envvar=True,
               show_default=True)
 @click.option("--budget", type=Integer(1), default=None)
 @click.option("--scheduler", type=SchedulerAddress(), default=None, metavar="tcp://HOST:PORT",
