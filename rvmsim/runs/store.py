@@ -252,8 +252,7 @@ class RunStore(SqliteStore):
     def write_space(self, space: SearchSpace) -> None:
         """Record the search space the run searches (``meta.space``: its ranges and the
         values of the untuned parameters), for the readers that measure distances in it."""
-        self.set_meta(space={"ranges": [dataclasses.asdict(r) for r in space.ranges],
-                             "base": {n: getattr(space.base, n) for n in IspParams.names()}})
+        self.set_meta(space=_space_json(space))
 
     def space(self) -> SearchSpace | None:
         """The search space the run recorded (None: a run of an earlier version, which
@@ -273,6 +272,14 @@ class RunStore(SqliteStore):
         except (TypeError, ValueError, KeyError) as err:
             raise RvmsimError(" ".join(f"{self.path}: meta: space: unreadable "
                                        f"({err})".split())) from None
+
+    def begin(self, settings: RunSettings, space: SearchSpace, total: int | None) -> None:
+        """Record, in one transaction, that the run starts or resumes: status running, its
+        strategy and planned evaluations (``total``; None: unknown), its settings (a resumed
+        run of rvmsim 0.1 gets them here) and the search space its diverse top-M measures
+        distances in."""
+        self.set_meta(status=str(RunStatus.RUNNING), stopped=None, total=total,
+                      format=RUN_FORMAT, **settings.as_json(), space=_space_json(space))
 
     def write_settings(self, settings: RunSettings) -> None:
         """Record what the run is (once, when it starts, or when an old run is resumed)."""
@@ -343,3 +350,9 @@ def _legacy_state(text: str, strategy: str, total: int | None) -> RunState:
     status = RunStatus(text)
     return RunState(status, StopReason.DONE if status is RunStatus.DONE else None, strategy,
                     total)
+
+
+def _space_json(space: SearchSpace) -> dict[str, Any]:
+    """``meta.space``: the space's ranges and the values of its untuned parameters."""
+    return {"ranges": [dataclasses.asdict(r) for r in space.ranges],
+            "base": {n: getattr(space.base, n) for n in IspParams.names()}}

@@ -228,10 +228,7 @@ def _search(store: RunStore, kind: MemberSet, built: Built, settings: RunSetting
             bar: tuple[ProgressBar | None, Callable[[int, float, str], None]]) -> SearchOutcome:
     """Search into ``store``, recording the run's state: running, then done, interrupted
     (Ctrl-C) or failed (an error, passed on as it is)."""
-    # state first: `rvmsim status` reads a store without settings as one of rvmsim 0.1
-    store.set_state(RunStatus.RUNNING, strategy=settings.strategy, total=strat.total())
-    store.write_settings(settings)  # a resumed run of rvmsim 0.1 gets them here
-    store.write_space(strat.space)  # the space the diverse top-M measures distances in
+    store.begin(settings, strat.space, strat.total())
     progress, on_batch = bar
     try:
         outcome = kind.search(built, kind.search_settings(settings.config, crit, strat), store,

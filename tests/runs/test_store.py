@@ -8,6 +8,7 @@ import math
 
 import pytest
 
+from rvmsim.camera import FisheyeCamera
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import IspParams
 from rvmsim.search import TuningConfig
@@ -20,6 +21,24 @@ def _settings(**changes) -> RunSettings:
                     strategy="cmaes", seed=7, budget=300, criteria_file=None,
                     config=TuningConfig.model_validate({"tuned": ["zoom"], "top_m": 4}))
     return dataclasses.replace(s, **changes)
+
+
+def test_begin_records_the_state_settings_and_space_of_a_starting_run(tmp_path):
+    """``begin``: a stopped run resumed is running again (no stop reason left), with its
+    settings, planned total and search space read back as they were given."""
+    settings = _settings()
+    space = settings.config.space(FisheyeCamera(640, 480, 200.0, 200.0, 319.5, 239.5))
+    store = RunStore(tmp_path / "run.sqlite")
+    store.set_state(RunStatus.DONE, StopReason.MAX_TIME)
+    store.begin(settings, space, 300)
+    store.close()
+    store = RunStore(tmp_path / "run.sqlite", readonly=True)
+    state = store.state()
+    assert (state.status, state.stopped, state.strategy, state.total) == (
+        RunStatus.RUNNING, None, "cmaes", 300)
+    assert store.settings() == settings
+    assert store.space() == space
+    store.close()
 
 
 def test_trials_come_back_as_typed_records(tmp_path):
