@@ -31,6 +31,7 @@ from ..render import cached_render
 from ..runs import is_run_folder, open_run, run_inputs, run_settings, store_candidates
 from ..scene import load_scene
 from ..search import TuningConfig
+from ..tune import member_set
 from .candidates import Candidate
 
 if TYPE_CHECKING:
@@ -204,7 +205,8 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         try:
             settings = run_settings(source, store)
             scene_file, crit_file = run_inputs(source, settings)
-            criteria = load_criteria(crit_file)
+            kind = member_set(settings)
+            scene, criteria = kind.shown(load_scene(scene_file), load_criteria(crit_file))
             candidates = tuple(c for c, _ in store_candidates(store, settings,
                                                               criteria=criteria))
         finally:
@@ -215,11 +217,10 @@ def open_session(source: str | Path, *, out_root: str | Path = "out") -> Console
         start = candidates[0].params
     elif source.is_file():
         scene_file, config, run_dir = source, TuningConfig(), None
-        criteria = load_criteria(None)
+        scene, criteria = load_scene(scene_file), load_criteria(None)
         root, candidates, start = Path(out_root) / source.stem, (), IspParams()
     else:
         raise RvmsimError(f"{source}: no such run folder or scene file")
-    scene = load_scene(scene_file)
     images, _ = cached_render(scene)
 
     ec_output = record_output(criteria, scene, config.output.mirror)

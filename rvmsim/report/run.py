@@ -106,23 +106,24 @@ def _load_run(run_dir: Path) -> _Run:
     store = open_run(run_dir)
     try:
         settings = run_settings(run_dir, store)
+        kind = member_set(settings)
         scene_file, crit_file = run_inputs(run_dir, settings)
-        criteria = load_criteria(crit_file)
+        own = load_scene(scene_file)  # as the run recorded it (its key is this one's)
+        scene, criteria = kind.shown(own, load_criteria(crit_file))
         state = run_state(run_dir, store)
         pairs = store_candidates(store, settings, criteria=criteria)
         top = [rec for _, rec in pairs]
         curve = store.best_curve()
         scores = np.array(store.scores(), dtype=float)
         count = store.count()
-        rows = member_set(settings).top_rows(store, top)  # what the run's kind says of each
+        rows = kind.top_rows(store, top)  # what the run's kind says of each
     finally:
         store.close()
-    scene = load_scene(scene_file)
     if not top:
         raise RvmsimError(f"{run_dir}: no evaluated candidates to report yet")
     images, _ = cached_render(scene)
     recorded_key = settings.scene_key
-    scene_changed = recorded_key is not None and not same_scene(recorded_key, scene, scene_file)
+    scene_changed = recorded_key is not None and not same_scene(recorded_key, own, scene_file)
     return _Run(run_dir, settings, state, scene_file, scene, images, settings.config, criteria,
                 crit_file, settings.record_output(), top, curve, scores, count,
                 scene_changed, load_member_scenes(settings, run_dir, recorded_path),

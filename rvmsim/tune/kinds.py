@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Protocol
 
 from ..criteria import Criteria, Unsupported, load_criteria, supported_criteria
 from ..errors import RvmsimError
-from ..markets import market_criteria, parse_markets
+from ..markets import market_criteria, market_members, parse_markets
 from ..render import cached_render, same_scene
 from ..runs.records import RunSettings, TrialRecord
 from ..runs.store import RunStore
@@ -157,6 +157,13 @@ class MemberSet(Protocol):
         """What the kind says of each of ``top`` (its stored member results)."""
         ...
 
+    def shown(self, scene: Scene, criteria: Criteria) -> tuple[Scene, Criteria]:
+        """The member that ``best/``, the report and the console show, from the run's first
+        scene and the criteria it records, as the caller loaded them: they themselves,
+        except for a markets run (the scene at its first market's site, that market's
+        criteria)."""
+        ...
+
 
 @dataclass(frozen=True)
 class SingleSet:
@@ -207,6 +214,9 @@ class SingleSet:
 
     def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
         return TopRows()  # one scene, its own image: nothing beyond the trial's score
+
+    def shown(self, scene: Scene, criteria: Criteria) -> tuple[Scene, Criteria]:
+        return scene, criteria
 
 
 @dataclass(frozen=True)
@@ -272,6 +282,9 @@ class RobustSet:
     def resumed_criteria(self) -> Criteria:
         return self.inner.resumed_criteria()
 
+    def shown(self, scene: Scene, criteria: Criteria) -> tuple[Scene, Criteria]:
+        return self.inner.shown(scene, criteria)
+
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         renders = [cached_render(s, progress=progress)[0] for s in scenes]
         return Built(renders, robust_members(scenes, renders, self.settings, progress=progress))
@@ -330,6 +343,10 @@ class MarketsSet:
 
     def resumed_criteria(self) -> Criteria:
         return market_criteria(parse_markets(list(self.settings.kind.markets))[0])
+
+    def shown(self, scene: Scene, criteria: Criteria) -> tuple[Scene, Criteria]:
+        first = market_members([scene], parse_markets(list(self.settings.kind.markets))[:1])[0]
+        return first.scene, first.criteria
 
     def build(self, scenes: Sequence[Scene], *, progress: bool = False) -> Built:
         pairs, renders, members = markets_members(scenes, self.settings, progress=progress)

@@ -9,7 +9,12 @@ import pytest
 from rvmsim.console import evaluate_setting, open_session
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import PARAM_SPECS, IspParams, TUNED_BY_DEFAULT
+from rvmsim.markets import market_members, parse_markets
 from rvmsim.runs import open_run
+from rvmsim.scene import load_scene
+from rvmsim.search import TuningConfig
+from rvmsim.testing.scenes import write_small_scene
+from rvmsim.tune import Markets, TuneRequest, tune
 
 
 def test_a_run_starts_at_rank_1_with_its_candidates(small_run):
@@ -78,3 +83,21 @@ def test_a_run_tuned_with_a_bundled_criteria_set_opens(tmp_path):
     s = open_session(tmp_path / "run")
     assert s.kind == "run" and len(s.criteria.ids) == 14 and "6-1" in s.criteria.ids
     assert s.candidates and s.start == s.candidates[0].params
+
+
+def test_a_markets_run_is_shown_as_its_first_market_judges_it(tmp_path):
+    """A markets run whose first market is UN R158: the console judges its candidates at
+    R158's site by R158's criteria (the member its best/ shows), not by the paper's at the
+    scene's own site."""
+    scene_file = write_small_scene(tmp_path, edit={"display": {"rvm_image_px": [320, 180]}})
+    config = TuningConfig.model_validate({"tuned": ["zoom", "adv_v_shift"],
+                                          "output": {"size": [160, 90]}, "top_m": 3})
+    tune(TuneRequest((scene_file,), "random", config, seed=1, budget=12,
+                     kind=Markets(("unr158", "fmvss111"))), tmp_path / "run")
+    s = open_session(tmp_path / "run")
+    first = market_members([load_scene(scene_file)], parse_markets("unr158"))[0]
+    assert list(s.criteria.ids) == list(first.criteria.ids)
+    assert any(k.startswith("R158-") for k in s.criteria.ids)
+    assert s.scene == first.scene and s.scene.test_site != load_scene(scene_file).test_site
+    ecs = evaluate_setting(s, s.start).ec
+    assert [v.id for v in ecs.items] == list(first.criteria.ids)

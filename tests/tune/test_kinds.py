@@ -12,7 +12,10 @@ import pytest
 from rvmsim.compensation import DEFAULT_COMPENSATION
 from rvmsim.runs import RunSettings, RunStore
 from rvmsim.runs.records import RobustRecord, RunKind, SceneRef
+from rvmsim.criteria import default_criteria
 from rvmsim.errors import RvmsimError
+from rvmsim.markets import market_criteria, market_scene, parse_markets
+from rvmsim.scene import load_scene
 from rvmsim.tune import (CompensatedSet, Markets, MarketsSet, Robust, RobustSet, Shared,
                          SharedSet, SingleSet, TopRows, TuneRequest, member_set, tune)
 from rvmsim.tune.robust import ROBUST_AGGREGATE
@@ -116,6 +119,21 @@ def test_a_kind_checks_its_own_values_when_it_is_made(make, says):
 def test_a_kind_normalises_its_aggregate():
     assert Shared("quantile  0.25").aggregate == Shared("quantile 0.25").aggregate
     assert Robust(4).aggregate == ROBUST_AGGREGATE
+
+
+def test_the_member_shown_is_the_first_markets_or_the_runs_own(scene):
+    """What best/, the report and the console show: a markets run's first market (its site,
+    its criteria); any other kind, the scene and criteria as the caller loaded them."""
+    base = RunSettings(scene=str(scene), scene_key=None, vehicle="a", strategy="random",
+                       seed=0, budget=None, criteria_file=None, config=TuningConfig())
+    sc, crit = load_scene(scene), default_criteria()
+    for kind in (RunKind(), RunKind("min", RobustRecord(4))):
+        assert member_set(dataclasses.replace(base, kind=kind)).shown(sc, crit) == (sc, crit)
+    markets = dataclasses.replace(base, kind=RunKind("min", markets=("unr158", "fmvss111")))
+    shown, judged = member_set(markets).shown(sc, crit)
+    r158 = parse_markets("unr158")[0]
+    assert shown == market_scene(sc, r158) and shown.test_site != sc.test_site
+    assert list(judged.ids) == list(market_criteria(r158).ids) != list(crit.ids)
 
 
 def test_a_single_run_reports_its_verdict_and_does_not_gate(scene, tmp_path):
