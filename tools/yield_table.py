@@ -9,7 +9,7 @@ For every bundled scene ``scenes/vehicle_<letter>.yaml``:
 
 1. nominal tuning: :func:`rvmsim.tune.tune` with the default strategy (``cmaes-solved``),
    ``--seed``, the default budget (or ``--budget``), as ``rvmsim tune SCENE`` does;
-2. robust tuning: the same with ``robust_samples=K`` (``--robust-samples``), as
+2. robust tuning: the same with ``kind=Robust(K)`` (``--robust-samples``), as
    ``rvmsim tune SCENE --robust --samples K`` does (the default aggregate, the 10 % quantile
    over the nominal image and the K samples);
 3. :func:`rvmsim.robust.robustness` of both best settings on the same ``--samples`` samples
