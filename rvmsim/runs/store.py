@@ -249,11 +249,6 @@ class RunStore(SqliteStore):
                 for idx, s in self.rows("SELECT idx, score FROM trials ORDER BY idx")]
 
     # ------------------------------------------------------------------ settings and state
-    def write_space(self, space: SearchSpace) -> None:
-        """Record the search space the run searches (``meta.space``: its ranges and the
-        values of the untuned parameters), for the readers that measure distances in it."""
-        self.set_meta(space=_space_json(space))
-
     def space(self) -> SearchSpace | None:
         """The search space the run recorded (None: a run of an earlier version, which
         recorded none).

@@ -117,8 +117,7 @@ def test_the_diverse_top_m_passes_on_the_display_exactly_when_the_run_says(lette
     settings = RunSettings(scene="x", scene_key=None, vehicle=letter, strategy="cmaes-solved",
                            seed=100, budget=240, criteria_file=None, config=config,
                            judged_at=(RECORD.width, RECORD.height))
-    store.write_settings(settings)
-    store.write_space(config.space(images.camera))
+    store.begin(settings, config.space(images.camera), None)
     ref = _full_at_record(images, crit)
     pairs = store_candidates(store, settings, m=10, criteria=crit)
     assert pairs
