@@ -1,28 +1,36 @@
 """Worker processes on this machine: the one process-pool recipe tuning and batches share,
 and the rule that no process outlives its parent.
 
-Workers are spawned, not forked: a process that has run OpenCV's thread pool or an OpenGL
-context cannot be forked safely.  :func:`spawn_pool` makes the pool
-(:class:`concurrent.futures.ProcessPoolExecutor`, optionally with a per-worker initializer
-that receives the state every task reads); :func:`stop_pool` ends it, at once when the
-caller is interrupted.
+Workers are not forked from the caller: a process that has run OpenCV's thread pool or an
+OpenGL context cannot be forked safely.  They are forked from multiprocessing's *fork
+server*, a process of its own started once per process (at its first pool) that imports
+:data:`WORKER_PRELOAD` and nothing else, so every worker of every pool starts with the
+package imported (milliseconds, where a spawned worker took seconds to import it again).
+Where there is no fork server (Windows), workers are spawned.  :func:`start_pool` makes the
+pool (:class:`concurrent.futures.ProcessPoolExecutor`, optionally with a per-worker
+initializer that receives the state every task reads); :func:`stop_pool` ends it, at once
+when the caller is interrupted.  A worker takes the caller's environment as it is when the
+pool is made (the fork server's is that of its start).
 
 **No process outlives its parent.**  However the parent ends (Ctrl-C, SIGTERM, SIGKILL, a
-crash), every worker of :func:`spawn_pool` exits within about a second
+crash), every worker of :func:`start_pool` exits within about a second
 (:func:`die_with_parent`, run in each worker before anything else):
 
-- on Linux the kernel sends it SIGKILL when the parent dies (``PR_SET_PDEATHSIG``; set only
-  when the pool is made in the main thread, since the kernel ties it to the *thread* that
-  started the worker), and the worker checks its parent right after setting it, in case the
-  parent died while it started;
+- on Linux the kernel sends it SIGKILL when the process that forked it dies
+  (``PR_SET_PDEATHSIG``).  That is the fork server, which ends as soon as the parent is
+  gone (it waits on a pipe only the parent holds: each worker closes its inherited copy).
+  A spawned worker's is the parent itself (set only when the pool is made in the main
+  thread, since the kernel ties it to the *thread* that started the worker).  The worker
+  checks its parent right after setting it, in case the parent died while it started;
 - on every platform a daemon thread waits on the pipe multiprocessing keeps from the parent
-  to each spawned child (:func:`multiprocessing.parent_process`'s sentinel, at end of file
-  once the parent is gone: no polling) and ends the worker with :func:`os._exit`;
+  to each child (:func:`multiprocessing.parent_process`'s sentinel, at end of file once the
+  parent is gone: no polling) and ends the worker with :func:`os._exit`;
 - Ctrl-C is the parent's business: workers ignore SIGINT (a terminal sends it to the whole
-  process group), and the parent stops them with :func:`stop_pool` as it unwinds.
+  process group; the fork server ignores it too), and the parent stops them with
+  :func:`stop_pool` as it unwinds.
 
-The multiprocessing resource tracker, the one other child, exits by itself once the parent
-and every worker have closed its pipe (so within the same second).  A pool must be fed
+The multiprocessing resource tracker, the other child, exits by itself once the parent and
+every worker have closed its pipe (so within the same second).  A pool must be fed
 (``submit``, ``map``) from the thread that made it: that thread starts the workers.
 
 :func:`stop_on_signals` makes SIGTERM the same orderly stop as Ctrl-C in the command line
@@ -39,6 +47,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import multiprocessing as mp
+import multiprocessing.forkserver
 import os
 import pickle
 import signal
@@ -48,16 +57,20 @@ import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from types import FrameType
-from typing import Any, ParamSpec, TypeVar
+from typing import Any, Final, ParamSpec, TypeVar
 
 from .errors import RvmsimError
 
-__all__ = ["spawn_pool", "stop_pool", "die_with_parent", "stop_on_signals", "Terminated",
+__all__ = ["start_pool", "WORKER_PRELOAD", "stop_pool", "die_with_parent", "stop_on_signals",
+           "Terminated",
            "ORPHAN_EXIT_STATUS"]
 
 _P = ParamSpec("_P")
 _T = TypeVar("_T")
 
+#: What the fork server imports as it starts, so that every worker starts with it: the
+#: modules of the pools' tasks (tuning, batches, the end-of-line station).
+WORKER_PRELOAD: Final = ("rvmsim.tune", "rvmsim.batch", "rvmsim.eol")
 #: Exit status of a worker that ends because its parent is gone (nobody reads it).
 ORPHAN_EXIT_STATUS = 75
 #: Linux's ``prctl`` option that sets the signal a process gets when its parent dies.
@@ -69,17 +82,27 @@ _BROKEN_WAIT_S = 2.0
 _POLL_S = 0.25
 
 
-def spawn_pool(workers: int, *, initializer: Callable[..., None] | None = None,
+def start_pool(workers: int, *, initializer: Callable[..., None] | None = None,
                initargs: tuple[Any, ...] = ()) -> ProcessPoolExecutor:
-    """A pool of ``workers`` spawned processes, each running ``initializer(*initargs)``
-    once when it starts, after :func:`die_with_parent` (every worker ends with this
-    process; see the module docstring).  Submit to it from the thread that calls this."""
+    """A pool of ``workers`` processes, each running ``initializer(*initargs)`` once when it
+    starts, after :func:`die_with_parent` (every worker ends with this process; see the
+    module docstring).  Submit to it from the thread that calls this."""
     # The initializer and its state travel pickled and are unpickled only once the worker
-    # watches its parent: unpickling a scorer imports half the package (seconds under load).
+    # watches its parent: unpickling a scorer may import half the package.
     payload = pickle.dumps((initializer, initargs), protocol=pickle.HIGHEST_PROTOCOL)
-    kernel = threading.current_thread() is threading.main_thread()
-    return _Pool(max(1, workers), mp_context=mp.get_context("spawn"),
-                 initializer=_start_worker, initargs=(os.getpid(), kernel, payload))
+    context: mp.context.BaseContext
+    if "forkserver" in mp.get_all_start_methods():
+        context = mp.get_context("forkserver")
+        # Takes effect when the server starts (a server already running keeps its own).
+        multiprocessing.forkserver.set_forkserver_preload(list(WORKER_PRELOAD))
+        with _sigint_blocked():  # the server, and so every worker, starts with SIGINT blocked
+            multiprocessing.forkserver.ensure_running()
+        kernel = True  # the fork server's main thread forks every worker
+    else:
+        context = mp.get_context("spawn")
+        kernel = threading.current_thread() is threading.main_thread()
+    return _Pool(max(1, workers), mp_context=context, initializer=_start_worker,
+                 initargs=(os.getpid(), kernel, dict(os.environ), payload))
 
 
 class _Pool(ProcessPoolExecutor):
@@ -143,13 +166,16 @@ def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
     pool.shutdown(wait=not now, cancel_futures=True)
 
 
-def _start_worker(parent_pid: int, kernel: bool, payload: bytes) -> None:
-    """A pool worker's first step: die with the parent, leave Ctrl-C to it, then run the
-    pool's own initializer."""
+def _start_worker(parent_pid: int, kernel: bool, environ: dict[str, str],
+                  payload: bytes) -> None:
+    """A pool worker's first step: die with the parent, leave Ctrl-C to it, take the
+    parent's environment, then run the pool's own initializer."""
     die_with_parent(parent_pid, kernel=kernel)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C pending since the start
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    os.environ.clear()
+    os.environ.update(environ)
     global _START_FAILURE
     try:
         initializer, initargs = pickle.loads(payload)
@@ -167,19 +193,41 @@ def die_with_parent(parent_pid: int, *, kernel: bool = True) -> None:
     parent_pid : int
         The parent's pid, as the parent saw it (:func:`os.getpid` there).
     kernel : bool
-        Also ask Linux for SIGKILL at the parent's death (``PR_SET_PDEATHSIG``); only when
-        the parent started this process from its main thread (the kernel watches the
-        thread that forked, so a worker started from a thread that then ends would die).
+        Also ask Linux for SIGKILL at the death of the process that forked this one
+        (``PR_SET_PDEATHSIG``): the parent, or the fork server, which ends with it.  Only
+        when it was forked from a thread that lives as long as its process (the kernel
+        watches the thread that forked, so a worker started from a thread that then ends
+        would die).
 
     A daemon thread watches too (every platform; see the module docstring), and if the
     parent is already gone the process exits here with :data:`ORPHAN_EXIT_STATUS`.
     """
     if kernel and sys.platform.startswith("linux"):
         _kill_at_parent_death()
-    if os.getppid() != parent_pid:  # it died before the kernel was told: nobody will say so
+    _leave_fork_server()
+    parent = mp.parent_process()
+    if parent is not None and parent.pid == parent_pid:
+        gone = not parent.is_alive()  # its sentinel: the parent's end of a pipe
+    else:  # not a multiprocessing child
+        gone = os.getppid() != parent_pid
+    if gone:  # it died before the kernel was told: nobody will say so
         os._exit(ORPHAN_EXIT_STATUS)
     threading.Thread(target=_watch_parent, args=(parent_pid,), name="rvmsim-parent-watch",
                      daemon=True).start()
+
+
+def _leave_fork_server() -> None:
+    """Close this process's copy of the write end of the fork server's "alive" pipe.
+
+    multiprocessing gives every process its fork server forks a copy (so that such a process
+    could start more of them), and the server runs until every copy is closed.  A worker
+    starts none, and without its copy the server ends as soon as the parent is gone, and
+    the kernel then ends the worker (see :func:`die_with_parent`)."""
+    server = multiprocessing.forkserver._forkserver  # the module's one server; no public handle
+    fd = getattr(server, "_forkserver_alive_fd", None)
+    if fd is not None and getattr(server, "_forkserver_pid", None) is None:  # inherited
+        os.close(fd)
+        setattr(server, "_forkserver_alive_fd", None)
 
 
 def _kill_at_parent_death() -> None:

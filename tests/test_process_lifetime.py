@@ -1,8 +1,8 @@
 """No process outlives its parent (issue #29; ``rvmsim._procs``).
 
 Each command that starts processes runs as a real ``python -m rvmsim`` on a small scene with
-2 workers.  Once its children exist (the workers and multiprocessing's resource tracker,
-found with psutil) it is killed (SIGKILL) or stopped (SIGTERM; SIGINT for ``tune``), and
+2 workers.  Once its children exist (the workers, the fork server they come from and
+multiprocessing's resource tracker, found with psutil) it is killed (SIGKILL) or stopped (SIGTERM; SIGINT for ``tune``), and
 every child recorded must be gone, by pid, within :data:`GRACE_S` of the parent's end.
 A stopped command exits 128 + the signal's number with one line and no traceback, and a
 tuning run stopped any of those ways resumes to the unbroken run's result.
@@ -27,6 +27,7 @@ from pathlib import Path
 import psutil
 import pytest
 
+from rvmsim._procs import start_pool, stop_pool
 from rvmsim.runs import RunStatus, RunStore
 
 from .cli_runner import REPO, child_env, run_in_process, start_in_child
@@ -36,8 +37,9 @@ from rvmsim.testing.scenes import write_small_scene
 GRACE_S = 2.0
 #: How long a command may take to start its children, or to stop after SIGTERM/SIGINT (s).
 START_S = 180.0
-#: Children of a pool command with 2 workers: the workers and the resource tracker.
-POOL_CHILDREN = 3
+#: Children of a pool command with 2 workers: the workers, the fork server they are forked
+#: from (their parent) and the resource tracker.
+POOL_CHILDREN = 4
 #: A small search: at 160 × 90, judged at a 160 × 90 display (the unbroken run: EC 0.64).
 CONFIG = {"output": {"size": [160, 90]}, "top_m": 3, "batch": 20}
 SMALL_DISPLAY = {"display": {"rvm_image_px": [160, 90]}}
@@ -258,11 +260,11 @@ def test_the_console_starts_no_process_and_stops_on_sigterm(case):
 
 WATCH_ONLY = """\
 import threading, time
-from rvmsim._procs import spawn_pool
+from rvmsim._procs import start_pool
 
-def start():  # made in a thread that ends: no PR_SET_PDEATHSIG, the watch thread alone
+def start():  # made in a thread that ends (which the kernel's watch must not follow)
     global pool
-    pool = spawn_pool(2)
+    pool = start_pool(2)
     for f in [pool.submit(time.sleep, 0.2) for _ in range(4)]:
         f.result()
     pool.submit(time.sleep, 600)
@@ -278,9 +280,9 @@ time.sleep(600)
 
 
 def test_workers_of_a_pool_made_in_a_thread_end_with_their_parent(tmp_path):
-    """The portable watch (the pipe from the parent), without the kernel's help: the
-    workers of a pool started from a thread outlive that thread, and end with their
-    process."""
+    """The workers of a pool started from a thread outlive that thread, and end with their
+    process (killed: the fork server ends with it, and the kernel and each worker's watch
+    of the pipe from the parent end the workers)."""
     proc = subprocess.Popen([sys.executable, "-c", WATCH_ONLY], env=child_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     kids: list[psutil.Process] = []
@@ -302,3 +304,66 @@ def test_workers_of_a_pool_made_in_a_thread_end_with_their_parent(tmp_path):
             proc.wait()
         if proc.stdout is not None:
             proc.stdout.close()
+
+
+WATCH_ALONE = """\
+import multiprocessing as mp, os, time
+from rvmsim._procs import die_with_parent
+
+def watched(parent_pid):
+    die_with_parent(parent_pid, kernel=False)
+    time.sleep(600)
+
+if __name__ == "__main__":
+    kids = [mp.get_context("spawn").Process(target=watched, args=(os.getpid(),))
+            for _ in range(2)]
+    for k in kids:
+        k.start()
+    time.sleep(3.0)
+    print("ready", flush=True)
+    time.sleep(600)
+"""
+
+
+def test_the_watch_of_the_pipe_from_the_parent_ends_a_child_alone(tmp_path):
+    """The portable watch (where there is no fork server and no PR_SET_PDEATHSIG):
+    spawned children that only watch the pipe from their parent end when it is killed."""
+    script = tmp_path / "watch_alone.py"
+    script.write_text(WATCH_ALONE)
+    proc = subprocess.Popen([sys.executable, str(script)], env=child_env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    kids: list[psutil.Process] = []
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "ready\n"
+        kids = [k for k in psutil.Process(proc.pid).children()
+                if "resource_tracker" not in " ".join(k.cmdline())]
+        assert len(kids) == 2 and all(_alive(k) for k in kids)
+        proc.kill()
+        proc.wait()
+        ended = time.monotonic()
+        while any(_alive(k) for k in kids) and time.monotonic() < ended + GRACE_S:
+            time.sleep(0.02)
+        assert not [k.pid for k in kids if _alive(k)]
+    finally:
+        for k in [k for k in kids if _alive(k)]:
+            k.kill()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        if proc.stdout is not None:
+            proc.stdout.close()
+
+
+def test_a_worker_has_the_environment_of_its_pool_s_making(monkeypatch):
+    """Workers are forked from a fork server started once, with the environment of its own
+    start; each pool's workers still see the caller's environment as it was when the pool
+    was made (a render cache, a thread count set later)."""
+    seen = []
+    for value in ("one", "two"):
+        monkeypatch.setenv("RVMSIM_PROBE", value)
+        pool = start_pool(1)
+        try:
+            seen.append(pool.submit(os.getenv, "RVMSIM_PROBE").result(timeout=60))
+        finally:
+            stop_pool(pool, now=False)
+    assert seen == ["one", "two"]

@@ -28,7 +28,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import TYPE_CHECKING, TypeVar
 
 from .._optional import import_distributed
-from .._procs import spawn_pool, stop_pool
+from .._procs import start_pool, stop_pool
 from ..errors import RvmsimError
 
 if TYPE_CHECKING:
@@ -81,7 +81,7 @@ class LocalExecutor(Executor):
         todo = dict(items)
         rebuilds = 0
         while todo:
-            pool = spawn_pool(self.workers)
+            pool = start_pool(self.workers)
             futures = {pool.submit(fn, arg): key for key, arg in todo.items()}
             broken = False
             try:

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
-from .._procs import spawn_pool, stop_pool
+from .._procs import start_pool, stop_pool
 from ..errors import RvmsimError
 from ..scene import Scene
 from ..pose import capture_folders, check_captures, load_capture
@@ -66,7 +66,7 @@ def _cars(station: Station, captures: Sequence[Path], names: Sequence[str],
         for path, name in zip(captures, names):
             yield station.car(load_capture(path, cam), str(path), name)
         return
-    pool = spawn_pool(workers, initializer=_init_worker, initargs=(station.scene,
+    pool = start_pool(workers, initializer=_init_worker, initargs=(station.scene,
                                                                   station.settings))
     done = False
     try:

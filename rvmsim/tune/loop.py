@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import cv2
 import numpy as np
 
-from .._procs import spawn_pool, stop_pool
+from .._procs import start_pool, stop_pool
 from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
@@ -93,7 +93,7 @@ class BatchEvaluator:
     1.2 MB).  Workers also score and serialise their candidates (:func:`score_vectors`), so
     the main process only stores them and steers the search.
 
-    Workers are spawned (:func:`rvmsim._procs.spawn_pool`, the pool batches use too).
+    Workers come from :func:`rvmsim._procs.start_pool` (the pool batches use too).
     ``solver`` (:func:`solver_for`) sets the solved parameters of every candidate first;
     ``objective`` is the one the strategy maximises (:data:`rvmsim.tune.OBJECTIVES`).
     ``scorer`` replaces the one-evaluator scoring (``evaluator``, ``solver`` and
@@ -115,7 +115,7 @@ class BatchEvaluator:
         self.workers = max(1, workers)
         self.pool: ProcessPoolExecutor | None = None
         if self.workers > 1:
-            self.pool = spawn_pool(self.workers, initializer=_init_worker,
+            self.pool = start_pool(self.workers, initializer=_init_worker,
                                    initargs=(scorer,))
 
     def __call__(self, xs: list[np.ndarray]) -> ScoredBatch:
