@@ -310,16 +310,19 @@ WATCH_ALONE = """\
 import multiprocessing as mp, os, time
 from rvmsim._procs import die_with_parent
 
-def watched(parent_pid):
+def watched(parent_pid, started):
     die_with_parent(parent_pid, kernel=False)
+    started.release()
     time.sleep(600)
 
 if __name__ == "__main__":
-    kids = [mp.get_context("spawn").Process(target=watched, args=(os.getpid(),))
-            for _ in range(2)]
+    ctx = mp.get_context("spawn")
+    started = ctx.Semaphore(0)
+    kids = [ctx.Process(target=watched, args=(os.getpid(), started)) for _ in range(2)]
     for k in kids:
         k.start()
-    time.sleep(3.0)
+    for k in kids:
+        started.acquire()
     print("ready", flush=True)
     time.sleep(600)
 """
