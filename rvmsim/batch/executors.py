@@ -5,7 +5,7 @@ Both executors take a mapping ``{key: argument}`` and a picklable top-level func
 yield ``(key, result)`` as tasks finish, in completion order.  The caller stores each result
 as it arrives, so an interrupted run keeps everything finished.
 
-- :class:`LocalExecutor`: ``workers`` spawned processes on this machine
+- :class:`LocalExecutor`: ``workers`` worker processes on this machine
   (``concurrent.futures.ProcessPoolExecutor``).  If a worker process dies (killed, out of
   memory), the pool is rebuilt and the tasks that had not finished run again.
 - :class:`DaskExecutor`: an existing Dask ``distributed`` cluster (``tcp://HOST:PORT``).
@@ -64,7 +64,7 @@ class Executor:
 
 
 class LocalExecutor(Executor):
-    """``workers`` spawned processes on this machine (1: run in this process)."""
+    """``workers`` worker processes on this machine (1: run in this process)."""
 
     name = "local"
 

@@ -58,7 +58,7 @@ def _work(path: Path, name: str) -> CarResult:
 
 def _cars(station: Station, captures: Sequence[Path], names: Sequence[str],
           workers: int) -> Generator[CarResult, None, None]:
-    """Each car's result, in order: in this process, or on ``workers`` spawned processes
+    """Each car's result, in order: in this process, or on ``workers`` worker processes
     (each sets up its own station)."""
     if workers <= 1:
         station.prepare()
@@ -115,8 +115,8 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
         ``write_page(result, folder)`` writes the HTML page into ``folder`` and returns its
         path (:func:`rvmsim.report.write_eol_page`).
     workers : int
-        Processes the cars are shared out to (spawned; each sets up its own station, ~2 s,
-        so at most one per two cars is used); 1: in this process.
+        Processes the cars are shared out to (:func:`rvmsim._procs.start_pool`; each sets
+        up its own station, so at most one per two cars is used); 1: in this process.
     progress : bool
         A progress bar over the cars.
     on_car : callable, optional
