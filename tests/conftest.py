@@ -8,7 +8,12 @@ from pathlib import Path
 
 import pytest
 
+import numpy as np
+
+from rvmsim.camera import rotation_from_ypr
+from rvmsim.render import cached_render, render_fisheye
 from rvmsim.testing.captures import BAIC
+from rvmsim.testing.scenes import QUARTER, load_small_scene
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 if os.environ.get("PYTEST_XDIST_WORKER"):
@@ -70,21 +75,27 @@ def bundled_scene(letter: str):
 
 
 @functools.lru_cache(maxsize=None)
-def small_render(letter: str, scale: float = 0.5, cube_yaw_deg: float = 0.0):
-    """Render bundled vehicle ``letter`` at ``scale`` of its sensor size (cached per session,
-    and in the render cache, which every test process shares: its entries are written
-    whole, see ``rvmsim._io.write_png``)."""
-    import numpy as np
-
-    from rvmsim.camera import rotation_from_ypr
-    from rvmsim.render import cached_render, render_fisheye
-
-    scene = bundled_scene(letter)
+def small_render(letter: str, cube_yaw_deg: float = 0.0):
+    """Bundled vehicle ``letter`` at the test scale (:data:`~rvmsim.testing.scenes.QUARTER`
+    of its sensor, :func:`~rvmsim.testing.scenes.load_small_scene`, the scene every other
+    test builds too), rendered: cached per session, and in the render cache, which every
+    test process shares (its entries are written whole, see ``rvmsim._io.write_png``).
+    ``cube_yaw_deg`` turns the render's cube (not cached on disk)."""
+    scene = load_small_scene(letter)
     if cube_yaw_deg == 0.0:
-        return cached_render(scene, scale=scale)[0]
-    cam = scene.fisheye_camera().scaled(scale)
+        return cached_render(scene)[0]
     rot = rotation_from_ypr(cube_yaw_deg, 20.0, 45.0)
-    return render_fisheye(scene, camera=cam, cube_rotation=np.asarray(rot))
+    return render_fisheye(scene, cube_rotation=np.asarray(rot))
+
+
+@functools.lru_cache(maxsize=None)
+def sensor_render(letter: str):
+    """Bundled vehicle ``letter`` on its own sensor, the product's input, rendered (cached as
+    :func:`small_render`).  Not a second test scale: for the checks whose tolerance is a
+    claim about the product at its real resolution (projection to 1 px, a solver exact to
+    a pixel, a verdict at the display of record), which the test scale's 320 × 240 px
+    fisheye cannot resolve."""
+    return cached_render(bundled_scene(letter))[0]
 
 
 @pytest.fixture

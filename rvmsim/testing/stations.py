@@ -25,7 +25,8 @@ from .scenes import SCENES, small_scene_doc
 HERE = Path(__file__).resolve().parent
 #: Vehicle A's tuned platform setting (full sensor).
 TUNED = HERE / "vehicle_a_tuned.yaml"
-#: The test's sensor: half of vehicle A's 1280 × 960.
+#: The station's camera: half of vehicle A's 1280 × 960 (its own scene, with the mat, so it
+#: shares no render with the test scale's; the station's claims, 1 mm and 0.05°, need it).
 HALF = 0.5
 #: The station's mat (its own target, not at the test site).
 STATION_MAT: dict[str, Any] = {

@@ -15,8 +15,8 @@ from rvmsim.criteria import EC_IDS, default_criteria, evaluate, measure
 from rvmsim.isp import build_map_exact
 from rvmsim.scene import GUIDELINE_LIFT_M, board_point, build_parts
 
-from ..conftest import bundled_scene, small_render
-from .views import OUT, SCALE, VIEWS, polygon_area, project, ring, rvm
+from ..conftest import bundled_scene, sensor_render
+from .views import OUT, VIEWS, polygon_area, project, ring, rvm
 
 
 @pytest.mark.parametrize("letter", ["a", "b"])
@@ -117,7 +117,7 @@ def test_bumper_heights_match_ray_casting(letter):
     """t_l, t_c, t_r against an exact renderer: per RVM pixel of those columns, the ray
     (inverse ISP, then the camera) is cast with trimesh and the bumper hits counted."""
     scene = bundled_scene(letter)
-    img = small_render(letter, SCALE)
+    img = sensor_render(letter)
     cam = img.camera
     labels = rvm(letter)
     m = measure(labels)

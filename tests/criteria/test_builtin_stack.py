@@ -14,7 +14,7 @@ from rvmsim.criteria.measure import measure_ecs
 from rvmsim.isp import OutputSpec, apply_map, build_map
 from rvmsim.search import TuningConfig
 
-from ..conftest import small_render
+from ..conftest import sensor_render
 from .views import VIEWS, rvm
 
 
@@ -33,11 +33,11 @@ def _check(images: list[np.ndarray]) -> None:
 def _views(letter: str, n: int, seed: int, out: OutputSpec) -> list[np.ndarray]:
     """RVM label images of ``n`` views drawn from the tuning space (and the view in which
     every object shows)."""
-    img = small_render(letter, 0.5)
+    img = sensor_render(letter)
     space = TuningConfig().space(img.camera)
     rng = np.random.default_rng(seed)
     size = (img.camera.width, img.camera.height)
-    ps = [VIEWS[letter].for_input_scale(0.5)] + [
+    ps = [VIEWS[letter]] + [
         space.params(space.low + rng.random(len(space.low)) * (space.high - space.low))
         for _ in range(n)]
     return [apply_map(img.labels, build_map(p, size, out)) for p in ps]

@@ -8,7 +8,7 @@ import numpy as np
 
 from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map, input_to_output
 
-from ..conftest import small_render
+from ..conftest import sensor_render
 
 #: RVM size for the analytic comparisons: no finer than the fisheye where the view is widest,
 #: so one RVM pixel never magnifies more than one fisheye pixel (nearest sampling of a
@@ -23,12 +23,11 @@ VIEWS = {
     "b": IspParams(fov=180, rad=303, v_shift=35, zoom=0.36, adv_v_shift=0.01, adv_h_scale=0.89,
                    adv_v_scale=1.06).for_input_scale(2.0),
 }
-SCALE = 1.0
 
 
 def project(letter: str, params: IspParams, pts: np.ndarray) -> np.ndarray:
     """3D scene points → RVM px: cv2.fisheye.projectPoints, then the inverse ISP."""
-    cam = small_render(letter, SCALE).camera
+    cam = sensor_render(letter).camera
     rvec, tvec = cam.rvec_tvec
     uv, _ = cv2.fisheye.projectPoints(np.asarray(pts, float).reshape(-1, 1, 3), rvec, tvec,
                                       cam.K, cam.D, alpha=cam.skew)
@@ -38,7 +37,7 @@ def project(letter: str, params: IspParams, pts: np.ndarray) -> np.ndarray:
 
 
 def rvm(letter: str):
-    img = small_render(letter, SCALE)
+    img = sensor_render(letter)
     m = build_map(VIEWS[letter], (img.camera.width, img.camera.height), OUT)
     return apply_map(img.labels, m)
 

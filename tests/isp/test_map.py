@@ -21,7 +21,7 @@ from rvmsim.isp import (
     map_nodes,
 )
 
-from ..conftest import small_render
+from ..conftest import sensor_render, small_render
 from .conftest import INPUT
 
 
@@ -71,7 +71,7 @@ def _line_fit_residuals(labels: np.ndarray, color: np.ndarray, label: int) -> np
 
 
 def test_straight_edges_stay_straight_with_matching_lens():
-    img = small_render("a")  # equidistance lens, 640×480
+    img = sensor_render("a")  # equidistance lens, 1280 × 960: straight to a fraction of a px
     cam = img.camera
     out = OutputSpec(640, 360, mirror=False)
 

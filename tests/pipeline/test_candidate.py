@@ -15,9 +15,9 @@ from rvmsim.isp import IspParams, OutputSpec, apply_map, build_map
 from ..conftest import small_render
 from .custom_ecs import SKY_UP, custom_criteria
 
-RANGES = {  # wide tuning ranges for the half-size sensors of the test renders
-    "fov": (150.0, 210.0), "rad": (200.0, 450.0), "h_shift": (-40.0, 40.0),
-    "v_shift": (-80.0, 80.0), "zoom": (0.25, 1.5), "adv_h_shift": (-0.4, 0.4),
+RANGES = {  # wide tuning ranges for the test scale's 320 × 240 px sensors
+    "fov": (150.0, 210.0), "rad": (100.0, 225.0), "h_shift": (-20.0, 20.0),
+    "v_shift": (-40.0, 40.0), "zoom": (0.25, 1.5), "adv_h_shift": (-0.4, 0.4),
     "adv_v_shift": (-0.8, 0.8), "adv_h_scale": (0.5, 2.0), "adv_v_scale": (0.5, 2.0),
 }
 
@@ -52,7 +52,7 @@ def test_uses_the_given_criteria(tmp_path):
     crit_file = tmp_path / "c.yaml"
     crit_file.write_text("criteria:\n  4-1: {enabled: false}\n  2-4: {enabled: false}\n")
     crit = load_criteria(crit_file)
-    p = IspParams(fov=180, rad=300, zoom=0.5, adv_v_shift=0.2)
+    p = IspParams(fov=180, rad=150, zoom=0.5, adv_v_shift=0.2)
     r = CandidateEvaluator(img.labels, OutputSpec(320, 240), crit)(p)
     assert not r["4-1"].enabled and r.criteria_name == crit.name
     assert r.score == pytest.approx(np.prod([i.score for i in r.items if i.enabled]))
@@ -73,7 +73,7 @@ def test_an_undeclared_group_fails_in_both_paths():
     sneaky = EcDefinition("sneaky", "sneaky", "", (), lambda s, o: Measurement(s.window(SKY_UP)[0]))
     base = default_criteria()
     crit = Criteria("x", {**base.items, "sneaky": sneaky.default_criterion()}, ecs=base.ecs + (sneaky,))
-    p = IspParams(fov=180, rad=300, zoom=0.5, adv_v_shift=0.2)
+    p = IspParams(fov=180, rad=150, zoom=0.5, adv_v_shift=0.2)
     out = OutputSpec(160, 120)
     # an EC outside rvmsim's own plugins: its failure is one line naming it (EcFailedError)
     with pytest.raises(EcFailedError, match="EC sneaky: .*KeyError: .*not declared"):

@@ -10,10 +10,11 @@ import pytest
 from rvmsim.criteria import annotate, criteria_from_text, default_criteria, evaluate
 from rvmsim.isp import IspParams, OutputSpec, process
 from rvmsim.pipeline import evaluate_params, render_rvm, rvm_color, write_frame
+from rvmsim.testing.scenes import QUARTER
 
 from ..conftest import bundled_scene, small_render
 
-PARAMS = IspParams().replace(rad=306.0, zoom=0.6, adv_v_shift=0.2)  # for the half-size render
+PARAMS = IspParams().replace(rad=153.0, zoom=0.6, adv_v_shift=0.2)  # for the test scale
 OUT = OutputSpec(320, 180)
 
 
@@ -38,10 +39,11 @@ def test_evaluate_params_is_the_separate_steps():
 def test_render_rvm_scales_the_parameters_with_the_render():
     scene = bundled_scene("a")
     full = IspParams().replace(rad=612.0, zoom=0.6, adv_v_shift=0.2)
-    frame = render_rvm(scene, full, OUT, scale=0.5)
-    assert frame.params == full.for_input_scale(0.5) and frame.annotated is None
-    # the same as evaluating the half-size render with the scaled parameters
-    ref = evaluate_params(small_render("a"), full.for_input_scale(0.5), OUT, annotate=False)
+    frame = render_rvm(scene, full, OUT, scale=QUARTER)
+    assert frame.params == full.for_input_scale(QUARTER) and frame.annotated is None
+    # the same as evaluating the test scale's render with the scaled parameters
+    ref = evaluate_params(small_render("a"), full.for_input_scale(QUARTER), OUT,
+                          annotate=False)
     assert np.array_equal(frame.labels, ref.labels)
     assert frame.ec.score == pytest.approx(ref.ec.score)
 

@@ -23,7 +23,7 @@ from rvmsim.scene import Display
 from rvmsim.tune import Member, SearchSettings, search_scene
 from rvmsim.search import TuningConfig, default_space
 
-from ..conftest import bundled_scene, small_render
+from ..conftest import bundled_scene, sensor_render, small_render
 
 LETTERS = "abcdef"
 RECORD = OutputSpec(1280, 720)
@@ -76,8 +76,10 @@ def test_a_limit_in_px_is_twice_as_strict_at_half_the_size():
 @pytest.mark.parametrize("letter", LETTERS)
 def test_a_smaller_search_is_judged_at_the_size_of_record(letter):
     """RecordEvaluator against the full path at 1280 × 720: the same verdict for every
-    candidate; the same values for every one that could pass."""
-    images = small_render(letter)
+    candidate; the same values for every one that could pass.  On the vehicle's own sensor,
+    as in production (a test-scale fisheye upsampled 4× to the display of record shows
+    objects that its 320 × 180 px search cannot)."""
+    images = sensor_render(letter)
     crit = default_criteria()
     ev = make_evaluator(images, QUARTER_SEARCH, crit)
     assert isinstance(ev, RecordEvaluator)
@@ -94,7 +96,9 @@ def test_a_smaller_search_is_judged_at_the_size_of_record(letter):
         verdicts.append(want.passed)
         if got.passed:
             assert got.as_dict()["ecs"] == want.as_dict()["ecs"]
-        assert np.array_equal(np.isnan(ev.values(p)), np.isnan(ref.values(p)))
+        # what the search measures, the display shows (the search may miss a thin object
+        # that the display of record shows: such a candidate fails, as above, either way)
+        assert not np.any(np.isnan(ref.values(p)) & ~np.isnan(ev.values(p)))
     assert any(verdicts) or not all(verdicts)  # informative either way; the top-M test below
 
 

@@ -186,7 +186,7 @@ def test_half_hidden_object_shows_half_its_silhouette(tmp_path, hidden):
 def test_object_cut_by_the_image_border_is_not_wholly_visible():
     from ..conftest import small_render
 
-    images = small_render("a", 0.25)
+    images = small_render("a")
     crit = load_criteria("fmvss111-full")
     wide = IspParams(fov=180.0, rad=160.0, zoom=0.45, adv_v_shift=0.15)
     cut = IspParams(fov=180.0, rad=160.0, zoom=0.45, adv_v_shift=0.15, adv_h_shift=-0.78)
@@ -201,7 +201,7 @@ def test_object_cut_by_the_image_border_is_not_wholly_visible():
 def test_fast_evaluator_equals_the_whole_image_on_the_new_ecs():
     from ..conftest import small_render
 
-    images = small_render("a", 0.25)
+    images = small_render("a")
     crit = load_criteria("fmvss111-full")
     out = OutputSpec(320, 180)
     ev = CandidateEvaluator(images.labels, out, crit, scene=images.scene, camera=images.camera)
@@ -219,7 +219,7 @@ def test_fast_evaluator_equals_the_whole_image_on_the_new_ecs():
 def test_without_a_scene_the_new_ecs_cannot_be_measured():
     from ..conftest import small_render
 
-    images = small_render("a", 0.25)
+    images = small_render("a")
     crit = load_criteria("fmvss111-full")
     ev = CandidateEvaluator(images.labels, OutputSpec(320, 180), crit)
     m = ev.measure(IspParams(fov=180.0, rad=160.0, zoom=0.6))

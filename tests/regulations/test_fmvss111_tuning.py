@@ -14,8 +14,9 @@ from rvmsim.testing.scenes import write_small_scene
 
 
 def test_tuning_with_fmvss111_full_passes_on_vehicle_a(tmp_path):
-    # A 640 × 480 sensor shown at 640 × 360: at the default 1280 × 720 of record 6-1 would
-    # rightly fail (an RVM px showing less than half a sensor px).
+    # A 640 × 480 sensor shown at 640 × 360 (not the test scale: on its 320 × 240 sensor
+    # shown at 320 × 180, 6-1 fails): at the default 1280 × 720 of record 6-1 would rightly
+    # fail (an RVM px showing less than half a sensor px).
     scene = write_small_scene(tmp_path, "a", 0.5, name="scene.yaml",
                               edit={"display": {"rvm_image_px": [640, 360]}})
     env = {"RVMSIM_CACHE": str(tmp_path / "cache")}

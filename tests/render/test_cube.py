@@ -19,7 +19,7 @@ def test_cube_seams_leave_no_gaps_or_doubles():
     diff = ref.labels != turned.labels
     border = label_boundary(ref.labels) | label_boundary(turned.labels)
     assert not np.any(diff & ~border), np.argwhere(diff & ~border)[:10]
-    assert diff.mean() < 0.003
+    assert diff.sum() < 0.1 * border.sum()  # a few of the border pixels, at any image size
     # And along the seams of the reference cube: each seam pixel's label matches the turned
     # cube (where it is not a label border), so no row or column is dropped or repeated.
     rays, ok = ref.camera.image_rays()

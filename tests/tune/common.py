@@ -18,7 +18,7 @@ from ..conftest import small_render
 
 
 def small_problem(letter: str = "a") -> tuple[CandidateEvaluator, SearchSpace]:
-    """An evaluator on a half-size render and a seven-parameter space."""
+    """An evaluator on a test-scale render and a seven-parameter space."""
     img = small_render(letter)
     ev = CandidateEvaluator(img.labels, OutputSpec(320, 180), default_criteria())
     space = default_space(img.camera, ("fov", "rad", "v_shift", "zoom", "adv_v_shift",

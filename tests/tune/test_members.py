@@ -17,7 +17,9 @@ from rvmsim.tune import (Aggregate, EcSolver, Member, MembersScorer, MembersSolv
                          SearchSettings, check_members, parse_aggregate, score_params,
                          score_vectors, search_members, search_scene, worst_ec_json)
 from rvmsim.search import TuningConfig, make_strategy
+from rvmsim.render import cached_render
 from rvmsim.runs import RunStore, ec_json
+from rvmsim.testing.scenes import QUARTER, load_small_scene
 
 from ..conftest import small_render
 
@@ -53,7 +55,7 @@ def test_the_ec_column_holds_each_ecs_worst_member():
 
 @pytest.fixture(scope="module")
 def two():
-    """Vehicles A and E at half size: their evaluators and a space on A's camera."""
+    """Vehicles A and E at the test scale: their evaluators and a space on A's camera."""
     out = OutputSpec(160, 90)
     imgs = [small_render("a"), small_render("e")]
     evs = [CandidateEvaluator(i.labels, out, default_criteria()) for i in imgs]
@@ -140,7 +142,7 @@ def test_two_members_store_each_members_results(two, tmp_path):
 
 def test_members_of_different_sensor_sizes_are_refused(two):
     imgs, _, _ = two
-    half = small_render("a", 0.25)
+    half = cached_render(load_small_scene("a", QUARTER / 2))[0]
     with pytest.raises(RvmsimError, match="one sensor size"):
         check_members([Member("A", imgs[0].labels, imgs[0].camera),
                        Member("A small", half.labels, half.camera)])

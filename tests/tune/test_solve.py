@@ -1,6 +1,8 @@
 """The closed-form sub-solves: each puts its EC on its target, measured on the real RVM
 label image (the full-frame measurement, not the solver's own geometry), and applies only
-where the criteria and the search space allow it."""
+where the criteria and the search space allow it.  On the vehicles' own sensors: a solver
+reads the fisheye label image, so it is exact to about one of its pixels, and the test
+scale's 320 × 240 px fisheye is coarser than the 640 × 360 px RVM image judged here."""
 
 from __future__ import annotations
 
@@ -14,7 +16,7 @@ from rvmsim.pipeline import evaluate_params
 from rvmsim.tune import EcSolver
 from rvmsim.search import TuningConfig
 
-from ..conftest import small_render
+from ..conftest import sensor_render
 
 OUT = OutputSpec(640, 360)
 
@@ -38,7 +40,7 @@ def test_each_sub_solve_puts_its_ec_on_target(letter):
     centre within 0.5 px of the image centre (3-1), guideline 3 at 50 % ± 1 px (3-2), the
     board's aspect 1 to within a pixel of its box width (4-1), wherever the object is wholly in the
     image and the solved value inside its search range."""
-    images = small_render(letter)
+    images = sensor_render(letter)
     cfg = TuningConfig.model_validate({"output": {"size": [OUT.width, OUT.height]}})
     criteria = default_criteria()
     space = cfg.space(images.camera)
@@ -55,7 +57,7 @@ def test_each_sub_solve_puts_its_ec_on_target(letter):
             checked["3-1"] += 1
         if _inside_range(space, p, "adv_v_shift") and _wholly_inside(frame.labels,
                                                                      L.guide_cross(3)):
-            assert abs(frame.ec["3-2"].value - 50.0) <= 100.0 / OUT.height, p
+            assert abs(frame.ec["3-2"].value - 50.0) <= 100.0 / OUT.height + 1e-9, p
             checked["3-2"] += 1
         if _inside_range(space, p, "adv_h_scale") and _wholly_inside(frame.labels, L.BOARD):
             bh = np.ptp(np.nonzero(frame.labels == L.BOARD)[0]) + 1
@@ -66,7 +68,7 @@ def test_each_sub_solve_puts_its_ec_on_target(letter):
 
 def test_a_range_of_its_own_moves_the_target(tmp_path):
     """Guideline 3's target is the middle of the criteria's range: [40, 50] % puts it at 45 %."""
-    images = small_render("a")
+    images = sensor_render("a")
     path = tmp_path / "criteria.yaml"
     path.write_text("criteria:\n  3-2: {range: [40, 50]}\n")
     criteria = criteria_from_text(path.read_text(), str(path))
@@ -76,11 +78,11 @@ def test_a_range_of_its_own_moves_the_target(tmp_path):
     assert solver.targets["3-2"] == pytest.approx(45.0)
     p = solver(space.params(np.array([r.init for r in space.ranges])))
     frame = evaluate_params(images, p, OUT, criteria, annotate=False)
-    assert abs(frame.ec["3-2"].value - 45.0) <= 100.0 / OUT.height
+    assert abs(frame.ec["3-2"].value - 45.0) <= 100.0 / OUT.height + 1e-9
 
 
 def test_solves_only_tuned_parameters_of_enabled_ecs(tmp_path):
-    images = small_render("a")
+    images = sensor_render("a")
     path = tmp_path / "criteria.yaml"
     path.write_text("criteria:\n  3-1: {enabled: false}\n")
     criteria = criteria_from_text(path.read_text(), str(path))
@@ -94,7 +96,7 @@ def test_solves_only_tuned_parameters_of_enabled_ecs(tmp_path):
 
 
 def test_an_object_missing_from_the_fisheye_image_is_not_solved():
-    images = small_render("a")
+    images = sensor_render("a")
     labels = images.labels.copy()
     labels[labels == L.BOARD] = L.GROUND
     cfg = TuningConfig()
