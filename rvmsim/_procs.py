@@ -62,8 +62,7 @@ from typing import Any, Final, ParamSpec, TypeVar
 from .errors import RvmsimError
 
 __all__ = ["start_pool", "WORKER_PRELOAD", "stop_pool", "die_with_parent", "stop_on_signals",
-           "Terminated",
-           "ORPHAN_EXIT_STATUS"]
+           "Terminated", "ORPHAN_EXIT_STATUS"]
 
 _P = ParamSpec("_P")
 _T = TypeVar("_T")
