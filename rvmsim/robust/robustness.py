@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..compensation import CompensationModel, measured_load_index
+from ..compensation import CompensationLaw, CompensationModel, measured_load_index
 from ..criteria import Criteria, EcBatch, default_criteria, score_batch
 from ..isp import IspParams, OutputSpec, params_to_dict
 from ..pipeline import RvmFrame, evaluate_params, make_evaluator, record_output
@@ -400,9 +400,12 @@ def robustness(scene: Scene, params: IspParams,
     RobustnessResult
     """
     t0 = time.perf_counter()
+    crit = settings.criteria if settings.criteria is not None else default_criteria()
     if settings.compensation is not None:
         check_law(settings.compensation)
-    crit = settings.criteria if settings.criteria is not None else default_criteria()
+        # its reference ground points in view, before any render (one line, at once)
+        CompensationLaw(scene, params, record_output(crit, scene, settings.output.mirror),
+                        settings.compensation)
     var = settings.variation if settings.variation is not None else variation_from_scene(scene)
     seed, output, render_scale = settings.seed, settings.output, settings.render_scale
     drawn = draw_samples(var, settings.samples, seed)

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw
-from rvmsim.isp import OutputSpec
+from rvmsim.errors import CompensationError
+from rvmsim.isp import IspParams, OutputSpec
 from rvmsim.pipeline import make_evaluator
 from rvmsim.report import write_robustness_outputs
 from rvmsim.robust import (RobustnessSettings, SampleSet, draw_samples, robustness,
@@ -123,3 +124,22 @@ def test_cli_compensation_writes_before_and_after(tmp_path: Path):
     assert doc["compensation"]["station"]["angle_sigma_deg"] == 0.0
     assert doc["compensation"]["source"].endswith("c.yaml")
     assert doc["yield_before_compensation"] is not None
+
+
+def test_a_setting_that_shows_no_ground_is_refused_before_any_render(edge):
+    """The law's reference ground points are counted before the viewpoints are rendered:
+    the one-line refusal comes at once (it came after a render of every sample's
+    viewpoint)."""
+    sc, crit, _ = edge
+    calls = []
+
+    class Runner:  # a TaskRunner that records what it is given
+        def run(self, fn, items):
+            calls.append(dict(items))
+            for key, item in items.items():
+                yield key, fn(item)
+
+    how = RobustnessSettings(OUTPUT, crit, samples=4, seed=2, compensation=POINTS)
+    with pytest.raises(CompensationError, match="reference ground points"):
+        robustness(sc, IspParams(h_pan=90, v_pan=-90, zoom=3), how, runner=Runner())
+    assert calls == []
