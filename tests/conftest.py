@@ -6,14 +6,13 @@ import functools
 import os
 from pathlib import Path
 
-import pytest
-
 import numpy as np
+import pytest
 
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.render import cached_render, render_fisheye
 from rvmsim.testing.captures import BAIC
-from rvmsim.testing.scenes import QUARTER, load_small_scene
+from rvmsim.testing.scenes import load_small_scene
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 if os.environ.get("PYTEST_XDIST_WORKER"):
