@@ -279,17 +279,17 @@ time.sleep(600)
 """
 
 
-def test_workers_of_a_pool_made_in_a_thread_end_with_their_parent(tmp_path):
-    """The workers of a pool started from a thread outlive that thread, and end with their
-    process (killed: the fork server ends with it, and the kernel and each worker's watch
-    of the pipe from the parent end the workers)."""
-    proc = subprocess.Popen([sys.executable, "-c", WATCH_ONLY], env=child_env(),
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+def _kill_and_check(argv: list[str], children: Callable[[psutil.Process], list[psutil.Process]],
+                    count: int) -> None:
+    """Start ``argv``; once it prints "ready", its ``count`` ``children`` must be running;
+    kill it (SIGKILL) and check that every one of them ends within :data:`GRACE_S`."""
+    proc = subprocess.Popen(argv, env=child_env(), stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True)
     kids: list[psutil.Process] = []
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "ready\n"
-        kids = psutil.Process(proc.pid).children(recursive=True)
-        assert len(kids) == POOL_CHILDREN and all(_alive(k) for k in kids)
+        kids = children(psutil.Process(proc.pid))
+        assert len(kids) == count and all(_alive(k) for k in kids)
         proc.kill()
         proc.wait()
         ended = time.monotonic()
@@ -304,6 +304,14 @@ def test_workers_of_a_pool_made_in_a_thread_end_with_their_parent(tmp_path):
             proc.wait()
         if proc.stdout is not None:
             proc.stdout.close()
+
+
+def test_workers_of_a_pool_made_in_a_thread_end_with_their_parent():
+    """The workers of a pool started from a thread outlive that thread, and end with their
+    process (killed: the fork server ends with it, and the kernel and each worker's watch
+    of the pipe from the parent end the workers)."""
+    _kill_and_check([sys.executable, "-c", WATCH_ONLY],
+                    lambda proc: proc.children(recursive=True), POOL_CHILDREN)
 
 
 WATCH_ALONE = """\
@@ -333,28 +341,9 @@ def test_the_watch_of_the_pipe_from_the_parent_ends_a_child_alone(tmp_path):
     spawned children that only watch the pipe from their parent end when it is killed."""
     script = tmp_path / "watch_alone.py"
     script.write_text(WATCH_ALONE)
-    proc = subprocess.Popen([sys.executable, str(script)], env=child_env(),
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    kids: list[psutil.Process] = []
-    try:
-        assert proc.stdout is not None and proc.stdout.readline() == "ready\n"
-        kids = [k for k in psutil.Process(proc.pid).children()
-                if "resource_tracker" not in " ".join(k.cmdline())]
-        assert len(kids) == 2 and all(_alive(k) for k in kids)
-        proc.kill()
-        proc.wait()
-        ended = time.monotonic()
-        while any(_alive(k) for k in kids) and time.monotonic() < ended + GRACE_S:
-            time.sleep(0.02)
-        assert not [k.pid for k in kids if _alive(k)]
-    finally:
-        for k in [k for k in kids if _alive(k)]:
-            k.kill()
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        if proc.stdout is not None:
-            proc.stdout.close()
+    _kill_and_check([sys.executable, str(script)],
+                    lambda proc: [k for k in proc.children()
+                                  if "resource_tracker" not in " ".join(k.cmdline())], 2)
 
 
 def test_a_worker_has_the_environment_of_its_pool_s_making(monkeypatch):
