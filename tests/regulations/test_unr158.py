@@ -20,6 +20,7 @@ from rvmsim.criteria import SceneContext, load_criteria
 from rvmsim.pipeline import CandidateEvaluator
 from rvmsim.isp import IspParams, OutputSpec, input_to_output
 from rvmsim.pipeline import evaluate_params
+from rvmsim.regulations.fmvss111.ecs import size_margin
 from rvmsim.render import render_fisheye
 from rvmsim.scene import build_parts
 from rvmsim.scene import BUNDLED_SITES, load_site, site_scene
@@ -189,7 +190,27 @@ def test_visual_angle_is_the_pinhole_formula_of_the_display_width(criteria, ec, 
         assert w["mm"] == pytest.approx(w_mm, rel=1e-6)
         assert w["arcmin"] == pytest.approx(theta, rel=1e-6)
         angles.append(theta)
-    assert m.values[ec] == pytest.approx(min(angles) / 5.0, rel=1e-6)
+    # R158-4: the three average ≥ 5′ and each ≥ 3′ (§16.1.1); JP-2: each ≥ 5′
+    want = min(sum(angles) / len(angles) / 5.0, min(angles) / 3.0) if ec == "R158-4" \
+        else min(angles) / 5.0
+    assert m.values[ec] == pytest.approx(want, rel=1e-6)
+
+
+@pytest.mark.parametrize("angles, passes", [
+    ([5.0, 5.0, 5.0], True),     # every one at the average's limit
+    ([7.0, 5.0, 3.0], True),     # one at the least limit, the average at 5′
+    ([8.1, 4.0, 2.95], False),   # the average above 5′, one under 3′
+    ([4.9, 4.9, 4.9], False),    # each above 3′, the average under 5′
+    ([3.0, 3.0, 9.01], True),    # two at 3′, the average just above 5′
+])
+def test_r158_4_asks_an_average_of_5_and_each_3_arcmin(angles, passes):
+    """R158 §16.1.1 (quoted in UNECE VRU-Proxi-17-05): the three far objects' horizontal
+    widths average not less than 5′, and each is not less than 3′; both limits bind."""
+    ecs = {e.id: e for e in load_criteria("unr158").ecs}
+    params = dict(ecs["R158-4"].parameters)
+    assert params == {"each_arcmin": 3.0, "mean_arcmin": 5.0}
+    margin = size_margin(angles, params["each_arcmin"], params["mean_arcmin"])
+    assert (margin >= 1.0 - 1e-12) == passes, margin
 
 
 def test_visual_angle_of_a_far_cylinder_in_a_rectilinear_view():

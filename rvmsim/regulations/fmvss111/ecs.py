@@ -39,7 +39,7 @@ if TYPE_CHECKING:
 from ..objects import silhouette_fractions, width_edges
 
 __all__ = ["ECS", "FULL_VIEW_OBJECTS", "SIZE_OBJECTS", "MAX_MAGNIFICATION",
-           "MIN_PIXELS_PER_DEGREE", "object_widths", "ObjectWidths"]
+           "MIN_PIXELS_PER_DEGREE", "object_widths", "ObjectWidths", "size_margin"]
 
 #: Per object letter: its figures (px, mm, arcmin, magnification, px_per_deg, x, y and the
 #: width's ends x0, y0, x1, y1), as :func:`object_widths` gives them.
@@ -139,6 +139,32 @@ def _widths(display: Display, ctx: SceneContext, isp: IspView,
     return out
 
 
+def size_margin(angles_arcmin: list[float], each_arcmin: float,
+                mean_arcmin: float | None = None) -> float | None:
+    """The margin of visual angles against a rule of the form "each at least ``each``, and
+    their average at least ``mean``" (FMVSS 111 S5.5.1(b), UN R158 §16.1.1; ``mean`` None:
+    each alone): min(mean / ``mean_arcmin``, least / ``each_arcmin``), ≥ 1 passes.
+
+    Parameters
+    ----------
+    angles_arcmin : list of float
+        The objects' visual angles on the display, arc-minutes (at least one).
+    each_arcmin, mean_arcmin : float
+        The limits, arc-minutes; a limit ≤ 0 is no limit.
+
+    Returns
+    -------
+    float or None
+        None when no limit applies.
+    """
+    margins = []
+    if each_arcmin > 0:
+        margins.append(min(angles_arcmin) / each_arcmin)
+    if mean_arcmin is not None and mean_arcmin > 0:
+        margins.append(sum(angles_arcmin) / len(angles_arcmin) / mean_arcmin)
+    return min(margins) if margins else None
+
+
 def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
     """min(mean / mean limit, min / each limit) of the objects' visual angles (≥ 1 passes)."""
     widths = object_widths(src, options)
@@ -147,8 +173,7 @@ def _measure_1_6(src: LabelSource, options: MeasureOptions) -> Measurement:
     mean_limit = options.parameter("1-6", "mean_arcmin", rule.IMAGE_SIZE_MEAN_ARCMIN)
     each_limit = options.parameter("1-6", "each_arcmin", rule.IMAGE_SIZE_MIN_ARCMIN)
     angles = [w["arcmin"] for w in widths.values()]
-    margin = min(sum(angles) / len(angles) / mean_limit, min(angles) / each_limit)
-    return Measurement(margin, widths)
+    return Measurement(size_margin(angles, each_limit, mean_limit), widths)
 
 
 def _draw_widths(canvas: Canvas, item: EcValue, widths: ObjectWidths | None,

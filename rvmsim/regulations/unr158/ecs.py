@@ -7,8 +7,9 @@ vision requirement, as docs/markets.md reads it (⚠ there marks every choice):
 
 - row 1: a 0.15 m × 0.15 m area or the top of each cylinder visible at one position at least;
 - rows 2 and 3: the whole cylinder visible;
-- the image size of the far row on the display (⚠ our reading: the text's value was not
-  retrieved; a parameter).
+- the image size of the far row on the display: the horizontal widths of its three
+  cylinders must *average* at least 5′ and *each* be at least 3′ (R158 §16.1.1 as quoted in
+  UNECE document VRU-Proxi-17-05; FMVSS 111 S5.5.1(b) has the same form).
 
 =======  ================================================================================  ==
 EC       measurement                                                                        unit
@@ -17,7 +18,8 @@ R158-1   min over row 1 of max(largest shown square of the side / 0.15 m, shown 
          of the top face): ≥ 1 when a 0.15 m square or the whole top shows
 R158-2   min over row 2 of the shown fraction of the whole silhouette (hidden parts count)   %
 R158-3   the same for row 3                                                                  %
-R158-4   min over row 3 of the visual angle of its width on the display / ``each_arcmin``    ×
+R158-4   min(mean / ``mean_arcmin``, least / ``each_arcmin``) of row 3's visual angles on   ×
+         the display (5′ and 3′)
 =======  ================================================================================  ==
 
 Each measurable-only-from-the-scene EC has a feasibility reason read from the fisheye labels
@@ -35,20 +37,22 @@ import numpy as np
 from ...criteria import (Canvas, EcDefinition, EcValue, IspView, LabelSource, Measurement, MeasureOptions,
                          SceneContext, Sigmoid)
 from ...criteria.sigmoid import Criterion
-from ..fmvss111.ecs import _draw_widths, object_widths
+from ..fmvss111.ecs import _draw_widths, object_widths, size_margin
 from ..objects import silhouette, silhouette_fractions
 from ..siteobjects import hidden_reason, row_objects, shown_area
 
-__all__ = ["ECS", "AREA_M", "ROW_AREA", "ROW_WHOLE", "FAR_ROW", "EACH_ARCMIN",
+__all__ = ["ECS", "AREA_M", "ROW_AREA", "ROW_WHOLE", "FAR_ROW", "EACH_ARCMIN", "MEAN_ARCMIN",
            "area_ec", "whole_ec", "size_ec"]
 
 #: Row 1: the side of the square area that must show, metres.
 AREA_M = 0.15
 #: The rows of the ``unr158`` site each EC reads.
 ROW_AREA, ROW_WHOLE, FAR_ROW = "row1", ("row2", "row3"), "row3"
-#: ⚠L The far row's least visual angle on the display, arc-minutes (a parameter: the text's
-#: value was not retrieved; FMVSS 111's and JNCAP's 5' until it is).
-EACH_ARCMIN = 5.0
+#: The far row's visual angles on the display, arc-minutes: each at least
+#: :data:`EACH_ARCMIN`, their average at least :data:`MEAN_ARCMIN` (R158 §16.1.1, quoted in
+#: UNECE VRU-Proxi-17-05; EC parameters ``each_arcmin`` and ``mean_arcmin``).
+EACH_ARCMIN = 3.0
+MEAN_ARCMIN = 5.0
 
 #: Per object its figure and fisheye outline, and the candidate's ISP view (for drawing).
 _AreaDetail = tuple[dict[str, float], dict[str, np.ndarray], IspView]
@@ -178,7 +182,7 @@ def whole_ec(ec_id: str, rows: tuple[str, ...], name: str, description: str,
 
 
 # ---------------------------------------------------------------------------- image size
-def _size_measure(ec_id: str, row: str, each: float
+def _size_measure(ec_id: str, row: str, each: float, mean: float | None
                   ) -> Callable[[LabelSource, MeasureOptions], Measurement]:
     def measure(src: LabelSource, options: MeasureOptions) -> Measurement:
         ctx = src.context
@@ -188,22 +192,28 @@ def _size_measure(ec_id: str, row: str, each: float
         widths = object_widths(src, options, names) if names else None
         if not widths:
             return Measurement(None)
-        limit = options.parameter(ec_id, "each_arcmin", each)
-        return Measurement(min(w["arcmin"] for w in widths.values()) / limit
-                           if limit > 0 else None, widths)
+        angles = [w["arcmin"] for w in widths.values()]
+        mean_limit = None if mean is None else options.parameter(ec_id, "mean_arcmin", mean)
+        return Measurement(size_margin(angles, options.parameter(ec_id, "each_arcmin", each),
+                                       mean_limit), widths)
     return measure
 
 
-def size_ec(ec_id: str, row: str, each_arcmin: float, name: str, description: str
-            ) -> EcDefinition:
-    """An EC: min over ``row``'s objects of the visual angle of its width on the display
-    (from the driver's eye point, :func:`rvmsim.regulations.fmvss111.ecs.object_widths`) /
-    ``each_arcmin``."""
+def size_ec(ec_id: str, row: str, each_arcmin: float, name: str, description: str, *,
+            mean_arcmin: float | None = None) -> EcDefinition:
+    """An EC: the margin of ``row``'s objects' visual angles on the display (from the
+    driver's eye point, :func:`rvmsim.regulations.fmvss111.ecs.object_widths`) against
+    "each ≥ ``each_arcmin``" and, if given, "their average ≥ ``mean_arcmin``"
+    (:func:`rvmsim.regulations.fmvss111.ecs.size_margin`; ≥ 1 passes)."""
+    parameters = {"each_arcmin": each_arcmin}
+    if mean_arcmin is not None:
+        parameters["mean_arcmin"] = mean_arcmin
     return EcDefinition(
-        id=ec_id, name=name, unit="x", groups=(), measure=_size_measure(ec_id, row, each_arcmin),
+        id=ec_id, name=name, unit="x", groups=(),
+        measure=_size_measure(ec_id, row, each_arcmin, mean_arcmin),
         annotate=lambda c, i, d: _draw_widths(c, i, d, ("px", "mm", "arcmin")),
         default_range=(1.0, None), default_sigmoid=Sigmoid.from_range(1.0, None, tolerance=0.3),
-        description=description, parameters={"each_arcmin": each_arcmin}, uses_scene=True)
+        description=description, parameters=parameters, uses_scene=True)
 
 
 ECS = [
@@ -212,5 +222,6 @@ ECS = [
     whole_ec("R158-2", ("row2",), "r158_row2_whole", "row 2: least shown % of a whole cylinder"),
     whole_ec("R158-3", ("row3",), "r158_row3_whole", "row 3: least shown % of a whole cylinder"),
     size_ec("R158-4", FAR_ROW, EACH_ARCMIN, "r158_row3_display_size",
-            "row 3: least visual angle of a cylinder's width on the display / 5'"),
+            "row 3: min(mean/5', least/3') of the cylinders' visual angles on the display",
+            mean_arcmin=MEAN_ARCMIN),
 ]
