@@ -15,6 +15,7 @@ from rvmsim import labels as L
 from .cli_runner import run_in_process
 from .conftest import SCENES
 from rvmsim.testing.scenes import write_small_scene
+from rvmsim.testing.stations import TUNED
 
 
 def test_render_writes_color_labels_preview_and_metadata(tmp_path):
@@ -83,7 +84,10 @@ def test_evaluate_prints_table_writes_json_and_annotated_image(tmp_path):
     res = run_in_process(["evaluate", str(SCENES / "vehicle_a.yaml"), "--params", str(params),
                           "--criteria", str(crit), "--out", str(out), "--scale", "0.25",
                           "--no-progress"])
-    assert res.code == 0, res.stderr
+    assert res.code == 1, res.stderr  # 1-3, 2-1, 2-2 and 3-2 fail at this setting
+    failing = [e["id"] for e in json.loads((out / "ec.json").read_text())["ecs"]
+               if e["enabled"] and not e["passed"]]
+    assert failing and res.stderr == f"not every EC passes: {', '.join(failing)}\n"
     for ec in ("1-1", "2-3", "4-1"):
         assert f"\n{ec} " in res.stdout
     assert "OEM test" in res.stdout and "EC score" in res.stdout
@@ -102,6 +106,16 @@ def test_evaluate_prints_table_writes_json_and_annotated_image(tmp_path):
     from rvmsim.criteria import evaluate, load_criteria
 
     assert evaluate(labels, load_criteria(crit)).score == pytest.approx(doc["ec_score"])
+
+
+def test_evaluate_exits_0_when_every_ec_passes(tmp_path):
+    """evaluate judges: 0 when every EC passes at the RVM image of record (vehicle A's
+    tuned setting), 1 when one fails (the test above), 2 on an error (the test below)."""
+    res = run_in_process(["evaluate", str(SCENES / "vehicle_a.yaml"), "--params", str(TUNED),
+                          "--out", str(tmp_path / "ev"), "--scale", "0.25", "--no-progress"])
+    assert res.code == 0, res.stderr
+    assert json.loads((tmp_path / "ev" / "ec.json").read_text())["passed"]
+    assert res.stderr == ""
 
 
 def test_evaluate_bad_criteria_is_one_line(tmp_path):

@@ -109,7 +109,8 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
 
     Prints the EC table and writes ec.json, ec_annotated.png (the measurements drawn on the RVM
     image), rvm_color.png and rvm_labels.png; with --markets one such folder per market and
-    markets.json (docs/markets.md).
+    markets.json (docs/markets.md).  Exit status 0 when every EC passes (every market, with
+    --markets), 1 when one fails, 2 on an error.
     """
     from ..criteria import check_supported, load_criteria
     from ..pipeline import record_output, render_rvm, write_evaluation
@@ -136,6 +137,10 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
                f"{record.width}x{record.height} px")
     click.echo(frame.ec.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
+    if not frame.ec.passed:  # a judging command: 1 when something it judged fails
+        failing = [e.id for e in frame.ec.items if e.enabled and not e.passed]
+        click.echo(f"not every EC passes: {', '.join(failing)}", err=True)
+        sys.exit(1)
 
 
 def _evaluate_markets(scene: Path, params: IspParams, mirror: bool, markets: str, out: Path,
