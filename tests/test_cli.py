@@ -118,6 +118,27 @@ def test_evaluate_exits_0_when_every_ec_passes(tmp_path):
     assert res.stderr == ""
 
 
+def test_evaluate_says_when_it_judges_at_another_size_than_the_params_file_was(tmp_path):
+    """A params file judged at 640 × 360 (its output.judged_at) evaluated on a scene whose
+    RVM image of record is 1280 × 720: one line says so; the same size says nothing."""
+    text = TUNED.read_text()
+    for judged, note in (([640, 360], True), ([1280, 720], False)):
+        params = tmp_path / f"p{judged[0]}.yaml"
+        params.write_text(text.replace("output:", f"output:\n  judged_at: {judged}", 1)
+                          if "output:" in text else text + f"output: {{judged_at: {judged}}}\n")
+        res = run_in_process(["evaluate", str(SCENES / "vehicle_a.yaml"), "--params",
+                              str(params), "--out", str(tmp_path / "ev"), "--scale", "0.25",
+                              "--no-progress"])
+        assert res.code in (0, 1), res.stderr
+        lines = [ln for ln in res.stderr.splitlines() if "judged_at" in ln]
+        if note:
+            assert lines == [f"rvmsim: note: {params}: output.judged_at is 640x360; judged "
+                             f"here at {SCENES / 'vehicle_a.yaml'}'s RVM image of record, "
+                             "1280x720 px"]
+        else:
+            assert lines == []
+
+
 def test_evaluate_bad_criteria_is_one_line(tmp_path):
     crit = tmp_path / "c.yaml"
     crit.write_text("criteria:\n  9-9: {}\n")

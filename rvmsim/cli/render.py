@@ -113,6 +113,7 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
     --markets), 1 when one fails, 2 on an error.
     """
     from ..criteria import check_supported, load_criteria
+    from ..isp import params_judged_at
     from ..pipeline import record_output, render_rvm, write_evaluation
     from ..scene import load_scene
 
@@ -135,6 +136,11 @@ def evaluate(scene: Path, params_file: Path | None, criteria_file: Path | None,
                      criteria_file=criteria_file)
     click.echo(f"{sc.name} — criteria: {criteria.name} — judged at the RVM image of record, "
                f"{record.width}x{record.height} px")
+    was = params_judged_at(params_file) if params_file is not None else None
+    if was is not None and was != (record.width, record.height):
+        click.echo(f"rvmsim: note: {params_file}: output.judged_at is {was[0]}x{was[1]}; "
+                   f"judged here at {scene}'s RVM image of record, "
+                   f"{record.width}x{record.height} px", err=True)
     click.echo(frame.ec.table())
     click.echo(f"wrote {out / 'ec.json'} and {out / 'ec_annotated.png'}")
     if not frame.ec.passed:  # a judging command: 1 when something it judged fails

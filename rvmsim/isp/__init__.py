@@ -14,6 +14,7 @@ from .params import (
     PARAM_SPECS,
     TUNED_BY_DEFAULT,
     load_params,
+    params_judged_at,
     params_to_dict,
 )
 from .exact import IspMap, build_map_exact
@@ -50,5 +51,6 @@ __all__ = [
     "input_to_output",
     "input_to_plane",
     "load_params",
+    "params_judged_at",
     "params_to_dict",
 ]

@@ -24,6 +24,7 @@ from .._io import (KeyPath, image_size_problem, key_lines, read_text, safe_load_
 from ..errors import ParamsFileError
 
 __all__ = [
+    "params_judged_at",
     "ParamSpec",
     "PARAM_SPECS",
     "TUNED_BY_DEFAULT",
@@ -243,6 +244,16 @@ def _output_spec(out_data: object, path: Path, lines: Mapping[KeyPath, int]) -> 
         return OutputSpec(size[0], size[1], mirror)
     except ValueError as err:
         raise error("output.size", str(err)) from None
+
+
+def params_judged_at(path: str | Path) -> tuple[int, int] | None:
+    """The RVM image of record a params file says its ECs were judged at
+    (``output.judged_at: [W, H]``, px), or None where it says none.  Read after
+    :func:`load_params` has accepted the file."""
+    data = _parse(read_text(Path(path), ParamsFileError, what="params file"), Path(path))
+    out = data.get("output") if isinstance(data, dict) else None
+    judged = out.get("judged_at") if isinstance(out, dict) else None
+    return (int(judged[0]), int(judged[1])) if isinstance(judged, list) else None
 
 
 def load_params(path: str | Path) -> tuple[IspParams, OutputSpec]:
