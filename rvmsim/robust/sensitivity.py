@@ -45,6 +45,8 @@ __all__ = ["Sensitivity", "fit_sensitivity", "sensitivity_axes", "GOOD_R2", "SHO
 
 #: A fit explains an EC when its R² is at least this.
 GOOD_R2 = 0.8
+#: Below this R² a fit explains so little that its formula is not shown.
+_PARTLY_R2 = 0.5
 #: A term is kept when its contribution is at least this many residual RMS …
 _RESIDUAL_FACTOR = 2.0
 #: … and at least this share of the largest contribution.
@@ -132,14 +134,18 @@ class Sensitivity:
         return f"{text} {self.unit}".rstrip()
 
     def describe(self) -> str:
-        """One line: ``2-3 ≈ |16.0·yaw + 16.5·roll| px, R² 0.99``, that no fit explains the
-        EC, or ``1-1 = 0.00 on every sample``."""
+        """One line: ``2-3 ≈ |16.0·yaw + 16.5·roll| px, R² 0.99``; that the EC follows none
+        of the offsets (R² < 0.5: no formula) or only partly (the formula with its R²); or
+        ``1-1 = 0.00 on every sample``."""
         if not self.coefficients and self.rms <= 1e-9 * max(1.0, abs(self.intercept)):
             return f"{self.ec_id} = {self.formula()} on every sample"
         if self.good:
             return f"{self.ec_id} ≈ {self.formula()}, R² {self.r2:.2f}"
-        return (f"{self.ec_id}: no linear or |linear| fit of the mount offsets and load "
-                f"explains it (best R² {self.r2:.2f}: {self.formula()})")
+        if self.r2 < _PARTLY_R2:  # a formula that explains nothing is noise to a reader
+            return (f"{self.ec_id}: follows none of the mount offsets or the load (no linear "
+                    f"or |linear| fit, R² {self.r2:.2f})")
+        return (f"{self.ec_id}: only partly follows the mount offsets and load (R² "
+                f"{self.r2:.2f}: {self.formula()})")
 
     def as_dict(self) -> dict[str, object]:
         return {"model": self.model, "intercept": self.intercept,

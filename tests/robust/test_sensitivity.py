@@ -102,8 +102,18 @@ def test_no_good_fit_says_so(kind):
          else np.sin(6 * axes["yaw_deg"]) * np.cos(5 * axes["roll_deg"]))
     s = fit_sensitivity(v, axes, loads, states=STATES, ec_id="1-1", unit="%")
     assert s is not None and s.r2 < 0.3 and not s.good
-    assert s.describe().startswith("1-1: no linear or |linear| fit")
-    assert f"R² {s.r2:.2f}" in s.describe()
+    assert s.describe() == (f"1-1: follows none of the mount offsets or the load (no linear "
+                            f"or |linear| fit, R² {s.r2:.2f})")  # no formula of noise
+
+
+def test_a_fit_that_explains_part_says_partly_with_its_formula():
+    axes, loads = _samples(seed=7)
+    rng = np.random.default_rng(8)
+    v = 2.0 * axes["yaw_deg"] + rng.normal(0.0, 1.5 * axes["yaw_deg"].std(), loads.size)
+    s = fit_sensitivity(v, axes, loads, states=STATES, ec_id="1-1", unit="%")
+    assert s is not None and 0.5 <= s.r2 < 0.8 and not s.good, s.r2
+    assert s.describe() == (f"1-1: only partly follows the mount offsets and load (R² "
+                            f"{s.r2:.2f}: {s.formula()})")
 
 
 def test_unmeasured_samples_are_left_out_and_too_few_give_none():
