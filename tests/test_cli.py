@@ -226,7 +226,11 @@ def test_tune_errors_are_one_line(tmp_path):
     res = _rvmsim("tune", "--resume", str(tmp_path / "nothing"))
     assert res.code == 2 and "no run to resume" in res.stderr
     res = _rvmsim("status", str(tmp_path / "nothing"))
-    assert res.code == 2 and "no run database" in res.stderr
+    assert res.code == 2
+    assert res.stderr == f"rvmsim: error: {tmp_path / 'nothing'}: no such run folder\n"
+    res = _rvmsim("status", str(tmp_path))  # a folder, but not a run's
+    assert res.code == 2 and res.stderr == \
+        f"rvmsim: error: {tmp_path}: not a run folder (no run.sqlite in it)\n"
 
 
 def test_strategy_choices_come_from_the_registry():
@@ -392,7 +396,7 @@ def test_main_takes_its_arguments(capsys, tmp_path):
         main(["status", str(tmp_path / "nothing")])
     err = capsys.readouterr().err
     assert stop.value.code == 2 and err.startswith("rvmsim: error: ")
-    assert "no run database" in err and len(err.splitlines()) == 1
+    assert "no such run folder" in err and len(err.splitlines()) == 1
     with pytest.raises(SystemExit) as stop:
         main(("render", "--out"))
     assert stop.value.code == 2

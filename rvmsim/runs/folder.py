@@ -63,11 +63,13 @@ def open_run(run_dir: str | Path) -> RunStore:
     Raises
     ------
     RvmsimError
-        One line: no ``run.sqlite`` there, or not a readable one.
+        One line: no such folder, no ``run.sqlite`` in it, or not a readable one.
     """
     run_dir = Path(run_dir)
+    if not run_dir.is_dir():  # the words signoff and the console use too
+        raise RvmsimError(f"{run_dir}: no such run folder")
     if not is_run_folder(run_dir):
-        raise RvmsimError(f"{run_dir}: no run database ({RUN_DB}) here")
+        raise RvmsimError(f"{run_dir}: not a run folder (no {RUN_DB} in it)")
     return RunStore(run_dir / RUN_DB, readonly=True)
 
 
