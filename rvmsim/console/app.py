@@ -151,8 +151,9 @@ def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any]
     roi = _roi(session, params)
     t3 = time.perf_counter()
     ec = ec_result.as_dict()
-    for item in ec["ecs"]:
-        item["margin"] = ec_margin(item["value"], *item["range"])
+    for item, value in zip(ec["ecs"], ec_result.items):
+        item["yes_no"] = value.yes_no  # ✓/✗, no margin bar (EcValue.margin_text)
+        item["margin"] = None if value.yes_no else ec_margin(item["value"], *item["range"])
     ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2}
     return {"frame": frame_id, "params": params_to_dict(params), **ec, "roi": roi,
             "image": picture_url("display", params),

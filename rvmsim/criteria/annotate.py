@@ -356,7 +356,10 @@ def panel_rows(result: EcResult, definitions: Sequence[EcDefinition | None] | No
         else:
             value = _num(item.value) + u
         m = item.margin
-        margin = "—" if binary or m is None else ("+" if m >= 0 else "−") + _num(abs(m)) + u
+        if binary:  # ✓/✗, as every table shows a yes/no EC (EcValue.margin_text)
+            margin = "—" if item.value is None else ("✓" if item.passed else "✗")
+        else:
+            margin = "—" if m is None else ("+" if m >= 0 else "−") + _num(abs(m)) + u
         result_text = "off" if not item.enabled else ("pass" if item.passed else "fail")
         rows.append((item.id, spelled_name(item.name), value, _range_text(item, binary),
                      margin, result_text))

@@ -36,6 +36,23 @@ class EcValue:
         return min(self.value - self.low if self.low is not None else math.inf,
                    self.high - self.value if self.high is not None else math.inf)
 
+    @property
+    def yes_no(self) -> bool:
+        """A yes/no EC: one acceptable value (1-1, 2-4: ``[1, 1]``), met or not; it has no
+        margin to show, only ✓ or ✗ (:meth:`margin_text`)."""
+        return self.low is not None and self.low == self.high
+
+    def margin_text(self, unit: str = "") -> str:
+        """The margin as every table shows it (report, sign-off, annotation panel, console,
+        gallery): ✓/✗ for a yes/no EC, the signed margin with ``unit`` (4 significant
+        digits) otherwise, "—" when there is none."""
+        if self.yes_no:
+            return "—" if self.value is None else ("✓" if self.passed else "✗")
+        m = self.margin
+        if m is None or not math.isfinite(m):
+            return "—"
+        return f"{m:+.4g}{unit}"
+
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready: id, name, value, unit, range, score, passed, enabled."""
         return {

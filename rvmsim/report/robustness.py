@@ -27,7 +27,8 @@ from ..robust import EcStats, MarketsRobustness, RobustnessResult
 from ..storage import json_default
 from .page import data_uri, escape, figure_png, img_tag, page
 from .provenance import FileRecord, file_record, files_table, scene_records
-from .setting import SettingRecord, by_load_html, setting_html, variation_html
+from .setting import (SettingRecord, by_load_html, setting_html, variation_html,
+                      worst_margin_text)
 
 if TYPE_CHECKING:
     from ..pipeline import RvmFrame
@@ -123,7 +124,8 @@ def _ec_rows(result: RobustnessResult) -> str:
             f'<td class="num">{rng} {escape(e.unit)}</td>'
             f'<td class="num">{100 * e.failure_rate:.1f} %</td>'
             f'<td class="num">{"—" if e.worst_value is None else f"{e.worst_value:.3g}"}</td>'
-            f'<td class="num">{"—" if e.worst_margin is None else f"{e.worst_margin:+.3g}"}</td>'
+            f'<td class="num">{escape(worst_margin_text(e.low, e.high, e.n_fail, e.worst_margin))}'
+            "</td>"
             f'<td>{why}</td></tr>')
     return "".join(rows)
 

@@ -40,8 +40,8 @@ from .gallery import differences, margins_html
 from .plots import convergence_png, histogram_png
 from .provenance import provenance
 from .run_notes import display_figure, provenance_line, signoff_note, yield_note
-from .setting import ec_margin, fmt_margin
 from ..criteria import load_criteria
+from ..criteria.canvas import unit_text
 from ..render import cached_render, same_scene
 from ..scene import load_scene
 from ..isp import PARAM_SPECS, IspParams, draw_roi
@@ -202,7 +202,7 @@ def _ec_section(result: EcResult) -> str:
             f'<tr class="{st}"><td>{escape(i.id)}</td><td>{escape(i.name)}</td>'
             f'<td class="num">{escape(_fmt(i.value))}</td><td>{escape(i.unit)}</td>'
             f'<td class="num">{escape(rng)}</td>'
-            f'<td class="num">{escape(fmt_margin(ec_margin(i), i.unit))}</td>'
+            f'<td class="num">{escape(i.margin_text(unit_text(i.unit)))}</td>'
             f'<td class="num">{i.score:.4f}</td>'
             f'<td>{escape(st)}</td></tr>')
     badge = "pass" if result.passed else "fail"

@@ -19,11 +19,10 @@ from .provenance import FileRecord
 from ..isp import PARAM_SPECS
 
 if TYPE_CHECKING:
-    from ..criteria import EcValue
     from ..isp import IspParams, OutputSpec
 
 __all__ = ["SettingRecord", "setting_html", "params_table", "variation_html", "by_load_html",
-           "ec_margin", "fmt_margin", "AXIS_TEXT"]
+           "fmt_margin", "worst_margin_text", "AXIS_TEXT"]
 
 #: The mount axes as a page names them, with their unit.
 AXIS_TEXT: dict[str, tuple[str, str]] = {
@@ -122,15 +121,14 @@ def by_load_html(after: Mapping[str, Any], before: Mapping[str, Any] | None = No
     return f'<table class="by-load">{head}{rows}</table>'
 
 
-def ec_margin(item: EcValue) -> float | None:
-    """Signed distance of the EC's value inside its acceptable range (EC unit): > 0 inside,
-    < 0 outside, the nearer end counting; None when not measured or without a range."""
-    if item.value is None or (item.low is None and item.high is None):
-        return None
-    v = float(item.value)
-    lo = v - item.low if item.low is not None else math.inf
-    hi = item.high - v if item.high is not None else math.inf
-    return min(lo, hi)
+def worst_margin_text(low: float | None, high: float | None, n_fail: int,
+                      worst_margin: float | None, unit: str = "") -> str:
+    """The worst margin over samples, as every table shows a margin
+    (:meth:`rvmsim.criteria.EcValue.margin_text`): ✓/✗ for a yes/no EC (a range of one
+    value: ✗ when any sample fails it), else the signed margin with its unit."""
+    if low is not None and low == high:
+        return "✗" if n_fail else "✓"
+    return fmt_margin(worst_margin, unit)
 
 
 def fmt_margin(margin: float | None, unit: str = "") -> str:

@@ -16,8 +16,9 @@ from .market_rows import all_markets_pass, markets_html, markets_verdict_text
 from .page import escape, img_tag, page
 from .provenance import FileRecord, Provenance, files_table, provenance_html
 from .records import EolRecord, RobustnessRecord, ValidationRecord
-from .setting import (SettingRecord, by_load_html, ec_margin, fmt_margin, setting_html,
-                      variation_html)
+from .setting import (SettingRecord, by_load_html, setting_html, variation_html,
+                      worst_margin_text)
+from ..criteria.canvas import unit_text
 
 if TYPE_CHECKING:
     from ..criteria import EcResult
@@ -128,6 +129,13 @@ def _tool(c: SignoffContent) -> str:
     return f'<section id="tool"><h2>Tool</h2>{provenance_html(c.provenance)}</section>'
 
 
+def _worst_margin(e: dict[str, Any]) -> str:
+    """A robustness.json EC's worst margin over the samples (✓/✗ for a yes/no EC)."""
+    low, high = e.get("range") or (None, None)
+    return worst_margin_text(low, high, int(e.get("n_fail") or 0), e.get("worst_margin"),
+                             e.get("unit", ""))
+
+
 def _ec_rows(c: SignoffContent) -> str:
     rows = []
     for item in c.ec.items:
@@ -141,7 +149,7 @@ def _ec_rows(c: SignoffContent) -> str:
             f'<tr class="{st}"><td>{escape(item.id)}</td><td>{escape(item.name)}</td>'
             f'<td class="num">{escape(value)} {escape(item.unit)}</td>'
             f'<td class="num">{escape(rng)} {escape(item.unit)}</td>'
-            f'<td class="num">{escape(fmt_margin(ec_margin(item), item.unit))}</td>'
+            f'<td class="num">{escape(item.margin_text(unit_text(item.unit)))}</td>'
             f"<td>{escape(st)}</td><td>{cell}</td></tr>")
     return "".join(rows)
 
@@ -176,7 +184,7 @@ def _yield_ec_rows(doc: dict[str, Any]) -> str:
             + ("" if not before else
                f'<td class="num">{100 * float((b or {}).get("failure_rate", 0)):.1f} %</td>')
             + f'<td class="num">{100 * float(e.get("failure_rate", 0)):.1f} %</td>'
-            f'<td class="num">{escape(fmt_margin(e.get("worst_margin"), e.get("unit", "")))}'
+            f'<td class="num">{escape(_worst_margin(e))}'
             "</td></tr>")
     head = ("<tr><th>EC</th><th>measurement</th>" + ("<th>fails before compensation</th>"
                                                      if before else "")

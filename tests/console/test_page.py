@@ -212,7 +212,15 @@ def test_margin_bars_show_how_far_inside_or_outside_each_range(served, browser):
                 barWidth: bar ? bar.getBoundingClientRect().width : null}; })""")
     assert len(rows) == len(ecs)
     signs = set()
+    yes_no = 0
     for row, ec in zip(rows, ecs):
+        if ec["range"][0] is not None and ec["range"][0] == ec["range"][1]:  # 1-1, 2-4
+            assert ec["yes_no"] and row["margin"] is None and row["cls"] is None
+            assert row["text"] == ("—" if ec["value"] is None else
+                                   "✓" if ec["passed"] else "✗")  # as report and sign-off
+            yes_no += 1
+            continue
+        assert not ec["yes_no"]
         want = ec_margin(ec["value"], *ec["range"])
         if want is None:
             assert row["margin"] is None and row["text"] == "—"
@@ -231,6 +239,7 @@ def test_margin_bars_show_how_far_inside_or_outside_each_range(served, browser):
         else:
             assert row["left"] + row["width"] == pytest.approx(middle, abs=1.5)
     assert signs == {True, False}  # both kinds drawn
+    assert yes_no == 2  # 1-1 and 2-4
     assert not errors
 
 

@@ -153,6 +153,23 @@ def test_margin_is_the_signed_distance_to_the_nearer_limit():
     assert v(None, 4.0, 8.0) is None and v(3.0, None, None) is None
 
 
+def test_one_margin_text_everywhere_yes_no_ecs_read_tick_or_cross():
+    """EcValue.margin_text, which the report, the sign-off, the panel and the console
+    follow: ✓/✗ for a yes/no EC (a range of one value), never "+0"; signed otherwise."""
+    def t(value, low, high, passed, unit=""):
+        return EcValue("x", "x", value, "px", low, high, 1.0, passed, True).margin_text(unit)
+
+    assert t(1.0, 1.0, 1.0, True) == "✓" and t(0.0, 1.0, 1.0, False) == "✗"
+    assert t(None, 1.0, 1.0, False) == "—"
+    assert t(6.5, None, 5.0, False, " px") == "-1.5 px" and t(2.0, 0.0, 5.0, True) == "+2"
+    assert t(3.0, None, None, True) == "—" and t(None, 0.0, 5.0, False) == "—"
+    color, labels = _rvm()
+    rows = {row[0]: row for row in panel_rows(evaluate(labels))}
+    r = evaluate(labels)
+    for ec in ("1-1", "2-4"):  # the paper's yes/no ECs
+        assert r[ec].yes_no and rows[ec][4] == ("✓" if r[ec].passed else "✗")
+
+
 def _longest_background_run(rows: np.ndarray) -> int:
     """Longest run of consecutive rows that are entirely the panel's background."""
     blank = np.all(rows == np.array(PANEL_BG), axis=(1, 2))

@@ -7,6 +7,7 @@ import dataclasses
 import html
 import json
 import os
+import re
 import shutil
 import subprocess
 import xml.etree.ElementTree as ET
@@ -144,6 +145,10 @@ def test_report_has_every_section_and_decodable_images(runs):
                  str(runs["crit"]), str(runs["scene"])):
         assert fact in words, fact
     _assert_self_contained(text, doc)
+    # a yes/no EC's margin is ✓ or ✗ (as in the sign-off, the console and the gallery)
+    for ec in ("1-1", "2-4"):
+        row = re.search(rf'<tr class="\w+"><td>{ec}</td>.*?</tr>', text)
+        assert row is not None and re.search(r'<td class="num">[✓✗]</td>', row.group(0)), ec
     # fisheye+ROI, RVM, annotated, RVM at the display size, convergence, histogram, and one
     # per top-M candidate
     imgs = doc.find("img")

@@ -215,7 +215,8 @@ def test_each_failing_sample_has_a_command_that_reproduces_it(made, tmp_path):
     assert {e for e, v in exported["ecs"].items() if not v["passed"]} == \
         {f for f in first["failed"] if f in ids}
     res = _rvmsim(*shlex.split(evaluate)[1:], env=made["env"], cwd=tmp_path)
-    assert res.code == 0, res.stderr
+    assert res.code == 1, res.stderr  # evaluate judges the failing car: exit 1, as recorded
+    assert res.stderr.splitlines()[-1].startswith("not every EC passes: ")
 
 
 def test_the_pdf_is_printed(made):

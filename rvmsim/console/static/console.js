@@ -217,8 +217,11 @@
     markStale();
   }
 
-  function marginCell(tr, m) {
+  function marginCell(tr, i) {
     const td = cell(tr, "", "margin");
+    // a yes/no EC (1-1, 2-4) has no margin: ✓ or ✗, as in the report and the sign-off
+    if (i.yes_no) { td.textContent = i.value === null ? "—" : (i.passed ? "✓" : "✗"); return; }
+    const m = i.margin;
     if (m === null || m === undefined) { td.textContent = "—"; return; }
     td.dataset.margin = String(m);
     const bar = document.createElement("span");
@@ -256,7 +259,7 @@
       cell(tr, num(i.value), "num value");
       cell(tr, i.unit);
       cell(tr, `[${i.range[0] === null ? "–" : i.range[0]}, ${i.range[1] === null ? "–" : i.range[1]}]`, "num");
-      marginCell(tr, i.margin);
+      marginCell(tr, i);
       cell(tr, i.score.toFixed(4), "num score");
       cell(tr, st, "res");
       const b = bItems[i.id];
