@@ -165,6 +165,13 @@ def test_tune_status_select_and_batch(tmp_path):
                   "--no-progress", env=env)
     assert res.code == 0, res.stderr
     assert "120 evaluated" in res.stdout and "EC score" in res.stdout
+    # it ends with where the results are and the commands that come next
+    tail = res.stdout.splitlines()
+    assert f"run folder: {run}" in tail and "next:" in tail
+    best = next(ln for ln in tail if ln.startswith("best setting: "))
+    assert best.startswith(f"best setting: {run / 'top' / 'rank_1.yaml'} ")
+    for command in ("report", "console", "select", "robustness", "signoff"):
+        assert any(ln.startswith(f"  rvmsim {command} ") for ln in tail), command
     for name in ("run.sqlite", "run.json", "best/rvm_color.png", "best/ec_annotated.png",
                  "best/ec.json", "top/rank_1.yaml", "top/rank_3.yaml"):
         assert (run / name).is_file(), name

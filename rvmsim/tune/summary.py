@@ -1,14 +1,17 @@
 """What ``rvmsim tune`` prints at the end of a run (:func:`summary_lines`): the search's
-counts, the best candidate, and what the run's kind judged (:class:`rvmsim.tune.Verdict`)."""
+counts, the best candidate, what the run's kind judged (:class:`rvmsim.tune.Verdict`), and
+where the results are and what comes next (:func:`next_steps`)."""
 
 from __future__ import annotations
 
+import shlex
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .run import TuneResult
 
-__all__ = ["summary_lines"]
+__all__ = ["summary_lines", "next_steps"]
 
 
 def summary_lines(result: TuneResult) -> list[str]:
@@ -21,4 +24,23 @@ def summary_lines(result: TuneResult) -> list[str]:
     idx, score = result.verdict.shown or (best.idx, best.score)
     head = (f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
             f"{o.seconds:.1f} s ({o.stopped}); best EC score {score:.4g} (trial {idx})")
-    return [head, *result.verdict.lines]
+    return [head, *result.verdict.lines, "", *next_steps(result.run_dir)]
+
+
+def next_steps(run_dir: Path) -> list[str]:
+    """Where a finished run's results are, and the commands that come next."""
+    run = shlex.quote(str(run_dir))
+    top = run_dir / "top"
+    lines = [f"run folder: {run_dir}"]
+    if (top / "rank_1.yaml").is_file():
+        lines.append(f"best setting: {top / 'rank_1.yaml'} (the diverse top-M: "
+                     f"{top / 'rank_K.yaml'}, candidates.json)")
+    steps = [(f"rvmsim report {run}", "the HTML report (report.html)"),
+             (f"rvmsim console {run}", "adjust any top candidate live in the browser"),
+             (f"rvmsim select {run} --rank K -o K.yaml", "export another candidate"),
+             (f"rvmsim robustness SCENE --params {shlex.quote(str(top / 'rank_1.yaml'))}",
+              "its yield over the mount tolerances"),
+             (f"rvmsim signoff {run} --robustness DIR", "the sign-off record")]
+    width = max(len(c) for c, _ in steps)
+    lines += ["next:", *(f"  {c:<{width}}   {what}" for c, what in steps)]
+    return lines
