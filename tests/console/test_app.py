@@ -52,8 +52,13 @@ def test_evaluate_gives_the_ecs_of_the_one_evaluation_path(session):
     want = evaluate_params(session.images, session.start.replace(zoom=0.9), session.ec_output,
                            session.criteria, annotate=False).ec.as_dict()
     margins = [ec.pop("margin") for ec in doc["ecs"]]
+    yes_no = [ec.pop("yes_no") for ec in doc["ecs"]]
     assert doc["ecs"] == want["ecs"] and doc["ec_score"] == want["ec_score"]
-    assert margins == [ec_margin(ec["value"], *ec["range"]) for ec in want["ecs"]]
+    # a yes/no EC (a range of one value: 1-1, 2-4) has no margin: the page shows ✓/✗
+    assert yes_no == [ec["range"][0] is not None and ec["range"][0] == ec["range"][1]
+                      for ec in want["ecs"]] and sum(yes_no) == 2
+    assert margins == [None if y else ec_margin(ec["value"], *ec["range"])
+                       for ec, y in zip(want["ecs"], yes_no)]
     assert any(m is not None for m in margins)
     pic = client.get(doc["image"])
     assert pic.status_code == 200 and pic.headers["content-type"] == "image/jpeg"
