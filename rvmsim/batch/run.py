@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
@@ -221,7 +221,7 @@ def _stream(executor: Executor, fn: Callable[[_Task], _Result], tasks: dict[str,
     ``progress``."""
     bar: ProgressBar | None = None
     if progress and tasks:
-        bar = tqdm(total=total, initial=total - len(tasks), unit="point", desc=desc)
+        bar = progress_bar(total=total, initial=total - len(tasks), unit="point", desc=desc)
     try:
         for task_key, result in executor.run(fn, tasks):
             yield task_key, result

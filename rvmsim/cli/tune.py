@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import click
 from click.core import ParameterSource
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from .._progress import ProgressBar
 from ..search import DEFAULT_STRATEGY, STRATEGIES
@@ -211,7 +211,7 @@ class _BatchProgress:
 
     def overall(self) -> ProgressBar | None:
         if self.show and self.bar is None:
-            self.bar = tqdm(total=self.n_scenes, unit="vehicle", desc="batch", position=0)
+            self.bar = progress_bar(total=self.n_scenes, unit="vehicle", desc="batch", position=0)
         return self.bar
 
     def say(self, msg: str, err: bool = False) -> None:

@@ -18,7 +18,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from .._procs import start_pool, stop_pool
 from ..errors import RvmsimError
@@ -86,7 +86,7 @@ def _bar(total: int, progress: bool) -> ProgressBar | None:
     if not progress:
         return None
 
-    bar: ProgressBar = tqdm(total=total, desc="eol", unit="car", leave=False)
+    bar: ProgressBar = progress_bar(total=total, desc="eol", unit="car", leave=False)
     return bar
 
 

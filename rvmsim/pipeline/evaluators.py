@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from ..camera import FisheyeCamera
 from ..criteria import (Criteria, EcBatch, EcResult, Measurements, measure_labels,
@@ -304,4 +304,4 @@ def _bar(desc: str | None, total: int) -> ProgressBar | None:
     if desc is None:
         return None
 
-    return tqdm(total=total, desc=desc, unit="image", leave=False)
+    return progress_bar(total=total, desc=desc, unit="image", leave=False)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from .._optional import import_pyrender
 from ..camera import FisheyeCamera
@@ -207,7 +207,7 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     label_atlas = np.zeros((atlas_h, atlas_w), np.uint8)
     crops: Iterable[FaceCrop] = layout.crops
     if progress:
-        crops = tqdm(crops, desc="render cube faces", unit="face", leave=False)
+        crops = progress_bar(crops, desc="render cube faces", unit="face", leave=False)
     flags = pyrender.RenderFlags
     try:
         for crop in crops:

@@ -35,7 +35,7 @@ from typing import Protocol, TypedDict, TypeVar
 import cv2
 import imageio.v3 as iio
 import numpy as np
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from .. import labels as L
 from ..camera import FisheyeCamera
@@ -284,7 +284,7 @@ def render_cubes(scene: Scene, views: Sequence[CubeView], *, scale: float = 1.0,
         (k, cube_task(t)) for k, t in items.items())
     bar = None
     if progress:
-        bar = tqdm(total=len(items), desc="render viewpoints", unit="view", leave=False)
+        bar = progress_bar(total=len(items), desc="render viewpoints", unit="view", leave=False)
     try:
         for key, out in results:
             v = todo[key]

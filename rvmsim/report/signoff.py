@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from .._optional import import_playwright_sync_api
 from ..criteria import annotate, bundled_criteria_text
@@ -345,7 +345,7 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     if not run_dir.is_dir():
         raise RvmsimError(f"{run_dir}: no such run folder")
     run = _load_run(run_dir)  # every input checked before the bar starts
-    bar = tqdm(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
+    bar = progress_bar(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
                disable=not progress)
     try:
         content = _content(run, out, rob, val, eol_rec, reviewer, bar)

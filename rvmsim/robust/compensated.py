@@ -28,7 +28,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from ..compensation import (CompensationModel, Correction, Deviation, deviated_pose, edge_error,
                             loaded_deviation, measured_deviation)
@@ -280,4 +280,4 @@ def _bar(progress: bool, total: int):  # type: ignore[no-untyped-def]
     if not progress:
         return None
 
-    return tqdm(total=total, desc="cars through the station", unit="car", leave=False)
+    return progress_bar(total=total, desc="cars through the station", unit="car", leave=False)

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from .. import labels as L
 from ..camera import FisheyeCamera, rotation_from_ypr
@@ -253,7 +253,7 @@ def _bar(progress: bool, total: int, desc: str) -> ProgressBar | None:
     if not progress:
         return None
 
-    return tqdm(total=total, desc=desc, unit="sample", leave=False)
+    return progress_bar(total=total, desc=desc, unit="sample", leave=False)
 
 
 def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, scale: float,

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
-from tqdm import tqdm
+from .._progress import progress_bar
 
 from ..errors import RvmsimError
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock, run_settings
@@ -132,13 +132,15 @@ def _progress_bar(on: bool, total: int | None, vehicle: str,
     """A tqdm bar (or None when ``on`` is false) and the search's ``on_batch`` updating it."""
     bar = None
     if on:
-        bar = tqdm(total=total, unit="eval", desc=f"tune {vehicle}", smoothing=0.1,
+        bar = progress_bar(total=total, unit="eval", desc=f"tune {vehicle}", smoothing=0.1,
                    position=position, leave=position == 0)
 
     def on_batch(done: int, best: float, stage: str) -> None:
         if bar is not None:
+            if bar.total is not None and done > bar.total:  # a last batch past the budget
+                bar.total = done
+            bar.set_postfix_str(f"best {best:.4g} [{stage}]", refresh=False)
             bar.update(done - bar.n)
-            bar.set_postfix_str(f"best {best:.4g} [{stage}]")
 
     return bar, on_batch
 
