@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from .._progress import progress_bar
-
 from ..errors import RvmsimError
 from .executors import Executor, LocalExecutor
 from .payloads import MergedResult, PointResult, PointTask, YieldDoc, YieldError, YieldTask

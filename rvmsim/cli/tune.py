@@ -9,9 +9,8 @@ from typing import TYPE_CHECKING
 
 import click
 from click.core import ParameterSource
-from .._progress import progress_bar
 
-from .._progress import ProgressBar
+from .._progress import ProgressBar, progress_bar
 from ..search import DEFAULT_STRATEGY, STRATEGIES
 from ..tune.robust import DEFAULT_SAMPLES, ROBUST_AGGREGATE
 from ..errors import RvmsimError

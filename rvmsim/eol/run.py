@@ -18,9 +18,8 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .._progress import progress_bar
-
 from .._procs import start_pool, stop_pool
+from .._progress import progress_bar
 from ..errors import RvmsimError
 from ..scene import Scene
 from ..pose import capture_folders, check_captures, load_capture

@@ -14,8 +14,8 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
-from .._progress import progress_bar
 
+from .._progress import progress_bar
 from ..camera import FisheyeCamera
 from ..criteria import (Criteria, EcBatch, EcResult, Measurements, measure_labels,
                         scene_context, score, score_batch, values_array)

@@ -21,9 +21,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from .._progress import progress_bar
 
 from .._optional import import_pyrender
+from .._progress import progress_bar
 from ..camera import FisheyeCamera
 from ..scene import Part
 from .cube import CubeLayout, FaceCrop, face_rotation

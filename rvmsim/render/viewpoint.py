@@ -35,9 +35,9 @@ from typing import Protocol, TypedDict, TypeVar
 import cv2
 import imageio.v3 as iio
 import numpy as np
-from .._progress import progress_bar
 
 from .. import labels as L
+from .._progress import progress_bar
 from ..camera import FisheyeCamera
 from ..scene import Part, Scene, build_parts
 from .cache import cache_dir, scene_key

@@ -34,9 +34,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from .._progress import progress_bar
 
 from .._optional import import_playwright_sync_api
+from .._progress import progress_bar
 from ..criteria import annotate, bundled_criteria_text
 from ..errors import ParamsFileError, RvmsimError
 from ..isp import load_params, params_to_dict, process

@@ -28,8 +28,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from .._progress import progress_bar
 
+from .._progress import progress_bar
 from ..compensation import (CompensationModel, Correction, Deviation, deviated_pose, edge_error,
                             loaded_deviation, measured_deviation)
 from ..criteria import Criteria, EcBatch, score_batch

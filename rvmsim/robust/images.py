@@ -36,9 +36,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from .._progress import progress_bar
 
 from .. import labels as L
+from .._progress import progress_bar
 from ..camera import FisheyeCamera, rotation_from_ypr
 from ..errors import SceneError
 from ..pipeline import FisheyeLabels, RvmPixels

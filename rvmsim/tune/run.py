@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 from .._progress import progress_bar
-
 from ..errors import RvmsimError
 from ..runs.folder import RUN_DB, RUN_JSON, open_run, run_json_disagreement, run_lock, run_settings
 from ..runs.records import RunSettings, RunStatus
