@@ -99,6 +99,7 @@ from .scoring import (
     score_batch,
     values_array,
 )
+from .values import is_yes_no
 from .config import (
     BUNDLED_CRITERIA,
     bundled_criteria_text,
@@ -179,6 +180,7 @@ __all__ = [
     "Criterion",
     "Criteria",
     "EcValue",
+    "is_yes_no",
     "EcResult",
     "EcBatch",
     "score_batch",

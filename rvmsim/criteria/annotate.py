@@ -347,7 +347,7 @@ def panel_rows(result: EcResult, definitions: Sequence[EcDefinition | None] | No
     defs = _definitions(result) if definitions is None else definitions
     rows = []
     for item, ec in zip(result.items, defs):
-        binary = ec.binary if ec is not None else (item.low is not None and item.low == item.high)
+        binary = ec.binary if ec is not None else item.yes_no
         u = unit_text(item.unit)
         if item.value is None:
             value = "n/a"
@@ -357,7 +357,7 @@ def panel_rows(result: EcResult, definitions: Sequence[EcDefinition | None] | No
             value = _num(item.value) + u
         m = item.margin
         if binary:  # ✓/✗, as every table shows a yes/no EC (EcValue.margin_text)
-            margin = "—" if item.value is None else ("✓" if item.passed else "✗")
+            margin = item.check_mark()
         else:
             margin = "—" if m is None else ("+" if m >= 0 else "−") + _num(abs(m)) + u
         result_text = "off" if not item.enabled else ("pass" if item.passed else "fail")

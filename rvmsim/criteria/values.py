@@ -7,7 +7,13 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["EcValue"]
+__all__ = ["EcValue", "is_yes_no"]
+
+
+def is_yes_no(low: float | None, high: float | None) -> bool:
+    """Whether an acceptable range is one value (1-1, 2-4: ``[1, 1]``): a yes/no EC, met or
+    not, with no margin to show (:meth:`EcValue.margin_text`)."""
+    return low is not None and low == high
 
 
 @dataclass(frozen=True)
@@ -38,16 +44,20 @@ class EcValue:
 
     @property
     def yes_no(self) -> bool:
-        """A yes/no EC: one acceptable value (1-1, 2-4: ``[1, 1]``), met or not; it has no
-        margin to show, only ✓ or ✗ (:meth:`margin_text`)."""
-        return self.low is not None and self.low == self.high
+        """A yes/no EC (:func:`is_yes_no`): it has no margin to show, only ✓ or ✗
+        (:meth:`margin_text`)."""
+        return is_yes_no(self.low, self.high)
+
+    def check_mark(self) -> str:
+        """✓ passed, ✗ failed, "—" not measured: a yes/no EC's margin cell."""
+        return "—" if self.value is None else ("✓" if self.passed else "✗")
 
     def margin_text(self, unit: str = "") -> str:
         """The margin as every table shows it (report, sign-off, annotation panel, console,
         gallery): ✓/✗ for a yes/no EC, the signed margin with ``unit`` (4 significant
         digits) otherwise, "—" when there is none."""
         if self.yes_no:
-            return "—" if self.value is None else ("✓" if self.passed else "✗")
+            return self.check_mark()
         m = self.margin
         if m is None or not math.isfinite(m):
             return "—"

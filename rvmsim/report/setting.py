@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from .page import escape
 from .provenance import FileRecord
+from ..criteria import is_yes_no
 from ..isp import PARAM_SPECS
 
 if TYPE_CHECKING:
@@ -126,7 +127,7 @@ def worst_margin_text(low: float | None, high: float | None, n_fail: int,
     """The worst margin over samples, as every table shows a margin
     (:meth:`rvmsim.criteria.EcValue.margin_text`): ✓/✗ for a yes/no EC (a range of one
     value: ✗ when any sample fails it), else the signed margin with its unit."""
-    if low is not None and low == high:
+    if is_yes_no(low, high):
         return "✗" if n_fail else "✓"
     return fmt_margin(worst_margin, unit)
 
