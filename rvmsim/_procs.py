@@ -68,8 +68,10 @@ _P = ParamSpec("_P")
 _T = TypeVar("_T")
 
 #: What the fork server imports as it starts, so that every worker starts with it: the
-#: modules of the pools' tasks (tuning, batches, the end-of-line station).
-WORKER_PRELOAD: Final = ("rvmsim.tune", "rvmsim.batch", "rvmsim.eol")
+#: modules of the pools' tasks (tuning, batches, the end-of-line station) and pyrender for
+#: the render workers (:func:`rvmsim.render.render_faces`).
+WORKER_PRELOAD: Final = ("rvmsim.tune", "rvmsim.batch", "rvmsim.eol",
+                         "rvmsim.render._gl_preload")
 #: Exit status of a worker that ends because its parent is gone (nobody reads it).
 ORPHAN_EXIT_STATUS = 75
 #: Linux's ``prctl`` option that sets the signal a process gets when its parent dies.

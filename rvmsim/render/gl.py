@@ -15,16 +15,20 @@ platform is EGL unless ``PYOPENGL_PLATFORM`` says otherwise (``osmesa``).
 
 from __future__ import annotations
 
+import multiprocessing as mp
 import time
 from collections.abc import Iterable
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._optional import import_pyrender
+from .._procs import start_pool, stop_pool
 from .._progress import progress_bar
 from ..camera import FisheyeCamera
+from ..errors import RvmsimError
 from ..scene import Part
 from .cube import CubeLayout, FaceCrop, face_rotation
 
@@ -32,6 +36,9 @@ if TYPE_CHECKING:
     import pyrender  # no type information: its classes are Any to mypy
 
 __all__ = ["FaceAtlas", "render_faces", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
+
+#: How many workers a render is tried in before it fails (see :func:`_isolated`).
+_RENDER_ATTEMPTS = 2
 
 Z_NEAR_M = 0.003
 Z_FAR_M = 400.0
@@ -169,6 +176,11 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
                  progress: bool = False, color: bool = True) -> FaceAtlas:
     """Render the crops of ``layout`` (colour and labels) for ``camera``.
 
+    In a process of its own (:func:`_isolated`): the OpenGL driver runs in a worker forked
+    for the render, so a crash of the driver ends that worker, not the caller, and the
+    render is tried once more in a fresh one.  A process that is itself a worker (a pool's,
+    a Dask cluster's) renders here: it is the disposable one.
+
     Parameters
     ----------
     parts : list of Part
@@ -194,6 +206,43 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     The atlas holds each crop at columns ``[atlas_x0, atlas_x0 + width)`` and rows
     ``[0, height)``, in the face's pixel grid (pixel centres at integer coordinates).
     """
+    if mp.parent_process() is not None:
+        return _render_here(parts, layout, camera, sky, progress, color)
+    return _isolated(parts, layout, camera, sky, progress, color)
+
+
+def _isolated(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
+              sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
+    """:func:`_render_here` in a worker of its own (:func:`rvmsim._procs.start_pool`, which
+    ends with this process), tried twice: llvmpipe has been seen to abort (SIGABRT) inside
+    ``glReadPixels`` once in thousands of renders, and a render is pure (the same inputs,
+    the same atlas), so a second worker's is the same render."""
+    for attempt in range(1, _RENDER_ATTEMPTS + 1):
+        pool = start_pool(1)
+        stopped = False
+        try:
+            return pool.submit(_render_here, parts, layout, camera, sky, progress,
+                               color).result()
+        except BrokenProcessPool:
+            stop_pool(pool, now=True)
+            stopped = True
+            if attempt == _RENDER_ATTEMPTS:
+                raise RvmsimError(f"render: the OpenGL render process died {attempt} times "
+                                  "in a row (the driver crashed or the process was killed)"
+                                  ) from None
+        except BaseException:  # Ctrl-C, SIGTERM, the render's own error: no worker left
+            stop_pool(pool, now=True)
+            stopped = True
+            raise
+        finally:
+            if not stopped:
+                stop_pool(pool, now=False)
+    raise AssertionError("unreachable")
+
+
+def _render_here(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
+                 sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
+    """:func:`render_faces` in this process."""
     t0 = time.perf_counter()
     pyrender = import_pyrender()
     pscene, seg = _pyrender_scene(parts, sky)

@@ -1,11 +1,21 @@
-"""The GL stage: real pyrender (EGL) renders of the cube faces, and the baked lighting."""
+"""The GL stage: real pyrender (EGL) renders of the cube faces in a process of their own,
+and the baked lighting."""
 
 from __future__ import annotations
 
+import multiprocessing.forkserver
+import os
+import signal
+import threading
+import time
+
 import numpy as np
+import psutil
 import pytest
 
 from rvmsim import labels as L
+from rvmsim._procs import start_pool
+from rvmsim.errors import RvmsimError
 from rvmsim.render import cube_layout, render_faces
 from rvmsim.render.gl import AMBIENT, LIGHTS, _lambert, _linear_to_srgb
 from rvmsim.scene import build_parts
@@ -43,3 +53,49 @@ def test_srgb_encoding_and_lambert_shading():
         i * max(0.0, float(away[0] @ (-d / np.linalg.norm(d)))) for d, i in LIGHTS[1:]))
     up = np.array([[0.0, -1.0, 0.0]])
     assert _lambert(up)[0] > AMBIENT
+
+
+def _kill_render_workers(count: int, stop: threading.Event, killed: list[int]) -> None:
+    """SIGKILL the first ``count`` processes the fork server forks (the render workers)
+    from now on: a crash of the GL driver, as far as the caller can tell."""
+    server = psutil.Process(multiprocessing.forkserver._forkserver._forkserver_pid)
+    seen = {c.pid for c in server.children()}
+    while len(killed) < count and not stop.is_set():
+        for child in server.children():
+            if child.pid not in seen:
+                seen.add(child.pid)
+                os.kill(child.pid, signal.SIGKILL)
+                killed.append(child.pid)
+        time.sleep(0.002)
+
+
+def _render_while_killing(count: int):
+    scene = bundled_scene("a")
+    cam = scene.fisheye_camera().scaled(0.1)
+    layout = cube_layout(cam, face_size=48)
+    parts = build_parts(scene)
+    start_pool(1).shutdown()  # the fork server runs (the first render would start it)
+    stop, killed = threading.Event(), []
+    watch = threading.Thread(target=_kill_render_workers, args=(count, stop, killed))
+    watch.start()
+    try:
+        return render_faces(parts, layout, cam, sky=scene.render.sky_color), killed
+    finally:
+        stop.set()
+        watch.join()
+
+
+def test_a_render_whose_process_dies_is_rendered_again_in_a_fresh_one():
+    atlas, killed = _render_while_killing(1)
+    assert len(killed) == 1 and not psutil.pid_exists(killed[0])
+    scene = bundled_scene("a")
+    cam = scene.fisheye_camera().scaled(0.1)
+    again = render_faces(build_parts(scene), cube_layout(cam, face_size=48), cam,
+                         sky=scene.render.sky_color)
+    np.testing.assert_array_equal(atlas.labels, again.labels)
+    assert {L.GROUND, L.BUMPER} <= set(np.unique(atlas.labels).tolist())
+
+
+def test_a_render_that_dies_twice_is_one_error():
+    with pytest.raises(RvmsimError, match="render process died 2 times"):
+        _render_while_killing(2)
