@@ -61,7 +61,7 @@ from typing import Any, Final, ParamSpec, TypeVar
 
 from .errors import RvmsimError
 
-__all__ = ["start_pool", "WORKER_PRELOAD", "stop_pool", "die_with_parent", "stop_on_signals",
+__all__ = ["start_pool", "start_worker_server", "WORKER_PRELOAD", "stop_pool", "die_with_parent", "stop_on_signals",
            "Terminated", "ORPHAN_EXIT_STATUS"]
 
 _P = ParamSpec("_P")
@@ -92,18 +92,27 @@ def start_pool(workers: int, *, initializer: Callable[..., None] | None = None,
     # watches its parent: unpickling a scorer may import half the package.
     payload = pickle.dumps((initializer, initargs), protocol=pickle.HIGHEST_PROTOCOL)
     context: mp.context.BaseContext
-    if "forkserver" in mp.get_all_start_methods():
+    if start_worker_server():
         context = mp.get_context("forkserver")
-        # Takes effect when the server starts (a server already running keeps its own).
-        multiprocessing.forkserver.set_forkserver_preload(list(WORKER_PRELOAD))
-        with _sigint_blocked():  # the server, and so every worker, starts with SIGINT blocked
-            multiprocessing.forkserver.ensure_running()
         kernel = True  # the fork server's main thread forks every worker
     else:
         context = mp.get_context("spawn")
         kernel = threading.current_thread() is threading.main_thread()
     return _Pool(max(1, workers), mp_context=context, initializer=_start_worker,
                  initargs=(os.getpid(), kernel, dict(os.environ), payload))
+
+
+def start_worker_server() -> bool:
+    """Start the fork server every pool's workers are forked from, if it is not running
+    (it imports :data:`WORKER_PRELOAD` in the background: this returns at once).  False
+    where there is no fork server (workers are spawned)."""
+    if "forkserver" not in mp.get_all_start_methods():
+        return False
+    # Takes effect when the server starts (a server already running keeps its own).
+    multiprocessing.forkserver.set_forkserver_preload(list(WORKER_PRELOAD))
+    with _sigint_blocked():  # the server, and so every worker, starts with SIGINT blocked
+        multiprocessing.forkserver.ensure_running()
+    return True
 
 
 class _Pool(ProcessPoolExecutor):

@@ -26,12 +26,15 @@ __all__ = ["signoff"]
               help="Judge the setting in these markets too (one row and picture per market; "
                    "docs/markets.md); a run tuned with --markets shows its own.")
 @click.option("--reviewer", default="", help="The reviewer's name, for the signature block.")
+@click.option("--allow-other-setting", is_flag=True,
+              help="Sign with a robustness, validation or EOL folder of another setting or "
+                   "vehicle (refused otherwise): the sheet opens with a red banner.")
 @click.option("--pdf/--no-pdf", default=True, show_default=True,
               help="Also print the page to signoff.pdf with headless Chromium.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: Path | None,
-            eol_dir: Path | None, markets: str | None, reviewer: str, pdf: bool,
-            progress: bool) -> None:
+            eol_dir: Path | None, markets: str | None, reviewer: str,
+            allow_other_setting: bool, pdf: bool, progress: bool) -> None:
     """Write the sign-off sheet of RUN's best setting: its 14 values, params file and
     SHA-256, the input files with theirs, the tool's version and commit, every EC at the
     display output of record with its margin, the yield (--robustness), validation and EOL
@@ -44,7 +47,10 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
         judge_run_in_markets(run, markets)
         click.echo(f"judged in {markets}: wrote {run / 'best' / 'markets.json'}")
     result = write_signoff(run, out, robustness=robustness_dir, validation=validation_dir,
-                           eol=eol_dir, reviewer=reviewer, pdf=pdf, progress=progress)
+                           eol=eol_dir, reviewer=reviewer, pdf=pdf, progress=progress,
+                           allow_other_setting=allow_other_setting)
+    for why in result.other_setting:
+        click.echo(f"warning: {why}: signed anyway (--allow-other-setting)", err=True)
     yield_text = ("robustness not run" if result.yield_ is None
                   else f"yield {100 * result.yield_:.1f} %")
     click.echo(f"ECs at the display: {'all pass' if result.nominal_passed else 'not all pass'}"

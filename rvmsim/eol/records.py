@@ -144,6 +144,9 @@ class StationResult:
     cars : tuple of CarResult
     timings : dict
         Seconds: ``setup`` (the station's frame, the law), ``cars`` (all cars), ``total``.
+    platform_isp : dict
+        The platform setting's 14 values (what a sign-off checks it judged its own setting
+        by; empty: not known).
     """
 
     scene_name: str
@@ -157,6 +160,7 @@ class StationResult:
     written: tuple[str, ...]
     cars: tuple[CarResult, ...]
     timings: dict[str, float] = field(default_factory=dict)
+    platform_isp: dict[str, float] = field(default_factory=dict)
 
     @property
     def n_pass(self) -> int:
@@ -183,7 +187,7 @@ class StationResult:
         return {
             "scene": self.scene_name, "scene_file": self.scene_file, "target": self.target,
             "load_state": self.load_state, "params_file": self.params_file,
-            "output": list(self.output), "compensation": {**comp, "station": station},
+            "platform_isp": dict(self.platform_isp), "output": list(self.output), "compensation": {**comp, "station": station},
             "assumed_station_sigma": {**assumed, "note": "an assumption of the compensation "
                                       "model (not measured by this run): the ECs' "
                                       "uncertainty a car is called marginal by"},

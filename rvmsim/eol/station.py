@@ -179,7 +179,8 @@ class Station:
                         "pitch_deg": load.pitch_deg},
             params_file=params_file, output=(self.record.width, self.record.height),
             compensation=s.compensation.as_dict(), criteria=self.criteria.name,
-            written=tuple(s.compensation.params), cars=tuple(cars), timings=dict(timings or {}))
+            written=tuple(s.compensation.params), cars=tuple(cars), timings=dict(timings or {}),
+            platform_isp={n: float(getattr(s.params, n)) for n in IspParams.names()})
 
     def _check_target_in_view(self) -> None:
         spec = self.scene.eol

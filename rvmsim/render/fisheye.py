@@ -31,7 +31,7 @@ from ..errors import SceneError
 from ..scene import Scene, build_parts
 from .cube import FACE_NAMES, cube_layout
 from .fold import fold
-from .gl import render_faces
+from .gl import prepare_render, render_faces
 
 __all__ = ["FisheyeImages", "render_fisheye"]
 
@@ -111,6 +111,7 @@ def render_fisheye(
     too_big = image_size_problem(cam.width, cam.height)  # a camera scaled up, or from the API
     if too_big is not None:
         raise SceneError(scene.source, "camera.image_size", f"cannot render: {too_big}")
+    prepare_render()
     parts = build_parts(scene)
     layout = cube_layout(
         cam,

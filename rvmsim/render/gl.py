@@ -15,9 +15,12 @@ platform is EGL unless ``PYOPENGL_PLATFORM`` says otherwise (``osmesa``).
 
 from __future__ import annotations
 
+import atexit
 import multiprocessing as mp
+import threading
 import time
 from collections.abc import Iterable
+from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -35,9 +38,9 @@ from .cube import CubeLayout, FaceCrop, face_rotation
 if TYPE_CHECKING:
     import pyrender  # no type information: its classes are Any to mypy
 
-__all__ = ["FaceAtlas", "render_faces", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
+__all__ = ["FaceAtlas", "render_faces", "prepare_render", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
 
-#: How many workers a render is tried in before it fails (see :func:`_isolated`).
+#: How many workers a render is tried in before it fails (see :class:`_RenderWorker`).
 _RENDER_ATTEMPTS = 2
 
 Z_NEAR_M = 0.003
@@ -176,10 +179,10 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
                  progress: bool = False, color: bool = True) -> FaceAtlas:
     """Render the crops of ``layout`` (colour and labels) for ``camera``.
 
-    In a process of its own (:func:`_isolated`): the OpenGL driver runs in a worker forked
-    for the render, so a crash of the driver ends that worker, not the caller, and the
-    render is tried once more in a fresh one.  A process that is itself a worker (a pool's,
-    a Dask cluster's) renders here: it is the disposable one.
+    In a process of its own (:class:`_RenderWorker`): the OpenGL driver runs in a worker
+    this process keeps for its renders, so a crash of the driver ends that worker, not the
+    caller, and the render is tried once more in a fresh one.  A process that is itself a
+    worker (a pool's, a Dask cluster's) renders here: it is the disposable one.
 
     Parameters
     ----------
@@ -208,36 +211,81 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     """
     if mp.parent_process() is not None:
         return _render_here(parts, layout, camera, sky, progress, color)
-    return _isolated(parts, layout, camera, sky, progress, color)
+    return _WORKER.render(parts, layout, camera, sky, progress, color)
 
 
-def _isolated(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
-              sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
-    """:func:`_render_here` in a worker of its own (:func:`rvmsim._procs.start_pool`, which
-    ends with this process), tried twice: llvmpipe has been seen to abort (SIGABRT) inside
-    ``glReadPixels`` once in thousands of renders, and a render is pure (the same inputs,
-    the same atlas), so a second worker's is the same render."""
-    for attempt in range(1, _RENDER_ATTEMPTS + 1):
-        pool = start_pool(1)
-        stopped = False
-        try:
-            return pool.submit(_render_here, parts, layout, camera, sky, progress,
-                               color).result()
-        except BrokenProcessPool:
-            stop_pool(pool, now=True)
-            stopped = True
-            if attempt == _RENDER_ATTEMPTS:
-                raise RvmsimError(f"render: the OpenGL render process died {attempt} times "
-                                  "in a row (the driver crashed or the process was killed)"
-                                  ) from None
-        except BaseException:  # Ctrl-C, SIGTERM, the render's own error: no worker left
-            stop_pool(pool, now=True)
-            stopped = True
-            raise
-        finally:
-            if not stopped:
-                stop_pool(pool, now=False)
-    raise AssertionError("unreachable")
+class _RenderWorker:
+    """The worker process renders run in: one pool worker (:func:`rvmsim._procs.start_pool`,
+    so it ends with this process however this process ends), started at the first render
+    and kept for the next ones (a warm GL driver: a fresh process takes about a fifth longer
+    over the faces), replaced when it dies, stopped at exit.  One render at a time.
+
+    Why a process of its own: llvmpipe has been seen to abort (SIGABRT, inside
+    ``glReadPixels``) once in thousands of renders, which ended the caller with it.  A
+    render is pure (the same inputs give the same atlas), so a render whose worker died is
+    rendered again in a fresh one; :data:`_RENDER_ATTEMPTS` deaths in a row are an error.
+    """
+
+    def __init__(self) -> None:
+        self._pool: ProcessPoolExecutor | None = None
+        self._lock = threading.Lock()
+
+    def render(self, parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
+               sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
+        with self._lock:
+            for attempt in range(1, _RENDER_ATTEMPTS + 1):
+                if self._pool is None:
+                    self._pool = start_pool(1)
+                try:
+                    future = self._pool.submit(_render_here, parts, layout, camera, sky,
+                                               progress, color)
+                    return future.result()
+                except BrokenProcessPool:
+                    self._stop()
+                    if attempt == _RENDER_ATTEMPTS:
+                        raise RvmsimError(
+                            f"render: the OpenGL render process died {attempt} times in a "
+                            "row (the driver crashed, or the process was killed)") from None
+                except Exception:  # the render's own error: the worker is fine
+                    raise
+                except BaseException:  # Ctrl-C, SIGTERM: the render in flight is abandoned
+                    self._stop()
+                    raise
+            raise AssertionError("unreachable")
+
+    def start(self) -> None:
+        """Start the worker's pool now, when this process will render but has other work
+        first (its fork server imports in parallel with that work)."""
+        if mp.parent_process() is None and self._lock.acquire(timeout=0):
+            try:
+                if self._pool is None:
+                    self._pool = start_pool(1)
+            finally:
+                self._lock.release()
+
+    def _stop(self, now: bool = True) -> None:
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            stop_pool(pool, now=now)
+
+    def stop(self) -> None:
+        """End the idle worker (at exit; a render in flight keeps it)."""
+        if self._lock.acquire(timeout=0):
+            try:
+                self._stop(now=False)
+            finally:
+                self._lock.release()
+
+
+#: This process's render worker (see :class:`_RenderWorker`).
+_WORKER = _RenderWorker()
+atexit.register(_WORKER.stop)
+
+
+def prepare_render() -> None:
+    """Start what :func:`render_faces` renders in (its worker's fork server) now, so that
+    it starts while the caller builds the meshes."""
+    _WORKER.start()
 
 
 def _render_here(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,

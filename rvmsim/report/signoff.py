@@ -59,7 +59,8 @@ if TYPE_CHECKING:
     from ..render import FisheyeImages
     from ..scene import Scene
 
-__all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FILE"]
+__all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FILE",
+           "other_setting"]
 
 #: The params file written into the output folder when the run has none for its best.
 PARAMS_FILE = "params.yaml"
@@ -84,6 +85,8 @@ class SignoffResult:
     #: run); :attr:`markets_text` says so in words.
     markets_passed: bool | None = None
     markets_text: str | None = None
+    #: Why a given folder is not of this setting or vehicle (``allow_other_setting``).
+    other_setting: tuple[str, ...] = ()
 
 
 def _record_output(criteria: Criteria, scene: Scene, output: OutputSpec) -> OutputSpec:
@@ -289,7 +292,7 @@ def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any
             "robustness": rob,
             "validation": None if res.validation is None else str(res.validation.path.resolve()),
             "eol": None if res.eol is None else str(res.eol.path.resolve()),
-            "reviewer": res.reviewer,
+            "reviewer": res.reviewer, "other_setting": list(res.other_setting),
             **_markets_summary(res)}
 
 
@@ -305,7 +308,8 @@ def _markets_summary(res: SignoffContent) -> dict[str, Any]:
 
 def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | None = None,
             validation: str | Path | None = None, eol: str | Path | None = None,
-            reviewer: str = "", pdf: bool = True, progress: bool = False) -> SignoffResult:
+            reviewer: str = "", pdf: bool = True, progress: bool = False,
+            allow_other_setting: bool = False) -> SignoffResult:
     """Write the sign-off sheet of a run's best setting (see the module docstring).
 
     Parameters
@@ -324,13 +328,19 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         Also print the page to PDF with headless Chromium.
     progress : bool
         Show a progress bar on stderr.
+    allow_other_setting : bool
+        Sign with a robustness, validation or EOL folder that judged another setting or
+        another vehicle (:func:`other_setting`): the sheet then opens with a red banner
+        that says so, and :attr:`SignoffResult.other_setting` lists the reasons.  Without
+        it such a folder is refused.
 
     Raises
     ------
     RvmsimError
         One line naming the file: a missing or unreadable run folder, a folder without
-        its result file, a corrupt result file, an output folder whose parent is missing,
-        no Chromium for the PDF.
+        its result file, a corrupt result file, a folder that judged another setting or
+        vehicle (unless ``allow_other_setting``), an output folder whose parent is
+        missing, no Chromium for the PDF.
     """
 
     run_dir, out = Path(run_dir), Path(out)
@@ -345,10 +355,14 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     if not run_dir.is_dir():
         raise RvmsimError(f"{run_dir}: no such run folder")
     run = _load_run(run_dir)  # every input checked before the bar starts
+    others = other_setting(run.scene.name, run.top[0].params, rob, val, eol_rec)
+    if others and not allow_other_setting:
+        raise RvmsimError(f"{others[0]} (rank 1 of {run_dir} is signed here; give "
+                          "--allow-other-setting to sign it anyway, under a red banner)")
     bar = progress_bar(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
                disable=not progress)
     try:
-        content = _content(run, out, rob, val, eol_rec, reviewer, bar)
+        content = _content(run, out, rob, val, eol_rec, reviewer, bar, tuple(others))
         html, js = out / "signoff.html", out / SIGNOFF_JSON
         bar.set_postfix_str("writing the page")
         html.write_text(signoff_html(content), encoding="utf-8")
@@ -371,11 +385,48 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
                          None if rob is None else rob.yield_,
                          None if m is None else all_markets_pass(m) and content.markets_same_trial,
                          None if m is None else markets_verdict_text(m) if
-                         content.markets_same_trial else "markets not judged for this setting")
+                         content.markets_same_trial else "markets not judged for this setting",
+                         content.other_setting)
+
+
+def other_setting(vehicle: str, params: IspParams, robustness: RobustnessRecord | None,
+                  validation: ValidationRecord | None, eol: EolRecord | None) -> list[str]:
+    """Why each given record is not of the setting ``params`` on vehicle ``vehicle``: one
+    line each, naming its file, empty when every one is.
+
+    A robustness record must have judged these 14 values (to a relative 1e-9) on this
+    vehicle; an EOL record must have run this vehicle with these values as its platform
+    setting (a record that does not name its platform values is checked by its vehicle
+    alone); a validation must be of this vehicle.  The vehicle is the scene's ``name``.
+    """
+    values = params_to_dict(params)
+    why: list[str] = []
+
+    def vehicle_of(path: Path, recorded: Any) -> None:
+        if isinstance(recorded, str) and recorded and recorded != vehicle:
+            why.append(f"{path}: judged vehicle {recorded!r}, not {vehicle!r}")
+
+    if robustness is not None:
+        vehicle_of(robustness.path, robustness.doc.get("vehicle"))
+        if not same_setting(robustness.doc["isp"], values):
+            why.append(f"{robustness.path}: judged another setting (its isp differs from "
+                       "the one signed)")
+    if validation is not None:
+        for doc in [validation.single] if validation.single is not None else validation.rows:
+            if doc is not None:
+                vehicle_of(validation.path, doc.get("scene"))
+    if eol is not None:
+        vehicle_of(eol.path, eol.doc.get("scene"))
+        platform = eol.doc.get("platform_isp")
+        if isinstance(platform, dict) and platform and not same_setting(platform, values):
+            why.append(f"{eol.path}: judged another setting (its platform_isp differs from "
+                       "the one signed)")
+    return list(dict.fromkeys(why))
 
 
 def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRecord | None,
-             eol: EolRecord | None, reviewer: str, bar: Any) -> SignoffContent:
+             eol: EolRecord | None, reviewer: str, bar: Any,
+             others: tuple[str, ...] = ()) -> SignoffContent:
     """Everything the page shows: the setting, its ECs of record, the files, the commands."""
 
     out.mkdir(exist_ok=True)
@@ -396,4 +447,5 @@ def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRe
         display=color, annotated=annotated, ec_pictures=each, robustness=rob,
         robustness_same_setting=same, changed_files=changed, validation=val, eol=eol,
         reviewer=reviewer, repro=_repro_commands(rob, r, setting, out), markets=markets,
-        markets_same_trial=markets is None or markets.get("trial") == best.idx)
+        markets_same_trial=markets is None or markets.get("trial") == best.idx,
+        other_setting=others)

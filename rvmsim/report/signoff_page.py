@@ -69,6 +69,9 @@ class SignoffContent:
     #: the trial signed off here.
     markets: dict[str, Any] | None = None
     markets_same_trial: bool = True
+    #: Why a given record is not of this setting or vehicle (signed with
+    #: ``--allow-other-setting``): a red banner at the top.
+    other_setting: tuple[str, ...] = ()
 
 
 def _pct(est: dict[str, Any]) -> str:
@@ -311,6 +314,10 @@ def signoff_html(c: SignoffContent) -> str:
     if c.markets is not None:
         nav = nav.replace("</a>", '</a> · <a href="#markets">markets</a>', 1)
     markets = "" if c.markets is None else markets_html(c.markets, c.run_dir)
-    body = (head + _verdict(c) + markets + _setting(c) + _inputs(c) + _tool(c) + _ecs(c) + _yield(c)
+    banner = "" if not c.other_setting else (
+        '<p class="redbox"><b>Signed with records of another setting or vehicle</b> '
+        "(--allow-other-setting): " + "; ".join(escape(w) for w in c.other_setting)
+        + ". Their figures below do not describe this setting.</p>")
+    body = (head + banner + _verdict(c) + markets + _setting(c) + _inputs(c) + _tool(c) + _ecs(c) + _yield(c)
             + _failing(c) + _validation(c) + _eol(c) + _signature(c))
     return page(f"Sign-off: {c.title}", body)

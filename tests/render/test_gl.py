@@ -56,10 +56,11 @@ def test_srgb_encoding_and_lambert_shading():
 
 
 def _kill_render_workers(count: int, stop: threading.Event, killed: list[int]) -> None:
-    """SIGKILL the first ``count`` processes the fork server forks (the render workers)
-    from now on: a crash of the GL driver, as far as the caller can tell."""
+    """SIGKILL the first ``count`` children of the fork server (the render workers: the one
+    kept from an earlier render, then the fresh ones): a crash of the GL driver, as far as
+    the caller can tell."""
     server = psutil.Process(multiprocessing.forkserver._forkserver._forkserver_pid)
-    seen = {c.pid for c in server.children()}
+    seen: set[int] = set()
     while len(killed) < count and not stop.is_set():
         for child in server.children():
             if child.pid not in seen:

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from rvmsim.compensation import Deviation
+from rvmsim.errors import RvmsimError
 from rvmsim.isp import OutputSpec, load_params
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
@@ -69,9 +70,10 @@ def made(tmp_path_factory):
                       "--scales", "1", "--workers", "1", "--compensation", "default",
                       "--out", root / "rob", "--no-progress", env=env)
         assert res.code in (0, 1), res.stderr
-        eol_scene, eol_params = write_inputs(root / "eol_in")
+        # the station of this vehicle (its name), writing on the platform setting signed
+        eol_scene, _ = write_inputs(root / "eol_in", edit={"name": VEHICLE})
         car = write_capture(root / "eol_in" / "car <1> & co.png", Deviation())
-        res = _rvmsim("eol", eol_scene, "--params", eol_params, "--capture", car, "--out",
+        res = _rvmsim("eol", eol_scene, "--params", params, "--capture", car, "--out",
                       root / "eol", "--no-progress", env=env)
         assert res.code in (0, 1), res.stderr
         fisheye = cached_render(load_scene(scene))[0].color
@@ -295,15 +297,47 @@ def test_a_robustness_result_of_other_values_or_changed_files_is_flagged(made, t
     scene_rec = next(f for f in doc["inputs"]["files"] if f["role"] == "scene")
     scene_rec["sha256"] = "0" * 64
     (rob / "robustness.json").write_text(json.dumps(doc))
-    res = signoff(made["run"], tmp_path / "so", robustness=rob, pdf=False)
+    with pytest.raises(RvmsimError, match=r"robustness\.json: judged another setting .*"
+                                          r"--allow-other-setting"):
+        signoff(made["run"], tmp_path / "refused", robustness=rob, pdf=False)
+    assert not (tmp_path / "refused").exists()
+    res = signoff(made["run"], tmp_path / "so", robustness=rob, pdf=False,
+                  allow_other_setting=True)
     text = res.html.read_text()
+    assert len(res.other_setting) == 1 and "judged another setting" in res.other_setting[0]
+    banner = re.search(r'<p class="redbox"><b>Signed with records of another setting.*?</p>',
+                       text)
+    assert banner and text.index(banner.group(0)) < text.index('<section id="verdict">')
     assert "judged a different setting" in _section(text, "yield")
     changed = re.search(r'<p class="redbox">Changed since.*?</p>', _section(text, "inputs"))
     assert changed and html_escape(str(made["scene"].resolve())) in changed.group(0)
     assert str(made["params"].resolve()) not in changed.group(0)
     js = json.loads((tmp_path / "so" / "signoff.json").read_text())
     assert js["robustness"]["same_setting"] is False
+    assert js["other_setting"] == list(res.other_setting)
     assert js["changed_files"] == [str(made["scene"].resolve())]
+
+
+def test_signoff_refuses_an_eol_record_of_another_vehicle_unless_allowed(made, tmp_path):
+    """The command line: exit 2 and one line naming eol.json and both vehicles; with
+    --allow-other-setting, exit 0, a warning on stderr and the banner on the sheet."""
+    eol = tmp_path / "eol"
+    shutil.copytree(made["root"] / "eol", eol)
+    doc = json.loads((eol / "eol.json").read_text())
+    assert doc["scene"] == VEHICLE and doc["platform_isp"]  # the fixture's is this vehicle's
+    doc["scene"] = "Vehicle B"
+    (eol / "eol.json").write_text(json.dumps(doc))
+    out = tmp_path / "so"
+    res = _rvmsim("signoff", made["run"], "--eol", eol, "--out", out, "--no-pdf",
+                  "--no-progress", env=made["env"])
+    assert res.code == 2 and len(res.stderr.strip().splitlines()) == 1, res.stderr
+    assert "eol.json: judged vehicle 'Vehicle B'" in res.stderr and "Traceback" not in res.stderr
+    assert not out.exists()
+    res = _rvmsim("signoff", made["run"], "--eol", eol, "--out", out, "--no-pdf",
+                  "--no-progress", "--allow-other-setting", env=made["env"])
+    assert res.code == 0, res.stderr
+    assert "warning:" in res.stderr and "Vehicle B" in res.stderr
+    assert "Signed with records of another setting" in (out / "signoff.html").read_text()
 
 
 def html_escape(s: str) -> str:

@@ -1,0 +1,38 @@
+"""The command line's entry point (``rvmsim``, ``python -m rvmsim``).
+
+For a command that renders or starts worker pools (:data:`WORKER_COMMANDS`), the worker
+fork server (:func:`rvmsim._procs.start_worker_server`) is started before anything else,
+so that it imports the package for its workers (about 2 s) while this process imports the
+command line, instead of after it.  That is why the command line is imported inside
+:func:`main` rather than at the top.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+from ._procs import start_worker_server
+
+__all__ = ["main", "WORKER_COMMANDS"]
+
+#: The commands that render (:func:`rvmsim.render.render_faces` runs in a worker) or start
+#: worker pools.  Those that read a run's render from the cache (report, signoff, console)
+#: are not among them: they render only when the cache lost it.
+WORKER_COMMANDS = frozenset({"render", "process", "evaluate", "tune", "batch", "sweep",
+                             "robustness", "eol", "validate", "calibrate", "judge"})
+
+
+def command_of(args: Sequence[str]) -> str | None:
+    """The command named in ``args`` (the command line without the program): the first
+    argument that is not an option."""
+    return next((a for a in args if not a.startswith("-")), None)
+
+
+def main() -> None:
+    """Run the command line."""
+    if command_of(sys.argv[1:]) in WORKER_COMMANDS:
+        start_worker_server()
+    from .cli import main as cli_main
+
+    cli_main()
