@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rvmsim._procs import start_worker_server
 from rvmsim.camera import rotation_from_ypr
 from rvmsim.render import cached_render, render_fisheye
 from rvmsim.testing.captures import BAIC
@@ -26,6 +27,15 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """In a process that runs tests (not pytest-xdist's controller): start the worker fork
+    server now, so that it imports the package for the pools' and renders' workers while
+    this process collects the tests (as ``rvmsim._entry`` does for a command)."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses",
+                                                            None):
+        start_worker_server()
 
 #: Tests of the real BAIC EU5 capture run where it is (``rvmsim.testing.captures.BAIC``).
 needs_real = pytest.mark.skipif(not BAIC.is_file(),
