@@ -15,12 +15,9 @@ platform is EGL unless ``PYOPENGL_PLATFORM`` says otherwise (``osmesa``).
 
 from __future__ import annotations
 
-import atexit
 import multiprocessing as mp
-import threading
 import time
 from collections.abc import Iterable
-from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -28,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._optional import import_pyrender
-from .._procs import start_pool, stop_pool
+from .._procs import start_pool, start_worker_server, stop_pool
 from .._progress import progress_bar
 from ..camera import FisheyeCamera
 from ..errors import RvmsimError
@@ -40,7 +37,7 @@ if TYPE_CHECKING:
 
 __all__ = ["FaceAtlas", "render_faces", "prepare_render", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
 
-#: How many workers a render is tried in before it fails (see :class:`_RenderWorker`).
+#: How many workers a render is tried in before it fails (see :func:`_isolated`).
 _RENDER_ATTEMPTS = 2
 
 Z_NEAR_M = 0.003
@@ -179,9 +176,9 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
                  progress: bool = False, color: bool = True) -> FaceAtlas:
     """Render the crops of ``layout`` (colour and labels) for ``camera``.
 
-    In a process of its own (:class:`_RenderWorker`): the OpenGL driver runs in a worker
-    this process keeps for its renders, so a crash of the driver ends that worker, not the
-    caller, and the render is tried once more in a fresh one.  A process that is itself a
+    In a process of its own (:func:`_isolated`): the OpenGL driver runs in a worker forked
+    for the render, so a crash of the driver ends that worker, not the caller, and the
+    render is tried once more in a fresh one.  A process that is itself a
     worker (a pool's, a Dask cluster's) renders here: it is the disposable one.
 
     Parameters
@@ -211,81 +208,48 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     """
     if mp.parent_process() is not None:
         return _render_here(parts, layout, camera, sky, progress, color)
-    return _WORKER.render(parts, layout, camera, sky, progress, color)
+    return _isolated(parts, layout, camera, sky, progress, color)
 
 
-class _RenderWorker:
-    """The worker process renders run in: one pool worker (:func:`rvmsim._procs.start_pool`,
-    so it ends with this process however this process ends), started at the first render
-    and kept for the next ones (a warm GL driver: a fresh process takes about a fifth longer
-    over the faces), replaced when it dies, stopped at exit.  One render at a time.
+def _isolated(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
+              sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
+    """:func:`_render_here` in a worker of its own (a pool of one,
+    :func:`rvmsim._procs.start_pool`: it ends with this process however this process
+    ends, and is gone when this returns), tried :data:`_RENDER_ATTEMPTS` times.
 
     Why a process of its own: llvmpipe has been seen to abort (SIGABRT, inside
     ``glReadPixels``) once in thousands of renders, which ended the caller with it.  A
     render is pure (the same inputs give the same atlas), so a render whose worker died is
-    rendered again in a fresh one; :data:`_RENDER_ATTEMPTS` deaths in a row are an error.
+    rendered again in a fresh one.  Not a worker kept between renders: nothing of a call
+    keeps running after it returns.
     """
-
-    def __init__(self) -> None:
-        self._pool: ProcessPoolExecutor | None = None
-        self._lock = threading.Lock()
-
-    def render(self, parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
-               sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
-        with self._lock:
-            for attempt in range(1, _RENDER_ATTEMPTS + 1):
-                if self._pool is None:
-                    self._pool = start_pool(1)
-                try:
-                    future = self._pool.submit(_render_here, parts, layout, camera, sky,
-                                               progress, color)
-                    return future.result()
-                except BrokenProcessPool:
-                    self._stop()
-                    if attempt == _RENDER_ATTEMPTS:
-                        raise RvmsimError(
-                            f"render: the OpenGL render process died {attempt} times in a "
-                            "row (the driver crashed, or the process was killed)") from None
-                except Exception:  # the render's own error: the worker is fine
-                    raise
-                except BaseException:  # Ctrl-C, SIGTERM: the render in flight is abandoned
-                    self._stop()
-                    raise
-            raise AssertionError("unreachable")
-
-    def start(self) -> None:
-        """Start the worker's pool now, when this process will render but has other work
-        first (its fork server imports in parallel with that work)."""
-        if mp.parent_process() is None and self._lock.acquire(timeout=0):
-            try:
-                if self._pool is None:
-                    self._pool = start_pool(1)
-            finally:
-                self._lock.release()
-
-    def _stop(self, now: bool = True) -> None:
-        pool, self._pool = self._pool, None
-        if pool is not None:
+    for attempt in range(1, _RENDER_ATTEMPTS + 1):
+        pool = start_pool(1)
+        now = True  # the worker is stopped at once unless the render came back
+        try:
+            atlas: FaceAtlas = pool.submit(_render_here, parts, layout, camera, sky, progress,
+                                           color).result()
+            now = False
+            return atlas
+        except BrokenProcessPool:
+            if attempt == _RENDER_ATTEMPTS:
+                raise RvmsimError(f"render: the OpenGL render process died {attempt} times "
+                                  "in a row (the driver crashed, or the process was killed)"
+                                  ) from None
+        except Exception:  # the render's own error: its worker is fine
+            now = False
+            raise
+        finally:
             stop_pool(pool, now=now)
-
-    def stop(self) -> None:
-        """End the idle worker (at exit; a render in flight keeps it)."""
-        if self._lock.acquire(timeout=0):
-            try:
-                self._stop(now=False)
-            finally:
-                self._lock.release()
-
-
-#: This process's render worker (see :class:`_RenderWorker`).
-_WORKER = _RenderWorker()
-atexit.register(_WORKER.stop)
+    raise AssertionError("unreachable")
 
 
 def prepare_render() -> None:
-    """Start what :func:`render_faces` renders in (its worker's fork server) now, so that
-    it starts while the caller builds the meshes."""
-    _WORKER.start()
+    """Start what :func:`render_faces` renders in (the worker fork server,
+    :func:`rvmsim._procs.start_worker_server`) now, so that it starts while the caller
+    builds the meshes."""
+    if mp.parent_process() is None:
+        start_worker_server()
 
 
 def _render_here(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,

@@ -56,9 +56,8 @@ def test_srgb_encoding_and_lambert_shading():
 
 
 def _kill_render_workers(count: int, stop: threading.Event, killed: list[int]) -> None:
-    """SIGKILL the first ``count`` children of the fork server (the render workers: the one
-    kept from an earlier render, then the fresh ones): a crash of the GL driver, as far as
-    the caller can tell."""
+    """SIGKILL the first ``count`` children of the fork server (the render workers, one per
+    attempt): a crash of the GL driver, as far as the caller can tell."""
     server = psutil.Process(multiprocessing.forkserver._forkserver._forkserver_pid)
     seen: set[int] = set()
     while len(killed) < count and not stop.is_set():
