@@ -54,7 +54,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor
 from types import FrameType
 from typing import Any, Final, ParamSpec, TypeVar
@@ -102,14 +102,16 @@ def start_pool(workers: int, *, initializer: Callable[..., None] | None = None,
                  initargs=(os.getpid(), kernel, dict(os.environ), payload))
 
 
-def start_worker_server() -> bool:
+def start_worker_server(also: Sequence[str] = ()) -> bool:
     """Start the fork server every pool's workers are forked from, if it is not running
-    (it imports :data:`WORKER_PRELOAD` in the background: this returns at once).  False
-    where there is no fork server (workers are spawned)."""
+    (it imports :data:`WORKER_PRELOAD` and the modules ``also`` in the background: this
+    returns at once; a server already running keeps what it imported).  False where there
+    is no fork server (workers are spawned)."""
     if "forkserver" not in mp.get_all_start_methods():
         return False
     # Takes effect when the server starts (a server already running keeps its own).
-    multiprocessing.forkserver.set_forkserver_preload(list(WORKER_PRELOAD))
+    multiprocessing.forkserver.set_forkserver_preload(list(dict.fromkeys([*WORKER_PRELOAD,
+                                                                          *also])))
     with _sigint_blocked():  # the server, and so every worker, starts with SIGINT blocked
         multiprocessing.forkserver.ensure_running()
     return True

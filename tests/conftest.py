@@ -15,6 +15,8 @@ from rvmsim.render import cached_render, render_fisheye
 from rvmsim.testing.captures import BAIC
 from rvmsim.testing.scenes import load_small_scene
 
+from .cli_runner import FORK_SERVER_PRELOAD
+
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 if os.environ.get("PYTEST_XDIST_WORKER"):
     # pytest-xdist already runs one test process per core: one thread per library in each
@@ -31,11 +33,14 @@ SCENES = ROOT / "scenes"
 
 def pytest_configure(config: pytest.Config) -> None:
     """In a process that runs tests (not pytest-xdist's controller): start the worker fork
-    server now, so that it imports the package for the pools' and renders' workers while
-    this process collects the tests (as ``rvmsim._entry`` does for a command)."""
+    server now, so that it imports the package for the pools' and renders' workers, and
+    the command line for the commands the tests run in forked children
+    (:data:`tests.cli_runner.FORK_SERVER_PRELOAD`), while this process collects the tests
+    (as ``rvmsim._entry`` does for a command).  One server serves both: whichever started
+    it first would leave the other's modules to every child to import again."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses",
                                                             None):
-        start_worker_server()
+        start_worker_server(also=FORK_SERVER_PRELOAD)
 
 #: Tests of the real BAIC EU5 capture run where it is (``rvmsim.testing.captures.BAIC``).
 needs_real = pytest.mark.skipif(not BAIC.is_file(),
