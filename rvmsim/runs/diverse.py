@@ -219,13 +219,6 @@ def margins_of(rec: TrialRecord, criteria: Criteria) -> dict[str, float]:
     return out
 
 
-def _signed(d: float) -> str:
-    """A change with its sign, to two significant digits (whole numbers from 10 on)."""
-    if abs(d) >= 10:
-        return f"{d:+.0f}"
-    return f"{d:+.2g}"
-
-
 def _label(name: str) -> str:
     """A parameter's short name: the paper's (``FOV``, ``RAD``, ``zoom``, ``adv V scale``)."""
     label = _SPEC[name].paper_name.replace("Advanced ", "adv ")
@@ -233,8 +226,10 @@ def _label(name: str) -> str:
 
 
 def _param_changes(first: IspParams, other: IspParams, space: SearchSpace) -> list[str]:
-    """The two or three largest parameter changes (relative to span), with signs and units;
-    a third only when it is at least a third of the largest."""
+    """The two or three largest parameter changes (relative to span), a third only when it
+    is at least a third of the largest: each as its value beside rank 1's, with its unit
+    (``FOV 162° (rank 1: 195°)``), never a bare signed change, which could read as the
+    opposite of the view words beside it."""
     rows = []
     for r in space.ranges:
         span = r.high - r.low
@@ -243,8 +238,13 @@ def _param_changes(first: IspParams, other: IspParams, space: SearchSpace) -> li
             rows.append((abs(d) / span, r.name, d))
     rows.sort(key=lambda t: -t[0])
     keep = [t for i, t in enumerate(rows[:3]) if i < 2 or t[0] >= rows[0][0] / 3]
-    return [f"{_label(n)} {_signed(d)}{_UNIT.get(_SPEC[n].unit, ' ' + _SPEC[n].unit)}"
-            for _, n, d in keep]
+    out = []
+    for _, n, d in keep:
+        unit = _UNIT.get(_SPEC[n].unit, " " + _SPEC[n].unit)
+        places = max(0, 1 - math.floor(math.log10(abs(d))))  # the change to 2 digits
+        mine, theirs = getattr(other, n), getattr(first, n)
+        out.append(f"{_label(n)} {mine:.{places}f}{unit} (rank 1: {theirs:.{places}f}{unit})")
+    return out
 
 
 def _view(p: IspParams, out: OutputSpec) -> tuple[float, float]:
@@ -307,8 +307,8 @@ def differs_text(first: TrialRecord, rec: TrialRecord, space: SearchSpace, crite
                  margins: tuple[Mapping[str, float], Mapping[str, float]] | None = None) -> str:
     """How ``rec`` differs from rank 1 (``first``), in one line: what the view does (where
     it clearly does), the largest parameter changes, the EC margin that changes most, and the
-    ECs it fails, e.g. ``wider view: FOV -12°, zoom -0.08; 2-1 bumper center ratio margin
-    lower (1.9 → 0.6 %)``.
+    ECs it fails, e.g. ``wider view: FOV 168° (rank 1: 180°), zoom 0.62 (rank 1: 0.70); 2-1
+    bumper center ratio margin lower (1.9 → 0.6 %)``.
 
     Parameters
     ----------

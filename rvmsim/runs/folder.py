@@ -244,11 +244,14 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
         top: list[tuple[int, TrialRecord, str]] = []
         note = ""
         differs = None
+        heading: list[str] = []
         try:
             settings = run_settings(run_dir, store)
-            top = [(c.rank, rec, "" if not c.differs else f"  (d {c.distance:.2f}: "
+            top = [(c.rank, rec, "" if not c.differs else f"  (distance {c.distance:.2f}: "
                     f"{c.differs})") for c, rec in store_candidates(
                         store, settings, top_m, min_distance, by_score=by_score)]
+            dmin = settings.config.diverse.min_distance if min_distance is None else min_distance
+            heading = _list_heading(len(top), dmin, by_score)
             if store.settings() is not None:  # not a run of rvmsim 0.1 (run.json its truth)
                 differs = run_json_disagreement(run_dir, settings)
         except RvmsimError as err:  # status needs only the store: say why, show by score
@@ -273,6 +276,7 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
     if differs:
         lines.append(f"  {differs}: the settings live in {RUN_DB} and are used; {RUN_JSON} "
                      "only exports them (an edit there changes nothing)")
+    lines += heading
     for rank, rec, how in top:
         fails = rec.failing()
         each = "" if not members[rec.idx] else "  [" + ", ".join(
@@ -281,6 +285,17 @@ def status_lines(run_dir: str | Path, top_m: int | None = None, *, by_score: boo
                      f"({rec.stage})  {'all pass' if not fails else 'fails ' + ','.join(fails)}"
                      f"{each}{how}")
     return lines
+
+
+def _list_heading(m: int, min_distance: float, by_score: bool) -> list[str]:
+    """What :func:`status_lines`' list is and what its columns say."""
+    if by_score:
+        return [f"  the {m} best trials by EC score (--by-score)"]
+    return [f"  the diverse top-{m}, not in score order: #1 is the best trial; each next one is "
+            f"the best left at least {min_distance:g} of each tuned parameter's search span "
+            "from every one above it",
+            "  (distance: to #1, in those spans; then how it differs from #1, its values "
+            "beside #1's)"]
 
 
 def rank_text(rec: TrialRecord, rank: int, output: OutputSpec, vehicle: str | None = None,

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 
 import numpy as np
 import pytest
@@ -154,32 +155,35 @@ def test_fixed_and_empty_span_parameters_do_not_count():
 
 
 # ---------------------------------------------------------------------------- differs
-def test_differs_names_the_largest_change_with_its_sign_and_unit():
+def test_differs_names_the_largest_change_with_rank_1_s_value_and_its_unit():
     first = _record(0, [180, 0.7, 0.0], 0.9)
     fov = _record(1, [168, 0.7, 0.01], 0.8)
     text = differs_text(first, fov, SPACE, CRIT)
     # a smaller FOV with the same RAD reads farther out in the fisheye image: a wider view
-    assert text.startswith("wider view: FOV -12°")
-    assert text.index("FOV -12°") < text.index("adv V shift +0.01")
+    assert text.startswith("wider view: FOV 168° (rank 1: 180°)")
+    assert text.index("FOV 168°") < text.index("adv V shift 0.010 (rank 1: 0.000)")
     up = differs_text(first, _record(2, [180.5, 0.95, 0.0], 0.8), SPACE, CRIT)
-    assert up.split(": ")[1].startswith("zoom +0.25")
-    assert "FOV +0.5°" in up  # the second change, with its unit
+    assert up.split(": ", 1)[1].startswith("zoom 0.95 (rank 1: 0.70)")
+    assert "FOV 180.50° (rank 1: 180.00°)" in up  # the second change, with its unit
+    # no signed change anywhere: "wider view" beside "FOV -12°" read as a contradiction
+    assert not re.search(r"[A-Za-z] [+-]\d", text + up)
 
 
 def test_differs_says_wider_or_narrower_from_the_view_itself():
     first = _record(0, [180, 0.7, 0.0], 0.9)
     assert differs_text(first, _record(1, [180, 0.5, 0.0], 0.8), SPACE, CRIT).startswith(
-        "wider view: zoom -0.2")
+        "wider view: zoom 0.50 (rank 1: 0.70)")
     assert differs_text(first, _record(1, [180, 0.9, 0.0], 0.8), SPACE, CRIT).startswith(
-        "narrower view: zoom +0.2")
+        "narrower view: zoom 0.90 (rank 1: 0.70)")
     # a larger FOV with the same RAD reads nearer the image centre: a narrower view
     assert differs_text(first, _record(1, [200, 0.7, 0.0], 0.8), SPACE, CRIT).startswith(
-        "narrower view: FOV +20°")
+        "narrower view: FOV 200° (rank 1: 180°)")
     # moving the window down the plane (adv V shift > 0) reads lower rows of the fisheye
     moved = differs_text(first, _record(1, [180, 0.7, 0.3], 0.8), SPACE, CRIT)
-    assert moved.startswith("view lower: adv V shift +0.3")
+    assert moved.startswith("view lower: adv V shift 0.30 (rank 1: 0.00)")
     # a change too small to see gets no word
-    assert differs_text(first, _record(1, [180.3, 0.7, 0.0], 0.8), SPACE, CRIT) == "FOV +0.3°"
+    assert differs_text(first, _record(1, [180.3, 0.7, 0.0], 0.8), SPACE,
+                        CRIT) == "FOV 180.30° (rank 1: 180.00°)"
 
 
 def test_differs_names_the_ec_margin_that_changes_most():

@@ -23,11 +23,12 @@ def test_status_and_params_file_of_a_run(clean, tmp_path):
     # diverse top-M
     lines = status_lines(clean, 2, by_score=True)
     assert lines[0] == f"{clean}: done, strategy random, 60 / 60 evaluations"
-    assert len(lines) == 3 and lines[1].startswith("  #1  EC score ")
+    assert lines[1] == "  the 2 best trials by EC score (--by-score)"
+    assert len(lines) == 4 and lines[2].startswith("  #1  EC score ")
     store = RunStore(clean / "run.sqlite")
     second = store.top(2)[1]
     store.close()
-    assert f"trial {second.idx:>6} (random)" in lines[2]
+    assert f"trial {second.idx:>6} (random)" in lines[3]
     text = rank_params_text(clean, 2, by_score=True)
     assert text.startswith(f"# rank 2: EC score {second.score:.6g} (trial {second.idx}, random)")
     (tmp_path / "p.yaml").write_text(text)
@@ -38,8 +39,12 @@ def test_status_and_params_file_of_a_run(clean, tmp_path):
     # the default: rank K of the diverse top-M
     diverse = diverse_candidates(clean, 2)
     lines = status_lines(clean, 2)
-    assert len(lines) == 3 and f"trial {diverse[1].trial:>6} (random)" in lines[2]
-    assert f"(d {diverse[1].distance:.2f}: {diverse[1].differs})" in lines[2]
+    # the list is named, and its columns explained, before it
+    assert lines[1].startswith("  the diverse top-2, not in score order: #1 is the best")
+    assert "at least 0.05 of each tuned parameter's search span" in lines[1]
+    assert lines[2].startswith("  (distance: to #1")
+    assert len(lines) == 5 and f"trial {diverse[1].trial:>6} (random)" in lines[4]
+    assert f"(distance {diverse[1].distance:.2f}: {diverse[1].differs})" in lines[4]
     text = rank_params_text(clean, 2)
     assert text.startswith(f"# rank 2: EC score {diverse[1].score:.6g} (trial "
                            f"{diverse[1].trial}, random)\n# differs from rank 1: ")

@@ -100,7 +100,8 @@ def test_a_shared_run_records_its_scenes_and_refuses_a_changed_one(scenes, share
     best = store.top(1)[0]
     each = [m[0] for m in store.member_results(best.idx)]
     store.close()
-    assert lines[2].endswith("[" + ", ".join(f"{m:.4g}" for m in each) + "]")
+    first = next(ln for ln in lines if ln.startswith("  #1 "))
+    assert first.endswith("[" + ", ".join(f"{m:.4g}" for m in each) + "]")
     assert "rank 1" in rank_params_text(run)
     # the diverse top-M of a shared run: top/, status and select agree
     from rvmsim.runs import diverse_candidates
