@@ -18,6 +18,7 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 from __future__ import annotations
 
 import os
+import re
 import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -274,7 +275,11 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             if diffs:
                 diff_html += "<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
         badge = "pass" if rec.passed else "fail"
-        cmd = f"rvmsim select {shlex.quote(run_arg)} --rank {k}"
+        kept = _rank_file(r.run_dir, k, rec.idx)
+        export = (f'<p>Its params file: <code>{escape(f"{run_arg}/top/{kept.name}")}</code></p>'
+                  if kept is not None else
+                  "<p>Export: <code>" + escape(f"rvmsim select {shlex.quote(run_arg)} --rank {k} "
+                                              f"--out rank_{k}.yaml") + "</code></p>")
         cards.append(
             f'<div class="card{" rank1" if k == 1 else ""}" id="rank-{k}">'
             f'<h3>#{k} <span class="badge {badge}">{badge}</span></h3>'
@@ -283,7 +288,7 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             f'({escape(rec.stage)})</span></p>'
             f'{margins_html(cand.margins, rec, r.criteria)}'
             f'{member_scores_html(r.members, r.member_top.get(rec.idx, []))}{diff_html}'
-            f'<p>Export: <code>{escape(cmd)}</code></p></div>')
+            f'{export}</div>')
     dmin = r.config.diverse.min_distance
     return (f'<section id="gallery"><h2>Top-{len(r.top)} candidates</h2>'
             '<p class="muted">Genuinely different candidates for the final choice: after #1 '
@@ -291,8 +296,21 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             f'at least {dmin:g} of the search span from every other (docs/tuning.md, "The '
             'diverse top-M"). Each card shows every EC\'s margin (how far its value is '
             'inside its range, in the EC\'s unit; red: outside), how it differs from #1 and '
-            'which ECs change result; choose one and export it with the command shown.</p>'
+            'which ECs change result; choose one: its params file is in the run\'s top/ '
+            'folder.</p>'
             f'<div class="gallery">{"".join(cards)}</div></section>')
+
+
+def _rank_file(run_dir: Path, rank: int, trial: int) -> Path | None:
+    """``top/rank_K.yaml`` of the run when it holds trial ``trial`` (its first comment line
+    names the trial), else None (no such file, or one from another selection)."""
+    path = run_dir / "top" / f"rank_{rank}.yaml"
+    try:
+        with path.open(encoding="utf-8") as f:
+            head = f.readline()
+    except (OSError, UnicodeDecodeError):
+        return None
+    return path if re.search(rf"\(trial {trial}\b", head) else None
 
 
 def _group_status(result: EcResult) -> dict[str, str]:

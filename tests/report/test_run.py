@@ -185,13 +185,30 @@ def test_report_tables_gallery_and_escaping(runs):
         assert name in words
     assert len([a for t, a in doc.tags if t == "tr" and a.get("class") == "tuned"]) == 4
     assert "(search)" in words and "(Table 2)" in words
-    # Gallery: one card per candidate with its export command.
+    # Gallery: one card per candidate with the params file tune wrote for it (top/), not a
+    # command that prints it again.
     cards = [a for t, a in doc.tags if t == "div" and (a.get("id") or "").startswith("rank-")]
     assert len(cards) == TOP_M
+    flat = " ".join(words.split())
     for k in range(1, TOP_M + 1):
-        assert f"--rank {k}" in words
-        assert "rvmsim select" in words
+        assert f"Its params file: {runs['evil_run']}/top/rank_{k}.yaml" in flat
+        assert (runs["evil_run"] / "top" / f"rank_{k}.yaml").is_file()
+    assert "rvmsim select" not in words
     assert "EC score" in words
+
+
+def test_a_card_without_its_params_file_gives_the_command_that_writes_one(runs, tmp_path):
+    run = tmp_path / "run"
+    shutil.copytree(runs["evil_run"], run)
+    (run / "top" / "rank_2.yaml").unlink()
+    # a rank_3.yaml of another selection (another trial) is not this card's file either
+    other = (run / "top" / "rank_3.yaml").read_text().replace("(trial ", "(trial 9", 1)
+    (run / "top" / "rank_3.yaml").write_text(other)
+    words = " ".join(_parse(write_report(run).read_text(encoding="utf-8")).all_text().split())
+    assert f"Its params file: {run}/top/rank_1.yaml" in words
+    for k in (2, 3):
+        assert f"rvmsim select {run} --rank {k} --out rank_{k}.yaml" in words
+        assert f"top/rank_{k}.yaml" not in words
 
 
 def test_batch_index_links_and_groups(runs, tmp_path):
