@@ -6,7 +6,7 @@ from __future__ import annotations
 from .cube import (CubeLayout, FaceCrop, CameraRays, cube_layout, cover_layout, refold_layout,
                    refold_coords,
                    face_coords, face_rotation, FACE_NAMES, GUARD_PX)
-from .gl import FaceAtlas, render_faces
+from .gl import FaceAtlas, RenderProcess, render_faces
 from .fold import fold, fold_color, fold_labels, nearest_labels
 from .fisheye import FisheyeImages, render_fisheye
 from .viewpoint import (CubeView, TaskRunner, cached_cube, cube_key, cube_task, is_vehicle_label,
@@ -34,6 +34,7 @@ __all__ = [
     "face_coords",
     "face_rotation",
     "render_faces",
+    "RenderProcess",
     "fold",
     "fold_color",
     "fold_labels",

@@ -18,7 +18,9 @@ from __future__ import annotations
 import multiprocessing as mp
 import time
 from collections.abc import Iterable
+from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from types import TracebackType
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -35,9 +37,9 @@ from .cube import CubeLayout, FaceCrop, face_rotation
 if TYPE_CHECKING:
     import pyrender  # no type information: its classes are Any to mypy
 
-__all__ = ["FaceAtlas", "render_faces", "prepare_render", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
+__all__ = ["FaceAtlas", "render_faces", "RenderProcess", "prepare_render", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
 
-#: How many workers a render is tried in before it fails (see :func:`_isolated`).
+#: How many workers a render is tried in before it fails (see :class:`RenderProcess`).
 _RENDER_ATTEMPTS = 2
 
 Z_NEAR_M = 0.003
@@ -173,12 +175,13 @@ def _face_pose(camera: FisheyeCamera, layout: CubeLayout, crop: FaceCrop) -> np.
 
 
 def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *, sky: tuple[float, float, float],
-                 progress: bool = False, color: bool = True) -> FaceAtlas:
+                 progress: bool = False, color: bool = True,
+                 renders: RenderProcess | None = None) -> FaceAtlas:
     """Render the crops of ``layout`` (colour and labels) for ``camera``.
 
-    In a process of its own (:func:`_isolated`): the OpenGL driver runs in a worker forked
-    for the render, so a crash of the driver ends that worker, not the caller, and the
-    render is tried once more in a fresh one.  A process that is itself a
+    In a process of its own (:class:`RenderProcess`; ``renders``: one kept for a block of
+    renders, else one for this render): a crash of the OpenGL driver ends that worker, not
+    the caller, and the render is tried once more in a fresh one.  A process that is itself a
     worker (a pool's, a Dask cluster's) renders here: it is the disposable one.
 
     Parameters
@@ -196,6 +199,9 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     color : bool
         Render the colour pass too (else the colour atlas stays black: labels only, half
         the work).
+    renders : RenderProcess, optional
+        The worker to render in, kept by the caller for a block of renders (default: one
+        for this render).
 
     Returns
     -------
@@ -208,40 +214,70 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     """
     if mp.parent_process() is not None:
         return _render_here(parts, layout, camera, sky, progress, color)
-    return _isolated(parts, layout, camera, sky, progress, color)
+    if renders is not None:
+        return renders.render(parts, layout, camera, sky, progress, color)
+    with RenderProcess() as own:
+        return own.render(parts, layout, camera, sky, progress, color)
 
 
-def _isolated(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
-              sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
-    """:func:`_render_here` in a worker of its own (a pool of one,
-    :func:`rvmsim._procs.start_pool`: it ends with this process however this process
-    ends, and is gone when this returns), tried :data:`_RENDER_ATTEMPTS` times.
+class RenderProcess:
+    """The worker process renders run in, kept for a block of renders::
+
+        with RenderProcess() as renders:
+            for view in views:
+                render_faces(..., renders=renders)
+
+    Each render after the first skips a fresh process's start (the EGL display and the
+    shaders, about 0.13 s).  The worker is a pool of one (:func:`rvmsim._procs.start_pool`:
+    it ends with this process however this process ends) and is gone when the block ends:
+    nothing of a call keeps running after it returns.  A render whose worker dies is
+    rendered again in a fresh one (:data:`_RENDER_ATTEMPTS` in all); a Ctrl-C or SIGTERM
+    while it renders stops the worker at once.
 
     Why a process of its own: llvmpipe has been seen to abort (SIGABRT, inside
     ``glReadPixels``) once in thousands of renders, which ended the caller with it.  A
-    render is pure (the same inputs give the same atlas), so a render whose worker died is
-    rendered again in a fresh one.  Not a worker kept between renders: nothing of a call
-    keeps running after it returns.
+    render is pure (the same inputs give the same atlas), so a fresh worker's render is the
+    same render.
     """
-    for attempt in range(1, _RENDER_ATTEMPTS + 1):
-        pool = start_pool(1)
-        now = True  # the worker is stopped at once unless the render came back
-        try:
-            atlas: FaceAtlas = pool.submit(_render_here, parts, layout, camera, sky, progress,
-                                           color).result()
-            now = False
-            return atlas
-        except BrokenProcessPool:
-            if attempt == _RENDER_ATTEMPTS:
-                raise RvmsimError(f"render: the OpenGL render process died {attempt} times "
-                                  "in a row (the driver crashed, or the process was killed)"
-                                  ) from None
-        except Exception:  # the render's own error: its worker is fine
-            now = False
-            raise
-        finally:
+
+    def __init__(self) -> None:
+        self._pool: ProcessPoolExecutor | None = None
+
+    def __enter__(self) -> RenderProcess:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close(now=exc_type is not None)
+
+    def close(self, *, now: bool = False) -> None:
+        """End the worker (``now``: without waiting for a render in flight)."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
             stop_pool(pool, now=now)
-    raise AssertionError("unreachable")
+
+    def render(self, parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
+               sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
+        """:func:`render_faces` in the worker."""
+        for attempt in range(1, _RENDER_ATTEMPTS + 1):
+            if self._pool is None:
+                self._pool = start_pool(1)
+            try:
+                atlas: FaceAtlas = self._pool.submit(_render_here, parts, layout, camera, sky,
+                                                     progress, color).result()
+                return atlas
+            except BrokenProcessPool:
+                self.close(now=True)
+                if attempt == _RENDER_ATTEMPTS:
+                    raise RvmsimError(
+                        f"render: the OpenGL render process died {attempt} times in a row "
+                        "(the driver crashed, or the process was killed)") from None
+            except Exception:  # the render's own error: its worker is fine
+                raise
+            except BaseException:  # Ctrl-C, SIGTERM: the render in flight is abandoned
+                self.close(now=True)
+                raise
+        raise AssertionError("unreachable")
 
 
 def prepare_render() -> None:

@@ -42,7 +42,7 @@ from ..camera import FisheyeCamera
 from ..scene import Part, Scene, build_parts
 from .cache import cache_dir, scene_key
 from .cube import CubeLayout
-from .gl import render_faces
+from .gl import RenderProcess, render_faces
 
 __all__ = ["posed_parts", "cube_key", "cached_cube", "read_cube", "is_vehicle_label",
            "CubeView", "TaskRunner", "render_cubes", "cube_task"]
@@ -108,7 +108,8 @@ def read_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
 def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
                 body_pose: np.ndarray | None = None, scale: float = 1.0,
                 parts: Callable[[], list[Part]] | None = None, color: bool = True,
-                progress: bool = False) -> tuple[np.ndarray | None, np.ndarray, bool]:
+                progress: bool = False, renders: RenderProcess | None = None
+                ) -> tuple[np.ndarray | None, np.ndarray, bool]:
     """The rendered atlas of ``layout`` seen by ``camera`` (its pose; its lens is not used),
     with the body at ``body_pose``: from the cache, or rendered and stored.
 
@@ -131,6 +132,8 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
         The colour atlas too.  Without it only the labels are rendered (half the work) and
         stored; a later call asking for colour renders the viewpoint again, with colour.
     progress : bool
+    renders : RenderProcess, optional
+        The render worker kept for a block of viewpoints (:func:`~rvmsim.render.render_faces`).
 
     Returns
     -------
@@ -149,7 +152,8 @@ def cached_cube(scene: Scene, camera: FisheyeCamera, layout: CubeLayout, *,
         return entry[0], entry[1], True
     base = build_parts(scene) if parts is None else parts()
     atlas = render_faces(posed_parts(base, body_pose), layout, camera,
-                         sky=scene.render.sky_color, progress=progress, color=color)
+                         sky=scene.render.sky_color, progress=progress, color=color,
+                         renders=renders)
     _store(folder, scene, camera, layout, _png(atlas.labels),
            _png(atlas.color) if color else None)
     return (atlas.color if color else None), atlas.labels, False

@@ -42,7 +42,8 @@ from .._progress import progress_bar
 from ..camera import FisheyeCamera, rotation_from_ypr
 from ..errors import SceneError
 from ..pipeline import FisheyeLabels, RvmPixels
-from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, TaskRunner, cached_cube,
+from ..render import (CameraRays, CubeLayout, CubeView, FisheyeImages, RenderProcess,
+                      TaskRunner, cached_cube,
                       cover_layout, fold, fold_labels, nearest_labels, read_cube, refold_coords,
                       refold_layout, render_cubes)
 from ..scene import Scene, body_motion, build_parts
@@ -271,8 +272,9 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
         return read_cube(scene, cams[k], shared.cover, body_pose=poses[k], scale=scale,
                          color=color)
 
-    # the next viewpoint's cube is read (decoded) while this one's samples are re-folded
-    with ThreadPoolExecutor(max_workers=1) as pool:
+    # the next viewpoint's cube is read (decoded) while this one's samples are re-folded;
+    # the viewpoints not cached render in one kept worker
+    with ThreadPoolExecutor(max_workers=1) as pool, RenderProcess() as renders:
         ahead = pool.submit(read, 0)
         for k, idx in enumerate(groups):
             entry = ahead.result()
@@ -280,7 +282,8 @@ def _viewpoints(scene: Scene, samples: Sequence[MountSample], shared: Refolder, 
                 ahead = pool.submit(read, k + 1)
             if entry is None:  # not cached: render here (GL stays in this thread)
                 atlas_c, atlas_l, _ = cached_cube(scene, cams[k], shared.cover, scale=scale,
-                                                  parts=parts, body_pose=poses[k], color=color)
+                                                  parts=parts, body_pose=poses[k], color=color,
+                                                  renders=renders)
             else:
                 atlas_c, atlas_l = entry
             yield idx, cams[k], atlas_c, atlas_l

@@ -16,7 +16,7 @@ import pytest
 from rvmsim import labels as L
 from rvmsim._procs import start_pool
 from rvmsim.errors import RvmsimError
-from rvmsim.render import cube_layout, render_faces
+from rvmsim.render import RenderProcess, cube_layout, render_faces
 from rvmsim.render.gl import AMBIENT, LIGHTS, _lambert, _linear_to_srgb
 from rvmsim.scene import build_parts
 
@@ -99,3 +99,29 @@ def test_a_render_whose_process_dies_is_rendered_again_in_a_fresh_one():
 def test_a_render_that_dies_twice_is_one_error():
     with pytest.raises(RvmsimError, match="render process died 2 times"):
         _render_while_killing(2)
+
+
+def test_a_render_process_keeps_one_worker_for_its_block_and_ends_it():
+    scene = bundled_scene("a")
+    cam = scene.fisheye_camera().scaled(0.1)
+    layout = cube_layout(cam, face_size=48)
+    parts = build_parts(scene)
+    start_pool(1).shutdown()  # the fork server runs
+    server = psutil.Process(multiprocessing.forkserver._forkserver._forkserver_pid)
+    with RenderProcess() as renders:
+        first = render_faces(parts, layout, cam, sky=scene.render.sky_color, renders=renders)
+        workers = [c.pid for c in server.children()]
+        second = render_faces(parts, layout, cam, sky=scene.render.sky_color, color=False,
+                              renders=renders)
+        assert [c.pid for c in server.children()] == workers and len(workers) == 1
+        # a worker that dies in the block is replaced, and the render still comes back
+        dead = psutil.Process(workers[0])
+        os.kill(dead.pid, signal.SIGKILL)
+        dead.wait(5)
+        third = render_faces(parts, layout, cam, sky=scene.render.sky_color, renders=renders)
+    np.testing.assert_array_equal(first.labels, second.labels)
+    np.testing.assert_array_equal(first.labels, third.labels)
+    deadline = time.monotonic() + 5
+    while server.children() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert server.children() == []  # gone when the block ends
