@@ -4,7 +4,10 @@ For a command that renders or starts worker pools (:data:`WORKER_COMMANDS`), the
 fork server (:func:`rvmsim._procs.start_worker_server`) is started before anything else,
 so that it imports the package for its workers (about 2 s) while this process imports the
 command line, instead of after it.  That is why the command line is imported inside
-:func:`main` rather than at the top.
+:func:`main` rather than at the top: this module is the ``rvmsim`` script's import, and
+multiprocessing imports a script's main module again in the fork server and in every
+worker, so importing it must start nothing (a module-level start there was tried: each
+worker tried to start a fork server of its own, and every render failed).
 """
 
 from __future__ import annotations

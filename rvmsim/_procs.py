@@ -61,8 +61,8 @@ from typing import Any, Final, ParamSpec, TypeVar
 
 from .errors import RvmsimError
 
-__all__ = ["start_pool", "start_worker_server", "WORKER_PRELOAD", "stop_pool", "die_with_parent", "stop_on_signals",
-           "Terminated", "ORPHAN_EXIT_STATUS"]
+__all__ = ["start_pool", "start_worker_server", "WORKER_PRELOAD", "stop_pool",
+           "die_with_parent", "stop_on_signals", "Terminated", "ORPHAN_EXIT_STATUS"]
 
 _P = ParamSpec("_P")
 _T = TypeVar("_T")

@@ -187,7 +187,8 @@ class StationResult:
         return {
             "scene": self.scene_name, "scene_file": self.scene_file, "target": self.target,
             "load_state": self.load_state, "params_file": self.params_file,
-            "platform_isp": dict(self.platform_isp), "output": list(self.output), "compensation": {**comp, "station": station},
+            "platform_isp": dict(self.platform_isp), "output": list(self.output),
+            "compensation": {**comp, "station": station},
             "assumed_station_sigma": {**assumed, "note": "an assumption of the compensation "
                                       "model (not measured by this run): the ECs' "
                                       "uncertainty a car is called marginal by"},

@@ -20,8 +20,8 @@ import time
 from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from types import TracebackType
 from dataclasses import dataclass
+from types import TracebackType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -37,7 +37,8 @@ from .cube import CubeLayout, FaceCrop, face_rotation
 if TYPE_CHECKING:
     import pyrender  # no type information: its classes are Any to mypy
 
-__all__ = ["FaceAtlas", "render_faces", "RenderProcess", "prepare_render", "LIGHTS", "AMBIENT", "Z_NEAR_M", "Z_FAR_M"]
+__all__ = ["FaceAtlas", "render_faces", "RenderProcess", "prepare_render", "LIGHTS", "AMBIENT",
+           "Z_NEAR_M", "Z_FAR_M"]
 
 #: How many workers a render is tried in before it fails (see :class:`RenderProcess`).
 _RENDER_ATTEMPTS = 2

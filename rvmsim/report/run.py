@@ -18,7 +18,6 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 from __future__ import annotations
 
 import os
-import re
 import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,7 +29,7 @@ import numpy as np
 from ..errors import RvmsimError
 from ..pipeline import evaluate_params, record_output, rvm_color
 from ..runs import (find_runs, is_run_folder, open_run, recorded_path, run_inputs, run_settings,
-                    run_state, store_candidates)
+                    run_state, store_candidates, top_file)
 from ..tune import member_set
 from ..tune.markets import load_markets
 from .market_rows import markets_html
@@ -275,7 +274,7 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             if diffs:
                 diff_html += "<ul>" + "".join(f"<li>{escape(d)}</li>" for d in diffs) + "</ul>"
         badge = "pass" if rec.passed else "fail"
-        kept = _rank_file(r.run_dir, k, rec.idx)
+        kept = top_file(r.run_dir, k, rec.params, r.config.output_spec())
         export = (f'<p>Its params file: <code>{escape(f"{run_arg}/top/{kept.name}")}</code></p>'
                   if kept is not None else
                   "<p>Export: <code>" + escape(f"rvmsim select {shlex.quote(run_arg)} --rank {k} "
@@ -299,18 +298,6 @@ def _gallery_section(r: _Run, run_arg: str, best_color: np.ndarray) -> str:
             'which ECs change result; choose one: its params file is in the run\'s top/ '
             'folder.</p>'
             f'<div class="gallery">{"".join(cards)}</div></section>')
-
-
-def _rank_file(run_dir: Path, rank: int, trial: int) -> Path | None:
-    """``top/rank_K.yaml`` of the run when it holds trial ``trial`` (its first comment line
-    names the trial), else None (no such file, or one from another selection)."""
-    path = run_dir / "top" / f"rank_{rank}.yaml"
-    try:
-        with path.open(encoding="utf-8") as f:
-            head = f.readline()
-    except (OSError, UnicodeDecodeError):
-        return None
-    return path if re.search(rf"\(trial {trial}\b", head) else None
 
 
 def _group_status(result: EcResult) -> dict[str, str]:

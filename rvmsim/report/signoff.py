@@ -38,10 +38,10 @@ import numpy as np
 from .._optional import import_playwright_sync_api
 from .._progress import progress_bar
 from ..criteria import annotate, bundled_criteria_text
-from ..errors import ParamsFileError, RvmsimError
-from ..isp import load_params, params_to_dict, process
+from ..errors import RvmsimError
+from ..isp import params_to_dict, process
 from ..pipeline import make_evaluator, record_output
-from ..runs import rank_text
+from ..runs import rank_text, top_file
 from ..storage import json_default
 from ..tune.markets import load_markets
 from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
@@ -123,14 +123,10 @@ def _params_file(r: _Run, out: Path) -> Path:
 
     best = r.top[0]
     searched = r.config.output_spec()  # a params file's output: the size the run searched at
-    ranked = r.run_dir / "top" / "rank_1.yaml"
-    try:
-        params, output = load_params(ranked)
-        if params == best.params and output == searched:
-            return ranked
-    except (ParamsFileError, OSError):  # absent or stale: the sign-off writes its own
-        pass
-    path = out / PARAMS_FILE
+    ranked = top_file(r.run_dir, 1, best.params, searched)
+    if ranked is not None:
+        return ranked
+    path = out / PARAMS_FILE  # absent or stale: the sign-off writes its own
     path.write_text(rank_text(best, 1, searched, r.scene.name, judged_at=r.output),
                     encoding="utf-8")
     return path

@@ -318,6 +318,6 @@ def signoff_html(c: SignoffContent) -> str:
         '<p class="redbox"><b>Signed with records of another setting or vehicle</b> '
         "(--allow-other-setting): " + "; ".join(escape(w) for w in c.other_setting)
         + ". Their figures below do not describe this setting.</p>")
-    body = (head + banner + _verdict(c) + markets + _setting(c) + _inputs(c) + _tool(c) + _ecs(c) + _yield(c)
-            + _failing(c) + _validation(c) + _eol(c) + _signature(c))
+    body = (head + banner + _verdict(c) + markets + _setting(c) + _inputs(c) + _tool(c) + _ecs(c)
+            + _yield(c) + _failing(c) + _validation(c) + _eol(c) + _signature(c))
     return page(f"Sign-off: {c.title}", body)

@@ -65,6 +65,7 @@ from .folder import (
     rank_params_text,
     diverse_candidates,
     write_top_files,
+    top_file,
 )
 
 __all__ = [
@@ -108,4 +109,5 @@ __all__ = [
     "rank_params_text",
     "diverse_candidates",
     "write_top_files",
+    "top_file",
 ]

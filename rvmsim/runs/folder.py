@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from ..criteria import bundled_criteria_text
-from ..errors import RvmsimError
-from ..isp import OutputSpec, params_to_dict
+from ..errors import ParamsFileError, RvmsimError
+from ..isp import IspParams, OutputSpec, load_params, params_to_dict
 from ..storage import FolderLock, json_default
 from .diverse import Candidate, candidates_json, store_candidates
 from .records import RunSettings, RunState, RunStatus, TrialRecord
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 __all__ = ["RUN_DB", "RUN_JSON", "recorded_path", "run_inputs", "open_run", "run_settings",
            "json_difference", "run_json_disagreement",
            "run_state", "run_lock", "find_runs", "is_run_folder", "status_lines", "rank_text",
-           "rank_params_text", "diverse_candidates", "write_top_files"]
+           "rank_params_text", "diverse_candidates", "write_top_files", "top_file"]
 
 RUN_DB = "run.sqlite"
 RUN_JSON = "run.json"
@@ -343,6 +343,23 @@ def rank_params_text(run_dir: str | Path, rank: int = 1, *, by_score: bool = Fal
                      judged_at=settings.record_output())
 
 
+def _top_path(run_dir: str | Path, rank: int) -> Path:
+    """Where :func:`write_top_files` writes rank ``rank``'s params file."""
+    return Path(run_dir) / "top" / f"rank_{rank}.yaml"
+
+
+def top_file(run_dir: str | Path, rank: int, params: IspParams,
+             output: OutputSpec) -> Path | None:
+    """The run's ``top/rank_K.yaml`` (:func:`write_top_files`) when it holds ``params``
+    and ``output``, else None: absent, unreadable, or of another selection."""
+    path = _top_path(run_dir, rank)
+    try:
+        held, held_output = load_params(path)
+    except (ParamsFileError, OSError):
+        return None
+    return path if held == params and held_output == output else None
+
+
 def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
                     vehicle: str | None = None, criteria: Criteria | None = None) -> list[Candidate]:
     """``top/rank_K.yaml`` (params files, each with its ``differs`` line as a comment) and
@@ -354,7 +371,7 @@ def write_top_files(run_dir: str | Path, store: RunStore, settings: RunSettings,
     top.mkdir(parents=True, exist_ok=True)
     out = cfg.output_spec()
     for cand, rec in pairs:
-        (top / f"rank_{cand.rank}.yaml").write_text(
+        _top_path(run_dir, cand.rank).write_text(
             rank_text(rec, cand.rank, out, vehicle, cand.differs, settings.record_output()),
             encoding="utf-8")
     for old in top.glob("rank_*.yaml"):

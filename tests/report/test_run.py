@@ -15,6 +15,7 @@ from html.parser import HTMLParser
 from urllib.parse import unquote
 
 import numpy as np
+import yaml
 import pytest
 
 from rvmsim.errors import RvmsimError
@@ -201,9 +202,10 @@ def test_a_card_without_its_params_file_gives_the_command_that_writes_one(runs, 
     run = tmp_path / "run"
     shutil.copytree(runs["evil_run"], run)
     (run / "top" / "rank_2.yaml").unlink()
-    # a rank_3.yaml of another selection (another trial) is not this card's file either
-    other = (run / "top" / "rank_3.yaml").read_text().replace("(trial ", "(trial 9", 1)
-    (run / "top" / "rank_3.yaml").write_text(other)
+    # a rank_3.yaml of another selection (another setting) is not this card's file either
+    third = yaml.safe_load((run / "top" / "rank_3.yaml").read_text())
+    third["zoom"] = third["zoom"] * 0.9 + 0.01
+    (run / "top" / "rank_3.yaml").write_text(yaml.safe_dump(third))
     words = " ".join(_parse(write_report(run).read_text(encoding="utf-8")).all_text().split())
     assert f"Its params file: {run}/top/rank_1.yaml" in words
     for k in (2, 3):
