@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 
 from rvmsim._procs import start_worker_server
 from rvmsim.camera import rotation_from_ypr
-from rvmsim.render import cached_render, render_fisheye
+from rvmsim.render import RenderProcess, cached_render, render_fisheye
 from rvmsim.testing.captures import BAIC
 from rvmsim.testing.scenes import load_small_scene
 
@@ -66,6 +67,15 @@ def session_render_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
     cache = root / "render-cache"
     os.environ["RVMSIM_CACHE"] = str(cache)
     return cache
+
+
+@pytest.fixture(autouse=True)
+def render_worker() -> Iterator[None]:
+    """Each test's renders in one render worker (:class:`~rvmsim.render.RenderProcess`),
+    as a command's are (``rvmsim.cli.main``): a test that renders several views starts the
+    worker once (about 0.12 s a render), and nothing of it is left after the test."""
+    with RenderProcess():
+        yield
 
 
 @pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups

@@ -10,6 +10,7 @@ import click
 
 from .._procs import stop_on_signals
 from ..errors import RvmsimError
+from ..render import RenderProcess
 from .calibrate import calibrate
 from .console import console
 from .eol import eol
@@ -54,10 +55,12 @@ def main(args: Sequence[str] | None = None) -> NoReturn:
     itself (:class:`~rvmsim.cli.errors.Command` reports theirs); Ctrl-C exits 130 and SIGTERM
     the same orderly way with 143 (128 + the signal; a tuning run keeps every finished batch
     and can be resumed, and no worker process outlives the command: :mod:`rvmsim._procs`).
-    Always raises :class:`SystemExit`.
+    Every render of the command runs in one render worker
+    (:class:`~rvmsim.render.RenderProcess`), ended when the command ends.  Always raises
+    :class:`SystemExit`.
     """
     try:
-        with stop_on_signals():
+        with stop_on_signals(), RenderProcess():
             code = cli.main(args=None if args is None else list(args),
                             prog_name=None if args is None else "rvmsim", standalone_mode=False)
     except (KeyboardInterrupt, click.exceptions.Abort) as err:

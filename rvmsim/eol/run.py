@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 from .._procs import start_pool, stop_pool
 from .._progress import progress_bar
 from ..errors import RvmsimError
+from ..render import RenderProcess
 from ..scene import Scene
 from ..pose import capture_folders, check_captures, load_capture
 from .outputs import Staging, write_car, write_tables
@@ -146,8 +147,11 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
     bar = _bar(len(captures), progress)
     cars: list[CarResult] = []
     try:
-        with contextlib.closing(_cars(station, captures, names,
-                                      min(workers, len(captures) // 2))) as results:
+        # a car's renders (its pose search, its labels) in one render worker for the
+        # whole station, where the cars are not shared out to processes
+        with RenderProcess(), contextlib.closing(_cars(station, captures, names,
+                                                       min(workers, len(captures) // 2))
+                                                 ) as results:
             for car in results:
                 files = write_car(car, staging.dir, settings.output)
                 cars.append(dataclasses.replace(car, images={}, files=files))

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import time
+from contextvars import ContextVar, Token
 from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -201,8 +202,9 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
         Render the colour pass too (else the colour atlas stays black: labels only, half
         the work).
     renders : RenderProcess, optional
-        The worker to render in, kept by the caller for a block of renders (default: one
-        for this render).
+        The worker to render in, kept by the caller for a block of renders (default: that
+        of the innermost ``with RenderProcess():`` block around this call in this thread,
+        else one for this render).
 
     Returns
     -------
@@ -215,6 +217,7 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
     """
     if mp.parent_process() is not None:
         return _render_here(parts, layout, camera, sky, progress, color)
+    renders = renders or _KEPT.get()
     if renders is not None:
         return renders.render(parts, layout, camera, sky, progress, color)
     with RenderProcess() as own:
@@ -224,12 +227,16 @@ def render_faces(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera, *
 class RenderProcess:
     """The worker process renders run in, kept for a block of renders::
 
-        with RenderProcess() as renders:
+        with RenderProcess():
             for view in views:
-                render_faces(..., renders=renders)
+                render_fisheye(scene, camera=view)  # every render of the block in one worker
 
-    Each render after the first skips a fresh process's start (the EGL display and the
-    shaders, about 0.13 s).  The worker is a pool of one (:func:`rvmsim._procs.start_pool`:
+    Every render of the block (:func:`render_faces`, however deep below the call that
+    starts it) runs in this worker, unless it is given another (``renders=``).  The block
+    is the ``with`` statement's, in its thread (a :class:`contextvars.ContextVar`): another
+    thread renders in the block only when handed the worker (``renders=renders``).  Each
+    render after the first skips a fresh process's start (the EGL display and the shaders,
+    about 0.13 s).  The worker is a pool of one (:func:`rvmsim._procs.start_pool`:
     it ends with this process however this process ends) and is gone when the block ends:
     nothing of a call keeps running after it returns.  A render whose worker dies is
     rendered again in a fresh one (:data:`_RENDER_ATTEMPTS` in all); a Ctrl-C or SIGTERM
@@ -243,13 +250,17 @@ class RenderProcess:
 
     def __init__(self) -> None:
         self._pool: ProcessPoolExecutor | None = None
+        self._blocks: list[Token[RenderProcess | None]] = []
 
     def __enter__(self) -> RenderProcess:
+        self._blocks.append(_KEPT.set(self))
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
-        self.close(now=exc_type is not None)
+        _KEPT.reset(self._blocks.pop())
+        if not self._blocks:
+            self.close(now=exc_type is not None)
 
     def close(self, *, now: bool = False) -> None:
         """End the worker (``now``: without waiting for a render in flight)."""
@@ -279,6 +290,10 @@ class RenderProcess:
                 self.close(now=True)
                 raise
         raise AssertionError("unreachable")
+
+
+#: The worker of the innermost ``with RenderProcess():`` block in this thread, if any.
+_KEPT: ContextVar[RenderProcess | None] = ContextVar("rvmsim_render_process", default=None)
 
 
 def prepare_render() -> None:

@@ -16,9 +16,10 @@ import pytest
 from rvmsim import labels as L
 from rvmsim._procs import start_pool
 from rvmsim.errors import RvmsimError
-from rvmsim.render import RenderProcess, cube_layout, render_faces
+from rvmsim.render import RenderProcess, cube_layout, render_faces, render_fisheye
 from rvmsim.render.gl import AMBIENT, LIGHTS, _lambert, _linear_to_srgb
 from rvmsim.scene import build_parts
+from rvmsim.testing.scenes import load_small_scene
 
 from ..conftest import bundled_scene
 
@@ -121,6 +122,23 @@ def test_a_render_process_keeps_one_worker_for_its_block_and_ends_it():
         third = render_faces(parts, layout, cam, sky=scene.render.sky_color, renders=renders)
     np.testing.assert_array_equal(first.labels, second.labels)
     np.testing.assert_array_equal(first.labels, third.labels)
+    deadline = time.monotonic() + 5
+    while server.children() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert server.children() == []  # gone when the block ends
+
+
+def test_every_render_of_a_block_however_deep_runs_in_its_one_worker():
+    scene = load_small_scene("a")
+    start_pool(1).shutdown()  # the fork server runs
+    server = psutil.Process(multiprocessing.forkserver._forkserver._forkserver_pid)
+    with RenderProcess():
+        first = render_fisheye(scene)  # no renders=: the block's worker, kept
+        after_first = [c.pid for c in server.children()]
+        second = render_fisheye(scene, camera=scene.fisheye_camera())
+        after_second = [c.pid for c in server.children()]
+    assert len(after_first) == 1 and after_second == after_first
+    np.testing.assert_array_equal(first.labels, second.labels)
     deadline = time.monotonic() + 5
     while server.children() and time.monotonic() < deadline:
         time.sleep(0.02)
