@@ -25,7 +25,8 @@ __all__ = ["robustness"]
               help="Scrambling seed: the same seed, the same samples.")
 @click.option("--out", "-o", type=OutputFolder(), required=True, help="Output folder.")
 @click.option("--min-yield", type=FiniteFloat(0, 1), default=None,
-              help="Exit 1 when the yield (0-1) is below this.")
+              help="Exit 1 when the yield (0-1) is below this (default: the variation's "
+                   "min_yield, else none).")
 @click.option("--variation", "variation_file", type=click.Path(path_type=Path), default=None,
               help="Variation file (default: the scene's variation section).")
 @click.option("--criteria", "criteria_file", type=click.Path(path_type=Path), default=None,
@@ -75,7 +76,7 @@ def robustness(scene: Path, params_file: Path, samples: int, seed: int, out: Pat
     after that.  With --markets (or a markets run), the yield per market and over all
     markets, which the exit status and --min-yield then refer to.  With --export-sample N, also sample N as a scene file (``rvmsim evaluate``
     renders it in full: docs/robustness.md).  Exit status: 0 the yield is at least
-    --min-yield (or none given), 1 below it, 2 an error.
+    --min-yield (or the variation's min_yield; or none given), 1 below it, 2 an error.
     """
     from ..batch import make_executor
     from ..compensation import compensation_for

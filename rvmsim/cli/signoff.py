@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
 
 from .errors import Command
+from .params import FiniteFloat
 
 __all__ = ["signoff"]
 
@@ -29,17 +31,25 @@ __all__ = ["signoff"]
 @click.option("--allow-other-setting", is_flag=True,
               help="Sign with a robustness, validation or EOL folder of another setting or "
                    "vehicle (refused otherwise): the sheet opens with a red banner.")
+@click.option("--min-yield", type=FiniteFloat(0, 1), default=None,
+              help="The least production yield (0-1) that passes (default: the one the "
+                   "--robustness folder recorded, its --min-yield or its variation's "
+                   "min_yield; else the yield is shown, not judged).")
 @click.option("--pdf/--no-pdf", default=True, show_default=True,
               help="Also print the page to signoff.pdf with headless Chromium.")
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: Path | None,
             eol_dir: Path | None, markets: str | None, reviewer: str,
-            allow_other_setting: bool, pdf: bool, progress: bool) -> None:
+            allow_other_setting: bool, min_yield: float | None, pdf: bool,
+            progress: bool) -> None:
     """Write the sign-off sheet of RUN's best setting: its 14 values, params file and
     SHA-256, the input files with theirs, the tool's version and commit, every EC at the
     display output of record with its margin, the yield (--robustness), validation and EOL
     records, the failing samples with the commands that reproduce them, and a signature
-    block.  One self-contained HTML page and its PDF."""
+    block.  One self-contained HTML page and its PDF.  Exit status: 0 when nothing the
+    sheet judged fails (the ECs at the display, the markets, the yield against the least
+    yield, the validation, the EOL station; what was not given is not judged), 1 when
+    something fails, 2 on an error."""
     from ..report import signoff as write_signoff
     from ..tune.markets import judge_run_in_markets
 
@@ -48,7 +58,7 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
         click.echo(f"judged in {markets}: wrote {run / 'best' / 'markets.json'}")
     result = write_signoff(run, out, robustness=robustness_dir, validation=validation_dir,
                            eol=eol_dir, reviewer=reviewer, pdf=pdf, progress=progress,
-                           allow_other_setting=allow_other_setting)
+                           allow_other_setting=allow_other_setting, min_yield=min_yield)
     for why in result.other_setting:
         click.echo(f"warning: {why}: signed anyway (--allow-other-setting)", err=True)
     yield_text = ("robustness not run" if result.yield_ is None
@@ -58,3 +68,10 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
     if result.markets_text is not None:
         click.echo(f"markets: {result.markets_text}")
     click.echo(f"wrote {result.html}" + ("" if result.pdf is None else f", {result.pdf}"))
+    unjudged = [ch.name.lower() for ch in result.checks if ch.passed is None]
+    click.echo(f"verdict: {'PASS' if result.passed else 'FAIL'}"
+               + ("" if not unjudged else f" (not judged: {'; '.join(unjudged)})"))
+    if not result.passed:
+        failing = [f"{ch.name}: {ch.detail}" for ch in result.checks if ch.passed is False]
+        click.echo(f"the sheet fails: {'; '.join(failing)}", err=True)
+        sys.exit(1)

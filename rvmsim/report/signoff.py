@@ -51,7 +51,7 @@ from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecor
                       load_robustness, load_validation, same_setting)
 from .run import _load_run, _Run
 from .setting import SettingRecord
-from .signoff_page import SignoffContent, signoff_html
+from .signoff_page import Check, SignoffContent, sheet_passes, signoff_html, verdict_checks
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -64,6 +64,9 @@ __all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FIL
 
 #: The params file written into the output folder when the run has none for its best.
 PARAMS_FILE = "params.yaml"
+
+#: The files table's role of the compensation model the yield assumes.
+COMPENSATION_ROLE = "compensation (robustness)"
 
 #: Longest side of each EC's own annotated picture on the page, px.
 EC_PICTURE_PX = 480
@@ -87,6 +90,10 @@ class SignoffResult:
     markets_text: str | None = None
     #: Why a given folder is not of this setting or vehicle (``allow_other_setting``).
     other_setting: tuple[str, ...] = ()
+    #: What the sheet judged (:func:`~rvmsim.report.signoff_page.verdict_checks`), and
+    #: whether none of it fails: the sheet's verdict (``rvmsim signoff`` exits 1 if not).
+    checks: tuple[Check, ...] = ()
+    passed: bool = True
 
 
 def _record_output(criteria: Criteria, scene: Scene, output: OutputSpec) -> OutputSpec:
@@ -182,6 +189,12 @@ def _files(r: _Run, setting: SettingRecord, rob: RobustnessRecord | None,
     if rob is not None:
         more, changed = _robustness_files(rob)
         files += [*more, file_record("robustness result", rob.path)]
+        comp = rob.doc.get("compensation")
+        if isinstance(comp, dict) and not any(f.role == COMPENSATION_ROLE for f in more):
+            files.append(FileRecord(COMPENSATION_ROLE, str(comp.get("source") or "built-in "
+                                                         "default"), None,
+                                    "no file: the built-in model, every value under "
+                                    "Production yield"))
     if val is not None:
         files.append(file_record("validation result", val.path))
         capture = (val.single or {}).get("capture")
@@ -272,11 +285,13 @@ def _check_out(out: Path) -> None:
 def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any]:
     """signoff.json's document."""
 
+    checks = verdict_checks(res)
     rob: dict[str, Any] | None = None
     if res.robustness is not None:
         d = res.robustness.doc
         rob = {k: d.get(k) for k in ("yield", "ci95", "n_pass", "n", "isp", "seed",
-                                     "yield_by_load", "yield_before_compensation")}
+                                     "yield_by_load", "yield_before_compensation",
+                                     "limiting", "compensation")}
         rob["path"] = str(res.robustness.path.resolve())
         rob["same_setting"] = res.robustness_same_setting
     return {"run": res.run_dir, "html": str(html), "pdf": None if pdf is None else str(pdf),
@@ -289,6 +304,9 @@ def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any
             "validation": None if res.validation is None else str(res.validation.path.resolve()),
             "eol": None if res.eol is None else str(res.eol.path.resolve()),
             "reviewer": res.reviewer, "other_setting": list(res.other_setting),
+            "min_yield": res.min_yield, "passed": sheet_passes(checks),
+            "checks": [{"name": ch.name, "passed": ch.passed, "detail": ch.detail}
+                       for ch in checks],
             **_markets_summary(res)}
 
 
@@ -305,7 +323,8 @@ def _markets_summary(res: SignoffContent) -> dict[str, Any]:
 def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | None = None,
             validation: str | Path | None = None, eol: str | Path | None = None,
             reviewer: str = "", pdf: bool = True, progress: bool = False,
-            allow_other_setting: bool = False) -> SignoffResult:
+            allow_other_setting: bool = False, min_yield: float | None = None
+            ) -> SignoffResult:
     """Write the sign-off sheet of a run's best setting (see the module docstring).
 
     Parameters
@@ -329,6 +348,10 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         another vehicle (:func:`other_setting`): the sheet then opens with a red banner
         that says so, and :attr:`SignoffResult.other_setting` lists the reasons.  Without
         it such a folder is refused.
+    min_yield : float, optional
+        The least production yield (0–1) that passes; default: the one the robustness
+        result recorded (its ``--min-yield``, or its variation's ``min_yield``), else none
+        (the yield is then shown, not judged).
 
     Raises
     ------
@@ -358,7 +381,8 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     bar = progress_bar(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
                disable=not progress)
     try:
-        content = _content(run, out, rob, val, eol_rec, reviewer, bar, tuple(others))
+        content = _content(run, out, rob, val, eol_rec, reviewer, bar, tuple(others),
+                           _least_yield(min_yield, rob))
         html, js = out / "signoff.html", out / SIGNOFF_JSON
         bar.set_postfix_str("writing the page")
         html.write_text(signoff_html(content), encoding="utf-8")
@@ -377,12 +401,26 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         bar.close()
     f = content.setting.file
     m = content.markets
+    checks = verdict_checks(content)
     return SignoffResult(html, pdf_path, js, Path(f.path), f.sha256 or "", content.ec.passed,
                          None if rob is None else rob.yield_,
                          None if m is None else all_markets_pass(m) and content.markets_same_trial,
                          None if m is None else markets_verdict_text(m) if
                          content.markets_same_trial else "markets not judged for this setting",
-                         content.other_setting)
+                         content.other_setting, tuple(checks), sheet_passes(checks))
+
+
+def _least_yield(given: float | None, rob: RobustnessRecord | None
+                 ) -> tuple[float | None, str]:
+    """The least yield that passes and where it came from: ``given`` (``--min-yield``),
+    else the robustness result's record of its own, else none."""
+    if given is not None:
+        return given, "--min-yield"
+    if rob is not None:
+        recorded = rob.doc.get("min_yield")
+        if isinstance(recorded, (int, float)) and 0.0 <= recorded <= 1.0:
+            return float(recorded), f"the robustness run's, in {rob.path.name}"
+    return None, ""
 
 
 def other_setting(vehicle: str, params: IspParams, robustness: RobustnessRecord | None,
@@ -422,7 +460,8 @@ def other_setting(vehicle: str, params: IspParams, robustness: RobustnessRecord 
 
 def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRecord | None,
              eol: EolRecord | None, reviewer: str, bar: Any,
-             others: tuple[str, ...] = ()) -> SignoffContent:
+             others: tuple[str, ...] = (),
+             least: tuple[float | None, str] = (None, "")) -> SignoffContent:
     """Everything the page shows: the setting, its ECs of record, the files, the commands."""
 
     out.mkdir(exist_ok=True)
@@ -444,4 +483,4 @@ def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRe
         robustness_same_setting=same, changed_files=changed, validation=val, eol=eol,
         reviewer=reviewer, repro=_repro_commands(rob, r, setting, out), markets=markets,
         markets_same_trial=markets is None or markets.get("trial") == best.idx,
-        other_setting=others)
+        other_setting=others, min_yield=least[0], min_yield_source=least[1])

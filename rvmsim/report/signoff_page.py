@@ -24,7 +24,8 @@ if TYPE_CHECKING:
     from ..criteria import EcResult
     from ..isp import OutputSpec
 
-__all__ = ["SignoffContent", "signoff_html", "SECTION_IDS", "NO_ROBUSTNESS"]
+__all__ = ["SignoffContent", "signoff_html", "SECTION_IDS", "NO_ROBUSTNESS", "Check",
+           "verdict_checks", "sheet_passes", "compensation_text"]
 
 #: The page's sections, in order (each an element id).
 SECTION_IDS: tuple[str, ...] = ("verdict", "setting", "inputs", "tool", "ecs", "yield",
@@ -35,7 +36,7 @@ NO_ROBUSTNESS = ("Robustness not run: the yield over mount tolerances and load s
                  "known, so this setting is judged at the nominal pose only.")
 
 _CSS = """<style>
-.red{color:#c02828;font-weight:bold}.redbox{border:2px solid #c02828;padding:.5em .8em}
+.red{color:#c02828;font-weight:bold}.amber{color:#8a5a00;font-weight:bold}.redbox{border:2px solid #c02828;padding:.5em .8em}
 code.sha{font-size:.85em}table.sign td{height:2.6em;min-width:16em}
 @media print{body{max-width:none;margin:0;font-size:10pt}h2{page-break-after:avoid}
 tr,figure,img,table.sign{page-break-inside:avoid}nav{display:none}}
@@ -72,6 +73,9 @@ class SignoffContent:
     #: Why a given record is not of this setting or vehicle (signed with
     #: ``--allow-other-setting``): a red banner at the top.
     other_setting: tuple[str, ...] = ()
+    #: The least yield that passes (None: none given) and where it came from.
+    min_yield: float | None = None
+    min_yield_source: str = ""
 
 
 def _pct(est: dict[str, Any]) -> str:
@@ -80,26 +84,142 @@ def _pct(est: dict[str, Any]) -> str:
             f'{est.get("n_pass", "?")} of {est.get("n", "?")} samples)')
 
 
-def _verdict(c: SignoffContent) -> str:
-    nominal = "pass" if c.ec.passed else "fail"
-    rows = [("ECs at the display output of record (nominal pose)",
-             f'<span class="badge {nominal}">{"every EC passes" if c.ec.passed else "not all pass"}'
-             f"</span> {c.record_output.width} × {c.record_output.height} px")]
+@dataclass(frozen=True)
+class Check:
+    """One line of the sheet's verdict: what was judged, whether it passes (None: not
+    judged, e.g. no robustness folder given) and the figure that says so."""
+
+    name: str
+    passed: bool | None
+    detail: str
+
+
+def verdict_checks(c: SignoffContent) -> list[Check]:
+    """What the sheet judges, in the summary's order: the ECs at the display output of
+    record, the markets (a markets run), the yield against the least yield, the
+    validation and the end-of-line station (each when given).  The sheet passes when no
+    check fails (:func:`sheet_passes`)."""
+    checks = [Check("ECs at the display output of record", c.ec.passed,
+                    "every EC passes" if c.ec.passed else "failing: " + ", ".join(
+                        e.id for e in c.ec.items if e.enabled and not e.passed))]
     if c.markets is not None:
         ok = all_markets_pass(c.markets) and c.markets_same_trial
-        text = (markets_verdict_text(c.markets) if c.markets_same_trial else
-                f"not known for this setting (best/markets.json is of trial "
-                f"{c.markets.get('trial')})")
-        rows.append(("Markets (one setting judged at each market's site)",
-                     f'<span class="badge {"pass" if ok else "fail"}">{escape(text)}</span>'))
+        checks.append(Check("Markets", ok, markets_verdict_text(c.markets)
+                            if c.markets_same_trial else "not judged for this setting"))
     r = c.robustness
     if r is None:
-        rows.append(("Production yield", f'<span class="red">{escape(NO_ROBUSTNESS)}</span>'))
+        checks.append(Check("Production yield", None, "robustness not run"))
+    elif c.min_yield is None:
+        checks.append(Check("Production yield", None, f"{100 * float(r.doc['yield']):.1f} %, "
+                            "no least yield given"))
     else:
-        cls = "red" if not c.robustness_same_setting else ""
-        rows.append(("Production yield" + (" after EOL compensation"
-                                           if r.doc.get("compensation") else ""),
-                     f'<span class="{cls}">{escape(_pct(r.doc))}</span>'))
+        ok = float(r.doc["yield"]) >= c.min_yield and c.robustness_same_setting
+        checks.append(Check("Production yield", ok, f"{100 * float(r.doc['yield']):.1f} % "
+                            f"{'≥' if float(r.doc['yield']) >= c.min_yield else '<'} "
+                            f"{100 * c.min_yield:g} %" + ("" if c.robustness_same_setting
+                                                          else " (of another setting)")))
+    v = c.validation
+    if v is not None:
+        ok = (bool(v.single["passed"]) if v.single is not None
+              else all(row["verdict"] == "PASS" for row in v.rows))
+        checks.append(Check("Validation against a real capture", ok,
+                            "passes" if ok else "fails"))
+    e = c.eol
+    if e is not None:
+        checks.append(Check("End-of-line station", e.doc["passed"] == e.doc["cars"],
+                            f"{e.doc['passed']} of {e.doc['cars']} cars pass"))
+    return checks
+
+
+def sheet_passes(checks: list[Check]) -> bool:
+    """Whether no check of the sheet fails (one not judged does not fail it)."""
+    return all(ch.passed is not False for ch in checks)
+
+
+def _badge(passed: bool | None, text: str) -> str:
+    if passed is None:
+        return f'<span class="amber">{escape(text)}</span>'
+    return f'<span class="badge {"pass" if passed else "fail"}">{escape(text)}</span>'
+
+
+def _limiting(doc: dict[str, Any] | None) -> str:
+    """The limiting EC of a yield (robustness.json's ``limiting``) in words."""
+    lim = None if doc is None else doc.get("limiting")
+    if not isinstance(lim, dict):
+        return "none (no EC fails on any sample)" if doc is not None and "limiting" in doc \
+            else "not recorded (a robustness.json of an earlier rvmsim)"
+    return (f"{lim.get('id')} {lim.get('name', '')}, fails on "
+            f"{100 * float(lim.get('failure_rate', 0)):.1f} % of the samples")
+
+
+def _yield_rows(c: SignoffContent, checks: list[Check]) -> list[tuple[str, str]]:
+    """The summary's yield rows: after and before compensation with their intervals, the
+    limiting EC, the least yield and the compensation model."""
+    r = c.robustness
+    if r is None:
+        return [("Production yield", f'<span class="red">{escape(NO_ROBUSTNESS)}</span>')]
+    doc = r.doc
+    cls = "red" if not c.robustness_same_setting else ""
+    before = doc.get("yield_before_compensation")
+    rows = [("Production yield" + (" after end-of-line compensation" if before else ""),
+             f'<span class="{cls}"><b>{escape(_pct(doc))}</b></span>')]
+    if before:
+        rows.append(("… before compensation", escape(_pct(before))))
+    rows.append(("Limiting EC (fails on most samples)", escape(_limiting(doc))
+                 + ("" if not before else "; before compensation: "
+                    + escape(_limiting(before)))))
+    check = next(ch for ch in checks if ch.name == "Production yield")
+    least = ("no least yield given (<code>--min-yield</code>, or <code>min_yield</code> in "
+             "the variation file)" if c.min_yield is None else
+             f"{100 * c.min_yield:g} % ({escape(c.min_yield_source)}): "
+             + _badge(check.passed, "PASS" if check.passed else "FAIL"))
+    rows.append(("Least yield that passes", least))
+    comp = doc.get("compensation")
+    if isinstance(comp, dict):
+        rows.append(("Compensation model (what the yield after it assumes)",
+                     escape(compensation_text(comp))))
+    return rows
+
+
+def compensation_text(comp: dict[str, Any]) -> str:
+    """A compensation model (robustness.json's ``compensation``) in one line: its law,
+    the values written per car with their ranges, the station's σ, the load it measures
+    at, and where the model came from."""
+    ranges = comp.get("ranges") or {}
+    written = ", ".join(
+        f"{name}" + (f" {float(ranges[name][0]):g}…{float(ranges[name][1]):g}°"
+                     if name in ranges else "") for name in comp.get("params") or [])
+    st = comp.get("station") or {}
+    at = st.get("measured_at") or "the variation's first load state"
+    return (f"law {comp.get('law')}; writes {written}; station σ "
+            f"{st.get('angle_sigma_deg')}° / {st.get('position_sigma_mm')} mm "
+            f"(body edge {st.get('edge_sigma_px')} px); measured at {at}; "
+            f"model: {comp.get('source')}")
+
+
+def _verdict(c: SignoffContent) -> str:
+    checks = verdict_checks(c)
+    ok = sheet_passes(checks)
+    failing = [ch.name for ch in checks if ch.passed is False]
+    unjudged = [ch.name for ch in checks if ch.passed is None]
+    verdict = (_badge(ok, "PASS" if ok else "FAIL") + " "
+               + escape("; ".join(f"{ch.name}: {ch.detail}" for ch in checks
+                                  if ch.passed is False) if failing else
+                        "every check below passes")
+               + ("" if not unjudged else
+                  f' <span class="amber">not judged: {escape(", ".join(unjudged))}</span>'))
+    nominal = checks[0]
+    rows = [("Verdict", verdict),
+            (nominal.name + " (nominal pose)",
+             _badge(nominal.passed, nominal.detail)
+             + f" {c.record_output.width} × {c.record_output.height} px")]
+    if c.markets is not None:
+        mk = checks[1]
+        rows.append(("Markets (one setting judged at each market's site)",
+                     _badge(mk.passed, mk.detail if c.markets_same_trial else
+                            f"not known for this setting (best/markets.json is of trial "
+                            f"{c.markets.get('trial')})")))
+    rows += _yield_rows(c, checks)
     v = c.validation
     rows.append(("Validation against a real capture", "not given" if v is None else escape(
         ("PASS" if v.single["passed"] else "FAIL") if v.single is not None else
@@ -213,10 +333,41 @@ def _yield(c: SignoffContent) -> str:
             + f". Seed {escape(doc['seed'])}; criteria {escape(doc.get('criteria', ''))}; "
             f"from <code>{escape(r.path.resolve())}</code>.</p>")
     by_load = by_load_html(doc["yield_by_load"], before.get("by_load") if before else None)
+    comp = doc.get("compensation")
     return (f'<section id="yield"><h2>Production yield</h2>{warn}{line}'
             f"<h3>Per load state</h3>{by_load}<h3>Per EC</h3>{_yield_ec_rows(doc)}"
             f"<h3>Tolerances and load states</h3>{variation_html(doc['variation'])}"
-            "</section>")
+            + ("" if not isinstance(comp, dict) else
+               f"<h3>End-of-line compensation model</h3>{_compensation_table(c, comp)}")
+            + "</section>")
+
+
+def _compensation_table(c: SignoffContent, comp: dict[str, Any]) -> str:
+    """Every value of the compensation model the yield after compensation assumes, and
+    its source: a file with its SHA-256, or the built-in default of this rvmsim."""
+    src = str(comp.get("source", ""))
+    rec = next((f for f in c.files if f.role == "compensation (robustness)"), None)
+    where = (f"built-in default of rvmsim {escape(c.provenance.version)} (no file: every "
+             "value is below)" if rec is None or rec.sha256 is None else
+             f'<code class="nobr">{escape(rec.path)}</code> sha256 '
+             f'<code class="sha">{escape(rec.sha256)}</code>')
+    st = comp.get("station") or {}
+    ranges = comp.get("ranges") or {}
+    rows = [("source", where if src else "—"),
+            ("law", escape(comp.get("law"))),
+            ("values written per car", escape(", ".join(map(str, comp.get("params") or [])))),
+            *((f"range of {escape(n)}", f"{float(lo):g} … {float(hi):g}°")
+              for n, (lo, hi) in ranges.items()),
+            ("station σ: angle, position", f"{escape(st.get('angle_sigma_deg'))}°, "
+                                           f"{escape(st.get('position_sigma_mm'))} mm"),
+            ("station σ: body edge on the capture", f"{escape(st.get('edge_sigma_px'))} px"),
+            ("load state at the station", escape(st.get("measured_at")
+                                                 or "the variation's first")),
+            ("a car inside the station's uncertainty", escape(st.get("marginal"))),
+            ("reference points", escape(comp.get("reference"))),
+            ("EC evaluations per car (ec-solve)", escape(comp.get("budget"))),
+            ("search stops", escape(comp.get("stop")))]
+    return "<table>" + "".join(f"<tr><th>{a}</th><td>{b}</td></tr>" for a, b in rows) + "</table>"
 
 
 def _failing(c: SignoffContent) -> str:

@@ -31,6 +31,7 @@ from .stats import (
     AxisEffect,
     failure_drivers,
     ec_margins,
+    limiting_ec,
 )
 from .compensated import (COMPENSATION_CHUNK, CarJudge, CompensatedSamples, StationReading,
                           read_at_station, station_readings, station_twin, true_deviation)
@@ -101,4 +102,5 @@ __all__ = [
     "MarketYield",
     "MarketsRobustness",
     "markets_robustness",
+    "limiting_ec",
 ]

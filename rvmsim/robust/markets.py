@@ -28,7 +28,7 @@ from ..render import TaskRunner
 from ..scene import Scene
 from .robustness import EcStats, RobustnessResult, RobustnessSettings, _by_load, robustness
 from .samples import MountSample
-from .stats import YieldEstimate, YieldVerdict, yield_estimate
+from .stats import YieldEstimate, YieldVerdict, limiting_ec, yield_estimate
 from .variation import Variation, variation_from_scene
 
 if TYPE_CHECKING:
@@ -53,10 +53,7 @@ class MarketYield:
     def limiting(self) -> EcStats | None:
         """The enabled EC that fails on most samples (ties: the least worst margin); None
         when no EC fails."""
-        failing = [e for e in self.result.ecs if e.enabled and e.n_fail]
-        if not failing:
-            return None
-        return max(failing, key=lambda e: (e.n_fail, -(e.worst_margin or 0.0)))
+        return limiting_ec(self.result.ecs)
 
     def as_dict(self) -> dict[str, Any]:
         """The market's row of robustness.json (``markets``)."""
@@ -219,5 +216,5 @@ def markets_robustness(scene: Scene, params: IspParams, members: Sequence[Market
     timings = {f"{m.name}": m.result.timings.get("total", 0.0) for m in out}
     timings["total"] = time.perf_counter() - t0
     return MarketsRobustness(scene.name, scene.source, params, settings.output, var,
-                             settings.seed, first.samples, tuple(out), settings.min_yield,
+                             settings.seed, first.samples, tuple(out), settings.least_yield(var),
                              timings)

@@ -34,7 +34,7 @@ from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints,
 from .samples import MountSample, draw_samples, nominal_sample
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
 from .stats import (AxisEffect, YieldEstimate, YieldVerdict, ec_margins, failure_drivers,
-                    yield_estimate)
+                    limiting_dict, yield_estimate)
 from .variation import MOUNT_AXES, LoadState, Variation, variation_from_scene
 
 __all__ = ["EcStats", "ScalePoint", "RobustnessResult", "RobustnessSettings", "evaluate_samples",
@@ -210,7 +210,7 @@ class RobustnessResult(YieldVerdict):
             "min_yield": self.min_yield, "meets_min_yield": self.meets_min_yield,
             "nominal": None if self.nominal is None else self.nominal.ec.as_dict(),
             "worst_sample": self.worst_index,
-            "ecs": [e.as_dict() for e in self.ecs],
+            "ecs": [e.as_dict() for e in self.ecs], "limiting": limiting_dict(self.ecs),
             "yield_by_load": self.yield_by_load(),
             "scale_curve": [{"scale": p.scale, **p.estimate.as_dict()} for p in self.scale_curve],
             **self._compensation_dict(),
@@ -229,6 +229,7 @@ class RobustnessResult(YieldVerdict):
                              **comp.distribution()},
             "yield_before_compensation": {
                 **est.as_dict(), "by_load": self.yield_by_load(before=True),
+                "limiting": limiting_dict(self.ecs_before),
                 "ecs": [{"id": e.id, "n_fail": e.n_fail, "failure_rate": e.failure_rate,
                          "worst_value": e.worst_value, "worst_margin": e.worst_margin}
                         for e in self.ecs_before]},
@@ -355,7 +356,7 @@ class RobustnessSettings:
     render_scale : float
         Fraction of the sensor rendered (small renders for tests).
     min_yield : float, optional
-        Recorded with the result (``meets_min_yield``).
+        The least yield (0–1) that passes (``meets_min_yield``); default: the variation's.
     compensation : CompensationModel, optional
         Judge every sample after end-of-line compensation (:mod:`.compensated`): the yield
         is then the yield after it, and the result also holds the yield before.
@@ -371,6 +372,10 @@ class RobustnessSettings:
     render_scale: float = 1.0
     min_yield: float | None = None
     compensation: CompensationModel | None = None
+
+    def least_yield(self, variation: Variation) -> float | None:
+        """The least yield that passes: :attr:`min_yield`, else ``variation``'s."""
+        return self.min_yield if self.min_yield is not None else variation.min_yield
 
 
 def robustness(scene: Scene, params: IspParams,
@@ -463,7 +468,7 @@ def robustness(scene: Scene, params: IspParams,
     return RobustnessResult(
         scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,
         yield_estimate(passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
-        worst_frame, worst, settings.min_yield,
+        worst_frame, worst, settings.least_yield(var),
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
          "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)},
         fixed, before, () if before is None else _ec_stats(crit, drawn, before, var),

@@ -18,18 +18,58 @@ by state.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = ["YieldEstimate", "yield_estimate", "wilson_interval", "AxisEffect", "failure_drivers",
-           "ec_margins"]
+           "ec_margins", "limiting_ec", "limiting_dict"]
 
 #: Two-sided 95 % normal quantile.
 _Z95 = 1.959963984540054
+
+
+class _EcFailures(Protocol):
+    """What :func:`limiting_ec` reads of an EC over the samples
+    (:class:`~rvmsim.robust.EcStats`)."""
+
+    @property
+    def id(self) -> str: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def enabled(self) -> bool: ...
+    @property
+    def n_fail(self) -> int: ...
+    @property
+    def failure_rate(self) -> float: ...
+    @property
+    def worst_margin(self) -> float | None: ...
+
+
+_E = TypeVar("_E", bound=_EcFailures)
+
+
+def limiting_ec(ecs: Sequence[_E]) -> _E | None:
+    """The *limiting* EC over the samples: the enabled EC that fails on most samples (ties:
+    the least worst margin); None when no EC fails.  What a yield is short of first (the
+    *binding* EC of one picture is another thing: the least score,
+    :func:`rvmsim.markets.binding_ec`)."""
+    failing = [e for e in ecs if e.enabled and e.n_fail]
+    if not failing:
+        return None
+    return max(failing, key=lambda e: (e.n_fail, -(e.worst_margin or 0.0)))
+
+
+def limiting_dict(ecs: Sequence[_EcFailures]) -> dict[str, Any] | None:
+    """robustness.json's ``limiting``: the limiting EC's id, name and failures."""
+    e = limiting_ec(ecs)
+    return None if e is None else {"id": e.id, "name": e.name, "n_fail": e.n_fail,
+                                   "failure_rate": e.failure_rate}
 
 
 def wilson_interval(n_pass: int, n: int, z: float = _Z95) -> tuple[float, float]:

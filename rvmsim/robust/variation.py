@@ -74,13 +74,14 @@ NOMINAL_LOAD = LoadState("nominal")
 @dataclass(frozen=True)
 class Variation:
     """Mount tolerances (one :class:`AxisDistribution` per :data:`MOUNT_AXES` entry, same
-    order), load states (probabilities sum to 1) and the rendered positions per varying
-    position axis."""
+    order), load states (probabilities sum to 1), the rendered positions per varying
+    position axis, and the least production yield (0–1) that passes (None: not given)."""
 
     axes: tuple[AxisDistribution, ...] = tuple(AxisDistribution() for _ in MOUNT_AXES)
     load_states: tuple[LoadState, ...] = (NOMINAL_LOAD,)
     position_levels: int = 2
     source: str = "<none>"
+    min_yield: float | None = None
 
     def axis(self, name: str) -> AxisDistribution:
         """The distribution of axis ``name`` (one of :data:`MOUNT_AXES`)."""
@@ -90,7 +91,8 @@ class Variation:
         """JSON-ready description (what robustness.json records)."""
         return {"source": self.source, "position_levels": self.position_levels,
                 "mount": {n: vars(a) for n, a in zip(MOUNT_AXES, self.axes)},
-                "load_states": [vars(s) for s in self.load_states]}
+                "load_states": [vars(s) for s in self.load_states],
+                "min_yield": self.min_yield}
 
 
 def _axis(spec: AxisSpec | None) -> AxisDistribution:
@@ -108,7 +110,7 @@ def variation_from_spec(spec: VariationSpec, source: str = "<dict>") -> Variatio
     loads = tuple(LoadState(s.name, s.height_mm, s.pitch_deg, s.weight / total)
                   for s in spec.load_states) or (NOMINAL_LOAD,)
     return Variation(tuple(_axis(getattr(spec.mount, n)) for n in MOUNT_AXES), loads,
-                     spec.mount.position_levels, source)
+                     spec.mount.position_levels, source, spec.min_yield)
 
 
 def load_variation(path: str | Path) -> Variation:

@@ -116,12 +116,15 @@ class LoadStateSpec(_Model):
 
 
 class VariationSpec(_Model):
-    """Production variation: mount tolerances and load states (both optional), and the
-    end-of-line compensation that meets it (optional; used with ``--compensation``)."""
+    """Production variation: mount tolerances and load states (both optional), the
+    end-of-line compensation that meets it (optional; used with ``--compensation``), and
+    the least production yield that passes (``min_yield``, 0–1; optional: the default of
+    ``rvmsim robustness --min-yield`` and ``rvmsim signoff --min-yield``)."""
 
     mount: MountTolerance = MountTolerance()
     load_states: Annotated[list[LoadStateSpec], Field(max_length=20)] = []
     compensation: CompensationSpec | None = None
+    min_yield: Annotated[float, Field(ge=0, le=1)] | None = None
 
     @field_validator("load_states")
     @classmethod

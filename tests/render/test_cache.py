@@ -32,6 +32,11 @@ def test_key_follows_content_not_text_or_folder(tmp_path):
     assert scene_key(load_scene(copy)) == scene_key(scene)
     assert scene_key(scene, 0.5) != scene_key(scene)
     doc = yaml.safe_load(text)
+    # the production variation (its least yield too) changes no picture
+    assert scene.variation is not None and "min_yield" not in doc["variation"]
+    doc["variation"]["min_yield"] = 0.9
+    assert scene_key(scene_from_dict(doc)) == scene_key(scene)
+    doc = yaml.safe_load(text)
     doc["camera"]["mount"]["pitch_deg"] += 0.5
     assert scene_key(scene_from_dict(doc)) != scene_key(scene)
 

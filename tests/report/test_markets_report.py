@@ -33,8 +33,17 @@ def run(tmp_path_factory):
     assert _mtimes(root / "run") == before  # a report only reads the run
     sign = run_in_process(["signoff", "run", "--out", "so", "--no-pdf", "--no-progress"],
                           cwd=root)
-    assert sign.code == 0, sign.stderr
+    assert sign.code == _sheet_status(root / "so"), sign.stderr
     return root, json.loads((root / "run" / "best" / "markets.json").read_text()), sign
+
+
+def _sheet_status(out):
+    """The exit status a sign-off must have: 0 when its ECs at the display and every
+    market pass (nothing else was given to it), else 1."""
+    doc = json.loads((out / "signoff.json").read_text())
+    ok = all(e["passed"] for e in doc["ecs"]["ecs"] if e["enabled"]) and \
+        all(m["passed"] for m in doc["markets"])
+    return 0 if ok else 1
 
 
 def _mtimes(run):
@@ -94,7 +103,9 @@ def test_the_signoff_says_all_markets_pass_only_when_every_one_does(run, tmp_pat
         (copy / "best" / "markets.json").write_text(json.dumps(edited))
         out = run_in_process(["signoff", str(copy), "--out", str(tmp_path / f"so{expect}"),
                               "--no-pdf", "--no-progress"])
-        assert out.code == 0, out.stderr
+        assert out.code == _sheet_status(tmp_path / f"so{expect}"), out.stderr
+        if not expect:  # a failing market fails the sheet, whatever its ECs
+            assert out.code == 1 and "Markets: not every market passes" in out.stderr
         so = json.loads((tmp_path / f"so{expect}" / "signoff.json").read_text())
         assert so["all_markets_pass"] is expect
         assert ("markets: all markets pass (2)" in out.stdout) is expect
@@ -151,7 +162,7 @@ def test_a_plain_run_is_judged_in_markets_by_report_and_signoff(run, tmp_path):
         [r["binding"]["ec"] for r in doc["markets"]]
     sign = run_in_process(["signoff", "plain", "--markets", ",".join(MARKETS), "--out", "so",
                            "--no-pdf", "--no-progress"], cwd=tmp_path)
-    assert sign.code == 0, sign.stderr
+    assert sign.code == _sheet_status(tmp_path / "so"), sign.stderr
     assert [m["member"] for m in json.loads((tmp_path / "so" / "signoff.json").read_text())
             ["markets"]] == MARKETS
     other = run_in_process(["report", str(root / "run"), "--markets", "jp"])

@@ -86,7 +86,11 @@ def made(tmp_path_factory):
         res = _rvmsim("signoff", run, "--robustness", root / "rob", "--validation",
                       root / "val", "--eol", root / "eol", "--reviewer", REVIEWER, "--out",
                       out, "--no-progress", env=env)
-        assert res.code == 0, res.stderr
+        # the two captures are ERROR rows: the sheet fails, and says why on one line
+        assert res.code == 1, res.stderr
+        [line] = res.stderr.splitlines()
+        assert line.startswith("the sheet fails: ") and \
+            "Validation against a real capture: fails" in line, line
         yield {"root": root, "env": env, "scene": scene, "run": run, "params": params,
                "out": out, "stdout": res.stdout}
     finally:
@@ -335,7 +339,8 @@ def test_signoff_refuses_an_eol_record_of_another_vehicle_unless_allowed(made, t
     assert not out.exists()
     res = _rvmsim("signoff", made["run"], "--eol", eol, "--out", out, "--no-pdf",
                   "--no-progress", "--allow-other-setting", env=made["env"])
-    assert res.code == 0, res.stderr
+    signed = json.loads((out / "signoff.json").read_text())
+    assert res.code == (0 if signed["passed"] else 1), res.stderr
     assert "warning:" in res.stderr and "Vehicle B" in res.stderr
     assert "Signed with records of another setting" in (out / "signoff.html").read_text()
 
@@ -344,3 +349,50 @@ def html_escape(s: str) -> str:
     import html
 
     return html.escape(s, quote=True)
+
+
+def test_the_summary_gives_the_verdict_both_yields_the_limiting_ec_and_the_model(made):
+    """The summary says PASS/FAIL and why (from the records themselves), the yield after
+    and before compensation with their intervals, the limiting EC (the enabled EC failing
+    on most samples, counted here from robustness.json's rows), that no least yield was
+    given, and the compensation model the yield assumes (the built-in default, in full)."""
+    text = _page(made)
+    summary = _section(text, "verdict")
+    js = json.loads((made["out"] / "signoff.json").read_text())
+    rob = json.loads((made["root"] / "rob" / "robustness.json").read_text())
+    eol = json.loads((made["root"] / "eol" / "eol.json").read_text())
+    ecs_pass = all(e["passed"] for e in js["ecs"]["ecs"] if e["enabled"])
+    expected_fail = {"Validation against a real capture"} | (
+        set() if ecs_pass else {"ECs at the display output of record"}) | (
+        set() if eol["passed"] == eol["cars"] else {"End-of-line station"})
+    assert {c["name"] for c in js["checks"] if c["passed"] is False} == expected_fail
+    assert js["passed"] is False and '<span class="badge fail">FAIL</span>' in summary
+    # both yields, each with its interval and counts, as robustness.json has them
+    for est in (rob, rob["yield_before_compensation"]):
+        lo, hi = est["ci95"]
+        assert (f"{100 * est['yield']:.1f} % (95 % CI {100 * lo:.1f}–{100 * hi:.1f} %, "
+                f"{est['n_pass']} of {est['n']} samples)") in summary
+    assert "before compensation" in summary
+    # the limiting EC, counted from the per-EC rows
+    failing = [e for e in rob["ecs"] if e["enabled"] and e["n_fail"]]
+    if failing:
+        most = max(e["n_fail"] for e in failing)
+        tops = [e for e in failing if e["n_fail"] == most]
+        lim = min(tops, key=lambda e: e["worst_margin"])
+        assert f"{lim['id']} " in summary and rob["limiting"]["id"] == lim["id"]
+        assert f"{100 * lim['failure_rate']:.1f} % of the samples" in summary
+    else:
+        assert rob["limiting"] is None and "no EC fails on any sample" in summary
+    assert "no least yield given" in summary and js["min_yield"] is None
+    # the compensation model: built-in, its law, values, σ, and every value in the section
+    assert "law ec-solve" in summary and "built-in default" in summary
+    from rvmsim.compensation import DEFAULT_COMPENSATION as D
+    yield_section = _section(text, "yield")
+    assert "End-of-line compensation model" in yield_section
+    for value in (f"{D.angle_sigma_deg}°, {D.position_sigma_mm} mm", f"{D.edge_sigma_px} px",
+                  D.law, D.marginal, D.stop, str(D.budget)):
+        assert value in yield_section, value
+    for name, lo, hi in D.ranges:
+        assert f"<th>range of {name}</th><td>{lo:g} … {hi:g}°</td>" in yield_section
+    rows = [f for f in js["files"] if f["role"] == "compensation (robustness)"]
+    assert len(rows) == 1 and rows[0]["sha256"] is None and "built-in" in rows[0]["path"]

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 from rvmsim.criteria import Criteria, default_criteria
 from rvmsim.pipeline import CandidateEvaluator
@@ -95,16 +96,23 @@ def _cli_case(folder: Path) -> None:
 
 
 def test_cli_exit_status_follows_min_yield(tmp_path: Path):
-    """The paper's defaults do not pass on this car (yield 0): exit 1 below --min-yield,
-    0 at or above it; both write the outputs."""
+    """The paper's defaults do not pass on this car (yield 0): exit 1 below the least
+    yield (the variation file's ``min_yield`` when no --min-yield is given), 0 at or above
+    it (--min-yield overrides the file's); both write the outputs and record the least
+    yield they judged by."""
     _cli_case(tmp_path)
+    (tmp_path / "variation.yaml").write_text(yaml.safe_dump({**ANGLES_ONLY, "min_yield": 0.5}))
     args = ["robustness", "scene.yaml", "--params", "params.yaml", "--samples", "8",
-            "--scale-samples", "4", "--no-progress"]
-    low = run_in_process([*args, "--out", "a", "--min-yield", "0.5"], cwd=tmp_path)
+            "--scale-samples", "4", "--variation", "variation.yaml", "--no-progress"]
+    low = run_in_process([*args, "--out", "a"], cwd=tmp_path)
     assert low.code == 1, low.stderr
     assert "yield 0.0 %" in low.stdout
     ok = run_in_process([*args, "--out", "b", "--min-yield", "0"], cwd=tmp_path)
     assert ok.code == 0, ok.stderr
+    for out, least in (("a", 0.5), ("b", 0.0)):
+        doc = json.loads((tmp_path / out / "robustness.json").read_text())
+        assert doc["min_yield"] == least and doc["meets_min_yield"] is (out == "b")
+        assert doc["variation"]["min_yield"] == 0.5
     for out in ("a", "b"):
         assert (tmp_path / out / "robustness.html").is_file()
         assert json.loads((tmp_path / out / "robustness.json").read_text())["n"] == 8
