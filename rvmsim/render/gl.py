@@ -251,6 +251,7 @@ class RenderProcess:
     def __init__(self) -> None:
         self._pool: ProcessPoolExecutor | None = None
         self._blocks: list[Token[RenderProcess | None]] = []
+        self._in_flight = 0  # renders under way (another thread's, given renders=)
 
     def __enter__(self) -> RenderProcess:
         self._blocks.append(_KEPT.set(self))
@@ -259,8 +260,8 @@ class RenderProcess:
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
         _KEPT.reset(self._blocks.pop())
-        if not self._blocks:
-            self.close(now=exc_type is not None)
+        if not self._blocks:  # an idle worker ends in order even when the block failed
+            self.close(now=exc_type is not None and self._in_flight > 0)
 
     def close(self, *, now: bool = False) -> None:
         """End the worker (``now``: without waiting for a render in flight)."""
@@ -274,6 +275,7 @@ class RenderProcess:
         for attempt in range(1, _RENDER_ATTEMPTS + 1):
             if self._pool is None:
                 self._pool = start_pool(1)
+            self._in_flight += 1
             try:
                 atlas: FaceAtlas = self._pool.submit(_render_here, parts, layout, camera, sky,
                                                      progress, color).result()
@@ -289,6 +291,8 @@ class RenderProcess:
             except BaseException:  # Ctrl-C, SIGTERM: the render in flight is abandoned
                 self.close(now=True)
                 raise
+            finally:
+                self._in_flight -= 1
         raise AssertionError("unreachable")
 
 

@@ -396,3 +396,46 @@ def test_the_summary_gives_the_verdict_both_yields_the_limiting_ec_and_the_model
         assert f"<th>range of {name}</th><td>{lo:g} … {hi:g}°</td>" in yield_section
     rows = [f for f in js["files"] if f["role"] == "compensation (robustness)"]
     assert len(rows) == 1 and rows[0]["sha256"] is None and "built-in" in rows[0]["path"]
+
+
+def test_the_least_yield_gates_the_sheet_and_a_model_file_is_named_with_its_hash(made,
+                                                                               tmp_path):
+    """A copy of the robustness record that names a least yield above its yield, and a
+    compensation model read from a file: the yield check fails (exit 1, the line says
+    which figure), the sheet names the model's file with that file's SHA-256; --min-yield
+    0 overrides the record and the yield check passes."""
+    rob = tmp_path / "rob"
+    shutil.copytree(made["root"] / "rob", rob)
+    doc = json.loads((rob / "robustness.json").read_text())
+    n = int(doc["n"])
+    if doc["n_pass"] == n:  # a yield below 100 %
+        doc.update({"yield": (n - 1) / n, "n_pass": n - 1})
+    model = tmp_path / "station <model>.yaml"
+    model.write_text("station: {angle_sigma_deg: 0.2}\n")
+    digest = hashlib.sha256(model.read_bytes()).hexdigest()
+    doc["min_yield"] = 1.0
+    doc["compensation"]["source"] = str(model)
+    doc["inputs"]["compensation"] = str(model)
+    doc["inputs"]["files"].append({"role": "compensation", "path": str(model),
+                                   "sha256": digest, "note": ""})
+    (rob / "robustness.json").write_text(json.dumps(doc))
+    res = _rvmsim("signoff", made["run"], "--robustness", rob, "--out", tmp_path / "a",
+                  "--no-pdf", "--no-progress", env=made["env"])
+    js = json.loads((tmp_path / "a" / "signoff.json").read_text())
+    [check] = [c for c in js["checks"] if c["name"] == "Production yield"]
+    assert check["passed"] is False and js["min_yield"] == 1.0
+    assert res.code == 1 and f"Production yield: {100 * doc['yield']:.1f} % < 100 %" in \
+        res.stderr, res.stderr
+    page = (tmp_path / "a" / "signoff.html").read_text()
+    assert "the robustness run&#x27;s, in robustness.json" in _section(page, "verdict")
+    assert (f'<code class="nobr">{html_escape(str(model))}</code> sha256 '
+            f'<code class="sha">{digest}</code>') in _section(page, "yield")
+    assert [f["sha256"] for f in js["files"] if f["role"] == "compensation (robustness)"] \
+        == [digest]
+    res = _rvmsim("signoff", made["run"], "--robustness", rob, "--out", tmp_path / "b",
+                  "--min-yield", "0", "--no-pdf", "--no-progress", env=made["env"])
+    js = json.loads((tmp_path / "b" / "signoff.json").read_text())
+    [check] = [c for c in js["checks"] if c["name"] == "Production yield"]
+    ecs_pass = all(e["passed"] for e in js["ecs"]["ecs"] if e["enabled"])
+    assert check["passed"] is True and js["min_yield"] == 0.0
+    assert res.code == (0 if ecs_pass else 1), res.stderr
