@@ -21,7 +21,8 @@ __all__ = ["report", "judge"]
               help="First judge the run's best setting in these markets (as `rvmsim judge "
                    "RUN --markets` does: one row and picture per market, written into the "
                    "run; docs/markets.md); a run tuned with --markets shows its own.")
-def report(path: Path, out: Path | None, markets: str | None) -> None:
+@click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
+def report(path: Path, out: Path | None, markets: str | None, progress: bool) -> None:
     """Write a self-contained HTML review report of a run (PATH = RUN), or of every run in a
     folder plus an index page (PATH = RUNS_DIR).  The report only reads the run."""
     from ..report import write_any_report
@@ -30,7 +31,7 @@ def report(path: Path, out: Path | None, markets: str | None) -> None:
     if markets is not None:
         judge_run_in_markets(path, markets)
         click.echo(f"judged in {markets}: wrote {path / 'best' / 'markets.json'}")
-    click.echo(f"wrote {write_any_report(path, out)}")
+    click.echo(f"wrote {write_any_report(path, out, progress=progress)}")
 
 
 @click.command(cls=Command, error_path=("run",))

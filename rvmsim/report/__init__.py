@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from .run import (
     write_report,
-    write_batch_report,
-    write_any_report,
     EC_GROUP_NAMES,
     SECTION_IDS,
     ec_section,
 )
+from .index import write_batch_report, write_any_report
 from .sweep import (
     FeasibilityGrid,
     feasibility_grid,

@@ -17,19 +17,18 @@ Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``co
 
 from __future__ import annotations
 
-import os
 import shlex
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
-from urllib.parse import quote
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._progress import progress_bar
 from ..errors import RvmsimError
 from ..pipeline import evaluate_params, record_output, rvm_color
-from ..runs import (find_runs, is_run_folder, open_run, recorded_path, run_inputs, run_settings,
-                    run_state, store_candidates, top_file)
+from ..runs import (open_run, recorded_path, run_inputs, run_settings, run_state,
+                    store_candidates, top_file)
 from ..tune import member_set
 from ..tune.markets import load_markets
 from .market_rows import markets_html
@@ -55,7 +54,7 @@ if TYPE_CHECKING:
     from ..runs import Candidate, RunSettings, RunState, TrialRecord
     from ..search import TuningConfig
 
-__all__ = ["write_report", "write_batch_report", "write_any_report", "EC_GROUP_NAMES",
+__all__ = ["write_report", "EC_GROUP_NAMES",
            "SECTION_IDS", "ec_section"]
 
 #: The paper groups the ECs by their first digit.
@@ -320,12 +319,26 @@ class _Summary:
     thumb: np.ndarray
 
 
-def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary]:
-    """The report page of one run (to be written into ``report_dir``, default the run
-    folder: links are relative to it), and the summary the batch index shows."""
+#: The steps of one run's report, as its progress bar counts them.
+_STEPS = 4
 
+
+def _build(run_dir: Path, report_dir: Path | None = None,
+           bar: Any = None) -> tuple[str, _Summary]:
+    """The report page of one run (to be written into ``report_dir``, default the run
+    folder: links are relative to it), and the summary the batch index shows; ``bar``
+    (a progress bar) advances by :data:`_STEPS`."""
+
+    def step(next_step: str) -> None:
+        if bar is not None:
+            bar.update()
+            bar.set_postfix_str(next_step)
+
+    if bar is not None:
+        bar.set_postfix_str("reading the run")
     r = _load_run(run_dir)
     report_dir = report_dir if report_dir is not None else run_dir
+    step("the ECs of rank 1")
     frame = evaluate_params(r.images, r.top[0].params, r.output, r.criteria)
     result, color, annotated = frame.ec, frame.color, frame.annotated
     assert annotated is not None
@@ -357,9 +370,12 @@ def _build(run_dir: Path, report_dir: Path | None = None) -> tuple[str, _Summary
                                   r.settings.kind.aggregate or "min")
     if r.robust_rows:
         header += robust_section(r.top, r.robust_rows, r.settings)
+    step("pictures and tables")
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
-            + _ec_section(result) + _params_section(r) + _convergence_section(r)
-            + _gallery_section(r, str(run_dir), color))
+            + _ec_section(result) + _params_section(r) + _convergence_section(r))
+    step(f"the top-{len(r.top)} gallery")
+    body += _gallery_section(r, str(run_dir), color)
+    step("writing")
     summary = _Summary(title, result.score, result.passed, _group_status(result),
                        shrink(color, INDEX_THUMB_PX))
     return page(f"RVM tuning review: {title}", body), summary
@@ -374,7 +390,8 @@ def _write(path: Path, text: str) -> None:
 
 
 # ---------------------------------------------------------------------------- public API
-def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
+def write_report(run_dir: str | Path, out: str | Path | None = None, *,
+                 progress: bool = False) -> Path:
     """Write the review report of one tuning run.
 
     Parameters
@@ -383,6 +400,8 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
         A run folder written by :func:`rvmsim.tune.tune` (``run.json``, ``run.sqlite``).
     out : path, optional
         The HTML file to write (default: ``run_dir/report.html``).
+    progress : bool
+        Show a progress bar over the report's steps on stderr.
 
     Returns
     -------
@@ -397,78 +416,8 @@ def write_report(run_dir: str | Path, out: str | Path | None = None) -> Path:
     """
     run_dir = Path(run_dir)
     path = Path(out) if out is not None else run_dir / "report.html"
-    text, _ = _build(run_dir, path.parent)
-    _write(path, text)
+    with progress_bar(total=_STEPS, desc="report", unit="step", leave=False,
+                      disable=not progress) as bar:
+        text, _ = _build(run_dir, path.parent, bar)
+        _write(path, text)
     return path
-
-
-def write_batch_report(runs_dir: str | Path, out: str | Path | None = None) -> Path:
-    """Write a report for every run folder in ``runs_dir`` and an index page linking them.
-
-    Parameters
-    ----------
-    runs_dir : path
-        A folder of run folders (as ``rvmsim batch`` writes them).
-    out : path, optional
-        The index file (default: ``runs_dir/index.html``); each run's report goes to its
-        own folder as ``report.html`` and is linked relative to the index.
-
-    Returns
-    -------
-    Path
-        The index file written.
-
-    Raises
-    ------
-    RvmsimError
-        No run folders in ``runs_dir``, or the index cannot be written.  A run whose
-        report cannot be made gets an error row in the index instead.
-    """
-    runs_dir = Path(runs_dir)
-    runs = find_runs(runs_dir)
-    if not runs:
-        raise RvmsimError(f"{runs_dir}: no run folders (with run.sqlite) here")
-    index = Path(out) if out is not None else runs_dir / "index.html"
-    head = ("<tr><th>vehicle</th><th>RVM image</th><th>EC score</th>"
-            + "".join(f"<th>{escape(g)}-x {escape(n)}</th>" for g, n in EC_GROUP_NAMES.items())
-            + "<th>report</th></tr>")
-    rows = []
-    for run in runs:
-        try:
-            text, s = _build(run)
-            rep = run / "report.html"
-            _write(rep, text)
-        except RvmsimError as err:
-            rows.append(f'<tr class="fail"><td>{escape(run.name)}</td>'
-                        f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{escape(err)}</td></tr>')
-            continue
-        href = quote(Path(os.path.relpath(rep, index.parent)).as_posix())
-        cells = "".join(f'<td class="{st}">{escape(st)}</td>' for st in s.groups.values())
-        rows.append(
-            f'<tr><td>{escape(s.vehicle)}<br><span class="muted">{escape(run.name)}</span></td>'
-            f'<td>{img_tag(s.thumb, s.vehicle)}</td>'
-            f'<td class="num {"pass" if s.passed else "fail"}">{s.score:.4g}</td>'
-            f'{cells}<td><a href="{escape(href)}">report</a></td></tr>')
-    body = (f"<h1>RVM tuning review: {escape(runs_dir.name or str(runs_dir))}</h1>"
-            f'<p class="muted">{len(runs)} runs in {escape(runs_dir)}; EC groups pass when every '
-            'enabled EC of the group passes.</p>'
-            f'<section id="index"><table>{head}{"".join(rows)}</table></section>')
-    _write(index, page(f"RVM tuning review: {runs_dir.name}", body))
-    return index
-
-
-def write_any_report(path: str | Path, out: str | Path | None = None) -> Path:
-    """``rvmsim report PATH``: :func:`write_report` if ``path`` is a run folder, else
-    :func:`write_batch_report` if it holds run folders.
-
-    Raises
-    ------
-    RvmsimError
-        One line: neither.
-    """
-    path = Path(path)
-    if is_run_folder(path):
-        return write_report(path, out)
-    if find_runs(path):
-        return write_batch_report(path, out)
-    raise RvmsimError(f"{path}: not a run folder (no run.sqlite) and no run folders in it")

@@ -5,11 +5,13 @@ from __future__ import annotations
 import base64
 import dataclasses
 import html
+import io
 import json
 import os
 import re
 import shutil
 import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from html.parser import HTMLParser
 from urllib.parse import unquote
@@ -213,8 +215,17 @@ def test_a_card_without_its_params_file_gives_the_command_that_writes_one(runs, 
         assert f"top/rank_{k}.yaml" not in words
 
 
-def test_batch_index_links_and_groups(runs, tmp_path):
-    index = write_batch_report(runs["runs_dir"])
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_batch_index_links_and_groups(runs, tmp_path, monkeypatch):
+    err = _Terminal()  # a terminal: tqdm's bar (off one, plain lines: tests/test_progress.py)
+    monkeypatch.setattr(sys, "stderr", err)
+    index = write_batch_report(runs["runs_dir"], progress=True)
+    bar = err.getvalue()
+    assert "reports:" in bar and "| 8/8 " in bar and "gallery" in bar, bar  # 2 runs × 4 steps
     assert index == runs["runs_dir"] / "index.html"
     text = index.read_text(encoding="utf-8")
     doc = _parse(text)
