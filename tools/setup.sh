@@ -2,7 +2,7 @@
 # Install everything rvmsim needs on a fresh Debian machine with Python 3.11:
 #   - Debian packages for headless OpenGL (EGL on Mesa's llvmpipe; OSMesa as a fallback),
 #   - the rvmsim package itself with its Python dependencies (and the test extras with --test),
-#   - with --test, Chromium (headless, for the review-report screenshot test).
+#   - Chromium (headless: `rvmsim signoff` prints its PDF with it; the browser tests use it).
 # Safe to run again: packages already present are not fetched twice.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -10,8 +10,8 @@ extras=""
 if [[ "${1:-}" == "--test" ]]; then extras="[test]"; fi
 
 apt_pkgs=(libegl1 libegl-mesa0 libgl1-mesa-dri libgles2 libosmesa6)
-# --test: headless Chromium for the report screenshot test (skipped where it is missing).
-if [[ -n "$extras" ]] && ! command -v chromium >/dev/null 2>&1; then apt_pkgs+=(chromium); fi
+# Headless Chromium: the sign-off's PDF (Playwright drives it; no browser download).
+if ! command -v chromium >/dev/null 2>&1; then apt_pkgs+=(chromium); fi
 missing=()
 for p in "${apt_pkgs[@]}"; do
     dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
