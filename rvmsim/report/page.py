@@ -18,7 +18,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["CSS", "escape", "png_bytes", "shrink", "data_uri", "img_tag", "figure_png", "page"]
+__all__ = ["CSS", "escape", "png_bytes", "shrink", "data_uri", "img_tag", "figure_png", "page",
+           "sha_html", "path_html"]
 
 CSS = """
 body{font-family:sans-serif;margin:1.5em auto;max-width:1200px;color:#222;padding:0 1em}
@@ -42,6 +43,8 @@ img{max-width:100%;border:1px solid #999}
 .margins span{padding:.05em .35em;border-radius:.25em;white-space:nowrap}
 .margins .pass{background:#d8f0d8}.margins .fail{background:#f6d0d0;color:#8a1010}
 code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
+code.sha,code.path{word-break:normal;overflow-wrap:normal;white-space:nowrap;display:inline}
+code.sha{font-size:.8em}code.path{white-space:normal}.ecid{white-space:nowrap}
 .muted{color:#666;font-size:.9em}
 pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
 """
@@ -50,6 +53,18 @@ pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
 def escape(value: object) -> str:
     """HTML-escape anything (quotes included)."""
     return html.escape(str(value), quote=True)
+
+
+def sha_html(digest: str | None) -> str:
+    """A SHA-256 (or "—") in monospace that never breaks inside it."""
+    return f'<code class="sha">{escape(digest or "—")}</code>'
+
+
+def path_html(path: object) -> str:
+    """A file path in monospace that breaks only after a ``/`` (never inside a name)."""
+    words = [f'<span class="ecid">{escape(part)}</span>' if part else ""
+             for part in str(path).split("/")]
+    return '<code class="path">' + "/<wbr>".join(words) + "</code>"
 
 
 def png_bytes(image: np.ndarray) -> bytes:

@@ -21,7 +21,7 @@ from pathlib import Path
 from .._version import __version__
 from ..errors import RvmsimError
 from ..scene import load_scene, mesh_parts
-from .page import escape
+from .page import escape, path_html, sha_html
 
 __all__ = ["Provenance", "provenance", "sha256_file", "FileRecord", "file_record",
            "provenance_html", "files_table", "scene_records", "NOT_A_CHECKOUT"]
@@ -153,10 +153,9 @@ def files_table(records: list[FileRecord]) -> str:
     rows = "".join(
         f'<tr class="{"fail" if r.note.startswith("not readable") else ""}">'
         f"<td>{escape(r.role)}</td>"
-        f"<td><code>{escape(r.path)}</code></td>"
-        f"<td><code>{escape(r.sha256 or '—')}</code>{note(r)}</td></tr>"
+        f"<td>{path_html(r.path)}<br>{sha_html(r.sha256)}{note(r)}</td></tr>"
         for r in records)
-    return f"<table><tr><th>file</th><th>path</th><th>SHA-256</th></tr>{rows}</table>"
+    return f"<table><tr><th>file</th><th>path, then its SHA-256</th></tr>{rows}</table>"
 
 
 def scene_records(scene_file: str | Path, role: str = "scene") -> list[FileRecord]:

@@ -120,7 +120,7 @@ def _ec_rows(result: RobustnessResult) -> str:
         why = _why(e, result.estimate.n)
         rng = f"[{'–' if e.low is None else f'{e.low:g}'}, {'–' if e.high is None else f'{e.high:g}'}]"
         rows.append(
-            f'<tr class="{cls}"><td>{escape(e.id)}</td><td>{escape(e.name)}</td>'
+            f'<tr class="{cls}"><td class="ecid">{escape(e.id)}</td><td>{escape(e.name)}</td>'
             f'<td class="num">{rng} {escape(e.unit)}</td>'
             f'<td class="num">{100 * e.failure_rate:.1f} %</td>'
             f'<td class="num">{"—" if e.worst_value is None else f"{e.worst_value:.3g}"}</td>'

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .page import escape
+from .page import escape, path_html, sha_html
 from .provenance import FileRecord
 from ..criteria import is_yes_no
 from ..isp import PARAM_SPECS
@@ -58,8 +58,8 @@ def setting_html(setting: SettingRecord) -> str:
     """The params file with its SHA-256, the output size, then :func:`params_table`."""
     f, out = setting.file, setting.output
     digest = f.sha256 or f"— ({f.note})"
-    return (f'<table class="setting"><tr><th>params file</th><td><code>{escape(f.path)}</code>'
-            f'</td></tr><tr><th>SHA-256</th><td><code class="sha">{escape(digest)}</code></td>'
+    return (f'<table class="setting"><tr><th>params file</th><td>{path_html(f.path)}'
+            f'</td></tr><tr><th>SHA-256</th><td>{sha_html(digest)}</td>'
             f"</tr><tr><th>output of the file</th><td>{out.width} × {out.height} px, "
             f"{'mirrored' if out.mirror else 'not mirrored'}</td></tr></table>"
             + params_table(setting.params))

@@ -45,7 +45,7 @@ from ..runs import rank_text, top_file
 from ..storage import json_default
 from ..tune.markets import load_markets
 from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
-from .page import shrink
+from .page import escape, shrink
 from .provenance import FileRecord, file_record, provenance, scene_records
 from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,
                       load_robustness, load_validation, same_setting)
@@ -246,9 +246,22 @@ def find_chromium() -> str | None:
     return None
 
 
-def print_pdf(html: Path, pdf: Path, browser: str) -> Path:
+#: The PDF's running header and footer (Chromium's print templates: their own styles, the
+#: ``pageNumber``/``totalPages`` spans filled in by Chromium).
+_HEADER = ('<div style="font:8pt sans-serif;width:100%;margin:0 12mm;color:#444;'
+           'display:flex;justify-content:space-between"><span>{left}</span>'
+           '<span style="font-family:monospace">{right}</span></div>')
+_FOOTER = ('<div style="font:8pt sans-serif;width:100%;margin:0 12mm;color:#444;'
+           'text-align:right">page <span class="pageNumber"></span> of '
+           '<span class="totalPages"></span></div>')
+
+
+def print_pdf(html: Path, pdf: Path, browser: str, header: tuple[str, str] = ("", "")
+              ) -> Path:
     """Print ``html`` to ``pdf`` (A4, backgrounds) with headless Chromium at ``browser``,
-    driven by Playwright; the browser is closed before this returns.
+    driven by Playwright; the browser is closed before this returns.  Every page carries
+    ``header`` (left and right text: the vehicle; the setting's hash and the date) at the
+    top and "page N of M" at the bottom.
 
     Raises
     ------
@@ -263,7 +276,11 @@ def print_pdf(html: Path, pdf: Path, browser: str) -> Path:
                 page = b.new_page()
                 page.goto(html.resolve().as_uri(), wait_until="load")
                 page.pdf(path=str(pdf), format="A4", print_background=True,
-                         margin={"top": "14mm", "bottom": "14mm", "left": "12mm",
+                         display_header_footer=True,
+                         header_template=_HEADER.format(left=escape(header[0]),
+                                                        right=escape(header[1])),
+                         footer_template=_FOOTER,
+                         margin={"top": "18mm", "bottom": "16mm", "left": "12mm",
                                  "right": "12mm"})
             finally:
                 b.close()
@@ -390,7 +407,10 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         pdf_path = None
         if browser is not None:
             bar.set_postfix_str("printing the PDF")
-            pdf_path = print_pdf(html, out / "signoff.pdf", browser)
+            f = content.setting.file
+            pdf_path = print_pdf(html, out / "signoff.pdf", browser, (
+                f"Sign-off: {content.title}",
+                f"setting sha256 {(f.sha256 or '')[:16]} · {content.provenance.date[:10]}"))
             bar.update()
         js.write_text(json.dumps(_summary(content, html, pdf_path), indent=2,
                                  default=json_default) + "\n", encoding="utf-8")

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .market_rows import all_markets_pass, markets_html, markets_verdict_text
-from .page import escape, img_tag, page
+from .page import escape, img_tag, page, path_html, sha_html
 from .provenance import FileRecord, Provenance, files_table, provenance_html
 from .records import EolRecord, RobustnessRecord, ValidationRecord
 from .setting import (SettingRecord, by_load_html, setting_html, variation_html,
@@ -28,8 +28,10 @@ __all__ = ["SignoffContent", "signoff_html", "SECTION_IDS", "NO_ROBUSTNESS", "Ch
            "verdict_checks", "sheet_passes", "compensation_text"]
 
 #: The page's sections, in order (each an element id).
-SECTION_IDS: tuple[str, ...] = ("verdict", "setting", "inputs", "tool", "ecs", "yield",
-                                "failing-samples", "validation", "eol", "signature")
+#: The signature block follows the summary (what the witness signs); the commands that
+#: reproduce the failing samples close the sheet as an appendix.
+SECTION_IDS: tuple[str, ...] = ("verdict", "signature", "setting", "inputs", "tool", "ecs",
+                                "yield", "failing-samples", "validation", "eol", "reproduce")
 
 #: The red line of a sign-off without a robustness result.
 NO_ROBUSTNESS = ("Robustness not run: the yield over mount tolerances and load states is not "
@@ -229,13 +231,13 @@ def _verdict(c: SignoffContent) -> str:
         f"{e.doc['passed']} of {e.doc['cars']} cars pass")))
     body = "".join(f"<tr><th>{escape(a)}</th><td>{b}</td></tr>" for a, b in rows)
     return (f'<section id="verdict"><h2>Summary</h2><table>{body}</table>'
-            '<p class="muted">The figures below are what the tool measured; the decision is '
-            "the reviewer's (signature block at the end).</p></section>")
+            '<p class="muted">The figures are what the tool measured; the decision is '
+            "the reviewer's (the signature block below).</p></section>")
 
 
 def _setting(c: SignoffContent) -> str:
     return ('<section id="setting"><h2>The setting</h2>'
-            f'<p>Rank 1 of the run <code>{escape(c.run_dir)}</code>, for tuning output '
+            f'<p>Rank 1 of the run {path_html(c.run_dir)}, for tuning output '
             f"{c.tuning_output.width} × {c.tuning_output.height} px.</p>"
             f"{setting_html(c.setting)}</section>")
 
@@ -243,7 +245,7 @@ def _setting(c: SignoffContent) -> str:
 def _inputs(c: SignoffContent) -> str:
     warn = "" if not c.changed_files else (
         '<p class="redbox">Changed since the robustness run (its recorded SHA-256 differs): '
-        + ", ".join(f"<code>{escape(p)}</code>" for p in c.changed_files) + "</p>")
+        + ", ".join(f"{path_html(p)}" for p in c.changed_files) + "</p>")
     return (f'<section id="inputs"><h2>Input files</h2>{warn}{files_table(c.files)}'
             "</section>")
 
@@ -269,7 +271,7 @@ def _ec_rows(c: SignoffContent) -> str:
         pic = c.ec_pictures.get(item.id)
         cell = "" if pic is None else img_tag(pic, f"EC {item.id}")
         rows.append(
-            f'<tr class="{st}"><td>{escape(item.id)}</td><td>{escape(item.name)}</td>'
+            f'<tr class="{st}"><td class="ecid">{escape(item.id)}</td><td>{escape(item.name)}</td>'
             f'<td class="num">{escape(value)} {escape(item.unit)}</td>'
             f'<td class="num">{escape(rng)} {escape(item.unit)}</td>'
             f'<td class="num">{escape(item.margin_text(unit_text(item.unit)))}</td>'
@@ -303,7 +305,7 @@ def _yield_ec_rows(doc: dict[str, Any]) -> str:
         b = before.get(e["id"])
         cls = "fail" if e.get("n_fail") else "pass"
         rows.append(
-            f'<tr class="{cls}"><td>{escape(e["id"])}</td><td>{escape(e.get("name", ""))}</td>'
+            f'<tr class="{cls}"><td class="ecid">{escape(e["id"])}</td><td>{escape(e.get("name", ""))}</td>'
             + ("" if not before else
                f'<td class="num">{100 * float((b or {}).get("failure_rate", 0)):.1f} %</td>')
             + f'<td class="num">{100 * float(e.get("failure_rate", 0)):.1f} %</td>'
@@ -331,7 +333,7 @@ def _yield(c: SignoffContent) -> str:
             + ("" if not before else f"; before end-of-line compensation "
                f"<b>{escape(_pct(before))}</b>")
             + f". Seed {escape(doc['seed'])}; criteria {escape(doc.get('criteria', ''))}; "
-            f"from <code>{escape(r.path.resolve())}</code>.</p>")
+            f"from {path_html(r.path.resolve())}.</p>")
     by_load = by_load_html(doc["yield_by_load"], before.get("by_load") if before else None)
     comp = doc.get("compensation")
     return (f'<section id="yield"><h2>Production yield</h2>{warn}{line}'
@@ -349,8 +351,7 @@ def _compensation_table(c: SignoffContent, comp: dict[str, Any]) -> str:
     rec = next((f for f in c.files if f.role == "compensation (robustness)"), None)
     where = (f"built-in default of rvmsim {escape(c.provenance.version)} (no file: every "
              "value is below)" if rec is None or rec.sha256 is None else
-             f'<code class="nobr">{escape(rec.path)}</code> sha256 '
-             f'<code class="sha">{escape(rec.sha256)}</code>')
+             f"{path_html(rec.path)} sha256 {sha_html(rec.sha256)}")
     st = comp.get("station") or {}
     ranges = comp.get("ranges") or {}
     rows = [("source", where if src else "—"),
@@ -370,6 +371,15 @@ def _compensation_table(c: SignoffContent, comp: dict[str, Any]) -> str:
     return "<table>" + "".join(f"<tr><th>{a}</th><td>{b}</td></tr>" for a, b in rows) + "</table>"
 
 
+def _failure_groups(c: SignoffContent) -> list[tuple[str, list[dict[str, Any]]]]:
+    """The failing samples grouped by what fails on them (their set of failing ECs), in
+    order of first appearance: one reproduce command per group."""
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for s in c.robustness.failing if c.robustness is not None else []:
+        groups.setdefault(", ".join(sorted(map(str, s.get("failed", [])))), []).append(s)
+    return list(groups.items())
+
+
 def _failing(c: SignoffContent) -> str:
     r = c.robustness
     if r is None:
@@ -379,18 +389,21 @@ def _failing(c: SignoffContent) -> str:
     if not failing:
         return ('<section id="failing-samples"><h2>Failing samples</h2><p>None of the '
                 f"{len(r.doc['samples'])} samples fails.</p></section>")
+    ref = {str(s["index"]): f"R{k}" for k, (_, group) in enumerate(_failure_groups(c), 1)
+           for s in group}
     rows = []
     for s in failing:
         offsets = ", ".join(f"{k.split('_')[0]} {float(s.get(k, 0.0)):+.3g}" for k in (
             "x_mm", "y_mm", "z_mm", "yaw_deg", "pitch_deg", "roll_deg"))
         rows.append(f"<tr><td class=\"num\">{escape(s['index'])}</td>"
                     f"<td>{escape(s.get('load', ''))}</td><td>{escape(offsets)}</td>"
-                    f"<td>{escape(', '.join(map(str, s.get('failed', []))))}</td>"
-                    f"<td><code>{escape(c.repro.get(str(s['index']), ''))}</code></td></tr>")
+                    f"<td class=\"ecid\">{escape(', '.join(map(str, s.get('failed', []))))}</td>"
+                    f"<td>{escape(ref.get(str(s['index']), ''))}</td></tr>")
     return ('<section id="failing-samples"><h2>Failing samples</h2>'
-            f"<p>{len(failing)} of {len(r.doc['samples'])} samples fail. Each command writes "
-            "the sample's car as a scene file and renders it in full (docs/robustness.md, "
-            '"Any sample as a scene").'
+            f"<p>{len(failing)} of {len(r.doc['samples'])} samples fail. The appendix gives, "
+            "for each distinct failure (the same ECs failing), a command that writes one such "
+            'car as a scene and renders it in full (docs/robustness.md, "Any sample as a '
+            'scene").'
             + ("" if not r.doc.get("compensation") else
                " The exported car is the car before compensation: <code>rvmsim evaluate"
                "</code> judges it with the platform setting; its per-car values are the "
@@ -398,6 +411,23 @@ def _failing(c: SignoffContent) -> str:
             + '</p><table><tr><th>sample</th><th>load</th>'
             "<th>offsets (mm, °)</th><th>failing</th><th>reproduce</th></tr>"
             f"{''.join(rows)}</table></section>")
+
+
+def _reproduce(c: SignoffContent) -> str:
+    """The appendix: one command per distinct failure, for its first sample."""
+    groups = _failure_groups(c)
+    if not groups:
+        return ('<section id="reproduce"><h2>Appendix: reproducing a failure</h2><p>No '
+                "sample fails.</p></section>")
+    rows = "".join(
+        f"<tr><td>R{k}</td><td class=\"ecid\">{escape(ecs)}</td><td>{len(group)}: "
+        f"{escape(', '.join(str(s['index']) for s in group))}</td>"
+        f"<td><code>{escape(c.repro.get(str(group[0]['index']), ''))}</code></td></tr>"
+        for k, (ecs, group) in enumerate(groups, 1))
+    return ('<section id="reproduce"><h2>Appendix: reproducing a failure</h2>'
+            "<p>One command per distinct failure, for its first sample (the others differ "
+            "only in their offsets).</p><table><tr><th></th><th>failing</th><th>samples</th>"
+            f"<th>command</th></tr>{rows}</table></section>")
 
 
 def _validation(c: SignoffContent) -> str:
@@ -413,18 +443,18 @@ def _validation(c: SignoffContent) -> str:
             f'</td><td class="num">{escape(k.get("value"))}</td><td class="num">≤ '
             f'{escape(k.get("limit"))}</td><td>{"pass" if k.get("passed") else "FAIL"}</td></tr>'
             for k in d["checks"] if isinstance(k, dict))
-        body = (f"<p>Capture <code>{escape(d['capture'])}</code> of "
+        body = (f"<p>Capture {path_html(d['capture'])} of "
                 f"{escape(d.get('scene', ''))}: <b>{'PASS' if d['passed'] else 'FAIL'}</b>."
                 f"</p><table><tr><th>check</th><th>value</th><th>limit</th><th></th></tr>"
                 f"{rows}</table>")
     else:
         rows = "".join(f"<tr class=\"{'pass' if r['verdict'] == 'PASS' else 'fail'}\">"
-                       f"<td><code>{escape(r.get('capture'))}</code></td>"
+                       f"<td>{path_html(r.get('capture'))}</td>"
                        f"<td>{escape(r['verdict'])}</td><td>{escape(r.get('error') or '')}</td>"
                        "</tr>" for r in v.rows)
         body = f"<table><tr><th>capture</th><th>verdict</th><th>error</th></tr>{rows}</table>"
     return ('<section id="validation"><h2>Validation against a real capture</h2>'
-            f"<p>From <code>{escape(v.path.resolve())}</code>.</p>{body}</section>")
+            f"<p>From {path_html(v.path.resolve())}.</p>{body}</section>")
 
 
 def _eol(c: SignoffContent) -> str:
@@ -441,8 +471,8 @@ def _eol(c: SignoffContent) -> str:
         for r in d["results"] if isinstance(r, dict))
     return ('<section id="eol"><h2>End-of-line station</h2>'
             f"<p>{escape(d['passed'])} of {escape(d['cars'])} cars pass; platform setting "
-            f"<code>{escape(d['params_file'])}</code>; from "
-            f"<code>{escape(e.path.resolve())}</code>.</p>"
+            f"{path_html(d['params_file'])}; from "
+            f"{path_html(e.path.resolve())}.</p>"
             f"<table><tr><th>car</th><th>verdict</th><th>reasons</th></tr>{rows}</table>"
             "</section>")
 
@@ -460,7 +490,7 @@ def signoff_html(c: SignoffContent) -> str:
     nav = " · ".join(f'<a href="#{s}">{escape(s.replace("-", " "))}</a>' for s in SECTION_IDS)
     head = (f"{_CSS}<h1>Sign-off: {escape(c.title)}</h1><p class=\"muted\">ISP setting "
             f"sign-off sheet, made {escape(c.provenance.date)} by rvmsim "
-            f"{escape(c.provenance.version)} from the run <code>{escape(c.run_dir)}</code>."
+            f"{escape(c.provenance.version)} from the run {path_html(c.run_dir)}."
             f"</p><nav><p>{nav}</p></nav>")
     if c.markets is not None:
         nav = nav.replace("</a>", '</a> · <a href="#markets">markets</a>', 1)
@@ -469,6 +499,7 @@ def signoff_html(c: SignoffContent) -> str:
         '<p class="redbox"><b>Signed with records of another setting or vehicle</b> '
         "(--allow-other-setting): " + "; ".join(escape(w) for w in c.other_setting)
         + ". Their figures below do not describe this setting.</p>")
-    body = (head + banner + _verdict(c) + markets + _setting(c) + _inputs(c) + _tool(c) + _ecs(c)
-            + _yield(c) + _failing(c) + _validation(c) + _eol(c) + _signature(c))
+    body = (head + banner + _verdict(c) + _signature(c) + markets + _setting(c) + _inputs(c)
+            + _tool(c) + _ecs(c) + _yield(c) + _failing(c) + _validation(c) + _eol(c)
+            + _reproduce(c))
     return page(f"Sign-off: {c.title}", body)

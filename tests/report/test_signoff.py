@@ -14,6 +14,7 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pypdfium2 as pdfium
 import pytest
 
 from rvmsim.compensation import Deviation
@@ -22,6 +23,7 @@ from rvmsim.isp import OutputSpec, load_params
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.report import signoff, write_report
+from rvmsim.report.page import path_html
 from rvmsim.report.signoff_page import NO_ROBUSTNESS, SECTION_IDS
 from rvmsim.scene import load_scene
 from rvmsim.tune import DISPLAY_SIZE, TuneRequest, tune
@@ -104,6 +106,14 @@ def _page(made) -> str:
     return (made["out"] / "signoff.html").read_text(encoding="utf-8")
 
 
+def _text(fragment: str) -> str:
+    """What a reader sees of an HTML fragment: its text without tags, unescaped (a path
+    drawn in pieces, to break only after a /, reads whole)."""
+    import html as html_lib
+
+    return html_lib.unescape(re.sub(r"<[^>]+>", "", fragment))
+
+
 def _section(text: str, sid: str) -> str:
     start = text.index(f'<section id="{sid}">')
     return text[start: text.index("</section>", start)]
@@ -142,7 +152,8 @@ def test_the_ecs_are_judged_at_the_display_size_with_margins(made):
     assert [e["value"] for e in js["ecs"]["ecs"]] == pytest.approx(
         [i.value for i in frame.ec.items])
     section = _section(text, "ecs")
-    rows = re.findall(r'<tr class="(pass|fail|off)"><td>([^<]+)</td>.*?</tr>', section, re.S)
+    rows = re.findall(r'<tr class="(pass|fail|off)"><td class="ecid">([^<]+)</td>.*?</tr>',
+                      section, re.S)
     assert [r[1] for r in rows] == [i.id for i in frame.ec.items]
     for item in frame.ec.items:
         assert item.low is not None or item.high is not None
@@ -157,10 +168,10 @@ def test_the_ecs_are_judged_at_the_display_size_with_margins(made):
 
 def test_the_hash_on_the_page_is_that_of_the_params_file(made, tmp_path):
     text = _page(made)
-    shas = re.findall(r'<code class="sha">([0-9a-f]{64})</code>', text)
+    shas = re.findall(r'<code class="sha">([0-9a-f]{64})</code>', _section(text, "setting"))
     params = made["params"]
     assert shas == [hashlib.sha256(params.read_bytes()).hexdigest()]
-    assert str(params.resolve()) in _section(text, "setting")
+    assert str(params.resolve()) in _text(_section(text, "setting"))
     values, _ = load_params(params)
     for name in values.names():
         assert repr(getattr(values, name)) in _section(text, "setting")
@@ -172,7 +183,8 @@ def test_the_hash_on_the_page_is_that_of_the_params_file(made, tmp_path):
     assert res.params_file == tmp_path / "so" / "params.yaml"
     assert load_params(res.params_file) == load_params(params)
     page = res.html.read_text()
-    assert re.findall(r'<code class="sha">([0-9a-f]{64})</code>', page) == [
+    assert re.findall(r'<code class="sha">([0-9a-f]{64})</code>',
+                      _section(page, "setting")) == [
         hashlib.sha256(res.params_file.read_bytes()).hexdigest()] == [res.params_sha256]
 
 
@@ -193,7 +205,7 @@ def test_the_yield_before_and_after_compensation_per_ec_and_load(made):
         assert f"{100 * est['yield']:.1f} %" in section
     assert "full &lt;load&gt; &amp; co" in section and LOAD not in section
     for e in rob["ecs"]:
-        assert f"<td>{e['id']}</td>" in section
+        assert f"<td class=\"ecid\">{e['id']}</td>" in section
         assert f"{100 * e['failure_rate']:.1f} %" in section
     assert "uniform ±1" in section  # the tolerance figures
 
@@ -207,9 +219,12 @@ def test_each_failing_sample_has_a_command_that_reproduces_it(made, tmp_path):
         return
     import html as html_lib
 
+    # one command per distinct failure (the same failing ECs), in the appendix
+    appendix = _section(_page(made), "reproduce")
     commands = [html_lib.unescape(c) for c in re.findall(r"<code>(rvmsim robustness.*?)</code>",
-                                                         section)]
-    assert len(commands) == len(failing)
+                                                         appendix)]
+    assert len(commands) == len({tuple(sorted(s["failed"])) for s in failing})
+    assert "rvmsim robustness" not in section
     first = failing[0]
     cmd = next(c for c in commands if f"--export-sample {first['index']} " in c)
     produce, evaluate = cmd.split(" && ")
@@ -227,11 +242,42 @@ def test_each_failing_sample_has_a_command_that_reproduces_it(made, tmp_path):
 
 def test_the_pdf_is_printed(made):
     if shutil.which("chromium") is None:
-        pytest.skip("chromium is not installed (tools/setup.sh --test installs it)")
+        pytest.skip("chromium is not installed (tools/setup.sh installs it)")
     pdf = made["out"] / "signoff.pdf"
     data = pdf.read_bytes()
     assert data.startswith(b"%PDF") and len(data) > 20_000
     assert data.rstrip().endswith(b"%%EOF")
+
+
+def _pdf_pages(path: Path) -> list[str]:
+    """Each page's text as PDFium reads it (lines as laid out on the page)."""
+    doc = pdfium.PdfDocument(str(path))
+    try:
+        return [doc[k].get_textpage().get_text_range() for k in range(len(doc))]
+    finally:
+        doc.close()
+
+
+def test_the_pdf_pages_are_numbered_headed_and_keep_hashes_whole(made):
+    """Every page: "page N of M" and a running header (the vehicle, the setting's hash, the
+    date); the signature block on the summary's page or the next; every SHA-256 on the
+    sheet whole on one line."""
+    if shutil.which("chromium") is None:
+        pytest.skip("chromium is not installed (tools/setup.sh installs it)")
+    js = json.loads((made["out"] / "signoff.json").read_text())
+    pages = _pdf_pages(made["out"] / "signoff.pdf")
+    assert len(pages) >= 3
+    for k, text in enumerate(pages, 1):
+        assert f"page {k} of {len(pages)}" in text, (k, text[-200:])
+        assert "Sign-off:" in text and js["params_sha256"][:16] in text
+        assert js["tool"]["date"][:10] in text
+    signature = [k for k, text in enumerate(pages) if "Decision (approved / rejected)" in text]
+    summary = [k for k, text in enumerate(pages) if "Least yield that passes" in text]
+    assert signature and summary and signature[0] - summary[0] in (0, 1)
+    lines = [ln.strip() for text in pages for ln in text.splitlines()]
+    digests = {f["sha256"] for f in js["files"] if f["sha256"]} | {js["params_sha256"]}
+    for digest in digests:
+        assert any(digest in ln for ln in lines), digest  # never split across lines
 
 
 def test_without_robustness_the_page_says_so_in_red(made, tmp_path):
@@ -259,7 +305,7 @@ def test_the_robustness_page_shows_the_setting_tolerances_and_load_states(made):
     text = (made["root"] / "rob" / "robustness.html").read_text()
     setting = text[text.index('<h2 id="setting">'): text.index('<h2 id="inputs">')]
     digest = hashlib.sha256(made["params"].read_bytes()).hexdigest()
-    assert digest in setting and str(made["params"].resolve()) in setting
+    assert digest in setting and str(made["params"].resolve()) in _text(setting)
     values, _ = load_params(made["params"])
     for name in values.names():
         assert repr(getattr(values, name)) in text
@@ -314,8 +360,8 @@ def test_a_robustness_result_of_other_values_or_changed_files_is_flagged(made, t
     assert banner and text.index(banner.group(0)) < text.index('<section id="verdict">')
     assert "judged a different setting" in _section(text, "yield")
     changed = re.search(r'<p class="redbox">Changed since.*?</p>', _section(text, "inputs"))
-    assert changed and html_escape(str(made["scene"].resolve())) in changed.group(0)
-    assert str(made["params"].resolve()) not in changed.group(0)
+    assert changed and str(made["scene"].resolve()) in _text(changed.group(0))
+    assert str(made["params"].resolve()) not in _text(changed.group(0))
     js = json.loads((tmp_path / "so" / "signoff.json").read_text())
     assert js["robustness"]["same_setting"] is False
     assert js["other_setting"] == list(res.other_setting)
@@ -428,8 +474,8 @@ def test_the_least_yield_gates_the_sheet_and_a_model_file_is_named_with_its_hash
         res.stderr, res.stderr
     page = (tmp_path / "a" / "signoff.html").read_text()
     assert "the robustness run&#x27;s, in robustness.json" in _section(page, "verdict")
-    assert (f'<code class="nobr">{html_escape(str(model))}</code> sha256 '
-            f'<code class="sha">{digest}</code>') in _section(page, "yield")
+    assert f'{path_html(model)} sha256 <code class="sha">{digest}</code>' in \
+        _section(page, "yield")
     assert [f["sha256"] for f in js["files"] if f["role"] == "compensation (robustness)"] \
         == [digest]
     res = _rvmsim("signoff", made["run"], "--robustness", rob, "--out", tmp_path / "b",
