@@ -28,14 +28,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import shlex
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._optional import import_playwright_sync_api
 from .._progress import progress_bar
 from ..criteria import annotate, bundled_criteria_text
 from ..errors import RvmsimError
@@ -45,13 +43,15 @@ from ..runs import rank_text, top_file
 from ..storage import json_default
 from ..tune.markets import load_markets
 from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
-from .page import escape, shrink
+from .page import shrink
+from .pdf import find_chromium, print_pdf
 from .provenance import FileRecord, file_record, provenance, scene_records
 from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,
                       load_robustness, load_validation, same_setting)
 from .run import _load_run, _Run
 from .setting import SettingRecord
-from .signoff_page import Check, SignoffContent, sheet_passes, signoff_html, verdict_checks
+from .signoff_page import signoff_html
+from .signoff_summary import Check, SignoffContent, sheet_passes, verdict_checks
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -236,59 +236,6 @@ def _repro_commands(rob: RobustnessRecord | None, r: _Run, setting: SettingRecor
             f"--params {q(params)}" + (f" --criteria {q(str(crit))}" if crit else "")
             + ("" if scale == 1.0 else f" --scale {scale:g}"))
     return cmds
-
-
-def find_chromium() -> str | None:
-    """The Chromium binary (Debian's ``chromium`` first), None when there is none."""
-    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
-        if path := shutil.which(name):
-            return path
-    return None
-
-
-#: The PDF's running header and footer (Chromium's print templates: their own styles, the
-#: ``pageNumber``/``totalPages`` spans filled in by Chromium).
-_HEADER = ('<div style="font:8pt sans-serif;width:100%;margin:0 12mm;color:#444;'
-           'display:flex;justify-content:space-between"><span>{left}</span>'
-           '<span style="font-family:monospace">{right}</span></div>')
-_FOOTER = ('<div style="font:8pt sans-serif;width:100%;margin:0 12mm;color:#444;'
-           'text-align:right">page <span class="pageNumber"></span> of '
-           '<span class="totalPages"></span></div>')
-
-
-def print_pdf(html: Path, pdf: Path, browser: str, header: tuple[str, str] = ("", "")
-              ) -> Path:
-    """Print ``html`` to ``pdf`` (A4, backgrounds) with headless Chromium at ``browser``,
-    driven by Playwright; the browser is closed before this returns.  Every page carries
-    ``header`` (left and right text: the vehicle; the setting's hash and the date) at the
-    top and "page N of M" at the bottom.
-
-    Raises
-    ------
-    RvmsimError
-        Chromium did not start or print (one line).
-    """
-    sync_api = import_playwright_sync_api()
-    try:
-        with sync_api.sync_playwright() as p:
-            b = p.chromium.launch(executable_path=browser, args=["--no-sandbox"])
-            try:
-                page = b.new_page()
-                page.goto(html.resolve().as_uri(), wait_until="load")
-                page.pdf(path=str(pdf), format="A4", print_background=True,
-                         display_header_footer=True,
-                         header_template=_HEADER.format(left=escape(header[0]),
-                                                        right=escape(header[1])),
-                         footer_template=_FOOTER,
-                         margin={"top": "18mm", "bottom": "16mm", "left": "12mm",
-                                 "right": "12mm"})
-            finally:
-                b.close()
-    except sync_api.Error as err:
-        first = (str(err).strip().splitlines() or ["failed"])[0]
-        raise RvmsimError(f"{pdf}: Chromium ({browser}) could not print the PDF: "
-                          f"{first}") from None
-    return pdf
 
 
 def _check_out(out: Path) -> None:
