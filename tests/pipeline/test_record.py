@@ -87,7 +87,7 @@ def test_a_smaller_search_is_judged_at_the_size_of_record(letter):
     space = default_space(images.camera)
     rng = np.random.default_rng(ord(letter))
     init = np.array([r.init for r in space.ranges])
-    xs = np.clip(init + rng.uniform(-1, 1, (40, len(init))) * space.step, space.low, space.high)
+    xs = np.clip(init + rng.uniform(-1, 1, (20, len(init))) * space.step, space.low, space.high)
     params = [space.params(x) for x in xs]
     verdicts = []
     for p in params:

@@ -178,6 +178,8 @@ def test_the_report_has_a_row_per_vehicle(scenes, shared_run, tmp_path):
     store.close()
 
 
+@pytest.mark.slow  # one path resumes every kind (tune/run.py): a robust run, a multi-member
+# kind too, resumes after SIGKILL in tests/tune/test_robust.py, a single one in test_run.py
 def test_a_shared_run_resumes_after_sigkill_to_the_unbroken_result(scenes, tmp_path):
     cfg = tmp_path / "tune.yaml"
     cfg.write_text(yaml.safe_dump({**CONFIG, "cmaes_solved": {"budget": 1000}}))
