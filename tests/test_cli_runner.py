@@ -49,7 +49,8 @@ def test_in_process_a_forked_child_and_python_m_rvmsim_answer_alike(tmp_path: Pa
                  ["status"], [], ["--version"]):
         here = run_in_process(args, cwd=tmp_path)
         assert here == run_in_child(args, cwd=tmp_path), args
-        assert here == run_in_child(args, cwd=tmp_path, fresh=True), args
+        if args[:1] in (["tune"], ["render"]):  # a new interpreter (2 s each): a usage
+            assert here == run_in_child(args, cwd=tmp_path, fresh=True), args  # and a file error
 
 
 def test_the_process_is_put_back_as_it_was(tmp_path: Path,
