@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import time
-from contextvars import ContextVar, Token
 from collections.abc import Iterable
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from contextvars import ContextVar, Token
 from dataclasses import dataclass
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
