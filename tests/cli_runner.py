@@ -76,7 +76,7 @@ HARMLESS_THREADS: Final = ("TMonitor",)
 #: What the fork server of :func:`run_in_child` imports once: the CLI and what its commands
 #: import when they run (about 400 MB of address space, inside a capped child's cap; no
 #: OpenGL context, no thread of ours).  A module missing here is imported by each child.
-FORK_SERVER_PRELOAD: Final = ("rvmsim.cli", "rvmsim.pipeline", "rvmsim.render", "rvmsim.batch",
+FORK_SERVER_PRELOAD: Final = ("rvmsim.cli.group", "rvmsim.pipeline", "rvmsim.render", "rvmsim.batch",
                               "rvmsim.report", "rvmsim.validate", "rvmsim.calibrate",
                               "rvmsim.robust", "rvmsim.console")
 #: How long a thread a command started may take to end after it returned (s).

@@ -37,7 +37,7 @@ def pytest_configure(config: pytest.Config) -> None:
     server now, so that it imports the package for the pools' and renders' workers, and
     the command line for the commands the tests run in forked children
     (:data:`tests.cli_runner.FORK_SERVER_PRELOAD`), while this process collects the tests
-    (as ``rvmsim._entry`` does for a command).  One server serves both: whichever started
+    (as ``rvmsim.cli.entry`` does for a command).  One server serves both: whichever started
     it first would leave the other's modules to every child to import again."""
     if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(config.option, "numprocesses",
                                                             None):

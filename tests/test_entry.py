@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from rvmsim._entry import WORKER_COMMANDS, command_of
+from rvmsim.cli.entry import WORKER_COMMANDS, command_of
 from rvmsim.cli.group import cli
 
 from .cli_runner import child_env
@@ -28,7 +28,7 @@ def test_every_worker_command_is_a_command_and_every_renderer_is_one():
 
 
 def test_the_rvmsim_script_renders_in_a_worker(tmp_path):
-    """The installed ``rvmsim`` script (``rvmsim._entry:main``) as the main module: the fork
+    """The installed ``rvmsim`` script (``rvmsim.cli.entry:main``) as the main module: the fork
     server and the render worker import it again, which must start nothing (a start at
     import failed every render)."""
     script = Path(sys.executable).parent / "rvmsim"

@@ -143,7 +143,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("report",),
     ("console",),
     ("testing",),  # what tests and benchmarks share: nothing in the product imports it
-    ("cli", "_entry", "__main__", "__init__"),
+    ("cli", "__main__", "__init__"),
 )
 _LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
 
@@ -207,9 +207,9 @@ def _imported_modules(path: Path, tree: ast.AST, names: set[str] = _MODULE_NAMES
 
 
 #: Modules whose imports of rvmsim are deferred by design: the command line (each command
-#: imports what it runs) and its entry point (which starts the worker fork server before
-#: it imports the command line).
-_DEFERRED = [p for p in MODULES if _package(p) == "cli" or p == ROOT / "_entry.py"]
+#: imports what it runs; its entry point starts the worker fork server before it imports
+#: the command group).
+_DEFERRED = [p for p in MODULES if _package(p) == "cli"]
 
 
 @pytest.mark.parametrize("path", [p for p in MODULES if p not in _DEFERRED],

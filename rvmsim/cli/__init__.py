@@ -5,7 +5,9 @@ pipeline cannot use), calls the library and prints; user errors (bad scene files
 unreadable images, …) are one line on stderr and exit status 2, never a traceback
 (:mod:`.errors`: one place maps them for every command).
 
-Modules: :mod:`.group` (the ``rvmsim`` group and :func:`main`), :mod:`.render` (render,
+Modules: :mod:`.entry` (the ``rvmsim`` script), :mod:`.group` (the ``rvmsim`` group and
+:func:`main`; its names are this package's, imported when first used, so that importing
+the package, as the script does, loads no command), :mod:`.render` (render,
 process, evaluate), :mod:`.tune` (tune, status, select, batch), :mod:`.report`,
 :mod:`.validate`, :mod:`.sweep`, :mod:`.robust` (robustness), :mod:`.calibrate`,
 :mod:`.console`, :mod:`.eol`, :mod:`.signoff`.
@@ -13,6 +15,18 @@ process, evaluate), :mod:`.tune` (tune, status, select, batch), :mod:`.report`,
 
 from __future__ import annotations
 
-from .group import COMMANDS, cli, main
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .group import COMMANDS, cli, main
 
 __all__ = ["cli", "main", "COMMANDS"]
+
+
+def __getattr__(name: str) -> Any:
+    """:data:`__all__`'s names, from :mod:`.group` when first asked for."""
+    if name in __all__:
+        from . import group
+
+        return getattr(group, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
