@@ -44,7 +44,7 @@ img{max-width:100%;border:1px solid #999}
 .margins .pass{background:#d8f0d8}.margins .fail{background:#f6d0d0;color:#8a1010}
 code{background:#f0f0f0;padding:.1em .3em;word-break:break-all;overflow-wrap:anywhere;white-space:normal;display:inline-block;max-width:100%}
 code.sha,code.path{word-break:normal;overflow-wrap:normal;white-space:nowrap;display:inline}
-code.sha{font-size:.8em}code.path{white-space:normal}.ecid{white-space:nowrap}
+code.sha{font-size:.8em}code.path{white-space:normal}.ecid,.nobr{white-space:nowrap}
 .muted{color:#666;font-size:.9em}
 pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
 """
@@ -62,7 +62,7 @@ def sha_html(digest: str | None) -> str:
 
 def path_html(path: object) -> str:
     """A file path in monospace that breaks only after a ``/`` (never inside a name)."""
-    words = [f'<span class="ecid">{escape(part)}</span>' if part else ""
+    words = [f'<span class="nobr">{escape(part)}</span>' if part else ""
              for part in str(path).split("/")]
     return '<code class="path">' + "/<wbr>".join(words) + "</code>"
 

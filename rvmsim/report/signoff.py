@@ -51,7 +51,7 @@ from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecor
 from .run import _load_run, _Run
 from .setting import SettingRecord
 from .signoff_page import signoff_html
-from .signoff_summary import Check, SignoffContent, sheet_passes, verdict_checks
+from .signoff_summary import COMPENSATION_ROLE, Check, SignoffContent, sheet_passes
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -64,9 +64,6 @@ __all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FIL
 
 #: The params file written into the output folder when the run has none for its best.
 PARAMS_FILE = "params.yaml"
-
-#: The files table's role of the compensation model the yield assumes.
-COMPENSATION_ROLE = "compensation (robustness)"
 
 #: Longest side of each EC's own annotated picture on the page, px.
 EC_PICTURE_PX = 480
@@ -90,7 +87,7 @@ class SignoffResult:
     markets_text: str | None = None
     #: Why a given folder is not of this setting or vehicle (``allow_other_setting``).
     other_setting: tuple[str, ...] = ()
-    #: What the sheet judged (:func:`~rvmsim.report.signoff_page.verdict_checks`), and
+    #: What the sheet judged (:func:`~rvmsim.report.signoff_summary.verdict_checks`), and
     #: whether none of it fails: the sheet's verdict (``rvmsim signoff`` exits 1 if not).
     checks: tuple[Check, ...] = ()
     passed: bool = True
@@ -249,7 +246,7 @@ def _check_out(out: Path) -> None:
 def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any]:
     """signoff.json's document."""
 
-    checks = verdict_checks(res)
+    checks = res.checks
     rob: dict[str, Any] | None = None
     if res.robustness is not None:
         d = res.robustness.doc
@@ -368,13 +365,13 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         bar.close()
     f = content.setting.file
     m = content.markets
-    checks = verdict_checks(content)
+    checks = content.checks
     return SignoffResult(html, pdf_path, js, Path(f.path), f.sha256 or "", content.ec.passed,
                          None if rob is None else rob.yield_,
                          None if m is None else all_markets_pass(m) and content.markets_same_trial,
                          None if m is None else markets_verdict_text(m) if
                          content.markets_same_trial else "markets not judged for this setting",
-                         content.other_setting, tuple(checks), sheet_passes(checks))
+                         content.other_setting, checks, sheet_passes(checks))
 
 
 def _least_yield(given: float | None, rob: RobustnessRecord | None

@@ -13,7 +13,8 @@ from .market_rows import markets_html
 from .page import escape, img_tag, page, path_html, sha_html
 from .provenance import files_table, provenance_html
 from .setting import by_load_html, setting_html, variation_html, worst_margin_text
-from .signoff_summary import NO_ROBUSTNESS, SignoffContent, pct_text, summary_html
+from .signoff_summary import (COMPENSATION_ROLE, NO_ROBUSTNESS, SignoffContent, pct_text,
+                              summary_html)
 from ..criteria.canvas import unit_text
 
 __all__ = ["signoff_html", "SECTION_IDS", "NO_ROBUSTNESS", "SignoffContent"]
@@ -26,7 +27,7 @@ SECTION_IDS: tuple[str, ...] = ("verdict", "signature", "setting", "inputs", "to
 
 _CSS = """<style>
 .red{color:#c02828;font-weight:bold}.amber{color:#8a5a00;font-weight:bold}.redbox{border:2px solid #c02828;padding:.5em .8em}
-code.sha{font-size:.85em}table.sign td{height:2.6em;min-width:16em}
+table.sign td{height:2.6em;min-width:16em}
 @media print{body{max-width:none;margin:0;font-size:10pt}h2{page-break-after:avoid}
 tr,figure,img,table.sign{page-break-inside:avoid}nav{display:none}}
 @page{size:A4;margin:14mm}
@@ -103,7 +104,8 @@ def _yield_ec_rows(doc: dict[str, Any]) -> str:
         b = before.get(e["id"])
         cls = "fail" if e.get("n_fail") else "pass"
         rows.append(
-            f'<tr class="{cls}"><td class="ecid">{escape(e["id"])}</td><td>{escape(e.get("name", ""))}</td>'
+            f'<tr class="{cls}"><td class="ecid">{escape(e["id"])}</td>'
+            f'<td>{escape(e.get("name", ""))}</td>'
             + ("" if not before else
                f'<td class="num">{100 * float((b or {}).get("failure_rate", 0)):.1f} %</td>')
             + f'<td class="num">{100 * float(e.get("failure_rate", 0)):.1f} %</td>'
@@ -146,7 +148,7 @@ def _compensation_table(c: SignoffContent, comp: dict[str, Any]) -> str:
     """Every value of the compensation model the yield after compensation assumes, and
     its source: a file with its SHA-256, or the built-in default of this rvmsim."""
     src = str(comp.get("source", ""))
-    rec = next((f for f in c.files if f.role == "compensation (robustness)"), None)
+    rec = next((f for f in c.files if f.role == COMPENSATION_ROLE), None)
     where = (f"built-in default of rvmsim {escape(c.provenance.version)} (no file: every "
              "value is below)" if rec is None or rec.sha256 is None else
              f"{path_html(rec.path)} sha256 {sha_html(rec.sha256)}")

@@ -4,7 +4,9 @@ whether it passes, and the summary section that says so with its figures
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -20,7 +22,11 @@ if TYPE_CHECKING:
     from ..isp import OutputSpec
 
 __all__ = ["SignoffContent", "Check", "verdict_checks", "sheet_passes", "summary_html",
+           "COMPENSATION_ROLE",
            "compensation_text", "pct_text", "NO_ROBUSTNESS"]
+
+#: The files table's role of the compensation model the yield assumes.
+COMPENSATION_ROLE = "compensation (robustness)"
 
 #: The red line of a sign-off without a robustness result.
 NO_ROBUSTNESS = ("Robustness not run: the yield over mount tolerances and load states is not "
@@ -58,6 +64,11 @@ class SignoffContent:
     #: The least yield that passes (None: none given) and where it came from.
     min_yield: float | None = None
     min_yield_source: str = ""
+
+    @cached_property
+    def checks(self) -> tuple[Check, ...]:
+        """What the sheet judges (:func:`verdict_checks`), worked out once."""
+        return tuple(verdict_checks(self))
 
 
 def pct_text(est: dict[str, Any]) -> str:
@@ -113,7 +124,7 @@ def verdict_checks(c: SignoffContent) -> list[Check]:
     return checks
 
 
-def sheet_passes(checks: list[Check]) -> bool:
+def sheet_passes(checks: Sequence[Check]) -> bool:
     """Whether no check of the sheet fails (one not judged does not fail it)."""
     return all(ch.passed is not False for ch in checks)
 
@@ -134,7 +145,7 @@ def _limiting(doc: dict[str, Any] | None) -> str:
             f"{100 * float(lim.get('failure_rate', 0)):.1f} % of the samples")
 
 
-def _yield_rows(c: SignoffContent, checks: list[Check]) -> list[tuple[str, str]]:
+def _yield_rows(c: SignoffContent, checks: Sequence[Check]) -> list[tuple[str, str]]:
     """The summary's yield rows: after and before compensation with their intervals, the
     limiting EC, the least yield and the compensation model."""
     r = c.robustness
@@ -181,7 +192,7 @@ def compensation_text(comp: dict[str, Any]) -> str:
 
 def summary_html(c: SignoffContent) -> str:
     """The summary section: the verdict and every figure the sheet judges."""
-    checks = verdict_checks(c)
+    checks = c.checks
     ok = sheet_passes(checks)
     failing = [ch.name for ch in checks if ch.passed is False]
     unjudged = [ch.name for ch in checks if ch.passed is None]
