@@ -38,7 +38,7 @@ from .values import EcValue
 __all__ = ["annotate", "annotation", "Annotation", "PlacedLabel", "place_labels", "Canvas",
            "Colour", "Label", "PASS", "FAIL", "OFF", "INK", "TEXT_PX", "MIN_TEXT_PX",
            "DISPLAY_WIDTH_PX", "MIN_PICTURE_PX", "panel_rows", "spelled_name",
-           "picture_scale"]
+           "picture_scale", "draw_measurements", "write_labels"]
 
 #: Font size (px per em) of every text of the annotated image, at the size it is made.
 TEXT_PX = 14
@@ -145,22 +145,14 @@ def annotation(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult,
     """
 
     h, w = rvm_labels.shape
-    canvas = Canvas(np.ascontiguousarray(rvm_color.copy()), rvm_labels,
-                    max(0.35, min(w, h) / 900.0), max(1, int(round(min(w, h) / 400))))
-    details = result.measurements.details
-    defs = _definitions(result)
-    for item, ec in zip(result.items, defs):
-        if ec is not None and ec.annotate is not None:
-            call_ec(ec, "annotate", f"the {w}x{h} RVM image", ec.annotate, canvas, item,
-                    details.get(item.id))
-
+    canvas = draw_measurements(rvm_color, rvm_labels, result)
     k = picture_scale(w, display_width)
     pw, ph = max(1, round(w * k)), max(1, round(h * k))
     picture = canvas.image if (pw, ph) == (w, h) else cv2.resize(
         canvas.image, (pw, ph), interpolation=cv2.INTER_NEAREST if k > 1 else cv2.INTER_AREA)
-    placed, dropped, picture = _write_labels(picture, canvas.texts, k, TEXT_PX)
+    placed, dropped, picture = write_labels(picture, canvas.texts, k, TEXT_PX)
 
-    rows = panel_rows(result, defs)
+    rows = panel_rows(result, _definitions(result))
     beside = _panel_image(rows, result, TEXT_PX, None)
     if pw + beside.shape[1] <= display_width and beside.shape[0] <= ph:
         panel = np.empty((ph, beside.shape[1], 3), np.uint8)
@@ -174,6 +166,22 @@ def annotation(rvm_color: np.ndarray, rvm_labels: np.ndarray, result: EcResult,
         panel_box = (0, ph, pw, ph + under.shape[0])
     return Annotation(np.ascontiguousarray(out), (0, 0, pw, ph), panel_box, k, TEXT_PX,
                       tuple(placed), tuple(dropped))
+
+
+def draw_measurements(rvm_color: np.ndarray, rvm_labels: np.ndarray,
+                      result: EcResult) -> Canvas:
+    """Every EC of ``result`` draws its measurement on a copy of ``rvm_color`` (RVM px);
+    the labels they ask for are in :attr:`Canvas.texts`, not yet written
+    (:func:`write_labels`)."""
+    h, w = rvm_labels.shape
+    canvas = Canvas(np.ascontiguousarray(rvm_color.copy()), rvm_labels,
+                    max(0.35, min(w, h) / 900.0), max(1, int(round(min(w, h) / 400))))
+    details = result.measurements.details
+    for item, ec in zip(result.items, _definitions(result)):
+        if ec is not None and ec.annotate is not None:
+            call_ec(ec, "annotate", f"the {w}x{h} RVM image", ec.annotate, canvas, item,
+                    details.get(item.id))
+    return canvas
 
 
 # ---------------------------------------------------------------------------- labels
@@ -269,11 +277,12 @@ def _text_size(text: str, size_px: int, bold: bool = False) -> tuple[int, int]:
     return int(math.ceil(f.getlength(text))), ascent + descent
 
 
-def _write_labels(picture: np.ndarray, texts: Sequence[Label], scale: float, size_px: int
-                  ) -> tuple[list[PlacedLabel], list[str], np.ndarray]:
+def write_labels(picture: np.ndarray, texts: Sequence[Label], scale: float, size_px: int
+                 ) -> tuple[list[PlacedLabel], list[str], np.ndarray]:
     """Place ``texts`` (points in RVM px) on ``picture`` (``scale`` px per RVM px) and
-    write them: leader lines, then translucent dark boxes edged in the label's colour,
-    then the text in a light tint of it."""
+    write them at ``size_px`` px per em: leader lines, then translucent dark boxes edged in
+    the label's colour, then the text in a light tint of it.  Returns the labels placed,
+    the texts that found no place, and the picture written on."""
 
     ph, pw = picture.shape[:2]
     points = [((x + 0.5) * scale - 0.5, (y + 0.5) * scale - 0.5) for x, y in

@@ -36,6 +36,7 @@ import numpy as np
 
 from .._progress import progress_bar
 from ..criteria import annotate, bundled_criteria_text
+from ..criteria.closeup import closeup, text_px_for_print
 from ..errors import RvmsimError
 from ..isp import params_to_dict, process
 from ..pipeline import make_evaluator, record_output
@@ -43,7 +44,6 @@ from ..runs import rank_text, top_file
 from ..storage import json_default
 from ..tune.markets import load_markets
 from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
-from .page import shrink
 from .pdf import find_chromium, print_pdf
 from .provenance import FileRecord, file_record, provenance, scene_records
 from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,
@@ -65,8 +65,11 @@ __all__ = ["signoff", "SignoffResult", "find_chromium", "print_pdf", "PARAMS_FIL
 #: The params file written into the output folder when the run has none for its best.
 PARAMS_FILE = "params.yaml"
 
-#: Longest side of each EC's own annotated picture on the page, px.
-EC_PICTURE_PX = 480
+#: Each EC's close-up on the sheet: its width in px, the width it prints at (mm: two to a
+#: row of an A4 page's 182 mm column) and its labels' cap height on paper (mm).
+EC_PICTURE_PX = 800
+EC_PICTURE_MM = 88.0
+EC_TEXT_MM = 2.8
 
 
 @dataclass(frozen=True)
@@ -105,19 +108,21 @@ def _record_ecs(images: FisheyeImages, params: IspParams, output: OutputSpec,
                 criteria: Criteria) -> tuple[EcResult, np.ndarray, np.ndarray,
                                              dict[str, np.ndarray]]:
     """The ECs at ``output`` on the full path, the RVM picture, every EC drawn on it, and
-    each EC drawn alone (cropped to the picture, shrunk to :data:`EC_PICTURE_PX`)."""
+    each EC's close-up (:func:`rvmsim.criteria.closeup.closeup`: what it measures,
+    :data:`EC_PICTURE_PX` wide, labels :data:`EC_TEXT_MM` tall at :data:`EC_PICTURE_MM`)."""
 
     ec = make_evaluator(images, output, criteria, path="full")(params)
     color, labels = process(images.color, images.labels, params, output)
     assert color is not None and labels is not None
-    h, w = labels.shape
+    text_px = text_px_for_print(EC_PICTURE_PX, EC_PICTURE_MM, EC_TEXT_MM)
     each = {}
     for k, item in enumerate(ec.items):
         if not item.enabled:
             continue
         one = dataclasses.replace(ec, items=(item,), definitions=(
             (ec.definitions[k],) if ec.definitions else ()))
-        each[item.id] = shrink(annotate(color, labels, one)[:h, :w], EC_PICTURE_PX)
+        each[item.id] = closeup(color, labels, one, width_px=EC_PICTURE_PX,
+                                text_px=text_px).image
     return ec, color, annotate(color, labels, ec), each
 
 

@@ -15,6 +15,7 @@ from .provenance import files_table, provenance_html
 from .setting import by_load_html, setting_html, variation_html, worst_margin_text
 from .signoff_summary import (COMPENSATION_ROLE, NO_ROBUSTNESS, SignoffContent, pct_text,
                               summary_html)
+from ..criteria.annotate import spelled_name
 from ..criteria.canvas import unit_text
 
 __all__ = ["signoff_html", "SECTION_IDS", "NO_ROBUSTNESS", "SignoffContent"]
@@ -28,7 +29,10 @@ SECTION_IDS: tuple[str, ...] = ("verdict", "signature", "setting", "inputs", "to
 _CSS = """<style>
 .red{color:#c02828;font-weight:bold}.amber{color:#8a5a00;font-weight:bold}.redbox{border:2px solid #c02828;padding:.5em .8em}
 table.sign td{height:2.6em;min-width:16em}
-@media print{body{max-width:none;margin:0;font-size:10pt}h2{page-break-after:avoid}
+.closeups{display:grid;grid-template-columns:1fr 1fr;gap:4mm}
+.closeups figure{margin:0;display:block}.closeups img{width:100%;display:block}
+.closeups figcaption{max-width:none}
+@media print{body{max-width:none;margin:0;font-size:10pt}h2,h3{page-break-after:avoid}
 tr,figure,img,table.sign{page-break-inside:avoid}nav{display:none}}
 @page{size:A4;margin:14mm}
 </style>"""
@@ -67,15 +71,27 @@ def _ec_rows(c: SignoffContent) -> str:
         rng = (f"[{'–' if item.low is None else f'{item.low:g}'}, "
                f"{'–' if item.high is None else f'{item.high:g}'}]")
         value = "—" if item.value is None else f"{item.value:.4g}"
-        pic = c.ec_pictures.get(item.id)
-        cell = "" if pic is None else img_tag(pic, f"EC {item.id}")
         rows.append(
             f'<tr class="{st}"><td class="ecid">{escape(item.id)}</td><td>{escape(item.name)}</td>'
             f'<td class="num">{escape(value)} {escape(item.unit)}</td>'
             f'<td class="num">{escape(rng)} {escape(item.unit)}</td>'
             f'<td class="num">{escape(item.margin_text(unit_text(item.unit)))}</td>'
-            f"<td>{escape(st)}</td><td>{cell}</td></tr>")
+            f"<td>{escape(st)}</td></tr>")
     return "".join(rows)
+
+
+def _closeups(c: SignoffContent) -> str:
+    """Each enabled EC's close-up, two to a row (what it measures, labels readable on paper)."""
+    figs = []
+    for item in c.ec.items:
+        pic = c.ec_pictures.get(item.id)
+        if pic is None:
+            continue
+        st = "pass" if item.passed else "fail"
+        figs.append(f'<figure class="closeup {st}">{img_tag(pic, f"EC {item.id}")}'
+                    f'<figcaption><span class="ecid">{escape(item.id)}</span> '
+                    f"{escape(spelled_name(item.name))}: {escape(st)}</figcaption></figure>")
+    return f'<div class="closeups">{"".join(figs)}</div>' if figs else ""
 
 
 def _ecs(c: SignoffContent) -> str:
@@ -86,8 +102,8 @@ def _ecs(c: SignoffContent) -> str:
             "full evaluation path (the whole fisheye label image through the ISP). Margin: "
             "signed distance of the value inside its range, in the EC's unit (below 0 "
             "fails).</p><table><tr><th>EC</th><th>measurement</th><th>value</th>"
-            "<th>limit</th><th>margin</th><th>result</th><th>annotated</th></tr>"
-            f"{_ec_rows(c)}</table>"
+            "<th>limit</th><th>margin</th><th>result</th></tr>"
+            f"{_ec_rows(c)}</table><h3>Each EC, close up</h3>{_closeups(c)}"
             f"<figure>{img_tag(c.display, 'display picture')}<figcaption>The RVM picture at "
             f"{o.width} × {o.height} px.</figcaption></figure>"
             f"<figure>{img_tag(c.annotated, 'annotated EC image')}<figcaption>Every EC drawn "

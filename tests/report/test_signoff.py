@@ -4,6 +4,7 @@ end-of-line compensation), real validation and EOL folders, and the sheet made f
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -15,15 +16,18 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pypdfium2 as pdfium
+import pypdfium2.raw as pdfium_c
 import pytest
 
 from rvmsim.compensation import Deviation
+from rvmsim.criteria.closeup import closeup, text_px_for_print
 from rvmsim.errors import RvmsimError
 from rvmsim.isp import OutputSpec, load_params
 from rvmsim.pipeline import evaluate_params
 from rvmsim.render import cached_render
 from rvmsim.report import signoff, write_report
 from rvmsim.report.page import path_html
+from rvmsim.report.signoff import EC_PICTURE_MM, EC_PICTURE_PX, EC_TEXT_MM
 from rvmsim.report.signoff_page import NO_ROBUSTNESS, SECTION_IDS
 from rvmsim.scene import load_scene
 from rvmsim.tune import DISPLAY_SIZE, TuneRequest, tune
@@ -278,6 +282,69 @@ def test_the_pdf_pages_are_numbered_headed_and_keep_hashes_whole(made):
     digests = {f["sha256"] for f in js["files"] if f["sha256"]} | {js["params_sha256"]}
     for digest in digests:
         assert any(digest in ln for ln in lines), digest  # never split across lines
+
+
+#: Resolution the close-ups' page is rendered at to measure its text (dots per inch).
+_DPI = 300
+
+
+def _glyph_height_px(box: np.ndarray) -> float:
+    """The height (px) of a label's tall glyphs (capitals, digits, ascenders) in a rendered
+    label box: light text on the box's dark ground, its outline trimmed."""
+    gray = cv2.cvtColor(box[3:-3, 3:-3], cv2.COLOR_RGB2GRAY)
+    n, _, stats, _ = cv2.connectedComponentsWithStats((gray > 128).astype(np.uint8), 8)
+    heights = stats[1:, cv2.CC_STAT_HEIGHT]
+    tall = heights[heights >= 0.85 * heights.max()]  # not the x-height letters
+    return float(np.median(tall))
+
+
+def test_the_pdf_close_ups_are_wide_and_their_labels_readable_on_paper(made):
+    """Each enabled EC has a close-up in the PDF, printed at least 60 mm wide, whose label
+    text, measured in the page rendered at 300 dpi, is at least 2.5 mm tall."""
+    if shutil.which("chromium") is None:
+        pytest.skip("chromium is not installed (tools/setup.sh installs it)")
+    settings = json.loads((made["run"] / "run.json").read_text())
+    params, _ = load_params(made["params"])
+    images, _ = cached_render(load_scene(made["scene"]))
+    frame = evaluate_params(images, params, OutputSpec(*DISPLAY_SIZE,
+                                                       settings["config"]["output"]["mirror"]))
+    text_px = text_px_for_print(EC_PICTURE_PX, EC_PICTURE_MM, EC_TEXT_MM)
+    wanted = {}
+    for k, item in enumerate(frame.ec.items):
+        if item.enabled:
+            one = dataclasses.replace(frame.ec, items=(item,), definitions=(
+                (frame.ec.definitions[k],) if frame.ec.definitions else ()))
+            wanted[item.id] = closeup(frame.color, frame.labels, one, width_px=EC_PICTURE_PX,
+                                      text_px=text_px)
+    doc = pdfium.PdfDocument(str(made["out"] / "signoff.pdf"))
+    found, measured = {}, []
+    try:
+        for page in doc:
+            text = page.get_textpage()
+            bitmap = None
+            for obj in page.get_objects(filter=[pdfium_c.FPDF_PAGEOBJ_IMAGE]):
+                left, bottom, right, top = obj.get_bounds()
+                caption = text.get_text_bounded(left, bottom - 16, right, bottom).strip()
+                ec_id = caption.split(" ")[0] if caption else ""
+                if ec_id not in wanted or ec_id in found:
+                    continue
+                found[ec_id] = (right - left) / 72 * 25.4  # printed width, mm
+                if bitmap is None:
+                    bitmap = page.render(scale=_DPI / 72).to_numpy()
+                h_page = page.get_height()
+                per_px = (right - left) / EC_PICTURE_PX * _DPI / 72  # page px per close-up px
+                for lab in wanted[ec_id].labels:
+                    x0, y0, x1, y1 = lab.box
+                    px0 = int(round(left * _DPI / 72 + x0 * per_px))
+                    py0 = int(round((h_page - top) * _DPI / 72 + y0 * per_px))
+                    box = bitmap[py0: py0 + int((y1 - y0) * per_px),
+                                 px0: px0 + int((x1 - x0) * per_px), :3]
+                    measured.append((ec_id, lab.text, _glyph_height_px(box) / _DPI * 25.4))
+    finally:
+        doc.close()
+    assert sorted(found) == sorted(wanted)
+    assert min(found.values()) >= 60.0, found
+    assert measured and min(mm for _, _, mm in measured) >= 2.5, measured
 
 
 def test_without_robustness_the_page_says_so_in_red(made, tmp_path):
