@@ -40,6 +40,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import importlib.util
+import json
 import io
 import logging
 import multiprocessing
@@ -418,6 +419,17 @@ def _call_main() -> int:
         traceback.print_exc(file=sys.stderr)
         return 1
     return 0
+
+
+def tune_status(run: Path | str) -> int:
+    """The exit status ``rvmsim tune`` owes for the finished run folder ``run``, read from
+    what the run wrote: 0 when its best setting passes what the run judges
+    (``best/markets.json``, else ``best/members.json``, else ``best/ec.json``), else 1."""
+    best = Path(run) / "best"
+    for name in ("markets.json", "members.json", "ec.json"):
+        if (best / name).is_file():
+            return 0 if json.loads((best / name).read_text(encoding="utf-8"))["passed"] else 1
+    return 1
 
 
 def run_in_process(args: Sequence[object], *, cwd: Path | str | None = None,

@@ -81,7 +81,8 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
          workers: int, budget: int | None, max_time: float | None, target_score: float | None,
          resume_dir: Path | None, force: bool, only_supported: bool, progress: bool) -> None:
     """Tune the ISP of SCENE, one setting for SCENE1 SCENE2 … (--shared) or for several
-    markets (--markets), or --resume RUN."""
+    markets (--markets), or --resume RUN. Exits 1 when the best setting found fails an EC
+    (the run is stored all the same)."""
     from ..compensation import compensation_for
     from ..tune import Markets, Robust, RunOptions, Shared, TuneRequest
     from ..search import load_tuning_config
@@ -116,7 +117,7 @@ def tune(scenes: tuple[Path, ...], out: Path | None, shared: bool, aggregate: st
         name = "+".join(s.stem for s in scenes) + ("" if markets is None else "@markets")
         result = run_tune(request, out or Path("runs") / name, options=options, force=force)
     click.echo("\n".join(summary_lines(result)))
-    # 1 when a shared or markets run found no setting passing everywhere (the summary says why)
+    # 1 when the best setting fails what the run judges (the summary says which ECs)
     sys.exit(result.verdict.exit_status)
 
 

@@ -68,10 +68,6 @@ class Verdict:
     passed : bool
         Whether the best setting passes everything the run judges (every EC of every
         member: every scene, every market); False also when the run has no trials.
-    gate : bool
-        Whether the run's exit status follows ``passed`` (shared and markets runs, which
-        exist to find one setting that passes everywhere); a single or robust run reports
-        its best setting and exits 0 (``rvmsim evaluate`` judges a setting).
     problems : tuple of str
         Why the best setting fails, one line per reason (empty when it passes).
     lines : tuple of str
@@ -83,15 +79,15 @@ class Verdict:
     """
 
     passed: bool
-    gate: bool = False
     problems: tuple[str, ...] = ()
     lines: tuple[str, ...] = ()
     shown: tuple[int, float] | None = None
 
     @property
     def exit_status(self) -> int:
-        """``rvmsim tune``'s exit status: 1 when a gating run's best setting fails, else 0."""
-        return 1 if self.gate and not self.passed else 0
+        """``rvmsim tune``'s exit status: 0 when the best setting passes everything the run
+        judges, 1 when it fails (as every judging command: docs/errors.md)."""
+        return 0 if self.passed else 1
 
 
 @dataclass(frozen=True)
@@ -244,12 +240,12 @@ class SharedSet(SingleSet):
                                        self.settings.config, criteria,
                                        self.settings.kind.aggregate or "min")
         if written is None:
-            return Verdict(False, gate=True, problems=first.problems)
+            return Verdict(False, problems=first.problems)
         doc, table = written
         problems = shared_problems(doc)
         lines = (table.rstrip(),) + (("", "no setting found passes every scene:",
                                       *(f"  {p}" for p in problems)) if problems else ())
-        return Verdict(not problems, gate=True, problems=tuple(problems), lines=lines)
+        return Verdict(not problems, problems=tuple(problems), lines=lines)
 
 
 @dataclass(frozen=True)
@@ -304,7 +300,7 @@ class RobustSet:
         doc = write_robust_results(run_dir, store, self.settings, len(scenes))
         top = (doc or {}).get("top") or []
         shown = (int(top[0]["trial"]), float(top[0]["robust_score"])) if top else None
-        return Verdict(inner.passed, inner.gate, inner.problems,
+        return Verdict(inner.passed, inner.problems,
                        (*robust_line(doc), *inner.lines), shown)
 
     def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:
@@ -363,10 +359,10 @@ class MarketsSet:
         written = write_market_results(run_dir, store, built.pairs, built.renders,
                                        self.settings.config)
         if written is None:
-            return Verdict(False, gate=True, problems=("no trials",))
+            return Verdict(False, problems=("no trials",))
         doc, table = written
         problems = market_problem_lines(doc)
-        return Verdict(bool(doc["passed"]), gate=True, problems=tuple(problems),
+        return Verdict(bool(doc["passed"]), problems=tuple(problems),
                        lines=(table.rstrip(), "", *market_table_lines(doc)))
 
     def top_rows(self, store: RunStore, top: Sequence[TrialRecord]) -> TopRows:

@@ -4,6 +4,7 @@ expert does, and check what it shows against ``rvmsim evaluate``."""
 from __future__ import annotations
 
 import json
+import re
 import shlex
 from pathlib import Path
 
@@ -165,15 +166,50 @@ def test_load_candidate_3_and_save_it(served_run, browser):
     assert not errors
 
 
+def _type(page, name: str, value: str) -> None:
+    page.fill(f"#box-{name}", value)
+    page.press(f"#box-{name}", "Enter")
+
+
 def test_out_of_range_value_shows_a_message(served_run, browser):
+    """A value outside what is allowed: a message, beside the field too; fixed, both go.  A
+    value allowed beyond the search range pins the slider and says so; the failing ECs are
+    named above the fold; a small value is shown whole in its box."""
     folder, session, url = served_run
     page, errors = _open(browser, url)
     _settled(page)
-    page.fill("#box-zoom", "50")
-    page.press("#box-zoom", "Enter")
+    _type(page, "zoom", "50")
     page.wait_for_function("document.getElementById('message').className === 'error'")
     text = page.text_content("#message")
     assert "zoom" in text and "outside" in text and "Traceback" not in text
+    assert page.is_visible("#err-zoom")
+    spec = next(c for c in page.evaluate("window.rvmConsole.session.controls")
+                if c["name"] == "zoom")
+    assert spec["high"] < spec["spec_high"]
+    _type(page, "zoom", repr(spec["spec_high"]))  # allowed, beyond the search range
+    _settled(page)
+    assert not page.is_visible("#err-zoom") and page.text_content("#message") == ""
+    note = page.locator('.control[data-param="zoom"] .beyond')
+    assert note.is_visible() and "outside the search range" in note.text_content()
+    assert "pinned" in page.get_attribute("#slider-zoom", "class")
+    # the failing ECs of the frame shown, named above the fold of a 1400 x 900 window
+    last = page.evaluate("window.rvmConsole.last")
+    failing = [e["id"] for e in last["ecs"] if e["enabled"] and not e["passed"]]
+    assert failing and not last["passed"]
+    page.evaluate("window.scrollTo(0, 0)")
+    box = page.locator("#failing").bounding_box()
+    assert box is not None and box["y"] + box["height"] <= 900
+    shown = page.text_content("#failing")
+    assert [i for i in re.findall(r"\b(\d+-\d+)\b", shown)] == failing
+    # a small value is shown whole: its box does not scroll
+    _type(page, "h_shift", "-0.0001234567")
+    _settled(page)
+    assert page.input_value("#box-h_shift") == "-0.0001234567"
+    assert page.eval_on_selector("#box-h_shift", "b => b.scrollWidth <= b.clientWidth")
+    # back inside the search range: the note goes
+    _type(page, "zoom", repr(session.start.zoom))
+    _settled(page)
+    assert not note.is_visible()
     assert not errors
 
 
@@ -216,13 +252,20 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     _settled(page)
     before = page.get_attribute("#rvm", "src")
     assert "/display.jpg?v=" in before
+    assert page.get_attribute('#candidates tr[data-rank="1"]', "data-mark") == "A"
     page.check("#annotate")
     _image_loaded(page, "#rvm", "/annotated.jpg", before)
-    width = page.evaluate("document.getElementById('rvm').naturalWidth")
-    # the EC image of record with its results panel, at the report column's width or wider
+    width, height, shown = page.evaluate("(() => { const i = document.getElementById('rvm'); "
+                                         "return [i.naturalWidth, i.naturalHeight, "
+                                         "i.clientWidth]; })()")
+    # the EC image of record with its results panel, at the report column's width or wider,
+    # shown at its own size (its text is made for 1:1), and the heading names that image
     assert width >= min(session.ec_output.width, 1200)
+    assert shown == width
+    assert page.text_content("#rvm-size") == f"(annotated: {width}×{height} px)"
     page.click("#pin")
     page.wait_for_function("window.rvmConsole.bResult !== null")
+    assert page.get_attribute('#candidates tr[data-rank="1"]', "data-mark") == "AB"
     b_cells = page.eval_on_selector_all("#ec-table tbody tr td:nth-child(8)",
                                         "cells => cells.map(c => c.textContent)")
     assert all(b_cells)
@@ -230,6 +273,8 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     page.press("#box-fov", "Enter")
     _settled(page)
     assert page.evaluate("window.rvmConsole.last.params.fov") == 150.0
+    assert page.get_attribute('#candidates tr[data-rank="1"]', "data-mark") == "B"
+    assert page.text_content('#candidates tr[data-rank="1"] .mark') == "B"
     page.click("#reset")
     _settled(page)
     assert page.evaluate("window.rvmConsole.last.params.fov") == session.start.fov

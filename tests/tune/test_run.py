@@ -21,7 +21,7 @@ from rvmsim.tune import TuneRequest, resume, tune
 from rvmsim.search import STRATEGIES, Strategy, TuningConfig, register_strategy
 from rvmsim.runs import RunStatus, RunStore, StopReason, run_settings, status_lines
 
-from ..cli_runner import run_in_process, start_in_child
+from ..cli_runner import run_in_process, start_in_child, tune_status
 from ..conftest import SCENES
 from .common import make_legacy_run
 from .conftest import CONFIG, top_of
@@ -129,7 +129,7 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
                   if "--resume" not in extra else [])]
 
     clean = run_in_process(tune(tmp_path / "clean"), env=env)
-    assert clean.code == 0, clean.stderr
+    assert clean.code == tune_status(tmp_path / "clean"), clean.stderr
     run = tmp_path / "killed"
     proc = start_in_child(tune(run), env=env)
     db = run / "run.sqlite"
@@ -152,7 +152,7 @@ def test_resume_after_kill_gives_the_clean_result(tmp_path, strategy):
     if strategy == "grid-random":
         assert stored % 40 in (0, 81 % 40)  # whole batches only
     resumed = run_in_process(tune(None, "--resume", run), env=env)
-    assert resumed.code == 0, resumed.stderr
+    assert resumed.code == clean.code, resumed.stderr
     assert "replayed" in resumed.stdout
 
     def top(path):
@@ -206,7 +206,7 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     assert store.state().text == "interrupted (continue with --resume)"
     store.close()
     res = run_in_process(["tune", "--resume", run, "--workers", "1", "--no-progress"], env=env)
-    assert res.code == 0, res.stderr
+    assert res.code == tune_status(run), res.stderr
     store = RunStore(db)
     assert store.count() == 81 + 2 * 1500 and store.state().status is RunStatus.DONE
     store.close()
