@@ -80,7 +80,33 @@
     if (!c) return;
     c.error.textContent = text || "";
     c.error.hidden = !text;
+    c.errorAt = text ? performance.now() : 0;
     c.box.setAttribute("aria-invalid", text ? "true" : "false");
+  }
+
+  // A value accepted beyond its search range (a candidate, the URL, a typed value) pins the
+  // slider at an end: say so beside it rather than show a slider that does not move.
+  function beyond(name) {
+    const c = state.controls[name];
+    const v = state.current[name];
+    const s = c.spec;
+    const out = v < s.low || v > s.high;
+    c.beyond.textContent = out ? `${Number(v.toPrecision(7))} is outside the search range `
+      + `[${fmt(s.low)}, ${fmt(s.high)}]${s.unit ? " " + s.unit : ""}: the slider stays at its `
+      + `${v > s.high ? "right" : "left"} end` : "";
+    c.beyond.hidden = !out;
+    c.slider.classList.toggle("pinned", out);
+  }
+
+  // The candidates shown as A (the current setting) and B (the pinned one) are marked.
+  function markCandidates() {
+    for (const row of state.candidateRows || []) {
+      const marks = [];
+      if (same(row.params, state.current)) marks.push("A");
+      if (state.b && same(row.params, state.b)) marks.push("B");
+      row.mark.textContent = marks.join(" ");
+      row.tr.dataset.mark = marks.join("");
+    }
   }
 
   // ------------------------------------------------------------------ stale marking
@@ -91,6 +117,7 @@
     for (const id of ["rvm-view", "score", "ec-view"]) $(id).classList.toggle("stale", stale);
     $("stale-note").hidden = !stale;
     $("rvm-view").setAttribute("aria-busy", stale ? "true" : "false");
+    markCandidates();
   }
 
   // ------------------------------------------------------------------ evaluation
@@ -198,6 +225,8 @@
     img.alt = old.alt;
     img.dataset.quality = job.draft ? "draft" : "full";
     old.replaceWith(img);
+    $("rvm-view").classList.toggle("annotated", !!job.annotate);
+    showSize();
     const a = $("ab-a");
     a.src = img.src;
     a.hidden = false;
@@ -205,7 +234,23 @@
     if (state.shown) state.shown.draft = job.draft;
   }
 
+  // The heading names the picture shown: the display of record, or the annotated image
+  // (its own size), and the scale it is shown at when that is not 1:1.
+  function showSize() {
+    const img = $("rvm"), d = state.session.display;
+    const annotated = $("rvm-view").classList.contains("annotated");
+    const k = img.naturalWidth ? img.clientWidth / img.naturalWidth : 1;
+    const at = Math.abs(k - 1) > 0.005 ? `, shown at ${Math.round(k * 100)} %` : "";
+    $("rvm-size").textContent = annotated && img.naturalWidth
+      ? `(annotated: ${img.naturalWidth}×${img.naturalHeight} px${at})`
+      : `(${d.width}×${d.height} px${img.naturalWidth && !annotated ? at : ""})`;
+  }
+
   function show(doc, img, job) {
+    // an error beside a field is cleared by the first frame asked for after it
+    for (const [name, c] of Object.entries(state.controls)) {
+      if (c.errorAt && c.errorAt < job.t0) fieldError(name, "");
+    }
     showPicture(img, job);
     showEcs(doc);
     showRoi(doc.roi);
@@ -245,6 +290,10 @@
     score.textContent = `EC score ${fmt(doc.ec_score)} · ${doc.passed ? "all pass" : "not all pass"}`;
     score.classList.remove("pass", "fail");
     score.classList.add(doc.passed ? "pass" : "fail");
+    const failing = doc.ecs.filter((i) => i.enabled && !i.passed);
+    $("failing").textContent = failing.length
+      ? `fails: ${failing.map((i) => `${i.id} ${i.name}`).join(", ")}` : "";
+    $("failing").hidden = !failing.length;
     const body = $("ec-table").tBodies[0];
     body.replaceChildren();
     const bItems = {};
@@ -289,6 +338,7 @@
       $("ab-b-empty").hidden = true;
       $("ab-b-cap").textContent = `B: ${caption} — EC score ${fmt(doc.ec_score)}, ${doc.passed ? "all pass" : "not all pass"}`;
       if (state.last) showEcs(state.last);
+      markCandidates();
       writeUrl();
     } catch (e) {
       say(`B: ${e.message || e}`, "error");
@@ -350,6 +400,7 @@
     for (const [name, c] of Object.entries(state.controls)) {
       c.slider.value = String(state.current[name]);
       c.box.value = String(Number(state.current[name].toPrecision(7)));
+      beyond(name);
     }
     $("annotate").checked = state.annotate;
   }
@@ -390,6 +441,9 @@
     error.setAttribute("role", "alert");
     error.hidden = true;
     box.setAttribute("aria-describedby", error.id);
+    const out = document.createElement("span");
+    out.className = "beyond";
+    out.hidden = true;
     const range = document.createElement("div");
     range.className = "range";
     const unit = spec.unit ? " " + spec.unit : "";
@@ -402,6 +456,7 @@
       state.current[spec.name] = Number(slider.value);
       box.value = String(Number(Number(slider.value).toPrecision(7)));
       fieldError(spec.name, "");
+      beyond(spec.name);
       request({draft: state.dragging, t0: ev.timeStamp || performance.now()});
     });
     slider.addEventListener("change", (ev) => {
@@ -434,13 +489,14 @@
     label.htmlFor = `box-${spec.name}`;
     box.id = `box-${spec.name}`;
     slider.id = `slider-${spec.name}`;
-    div.append(label, slider, box, error, range);
-    state.controls[spec.name] = {slider, box, error, spec};
+    div.append(label, slider, box, error, out, range);
+    state.controls[spec.name] = {slider, box, error, beyond: out, spec, errorAt: 0};
     return div;
   }
 
   function buildCandidates(cands) {
     const body = $("candidates").tBodies[0];
+    state.candidateRows = [];
     if (!cands.length) {
       const tr = document.createElement("tr");
       cell(tr, "no run: the paper's defaults").colSpan = 5;
@@ -450,7 +506,10 @@
     for (const c of cands) {
       const tr = document.createElement("tr");
       tr.dataset.rank = String(c.rank);
-      cell(tr, `#${c.rank}`);
+      const mark = document.createElement("span");
+      mark.className = "mark";
+      cell(tr, `#${c.rank}`).appendChild(mark);
+      state.candidateRows.push({tr, params: c.params, mark});
       cell(tr, fmt(c.score), "num");
       cell(tr, c.passed ? "pass" : "fail", c.passed ? "pass" : "fail");
       cell(tr, c.differs || (c.rank === 1 ? "rank 1" : `trial ${c.trial}`));
@@ -521,6 +580,7 @@
     $("save").addEventListener("click", () => write("/api/save", "saved"));
     $("report").addEventListener("click", () => write("/api/report", "wrote"));
     window.addEventListener("pointerup", (ev) => { if (state.dragging) release(ev.timeStamp); });
+    window.addEventListener("resize", showSize);
     document.body.dataset.ready = "1";
     request();
     if (restored.b) setB(restored.b, restored.bname);
