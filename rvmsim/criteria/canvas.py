@@ -72,6 +72,8 @@ class Canvas:
     texts : list of Label
         The labels asked for so far (:meth:`text`), in order.
 
+    Notes
+    -----
     Convention: pixel centres at integer (column, row), as in the measurements.
     """
 

@@ -47,6 +47,8 @@ class SceneContext:
     fisheye_labels : (H_i, W_i) uint8
         The rendered fisheye label image (read-only).
 
+    Notes
+    -----
     Picklable (tuning sends it to worker processes with the evaluator); the per-scene cache
     travels with it.
     """

@@ -81,7 +81,7 @@ class Measurement(NamedTuple):
     """What an EC's measure function returns (an immutable record; a named tuple because one
     is made per EC per candidate).
 
-    Parameters
+    Attributes
     ----------
     value : float or None
         The measured value in the EC's unit; ``None`` when it cannot be measured (scores 0,
@@ -254,6 +254,8 @@ class EcFailedError(CriteriaError):
     what : str
         The error (:func:`error_text`).
 
+    Notes
+    -----
     Pickles by its parameters, so that a worker process's failure reaches the parent whole.
     """
 

@@ -56,6 +56,8 @@ class ImagesEvaluator:
     evaluators : sequence of ImageEvaluator
         One per member (:func:`make_evaluator`), each with its own criteria.
 
+    Notes
+    -----
     Picklable (it goes to tuning's worker processes).
     """
 

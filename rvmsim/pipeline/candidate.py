@@ -248,6 +248,8 @@ class CandidateEvaluator:
         The camera the labels were rendered with (default: the scene's, scaled to the
         labels' size).
 
+    Notes
+    -----
     Pickles (to tuning's worker processes) with its criteria, whose ECs pickle by reference
     to their plugin.
     """
