@@ -40,6 +40,11 @@ waits while a pool starts a worker (``submit`` writes the worker's state into a 
 worker reads as it starts, up to a second): cut there, the worker would be left out of the
 pool's table, unstopped, and die of its half-read state with a traceback on the command's
 stderr.
+
+Workers never import the caller's ``__main__`` (multiprocessing would run a script again in
+each worker, and in the fork server, unless it guards itself with
+``if __name__ == "__main__"``): their tasks are rvmsim's own, so a user's plain script that
+renders or tunes works as it reads (:func:`_main_hidden`).
 """
 
 from __future__ import annotations
@@ -112,7 +117,8 @@ def start_worker_server(also: Sequence[str] = ()) -> bool:
     # Takes effect when the server starts (a server already running keeps its own).
     multiprocessing.forkserver.set_forkserver_preload(list(dict.fromkeys([*WORKER_PRELOAD,
                                                                           *also])))
-    with _sigint_blocked():  # the server, and so every worker, starts with SIGINT blocked
+    # the server, and so every worker, starts with SIGINT blocked
+    with _sigint_blocked(), _main_hidden():
         multiprocessing.forkserver.ensure_running()
     return True
 
@@ -124,7 +130,7 @@ class _Pool(ProcessPoolExecutor):
     def submit(self, fn: Callable[_P, _T], /, *args: _P.args,
                **kwargs: _P.kwargs) -> Future[_T]:
         task: Callable[..., _T] = _task
-        with _signals_held(), _sigint_blocked():
+        with _signals_held(), _sigint_blocked(), _main_hidden():
             return super().submit(task, fn, *args, **kwargs)
 
 
@@ -140,6 +146,25 @@ def _task(fn: Callable[..., _T], *args: Any, **kwargs: Any) -> _T:
     if _START_FAILURE is not None:
         raise _START_FAILURE
     return fn(*args, **kwargs)
+
+
+@contextlib.contextmanager
+def _main_hidden() -> Iterator[None]:
+    """While a process starts: the caller's ``__main__`` shows neither a file nor a module
+    name, so multiprocessing does not have the new process import it (as ``__mp_main__``,
+    running a script's unguarded code again)."""
+    main = sys.modules.get("__main__")
+    if main is None:
+        yield
+        return
+    saved = {k: main.__dict__[k] for k in ("__file__", "__spec__") if k in main.__dict__}
+    main.__dict__.pop("__file__", None)
+    main.__dict__["__spec__"] = None
+    try:
+        yield
+    finally:
+        main.__dict__.pop("__spec__", None)
+        main.__dict__.update(saved)
 
 
 @contextlib.contextmanager

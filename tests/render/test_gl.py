@@ -6,6 +6,8 @@ from __future__ import annotations
 import multiprocessing.forkserver
 import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 
@@ -19,7 +21,7 @@ from rvmsim.errors import RvmsimError
 from rvmsim.render import RenderProcess, cube_layout, render_faces, render_fisheye
 from rvmsim.render.gl import AMBIENT, LIGHTS, _lambert, _linear_to_srgb
 from rvmsim.scene import build_parts
-from rvmsim.testing.scenes import load_small_scene
+from rvmsim.testing.scenes import load_small_scene, write_small_scene
 
 from ..conftest import bundled_scene
 
@@ -143,3 +145,20 @@ def test_every_render_of_a_block_however_deep_runs_in_its_one_worker():
     while server.children() and time.monotonic() < deadline:
         time.sleep(0.02)
     assert server.children() == []  # gone when the block ends
+
+
+def test_a_plain_script_without_a_main_guard_renders_once(tmp_path):
+    """A user's script that renders, with no ``if __name__ == "__main__"``: the render
+    worker and its fork server do not import the script again (it would run again in each,
+    and the render process would die), so it prints its lines once and exits 0."""
+    scene = write_small_scene(tmp_path, "a")
+    script = tmp_path / "plain.py"
+    script.write_text("from rvmsim import load_scene, render_fisheye\n"
+                      "print('start', flush=True)\n"
+                      f"images = render_fisheye(load_scene({str(scene)!r}))\n"
+                      "print('rendered', images.labels.shape, flush=True)\n")
+    env = {**os.environ, "RVMSIM_CACHE": str(tmp_path / "cache")}
+    res = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300, env=env)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert [ln.split()[0] for ln in res.stdout.splitlines()] == ["start", "rendered"]
