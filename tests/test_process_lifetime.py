@@ -179,7 +179,9 @@ def clean(case: Path) -> Path:
     return case / "clean"
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT],
+#: SIGINT is SIGTERM's orderly stop (both raise a KeyboardInterrupt): the slow tier.
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM,
+                                 pytest.param(signal.SIGINT, marks=pytest.mark.slow)],
                          ids=lambda s: s.name)
 def test_tune_leaves_no_worker_and_resumes_to_the_unbroken_result(case, clean, sig):
     run = case / f"run_{sig.name}"
@@ -231,7 +233,12 @@ tune:
 """
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=lambda s: s.name)
+#: Killed, every pool's workers end the same way (the fork server's end, PR_SET_PDEATHSIG):
+#: tune's and a robust run's SIGKILL cases above are the fast tier's.
+_KILLED_SLOW = pytest.param(signal.SIGKILL, marks=pytest.mark.slow)
+
+
+@pytest.mark.parametrize("sig", [_KILLED_SLOW, signal.SIGTERM], ids=lambda s: s.name)
 def test_a_local_sweep_leaves_no_worker(case, sig):
     (case / "sweep.yaml").write_text(SWEEP)
     out = case / f"sweep_{sig.name}"
@@ -241,7 +248,7 @@ def test_a_local_sweep_leaves_no_worker(case, sig):
         assert "run the same command again to resume" in res.stderr
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=lambda s: s.name)
+@pytest.mark.parametrize("sig", [_KILLED_SLOW, signal.SIGTERM], ids=lambda s: s.name)
 def test_robustness_leaves_no_render_worker(case, sig):
     """Stopped while its workers start to render the samples' viewpoints (16 samples: up to
     24 viewpoints, none cached)."""

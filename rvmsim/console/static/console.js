@@ -127,7 +127,7 @@
     const draft = !!o.draft && !state.annotate;
     state.lastDraft = draft;
     state.pending = {params: {...state.current}, annotate: state.annotate, draft,
-                     t0: o.t0 === undefined ? performance.now() : o.t0};
+                     t0: o.t0 === undefined ? performance.now() : o.t0, initial: !!o.initial};
     markStale();
     writeUrl();
     if (!state.inflight) pump();
@@ -247,9 +247,10 @@
   }
 
   function show(doc, img, job) {
-    // an error beside a field is cleared by the first frame asked for after it
+    // an error beside a field is cleared by the first frame the user asked for after it
+    // (not by the page's first frame: a link's refused value stays named until then)
     for (const [name, c] of Object.entries(state.controls)) {
-      if (c.errorAt && c.errorAt < job.t0) fieldError(name, "");
+      if (!job.initial && c.errorAt && c.errorAt < job.t0) fieldError(name, "");
     }
     showPicture(img, job);
     showEcs(doc);
@@ -582,7 +583,7 @@
     window.addEventListener("pointerup", (ev) => { if (state.dragging) release(ev.timeStamp); });
     window.addEventListener("resize", showSize);
     document.body.dataset.ready = "1";
-    request();
+    request({initial: true});
     if (restored.b) setB(restored.b, restored.bname);
     if (restored.problems.length) say(`not restored from the URL: ${restored.problems.join("; ")}`, "error");
   }
