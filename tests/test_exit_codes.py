@@ -12,7 +12,6 @@ from pathlib import Path
 
 import cv2
 import pytest
-import yaml
 
 from rvmsim.compensation import Deviation
 from rvmsim.testing.captures import perturbed, write_scene
@@ -20,17 +19,11 @@ from rvmsim.testing.scenes import write_small_scene
 from rvmsim.testing.stations import write_capture, write_inputs
 
 from .cli_runner import Outcome, run_in_process, tune_status
+from .tune.test_markets import _criteria
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The judging commands of docs/errors.md's table.
 JUDGING = ("evaluate", "tune", "robustness", "signoff", "validate", "eol")
-
-
-def _criteria(folder: Path, name: str, low: float, high: float) -> Path:
-    path = folder / f"{name}.yaml"
-    path.write_text(yaml.safe_dump({"name": name, "ecs": ["3-2"], "criteria": {
-        "3-2": {"range": [low, high], "tolerance": 2.0}}}))
-    return path
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,8 @@ fork server (:func:`rvmsim._procs.start_worker_server`) is started before anythi
 so that it imports the package for its workers (about 2 s) while this process imports the
 command line, instead of after it.  So the command group (:mod:`.group`) is imported inside
 :func:`main`, as every command imports what it runs, and importing this module (or
-:mod:`rvmsim.cli`, whose names load when first used) imports nothing of the commands: it
-is the ``rvmsim`` script's import, and multiprocessing imports a script's main module again
-in every worker.  Importing it must start nothing either (a module-level start was tried:
-each worker tried to start a fork server of its own, and every render failed).  Measured
+:mod:`rvmsim.cli`, whose names load when first used) imports nothing of the commands.
+Importing it starts nothing either: the fork server starts in :func:`main` alone.  Measured
 on the README's run: 8011 evaluations in 13.9 s, 15.1–15.6 s with the command line
 imported before the fork server starts; a quarter-size ``rvmsim render`` 3.1 s against
 4.7 s (docs/performance.md).

@@ -87,9 +87,10 @@ def crop_box(drawn: np.ndarray, points: list[tuple[float, float]],
     """
     h, w = drawn.shape
     ys, xs = np.nonzero(drawn)
-    px = [float(x) for x, _ in points if 0 <= x < w] + xs.tolist()
-    py = [float(y) for x, y in points if 0 <= x < w and 0 <= y < h] + ys.tolist()
-    if not px or not py:
+    inside = [(float(x), float(y)) for x, y in points if 0 <= x < w and 0 <= y < h]
+    px = [x for x, _ in inside] + xs.tolist()
+    py = [y for _, y in inside] + ys.tolist()
+    if not px:
         return (0, 0, w, h)
     pad = _PAD_FRACTION * w
     x0, x1 = min(px) - pad, max(px) + 1 + pad

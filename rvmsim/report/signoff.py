@@ -51,7 +51,8 @@ from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecor
 from .run import _load_run, _Run
 from .setting import SettingRecord
 from .signoff_page import signoff_html
-from .signoff_summary import COMPENSATION_ROLE, Check, SignoffContent, sheet_passes
+from .signoff_summary import (COMPENSATION_ROLE, Check, SignoffContent, failure_groups,
+                              sheet_passes)
 
 if TYPE_CHECKING:
     from ..criteria import Criteria, EcResult
@@ -210,9 +211,9 @@ def _files(r: _Run, setting: SettingRecord, rob: RobustnessRecord | None,
 
 def _repro_commands(rob: RobustnessRecord | None, r: _Run, setting: SettingRecord,
                     out: Path) -> dict[str, str]:
-    """Per failing sample (its index as text): the commands that write its car as a scene
-    (``rvmsim robustness … --export-sample N``) and render it in full (``rvmsim
-    evaluate``)."""
+    """Per distinct failure (:func:`~rvmsim.report.signoff_summary.failure_groups`), for its
+    first sample (the index as text): the commands that write its car as a scene (``rvmsim
+    robustness … --export-sample N``) and render it in full (``rvmsim evaluate``)."""
     if rob is None or rob.inputs.get("markets"):  # no --export-sample with --markets yet
         return {}
     inputs, doc = rob.inputs, rob.doc
@@ -228,8 +229,8 @@ def _repro_commands(rob: RobustnessRecord | None, r: _Run, setting: SettingRecor
                   if isinstance(f, dict) and f.get("role") == "scene"), str(doc["scene"]))
     q = shlex.quote
     cmds = {}
-    for s in rob.failing:
-        n = int(s["index"])
+    for _, group in failure_groups(rob.failing):
+        n = int(group[0]["index"])
         folder = out.resolve() / f"sample_{n}"
         cmds[str(n)] = (
             f"rvmsim robustness {q(scene)} --params {q(params)} --samples "

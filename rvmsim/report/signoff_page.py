@@ -13,8 +13,8 @@ from .market_rows import markets_html
 from .page import escape, img_tag, page, path_html, sha_html
 from .provenance import files_table, provenance_html
 from .setting import by_load_html, setting_html, variation_html, worst_margin_text
-from .signoff_summary import (COMPENSATION_ROLE, NO_ROBUSTNESS, SignoffContent, pct_text,
-                              summary_html)
+from .signoff_summary import (COMPENSATION_ROLE, NO_ROBUSTNESS, SignoffContent,
+                              failure_groups, pct_text, summary_html)
 from ..criteria.annotate import spelled_name
 from ..criteria.canvas import unit_text
 
@@ -188,12 +188,8 @@ def _compensation_table(c: SignoffContent, comp: dict[str, Any]) -> str:
 
 
 def _failure_groups(c: SignoffContent) -> list[tuple[str, list[dict[str, Any]]]]:
-    """The failing samples grouped by what fails on them (their set of failing ECs), in
-    order of first appearance: one reproduce command per group."""
-    groups: dict[str, list[dict[str, Any]]] = {}
-    for s in c.robustness.failing if c.robustness is not None else []:
-        groups.setdefault(", ".join(sorted(map(str, s.get("failed", [])))), []).append(s)
-    return list(groups.items())
+    """The sheet's failing samples by what fails on them (:func:`failure_groups`)."""
+    return failure_groups(c.robustness.failing if c.robustness is not None else [])
 
 
 def _failing(c: SignoffContent) -> str:

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from ..isp import OutputSpec
 
 __all__ = ["SignoffContent", "Check", "verdict_checks", "sheet_passes", "summary_html",
-           "COMPENSATION_ROLE",
+           "COMPENSATION_ROLE", "failure_groups",
            "compensation_text", "pct_text", "NO_ROBUSTNESS"]
 
 #: The files table's role of the compensation model the yield assumes.
@@ -53,6 +53,7 @@ class SignoffContent:
     validation: ValidationRecord | None = None
     eol: EolRecord | None = None
     reviewer: str = ""
+    #: The command reproducing each distinct failure, by its first sample's index.
     repro: dict[str, str] = field(default_factory=dict)
     #: A markets run's ``best/markets.json`` (None: not a markets run), and whether it is of
     #: the trial signed off here.
@@ -69,6 +70,16 @@ class SignoffContent:
     def checks(self) -> tuple[Check, ...]:
         """What the sheet judges (:func:`verdict_checks`), worked out once."""
         return tuple(verdict_checks(self))
+
+
+def failure_groups(failing: Sequence[dict[str, Any]]) -> list[tuple[str, list[dict[str, Any]]]]:
+    """Failing samples (robustness.json's) grouped by what fails on them (their set of
+    failing ECs, as text), in order of first appearance: the sheet gives one reproduce
+    command per group, for its first sample."""
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for s in failing:
+        groups.setdefault(", ".join(sorted(map(str, s.get("failed", [])))), []).append(s)
+    return list(groups.items())
 
 
 def pct_text(est: dict[str, Any]) -> str:
