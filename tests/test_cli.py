@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shlex
 
 import yaml
 
@@ -152,6 +153,22 @@ def _rvmsim(*args, env=None):
     return run_in_process(args, env=env)
 
 
+def _assert_runnable_as_printed(steps: list[str], scene) -> None:
+    """Each printed next command gives every option its command requires, and no
+    placeholder but ``K`` (the rank to choose): click parses it as printed."""
+    from rvmsim.cli import cli
+    for line in steps:
+        command = shlex.split(line.split("   ")[0].strip())
+        assert command[0] == "rvmsim", line
+        sub = cli.commands[command[1]]
+        ctx = sub.make_context(command[1], command[2:], resilient_parsing=True)
+        missing = [p.name for p in sub.params if p.required and ctx.params.get(p.name) is None]
+        assert not missing, (line, missing)
+        assert not {"SCENE", "DIR"} & set(command), line
+        if command[1] == "robustness":
+            assert command[2] == str(scene), line
+
+
 def test_tune_status_select_and_batch(tmp_path):
     """Vehicles A and B on a quarter of their sensors (the RVM images keep their sizes)."""
     env = {"RVMSIM_CACHE": str(tmp_path / "cache")}
@@ -172,6 +189,7 @@ def test_tune_status_select_and_batch(tmp_path):
     assert best.startswith(f"best setting: {run / 'top' / 'rank_1.yaml'} ")
     for command in ("report", "console", "select", "robustness", "signoff"):
         assert any(ln.startswith(f"  rvmsim {command} ") for ln in tail), command
+    _assert_runnable_as_printed(tail[tail.index("next:") + 1:], scene_a)
     for name in ("run.sqlite", "run.json", "best/rvm_color.png", "best/ec_annotated.png",
                  "best/ec.json", "top/rank_1.yaml", "top/rank_3.yaml"):
         assert (run / name).is_file(), name

@@ -73,7 +73,8 @@ def signoff_note(run_dir: Path, report_dir: Path) -> str:
         href = quote(Path(os.path.relpath(found[0], report_dir)).as_posix())
         return (f'<p id="signoff-link">Sign-off sheet: <a href="{escape(href)}">'
                 f"{escape(found[0].name)}</a>.</p>")
-    cmd = (f"rvmsim signoff {shlex.quote(str(run_dir))} --robustness DIR "
+    cmd = (f"rvmsim signoff {shlex.quote(str(run_dir))} --robustness "
+           f"{shlex.quote(str(run_dir / 'robustness'))} "
            f"--out {shlex.quote(str(run_dir / 'signoff'))}")
     return (f'<p class="muted" id="signoff-link">No sign-off sheet yet: '
             f"<code>{escape(cmd)}</code> makes one (docs/signoff.md).</p>")

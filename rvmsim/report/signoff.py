@@ -333,8 +333,8 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     _check_out(out)
     browser = find_chromium() if pdf else None
     if pdf and browser is None:
-        raise RvmsimError("chromium: not found on PATH, so no PDF can be printed (install "
-                          "Debian's chromium, or give --no-pdf)")
+        raise RvmsimError("chromium: not found on PATH, so no PDF can be printed (bash "
+                          "tools/setup.sh installs Debian's chromium; or give --no-pdf)")
     rob = None if robustness is None else load_robustness(robustness)
     val = None if validation is None else load_validation(validation)
     eol_rec = None if eol is None else load_eol(eol)

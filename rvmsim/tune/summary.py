@@ -4,9 +4,12 @@ where the results are and what comes next (:func:`next_steps`)."""
 
 from __future__ import annotations
 
+import json
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+from ..runs.folder import RUN_JSON
 
 if TYPE_CHECKING:
     from .run import TuneResult
@@ -24,13 +27,38 @@ def summary_lines(result: TuneResult) -> list[str]:
     idx, score = result.verdict.shown or (best.idx, best.score)
     head = (f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
             f"{o.seconds:.1f} s ({o.stopped}); best EC score {score:.4g} (trial {idx})")
-    return [head, *result.verdict.lines, "", *next_steps(result.run_dir)]
+    steps = next_steps(result.run_dir, _scene_of(result.run_dir))
+    return [head, *result.verdict.lines, "", *steps]
 
 
-def next_steps(run_dir: Path) -> list[str]:
-    """Where a finished run's results are, and the commands that come next."""
+def _scene_of(run_dir: Path) -> str | None:
+    """The scene file the run in ``run_dir`` recorded (its first, for a shared run), or None
+    when run.json does not say."""
+    try:
+        scene = json.loads((run_dir / RUN_JSON).read_text(encoding="utf-8")).get("scene")
+    except (OSError, ValueError, AttributeError):
+        return None
+    if isinstance(scene, list) and scene:
+        scene = scene[0]
+    return scene if isinstance(scene, str) and scene else None
+
+
+def next_steps(run_dir: Path, scene: str | Path | None = None) -> list[str]:
+    """Where a finished run's results are, and the commands that come next, each complete
+    enough to run as printed (its required options given: the robustness and sign-off
+    folders go inside the run folder).
+
+    Parameters
+    ----------
+    run_dir : Path
+        The run folder.
+    scene : str or Path, optional
+        The run's scene file, for the robustness command (``SCENE`` when not given).
+    """
     run = shlex.quote(str(run_dir))
     top = run_dir / "top"
+    rob = shlex.quote(str(run_dir / "robustness"))
+    scene_arg = shlex.quote(str(scene)) if scene is not None else "SCENE"
     lines = [f"run folder: {run_dir}"]
     if (top / "rank_1.yaml").is_file():
         lines.append(f"best setting: {top / 'rank_1.yaml'} (the diverse top-M: "
@@ -38,9 +66,10 @@ def next_steps(run_dir: Path) -> list[str]:
     steps = [(f"rvmsim report {run}", "the HTML report (report.html)"),
              (f"rvmsim console {run}", "adjust any top candidate live in the browser"),
              (f"rvmsim select {run} --rank K -o K.yaml", "export another candidate"),
-             (f"rvmsim robustness SCENE --params {shlex.quote(str(top / 'rank_1.yaml'))}",
-              "its yield over the mount tolerances"),
-             (f"rvmsim signoff {run} --robustness DIR", "the sign-off record")]
+             (f"rvmsim robustness {scene_arg} --params {shlex.quote(str(top / 'rank_1.yaml'))}"
+              f" --out {rob}", "its yield over the mount tolerances"),
+             (f"rvmsim signoff {run} --robustness {rob} "
+              f"--out {shlex.quote(str(run_dir / 'signoff'))}", "the sign-off record (HTML, PDF)")]
     width = max(len(c) for c, _ in steps)
     lines += ["next:", *(f"  {c:<{width}}   {what}" for c, what in steps)]
     return lines
