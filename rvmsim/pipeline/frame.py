@@ -18,7 +18,7 @@ from ..criteria import (Criteria, EcFailedError, EcResult, IspView, SceneContext
                         default_criteria, evaluate, scene_context)
 from ..criteria import annotate as annotate_ecs
 from ..isp import IspParams, OutputSpec, process
-from ..render import FisheyeImages, render_fisheye
+from ..render import FisheyeImages, cached_render
 from ..scene import Scene
 
 __all__ = ["RvmFrame", "evaluate_params", "evaluate_rvm_labels", "rvm_color", "render_rvm"]
@@ -122,6 +122,10 @@ def render_rvm(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
     """Render ``scene`` (at ``scale`` of its sensor size) and evaluate ``params`` on it
     (:func:`evaluate_params`).
 
+    The fisheye images come from the render cache (:func:`rvmsim.render.cached_render`:
+    rendered and stored on a miss), the same images ``tune``, the console and the
+    sign-off read, so a params file measures the same whichever command measures it.
+
     Parameters
     ----------
     scene : Scene
@@ -142,5 +146,5 @@ def render_rvm(scene: Scene, params: IspParams, output: OutputSpec = OutputSpec(
     if scale != 1.0:
         cam = cam.scaled(scale)
         params = params.for_input_scale(cam.width / scene.camera.image_size[0])
-    images = render_fisheye(scene, camera=cam, progress=progress)
+    images, _ = cached_render(scene, scale=scale, progress=progress)
     return evaluate_params(images, params, output, criteria, annotate=annotate)

@@ -30,7 +30,7 @@ __all__ = ["cache_dir", "scene_key", "file_scene_key", "same_scene", "cached_ren
            "RENDER_VERSION"]
 
 #: Bump when the renderer's output changes for the same scene.
-RENDER_VERSION = "render-3"
+RENDER_VERSION = "render-4"
 
 
 def cache_dir() -> Path:

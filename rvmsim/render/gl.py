@@ -2,7 +2,9 @@
 
 Each needed face (:mod:`rvmsim.render.cube`) is rendered twice as a 90° pinhole view of its
 crop: a lit colour pass and a segmentation pass (flat label colours, no lighting, no
-multisampling).  Lighting is baked into vertex colours (an overcast daylight: a sun from
+multisampling, every triangle in both windings: exact labels by construction).  The meshes
+are drawn in the parts' order in every process (the depth test's ties go to the part listed
+first), so a scene renders to the same bits in every process.  Lighting is baked into vertex colours (an overcast daylight: a sun from
 above and behind the car, a weak fill and ambient light), so the colour pass is drawn FLAT.
 
 Conventions
@@ -121,14 +123,48 @@ def _primitive(part: Part, texture: pyrender.Texture | None) -> pyrender.Primiti
     )
 
 
-def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]
-                    ) -> tuple[pyrender.Scene, dict[pyrender.Node, np.ndarray]]:
-    """The pyrender scene of ``parts`` (lighting baked, see :func:`_primitive`) under a sky of
-    linear colour ``sky``, and the segmentation colour of each mesh node (its label: low
-    byte in red, high byte in green)."""
+def _label_primitive(part: Part) -> pyrender.Primitive:
+    """The label pass's primitive of ``part``: its triangles in both windings.
+
+    pyrender's segmentation pass culls back faces whatever the render flags say, while
+    the colour pass (double-sided materials) draws them; a surface seen from behind, or a
+    mesh whose triangles are not all wound alike (common in CAD exports), would be seen
+    in colour but not in the labels.  With each triangle twice, once each way, the copy
+    that faces the camera is drawn wherever the colour pass draws the surface.
+    """
+    pyrender = import_pyrender()
+    faces = np.asarray(part.mesh.faces)
+    return pyrender.Primitive(
+        positions=np.asarray(part.mesh.vertices, dtype=np.float32),
+        indices=np.concatenate([faces, faces[:, ::-1]]).astype(np.uint32),
+    )
+
+
+@dataclass(frozen=True)
+class _GlScene:
+    """The pyrender scene of a part list: the colour meshes, and the label meshes with the
+    segmentation colour of each (its label: low byte in red, high byte in green), both in
+    the parts' order."""
+
+    scene: Any  # pyrender.Scene
+    color_nodes: list[Any]
+    seg: dict[Any, np.ndarray]
+
+    def show(self, *, labels: bool) -> None:
+        """Make the label meshes (``labels``) or the colour meshes the visible ones."""
+        for node in self.seg:
+            node.mesh.is_visible = labels
+        for node in self.color_nodes:
+            node.mesh.is_visible = not labels
+
+
+def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]) -> _GlScene:
+    """The pyrender scene of ``parts`` (lighting baked, see :func:`_primitive`; labels
+    from :func:`_label_primitive`) under a sky of linear colour ``sky``."""
     pyrender = import_pyrender()
     sky_srgb = _linear_to_srgb(np.asarray(sky, dtype=np.float64))
     scene = pyrender.Scene(bg_color=[*sky_srgb, 1.0])
+    color_nodes: list[Any] = []
     seg: dict[Any, np.ndarray] = {}  # pyrender.Node -> label colour
     textures: dict[str, Any] = {}  # texture name -> pyrender.Texture
     for part in parts:
@@ -139,9 +175,10 @@ def _pyrender_scene(parts: list[Part], sky: tuple[float, float, float]
                     source=_asphalt_texture(), source_channels="RGB"
                 )
             tex = textures[part.texture]
-        node = scene.add(pyrender.Mesh([_primitive(part, tex)]), name=part.name)
+        color_nodes.append(scene.add(pyrender.Mesh([_primitive(part, tex)]), name=part.name))
+        node = scene.add(pyrender.Mesh([_label_primitive(part)]), name=f"{part.name} (labels)")
         seg[node] = np.array([part.label & 0xFF, part.label >> 8, 0])
-    return scene, seg
+    return _GlScene(scene, color_nodes, seg)
 
 
 #: OpenCV camera axes (x right, y down, z forward) → GL camera axes (x right, y up, z back).
@@ -308,15 +345,35 @@ def prepare_render() -> None:
         start_worker_server()
 
 
+def _draw_in_part_order(renderer: pyrender.OffscreenRenderer, nodes: list[Any]) -> None:
+    """Make ``renderer`` draw the mesh ``nodes`` in this order, in every process.
+
+    pyrender 0.1.45 draws opaque meshes sorted by their node's distance from the camera,
+    and ours all sit at the origin (their vertices are in the scene frame), so the sort
+    keeps the order of ``Scene.mesh_nodes``: a set of objects hashed by address, which
+    differs from process to process.  Where two surfaces meet or nearly coincide (a
+    cylinder's base on the ground, a garnish against the bumper) the depth test keeps the
+    fragment drawn first on a tie, so the draw order decided a few label pixels, and through
+    multisampling a few colour pixels, differently in each process.  pyrender is pinned
+    (pyproject.toml), and its renderer has no option for the order, so its private sort is
+    replaced on this renderer.
+    """
+    rank = {node: i for i, node in enumerate(nodes)}
+    inner = renderer._renderer  # pyrender.Renderer: the one that sorts and draws
+    inner._sorted_mesh_nodes = lambda scene: sorted(scene.mesh_nodes, key=rank.__getitem__)
+
+
 def _render_here(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
                  sky: tuple[float, float, float], progress: bool, color: bool) -> FaceAtlas:
     """:func:`render_faces` in this process."""
     t0 = time.perf_counter()
     pyrender = import_pyrender()
-    pscene, seg = _pyrender_scene(parts, sky)
+    gl_scene = _pyrender_scene(parts, sky)
+    pscene = gl_scene.scene
     half = layout.face_size / 2.0
     first = layout.crops[0]
     renderer = pyrender.OffscreenRenderer(first.width, first.height)
+    _draw_in_part_order(renderer, [*gl_scene.color_nodes, *gl_scene.seg])
     cam_node = None
     t1 = time.perf_counter()
     atlas_h, atlas_w = layout.atlas_shape
@@ -339,10 +396,12 @@ def _render_here(parts: list[Part], layout: CubeLayout, camera: FisheyeCamera,
             cam_node = pscene.add(gl_cam, pose=_face_pose(camera, layout, crop))
             renderer.viewport_width, renderer.viewport_height = crop.width, crop.height
             if color:
+                gl_scene.show(labels=False)
                 lit, _ = renderer.render(pscene, flags=flags.FLAT | flags.SKIP_CULL_FACES)
                 color_atlas[: crop.height, crop.atlas_x0:crop.atlas_x0 + crop.width] = lit[..., :3]
+            gl_scene.show(labels=True)
             seg_img, _ = renderer.render(
-                pscene, flags=flags.SEG | flags.SKIP_CULL_FACES, seg_node_map=seg
+                pscene, flags=flags.SEG | flags.SKIP_CULL_FACES, seg_node_map=gl_scene.seg
             )
             cols = slice(crop.atlas_x0, crop.atlas_x0 + crop.width)
             label_atlas[: crop.height, cols] = seg_img[..., 0]
