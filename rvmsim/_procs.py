@@ -53,6 +53,7 @@ import contextlib
 import ctypes
 import multiprocessing as mp
 import multiprocessing.forkserver
+import multiprocessing.resource_tracker
 import os
 import pickle
 import signal
@@ -66,7 +67,7 @@ from typing import Any, Final, ParamSpec, TypeVar
 
 from .errors import RvmsimError
 
-__all__ = ["start_pool", "start_worker_server", "WORKER_PRELOAD", "stop_pool",
+__all__ = ["start_pool", "start_worker_server", "WORKER_PRELOAD", "stop_pool", "stop_helpers",
            "die_with_parent", "stop_on_signals", "Terminated", "ORPHAN_EXIT_STATUS"]
 
 _P = ParamSpec("_P")
@@ -202,6 +203,28 @@ def stop_pool(pool: ProcessPoolExecutor, *, now: bool) -> None:
         while procs and not getattr(pool, "_broken", True) and time.monotonic() < deadline:
             time.sleep(0.01)
     pool.shutdown(wait=not now, cancel_futures=True)
+
+
+def stop_helpers() -> None:
+    """End the helper processes multiprocessing started for this process, the worker fork
+    server and the resource tracker, and wait until they are gone.
+
+    Left alone, each ends when it sees this process's end (its pipe closes), a moment after
+    it: a supervisor that reads a command's exit status and then looks at its process group
+    would still find them.  A command calls this last (:func:`rvmsim.cli.group.main`), after
+    its pools and its render worker have ended; a process that did not start them (a
+    worker, which inherited them) leaves them alone.  multiprocessing has no public call for
+    either (both ``_stop`` methods are what its own tests use), so this reads their private
+    handles, as :func:`_leave_fork_server` does.
+    """
+    if mp.parent_process() is not None:
+        return
+    server = multiprocessing.forkserver._forkserver
+    if getattr(server, "_forkserver_pid", None) is not None:
+        server._stop()
+    tracker = multiprocessing.resource_tracker._resource_tracker
+    if getattr(tracker, "_pid", None) is not None:
+        tracker._stop()
 
 
 def _start_worker(parent_pid: int, kernel: bool, environ: dict[str, str],

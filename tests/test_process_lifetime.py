@@ -366,3 +366,42 @@ def test_a_worker_has_the_environment_of_its_pool_s_making(monkeypatch):
         finally:
             stop_pool(pool, now=False)
     assert seen == ["one", "two"]
+
+
+def _group_left(pgid: int) -> list[str]:
+    """The processes of process group ``pgid`` still running (zombies count: not reaped)."""
+    out = []
+    for proc in psutil.process_iter():
+        try:
+            if os.getpgid(proc.pid) == pgid:
+                out.append(_describe(proc))
+        except (ProcessLookupError, psutil.Error):
+            pass
+    return out
+
+
+@pytest.mark.parametrize("command", ["tune", "render", "tune-SIGTERM", "error"])
+def test_nothing_of_a_command_runs_once_its_exit_status_is_read(case, command):
+    """The command's process group (its own session, as a supervisor starts it) is empty
+    the moment its exit status is read: its workers, the fork server and multiprocessing's
+    resource tracker have ended before it (they used to end a moment after it)."""
+    run = case / f"group_{command}_{next(_RUNS)}"
+    args: list[object] = {
+        "tune": _tune_args(run, "--budget", 60),
+        "tune-SIGTERM": _tune_args(run),
+        "render": ["render", "vehicle_a.yaml", "--out", run, "--no-progress"],
+        "error": ["tune", "missing.yaml", "--out", run, "--workers", 2, "--no-progress"],
+    }[command]
+    proc = subprocess.Popen([sys.executable, "-m", "rvmsim", *map(str, args)], cwd=case,
+                            env=child_env(_env(case)), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    if command == "tune-SIGTERM":
+        deadline = time.monotonic() + START_S
+        while _trials(run / "run.sqlite") < STOP_AFTER and time.monotonic() < deadline:
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=START_S)
+    left = _group_left(proc.pid)
+    expected = {"tune": {0, 1}, "render": {0}, "tune-SIGTERM": {143}, "error": {2}}[command]
+    assert proc.returncode in expected, err
+    assert left == [], left

@@ -14,10 +14,11 @@ imported before the fork server starts; a quarter-size ``rvmsim render`` 3.1 s a
 
 from __future__ import annotations
 
+import atexit
 import sys
 from collections.abc import Sequence
 
-from .._procs import start_worker_server
+from .._procs import start_worker_server, stop_helpers
 
 __all__ = ["main", "WORKER_COMMANDS"]
 
@@ -36,6 +37,11 @@ def command_of(args: Sequence[str]) -> str | None:
 
 def main() -> None:
     """Run the command line."""
+    # the fork server and the resource tracker are waited for as the interpreter exits,
+    # so nothing of the command runs once its exit status can be read (one registration
+    # however often main runs in a process)
+    atexit.unregister(stop_helpers)
+    atexit.register(stop_helpers)
     if command_of(sys.argv[1:]) in WORKER_COMMANDS:
         start_worker_server()
     from .group import main as cli_main
