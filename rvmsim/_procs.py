@@ -221,10 +221,10 @@ def stop_helpers() -> None:
         return
     server = multiprocessing.forkserver._forkserver
     if getattr(server, "_forkserver_pid", None) is not None:
-        server._stop()
+        server._stop()  # type: ignore[attr-defined]  # private, see above
     tracker = multiprocessing.resource_tracker._resource_tracker
     if getattr(tracker, "_pid", None) is not None:
-        tracker._stop()
+        tracker._stop()  # type: ignore[attr-defined]  # private, see above
 
 
 def _start_worker(parent_pid: int, kernel: bool, environ: dict[str, str],
