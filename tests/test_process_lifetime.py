@@ -380,7 +380,10 @@ def _group_left(pgid: int) -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("command", ["tune", "render", "tune-SIGTERM", "error"])
+#: tune's case stands for the others in the test command (same exit path); the rest: slow tier
+@pytest.mark.parametrize("command", ["tune", "error",
+                                     pytest.param("render", marks=pytest.mark.slow),
+                                     pytest.param("tune-SIGTERM", marks=pytest.mark.slow)])
 def test_nothing_of_a_command_runs_once_its_exit_status_is_read(case, command):
     """The command's process group (its own session, as a supervisor starts it) is empty
     the moment its exit status is read: its workers, the fork server and multiprocessing's
