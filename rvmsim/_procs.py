@@ -211,8 +211,9 @@ def stop_helpers() -> None:
 
     Left alone, each ends when it sees this process's end (its pipe closes), a moment after
     it: a supervisor that reads a command's exit status and then looks at its process group
-    would still find them.  A command calls this last (:func:`rvmsim.cli.group.main`), after
-    its pools and its render worker have ended; a process that did not start them (a
+    would still find them.  The command line runs this as the interpreter exits (registered
+    by :func:`rvmsim.cli.entry.main`), after its pools and its render worker have ended; a
+    process that did not start them (a
     worker, which inherited them) leaves them alone.  multiprocessing has no public call for
     either (both ``_stop`` methods are what its own tests use), so this reads their private
     handles, as :func:`_leave_fork_server` does.

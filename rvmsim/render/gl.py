@@ -4,8 +4,9 @@ Each needed face (:mod:`rvmsim.render.cube`) is rendered twice as a 90° pinhole
 crop: a lit colour pass and a segmentation pass (flat label colours, no lighting, no
 multisampling, every triangle in both windings: exact labels by construction).  The meshes
 are drawn in the parts' order in every process (the depth test's ties go to the part listed
-first), so a scene renders to the same bits in every process.  Lighting is baked into vertex colours (an overcast daylight: a sun from
-above and behind the car, a weak fill and ambient light), so the colour pass is drawn FLAT.
+first), so a scene renders to the same bits in every process.  Lighting is baked into
+vertex colours (an overcast daylight: a sun from above and behind the car, a weak fill and
+ambient light), so the colour pass is drawn FLAT.
 
 Conventions
 -----------

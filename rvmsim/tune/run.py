@@ -45,13 +45,15 @@ DISPLAY_SIZE = RVM_IMAGE_OF_RECORD_PX
 @dataclass(frozen=True)
 class TuneResult:
     """A finished (or stopped) tuning run: its folder, what the search did, the evaluations
-    the strategy planned (None: unknown in advance) and the verdict on its best setting
-    (:class:`rvmsim.tune.kinds.Verdict`: ``verdict.exit_status`` is ``rvmsim tune``'s)."""
+    the strategy planned (None: unknown in advance), the verdict on its best setting
+    (:class:`rvmsim.tune.kinds.Verdict`: ``verdict.exit_status`` is ``rvmsim tune``'s) and
+    its scene file as recorded (the first, for a shared run; None: not known)."""
 
     run_dir: Path
     outcome: SearchOutcome
     total: int | None
     verdict: Verdict
+    scene: str | None = None
 
 
 def _check_out(run_dir: Path) -> None:
@@ -221,7 +223,7 @@ def _run(run_dir: Path, lock: FolderLock, settings: RunSettings, scenes: list[Sc
             verdict = kind.write_results(run_dir, store, scenes, built, crit)
         finally:
             store.close()
-    return TuneResult(run_dir, outcome, strat.total(), verdict)
+    return TuneResult(run_dir, outcome, strat.total(), verdict, settings.scene)
 
 
 def _search(store: RunStore, kind: MemberSet, built: Built, settings: RunSettings,

@@ -4,12 +4,9 @@ where the results are and what comes next (:func:`next_steps`)."""
 
 from __future__ import annotations
 
-import json
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING
-
-from ..runs.folder import RUN_JSON
 
 if TYPE_CHECKING:
     from .run import TuneResult
@@ -27,20 +24,7 @@ def summary_lines(result: TuneResult) -> list[str]:
     idx, score = result.verdict.shown or (best.idx, best.score)
     head = (f"{result.run_dir}: {o.evaluated} evaluated, {o.replayed} replayed in "
             f"{o.seconds:.1f} s ({o.stopped}); best EC score {score:.4g} (trial {idx})")
-    steps = next_steps(result.run_dir, _scene_of(result.run_dir))
-    return [head, *result.verdict.lines, "", *steps]
-
-
-def _scene_of(run_dir: Path) -> str | None:
-    """The scene file the run in ``run_dir`` recorded (its first, for a shared run), or None
-    when run.json does not say."""
-    try:
-        scene = json.loads((run_dir / RUN_JSON).read_text(encoding="utf-8")).get("scene")
-    except (OSError, ValueError, AttributeError):
-        return None
-    if isinstance(scene, list) and scene:
-        scene = scene[0]
-    return scene if isinstance(scene, str) and scene else None
+    return [head, *result.verdict.lines, "", *next_steps(result.run_dir, result.scene)]
 
 
 def next_steps(run_dir: Path, scene: str | Path | None = None) -> list[str]:

@@ -7,6 +7,7 @@ interpreters and compares their images bit for bit."""
 from __future__ import annotations
 
 import os
+import runpy
 import subprocess
 import sys
 from pathlib import Path
@@ -38,8 +39,10 @@ for side, facet in enumerate(box.facets):
             Part(f"b{side}", 30 + side, quad, (0.8, 0.5, 0.2))]
     parts += pair if side % 2 == 0 else pair[::-1]
 atlas = render_faces(parts, cube_layout(cam, face_size=48), cam, sky=(0.0, 0.0, 0.0))
-np.savez(sys.argv[1], labels=atlas.labels, color=atlas.color,
-         first=[p.label for p in parts[::2]], second=[p.label for p in parts[1::2]])
+result = dict(labels=atlas.labels, color=atlas.color, first=[p.label for p in parts[::2]],
+              second=[p.label for p in parts[1::2]])
+if __name__ == "__main__":
+    np.savez(sys.argv[1], **result)
 """
 
 
@@ -57,9 +60,7 @@ def test_coincident_surfaces_show_the_part_listed_first_in_every_process(tmp_pat
     res = subprocess.run([sys.executable, str(script), str(out)], capture_output=True,
                          text=True, timeout=300, env=_env(tmp_path), cwd=tmp_path)
     assert res.returncode == 0, res.stderr[-3000:]
-    here = {}
-    exec(compile(_COINCIDENT.replace("np.savez(sys.argv[1], ", "here.update("), "coincident",
-                 "exec"), {"here": here})  # the same script, its render in the worker
+    here = runpy.run_path(str(script))["result"]  # the same script, rendered in the worker
     atlases = [np.load(out), here]
     for a in atlases:
         seen = set(np.unique(a["labels"]).tolist())
