@@ -108,16 +108,16 @@ def start_pool(workers: int, *, initializer: Callable[..., None] | None = None,
                  initargs=(os.getpid(), kernel, dict(os.environ), payload))
 
 
-def start_worker_server(also: Sequence[str] = ()) -> bool:
+def start_worker_server(also: Sequence[str] = (), *,
+                        preload: Sequence[str] = WORKER_PRELOAD) -> bool:
     """Start the fork server every pool's workers are forked from, if it is not running
-    (it imports :data:`WORKER_PRELOAD` and the modules ``also`` in the background: this
-    returns at once; a server already running keeps what it imported).  False where there
-    is no fork server (workers are spawned)."""
+    (it imports ``preload`` and the modules ``also`` in the background: this returns at
+    once; a server already running keeps what it imported, and a worker imports what its
+    task needs beyond it).  False where there is no fork server (workers are spawned)."""
     if "forkserver" not in mp.get_all_start_methods():
         return False
     # Takes effect when the server starts (a server already running keeps its own).
-    multiprocessing.forkserver.set_forkserver_preload(list(dict.fromkeys([*WORKER_PRELOAD,
-                                                                          *also])))
+    multiprocessing.forkserver.set_forkserver_preload(list(dict.fromkeys([*preload, *also])))
     # the server, and so every worker, starts with SIGINT blocked
     with _sigint_blocked(), _main_hidden():
         multiprocessing.forkserver.ensure_running()

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import json
 import shlex
+import subprocess
+import sys
 
+import click
 import yaml
 
 import imageio.v3 as iio
@@ -13,7 +16,7 @@ import numpy as np
 
 from rvmsim import labels as L
 
-from .cli_runner import run_in_process, tune_status
+from .cli_runner import child_env, run_in_process, tune_status
 from .conftest import SCENES
 from rvmsim.testing.scenes import write_small_scene
 from rvmsim.testing.stations import TUNED
@@ -157,10 +160,12 @@ def _assert_runnable_as_printed(steps: list[str], scene) -> None:
     """Each printed next command gives every option its command requires, and no
     placeholder but ``K`` (the rank to choose): click parses it as printed."""
     from rvmsim.cli import cli
+    ctx = click.Context(cli)
     for line in steps:
         command = shlex.split(line.split("   ")[0].strip())
         assert command[0] == "rvmsim", line
-        sub = cli.commands[command[1]]
+        sub = cli.get_command(ctx, command[1])
+        assert sub is not None, line
         ctx = sub.make_context(command[1], command[2:], resilient_parsing=True)
         missing = [p.name for p in sub.params if p.required and ctx.params.get(p.name) is None]
         assert not missing, (line, missing)
@@ -357,11 +362,44 @@ def test_good_invocations_use_existing_outputs(tmp_path):
 def test_every_command_reports_its_errors_through_the_one_hook():
     """Every command is a :class:`rvmsim.cli.errors.Command` (so none needs an ``except``
     of its own), and the group holds exactly the commands the modules define."""
-    from rvmsim.cli import COMMANDS, cli
+    import importlib
+
+    import click
+
+    from rvmsim.cli import COMMAND_MODULES, cli
     from rvmsim.cli.errors import Command
 
-    assert sorted(cli.commands) == sorted(c.name for c in COMMANDS)
-    assert all(isinstance(c, Command) for c in cli.commands.values())
+    ctx = click.Context(cli)
+    assert cli.list_commands(ctx) == sorted(COMMAND_MODULES)
+    loaded = {name: cli.get_command(ctx, name) for name in COMMAND_MODULES}
+    assert all(isinstance(c, Command) and c.name == name for name, c in loaded.items())
+    defined = {c.name for module in set(COMMAND_MODULES.values())
+               for c in vars(importlib.import_module(module)).values()
+               if isinstance(c, click.Command)}
+    assert defined == set(COMMAND_MODULES)
+    assert cli.get_command(ctx, "tunes") is None
+
+
+def test_a_command_imports_its_own_module_alone():
+    """``rvmsim tune`` imports the tuning commands' module, not the console's, the
+    sign-off's or the report's (the time before a run's first candidate), and the tuning
+    package does not import scipy.stats (cmaes does, for the CMA-ES strategies only)."""
+    script = ("import sys\n"
+              "from rvmsim.cli.group import main\n"
+              "try:\n"
+              "    main(['tune', '--help'])\n"
+              "except SystemExit as stop:\n"
+              "    assert stop.code == 0, stop.code\n"
+              "print('modules:', *sorted(m for m in sys.modules\n"
+              "                          if m.startswith(('rvmsim', 'scipy.stats', 'cmaes'))))\n")
+    res = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         env=child_env(), timeout=120)
+    assert res.returncode == 0, res.stderr
+    modules = set(res.stdout.splitlines()[-1].split()[1:])
+    assert "rvmsim.cli.tune" in modules and "rvmsim.tune" in modules
+    assert not {"rvmsim.cli.console", "rvmsim.cli.signoff", "rvmsim.cli.report",
+                "rvmsim.console", "rvmsim.report"} & modules
+    assert not {"scipy.stats", "cmaes"} & modules
 
 
 def _failing_command(raised: BaseException):

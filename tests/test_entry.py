@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from rvmsim.cli.entry import WORKER_COMMANDS, command_of
-from rvmsim.cli.group import cli
+from rvmsim.cli.group import COMMAND_MODULES
 
 from .cli_runner import child_env
 from .conftest import SCENES
@@ -20,7 +20,7 @@ def test_the_command_is_the_first_argument_that_is_not_an_option():
 
 
 def test_every_worker_command_is_a_command_and_every_renderer_is_one():
-    commands = set(cli.commands)
+    commands = set(COMMAND_MODULES)
     assert WORKER_COMMANDS <= commands
     # the commands that render or start pools (by what they do), and none of the readers
     assert {"render", "evaluate", "tune", "robustness", "sweep", "eol"} <= WORKER_COMMANDS

@@ -18,9 +18,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from .group import COMMANDS, cli, main
+    from .group import COMMAND_MODULES, cli, main
 
-__all__ = ["cli", "main", "COMMANDS"]
+__all__ = ["cli", "main", "COMMAND_MODULES"]
 
 
 def __getattr__(name: str) -> Any:

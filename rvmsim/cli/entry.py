@@ -16,17 +16,29 @@ from __future__ import annotations
 
 import atexit
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
+from typing import Final
 
-from .._procs import start_worker_server, stop_helpers
+from .._procs import WORKER_PRELOAD, start_worker_server, stop_helpers
 
-__all__ = ["main", "WORKER_COMMANDS"]
+__all__ = ["main", "WORKER_COMMANDS", "COMMAND_PRELOAD"]
 
 #: The commands that render (:func:`rvmsim.render.render_faces` runs in a worker) or start
 #: worker pools.  Those that read a run's render from the cache (report, signoff, console)
 #: are not among them: they render only when the cache lost it.
 WORKER_COMMANDS = frozenset({"render", "process", "evaluate", "tune", "batch", "sweep",
                              "robustness", "eol", "validate", "calibrate", "judge"})
+
+
+#: What the fork server imports for a command's workers where it is not
+#: :data:`~rvmsim._procs.WORKER_PRELOAD` (everything any pool runs, and pyrender for
+#: renders).  ``tune``'s workers evaluate candidates: from a warm render cache it renders
+#: nothing, so it does not wait for pyrender and the station's modules before its first
+#: candidate (0.5 s of 2.1 s: tools/bench_first_candidate.py); on a cache miss its render
+#: worker imports pyrender itself.
+COMMAND_PRELOAD: Final[Mapping[str, tuple[str, ...]]] = MappingProxyType({
+    "tune": ("rvmsim.tune",)})
 
 
 def command_of(args: Sequence[str]) -> str | None:
@@ -42,8 +54,9 @@ def main() -> None:
     # however often main runs in a process)
     atexit.unregister(stop_helpers)
     atexit.register(stop_helpers)
-    if command_of(sys.argv[1:]) in WORKER_COMMANDS:
-        start_worker_server()
+    command = command_of(sys.argv[1:])
+    if command in WORKER_COMMANDS:
+        start_worker_server(preload=COMMAND_PRELOAD.get(command, WORKER_PRELOAD))
     from .group import main as cli_main
 
     cli_main()

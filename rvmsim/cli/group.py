@@ -2,36 +2,50 @@
 
 from __future__ import annotations
 
+import importlib
 import sys
-from collections.abc import Sequence
-from typing import NoReturn
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
+from typing import Final, NoReturn
 
 import click
 
 from .._procs import stop_on_signals
 from ..errors import RvmsimError
 from ..render import RenderProcess
-from .calibrate import calibrate
-from .console import console
-from .eol import eol
 from .errors import Group, fail, fail_os, interrupted_status, stopped_line, usage_error_line
-from .render import evaluate, process, render
-from .report import judge, report
-from .robust import robustness
-from .signoff import signoff
-from .sweep import sweep
-from .tune import batch, select, status, tune
-from .validate import validate
 
-__all__ = ["cli", "main", "COMMANDS"]
+__all__ = ["cli", "main", "COMMAND_MODULES"]
 
-#: Every command of ``rvmsim``, in the order the modules list them.
-COMMANDS: tuple[click.Command, ...] = (render, process, evaluate, tune, batch, status, select,
-                                       report, judge, validate, sweep, robustness, calibrate,
-                                       console, eol, signoff)
+#: Every command of ``rvmsim`` and the module that defines it (as an attribute of its
+#: name).  A command's module is imported when the command is asked for, so ``rvmsim tune``
+#: does not import the console's web server nor the sign-off's PDF printer (0.6 s of the
+#: 2 s before a tuning run's first candidate: tools/bench_first_candidate.py).
+COMMAND_MODULES: Final[Mapping[str, str]] = MappingProxyType({
+    "render": "rvmsim.cli.render", "process": "rvmsim.cli.render",
+    "evaluate": "rvmsim.cli.render", "tune": "rvmsim.cli.tune", "batch": "rvmsim.cli.tune",
+    "status": "rvmsim.cli.tune", "select": "rvmsim.cli.tune", "report": "rvmsim.cli.report",
+    "judge": "rvmsim.cli.report", "validate": "rvmsim.cli.validate",
+    "sweep": "rvmsim.cli.sweep", "robustness": "rvmsim.cli.robust",
+    "calibrate": "rvmsim.cli.calibrate", "console": "rvmsim.cli.console",
+    "eol": "rvmsim.cli.eol", "signoff": "rvmsim.cli.signoff"})
 
 
-@click.group(cls=Group, context_settings={"help_option_names": ["-h", "--help"]},
+class _Commands(Group):
+    """The group of :data:`COMMAND_MODULES`: a command's module is imported when it is
+    first asked for (to run it, or for the help page)."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMAND_MODULES)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        if cmd_name not in self.commands and cmd_name in COMMAND_MODULES:
+            self.add_command(getattr(importlib.import_module(COMMAND_MODULES[cmd_name]),
+                                     cmd_name))
+        return self.commands.get(cmd_name)
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]},
              invoke_without_command=True, no_args_is_help=False)
 @click.version_option(package_name="rvmsim")
 @click.pass_context
@@ -40,10 +54,6 @@ def cli(ctx: click.Context) -> None:
     if ctx.invoked_subcommand is None:  # a usage error of one line, not the help page
         names = ", ".join(cli.list_commands(ctx))
         raise click.UsageError(f"missing command (one of {names}; see rvmsim --help)", ctx)
-
-
-for _command in COMMANDS:
-    cli.add_command(_command)
 
 
 def main(args: Sequence[str] | None = None) -> NoReturn:

@@ -14,7 +14,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
 from .variation import MOUNT_AXES, LoadState, Variation
 
@@ -72,6 +71,9 @@ def nominal_sample(variation: Variation | None = None) -> MountSample:
 def _unit_points(n: int, seed: int) -> np.ndarray:
     """The first ``n`` points of a scrambled Sobol sequence in (0, 1)^_DIMS (a power of two
     is drawn, so the balance properties hold for the whole block)."""
+    # scipy.stats is imported where it is used, not at module top: it takes 0.25 s,
+    # and every command that tunes imports this module before its first candidate.
+    from scipy.stats import qmc
 
     sobol = qmc.Sobol(d=_DIMS, scramble=True, seed=np.random.default_rng(seed))
     u = sobol.random_base2(max(0, math.ceil(math.log2(max(n, 1)))))[:n]

@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 from pydantic import ValidationError
-from scipy.stats import truncnorm
 
 from .._io import input_error_from_validation, key_lines, parse_yaml_mapping, read_text
 from ..errors import VariationError
@@ -52,6 +51,10 @@ class AxisDistribution:
         if self.kind == "uniform":
             return (2.0 * u - 1.0) * self.half_width
         if self.kind == "normal" and self.sigma > 0:
+            # scipy.stats is imported where it is used, not at module top: it takes 0.25 s,
+            # and every command that tunes imports this module before its first candidate.
+            from scipy.stats import truncnorm
+
             return np.asarray(truncnorm.ppf(u, -self.truncate, self.truncate)) * self.sigma
         return np.zeros_like(u)
 

@@ -41,7 +41,6 @@ from abc import ABC, abstractmethod
 from typing import Annotated, ClassVar, Generator, Sequence, TypeVar
 
 import numpy as np
-from cmaes import CMA
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..errors import RvmsimError
@@ -327,6 +326,11 @@ class CmaEs(Strategy):
                 pool += [(-t[1], used + i, u) for i, (u, t) in enumerate(zip(us, told))]
                 used += len(us)
         starts = [u for _, _, u in sorted(pool, key=lambda t: t[:2])] + [init]
+        # Imported here, where CMA-ES starts, not at module top: the cmaes package imports
+        # scipy.stats (0.3-0.5 s) for a variant we do not use, and every command that
+        # tunes imports this module before its first candidate.
+        from cmaes import CMA
+
         restart = 0
         popsize = self.popsize
         while used < self.budget:
