@@ -19,8 +19,8 @@ __all__ = ["cli", "main", "COMMAND_MODULES"]
 
 #: Every command of ``rvmsim`` and the module that defines it (as an attribute of its
 #: name).  A command's module is imported when the command is asked for, so ``rvmsim tune``
-#: does not import the console's web server nor the sign-off's PDF printer (0.6 s of the
-#: 2 s before a tuning run's first candidate: tools/bench_first_candidate.py).
+#: imports neither the console's web server nor the report's and the sign-off's pages
+#: before its first candidate (docs/performance.md, "A command's first candidate").
 COMMAND_MODULES: Final[Mapping[str, str]] = MappingProxyType({
     "render": "rvmsim.cli.render", "process": "rvmsim.cli.render",
     "evaluate": "rvmsim.cli.render", "tune": "rvmsim.cli.tune", "batch": "rvmsim.cli.tune",
