@@ -98,10 +98,8 @@ def make_law(scene: Scene, platform: IspParams, output: OutputSpec, model: Compe
     reference = CompensationLaw(scene, platform, output, model)
     law = cls(reference, criteria, output)
     if nominal is not None:
-        if station is None:
-            station = nominal_draws(scene, model, nominal, camera)
-        law.uncertainty, values = ec_uncertainty(nominal, platform, model,
-                                                 _camera_of(scene, nominal, camera),
+        cam = _camera_of(scene, nominal, camera)
+        law.uncertainty, values = ec_uncertainty(nominal, platform, model, cam,
                                                  station=station)
         law.target = float(law.scale.least(values, law.uncertainty)[0])
     return law

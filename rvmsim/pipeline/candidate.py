@@ -294,7 +294,7 @@ class CandidateEvaluator:
         """The RVM window each label group can appear in, for one parameter set (``nodes``:
         its map's node grid, when already built)."""
         if nodes is None:
-            nodes = map_nodes(params, self.input_size, self.output, rays=self._rays)
+            nodes = self.map_nodes(params)
         return self.windows_at(self.node_lookup(nodes))
 
     def node_lookup(self, nodes: MapNodes) -> NodeLookup | None:

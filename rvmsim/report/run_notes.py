@@ -7,7 +7,6 @@ display's size.
 from __future__ import annotations
 
 import os
-import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
@@ -17,6 +16,7 @@ from .provenance import Provenance
 from .records import known_yield, signoff_files
 from ..isp import params_to_dict
 from ..pipeline import rvm_color
+from ..tune.summary import signoff_command
 
 if TYPE_CHECKING:
     from ..isp import IspParams, OutputSpec
@@ -73,9 +73,7 @@ def signoff_note(run_dir: Path, report_dir: Path) -> str:
         href = quote(Path(os.path.relpath(found[0], report_dir)).as_posix())
         return (f'<p id="signoff-link">Sign-off sheet: <a href="{escape(href)}">'
                 f"{escape(found[0].name)}</a>.</p>")
-    cmd = (f"rvmsim signoff {shlex.quote(str(run_dir))} --robustness "
-           f"{shlex.quote(str(run_dir / 'robustness'))} "
-           f"--out {shlex.quote(str(run_dir / 'signoff'))}")
+    cmd = signoff_command(run_dir)
     return (f'<p class="muted" id="signoff-link">No sign-off sheet yet: '
             f"<code>{escape(cmd)}</code> makes one (docs/signoff.md).</p>")
 

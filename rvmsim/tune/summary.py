@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from .run import TuneResult
 
-__all__ = ["summary_lines", "next_steps"]
+__all__ = ["summary_lines", "next_steps", "signoff_command"]
 
 
 def summary_lines(result: TuneResult) -> list[str]:
@@ -52,8 +52,16 @@ def next_steps(run_dir: Path, scene: str | Path | None = None) -> list[str]:
              (f"rvmsim select {run} --rank K -o K.yaml", "export another candidate"),
              (f"rvmsim robustness {scene_arg} --params {shlex.quote(str(top / 'rank_1.yaml'))}"
               f" --out {rob}", "its yield over the mount tolerances"),
-             (f"rvmsim signoff {run} --robustness {rob} "
-              f"--out {shlex.quote(str(run_dir / 'signoff'))}", "the sign-off record (HTML, PDF)")]
+             (signoff_command(run_dir), "the sign-off record (HTML, PDF)")]
     width = max(len(c) for c, _ in steps)
     lines += ["next:", *(f"  {c:<{width}}   {what}" for c, what in steps)]
     return lines
+
+
+def signoff_command(run_dir: Path) -> str:
+    """The ``rvmsim signoff`` command of a run, as printed after tuning and in the report:
+    the robustness folder :func:`next_steps`' robustness command writes, and the sign-off
+    folder, both inside the run folder."""
+    q = shlex.quote
+    return (f"rvmsim signoff {q(str(run_dir))} --robustness {q(str(run_dir / 'robustness'))} "
+            f"--out {q(str(run_dir / 'signoff'))}")
