@@ -35,7 +35,9 @@ every worker have closed its pipe (so within the same second).  A pool must be f
 
 :func:`stop_on_signals` makes SIGTERM the same orderly stop as Ctrl-C in the command line
 (:class:`Terminated`, a :class:`KeyboardInterrupt`: every finished batch stays stored and
-the run can be resumed; a second SIGTERM ends the process at once).  Under it, either signal
+the run can be resumed; a SIGTERM more than :data:`SIGTERM_REPEAT_S` after the first ends
+the process at once, one sooner is the same stop sent again to the process group, as
+``timeout`` and service managers do).  Under it, either signal
 waits while a pool starts a worker (``submit`` writes the worker's state into a pipe the
 worker reads as it starts, up to a second): cut there, the worker would be left out of the
 pool's table, unstopped, and die of its half-read state with a traceback on the command's
@@ -54,6 +56,7 @@ import ctypes
 import multiprocessing as mp
 import multiprocessing.forkserver
 import multiprocessing.resource_tracker
+import multiprocessing.util
 import os
 import pickle
 import signal
@@ -68,7 +71,8 @@ from typing import Any, Final, ParamSpec, TypeVar
 from .errors import RvmsimError
 
 __all__ = ["start_pool", "start_worker_server", "WORKER_PRELOAD", "stop_pool", "stop_helpers",
-           "die_with_parent", "stop_on_signals", "Terminated", "ORPHAN_EXIT_STATUS"]
+           "die_with_parent", "stop_on_signals", "stop_requested", "Terminated",
+           "ORPHAN_EXIT_STATUS", "SIGTERM_REPEAT_S"]
 
 _P = ParamSpec("_P")
 _T = TypeVar("_T")
@@ -116,9 +120,11 @@ def start_worker_server(also: Sequence[str] = (), *,
     task needs beyond it).  False where there is no fork server (workers are spawned)."""
     if "forkserver" not in mp.get_all_start_methods():
         return False
-    # Takes effect when the server starts (a server already running keeps its own).
-    multiprocessing.forkserver.set_forkserver_preload(list(dict.fromkeys([*preload, *also])))
-    # the server, and so every worker, starts with SIGINT blocked
+    # The preload takes effect when the server starts (a running server keeps its own).
+    # The server ignores SIGINT (multiprocessing's) and SIGTERM (rvmsim._forkserver, which it
+    # imports first), so a signal to the whole process group leaves it to reap its workers.
+    multiprocessing.forkserver.set_forkserver_preload(
+        list(dict.fromkeys(["rvmsim._forkserver", *preload, *also])))
     with _sigint_blocked(), _main_hidden():
         multiprocessing.forkserver.ensure_running()
     return True
@@ -219,9 +225,18 @@ def stop_helpers() -> None:
     """
     if mp.parent_process() is not None:
         return
+    for child in mp.active_children():  # the pools' workers, reaped by the server first
+        child.join(_BROKEN_WAIT_S)  # (ended by a signal to the group: its status unread)
     server = multiprocessing.forkserver._forkserver
     if getattr(server, "_forkserver_pid", None) is not None:
         server._stop()  # type: ignore[attr-defined]  # private, see above
+    # Then what the interpreter's exit would run after this: the finalizers that unlink the
+    # pools' semaphores (and tell the tracker so) and remove multiprocessing's temporary
+    # folder.  A pool that broke (its workers ended by a signal to the process group) still
+    # holds its semaphores here; with the tracker stopped first, it unlinks them itself
+    # with a "leaked semaphore objects" warning, and each finalizer then fails with a
+    # traceback.  It runs once (multiprocessing marks it done).
+    multiprocessing.util._exit_function()  # type: ignore[attr-defined]  # private, see above
     tracker = multiprocessing.resource_tracker._resource_tracker
     if getattr(tracker, "_pid", None) is not None:
         tracker._stop()  # type: ignore[attr-defined]  # private, see above
@@ -233,6 +248,7 @@ def _start_worker(parent_pid: int, kernel: bool, environ: dict[str, str],
     parent's environment, then run the pool's own initializer."""
     die_with_parent(parent_pid, kernel=kernel)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C pending since the start
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # the fork server's is "ignore"
     if hasattr(signal, "pthread_sigmask"):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     os.environ.clear()
@@ -326,6 +342,12 @@ class Terminated(KeyboardInterrupt):
 #: during one, raised as the outermost ends.
 _held = 0
 _pending: KeyboardInterrupt | None = None
+#: When the first SIGTERM of :func:`stop_on_signals` came (monotonic s; None: none yet).
+_sigterm_at: float | None = None
+#: A SIGTERM within this many seconds of the first is the same stop (s): ``timeout`` and
+#: a service manager send SIGTERM to the command and then to its whole process group, so
+#: the command gets it twice at once.  A later one ends the process at once.
+SIGTERM_REPEAT_S: Final = 2.0
 
 
 @contextlib.contextmanager
@@ -360,9 +382,24 @@ def _on_sigint(signum: int, frame: FrameType | None) -> None:
 
 
 def _on_sigterm(signum: int, frame: FrameType | None) -> None:
-    # one orderly stop; a second SIGTERM (say, from an impatient supervisor) ends at once
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # one orderly stop; a later SIGTERM (say, from an impatient supervisor) ends at once
+    global _sigterm_at
+    if _sigterm_at is not None:
+        if time.monotonic() - _sigterm_at < SIGTERM_REPEAT_S:
+            return  # the same stop, sent again to the whole process group
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return
+    _sigterm_at = time.monotonic()
     _stop(Terminated())
+
+
+def stop_requested() -> KeyboardInterrupt | None:
+    """The stop (:class:`Terminated`) that a SIGTERM under :func:`stop_on_signals` has
+    asked for, or None.  A caller whose pool broke raises it instead of reporting a failed
+    worker: a SIGTERM sent to the whole process group ends the workers too, and their pool
+    may report that before the caller has seen its own signal."""
+    return Terminated() if _sigterm_at is not None else None
 
 
 @contextlib.contextmanager
@@ -376,8 +413,10 @@ def stop_on_signals() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    global _sigterm_at
     ours = {signal.SIGINT: _on_sigint, signal.SIGTERM: _on_sigterm}
     before = {sig: signal.getsignal(sig) for sig in ours}
+    _sigterm_at = None
     ours = {sig: handler for sig, handler in ours.items()
             if before[sig] is not signal.SIG_IGN}  # started as "ignore" (nohup, background)
     for sig, handler in ours.items():

@@ -78,8 +78,8 @@ def _env(folder: Path) -> dict[str, str]:
 
 
 def _trials(db: Path) -> int:
-    try:
-        with sqlite3.connect(db) as con:
+    try:  # read-only: connecting must not make the file the command is about to make
+        with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as con:
             return int(con.execute("SELECT COUNT(*) FROM trials").fetchone()[0])
     except sqlite3.Error:  # not made yet
         return 0
@@ -408,3 +408,89 @@ def test_nothing_of_a_command_runs_once_its_exit_status_is_read(case, command):
     expected = {"tune": {0, 1}, "render": {0}, "tune-SIGTERM": {143}, "error": {2}}[command]
     assert proc.returncode in expected, err
     assert left == [], left
+
+
+#: The supervised runs: their budget, and the trials stored before the supervisor stops one.
+SUPERVISED_BUDGET, SUPERVISED_STOP = 120, 20
+
+
+@pytest.fixture(scope="module")
+def clean_supervised(case: Path) -> Path:
+    """The unbroken run of :data:`SUPERVISED_BUDGET` (seed 0), in this process."""
+    run = case / "clean_supervised"
+    res = run_in_process(_tune_args(run, "--budget", SUPERVISED_BUDGET, workers=1), cwd=case,
+                         env=_env(case))
+    assert res.code in (0, 1), res.stderr  # 1: its best fails an EC, as judged
+    return run
+
+
+def _supervised_stop(case: Path, run: Path, supervisor: str) -> subprocess.CompletedProcess[str]:
+    """Tune into ``run`` under ``supervisor`` and stop it with SIGTERM once
+    :data:`SUPERVISED_STOP` trials are stored: ``timeout`` (its own process group; SIGTERM
+    to ``timeout`` runs the same step as its expiry: the signal to the command, then to the
+    whole group) or ``group`` (the command in its own session, SIGTERM to the whole group,
+    as a service manager stops it).  Returns the command's status (``timeout
+    --preserve-status`` passes it on), its stderr, and checks its group is empty then."""
+    args = [str(a) for a in _tune_args(run, "--budget", SUPERVISED_BUDGET)]
+    command = [sys.executable, "-m", "rvmsim", *args]
+    if supervisor == "timeout":
+        command = ["timeout", "--preserve-status", str(int(START_S)), *command]
+    proc = subprocess.Popen(command, cwd=case, env=child_env(_env(case)),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + START_S
+        while _trials(run / "run.sqlite") < SUPERVISED_STOP:
+            if proc.poll() is not None:
+                pytest.fail(f"ended before it was stopped ({proc.returncode}): "
+                            f"{proc.communicate()[1]}")
+            assert time.monotonic() < deadline, "no trials in time"
+            time.sleep(0.02)
+        if supervisor == "timeout":
+            proc.send_signal(signal.SIGTERM)
+        else:
+            os.killpg(proc.pid, signal.SIGTERM)
+        _, err = proc.communicate(timeout=START_S)
+        assert _group_left(proc.pid) == []
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return subprocess.CompletedProcess(command, proc.returncode, "", err)
+
+
+#: 10 of 10 under timeout in the slow tier; 2 and 1 in the test command.
+@pytest.mark.parametrize("supervisor, attempts",
+                         [("timeout", 2), ("group", 1),
+                          pytest.param("timeout", 10, marks=pytest.mark.slow)],
+                         ids=["timeout-2", "group-1", "timeout-10"])
+def test_sigterm_to_the_process_group_is_one_orderly_stop(case, clean_supervised, supervisor,
+                                                          attempts):
+    """A supervisor's SIGTERM reaches the command twice (``timeout``: to it, then to its
+    group) or with its workers (a group kill): the same one orderly stop every time, exit
+    143, one line, the run stored as interrupted and resumed to the unbroken run's trials."""
+    for attempt in range(attempts):
+        run = case / f"supervised_{supervisor}_{attempts}_{attempt}"
+        res = _supervised_stop(case, run, supervisor)
+        assert res.returncode == 128 + signal.SIGTERM, (attempt, res.stderr)
+        assert res.stderr == "rvmsim: terminated (SIGTERM)\n", (attempt, res.stderr)
+        store = RunStore(run / "run.sqlite", readonly=True)
+        try:
+            assert store.state().status is RunStatus.INTERRUPTED
+            stored = store.count()
+        finally:
+            store.close()
+        assert SUPERVISED_STOP <= stored < SUPERVISED_BUDGET
+        res2 = run_in_process(_tune_args(None, "--resume", run, workers=1), cwd=case,
+                              env=_env(case))
+        assert res2.code in (0, 1), res2.stderr
+        assert _top(run) == _top(clean_supervised)
+        assert _trial_rows(run) == _trial_rows(clean_supervised)
+
+
+def _trial_rows(run: Path) -> list[tuple[object, ...]]:
+    """Every stored trial, in order, without its timing."""
+    with sqlite3.connect(f"file:{run / 'run.sqlite'}?mode=ro", uri=True) as con:
+        cols = [r[1] for r in con.execute("PRAGMA table_info(trials)")]
+        keep = [c for c in cols if "time" not in c and "second" not in c]
+        return con.execute(f"SELECT {', '.join(keep)} FROM trials ORDER BY idx").fetchall()

@@ -28,7 +28,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import TYPE_CHECKING, TypeVar
 
 from .._optional import import_distributed
-from .._procs import start_pool, stop_pool
+from .._procs import start_pool, stop_pool, stop_requested
 from ..errors import RvmsimError
 
 if TYPE_CHECKING:
@@ -93,6 +93,9 @@ class LocalExecutor(Executor):
                         try:
                             result = fut.result()
                         except BrokenProcessPool:
+                            stop = stop_requested()  # a SIGTERM to the group ended it
+                            if stop is not None:
+                                raise stop from None
                             broken = True
                             continue
                         del todo[key]

@@ -32,7 +32,7 @@ from .._procs import Terminated
 from ..errors import RvmsimError
 
 __all__ = ["Command", "Group", "usage_error_line", "fail", "fail_os", "interrupted_status",
-           "stopped_line"]
+           "stopped_line", "CommandStopped"]
 
 
 def fail(err: Exception) -> NoReturn:
@@ -106,6 +106,16 @@ class Command(click.Command):
             fail_os(err, where)
 
 
+class CommandStopped(Exception):
+    """A command stopped by Ctrl-C or SIGTERM (``stop``: the KeyboardInterrupt or
+    :class:`~rvmsim._procs.Terminated`), carried past click's ``main``, which would print an
+    empty line on stderr for it before the command's one line."""
+
+    def __init__(self, stop: KeyboardInterrupt):
+        super().__init__(str(stop))
+        self.stop = stop
+
+
 class Group(click.Group):
     """The ``rvmsim`` group: its usage errors know it, and its commands are :class:`Command`."""
 
@@ -113,6 +123,12 @@ class Group(click.Group):
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         return _parse_in(ctx, super().parse_args, args)
+
+    def invoke(self, ctx: click.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt as stop:
+            raise CommandStopped(stop) from None
 
 
 def _param_name(param: click.Parameter) -> str:

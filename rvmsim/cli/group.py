@@ -13,7 +13,8 @@ import click
 from .._procs import stop_on_signals
 from ..errors import RvmsimError
 from ..render import RenderProcess
-from .errors import Group, fail, fail_os, interrupted_status, stopped_line, usage_error_line
+from .errors import (CommandStopped, Group, fail, fail_os, interrupted_status, stopped_line,
+                     usage_error_line)
 
 __all__ = ["cli", "main", "COMMAND_MODULES"]
 
@@ -73,9 +74,11 @@ def main(args: Sequence[str] | None = None) -> NoReturn:
         with stop_on_signals(), RenderProcess():
             code = cli.main(args=None if args is None else list(args),
                             prog_name=None if args is None else "rvmsim", standalone_mode=False)
-    except (KeyboardInterrupt, click.exceptions.Abort) as err:
-        # click re-raises a KeyboardInterrupt (and so a SIGTERM's Terminated) as Abort from it
-        stop = err.__cause__ if isinstance(err, click.exceptions.Abort) else err
+    except (KeyboardInterrupt, click.exceptions.Abort, CommandStopped) as err:
+        # a command's stop comes as CommandStopped; outside one click re-raises a
+        # KeyboardInterrupt (and so a SIGTERM's Terminated) as Abort from it
+        stop = (err.stop if isinstance(err, CommandStopped)
+                else err.__cause__ if isinstance(err, click.exceptions.Abort) else err)
         click.echo(stopped_line(stop), err=True)
         sys.exit(interrupted_status(stop))
     except click.UsageError as err:

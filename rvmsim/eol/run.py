@@ -18,7 +18,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .._procs import start_pool, stop_pool
+from .._procs import start_pool, stop_pool, stop_requested
 from .._progress import progress_bar
 from ..errors import RvmsimError
 from ..render import RenderProcess
@@ -75,8 +75,10 @@ def _cars(station: Station, captures: Sequence[Path], names: Sequence[str],
             try:
                 yield fut.result()
             except BrokenProcessPool as err:  # a worker died, or its state did not unpickle
-                raise RvmsimError(f"station worker processes failed ({err}); run with "
-                                  "--workers 1 to see the error in this process") from None
+                # (or a SIGTERM to the process group ended it)
+                raise stop_requested() or RvmsimError(
+                    f"station worker processes failed ({err}); run with --workers 1 to see "
+                    "the error in this process") from None
         done = True
     finally:
         stop_pool(pool, now=not done)

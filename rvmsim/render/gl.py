@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._optional import import_pyrender
-from .._procs import start_pool, start_worker_server, stop_pool
+from .._procs import start_pool, start_worker_server, stop_pool, stop_requested
 from .._progress import progress_bar
 from ..camera import FisheyeCamera
 from ..errors import RvmsimError
@@ -320,6 +320,9 @@ class RenderProcess:
                 return atlas
             except BrokenProcessPool:
                 self.close(now=True)
+                stop = stop_requested()  # a SIGTERM to the process group ended it
+                if stop is not None:
+                    raise stop from None
                 if attempt == _RENDER_ATTEMPTS:
                     raise RvmsimError(
                         f"render: the OpenGL render process died {attempt} times in a row "

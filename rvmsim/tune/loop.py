@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import cv2
 import numpy as np
 
-from .._procs import start_pool, stop_pool
+from .._procs import start_pool, stop_pool, stop_requested
 from ..criteria import Criteria
 from ..errors import RvmsimError
 from ..isp import IspParams, OutputSpec
@@ -127,9 +127,11 @@ class BatchEvaluator:
             futures = [self.pool.submit(_work, xs[a:b]) for a, b in _chunks(len(xs), self.workers)]
             parts = [f.result() for f in futures]
         except BrokenProcessPool as err:  # a worker died, or could not start (its state did
-            # not unpickle: e.g. a criteria plugin it cannot import)
-            raise RvmsimError(f"tuning worker processes failed ({err}); run with workers=1 "
-                              "to see the error in this process") from None
+            # not unpickle: e.g. a criteria plugin it cannot import); or a SIGTERM to the
+            # process group ended it
+            raise stop_requested() or RvmsimError(
+                f"tuning worker processes failed ({err}); run with workers=1 to see the "
+                "error in this process") from None
         return ScoredBatch(*([v for p in parts for v in getattr(p, f.name)]
                              for f in dataclasses.fields(ScoredBatch)))
 
