@@ -62,7 +62,7 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
 
     captures = capture_files(capture_paths)
     sc = load_scene(scene)
-    params, output = load_isp(params_file)
+    params, output = load_isp(params_file, complete=True)  # never a default into a car
     model = compensation_for(compensation)
     assert model is not None  # a value is always given
     criteria = load_criteria(criteria_file)

@@ -166,11 +166,14 @@ def check_scale(scene: Scene, params: IspParams, scale: float) -> None:
                                      click.get_current_context(), param_hint="--scale") from err
 
 
-def load_isp(params_file: Path | None) -> tuple[IspParams, OutputSpec]:
-    """The params file's ISP parameters and output (the paper's defaults without one)."""
+def load_isp(params_file: Path | None, *, complete: bool = False
+             ) -> tuple[IspParams, OutputSpec]:
+    """The params file's ISP parameters and output (the paper's defaults without one);
+    ``complete``: every parameter must be in the file (:func:`rvmsim.isp.load_params`)."""
     from ..isp import IspParams, OutputSpec, load_params
 
-    return load_params(params_file) if params_file else (IspParams(), OutputSpec())
+    return (load_params(params_file, complete=complete) if params_file
+            else (IspParams(), OutputSpec()))
 
 
 #: ``--only-supported`` of the commands that score a scene (tune, evaluate, robustness):

@@ -10,7 +10,9 @@ before any of its body is read):
 - **how**: a state-changing request (anything but GET, HEAD, OPTIONS) must send its body
   as ``application/json``, a type no other site's form or simple request can send without
   a CORS preflight, which the console never grants (415 otherwise);
-- **how much**: a request target (path and query) over :data:`MAX_TARGET_BYTES` gets 414;
+- **how much**: a request target (path and query) over :data:`MAX_TARGET_BYTES` gets 414,
+  header fields over :data:`MAX_HEADER_BYTES` 431 (a request head too large to parse gets
+  the same from the connection itself, :mod:`.protocol`);
   a body over :data:`MAX_BODY_BYTES` gets 413 — at once when its ``Content-Length`` says
   so, else as soon as the bytes read pass the limit (the body is read in the chunks the
   server receives and never held beyond the limit), and the connection is closed.
@@ -26,7 +28,8 @@ from http.cookies import SimpleCookie
 from typing import Any, Awaitable, Callable, MutableMapping
 from urllib.parse import parse_qs
 
-__all__ = ["Guard", "MAX_BODY_BYTES", "MAX_TARGET_BYTES", "TOKEN_HEADER", "TOKEN_COOKIE",
+__all__ = ["Guard", "MAX_BODY_BYTES", "MAX_TARGET_BYTES", "MAX_HEADER_BYTES", "TOKEN_HEADER",
+           "TOKEN_COOKIE",
            "LOOPBACK_HOSTS", "SAFE_METHODS"]
 
 Scope = MutableMapping[str, Any]
@@ -43,6 +46,8 @@ LOOPBACK_HOSTS = frozenset({"127.0.0.1", "localhost", "::1"})
 MAX_BODY_BYTES = 64 * 1024
 #: Longest request target, path and query (bytes): an evaluation's query is about 1 kB.
 MAX_TARGET_BYTES = 8 * 1024
+#: Largest request header fields, all together (bytes; ``name: value\r\n`` each).
+MAX_HEADER_BYTES = 16 * 1024
 #: Methods that change nothing.
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
 _CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
@@ -122,6 +127,9 @@ class Guard:
         target = len(scope.get("raw_path") or scope["path"].encode()) + len(query)
         if target > MAX_TARGET_BYTES:
             await _refuse(send, 414, f"request target over {MAX_TARGET_BYTES} bytes")
+            return
+        if sum(len(k) + len(v) + 4 for k, v in scope.get("headers", [])) > MAX_HEADER_BYTES:
+            await _refuse(send, 431, f"request header fields over {MAX_HEADER_BYTES} bytes")
             return
         why = self._who(headers, query) or self._from_where(scope, headers)
         if why is not None:

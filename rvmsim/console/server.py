@@ -22,6 +22,7 @@ import uvicorn
 
 from ..errors import RvmsimError
 from .app import create_app
+from .protocol import MAX_HEAD_BYTES, ConsoleHttp
 
 if TYPE_CHECKING:
     from .session import ConsoleSession
@@ -112,7 +113,8 @@ def make_server(session: ConsoleSession, access: Access) -> uvicorn.Server:
     """A uvicorn server of the console app (not started)."""
 
     config = uvicorn.Config(create_app(session, token=access.token), log_level="warning",
-                            access_log=False, lifespan="off", ws="none")
+                            access_log=False, lifespan="off", ws="none", http=ConsoleHttp,
+                            h11_max_incomplete_event_size=MAX_HEAD_BYTES)
     return uvicorn.Server(config)
 
 

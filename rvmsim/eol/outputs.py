@@ -31,11 +31,14 @@ from .._io import make_output_folder, write_png
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from ..scene import MOUNT_AXES
-from ..storage import json_default
+from ..storage import FolderLock, json_default
 from .records import CarResult, StationResult
 
-__all__ = ["Staging", "write_car", "write_tables", "csv_rows", "RESULT_FILES"]
+__all__ = ["Staging", "write_car", "write_tables", "csv_rows", "RESULT_FILES", "output_lock",
+           "earlier_run_files", "STAGING_PREFIX"]
 
+#: The name of a run's staging folder in the output folder begins so.
+STAGING_PREFIX = ".eol-"
 #: The files written for all cars, in the output folder.
 RESULT_FILES = ("eol.json", "eol.csv", "eol.html")
 #: A failed car's pictures that are written (of the validation's), by key.
@@ -44,7 +47,11 @@ _FAILURE_PICTURES = ("landmarks", "overlay")
 
 class Staging:
     """A temporary folder inside ``out`` that a run writes into; :meth:`commit` moves its
-    files into ``out`` (each by one rename, written over), :meth:`discard` removes it.
+    files into ``out`` (each by one rename, written over) and removes the files of the
+    station run that was there before, :meth:`discard` removes it.
+
+    Make it while holding the output folder's lock (:func:`output_lock`): staging folders
+    found then (``.eol-*.tmp``) are a killed run's, and are removed.
 
     Raises
     ------
@@ -54,20 +61,27 @@ class Staging:
 
     def __init__(self, out: str | Path):
         self.out = make_output_folder(out)
-        self.dir = self.out / f".eol-{uuid.uuid4().hex[:12]}.tmp"
+        for stale in self.out.glob(f"{STAGING_PREFIX}*.tmp"):
+            shutil.rmtree(stale, ignore_errors=True)
+        self.dir = self.out / f"{STAGING_PREFIX}{uuid.uuid4().hex[:12]}.tmp"
         try:
             self.dir.mkdir()
         except OSError as err:
             raise RvmsimError(f"{self.out}: cannot write here ({err.strerror or err})") from None
 
     def commit(self) -> list[Path]:
-        """Move every staged file into the output folder; returns their new paths."""
+        """Move every staged file into the output folder, then remove the earlier run's
+        files that this run did not write again (its ``eol.json`` names them); returns the
+        new files' paths."""
+        earlier = earlier_run_files(self.out)
         moved = []
         try:
             for f in sorted(self.dir.iterdir()):
                 target = self.out / f.name
                 os.replace(f, target)
                 moved.append(target)
+            for name in sorted(earlier - {f.name for f in moved}):
+                (self.out / name).unlink(missing_ok=True)
         except OSError as err:
             raise RvmsimError(f"{self.out}: cannot move the results in "
                               f"({err.strerror or err})") from None
@@ -77,6 +91,32 @@ class Staging:
     def discard(self) -> None:
         """Remove the staging folder and whatever is left in it."""
         shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def output_lock(out: str | Path) -> FolderLock:
+    """The writer lock of a station's output folder (``eol.lock``, ``eol.pid`` in it): one
+    station run at a time per folder; a second fails at once with one line."""
+    return FolderLock(out, "eol", "station output folder")
+
+
+def earlier_run_files(out: Path) -> set[str]:
+    """The files the station run already in ``out`` wrote there: its cars' files as its
+    ``eol.json`` lists them, and the result files.  Only plain names of files directly in
+    ``out`` count; an unreadable or foreign ``eol.json`` names none but the result files
+    (nothing else of the folder is ever removed)."""
+    names = set(RESULT_FILES)
+    try:
+        data = json.loads((out / "eol.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return names
+    results = data.get("results") if isinstance(data, dict) else None
+    for car in results if isinstance(results, list) else []:
+        files = car.get("files") if isinstance(car, dict) else None
+        for name in (files.values() if isinstance(files, dict) else ()):
+            if (isinstance(name, str) and name and name == Path(name).name
+                    and not name.startswith(".") and (out / name).is_file()):
+                names.add(name)
+    return names
 
 
 def _write_text(path: Path, text: str) -> None:

@@ -24,7 +24,7 @@ from ..errors import RvmsimError
 from ..render import RenderProcess
 from ..scene import Scene
 from ..pose import capture_folders, check_captures, load_capture
-from .outputs import Staging, write_car, write_tables
+from .outputs import Staging, output_lock, write_car, write_tables
 from .records import CarResult, StationResult
 from .station import Station, StationSettings
 
@@ -109,7 +109,9 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
     out : path
         Output folder (created when missing): per car ``<name>.yaml`` and its pictures,
         ``eol.json``, ``eol.csv`` and (with ``write_page``) ``eol.html`` (see
-        :mod:`.outputs`).  Files of the same names are written over; others are left.
+        :mod:`.outputs`), all moved in at the end; the files of the station run that
+        was there before (its ``eol.json`` names them) are replaced, other files are left.
+        One station run at a time writes into a folder (its lock, ``eol.lock``).
     settings : StationSettings
     params_file : str
         The platform setting's file, for the record.
@@ -135,9 +137,10 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
         A bad ``eol`` section or target not in view (:class:`~rvmsim.errors.SceneError`),
         a bad compensation model, an unreadable capture or one of the wrong size, or a file
         that cannot be written: one line naming the file.  Nothing in ``out`` is written
-        over then.
+        over then.  Another process's station run writing into ``out``.
     """
     t0 = time.perf_counter()
+    output_lock(out).check_free()  # another station run writing there: say so before the work
     captures = [Path(p) for p in captures]
     # every capture read once before anything is written: a missing, unreadable, corrupt
     # or blank file, or one of another size than the camera's, is an error naming it
@@ -145,7 +148,17 @@ def run_station(scene: Scene, captures: Sequence[Path], out: str | Path,
     station = Station(scene, settings, progress=progress)
     t_setup = time.perf_counter() - t0
     names = car_names(captures)
-    staging = Staging(out)
+    with output_lock(out):  # one station run at a time per output folder
+        return _run_into(station, captures, names, Staging(out), settings, params_file,
+                         write_page, workers, progress, on_car, t0, t_setup)
+
+
+def _run_into(station: Station, captures: list[Path], names: list[str], staging: Staging,
+              settings: StationSettings, params_file: str,
+              write_page: Callable[[StationResult, Path], Path] | None, workers: int,
+              progress: bool, on_car: Callable[[CarResult], None] | None, t0: float,
+              t_setup: float) -> StationResult:
+    """:func:`run_station`'s cars, written into ``staging`` and committed."""
     bar = _bar(len(captures), progress)
     cars: list[CarResult] = []
     try:

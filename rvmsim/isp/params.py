@@ -256,23 +256,32 @@ def params_judged_at(path: str | Path) -> tuple[int, int] | None:
     return (int(judged[0]), int(judged[1])) if isinstance(judged, list) else None
 
 
-def load_params(path: str | Path) -> tuple[IspParams, OutputSpec]:
+def load_params(path: str | Path, *, complete: bool = False) -> tuple[IspParams, OutputSpec]:
     """Read a params file (YAML or JSON): any of the 14 parameter names (missing ones take
     the paper's defaults) and an optional ``output: {size: [W, H], mirror: bool}`` (its
     ``judged_at: [W, H]``, the RVM image of record the ECs were judged at, is checked and
     otherwise informational: every verdict is at the reader's image of record).
 
+    Parameters
+    ----------
+    path : path
+    complete : bool
+        Every one of the 14 parameters must be given (none taken from the defaults): a
+        setting that is written into a car (``rvmsim eol``'s platform setting).
+
     Raises
     ------
     ParamsFileError
         One line naming the file (and the line where known) and the key, for unreadable
-        files, malformed YAML/JSON, unknown keys, non-numbers and values out of range.
+        or empty files, malformed YAML/JSON, unknown keys, non-numbers, values out of
+        range and, with ``complete``, a parameter not given.
     """
     path = Path(path)
     text = read_text(path, ParamsFileError, what="params file")
     data = _parse(text, path)
     if data is None:
-        data = {}
+        raise ParamsFileError(str(path), "", "empty: no ISP parameters (the paper's defaults "
+                              "are params/paper_defaults.yaml)")
     if not isinstance(data, dict):
         raise ParamsFileError(str(path), "", "a params file must be a mapping (name: value)")
     lines = key_lines(text)
@@ -287,6 +296,11 @@ def load_params(path: str | Path) -> tuple[IspParams, OutputSpec]:
         problem = _SPEC[key].problem(value)
         if problem is not None:
             raise ParamsFileError(str(path), key, problem, lines.get((key,)))
+    missing = [k for k in IspParams.names() if k not in data]
+    if complete and missing:
+        raise ParamsFileError(str(path), missing[0], "not given: a setting written into a car "
+                              "names all 14 parameters (none is taken from the defaults; "
+                              f"missing: {', '.join(missing)})")
     params = IspParams(**{k: float(v) for k, v in data.items()})
     output = OutputSpec() if out_data is None else _output_spec(out_data, path, lines)
     return params, output

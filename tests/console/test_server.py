@@ -90,3 +90,42 @@ def test_the_url_is_told_only_once_uvicorn_holds_ctrl_c(small_run):
     assert getattr(seen["handler"], "__self__", None).__class__.__name__ == "Server"
     assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], caught
     assert given_back is signal.default_int_handler  # given back
+
+
+def _raw_get(url: str, target: bytes, header: bytes = b"") -> bytes:
+    """Send ``GET target`` (with ``header``, a whole ``Name: value`` line or nothing) on a
+    socket of its own and return the whole answer (read until the server closes)."""
+    import socket
+    from urllib.parse import urlsplit
+
+    where = urlsplit(url)
+    with socket.create_connection((where.hostname, where.port), timeout=30) as sock:
+        sock.sendall(b"GET " + target + b" HTTP/1.1\r\nHost: " + where.netloc.encode()
+                     + b"\r\n" + header + b"Connection: close\r\n\r\n")
+        answer = b""
+        while chunk := sock.recv(65536):  # a reset raises here
+            answer += chunk
+    return answer
+
+
+@pytest.mark.parametrize("target, header, status", [
+    (b"/?q=" + b"a" * 1_000_000, b"", 414),  # over h11's limit: the connection answers
+    (b"/?q=" + b"a" * 12_000, b"", 414),  # within it: the app's guard answers
+    (b"/", b"X-Big: " + b"a" * 1_000_000 + b"\r\n", 431),
+    (b"/", b"X-Big: " + b"a" * 20_000 + b"\r\n", 431),
+], ids=["1 MB query", "12 kB query", "1 MB header", "20 kB header"])
+def test_a_huge_request_head_gets_414_or_431_not_a_reset(small_run, target, header, status):
+    """A request head too large gets its status and a JSON reason, the connection closed
+    gently (no reset), and the server answers the next request as before."""
+    import json
+
+    from rvmsim.console import open_session
+
+    from .conftest import serving
+
+    with serving(open_session(small_run / "run"), check_access("127.0.0.1", None)) as url:
+        answer = _raw_get(url, target, header)
+        head, _, body = answer.partition(b"\r\n\r\n")
+        assert head.split(b" ")[1] == str(status).encode(), head
+        assert json.loads(body)["error"]
+        assert _raw_get(url, b"/").startswith(b"HTTP/1.1 200")

@@ -3,6 +3,8 @@ over in the output folder."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -164,3 +166,48 @@ def test_a_capture_folders_dangling_link_is_refused(tmp_path: Path, good_capture
     res, out, _ = _eol(tmp_path, good_capture.parent)
     _one_line(res, str(entry), "a link to a missing file")
     _unchanged(out)
+
+
+@pytest.mark.parametrize("text, key", [
+    ("", "empty: no ISP parameters"),
+    ("# the platform setting\n", "empty: no ISP parameters"),
+    ("fov: 190\nrad: 600\n", "h_shift: not given"),
+    ("output: {size: [1280, 720]}\n", "fov: not given"),
+], ids=["empty", "comments only", "two of 14", "output only"])
+def test_a_platform_setting_that_leaves_parameters_to_the_defaults_is_refused(
+        tmp_path: Path, good_capture: Path, text: str, key: str):
+    """A station must never write the defaults into a car: every parameter named."""
+    scene, _ = write_inputs(tmp_path)
+    params = tmp_path / "platform.yaml"
+    params.write_text(text)
+    out = _old_out(tmp_path)
+    res = run_in_process(["eol", scene, "--params", params, "--capture", good_capture,
+                          "--out", out, "--no-progress"],
+                         env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+    _one_line(res, str(params), key)
+    _unchanged(out)
+
+
+def test_a_second_station_run_into_a_folder_in_use_is_refused(tmp_path: Path,
+                                                              good_capture: Path):
+    """Another process's station run holds the folder: one line naming it, exit 2, the
+    folder as it was."""
+    out = _old_out(tmp_path)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time\n"
+         "from rvmsim.eol.outputs import output_lock\n"
+         "output_lock(sys.argv[1]).acquire(); print('held', flush=True); time.sleep(120)",
+         str(out)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout is not None and holder.stdout.readline() == "held\n"
+        scene, params = write_inputs(tmp_path)
+        res = run_in_process(["eol", scene, "--params", params, "--capture", good_capture,
+                              "--out", out, "--no-progress"],
+                             env={"RVMSIM_CACHE": str(tmp_path / "cache")})
+        _one_line(res, str(out), f"in use by process {holder.pid}")
+    finally:
+        holder.kill()
+        holder.communicate()
+    assert sorted(p.name for p in out.iterdir()) == sorted([*OLD, "eol.lock", "eol.pid"])
+    for name, text in OLD.items():
+        assert (out / name).read_text() == text

@@ -78,7 +78,7 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
     out = tmp_path / "out"
     assert sorted(p.name for p in out.iterdir()) == [
         "car0.yaml", "car0_annotated.png", "car0_rvm.png", "car1.yaml", "car1_annotated.png",
-        "car1_rvm.png", "eol.csv", "eol.html", "eol.json"]
+        "car1_rvm.png", "eol.csv", "eol.html", "eol.json", "eol.lock"]
     doc = json.loads((out / "eol.json").read_text())
     assert doc["all_pass"] and doc["cars"] == 2 and doc["target"] == "station mat"
     assert doc["load_state"]["name"] == "curb" and doc["written_params"] == ["h_pan", "v_pan",
@@ -109,6 +109,18 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
     assert float(rows[1]["tilt"]) == doc["results"][1]["correction"]["values"]["tilt"]
     html = (out / "eol.html").read_text()
     assert "2 of 2 cars pass" in html and 'src="car1_annotated.png"' in html
+
+    # The next station run into the folder replaces this one: car0's files go, a killed
+    # run's staging folder goes, a file of someone else's stays.
+    (out / ".eol-0123456789ab.tmp").mkdir()
+    (out / ".eol-0123456789ab.tmp" / "half.yaml").write_text("# a killed run's\n")
+    (out / "notes.txt").write_text("the line's own notes\n")
+    again = _run(tmp_path, caps / "car1.png", env=env)
+    assert again.code == 0, again.stdout + again.stderr
+    assert sorted(p.name for p in out.iterdir()) == [
+        "car1.yaml", "car1_annotated.png", "car1_rvm.png", "eol.csv", "eol.html", "eol.json",
+        "eol.lock", "notes.txt"]
+    assert [r["name"] for r in json.loads((out / "eol.json").read_text())["results"]] == ["car1"]
 
 
 def test_a_car_beyond_the_range_or_without_a_pose_fails_exit_1(tmp_path: Path, env):
