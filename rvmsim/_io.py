@@ -261,7 +261,12 @@ def validate_document(model: type[BaseModel], doc: Any, source: str,
         if kind != "missing":
             got = repr(first.get("input"))
             message += f" (got {got if len(got) <= 40 else got[:30] + '…'})"
-        raise error(source, key_path_text(loc) or "(the whole document)", message) from None
+        if not loc:  # the document is not of the file's kind at all
+            need = [f.alias or name for name, f in getattr(model, "model_fields", {}).items()
+                    if f.is_required()]
+            raise error(source, "", f"{message}; expected an object with "
+                        f"{', '.join(need)}" if need else message) from None
+        raise error(source, key_path_text(loc), message) from None
     return doc
 
 

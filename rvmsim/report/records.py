@@ -169,11 +169,12 @@ def known_yield(run_dir: Path, values: Mapping[str, Any]) -> KnownYield | None:
     candidates = [] if found is None else [found[1]]
     candidates += sorted(run_dir.glob("*/robustness.json")) + [run_dir / "robustness.json"]
     for path in candidates:
+        rob: dict[str, Any]
         try:
             doc = read_json_file(path, ResultFileError)
-            rob = doc.get("robustness") if path.name == SIGNOFF_JSON and isinstance(
-                doc, dict) else doc
-            validate_document(_KnownYieldDoc, rob, str(path), ResultFileError)
+            rob = validate_document(_KnownYieldDoc, doc.get("robustness") if (
+                path.name == SIGNOFF_JSON and isinstance(doc, dict)) else doc, str(path),
+                ResultFileError)
         except RvmsimError:  # absent or unreadable: not a result to report
             continue
         if not same_setting(rob["isp"], values):

@@ -108,9 +108,12 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
     if not run_json.is_file():
         raise RvmsimError(f"{run_dir}: a run of rvmsim 0.1 without its {RUN_JSON}: its settings "
                           "are not known (restore run.json, or start a new run)")
-    doc = read_json_file(run_json, ResultFileError, what=RUN_JSON)
     try:
+        doc = read_json_file(run_json, ResultFileError, what=RUN_JSON)
         return RunSettings.from_json({**doc, "config": _legacy_config(doc.get("config") or {})})
+    except ResultFileError as err:  # over the JSON limits, or not JSON
+        raise RvmsimError(f"{run_json}: not a readable {RUN_JSON} ({err.message}); restore it, "
+                          "or start a new run") from None
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         msg = f"{run_json}: not a readable {RUN_JSON} ({err}); restore it, or start a new run"
         raise RvmsimError(" ".join(msg.split())) from None
