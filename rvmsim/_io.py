@@ -11,16 +11,18 @@ variable ``RVMSIM_MAX_IMAGE_PIXELS``.
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import uuid
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import imageio.v3 as iio
 import numpy as np
 import yaml
-from pydantic import ValidationError
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
 
 from .errors import InputFileError, RvmsimError
 
@@ -28,7 +30,9 @@ __all__ = ["KeyPath", "read_text", "parse_yaml", "parse_yaml_mapping", "key_line
            "input_error_from_validation", "line_of", "write_png", "make_output_folder",
            "MAX_YAML_BYTES", "MAX_YAML_DEPTH", "MAX_YAML_ALIAS_NODES",
            "DEFAULT_MAX_IMAGE_PIXELS", "MAX_IMAGE_SIDE_PX", "max_image_pixels",
-           "image_size_problem", "env_limit", "safe_load_limited", "yaml_problem"]
+           "image_size_problem", "env_limit", "safe_load_limited", "yaml_problem",
+           "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "json_depth", "parse_json", "read_json_file",
+           "path_problem", "FilePathText", "validate_document", "key_path_text", "ReadModel"]
 
 #: Longest YAML file read (bytes): a scene, criteria, params, tuning or sweep file is a few KiB.
 MAX_YAML_BYTES = 4 * 1024**2
@@ -41,6 +45,13 @@ MAX_YAML_ALIAS_NODES = 10_000
 DEFAULT_MAX_IMAGE_PIXELS = 50_000_000
 #: Longest image side, px (the renderer's cube faces and OpenCV's remap stay within it).
 MAX_IMAGE_SIDE_PX = 16384
+
+#: Longest JSON file read back (bytes), unless ``RVMSIM_MAX_JSON_BYTES`` says otherwise: a
+#: robustness.json of 10,000 samples is about 60 MiB.
+MAX_JSON_BYTES = 512 * 1024**2
+#: Deepest nesting of objects and arrays in a JSON file read back, unless
+#: ``RVMSIM_MAX_JSON_DEPTH`` says otherwise (a robustness.json needs about 6).
+MAX_JSON_DEPTH = 64
 
 #: A key's path in a YAML document, from the root: mapping keys (their text) and list
 #: indices, as :func:`key_lines` and pydantic's error locations give them.
@@ -108,6 +119,160 @@ def read_text(path: Path, error: type[InputFileError] = InputFileError, *,
         return data.decode("utf-8")
     except UnicodeDecodeError as err:
         raise error(str(path), "", f"cannot read {what} ({err})") from None
+
+
+#: A JSON string (its escapes included), blanked out before brackets are counted.
+_JSON_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
+#: Every byte but the four brackets (deleted before they are counted).
+_NOT_BRACKETS = bytes(b for b in range(256) if b not in b"[]{}")
+
+
+def json_depth(data: bytes) -> int:
+    """How deep the objects and arrays of the JSON text ``data`` nest (0: a bare value),
+    counted from its brackets outside strings, without parsing it (so a document nested
+    deeper than Python's recursion limit is measured, not crashed on)."""
+    brackets = _JSON_STRING.sub(b"", data).translate(None, _NOT_BRACKETS)
+    codes = np.frombuffer(brackets, dtype=np.uint8)
+    steps = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1).astype(np.int32)
+    return int(np.cumsum(steps).max(initial=0))
+
+
+def parse_json(data: bytes | str, source: str, error: type[InputFileError] = InputFileError,
+               *, what: str = "file") -> Any:
+    """The JSON document ``data`` (the text of ``source``) within the JSON limits: at most
+    ``RVMSIM_MAX_JSON_BYTES`` (:data:`MAX_JSON_BYTES`) long and nested at most
+    ``RVMSIM_MAX_JSON_DEPTH`` (:data:`MAX_JSON_DEPTH`) deep.
+
+    Raises
+    ------
+    InputFileError
+        ``error``, one line naming ``source``: over a limit, not UTF-8, or not valid JSON
+        (with its line).
+    """
+    raw = data.encode("utf-8", "surrogatepass") if isinstance(data, str) else data
+    max_bytes = env_limit("RVMSIM_MAX_JSON_BYTES", MAX_JSON_BYTES)
+    if len(raw) > max_bytes:
+        raise error(source, "", f"{what} is over the limit of {max_bytes} bytes (raise it with "
+                    "the environment variable RVMSIM_MAX_JSON_BYTES)")
+    max_depth = env_limit("RVMSIM_MAX_JSON_DEPTH", MAX_JSON_DEPTH)
+    if json_depth(raw) > max_depth:
+        raise error(source, "", f"over the JSON limits: nested more than {max_depth} levels "
+                    "deep (raise it with the environment variable RVMSIM_MAX_JSON_DEPTH)")
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as err:
+        raise error(source, "", f"cannot read {what} ({err})") from None
+    except json.JSONDecodeError as err:
+        raise error(source, "", f"not valid JSON (line {err.lineno}: {err.msg})") from None
+    except RecursionError:  # within the depth limit but past the interpreter's stack
+        raise error(source, "", "over the JSON limits: nested too deep to read") from None
+
+
+def read_json_file(path: Path, error: type[InputFileError] = InputFileError, *,
+                   what: str = "file") -> Any:
+    """The JSON document in ``path`` (a file rvmsim wrote and reads back, or a user's JSON
+    file), read within the JSON limits (:func:`parse_json`).
+
+    Raises
+    ------
+    InputFileError
+        ``error``, one line naming the file: not found, unreadable, over a limit, not JSON.
+    """
+    max_bytes = env_limit("RVMSIM_MAX_JSON_BYTES", MAX_JSON_BYTES)
+    try:
+        with path.open("rb") as f:
+            data = f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise error(str(path), "", f"{what} not found") from None
+    except (OSError, ValueError) as err:
+        raise error(str(path), "", f"cannot read {what} "
+                    f"({getattr(err, 'strerror', None) or err})") from None
+    return parse_json(data, str(path), error, what=what)
+
+
+def path_problem(text: str) -> str | None:
+    """Why ``text`` (a path named in a file) cannot be a path on this system, one line, or
+    None when it can: it holds a NUL byte, which no operating system takes."""
+    if "\x00" in text:
+        return "a path cannot hold a NUL byte"
+    return None
+
+
+def _checked_path_text(text: str) -> str:
+    problem = path_problem(text)
+    if problem is not None:
+        raise ValueError(problem)
+    return text
+
+
+#: A path named in a file (pydantic): text the operating system can take (:func:`path_problem`).
+FilePathText = Annotated[str, AfterValidator(_checked_path_text)]
+
+
+class ReadModel(BaseModel):
+    """Base of the schemas a file rvmsim wrote is checked against when it is read back:
+    the keys and types its readers use, strictly (a number is not taken from text), other
+    keys allowed (a file of an older or newer rvmsim reads as before)."""
+
+    model_config = ConfigDict(strict=True, extra="allow", frozen=True)
+
+
+#: What a value of the wrong type is said to be "not", by pydantic's error type.
+_NOT_A = {"float_type": "not a number", "float_parsing": "not a number",
+          "int_type": "not a whole number", "int_parsing": "not a whole number",
+          "int_from_float": "not a whole number", "string_type": "not text",
+          "bool_type": "not true or false", "bool_parsing": "not true or false",
+          "list_type": "not a list", "tuple_type": "not a list", "dict_type": "not an object",
+          "model_type": "not an object", "model_attributes_type": "not an object",
+          "finite_number": "not a finite number", "missing": "missing",
+          "too_short": "too few items", "too_long": "too many items",
+          "none_required": "not null"}
+
+
+def key_path_text(path: KeyPath) -> str:
+    """A key path as a person reads it: ``ecs[2].failure_rate`` (``[3]`` alone for an item
+    of a top-level list)."""
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def validate_document(model: type[BaseModel], doc: Any, source: str,
+                      error: type[InputFileError] = InputFileError) -> Any:
+    """``doc`` (a JSON document read back) checked against ``model``; returns ``doc`` as it
+    is (its readers keep using the plain document; the model says what they may assume).
+
+    Raises
+    ------
+    InputFileError
+        ``error``, one line naming ``source`` and the key of the first problem
+        (``robustness.json: ecs[2].failure_rate: not a number (got 'lots')``).
+    """
+    try:
+        model.model_validate(doc)
+    except ValidationError as err:
+        first = err.errors(include_url=False)[0]
+        # the error of a union names each member's type; the key is the value's own
+        loc = tuple(p for p in first["loc"] if isinstance(p, int) or not (
+            isinstance(p, str) and (p in _NOT_A_MEMBERS or "[" in p)))
+        kind = first["type"]
+        message = _NOT_A.get(kind) or first["msg"].removeprefix("Value error, ")
+        if kind != "missing":
+            got = repr(first.get("input"))
+            message += f" (got {got if len(got) <= 40 else got[:30] + '…'})"
+        if not loc:  # the document is not of the file's kind at all
+            need = [f.alias or name for name, f in getattr(model, "model_fields", {}).items()
+                    if f.is_required()]
+            raise error(source, "", f"{message}; expected an object with "
+                        f"{', '.join(need)}" if need else message) from None
+        raise error(source, key_path_text(loc), message) from None
+    return doc
+
+
+#: Tags pydantic puts into the error location of a union's members (not keys).
+_NOT_A_MEMBERS = frozenset({"float", "int", "str", "bool", "list", "dict", "none",
+                            "list[float]", "list[str]", "list[int]", "tuple"})
 
 
 class _YamlLimitError(yaml.composer.ComposerError):

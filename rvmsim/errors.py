@@ -20,6 +20,7 @@ __all__ = [
     "ParamsFileError",
     "VariationError",
     "CompensationError",
+    "ResultFileError",
 ]
 
 
@@ -82,3 +83,9 @@ class VariationError(InputFileError):
 
 class CompensationError(InputFileError):
     """A compensation file (``--compensation``), or a ``compensation`` section, is unusable."""
+
+
+class ResultFileError(InputFileError):
+    """A file an rvmsim command wrote and another reads back (``run.json``,
+    ``robustness.json``, ``eol.json``, …) is unusable: over the JSON limits, not JSON, or not
+    of its schema (damaged, or edited by hand)."""

@@ -37,7 +37,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from .._io import KeyPath, input_error_from_validation, key_lines, parse_yaml_mapping, read_text
+from .._io import FilePathText, KeyPath, input_error_from_validation, key_lines, parse_yaml_mapping, read_text
 from ..criteria import Criteria, bundled_criteria_text, criteria_from_text, default_criteria
 from ..errors import CriteriaError, InputFileError, RvmsimError, SweepFileError
 from ..scene import Scene, absolute_mesh_paths, read_scene_document, scene_from_dict
@@ -95,7 +95,7 @@ class RecheckSettings:
 class _SweepFile(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str = "sweep"
-    base_scene: str
+    base_scene: FilePathText
     axes: dict[str, Any] = Field(min_length=1)  # lists or ranges: see expand_axis
     tune: _Tune = _Tune()
     map: tuple[str, str] | None = None

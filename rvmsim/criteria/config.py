@@ -30,7 +30,7 @@ from typing import Annotated
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from .._io import (KeyPath, input_error_from_validation, key_lines, line_of, parse_yaml_mapping,
+from .._io import (FilePathText, KeyPath, input_error_from_validation, key_lines, line_of, parse_yaml_mapping,
                    read_text)
 from ..errors import CriteriaError
 from ..scene import Display
@@ -95,7 +95,7 @@ class _CriteriaModel(BaseModel):
     name: str = "criteria"
     upper_region_fraction: Annotated[float, Field(gt=0, le=1)] = 0.5
     edge_columns: Annotated[int, Field(ge=1, le=64)] = 4
-    plugins: list[str] = []
+    plugins: list[FilePathText] = []
     ecs: list[str] | None = None
     display: Display | None = None
     criteria: dict[str, _CriterionModel] = {}

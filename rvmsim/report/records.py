@@ -9,15 +9,18 @@ not JSON, or a key is missing or of the wrong kind.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..errors import RvmsimError
+from .._io import FilePathText, read_json_file, validate_document
+from ..eol.result_file import EolFile
+from ..errors import ResultFileError, RvmsimError
 from ..isp import IspParams
+from ..robust.result_file import RobustnessFile, YieldEstimateDoc
+from ..validate.result_file import ValidationFile, ValidationSummaryFile
 
 __all__ = ["RobustnessRecord", "ValidationRecord", "EolRecord", "load_robustness",
            "load_validation", "load_eol", "read_json", "same_setting", "SIGNOFF_JSON",
@@ -28,35 +31,14 @@ SIGNOFF_JSON = "signoff.json"
 
 
 def read_json(path: Path, what: str) -> Any:
-    """The JSON document in ``path``; one-line :class:`RvmsimError` naming it otherwise
+    """The JSON document in ``path``, read within the JSON limits
+    (:func:`rvmsim._io.read_json_file`); one-line :class:`RvmsimError` naming it otherwise
     (``what``: the command that writes it, for the message)."""
     if not path.is_file():
         where = path.parent
         raise RvmsimError(f"{path}: not found ({where} is not a folder {what} wrote)"
                           if where.is_dir() else f"{where}: no such folder")
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as err:
-        raise RvmsimError(f"{path}: not valid JSON (line {err.lineno}: {err.msg})") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise RvmsimError(f"{path}: cannot be read ({getattr(err, 'strerror', None) or err})"
-                          ) from None
-
-
-_KINDS: dict[str, tuple[type, ...]] = {"number": (int, float), "text": (str,), "list": (list,),
-                                       "object": (dict,), "whole number": (int,)}
-
-
-def _need(doc: Any, key: str, kind: str, path: Path) -> Any:
-    """``doc[key]`` when it is of ``kind`` (see :data:`_KINDS`), else a one-line error."""
-    value = doc.get(key) if isinstance(doc, dict) else None
-    ok = isinstance(value, _KINDS[kind]) and not isinstance(value, bool)
-    if ok and kind == "number" and not math.isfinite(float(value or 0)):
-        ok = False
-    if not ok:
-        found = "missing" if not isinstance(doc, dict) or key not in doc else f"{value!r:.40}"
-        raise RvmsimError(f"{path}: {key}: not a {kind} ({found})")
-    return value
+    return read_json_file(path, ResultFileError, what=f"{what} result")
 
 
 @dataclass(frozen=True)
@@ -92,22 +74,8 @@ def load_robustness(folder: str | Path) -> RobustnessRecord:
     """The ``robustness.json`` in ``folder`` (see the module docstring for the errors)."""
     folder = Path(folder)
     path = folder / "robustness.json"
-    doc = read_json(path, "rvmsim robustness")
-    for key, kind in (("yield", "number"), ("n", "whole number"), ("n_pass", "whole number"),
-                      ("ci95", "list"), ("ecs", "list"), ("samples", "list"), ("isp", "object"),
-                      ("variation", "object"), ("seed", "whole number"), ("scene", "text"),
-                      ("yield_by_load", "object")):
-        _need(doc, key, kind, path)
-    if len(doc["ci95"]) != 2 or not all(isinstance(v, (int, float)) for v in doc["ci95"]):
-        raise RvmsimError(f"{path}: ci95: not a pair of numbers")
-    for k, row in enumerate(doc["ecs"]):
-        _need(row, "id", "text", path.with_name(f"robustness.json: ecs[{k}]"))
-    for k, row in enumerate(doc["samples"]):
-        _need(row, "index", "whole number", path.with_name(f"robustness.json: samples[{k}]"))
-    before = doc.get("yield_before_compensation")
-    if before is not None:
-        _need(before, "yield", "number", path.with_name("robustness.json: "
-                                                        "yield_before_compensation"))
+    doc = validate_document(RobustnessFile, read_json(path, "rvmsim robustness"), str(path),
+                            ResultFileError)
     return RobustnessRecord(folder, path, doc)
 
 
@@ -127,17 +95,11 @@ def load_validation(folder: str | Path) -> ValidationRecord:
     folder = Path(folder)
     single, several = folder / "validation.json", folder / "summary.json"
     if several.is_file():
-        rows = read_json(several, "rvmsim validate")
-        if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
-            raise RvmsimError(f"{several}: not a list of captures")
-        for k, r in enumerate(rows):
-            _need(r, "verdict", "text", several.with_name(f"summary.json: [{k}]"))
+        rows = validate_document(ValidationSummaryFile, read_json(several, "rvmsim validate"),
+                                 str(several), ResultFileError)
         return ValidationRecord(folder, several, None, rows)
-    doc = read_json(single, "rvmsim validate")
-    _need(doc, "checks", "list", single)
-    _need(doc, "capture", "text", single)
-    if not isinstance(doc.get("passed"), bool):
-        raise RvmsimError(f"{single}: passed: not true or false")
+    doc = validate_document(ValidationFile, read_json(single, "rvmsim validate"), str(single),
+                            ResultFileError)
     return ValidationRecord(folder, single, doc, [])
 
 
@@ -154,12 +116,7 @@ def load_eol(folder: str | Path) -> EolRecord:
     """The ``eol.json`` in ``folder``."""
     folder = Path(folder)
     path = folder / "eol.json"
-    doc = read_json(path, "rvmsim eol")
-    for key, kind in (("results", "list"), ("cars", "whole number"), ("passed", "whole number"),
-                      ("params_file", "text")):
-        _need(doc, key, kind, path)
-    for k, row in enumerate(doc["results"]):
-        _need(row, "verdict", "text", path.with_name(f"eol.json: results[{k}]"))
+    doc = validate_document(EolFile, read_json(path, "rvmsim eol"), str(path), ResultFileError)
     return EolRecord(folder, path, doc)
 
 
@@ -184,6 +141,15 @@ def signoff_files(run_dir: Path) -> tuple[Path, Path] | None:
     return None
 
 
+class _KnownYieldDoc(YieldEstimateDoc):
+    """What :func:`known_yield` reads of a robustness.json, or of a signoff.json's
+    ``robustness``."""
+
+    isp: dict[str, Any]
+    yield_before_compensation: YieldEstimateDoc | None = None
+    path: FilePathText | None = None
+
+
 @dataclass(frozen=True)
 class KnownYield:
     """A yield measured for a setting: the estimate's JSON form (yield, ci95, n_pass, n),
@@ -203,17 +169,15 @@ def known_yield(run_dir: Path, values: Mapping[str, Any]) -> KnownYield | None:
     candidates = [] if found is None else [found[1]]
     candidates += sorted(run_dir.glob("*/robustness.json")) + [run_dir / "robustness.json"]
     for path in candidates:
+        rob: dict[str, Any]
         try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError):  # absent or unreadable: not a result to report
+            doc = read_json_file(path, ResultFileError)
+            rob = validate_document(_KnownYieldDoc, doc.get("robustness") if (
+                path.name == SIGNOFF_JSON and isinstance(doc, dict)) else doc, str(path),
+                ResultFileError)
+        except RvmsimError:  # absent or unreadable: not a result to report
             continue
-        if not isinstance(doc, dict):
-            continue
-        rob = doc.get("robustness") if path.name == SIGNOFF_JSON else doc
-        if not isinstance(rob, dict) or not isinstance(rob.get("isp"), dict):
-            continue
-        if not same_setting(rob["isp"], values) or not isinstance(rob.get("yield"),
-                                                                   (int, float)):
+        if not same_setting(rob["isp"], values):
             continue
         before = rob.get("yield_before_compensation")
         source = Path(rob.get("path", path)) if path.name == SIGNOFF_JSON else path

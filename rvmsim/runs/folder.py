@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any
 import yaml
 
 from ..criteria import bundled_criteria_text
-from ..errors import ParamsFileError, RvmsimError
+from .._io import read_json_file
+from ..errors import ParamsFileError, ResultFileError, RvmsimError
 from ..isp import IspParams, OutputSpec, load_params, params_to_dict
 from ..storage import FolderLock, json_default
 from .diverse import Candidate, candidates_json, store_candidates
@@ -108,8 +109,11 @@ def run_settings(run_dir: str | Path, store: RunStore) -> RunSettings:
         raise RvmsimError(f"{run_dir}: a run of rvmsim 0.1 without its {RUN_JSON}: its settings "
                           "are not known (restore run.json, or start a new run)")
     try:
-        doc = json.loads(run_json.read_text(encoding="utf-8"))
+        doc = read_json_file(run_json, ResultFileError, what=RUN_JSON)
         return RunSettings.from_json({**doc, "config": _legacy_config(doc.get("config") or {})})
+    except ResultFileError as err:  # over the JSON limits, or not JSON
+        raise RvmsimError(f"{run_json}: not a readable {RUN_JSON} ({err.message}); restore it, "
+                          "or start a new run") from None
     except (ValueError, KeyError, TypeError, AttributeError) as err:
         msg = f"{run_json}: not a readable {RUN_JSON} ({err}); restore it, or start a new run"
         raise RvmsimError(" ".join(msg.split())) from None
@@ -151,9 +155,9 @@ def run_json_disagreement(run_dir: str | Path, settings: RunSettings) -> str | N
         return None
     stored = json.loads(json.dumps(settings.as_json(), default=json_default))
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as err:
-        return f"{path}: not readable JSON ({' '.join(str(err).split())})"
+        doc = read_json_file(path, ResultFileError, what=RUN_JSON)
+    except RvmsimError as err:  # over the JSON limits, or not JSON: said as it is
+        return str(err)
     # only the keys run.json has: one written by an older rvmsim may lack newer defaults
     key = json_difference(doc, stored, a_keys=True)
     if not key:

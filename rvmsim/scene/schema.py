@@ -24,6 +24,7 @@ from typing import Annotated, Literal, Union
 import numpy as np
 from pydantic import Discriminator, Field, Tag, model_validator
 
+from .._io import FilePathText
 from . import fmvss111
 from ..camera import FisheyeCamera, make_lens, rotation_from_ypr
 from .display import Display
@@ -212,7 +213,7 @@ class MeshPart(_Model):
     ``translation`` (scene frame, metres).  ``mesh`` is relative to the scene file.
     """
 
-    mesh: str
+    mesh: FilePathText
     units: Literal["m", "mm", "cm", "in"] = "m"
     translation: Vec3 = (0.0, 0.0, 0.0)
     rotation_deg: tuple[Angle180, Angle180, Angle180] = (0.0, 0.0, 0.0)
@@ -417,7 +418,7 @@ class Scene(_Model):
     #: The test sites the scene is judged at (:mod:`rvmsim.scene.sitedefs`): bundled names or
     #: site files (relative to the scene file); not part of the render key (each site's
     #: scene has its own).
-    sites: Annotated[list[str], Field(min_length=1, max_length=8)] = Field(
+    sites: Annotated[list[FilePathText], Field(min_length=1, max_length=8)] = Field(
         default=[DEFAULT_SITE], exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).
     base_dir: str = Field(default=".", exclude=True)

@@ -25,7 +25,9 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-from ..errors import RvmsimError
+from .._io import read_json_file, validate_document
+from ..errors import ResultFileError, RvmsimError
+from .markets_file import MarketsFile
 from .members import Member, check_cameras, member_conflicts, member_passes
 from ..markets import binding_row, market_members, parse_markets
 from ..render import cached_render
@@ -268,19 +270,13 @@ def load_markets(run_dir: str | Path) -> dict[str, Any] | None:
     Raises
     ------
     RvmsimError
-        One line naming the file: not JSON, or without its ``markets`` rows.
+        One line naming the file: over the JSON limits, not JSON, or not of its schema
+        (:class:`~rvmsim.tune.markets_file.MarketsFile`: the key at fault).
     """
 
     path = Path(run_dir) / "best" / MARKETS_JSON
     if not path.is_file():
         return None
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as err:
-        raise RvmsimError(f"{path}: not a readable markets file ({err})") from None
-    rows = doc.get("markets") if isinstance(doc, dict) else None
-    if not isinstance(rows, list) or not rows or not all(
-            isinstance(r, dict) and isinstance(r.get("passed"), bool) and "member" in r
-            for r in rows):
-        raise RvmsimError(f"{path}: markets: not a list of market rows (member, passed, …)")
+    doc: dict[str, Any] = validate_document(MarketsFile, read_json_file(
+        path, ResultFileError, what="markets file"), str(path), ResultFileError)
     return doc

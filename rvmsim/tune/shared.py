@@ -21,7 +21,8 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
-from ..errors import RvmsimError
+from .._io import read_json_file
+from ..errors import ResultFileError, RvmsimError
 from ..search.config import TuningConfig
 from .members import Member, check_cameras, member_conflicts
 from ..runs.records import RunSettings
@@ -114,7 +115,10 @@ def shared_problem_lines(run_dir: Path) -> list[str]:
     path = run_dir / "best" / "members.json"
     if not path.is_file() or (run_dir / "best" / "markets.json").is_file():
         return []
-    return shared_problems(json.loads(path.read_text()))
+    doc = read_json_file(path, ResultFileError, what="members file")
+    if not isinstance(doc, dict):
+        raise ResultFileError(str(path), "", "not an object of member results")
+    return shared_problems(doc)
 
 
 def shared_problems(doc: dict[str, Any]) -> list[str]:
