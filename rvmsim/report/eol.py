@@ -14,6 +14,7 @@ from urllib.parse import quote
 
 from ..eol import CarResult, StationResult
 from ..errors import RvmsimError
+from ..storage import write_problem, write_text
 from .page import escape, page
 
 __all__ = ["eol_page", "write_eol_page"]
@@ -127,7 +128,7 @@ def write_eol_page(result: StationResult, folder: str | Path) -> Path:
     """
     path = Path(folder) / PAGE_NAME
     try:
-        path.write_text(eol_page(result))
+        write_text(path, eol_page(result))
     except OSError as err:
-        raise RvmsimError(f"{path}: cannot write ({err.strerror or err})") from None
+        raise RvmsimError(f"{path}: {write_problem(err)}") from None
     return path
