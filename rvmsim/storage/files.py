@@ -65,7 +65,12 @@ def write_text(path: str | Path, text: str) -> Path:
     """Write ``text`` to ``path`` as UTF-8 (:func:`readable_text`: a name that is not valid
     UTF-8 is written as ``\\xff``)."""
     path = Path(path)
-    path.write_bytes(readable_text(text).encode("utf-8"))
+    try:
+        path.write_bytes(readable_text(text).encode("utf-8"))
+    except OSError as err:
+        if err.filename is None:  # a failed write (a full disk) names no file: this one
+            err.filename = str(path)
+        raise
     return path
 
 
