@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from urllib.parse import quote
 
 from .._progress import progress_bar
 from ..errors import RvmsimError
 from ..storage import StagedFiles
 from ..runs import find_runs, is_run_folder
-from .page import escape, img_tag, page
+from .page import escape, img_tag, page, url_path
 from .run import _STEPS, EC_GROUP_NAMES, _build, _write, write_report
 
 __all__ = ["write_batch_report", "write_any_report"]
@@ -67,7 +66,7 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None, *,
             finally:
                 bar.n = _STEPS * (k + 1)  # a run that failed half-way counts as done
                 bar.refresh()
-            href = quote(Path(os.path.relpath(rep, index.parent)).as_posix(), errors="surrogateescape")
+            href = url_path(Path(os.path.relpath(rep, index.parent)).as_posix())
             cells = "".join(f'<td class="{st}">{escape(st)}</td>' for st in s.groups.values())
             rows.append(
                 f'<tr><td>{escape(s.vehicle)}<br>'
