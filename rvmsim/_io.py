@@ -25,6 +25,7 @@ import yaml
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
 
 from .errors import InputFileError, RvmsimError
+from .storage import write_problem
 
 __all__ = ["KeyPath", "read_text", "parse_yaml", "parse_yaml_mapping", "key_lines",
            "input_error_from_validation", "line_of", "write_png", "make_output_folder",
@@ -446,7 +447,7 @@ def make_output_folder(path: str | Path) -> Path:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise RvmsimError(f"{out}: cannot create output folder ({err.strerror or err})") from None
+        raise RvmsimError(f"{out}: {write_problem(err, 'cannot create output folder')}") from None
     return out
 
 
@@ -466,7 +467,7 @@ def write_png(path: str | Path, image: np.ndarray) -> Path:
         iio.imwrite(tmp, np.ascontiguousarray(image), extension=".png")
         os.replace(tmp, path)
     except OSError as err:
-        raise RvmsimError(f"{path}: cannot write image ({err.strerror or err})") from None
+        raise RvmsimError(f"{path}: {write_problem(err, 'cannot write image')}") from None
     finally:
         tmp.unlink(missing_ok=True)  # a failed write leaves nothing behind
     return path

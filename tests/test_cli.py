@@ -427,7 +427,7 @@ def _failing_command(raised: BaseException):
     (RuntimeError("x"), None),  # not ours: not mapped
     (FileNotFoundError(2, "No such file or directory", "in.png"),
      "rvmsim: error: in.png: No such file or directory"),
-    (OSError(28, "No space left on device"), "rvmsim: error: {out}: No space left on device"),
+    (OSError(28, "No space left on device"), "rvmsim: error: {out}: the disk is full (No space left on device)"),
 ])
 def test_the_hook_maps_os_errors_naming_their_file_else_the_output_folder(
         tmp_path, monkeypatch, raised, line):

@@ -17,6 +17,7 @@ import yaml
 from .._io import read_text, write_png
 from ..errors import RvmsimError, SceneError
 from ..scene import read_scene_document, scene_from_dict
+from ..storage import staged_folder, write_text
 from .board import BoardSpec
 from .intrinsics import BoardView, Calibration
 
@@ -62,10 +63,10 @@ def coverage_image(calib: Calibration, views: list[BoardView]) -> np.ndarray:
 
 def write_calibration_outputs(calib: Calibration, views: list[BoardView], board: BoardSpec,
                               out: str | Path, fov_deg: float | None = None) -> list[Path]:
-    """Write ``calibration.json``, ``coverage.png`` and ``camera.yaml`` into ``out``;
-    returns their paths."""
+    """Write ``calibration.json``, ``coverage.png`` and ``camera.yaml`` into ``out``
+    (:func:`~rvmsim.storage.staged_folder`: all of them or, on an error, none); returns
+    their paths."""
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     doc = {
         "K": calib.K.tolist(), "D": calib.D.tolist(), "image_size": list(calib.image_size),
         "rms_px": calib.rms_px,
@@ -83,11 +84,13 @@ def write_calibration_outputs(calib: Calibration, views: list[BoardView], board:
                   for v, view in zip(calib.views, views)],
     }
     paths = [out / "calibration.json", out / "coverage.png", out / "camera.yaml"]
-    paths[0].write_text(json.dumps(doc, indent=2) + "\n")
-    write_png(paths[1], coverage_image(calib, views))
     block = {"camera": camera_block(calib.K, calib.D, calib.image_size, fov_deg)}
-    paths[2].write_text("# rvmsim calibrate: the scene's camera block (add camera.mount)\n"
-                        + yaml.safe_dump(block, sort_keys=False, default_flow_style=None))
+    with staged_folder(out) as stage:
+        write_text(stage / paths[0].name, json.dumps(doc, indent=2) + "\n")
+        write_png(stage / paths[1].name, coverage_image(calib, views))
+        write_text(stage / paths[2].name,
+                   "# rvmsim calibrate: the scene's camera block (add camera.mount)\n"
+                   + yaml.safe_dump(block, sort_keys=False, default_flow_style=None))
     return paths
 
 

@@ -14,6 +14,7 @@ from pydantic import ValidationError
 from ..errors import RvmsimError
 from ..scene import CameraSpec, camera_problem
 from ..pose import check_captures
+from ..storage import staged_folder, write_text
 from .board import BoardSpec, CalibrationInputError, parse_board_spec
 from .captures import board_images, load_grey
 from .counting import HINT_CAPTURES, counting_hint, other_counting
@@ -205,11 +206,10 @@ def import_camera(file: str | Path, out: str | Path, fov_deg: float | None = Non
     problem = camera_problem(spec)
     if problem is not None:
         raise CalibrationInputError(str(file), problem[0], problem[1])
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "camera.yaml").write_text(f"# rvmsim calibrate --import {file.name} "
-                                     f"({cam.source_format})\n"
-                                     + yaml.safe_dump({"camera": block}, sort_keys=False,
-                                                      default_flow_style=None))
+    with staged_folder(out) as stage:  # moved in when written
+        write_text(stage / "camera.yaml", f"# rvmsim calibrate --import {file.name} "
+                   f"({cam.source_format})\n"
+                   + yaml.safe_dump({"camera": block}, sort_keys=False, default_flow_style=None))
     text = f"imported {file} ({cam.source_format})"
     if cam.source_format == "ocamcalib":
         text += (f"; Kannala-Brandt fit error RMS {cam.fit_rms_px:.3f} px, "

@@ -30,6 +30,7 @@ import click
 
 from .._procs import Terminated
 from ..errors import RvmsimError
+from ..storage import os_error_text
 
 __all__ = ["Command", "Group", "usage_error_line", "fail", "fail_os", "interrupted_status",
            "stopped_line", "CommandStopped"]
@@ -58,9 +59,11 @@ def stopped_line(stop: BaseException | None) -> str:
 
 
 def fail_os(err: OSError, where: Path | None) -> NoReturn:
-    """:func:`fail` for an OS error, naming its file (or ``where``)."""
+    """:func:`fail` for an OS error, naming its file (or ``where``): ``FILE: the disk is
+    full (…)`` for a full disk (:func:`~rvmsim.storage.os_error_text`)."""
     name = getattr(err, "filename", None) or where
-    fail(RvmsimError(f"{name}: {err.strerror or err}" if name else str(err.strerror or err)))
+    words = os_error_text(err)
+    fail(RvmsimError(f"{name}: {words}" if name else words))
 
 
 def _parse_in(ctx: click.Context, parse: Callable[[click.Context, list[str]], list[str]],

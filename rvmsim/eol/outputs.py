@@ -31,7 +31,7 @@ from .._io import make_output_folder, write_png
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from ..scene import MOUNT_AXES
-from ..storage import FolderLock, json_default
+from ..storage import FolderLock, json_default, write_problem, write_text
 from .records import CarResult, StationResult
 
 __all__ = ["Staging", "write_car", "write_tables", "csv_rows", "RESULT_FILES", "output_lock",
@@ -121,9 +121,9 @@ def earlier_run_files(out: Path) -> set[str]:
 
 def _write_text(path: Path, text: str) -> None:
     try:
-        path.write_text(text)
+        write_text(path, text)  # a capture's name that is not UTF-8 written as \xff
     except OSError as err:
-        raise RvmsimError(f"{path}: cannot write ({err.strerror or err})") from None
+        raise RvmsimError(f"{path}: {write_problem(err)}") from None
 
 
 def write_car(car: CarResult, folder: Path, output: OutputSpec) -> dict[str, str]:

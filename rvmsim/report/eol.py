@@ -10,11 +10,11 @@ string from a user's files (scene name, capture names) is HTML-escaped.
 from __future__ import annotations
 
 from pathlib import Path
-from urllib.parse import quote
 
 from ..eol import CarResult, StationResult
 from ..errors import RvmsimError
-from .page import escape, page
+from ..storage import write_problem, write_text
+from .page import escape, page, url_path
 
 __all__ = ["eol_page", "write_eol_page"]
 
@@ -107,7 +107,7 @@ def _ec_table(result: StationResult) -> str:
 def _card(car: CarResult) -> str:
     key = next((k for k in ("annotated", "rvm", "landmarks", "overlay") if k in car.files), None)
     picture = ("<p>(no picture)</p>" if key is None else
-               f'<a href="{quote(car.files[key])}"><img src="{quote(car.files[key])}" '
+               f'<a href="{url_path(car.files[key])}"><img src="{url_path(car.files[key])}" '
                f'alt="{escape(car.name)}"></a>')
     what = ("corrected RVM picture, ECs drawn" if key in ("annotated", "rvm")
             else "landmarks (the pose was not recovered)")
@@ -127,7 +127,7 @@ def write_eol_page(result: StationResult, folder: str | Path) -> Path:
     """
     path = Path(folder) / PAGE_NAME
     try:
-        path.write_text(eol_page(result))
+        write_text(path, eol_page(result))
     except OSError as err:
-        raise RvmsimError(f"{path}: cannot write ({err.strerror or err})") from None
+        raise RvmsimError(f"{path}: {write_problem(err)}") from None
     return path

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from urllib.parse import quote
 
 from .._progress import progress_bar
 from ..errors import RvmsimError
+from ..storage import StagedFiles
 from ..runs import find_runs, is_run_folder
-from .page import escape, img_tag, page
+from .page import escape, img_tag, page, url_path
 from .run import _STEPS, EC_GROUP_NAMES, _build, _write, write_report
 
 __all__ = ["write_batch_report", "write_any_report"]
@@ -50,13 +50,15 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None, *,
             + "".join(f"<th>{escape(g)}-x {escape(n)}</th>" for g, n in EC_GROUP_NAMES.items())
             + "<th>report</th></tr>")
     rows = []
-    with progress_bar(total=_STEPS * len(runs), desc="reports", unit="step", leave=False,
-                      disable=not progress) as bar:
+    # every run's report and the index renamed into place when all are written
+    with StagedFiles() as staged, progress_bar(total=_STEPS * len(runs), desc="reports",
+                                               unit="step", leave=False,
+                                               disable=not progress) as bar:
         for k, run in enumerate(runs):
             try:
                 text, s = _build(run, None, bar)
                 rep = run / "report.html"
-                _write(rep, text)
+                _write(rep, text, staged)
             except RvmsimError as err:
                 rows.append(f'<tr class="fail"><td>{escape(run.name)}</td>'
                             f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{escape(err)}</td></tr>')
@@ -64,7 +66,7 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None, *,
             finally:
                 bar.n = _STEPS * (k + 1)  # a run that failed half-way counts as done
                 bar.refresh()
-            href = quote(Path(os.path.relpath(rep, index.parent)).as_posix())
+            href = url_path(Path(os.path.relpath(rep, index.parent)).as_posix())
             cells = "".join(f'<td class="{st}">{escape(st)}</td>' for st in s.groups.values())
             rows.append(
                 f'<tr><td>{escape(s.vehicle)}<br>'
@@ -72,11 +74,11 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None, *,
                 f'<td>{img_tag(s.thumb, s.vehicle)}</td>'
                 f'<td class="num {"pass" if s.passed else "fail"}">{s.score:.4g}</td>'
                 f'{cells}<td><a href="{escape(href)}">report</a></td></tr>')
-    body = (f"<h1>RVM tuning review: {escape(runs_dir.name or str(runs_dir))}</h1>"
-            f'<p class="muted">{len(runs)} runs in {escape(runs_dir)}; EC groups pass when every '
-            'enabled EC of the group passes.</p>'
-            f'<section id="index"><table>{head}{"".join(rows)}</table></section>')
-    _write(index, page(f"RVM tuning review: {runs_dir.name}", body))
+        body = (f"<h1>RVM tuning review: {escape(runs_dir.name or str(runs_dir))}</h1>"
+                f'<p class="muted">{len(runs)} runs in {escape(runs_dir)}; EC groups pass '
+                'when every enabled EC of the group passes.</p>'
+                f'<section id="index"><table>{head}{"".join(rows)}</table></section>')
+        _write(index, page(f"RVM tuning review: {runs_dir.name}", body), staged)
     return index
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+from urllib.parse import quote
 from typing import TYPE_CHECKING
 
 import cv2
@@ -18,7 +19,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["CSS", "escape", "png_bytes", "shrink", "data_uri", "img_tag", "figure_png", "page",
+__all__ = ["CSS", "escape", "url_path", "png_bytes", "shrink", "data_uri", "img_tag", "figure_png", "page",
            "sha_html", "path_html"]
 
 CSS = """
@@ -53,6 +54,13 @@ pre{background:#f4f4f4;padding:1em;white-space:pre-wrap}
 def escape(value: object) -> str:
     """HTML-escape anything (quotes included)."""
     return html.escape(str(value), quote=True)
+
+
+def url_path(path: str) -> str:
+    """``path`` (a relative file path) quoted for an ``href`` or ``src``: a name that is
+    not valid UTF-8 by its bytes (``car\\udcff.png`` → ``car%FF.png``), so the link finds
+    the file."""
+    return quote(path, errors="surrogateescape")
 
 
 def sha_html(digest: str | None) -> str:

@@ -10,6 +10,7 @@ page kit :mod:`.page`).  Every string from a user's files is HTML-escaped.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -24,7 +25,7 @@ from ..criteria import bundled_criteria_text
 from ..errors import RvmsimError
 from ..isp import params_to_dict
 from ..robust import EcStats, MarketsRobustness, RobustnessResult
-from ..storage import json_default
+from ..storage import json_default, staged_folder, write_text
 from .page import data_uri, escape, figure_png, img_tag, page
 from .provenance import FileRecord, file_record, files_table, scene_records
 from .setting import (SettingRecord, by_load_html, setting_html, variation_html,
@@ -320,18 +321,19 @@ each sample per EC (distance to the nearer end of its range; below 0 fails).</fi
 """)
 
 
-def _setting_file(result: RobustnessResult | MarketsRobustness, inputs: RobustnessInputs,
-                  out: Path) -> Path:
-    """The params file of the setting: the one given, else :data:`SETTING_FILE` written
-    into ``out`` (the setting's values and output size)."""
+def _setting_record(result: RobustnessResult | MarketsRobustness, inputs: RobustnessInputs,
+                    out: Path, stage: Path) -> FileRecord:
+    """The params file of the setting: the one given, else :data:`SETTING_FILE` (the
+    setting's values and output size) written into ``stage``, the staging folder of
+    ``out`` (where the record says it is)."""
 
     if inputs.params_file is not None:
-        return inputs.params_file
-    path = out / SETTING_FILE
-    path.write_text(f"# the setting rvmsim robustness judged ({result.scene_name})\n"
-                    + yaml.safe_dump(params_to_dict(result.params, result.output),
-                                     sort_keys=False))
-    return path
+        return file_record("params", inputs.params_file)
+    write_text(stage / SETTING_FILE,
+               f"# the setting rvmsim robustness judged ({result.scene_name})\n"
+               + yaml.safe_dump(params_to_dict(result.params, result.output), sort_keys=False))
+    return dataclasses.replace(file_record("params", stage / SETTING_FILE),
+                               path=str((out / SETTING_FILE).resolve()))
 
 
 def write_robustness_outputs(result: RobustnessResult, out_dir: str | Path,
@@ -371,20 +373,18 @@ def write_json_and_page(result: RobustnessResult | MarketsRobustness, out_dir: s
         One line naming the folder or file that cannot be created or written.
     """
     out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
+    js, html_path = out / "robustness.json", out / "robustness.html"
+    # all into a staging folder, moved in when all is written (a full disk leaves the
+    # earlier results as they were)
+    with staged_folder(out) as stage:
         setting = SettingRecord(result.params, result.output,
-                                file_record("params", _setting_file(result, how, out)))
+                                _setting_record(result, how, out, stage))
         records = records_for(setting)
         doc = {**result.as_dict(), "inputs": {
             "files": [r.as_dict() for r in records], "render_scale": how.render_scale,
             "params_file": setting.file.path,
             "variation_file": None if how.variation_file is None else str(how.variation_file),
             **inputs_doc}}
-        js = out / "robustness.json"
-        js.write_text(json.dumps(doc, indent=2, default=json_default) + "\n")
-        html_path = out / "robustness.html"
-        html_path.write_text(page_for(setting, records))
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+        write_text(stage / js.name, json.dumps(doc, indent=2, default=json_default) + "\n")
+        write_text(stage / html_path.name, page_for(setting, records))
     return [js, html_path]

@@ -26,6 +26,7 @@ import numpy as np
 
 from .._progress import progress_bar
 from ..errors import RvmsimError
+from ..storage import StagedFiles, write_problem, write_text
 from ..pipeline import evaluate_params, record_output, rvm_color
 from ..runs import (open_run, recorded_path, run_inputs, run_settings, run_state,
                     store_candidates, top_file)
@@ -381,12 +382,21 @@ def _build(run_dir: Path, report_dir: Path | None = None,
     return page(f"RVM tuning review: {title}", body), summary
 
 
-def _write(path: Path, text: str) -> None:
+def _write(path: Path, text: str, staged: StagedFiles | None = None) -> None:
+    """Write ``text`` to ``path`` whole: under a temporary name beside it, renamed into
+    place at once, or by ``staged``'s commit when given (several files, all or none)."""
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(text, encoding="utf-8")
+        if staged is not None:
+            try:
+                write_text(staged.path(path), text)
+            except OSError:
+                staged.drop(path)
+                raise
+            return
+        with StagedFiles() as one:
+            write_text(one.path(path), text)
     except OSError as err:
-        raise RvmsimError(f"{path}: cannot write report ({err.strerror or err})") from None
+        raise RvmsimError(f"{path}: {write_problem(err, 'cannot write report')}") from None
 
 
 # ---------------------------------------------------------------------------- public API

@@ -9,9 +9,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
-from urllib.parse import quote
 
-from .page import escape, img_tag
+from .page import escape, img_tag, url_path
 from .provenance import Provenance
 from .records import known_yield, signoff_files
 from ..isp import params_to_dict
@@ -70,7 +69,7 @@ def signoff_note(run_dir: Path, report_dir: Path) -> str:
     command that makes one."""
     found = signoff_files(run_dir)
     if found is not None:
-        href = quote(Path(os.path.relpath(found[0], report_dir)).as_posix())
+        href = url_path(Path(os.path.relpath(found[0], report_dir)).as_posix())
         return (f'<p id="signoff-link">Sign-off sheet: <a href="{escape(href)}">'
                 f"{escape(found[0].name)}</a>.</p>")
     cmd = signoff_command(run_dir)

@@ -41,7 +41,7 @@ from ..errors import RvmsimError
 from ..isp import params_to_dict, process
 from ..pipeline import make_evaluator, record_output
 from ..runs import rank_text, top_file
-from ..storage import json_default
+from ..storage import json_default, staged_folder, write_text
 from ..tune.markets import load_markets
 from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
 from .pdf import find_chromium, print_pdf
@@ -127,19 +127,20 @@ def _record_ecs(images: FisheyeImages, params: IspParams, output: OutputSpec,
     return ec, color, annotate(color, labels, ec), each
 
 
-def _params_file(r: _Run, out: Path) -> Path:
-    """The run's ``top/rank_1.yaml`` when it holds rank 1's values and output, else
-    :data:`PARAMS_FILE` written into ``out``."""
+def _params_record(r: _Run, out: Path, stage: Path) -> FileRecord:
+    """The params file of the setting: the run's ``top/rank_1.yaml`` when it holds rank 1's
+    values and output, else :data:`PARAMS_FILE` written into ``stage`` (the staging folder
+    of ``out``, where the record says it is)."""
 
     best = r.top[0]
     searched = r.config.output_spec()  # a params file's output: the size the run searched at
     ranked = top_file(r.run_dir, 1, best.params, searched)
     if ranked is not None:
-        return ranked
-    path = out / PARAMS_FILE  # absent or stale: the sign-off writes its own
-    path.write_text(rank_text(best, 1, searched, r.scene.name, judged_at=r.output),
-                    encoding="utf-8")
-    return path
+        return file_record("params", ranked)
+    path = stage / PARAMS_FILE  # absent or stale: the sign-off writes its own
+    write_text(path, rank_text(best, 1, searched, r.scene.name, judged_at=r.output))
+    return dataclasses.replace(file_record("params", path),
+                               path=str((out / PARAMS_FILE).resolve()))
 
 
 def _dedupe(records: list[FileRecord]) -> list[FileRecord]:
@@ -347,26 +348,27 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
                           "--allow-other-setting to sign it anyway, under a red banner)")
     bar = progress_bar(total=4 if pdf else 3, desc="signoff", unit="step", leave=False,
                disable=not progress)
+    html, js = out / "signoff.html", out / SIGNOFF_JSON
+    pdf_path = None
     try:
-        content = _content(run, out, rob, val, eol_rec, reviewer, bar, tuple(others),
-                           _least_yield(min_yield, rob))
-        html, js = out / "signoff.html", out / SIGNOFF_JSON
-        bar.set_postfix_str("writing the page")
-        html.write_text(signoff_html(content), encoding="utf-8")
-        bar.update()
-        pdf_path = None
-        if browser is not None:
-            bar.set_postfix_str("printing the PDF")
-            f = content.setting.file
-            pdf_path = print_pdf(html, out / "signoff.pdf", browser, (
-                f"Sign-off: {content.title}",
-                f"setting sha256 {(f.sha256 or '')[:16]} · {content.provenance.date[:10]}"))
+        # everything into a staging folder, moved into `out` only when all is written (a
+        # failed PDF or a full disk leaves the earlier sheet as it was)
+        with staged_folder(out) as stage:
+            content = _content(run, out, stage, rob, val, eol_rec, reviewer, bar,
+                               tuple(others), _least_yield(min_yield, rob))
+            bar.set_postfix_str("writing the page")
+            write_text(stage / html.name, signoff_html(content))
             bar.update()
-        js.write_text(json.dumps(_summary(content, html, pdf_path), indent=2,
-                                 default=json_default) + "\n", encoding="utf-8")
-    except OSError as err:
-        raise RvmsimError(f"{getattr(err, 'filename', None) or out}: cannot write "
-                          f"({err.strerror or err})") from None
+            if browser is not None:
+                bar.set_postfix_str("printing the PDF")
+                f = content.setting.file
+                pdf_path = out / "signoff.pdf"
+                print_pdf(stage / html.name, stage / pdf_path.name, browser, (
+                    f"Sign-off: {content.title}",
+                    f"setting sha256 {(f.sha256 or '')[:16]} · {content.provenance.date[:10]}"))
+                bar.update()
+            write_text(stage / js.name, json.dumps(_summary(content, html, pdf_path),
+                                                   indent=2, default=json_default) + "\n")
     finally:
         bar.close()
     f = content.setting.file
@@ -428,15 +430,15 @@ def other_setting(vehicle: str, params: IspParams, robustness: RobustnessRecord 
     return list(dict.fromkeys(why))
 
 
-def _content(r: _Run, out: Path, rob: RobustnessRecord | None, val: ValidationRecord | None,
-             eol: EolRecord | None, reviewer: str, bar: Any,
+def _content(r: _Run, out: Path, stage: Path, rob: RobustnessRecord | None,
+             val: ValidationRecord | None, eol: EolRecord | None, reviewer: str, bar: Any,
              others: tuple[str, ...] = (),
              least: tuple[float | None, str] = (None, "")) -> SignoffContent:
-    """Everything the page shows: the setting, its ECs of record, the files, the commands."""
+    """Everything the page shows: the setting, its ECs of record, the files, the commands
+    (a params file of its own written into ``stage``, the staging folder of ``out``)."""
 
-    out.mkdir(exist_ok=True)
     best = r.top[0]
-    setting = SettingRecord(best.params, r.output, file_record("params", _params_file(r, out)))
+    setting = SettingRecord(best.params, r.output, _params_record(r, out, stage))
     record = _record_output(r.criteria, r.scene, r.output)
     bar.set_postfix_str(f"ECs at {record.width}x{record.height}")
     ec, color, annotated, each = _record_ecs(r.images, best.params, record, r.criteria)

@@ -14,9 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._io import make_output_folder
 from ..errors import RvmsimError
-from ..storage import json_default
+from ..storage import json_default, staged_folder, write_text
 from ..validate import CaptureOutcome, Validation, write_pictures
 from .page import escape, img_tag, page
 
@@ -110,15 +109,13 @@ def write_validation_outputs(result: Validation, out_dir: str | Path) -> list[Pa
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = make_output_folder(out_dir)
-    paths = write_pictures(result.images, out)
-    js = out / "validation.json"
-    try:
-        js.write_text(json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
-        html_path = out / "validation.html"
-        html_path.write_text(validation_page(result))
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+    out = Path(out_dir)
+    js, html_path = out / "validation.json", out / "validation.html"
+    with staged_folder(out) as stage:  # moved in when all is written
+        paths = [out / p.name for p in write_pictures(result.images, stage)]
+        write_text(stage / js.name,
+                   json.dumps(result.to_dict(), indent=2, default=json_default) + "\n")
+        write_text(stage / html_path.name, validation_page(result))
     return [js, html_path, *paths]
 
 
@@ -152,19 +149,17 @@ def write_validation_summary(outcomes: list[CaptureOutcome], out_dir: str | Path
     RvmsimError
         One line naming the folder or file that cannot be created or written.
     """
-    out = make_output_folder(out_dir)
+    out = Path(out_dir)
     rows = [o.row() for o in outcomes]
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
     paths = [out / "summary.json", out / "summary.csv", out / "validation.html"]
-    try:
-        paths[0].write_text(json.dumps(rows, indent=2, default=json_default) + "\n")
-        paths[1].write_text(buf.getvalue())
-        paths[2].write_text(summary_page(outcomes))
-    except OSError as err:
-        raise RvmsimError(f"{out}: cannot write results ({err.strerror or err})") from None
+    with staged_folder(out) as stage:  # moved in when all is written (captures' folders kept)
+        write_text(stage / paths[0].name, json.dumps(rows, indent=2, default=json_default) + "\n")
+        write_text(stage / paths[1].name, buf.getvalue())
+        write_text(stage / paths[2].name, summary_page(outcomes))
     return paths
 
 

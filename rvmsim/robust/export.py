@@ -34,6 +34,7 @@ from typing import Any
 import yaml
 
 from ..errors import RvmsimError
+from ..storage import write_problem, write_text
 from ..isp import params_to_dict
 from ..scene import Scene, absolute_mesh_paths
 from .robustness import RobustnessResult
@@ -155,9 +156,9 @@ def write_sample_scenes(result: RobustnessResult, document: Mapping[str, Any], s
         try:
             out.mkdir(parents=True, exist_ok=True)
             for path, text in files:
-                path.write_text(text)
+                write_text(path, text)
         except OSError as err:
-            raise RvmsimError(f"{out}: cannot write sample {n} ({err.strerror or err})") \
+            raise RvmsimError(f"{out}: {write_problem(err, f'cannot write sample {n}')}") \
                 from None
         written += [path for path, _ in files]
     return written

@@ -145,9 +145,11 @@ class FolderLock:
         try:
             tmp.write_text(Writer.this_process().text(), encoding="ascii")
             os.replace(tmp, self.pid_path)
-        except OSError:
+        except OSError as err:
             lock.release()
             self._lock = None
+            if err.filename is None:  # a full disk fails the write, which names no file
+                err.filename = str(self.pid_path)
             raise
 
     def release(self) -> None:

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import RvmsimError
+from .files import disk_is_full
 
 __all__ = ["SqliteStore"]
 
@@ -55,6 +56,8 @@ class SqliteStore:
                                   f"{', '.join(missing)})")
 
     def _unreadable(self, err: Exception) -> RvmsimError:
+        if _full_disk(err, self.path):
+            return RvmsimError(f"{self.path}: the disk is full ({err})")
         return RvmsimError(" ".join(
             f"{self.path}: not a readable {self.what} database ({err})".split()))
 
@@ -76,6 +79,8 @@ class SqliteStore:
                 for q, r in more:
                     self.db.executemany(q, r)
         except sqlite3.DatabaseError as err:
+            if _full_disk(err, self.path):
+                raise RvmsimError(f"{self.path}: the disk is full ({err})") from None
             raise RvmsimError(f"{self.path}: cannot write the {self.what} database "
                               f"({err})") from None
 
@@ -95,6 +100,16 @@ class SqliteStore:
                 raise RvmsimError(f"{self.path}: meta: {key}: not a JSON value "
                                   f"({str(value)[:40]!r})") from None
         return out
+
+
+def _full_disk(err: Exception, path: Path) -> bool:
+    """Whether SQLite's ``err`` comes of a full disk: SQLite says so ("database or disk is
+    full"), or says "disk I/O error" while the disk holding ``path`` has (almost) no free
+    space (:func:`~.files.disk_is_full`)."""
+    text = str(err).lower()
+    if "disk is full" in text:
+        return True
+    return "disk i/o error" in text and disk_is_full(path)
 
 
 def _readonly_uri(path: Path) -> str:

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import RvmsimError
+from ..storage import os_error_text, staged_folder
 from .failure import ValidationFailure
 from .validation import ValidationSettings, validate
 from .verdict import Validation
@@ -149,13 +150,14 @@ def validate_captures(
                 result = validate(scene, capture, settings, use_cache=True,
                                   capture_name=name, progress=progress)
             except ValidationFailure as fail:
-                write_pictures(fail.images, out)
+                with staged_folder(out) as stage:  # moved in when all are written
+                    write_pictures(fail.images, stage)
                 return CaptureOutcome(name, out, None, str(fail), fail.step, fail.images)
             written = write_outputs(result, out)
         except RvmsimError as err:
             return CaptureOutcome(name, out, None, str(err), "error")
         except OSError as err:
-            return CaptureOutcome(name, out, None, f"{err.filename or out}: {err.strerror or err}",
+            return CaptureOutcome(name, out, None, f"{err.filename or out}: {os_error_text(err)}",
                                   "error")
         failed = [c.name for c in result.checks if not c.passed]
         return CaptureOutcome(name, out, result, step="check: " + ", ".join(failed) if failed
