@@ -28,7 +28,7 @@ MAX_HEAD_BYTES = 16 * 1024
 DRAIN_S = 5.0
 
 
-class ConsoleHttp(H11Protocol):  # type: ignore[misc]  # uvicorn ships no type stubs here
+class ConsoleHttp(H11Protocol):
     """uvicorn's h11 protocol; a request head over :data:`MAX_HEAD_BYTES` gets 414 or 431
     and a gentle close (see the module docstring)."""
 

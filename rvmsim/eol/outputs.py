@@ -27,7 +27,7 @@ from typing import Any
 
 import yaml
 
-from .._io import make_output_folder, write_png
+from .._io import make_output_folder, read_json_file, write_png
 from ..errors import RvmsimError
 from ..isp import OutputSpec, params_to_dict
 from ..scene import MOUNT_AXES
@@ -106,8 +106,8 @@ def earlier_run_files(out: Path) -> set[str]:
     (nothing else of the folder is ever removed)."""
     names = set(RESULT_FILES)
     try:
-        data = json.loads((out / "eol.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
+        data = read_json_file(out / "eol.json")
+    except RvmsimError:  # missing, unreadable, over the limits: its files are not known
         return names
     results = data.get("results") if isinstance(data, dict) else None
     for car in results if isinstance(results, list) else []:
