@@ -87,6 +87,9 @@ def test_signoff_whose_pdf_printing_fails_leaves_the_earlier_sheet(case_dir):
     assert not leftovers(case_dir / "so")
 
 
+# the slow tier: signoff's and calibrate's cases above and below run the same staged
+# folder (storage.staged_folder) in the test command
+@pytest.mark.slow
 def test_robustness_on_a_full_disk_leaves_the_earlier_results(case_dir):
     """robustness.json fits under the limit, robustness.html does not: neither is
     replaced (the issue's robustness.json replaced beside a truncated page)."""
@@ -111,6 +114,9 @@ def test_report_on_a_full_disk_leaves_the_run_folder_as_it_was(case_dir):
                     "report.html")
 
 
+# the slow tier: signoff's and calibrate's cases above and below run the same staged
+# folder (storage.staged_folder) in the test command
+@pytest.mark.slow
 def test_validate_on_a_full_disk_leaves_the_earlier_validation(tmp_path):
     import imageio.v3 as iio
 
