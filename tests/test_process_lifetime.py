@@ -459,12 +459,12 @@ def _supervised_stop(case: Path, run: Path, supervisor: str) -> subprocess.Compl
     return subprocess.CompletedProcess(command, proc.returncode, "", err)
 
 
-#: 2 under timeout in the test command (timeout also signals the group: the workers get it
+#: 1 under timeout in the test command (timeout also signals the group: the workers get it
 #: as under a group kill); the group kill and 10 of 10 under timeout in the slow tier.
 @pytest.mark.parametrize("supervisor, attempts",
-                         [("timeout", 2), pytest.param("group", 1, marks=pytest.mark.slow),
+                         [("timeout", 1), pytest.param("group", 1, marks=pytest.mark.slow),
                           pytest.param("timeout", 10, marks=pytest.mark.slow)],
-                         ids=["timeout-2", "group-1", "timeout-10"])
+                         ids=["timeout-1", "group-1", "timeout-10"])
 def test_sigterm_to_the_process_group_is_one_orderly_stop(case, clean_supervised, supervisor,
                                                           attempts):
     """A supervisor's SIGTERM reaches the command twice (``timeout``: to it, then to its

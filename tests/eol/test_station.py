@@ -25,9 +25,11 @@ GOOD = [Deviation(2, -3, 4, 0.5, -0.4, 0.3), Deviation(-5, 5, 0, -1, 1, -1)]
 TURNED = Deviation(0, 0, 0, 6.0, 0, 0)
 
 
-@pytest.fixture
-def env(tmp_path: Path) -> dict[str, str]:
-    return {"RVMSIM_CACHE": str(tmp_path / "cache")}
+@pytest.fixture(scope="module")
+def env(tmp_path_factory) -> dict[str, str]:
+    """One render cache for the module's station runs (renders are the same bits in every
+    process, so sharing them changes no result)."""
+    return {"RVMSIM_CACHE": str(tmp_path_factory.mktemp("eol_cache"))}
 
 
 @pytest.fixture(scope="module")
