@@ -102,18 +102,25 @@ def _short(n: int) -> str:
     return text if len(text) <= 12 else f"{text[:6]}…({len(text)} digits)"
 
 
+def _read_bytes(path: Path, error: type[InputFileError], what: str, max_bytes: int) -> bytes:
+    """At most ``max_bytes`` + 1 bytes of ``path`` (one more tells the caller it is over);
+    ``error`` naming the file when it is missing or cannot be read."""
+    try:
+        with path.open("rb") as f:
+            return f.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise error(str(path), "", f"{what} not found") from None
+    except (OSError, ValueError) as err:  # ValueError: a path the system cannot take
+        raise error(str(path), "", f"cannot read {what} "
+                    f"({getattr(err, 'strerror', None) or err})") from None
+
+
 def read_text(path: Path, error: type[InputFileError] = InputFileError, *,
               what: str = "file", max_bytes: int = MAX_YAML_BYTES) -> str:
     """The text of a user file; ``error`` (an :class:`InputFileError`) naming the file when it
     cannot be read or is longer than ``max_bytes`` (``what`` names the kind of file in the
     message: "params file not found")."""
-    try:
-        with path.open("rb") as f:
-            data = f.read(max_bytes + 1)
-    except FileNotFoundError:
-        raise error(str(path), "", f"{what} not found") from None
-    except OSError as err:
-        raise error(str(path), "", f"cannot read {what} ({err.strerror or err})") from None
+    data = _read_bytes(path, error, what, max_bytes)
     if len(data) > max_bytes:
         raise error(str(path), "", f"{what} is over the limit of {max_bytes} bytes")
     try:
@@ -179,15 +186,7 @@ def read_json_file(path: Path, error: type[InputFileError] = InputFileError, *,
     InputFileError
         ``error``, one line naming the file: not found, unreadable, over a limit, not JSON.
     """
-    max_bytes = env_limit("RVMSIM_MAX_JSON_BYTES", MAX_JSON_BYTES)
-    try:
-        with path.open("rb") as f:
-            data = f.read(max_bytes + 1)
-    except FileNotFoundError:
-        raise error(str(path), "", f"{what} not found") from None
-    except (OSError, ValueError) as err:
-        raise error(str(path), "", f"cannot read {what} "
-                    f"({getattr(err, 'strerror', None) or err})") from None
+    data = _read_bytes(path, error, what, env_limit("RVMSIM_MAX_JSON_BYTES", MAX_JSON_BYTES))
     return parse_json(data, str(path), error, what=what)
 
 

@@ -219,9 +219,9 @@ def stop_helpers() -> None:
     it: a supervisor that reads a command's exit status and then looks at its process group
     would still find them.  The command line runs this as the interpreter exits (registered
     by :func:`rvmsim.cli.entry.main`), after its pools and its render worker have ended; a
-    process that did not start them (a worker, which inherited them) leaves them alone.  multiprocessing has no public call for
-    either (both ``_stop`` methods are what its own tests use), so this reads their private
-    handles, as :func:`_leave_fork_server` does.
+    process that did not start them (a worker, which inherited them) leaves them alone.
+    multiprocessing has no public call for either (both ``_stop`` methods are what its own
+    tests use), so this reads their private handles, as :func:`_leave_fork_server` does.
     """
     if mp.parent_process() is not None:
         return

@@ -67,7 +67,7 @@ class Staging:
         try:
             self.dir.mkdir()
         except OSError as err:
-            raise RvmsimError(f"{self.out}: cannot write here ({err.strerror or err})") from None
+            raise RvmsimError(f"{self.out}: {write_problem(err, 'cannot write here')}") from None
 
     def commit(self) -> list[Path]:
         """Move every staged file into the output folder, then remove the earlier run's
@@ -83,8 +83,8 @@ class Staging:
             for name in sorted(earlier - {f.name for f in moved}):
                 (self.out / name).unlink(missing_ok=True)
         except OSError as err:
-            raise RvmsimError(f"{self.out}: cannot move the results in "
-                              f"({err.strerror or err})") from None
+            raise RvmsimError(f"{self.out}: "
+                              f"{write_problem(err, 'cannot move the results in')}") from None
         self.discard()
         return moved
 
