@@ -29,6 +29,8 @@ __all__ = [
     "GUIDE_SIDE_POS_X",
     "guide_cross",
     "MAX_CROSS_LINES",
+    "GUIDE_PAINT_BASE",
+    "guide_paint",
     "EXTRA_PART_BASE",
     "MAX_EXTRA_PARTS",
     "SITE_OBJECT_BASE",
@@ -58,6 +60,9 @@ GUIDE_SIDE_NEG_X = 30  # side guideline on the -X (passenger) side
 GUIDE_SIDE_POS_X = 31  # side guideline on the +X (driver) side
 _GUIDE_CROSS_BASE = 40  # 41.. cross line 1 (nearest the bumper), 2, ...
 MAX_CROSS_LINES = 19
+# Lines painted to check the parking guidelines (rvmsim.guidelines.check): 60, 61, ...
+GUIDE_PAINT_BASE = 60
+_MAX_PAINTED = 40
 
 EXTRA_PART_BASE = 100  # user-supplied extra meshes: 100, 101, ...
 MAX_EXTRA_PARTS = 100
@@ -91,6 +96,14 @@ def guide_cross(number: int) -> int:
     if not 1 <= number <= MAX_CROSS_LINES:
         raise ValueError(f"cross guideline number must be 1..{MAX_CROSS_LINES}, got {number}")
     return _GUIDE_CROSS_BASE + number
+
+
+def guide_paint(index: int) -> int:
+    """Label of painted check line ``index`` (0, 1, …) of the parking guidelines' check
+    (:mod:`rvmsim.guidelines.check`)."""
+    if not 0 <= index < _MAX_PAINTED:
+        raise ValueError(f"painted line index must be 0..{_MAX_PAINTED - 1}, got {index}")
+    return GUIDE_PAINT_BASE + index
 
 
 #: Labels of the car body: bumper, garnish, trunk and the user's extra parts.
@@ -128,6 +141,8 @@ def label_names() -> dict[int, str]:
         names[object_patch(letter)] = f"stripe_{letter}_lower_patch"
     for n in range(1, MAX_CROSS_LINES + 1):
         names[guide_cross(n)] = f"guide_cross_{n}"
+    for i in range(_MAX_PAINTED):
+        names[guide_paint(i)] = f"guide_paint_{i}"
     for i in range(MAX_EXTRA_PARTS):
         names[EXTRA_PART_BASE + i] = f"extra_{i}"
     for k in range(MAX_SITE_OBJECTS):

@@ -65,6 +65,8 @@ def scene_key(scene: Scene, scale: float = 1.0) -> str:
         # the FMVSS site, as before sites existed: its keys (and cached renders) unchanged
         site.pop("site", None)
         site.pop("site_objects", None)
+    if not site.get("painted_lines"):  # scenes without painted lines keep their keys
+        site.pop("painted_lines", None)
     if scene.load_state is not None:  # not dumped (unloaded scenes keep their keys)
         doc["load_state"] = scene.load_state.model_dump(mode="json")
     for key, part in mesh_parts(scene):

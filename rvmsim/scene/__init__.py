@@ -37,6 +37,8 @@ from .variation import (
     MOUNT_AXES,
 )
 from .eol import EolSpec, EolPose, BOARD_TARGET
+from .guideline_spec import (GuidelineSpec, DistanceMark, WidthLines, TrajectoryLines,
+                             PaintedLine)
 from .station import station_scene, station_target, eol_problem
 from .compensation import CompensationSpec, StationSpec, COMPENSABLE_PARAMS, DEFAULT_RANGES
 from .loading import (
@@ -48,6 +50,7 @@ from .loading import (
     absolute_mesh_paths,
     mesh_parts,
     scene_site_entry,
+    load_guideline_spec,
 )
 from .primitives import Part, cylinder_side, disk, swept_block, quad
 from .site import (
@@ -137,6 +140,12 @@ __all__ = [
     "scene_vehicle_width",
     "is_site_file",
     "scene_site_entry",
+    "load_guideline_spec",
+    "GuidelineSpec",
+    "DistanceMark",
+    "WidthLines",
+    "TrajectoryLines",
+    "PaintedLine",
     "site_landmarks",
     "checker_corners",
     "stripe_azimuth_deg",

@@ -17,12 +17,14 @@ from pydantic import ValidationError
 from .._io import (KeyPath, image_size_problem, input_error_from_validation, key_lines,
                    line_of, parse_yaml, read_text)
 from ..errors import SceneError
+from .guideline_spec import GuidelineSpec
 from .schema import CameraSpec, MeshPart, Scene
 from .station import eol_problem
 from .sitedefs import BUNDLED_SITES, SiteDefinition, SiteError, is_site_file, site_definition
 
 __all__ = [
     "scene_site_entry",
+    "load_guideline_spec",
     "load_scene",
     "read_scene_document",
     "scene_from_dict",
@@ -80,6 +82,12 @@ def scene_from_dict(
         key, message = bad
         raise SceneError(source, key, message, line_of(lines, tuple(key.split("."))))
     _check_sites(scene, lines)
+    if isinstance(scene.guidelines, str):
+        spec_path = scene.resolve_path(scene.guidelines)
+        if not spec_path.is_file():
+            raise SceneError(source, "guidelines", f"guideline spec file not found: {spec_path}",
+                             lines.get(("guidelines",)))
+        scene = scene.model_copy(update={"guidelines": load_guideline_spec(spec_path)})
     for key, part in mesh_parts(scene):
         path = scene.resolve_path(part.mesh)
         if not path.is_file():
@@ -88,6 +96,27 @@ def scene_from_dict(
                 source, key, f"mesh file not found: {path}", lines.get(loc)
             )
     return scene
+
+
+def load_guideline_spec(path: str | Path) -> GuidelineSpec:
+    """Read a guideline spec file (the ``guidelines:`` section's keys, :mod:`rvmsim.guidelines`).
+
+    Raises
+    ------
+    SceneError
+        A missing or unreadable file, malformed YAML or a bad key (naming this file, the line
+        and the key).
+    """
+    path = Path(path)
+    text = read_text(path, SceneError)
+    data = parse_yaml(text, str(path), SceneError)
+    if not isinstance(data, dict):
+        raise SceneError(str(path), "", "a guideline spec file must be a YAML mapping")
+    try:
+        return GuidelineSpec.model_validate(data)
+    except ValidationError as err:
+        raise input_error_from_validation(err, str(path), key_lines(text), SceneError,
+                                          _TAGS) from None
 
 
 def _check_sites(scene: Scene, lines: Mapping[KeyPath, int]) -> None:

@@ -16,7 +16,7 @@ import trimesh
 from .schema import BlockPart, Rgb
 
 
-__all__ = ["Part", "cylinder_side", "disk", "quad", "ground_rect", "swept_block",
+__all__ = ["Part", "cylinder_side", "disk", "quad", "ground_rect", "ground_strip", "swept_block",
            "concatenate", "CIRCLE_SECTIONS"]
 
 #: Segments of a full circle (cylinders, disks).
@@ -133,6 +133,38 @@ def ground_rect(x0: float, x1: float, z0: float, z1: float, lift: float) -> trim
     """Rectangle [x0, x1] × [z0, z1] (metres) lying ``lift`` metres above the ground."""
     y = -lift
     return quad(np.array([[x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]]))
+
+
+def ground_strip(points_xz: np.ndarray, width: float, lift: float) -> trimesh.Trimesh:
+    """A flat strip ``width`` metres wide centred on the polyline ``points_xz`` ((N, 2) x, z
+    metres), ``lift`` metres above the ground, facing up.
+
+    Convention
+    ----------
+    Each vertex pair lies on the bisector of its two segments' normals, scaled so that both
+    segments keep the full width (a mitred joint); consecutive duplicate points are dropped.
+    """
+    pts = np.asarray(points_xz, np.float64).reshape(-1, 2)
+    keep = np.r_[True, np.any(np.diff(pts, axis=0) != 0, axis=1)]
+    pts = pts[keep]
+    if len(pts) < 2:
+        raise ValueError("a strip needs two distinct points")
+    d = np.diff(pts, axis=0)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    n = np.stack([-d[:, 1], d[:, 0]], axis=1)  # segment normals
+    nv = np.vstack([n[:1], n[:-1] + n[1:], n[-1:]])
+    nv /= np.linalg.norm(nv, axis=1, keepdims=True)
+    seg_n = np.vstack([n[:1], n])  # a segment's normal at each vertex (for the mitre length)
+    scale = (width / 2.0) / np.maximum(np.sum(nv * seg_n, axis=1), 0.2)
+    left, right = pts + nv * scale[:, None], pts - nv * scale[:, None]
+    y = -lift
+    verts = np.empty((2 * len(pts), 3))
+    verts[0::2] = np.column_stack([left[:, 0], np.full(len(pts), y), left[:, 1]])
+    verts[1::2] = np.column_stack([right[:, 0], np.full(len(pts), y), right[:, 1]])
+    i = 2 * np.arange(len(pts) - 1)
+    # wound as ground_rect's quads, normals up (−Y): `left` lies to the left of the walk
+    faces = np.concatenate([np.stack([i, i + 1, i + 2], 1), np.stack([i + 1, i + 3, i + 2], 1)])
+    return trimesh.Trimesh(verts, faces, process=False)
 
 
 def concatenate(meshes: list[trimesh.Trimesh]) -> trimesh.Trimesh:

@@ -16,7 +16,8 @@ import trimesh
 
 from .. import labels as L
 from ..camera import rotation_from_ypr
-from .primitives import Part, concatenate, cylinder_side, disk, ground_rect, quad
+from .primitives import (Part, concatenate, cylinder_side, disk, ground_rect,
+                         ground_strip, quad)
 from .schema import GroundPattern, PatternBoard, Rect, Rgb, Scene
 
 
@@ -146,6 +147,15 @@ def _guidelines(scene: Scene) -> list[Part]:
         mesh = ground_rect(g.side_x[0] + hw, g.side_x[1] - hw, z - hw, z + hw, GUIDELINE_LIFT_M)
         parts.append(Part(f"guide_cross_{n}", L.guide_cross(n), mesh, g.color))
     return parts
+
+
+def _painted_lines(scene: Scene) -> list[Part]:
+    """The lines painted to check the parking guidelines (:attr:`TestSite.painted_lines`):
+    flat strips along their polylines, each with its own label."""
+    return [Part(f"guide_paint_{line.index}", L.guide_paint(line.index),
+                 ground_strip(np.asarray(line.points, np.float64), line.width,
+                              GUIDELINE_LIFT_M + 0.001), line.color)
+            for line in scene.test_site.painted_lines]
 
 
 def board_frame(board: PatternBoard) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -410,6 +420,7 @@ def site_parts(scene: Scene) -> list[Part]:
     parts += _site_objects(scene)
     parts += _test_objects(scene)
     parts += _guidelines(scene)
+    parts += _painted_lines(scene)
     parts += _board(scene)
     parts += _ground_patterns(scene)
     return parts
