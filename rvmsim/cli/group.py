@@ -29,7 +29,8 @@ COMMAND_MODULES: Final[Mapping[str, str]] = MappingProxyType({
     "judge": "rvmsim.cli.report", "validate": "rvmsim.cli.validate",
     "sweep": "rvmsim.cli.sweep", "robustness": "rvmsim.cli.robust",
     "calibrate": "rvmsim.cli.calibrate", "console": "rvmsim.cli.console",
-    "eol": "rvmsim.cli.eol", "signoff": "rvmsim.cli.signoff"})
+    "eol": "rvmsim.cli.eol", "signoff": "rvmsim.cli.signoff",
+    "guidelines": "rvmsim.cli.guidelines"})
 
 
 class _Commands(Group):

@@ -22,9 +22,10 @@ import numpy as np
 
 from ..camera import FisheyeCamera
 from ..isp import IspParams, OutputSpec, input_to_output
+from ..isp.exact import map_points
 from .lines import GroundLine
 
-__all__ = ["GuidelineView", "DisplayPiece", "DisplayLine", "project_lines"]
+__all__ = ["GuidelineView", "DisplayPiece", "DisplayLine", "project_lines", "display_to_ground"]
 
 _BISECTIONS = 24
 
@@ -167,3 +168,26 @@ def project_lines(view: GuidelineView, lines: Sequence[GroundLine]) -> list[Disp
         out.append(DisplayLine(line.name, line.kind, line.color, line.steering_deg,
                                tuple(pieces)))
     return out
+
+
+def display_to_ground(view: GuidelineView, uv_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where on the ground display pixels look: (N, 2) (x, z) m, and whether the pixel's ray
+    meets the ground (the ISP's exact map into the fisheye image, the lens's ray, the ground
+    plane y = 0 ahead of the camera).
+
+    Convention
+    ----------
+    Display px with pixel centres at integer coordinates; scene frame, metres.  The inverse
+    of :meth:`GuidelineView.to_display` for shown points.
+    """
+    uv = np.asarray(uv_px, np.float64).reshape(-1, 2)
+    cam = view.camera
+    ux, vy, _ = map_points(view.params, uv[:, 0], uv[:, 1], (cam.width, cam.height), view.output)
+    rays, in_fov = cam.pixel_rays(np.column_stack([ux, vy]))
+    d = rays @ cam.rotation.T  # camera → scene directions
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam = -cam.position[1] / d[:, 1]
+    hits = in_fov & np.isfinite(lam) & (lam > 0)
+    lam = np.where(hits, lam, np.nan)
+    ground = cam.position[[0, 2]][None, :] + lam[:, None] * d[:, [0, 2]]
+    return ground, hits

@@ -10,7 +10,7 @@ car's width, and trajectory lines of the rear corners over 3 m of travel.
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
@@ -99,6 +99,11 @@ class PaintedLine(_Model):
 
     index: Annotated[int, Field(ge=0, lt=MAX_PAINTED_LINES)]
     points: tuple[tuple[Metres, Metres], ...]
+    #: The guideline painted: its name and kind (``mark``, ``width``, ``trajectory``), and a
+    #: trajectory's steering-wheel angle, degrees.
+    name: str = ""
+    kind: Literal["mark", "width", "trajectory"] = "mark"
+    steering_deg: Annotated[float, Field(ge=-1440, le=1440)] | None = None
     width: Annotated[float, Field(gt=0, le=1.0)] = 0.05
     color: Rgb = (0.95, 0.95, 0.95)
 

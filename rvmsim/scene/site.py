@@ -31,6 +31,7 @@ __all__ = [
     "pattern_cells",
     "pattern_shade",
     "GUIDELINE_LIFT_M",
+    "PAINTED_LINE_LIFT_M",
     "BOARD_LIFT_M",
     "BOARD_SQUARE_LIFT_M",
     "PATTERN_LIFT_M",
@@ -38,6 +39,9 @@ __all__ = [
 
 #: Painted guidelines float this far above the ground (avoids depth fighting), metres.
 GUIDELINE_LIFT_M = 0.003
+#: Lines painted to check the parking guidelines lie this far above the ground: a 1 mm lift
+#: moves a line 3 m away by under 0.1 px of a 1280 × 720 RVM image (depth-safe to ~7 m).
+PAINTED_LINE_LIFT_M = 0.001
 #: A board lying on the ground: plate thickness; its black squares float a further lift.
 BOARD_LIFT_M = 0.006
 #: The pattern board's black squares float this far above its plate, metres.
@@ -154,7 +158,7 @@ def _painted_lines(scene: Scene) -> list[Part]:
     flat strips along their polylines, each with its own label."""
     return [Part(f"guide_paint_{line.index}", L.guide_paint(line.index),
                  ground_strip(np.asarray(line.points, np.float64), line.width,
-                              GUIDELINE_LIFT_M + 0.001), line.color)
+                              PAINTED_LINE_LIFT_M), line.color)
             for line in scene.test_site.painted_lines]
 
 
