@@ -35,7 +35,7 @@ from .lines import GroundLine, static_lines, trajectory_lines
 from .kinematics import running_gear
 from .overlay import guideline_view, scene_spec
 from ..scene import scene_vehicle_width
-from .project import GuidelineView, project_lines
+from .project import GuidelineView, display_to_ground, project_lines
 
 __all__ = ["PAINT_WIDTH_M", "SAMPLE_STEP_PX", "LineCheck", "GuidelineCheck", "painted_lines",
            "painted_scene", "measure_painted", "check_guidelines", "check_angles"]
@@ -65,6 +65,9 @@ class LineCheck:
         The ground points (x, z) m of those scans.
     scans : int
         Scans tried (the counted ones are ``len(offsets_px)``).
+    ground_offsets_m : (S,) float64
+        The offsets on the ground: the distance (m, signed as ``offsets_px``) from the
+        overlay's ground point to where the display point at the strip's centre looks.
     """
 
     name: str
@@ -73,6 +76,7 @@ class LineCheck:
     offsets_px: np.ndarray
     ground_m: np.ndarray
     scans: int
+    ground_offsets_m: np.ndarray
 
     @property
     def measured(self) -> bool:
@@ -91,12 +95,12 @@ class LineCheck:
         """The line's offset: the largest |mean offset| over :data:`SMOOTH_SCANS`
         consecutive counted scans (over all of them when fewer), px; NaN when nothing was
         measured.  This is the value G-1 and G-2 judge."""
-        o = self.offsets_px
-        if not len(o):
-            return float("nan")
-        k = min(SMOOTH_SCANS, len(o))
-        run = np.convolve(o, np.full(k, 1.0 / k), mode="valid")
-        return float(np.max(np.abs(run)))
+        return _smoothed_max(self.offsets_px)
+
+    @property
+    def offset_cm(self) -> float:
+        """:attr:`offset_px`'s measure of :attr:`ground_offsets_m`, in cm on the ground."""
+        return 100.0 * _smoothed_max(self.ground_offsets_m)
 
     @property
     def max_px(self) -> float:
@@ -105,6 +109,15 @@ class LineCheck:
     @property
     def median_px(self) -> float:
         return self.stat(0.5)
+
+
+def _smoothed_max(values: np.ndarray) -> float:
+    """The largest |mean| over :data:`SMOOTH_SCANS` consecutive values (all when fewer);
+    NaN for none."""
+    if not len(values):
+        return float("nan")
+    k = min(SMOOTH_SCANS, len(values))
+    return float(np.max(np.abs(np.convolve(values, np.full(k, 1.0 / k), mode="valid"))))
 
 
 @dataclass(frozen=True, eq=False)
@@ -229,7 +242,7 @@ def measure_painted(fisheye_labels: np.ndarray, view: GuidelineView,
     shown = project_lines(view, lines)
     out: list[LineCheck] = []
     for p, line in zip(painted, shown):
-        offs, grounds, scans = [], [], 0
+        offs, grounds, metres, scans = [], [], [], 0
         ends = np.asarray(p.points, np.float64)[[0, -1]]
         for piece in line.pieces:
             pts, normals, ground = _resample(piece.uv_px, piece.ground_m, SAMPLE_STEP_PX)
@@ -247,11 +260,14 @@ def measure_painted(fisheye_labels: np.ndarray, view: GuidelineView,
             reach = np.where(np.isfinite(half), 2.0 * half + 3.0, 0.0)
             o, ok = _scan(fisheye_labels, view, pts, normals, L.guide_paint(p.index), reach)
             scans += len(pts)
+            seen, _ = display_to_ground(view, pts[ok] + o[ok, None] * normals[ok])
             offs.append(o[ok])
             grounds.append(ground[ok])
+            metres.append(np.copysign(np.linalg.norm(seen - ground[ok], axis=1), o[ok]))
         out.append(LineCheck(p.name, p.kind, p.steering_deg,
                              np.concatenate(offs) if offs else np.empty(0),
-                             np.concatenate(grounds) if grounds else np.empty((0, 2)), scans))
+                             np.concatenate(grounds) if grounds else np.empty((0, 2)), scans,
+                             np.concatenate(metres) if metres else np.empty(0)))
     return out
 
 

@@ -50,7 +50,7 @@ def check_document(check: GuidelineCheck, limit_px: float) -> dict[str, Any]:
         "G-2": {"value_px": g2, "pass": bool(g2 <= limit_px)},
         "lines": [{"name": c.name, "kind": c.kind, "steering_deg": c.steering_deg,
                    "scans": c.scans, "counted": int(len(c.offsets_px)),
-                   "offset_px": c.offset_px, "median_px": c.median_px, "p95_px": c.p95_px,
+                   "offset_px": c.offset_px, "offset_cm": c.offset_cm, "median_px": c.median_px, "p95_px": c.p95_px,
                    "max_px": c.max_px} for c in check.lines]}
 
 
