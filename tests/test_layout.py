@@ -133,6 +133,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("compensation",),
     ("criteria",),
     ("regulations",),
+    ("guidelines",),
     ("pipeline", "markets"),
     ("percar",),
     ("robust",),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -59,31 +60,29 @@ def guidelines(scene: Path, params_file: Path | None, out: Path, steering: str |
     view = guideline_view(sc, params, output)
     gset = compute_guidelines(sc, view, angles)
     rvm = None
-    extra: dict[str, object] = {}
+    extra: dict[str, Any] = {}
+    covers: dict[str, Any] = {}
     if picture:
         images, _ = cached_render(sc, progress=progress)
         rvm = rvm_color(images, params, view.output)
-        extra["covers"] = required_coverage(sc, gset, images.labels, progress=progress)
+        covers = extra["covers"] = required_coverage(sc, gset, images.labels, progress=progress)
     failed = False
+    checked: dict[str, Any] = {}
     if check:
-        result = check_guidelines(sc, params, output)
-        doc = check_document(result, limit_px)
-        extra["check"] = doc
-        failed = not (doc["G-1"]["pass"] and doc["G-2"]["pass"])
+        checked = extra["check"] = check_document(check_guidelines(sc, params, output), limit_px)
+        failed = not (checked["G-1"]["pass"] and checked["G-2"]["pass"])
     write_guidelines(out, gset, rvm, scene_file=str(scene),
                      params_file=str(params_file or ""), extra=extra)
     shown = sum(1 for line in gset.lines() if line.shown)
     click.echo(f"guidelines of {sc.name}: {len(gset.steering_deg)} steering angles, "
                f"{shown} of {len(gset.lines())} lines shown -> {out}")
-    covers = extra.get("covers") or {}
-    for site, objs in covers.items():  # type: ignore[union-attr]
+    for site, objs in covers.items():
         if objs:
             click.echo(f"  covers {site}'s required areas: " + ", ".join(
                 f"{name} {v['fraction'] * 100:.1f} %" for name, v in objs.items()))
     if check:
-        c = extra["check"]
-        click.echo(f"  G-1 static lines {c['G-1']['value_px']:.2f} px, G-2 trajectories "
-                   f"{c['G-2']['value_px']:.2f} px (limit {limit_px:g} px): "
+        click.echo(f"  G-1 static lines {checked['G-1']['value_px']:.2f} px, G-2 trajectories "
+                   f"{checked['G-2']['value_px']:.2f} px (limit {limit_px:g} px): "
                    f"{'fail' if failed else 'pass'}")
     if failed:
         sys.exit(1)

@@ -46,7 +46,8 @@ __all__ = ["load_criteria", "default_criteria", "criteria_from_text", "BUNDLED_C
 #: (:mod:`rvmsim.regulations`, read as data).
 BUNDLED_CRITERIA: dict[str, str] = {"fmvss111-full": "rvmsim.regulations.fmvss111",
                                     "unr158": "rvmsim.regulations.unr158",
-                                    "jp": "rvmsim.regulations.jp"}
+                                    "jp": "rvmsim.regulations.jp",
+                                    "guidelines": "rvmsim.guidelines"}
 
 
 def _not_nan(value: float) -> float:

@@ -12,7 +12,7 @@ from __future__ import annotations
 from .kinematics import RunningGear, running_gear, reverse_paths
 from .lines import GroundLine, static_lines, trajectory_lines, half_width_m
 from .project import GuidelineView, DisplayPiece, DisplayLine, project_lines
-from .overlay import (GuidelineSet, scene_spec, record_output, guideline_view,
+from .overlay import (GuidelineSet, scene_spec, guideline_output, guideline_view,
                       compute_guidelines, steering_angles)
 
 __all__ = [
@@ -29,7 +29,7 @@ __all__ = [
     "project_lines",
     "GuidelineSet",
     "scene_spec",
-    "record_output",
+    "guideline_output",
     "guideline_view",
     "compute_guidelines",
     "steering_angles",

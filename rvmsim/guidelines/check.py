@@ -30,6 +30,7 @@ import numpy as np
 from .. import labels as L
 from ..isp import IspParams, OutputSpec
 from ..isp.exact import map_points
+from ..render import cached_render
 from ..scene import PaintedLine, Scene, TestObject
 from .lines import GroundLine, static_lines, trajectory_lines
 from .kinematics import running_gear
@@ -147,7 +148,7 @@ def painted_scene(scene: Scene, lines: Sequence[GroundLine],
     """``scene`` with ``lines`` painted on the ground, and without the site's own painted
     guidelines and test objects A–G."""
     site = scene.test_site
-    update = {"painted_lines": painted_lines(lines, width_m)}
+    update: dict[str, object] = {"painted_lines": painted_lines(lines, width_m)}
     if site.fmvss:
         update["guidelines"] = site.guidelines.model_copy(update={"enabled": False})
         update["objects"] = {k: TestObject(enabled=False) for k in L.OBJECT_LETTERS}
@@ -333,6 +334,4 @@ def check_guidelines(scene: Scene, params: IspParams, output: OutputSpec, *,
 
 
 def _cached_labels(scene: Scene, scale: float) -> np.ndarray:
-    from ..render import cached_render
-
     return cached_render(scene, scale=scale)[0].labels

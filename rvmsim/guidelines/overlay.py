@@ -16,7 +16,7 @@ from .kinematics import RunningGear, running_gear
 from .lines import static_lines, trajectory_lines
 from .project import DisplayLine, GuidelineView, project_lines
 
-__all__ = ["GuidelineSet", "scene_spec", "record_output", "guideline_view",
+__all__ = ["GuidelineSet", "scene_spec", "guideline_output", "guideline_view",
            "compute_guidelines", "steering_angles"]
 
 
@@ -65,7 +65,7 @@ def scene_spec(scene: Scene) -> GuidelineSpec:
     return spec if isinstance(spec, GuidelineSpec) else GuidelineSpec()
 
 
-def record_output(scene: Scene, output: OutputSpec) -> OutputSpec:
+def guideline_output(scene: Scene, output: OutputSpec) -> OutputSpec:
     """The RVM image of record (the scene's ``display.rvm_image_px``, default 1280 × 720)
     with ``output``'s mirroring: the image guidelines are drawn on, whatever size a search
     measured at."""
@@ -76,8 +76,8 @@ def record_output(scene: Scene, output: OutputSpec) -> OutputSpec:
 def guideline_view(scene: Scene, params: IspParams, output: OutputSpec, *,
                    camera: FisheyeCamera | None = None) -> GuidelineView:
     """The view guidelines are drawn through: ``camera`` (default: the scene's, at its
-    mount), ``params`` and the image of record (:func:`record_output`)."""
-    return GuidelineView(camera or scene.fisheye_camera(), params, record_output(scene, output))
+    mount), ``params`` and the image of record (:func:`guideline_output`)."""
+    return GuidelineView(camera or scene.fisheye_camera(), params, guideline_output(scene, output))
 
 
 def steering_angles(gear: RunningGear, spec: str | None = None) -> tuple[float, ...]:

@@ -35,7 +35,7 @@ __all__ = [
 ]
 
 #: Discriminator tags of the vehicle parts, which pydantic puts into error locations.
-_TAGS = frozenset({"block", "mesh"})
+_TAGS = frozenset({"block", "mesh", "spec", "file"})
 
 
 def scene_from_dict(

@@ -30,6 +30,7 @@ from ..camera import FisheyeCamera, make_lens, rotation_from_ypr
 from .display import Display
 from .eol import EolSpec
 from .guideline_spec import GuidelineSpec, PaintedLine
+from .running_gear import RunningGearKeys
 from .load_state import SceneLoadState
 from .sitedefs import DEFAULT_SITE, SiteObject
 from .variation import VariationSpec
@@ -250,7 +251,7 @@ Part = Annotated[
 ]
 
 
-class Vehicle(_Model):
+class Vehicle(RunningGearKeys):
     paint: Rgb = (0.75, 0.75, 0.78)
     bumper: Part
     garnish: Part | None = None
@@ -260,50 +261,6 @@ class Vehicle(_Model):
     #: (:mod:`rvmsim.scene.sitedefs`); None: the widest body part.  Not part of the render
     #: key (a site's placed objects are).
     width: PositiveFloat | None = Field(default=None, exclude=True)
-    # The car's running gear, for the parking guidelines (:mod:`rvmsim.guidelines`); none is
-    # part of the render key.
-    #: Front axle to rear axle, m.
-    wheelbase: Annotated[float, Field(ge=1.0, le=10.0)] | None = Field(default=None, exclude=True)
-    #: Rear axle to the rear-most point (the scene frame's origin plane), m.
-    rear_overhang: Annotated[float, Field(ge=0.1, le=5.0)] | None = Field(default=None,
-                                                                            exclude=True)
-    #: Rear track (wheel centre to wheel centre), m.
-    track: Annotated[float, Field(ge=0.5, le=4.0)] | None = Field(default=None, exclude=True)
-    #: The inner front wheel's angle at full lock, degrees.
-    max_road_wheel_deg: Annotated[float, Field(gt=0, le=70)] | None = Field(default=None,
-                                                                             exclude=True)
-    #: Steering-wheel degrees per degree of road-wheel angle (single-track equivalent).
-    steering_ratio: Annotated[float, Field(ge=1.0, le=60.0)] | None = Field(default=None,
-                                                                            exclude=True)
-    #: [steering-wheel deg, road-wheel deg] rows from [0, 0], both increasing (mirrored for
-    #: the other side): a non-linear steering gear instead of ``steering_ratio``.
-    steering_table: Annotated[
-        list[tuple[Annotated[float, Field(ge=0, le=1440)], Annotated[float, Field(ge=0, le=70)]]],
-        Field(min_length=2, max_length=64)] | None = Field(default=None, exclude=True)
-
-    @model_validator(mode="after")
-    def _running_gear(self) -> Vehicle:
-        if self.steering_ratio is not None and self.steering_table is not None:
-            raise ValueError("give steering_ratio or steering_table, not both")
-        table = self.steering_table
-        if table is not None:
-            if tuple(table[0]) != (0.0, 0.0):
-                raise ValueError("steering_table must start at [0, 0]")
-            for (w0, r0), (w1, r1) in zip(table, table[1:]):
-                if not (w1 > w0 and r1 > r0):
-                    raise ValueError("steering_table: both angles must increase row by row")
-        return self
-
-    def running_gear_problem(self) -> tuple[str, str] | None:
-        """(key, message) of the first running-gear key the guidelines need that is missing,
-        or None when wheelbase, rear overhang, track, lock angle and steering are all given."""
-        for key in ("wheelbase", "rear_overhang", "track", "max_road_wheel_deg"):
-            if getattr(self, key) is None:
-                return f"vehicle.{key}", "missing: the guidelines need the car's running gear"
-        if self.steering_ratio is None and self.steering_table is None:
-            return ("vehicle.steering_ratio", "missing (or steering_table): the trajectory "
-                    "lines need the steering gear")
-        return None
 
 
 # ---------------------------------------------------------------------------- test site
@@ -438,6 +395,18 @@ class RenderSettings(_Model):
     sky_color: Rgb = (0.62, 0.76, 0.92)
 
 
+def _spec_kind(v: object) -> str:
+    return "file" if isinstance(v, str) else "spec"
+
+
+#: The scene's ``guidelines:``: a mapping, or a spec file's path (the tags are not part of
+#: error keys: :data:`rvmsim.scene.loading._TAGS`).
+GuidelineSpecOrFile = Annotated[
+    Union[Annotated[GuidelineSpec, Tag("spec")], Annotated[FilePathText, Tag("file")]],
+    Discriminator(_spec_kind),
+]
+
+
 class Scene(_Model):
     """One vehicle at the test site.  Build with :func:`load_scene` or :func:`scene_from_dict`.
 
@@ -471,7 +440,7 @@ class Scene(_Model):
     #: The parking guidelines drawn over the picture (:mod:`rvmsim.guidelines`): a mapping,
     #: or a spec file relative to the scene file (read when the scene loads); None: the
     #: bundled default.  Not part of the render key.
-    guidelines: GuidelineSpec | FilePathText | None = Field(default=None, exclude=True)
+    guidelines: GuidelineSpecOrFile | None = Field(default=None, exclude=True)
     #: Directory that relative paths in the scene are resolved against (not a YAML key).
     base_dir: str = Field(default=".", exclude=True)
     #: The file the scene was read from, for messages (not a YAML key).
