@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import GuidelineSpec
+from ..scene.guideline_spec import GuidelineSpec, LineKind
 from .kinematics import RunningGear, reverse_paths
 
 __all__ = ["GroundLine", "static_lines", "trajectory_lines", "half_width_m"]
@@ -40,7 +40,7 @@ class GroundLine:
     """
 
     name: str
-    kind: str
+    kind: LineKind
     color: tuple[float, float, float]
     points_m: np.ndarray
     steering_deg: float | None = None

@@ -17,8 +17,10 @@ from pydantic import Field, model_validator
 from .fields import Metres, NonNegFloat, PositiveFloat, Rgb, _Model
 
 __all__ = ["DistanceMark", "WidthLines", "TrajectoryLines", "GuidelineSpec", "PaintedLine",
-           "MAX_MARKS", "MAX_PAINTED_LINES"]
+           "MAX_MARKS", "MAX_PAINTED_LINES", "LineKind"]
 
+#: The kinds of guideline.
+LineKind = Literal["mark", "width", "trajectory"]
 #: Most distance marks a spec may give.
 MAX_MARKS = 12
 #: Most lines painted on the ground at once (labels 60–99, :func:`rvmsim.labels.guide_paint`).
@@ -102,7 +104,7 @@ class PaintedLine(_Model):
     #: The guideline painted: its name and kind (``mark``, ``width``, ``trajectory``), and a
     #: trajectory's steering-wheel angle, degrees.
     name: str = ""
-    kind: Literal["mark", "width", "trajectory"] = "mark"
+    kind: LineKind = "mark"
     steering_deg: Annotated[float, Field(ge=-1440, le=1440)] | None = None
     width: Annotated[float, Field(gt=0, le=1.0)] = 0.05
     color: Rgb = (0.95, 0.95, 0.95)
