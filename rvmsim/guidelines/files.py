@@ -101,7 +101,8 @@ def write_guidelines(out: str | Path, gset: GuidelineSet, rvm_rgb: np.ndarray | 
                          shown_deg=shown_angle(gset))
     with staged_folder(out) as stage:
         (stage / "guidelines.bin").write_bytes(table)
-        (stage / "guidelines.json").write_text(json.dumps(doc, indent=1) + "\n")
+        # compact: the C encoder (an indented dump of 109 angles takes seconds)
+        (stage / "guidelines.json").write_text(json.dumps(doc, separators=(",", ":")) + "\n")
         write_png(stage / "guidelines.png", picture)
         (stage / "guidelines.svg").write_text(svg)
     return [out / name for name in GUIDELINE_FILES]
