@@ -77,9 +77,12 @@ def guidelines(scene: Path, params_file: Path | None, out: Path, steering: str |
     click.echo(f"guidelines of {sc.name}: {len(gset.steering_deg)} steering angles, "
                f"{shown} of {len(gset.lines())} lines shown -> {out}")
     for site, objs in covers.items():
-        if objs:
-            click.echo(f"  covers {site}'s required areas: " + ", ".join(
-                f"{name} {v['fraction'] * 100:.1f} %" for name, v in objs.items()))
+        for name, v in objs.items():
+            by = (["static lines"] if v["static_px"] else []) + (
+                [f"trajectories at {len(v['trajectory_px'])} angles"] if v["trajectory_px"]
+                else [])
+            click.echo(f"  covers {site} {name}'s required area (up to "
+                       f"{v['fraction'] * 100:.1f} %): {', '.join(by)}")
     if check:
         click.echo(f"  G-1 static lines {checked['G-1']['value_px']:.2f} px, G-2 trajectories "
                    f"{checked['G-2']['value_px']:.2f} px (limit {limit_px:g} px): "

@@ -9,6 +9,7 @@ of these areas they cover, and how much of each one's shown pixels.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import cv2
@@ -19,16 +20,17 @@ from ..isp import apply_map, build_map_exact
 from ..render import cached_render
 from ..scene import Scene, site_scene
 from .overlay import GuidelineSet
+from .project import DisplayLine
 
 __all__ = ["line_mask", "required_areas", "required_coverage"]
 
 
-def line_mask(gset: GuidelineSet) -> np.ndarray:
-    """(H, W) bool: the RVM pixels any of the set's lines (every angle) is drawn over."""
+def line_mask(gset: GuidelineSet, lines: Sequence[DisplayLine]) -> np.ndarray:
+    """(H, W) bool: the RVM pixels ``lines`` are drawn over (at the spec's width)."""
     out = gset.view.output
     mask = np.zeros((out.height, out.width), np.uint8)
     thick = max(1, int(round(gset.spec.line_width_px)))
-    for line in gset.lines():
+    for line in lines:
         for piece in line.pieces:
             pts = np.round(piece.uv_px * 16).astype(np.int32).reshape(-1, 1, 2)
             cv2.polylines(mask, [pts], False, 255, thick, cv2.LINE_8, shift=4)
@@ -51,31 +53,48 @@ def required_areas(scene: Scene) -> dict[str, tuple[int, ...]]:
     return areas
 
 
-def _covered(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray, mask: np.ndarray
-             ) -> dict[str, dict[str, float]]:
+def _covered(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray
+             ) -> dict[str, dict[str, Any]]:
+    """Per required area the lines are drawn over: its shown px, and the px the static lines
+    and each steering angle's trajectories cover (only angles that cover some)."""
     cam = scene.fisheye_camera()
     isp_map = build_map_exact(gset.view.params, (cam.width, cam.height), gset.view.output)
     rvm = apply_map(fisheye_labels, isp_map, labels=True)
-    counts = np.bincount(rvm.ravel(), minlength=256)
-    under = np.bincount(rvm[mask], minlength=256)
-    out = {}
-    for name, ids in required_areas(scene).items():
-        seen, hit = int(counts[list(ids)].sum()), int(under[list(ids)].sum())
-        if hit:
-            out[name] = {"covered_px": hit, "shown_px": seen, "fraction": hit / seen}
+    areas = required_areas(scene)
+    lut = np.full(256, -1, np.int64)
+    names = list(areas)
+    for k, ids in enumerate(areas.values()):
+        lut[list(ids)] = k
+    area_of = lut[rvm]
+    shown = np.bincount(area_of[area_of >= 0], minlength=len(names))
+
+    def hits(lines: Sequence[DisplayLine]) -> np.ndarray:
+        under = area_of[line_mask(gset, lines)]
+        return np.bincount(under[under >= 0], minlength=len(names))
+
+    static = hits(gset.static)
+    per_angle = [(a, hits(group)) for a, group in zip(gset.steering_deg, gset.trajectories)]
+    out: dict[str, dict[str, Any]] = {}
+    for k, name in enumerate(names):
+        angles = {a: int(h[k]) for a, h in per_angle if h[k]}
+        if static[k] or angles:
+            worst = max([int(static[k]), *angles.values()])
+            out[name] = {"shown_px": int(shown[k]), "static_px": int(static[k]),
+                         "trajectory_px": {f"{a:g}": v for a, v in angles.items()},
+                         "fraction": worst / max(int(shown[k]), 1)}
     return out
 
 
 def required_coverage(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray, *,
                       progress: bool = False) -> dict[str, Any]:
-    """The required areas the lines cover: ``{"fmvss111": {...}, "unr158": {...}}``, per
-    object its covered and shown px and the covered fraction (only objects covered).
+    """The required areas the lines cover: ``{"fmvss111": {...}, "unr158": {...}}``; per
+    covered object its shown px, the px the static lines cover, per steering angle the px
+    its trajectories cover, and ``fraction``: the largest of these over the shown px.
 
     ``fisheye_labels``: the scene's own render (its FMVSS site); the UN R158 site is
     rendered (or read from the render cache).
     """
-    mask = line_mask(gset)
     r158 = site_scene(scene, "unr158")
     r158_labels = cached_render(r158, progress=progress)[0].labels
-    return {"fmvss111": _covered(scene, gset, fisheye_labels, mask),
-            "unr158": _covered(r158, gset, r158_labels, mask)}
+    return {"fmvss111": _covered(scene, gset, fisheye_labels),
+            "unr158": _covered(r158, gset, r158_labels)}

@@ -44,19 +44,19 @@ def _polyline(line: DisplayLine, width_px: float) -> str:
     return "".join(out)
 
 
-def guidelines_svg(gset: GuidelineSet, rvm_png: bytes | None, *,
+def guidelines_svg(gset: GuidelineSet, rvm_jpeg: bytes | None, *,
                    shown_deg: float = 0.0) -> str:
-    """An SVG of the guidelines over the RVM picture (``rvm_png``, embedded; None: lines
+    """An SVG of the guidelines over the RVM picture (``rvm_jpeg``, embedded; None: lines
     only): the static lines, and one group per steering angle (``id="steer_<deg>"``), only
     ``shown_deg``'s visible (set another group's ``display`` to show it)."""
     w, h = gset.view.output.width, gset.view.output.height
     lw = gset.spec.line_width_px
     parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" '
              f'viewBox="-0.5 -0.5 {w} {h}">']
-    if rvm_png is not None:
-        data = base64.b64encode(rvm_png).decode("ascii")
+    if rvm_jpeg is not None:
+        data = base64.b64encode(rvm_jpeg).decode("ascii")
         parts.append(f'<image x="-0.5" y="-0.5" width="{w}" height="{h}" '
-                     f'href="data:image/png;base64,{data}"/>')
+                     f'href="data:image/jpeg;base64,{data}"/>')
     parts.append('<g id="static">' + "".join(_polyline(l, lw) for l in gset.static) + "</g>")
     for deg, group in zip(gset.steering_deg, gset.trajectories):
         hidden = "" if deg == shown_deg else ' display="none"'

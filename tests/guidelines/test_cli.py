@@ -58,7 +58,7 @@ def test_outputs_match_the_library_and_the_table_hash(tmp_path: Path) -> None:
     u, v = np.rint(mid[len(mid) // 2]).astype(int)
     assert tuple(picture[v, u]) == tuple(round(c * 255) for c in gset.static[0].color)
     svg = (out / "guidelines.svg").read_text()
-    assert svg.count("<g id=\"steer_") == 109 and "data:image/png;base64," in svg
+    assert svg.count("<g id=\"steer_") == 109 and "data:image/jpeg;base64," in svg
     assert "covers" in doc
 
 
