@@ -10,8 +10,10 @@ grid), and at points every :data:`SAMPLE_STEP_PX` along the overlay scans across
 strip's two edges in the label image give its centre, and the overlay's signed distance to that centre is the
 offset.  A scan counts only when the strip lies whole between ground on both sides (not cut
 by the picture's border, the body, or another line).  The strip's centre is the image of
-the line's centre to second order (a strip 5 cm wide: < 0.1 px); its 1 mm lift moves it by
-< 0.1 px at 3 m.
+the line's centre to second order (a strip 5 cm wide: < 0.1 px).  The strips lie
+:data:`~rvmsim.scene.site.PAINTED_LINE_LIFT_M` above the ground (against depth fighting), which
+moves them about 0.3 px up a 1280 × 720 image: the lines are projected at that height for
+the comparison, so the lift is not counted as an offset.
 
 Lines are painted in groups that do not overlap: the static lines (marks and width lines),
 then one group per steering angle (its two trajectory lines): every group is one render.
@@ -32,6 +34,7 @@ from ..isp import IspParams, OutputSpec
 from ..isp.exact import map_points
 from ..render import cached_render
 from ..scene import PaintedLine, Scene, TestObject
+from ..scene.site import PAINTED_LINE_LIFT_M
 from .lines import GroundLine, static_lines, trajectory_lines
 from .kinematics import running_gear
 from .overlay import guideline_view, scene_spec
@@ -240,7 +243,10 @@ def measure_painted(fisheye_labels: np.ndarray, view: GuidelineView,
     """
     lines = [GroundLine(p.name, p.kind, p.color, np.asarray(p.points, np.float64),
                         p.steering_deg) for p in painted]
-    shown = project_lines(view, lines)
+    # the strips lie PAINTED_LINE_LIFT_M above the ground (against depth fighting): their
+    # centrelines there are what the overlay is compared with (1 mm moves a line 0.3 px)
+    lift = PAINTED_LINE_LIFT_M
+    shown = project_lines(view, lines, height_m=lift)
     out: list[LineCheck] = []
     for p, line in zip(painted, shown):
         offs, grounds, metres, scans = [], [], [], 0
@@ -256,12 +262,12 @@ def measure_painted(fisheye_labels: np.ndarray, view: GuidelineView,
                 continue
             # the strip's half width in display px at each point, for the scan's reach
             gn = _ground_normals(ground, np.asarray(p.points, np.float64))
-            edge, _ = view.to_display(ground + gn * (p.width / 2.0))
+            edge, _ = view.to_display(ground + gn * (p.width / 2.0), lift)
             half = np.linalg.norm(edge - pts, axis=1)
             reach = np.where(np.isfinite(half), 2.0 * half + 3.0, 0.0)
             o, ok = _scan(fisheye_labels, view, pts, normals, L.guide_paint(p.index), reach)
             scans += len(pts)
-            seen, _ = display_to_ground(view, pts[ok] + o[ok, None] * normals[ok])
+            seen, _ = display_to_ground(view, pts[ok] + o[ok, None] * normals[ok], lift)
             offs.append(o[ok])
             grounds.append(ground[ok])
             metres.append(np.copysign(np.linalg.norm(seen - ground[ok], axis=1), o[ok]))

@@ -46,15 +46,17 @@ class GuidelineView:
     params: IspParams
     output: OutputSpec
 
-    def to_display(self, ground_xz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Display px (N, 2) of ground points (N, 2) (x, z) m, and whether each is shown.
+    def to_display(self, ground_xz: np.ndarray, height_m: float = 0.0
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Display px (N, 2) of ground points (N, 2) (x, z) m, and whether each is shown;
+        ``height_m``: the points lie that far above the ground (a painted strip's lift).
 
         Convention
         ----------
         See the module docstring.
         """
         g = np.asarray(ground_xz, np.float64).reshape(-1, 2)
-        pts = np.column_stack([g[:, 0], np.zeros(len(g)), g[:, 1]])
+        pts = np.column_stack([g[:, 0], np.full(len(g), -height_m), g[:, 1]])
         cam = self.camera
         uv_in, in_fov = cam.project(pts)
         on_sensor = ((uv_in[:, 0] >= -0.5) & (uv_in[:, 0] <= cam.width - 0.5)
@@ -95,25 +97,29 @@ class DisplayLine:
         return bool(self.pieces)
 
 
-def _crossings(view: GuidelineView, inside: np.ndarray, outside: np.ndarray) -> np.ndarray:
+def _crossings(view: GuidelineView, inside: np.ndarray, outside: np.ndarray,
+               height_m: float) -> np.ndarray:
     """The shown end (ground (K, 2) m) of each segment from a shown ``inside`` point to a
     hidden ``outside`` point, by bisection."""
     a, b = inside.copy(), outside.copy()
     for _ in range(_BISECTIONS):
         mid = (a + b) / 2.0
-        _, vis = view.to_display(mid)
+        _, vis = view.to_display(mid, height_m)
         a = np.where(vis[:, None], mid, a)
         b = np.where(vis[:, None], b, mid)
     return a
 
 
-def project_lines(view: GuidelineView, lines: Sequence[GroundLine]) -> list[DisplayLine]:
+def project_lines(view: GuidelineView, lines: Sequence[GroundLine], *,
+                  height_m: float = 0.0) -> list[DisplayLine]:
     """Every line on the RVM image, cut at the border of what is shown.
 
     Parameters
     ----------
     view : GuidelineView
     lines : sequence of GroundLine
+    height_m : float
+        The lines lie this far above the ground, m (0: on it, as guidelines are).
 
     Returns
     -------
@@ -128,7 +134,7 @@ def project_lines(view: GuidelineView, lines: Sequence[GroundLine]) -> list[Disp
         return []
     counts = [len(line.points_m) for line in lines]
     ground = np.concatenate([line.points_m for line in lines])
-    uv, vis = view.to_display(ground)
+    uv, vis = view.to_display(ground, height_m)
     starts = np.cumsum([0, *counts[:-1]])
     # segments whose ends differ in being shown, over all lines at once
     same_line = np.ones(len(ground) - 1, bool)
@@ -137,8 +143,8 @@ def project_lines(view: GuidelineView, lines: Sequence[GroundLine]) -> list[Disp
     idx = np.flatnonzero(edge)
     inner = np.where(vis[idx], idx, idx + 1)
     outer = np.where(vis[idx], idx + 1, idx)
-    cut = _crossings(view, ground[inner], ground[outer])
-    cut_uv, _ = view.to_display(cut)
+    cut = _crossings(view, ground[inner], ground[outer], height_m)
+    cut_uv, _ = view.to_display(cut, height_m)
     cut_at = dict(zip(idx.tolist(), range(len(idx))))
     out: list[DisplayLine] = []
     for line, start, n in zip(lines, starts.tolist(), counts):
@@ -170,10 +176,11 @@ def project_lines(view: GuidelineView, lines: Sequence[GroundLine]) -> list[Disp
     return out
 
 
-def display_to_ground(view: GuidelineView, uv_px: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def display_to_ground(view: GuidelineView, uv_px: np.ndarray, height_m: float = 0.0
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """Where on the ground display pixels look: (N, 2) (x, z) m, and whether the pixel's ray
     meets the ground (the ISP's exact map into the fisheye image, the lens's ray, the ground
-    plane y = 0 ahead of the camera).
+    plane y = 0 ahead of the camera; the plane ``height_m`` above it when given).
 
     Convention
     ----------
@@ -186,7 +193,7 @@ def display_to_ground(view: GuidelineView, uv_px: np.ndarray) -> tuple[np.ndarra
     rays, in_fov = cam.pixel_rays(np.column_stack([ux, vy]))
     d = rays @ cam.rotation.T  # camera → scene directions
     with np.errstate(divide="ignore", invalid="ignore"):
-        lam = -cam.position[1] / d[:, 1]
+        lam = (-height_m - cam.position[1]) / d[:, 1]
     hits = in_fov & np.isfinite(lam) & (lam > 0)
     lam = np.where(hits, lam, np.nan)
     ground = cam.position[[0, 2]][None, :] + lam[:, None] * d[:, [0, 2]]

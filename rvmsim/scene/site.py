@@ -39,8 +39,9 @@ __all__ = [
 
 #: Painted guidelines float this far above the ground (avoids depth fighting), metres.
 GUIDELINE_LIFT_M = 0.003
-#: Lines painted to check the parking guidelines lie this far above the ground: a 1 mm lift
-#: moves a line 3 m away by under 0.1 px of a 1280 × 720 RVM image (depth-safe to ~7 m).
+#: Lines painted to check the parking guidelines lie this far above the ground (depth-safe to
+#: about 7 m; the check projects them at this height: 1 mm moves a line about 0.3 px of a
+#: 1280 × 720 RVM image).
 PAINTED_LINE_LIFT_M = 0.001
 #: A board lying on the ground: plate thickness; its black squares float a further lift.
 BOARD_LIFT_M = 0.006
