@@ -60,8 +60,8 @@ def test_the_overlay_lies_on_the_painted_lines(letter: str, params: IspParams) -
     assert {c.steering_deg for c in result.lines if c.measured} == {None, *angles}
     assert result.worst_px(("mark", "width")) <= LIMIT_PX
     assert result.worst_px(("trajectory",)) <= LIMIT_PX
-    for c in result.lines:
-        assert not c.measured or c.offset_cm < 2.0, c.name
+    for c in result.lines:  # on the ground: 1 px of 640 × 360 spans < 4 cm within 3.5 m
+        assert not c.measured or 0.0 <= c.offset_cm < 4.0 * max(c.offset_px, 0.25), c.name
     # the check has teeth: an overlay drawn for a camera pitched 0.5° off its mount is off
     # the painted lines by more than the limit
     m = scene.camera.mount
