@@ -126,8 +126,9 @@ class ConsoleGuidelines:
 
     ``available`` says whether the scene can have them (its ``vehicle`` carries the running
     gear); when not, ``why`` says what is missing and every request for them is refused
-    (409).  The painted renders are made by one background thread, started at the first
-    request for a ground error, newest wish first.
+    (409).  The painted renders are made by one background thread while any is wished
+    for (started by the first wish, ended when none is left), the static lines first, then
+    the newest wish.
     """
 
     def __init__(self, session: ConsoleSession) -> None:
@@ -142,7 +143,6 @@ class ConsoleGuidelines:
         except RvmsimError as err:
             self.gear, self.why = None, f"no guidelines: {err}"
         self._lock = threading.Lock()
-        self._wake = threading.Condition(self._lock)
         self._painted: OrderedDict[GroupKey, _Painted] = OrderedDict()
         self._pending: OrderedDict[GroupKey, None] = OrderedDict()
         self._measured: OrderedDict[tuple[IspParams, GroupKey], GroupError] = OrderedDict()
@@ -242,7 +242,6 @@ class ConsoleGuidelines:
                 self._worker = threading.Thread(target=self._work, name="rvmsim-guidelines",
                                                 daemon=True)
                 self._worker.start()
-            self._wake.notify()
 
     def _next(self) -> GroupKey | None:
         with self._lock:
@@ -255,14 +254,15 @@ class ConsoleGuidelines:
 
     def _work(self) -> None:
         """The background thread: paint, render and keep each wished group, in one render
-        worker while wishes keep coming."""
+        worker, until no wish is left (then the thread ends; the next wish starts another)."""
         while True:
-            with self._lock:
-                while not self._pending:
-                    self._wake.wait()
             with RenderProcess():
                 while (key := self._next()) is not None:
                     self._keep(key, self._render(key))
+            with self._lock:
+                if not self._pending:
+                    self._worker = None
+                    return
 
     def _render(self, key: GroupKey) -> _Painted:
         """``key``'s group painted on the ground and rendered (the render cache), or why

@@ -277,7 +277,6 @@
   // ------------------------------------------------------------------ guidelines
   const guidesInfo = () => (state.session && state.session.guidelines) || {available: false};
   const guidesWanted = () => state.guides.on && guidesInfo().available;
-  const SVG = "http://www.w3.org/2000/svg";
 
   // The lines over the display picture (null: none), in its pixels (the SVG's viewBox).
   function drawGuides(g) {
@@ -289,7 +288,7 @@
     svg.setAttribute("viewBox", `-0.5 -0.5 ${g.output.width} ${g.output.height}`);
     for (const line of g.lines) {
       for (const piece of line.pieces) {
-        const pl = document.createElementNS(SVG, "polyline");
+        const pl = document.createElementNS(svg.namespaceURI, "polyline");  // the SVG's
         pl.setAttribute("points", piece.map((p) => `${p[0]},${p[1]}`).join(" "));
         pl.setAttribute("stroke", line.color);
         pl.setAttribute("stroke-width", String(g.line_width_px));
