@@ -177,6 +177,23 @@ def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any]
             "timings_ms": {k: round(1e3 * v, 2) for k, v in ms.items()}}
 
 
+def _guidelines(session: ConsoleSession, guides: ConsoleGuidelines, doc: dict[str, Any]
+                ) -> dict[str, Any]:
+    """One ``/api/guidelines`` answer: the guidelines of ``doc``'s ``params`` at its
+    ``steering_pct`` (% of the steering range) and their ground error (a group whose painted
+    render is not in yet: ``"measuring"``)."""
+    params = parse_params(doc.get("params", {}), session.start)
+    pct = parse_steering(doc.get("steering_pct"))
+    t0 = time.perf_counter()
+    lines = guides.lines_json(params, pct)
+    t1 = time.perf_counter()
+    error = guides.error(params, pct)
+    t2 = time.perf_counter()
+    return {"params": params_to_dict(params), **lines, "error": error,
+            "timings_ms": {"lines": round(1e3 * (t1 - t0), 2),
+                           "error": round(1e3 * (t2 - t1), 2)}}
+
+
 def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
     """The console app of ``session`` behind its :class:`~.guard.Guard`; ``token``:
     required on every request (None: no token, and loopback ``Host`` names only)."""
@@ -194,17 +211,6 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
     def evaluate(doc: dict[str, Any]) -> dict[str, Any]:
         return _evaluation(session, pictures, doc, next(frames), picture_url, guides)
 
-    def guidelines(doc: dict[str, Any]) -> dict[str, Any]:
-        params = parse_params(doc.get("params", {}), session.start)
-        pct = parse_steering(doc.get("steering_pct"))
-        t0 = time.perf_counter()
-        lines = guides.lines_json(params, pct)
-        t1 = time.perf_counter()
-        error = guides.error(params, pct)
-        t2 = time.perf_counter()
-        return {"params": params_to_dict(params), **lines, "error": error,
-                "timings_ms": {"lines": round(1e3 * (t1 - t0), 2),
-                               "error": round(1e3 * (t2 - t1), 2)}}
 
     @app.get("/")
     async def index() -> FileResponse:
@@ -232,9 +238,8 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
 
     @app.get("/api/guidelines")
     async def get_guidelines(q: str = "{}") -> JSONResponse:
-        doc = _json_object(q)
-        return JSONResponse(await run_in_threadpool(guidelines, doc),
-                            headers={"Cache-Control": "no-store"})
+        doc = await run_in_threadpool(_guidelines, session, guides, _json_object(q))
+        return JSONResponse(doc, headers={"Cache-Control": "no-store"})
 
     @app.get("/api/picture/{kind}.jpg")
     async def picture(kind: str, p: str = "") -> Response:

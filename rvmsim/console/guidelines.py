@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 
 from ..errors import RvmsimError
-from ..guidelines import (GuidelineView, RunningGear, compute_guidelines, running_gear,
-                          scene_spec, static_lines, trajectory_lines)
+from ..guidelines import (GroundLine, GuidelineView, RunningGear, compute_guidelines,
+                          running_gear, scene_spec, static_lines, trajectory_lines)
 from ..guidelines.check import LineCheck, measure_painted, painted_scene
 from ..guidelines.project import DisplayLine
 from ..isp import IspParams
@@ -221,7 +221,7 @@ class ConsoleGuidelines:
                 self._measured.popitem(last=False)
         return result
 
-    def ground_lines(self, key: GroupKey) -> list[Any]:
+    def ground_lines(self, key: GroupKey) -> list[GroundLine]:
         """The ground lines of a group (the static lines, or one angle's trajectories)."""
         gear = self._need()
         if key == STATIC:
