@@ -4,7 +4,8 @@
 Modules: :mod:`.session` (what it works on, one setting's evaluation), :mod:`.candidates`
 (the run's candidates), :mod:`.inputs` (checking the browser's values), :mod:`.outputs`
 (params files and setting reports, inside the run folder), :mod:`.pictures` (the pictures,
-named by their parameters), :mod:`.guard` (the gate in front of every request: access,
+named by their parameters), :mod:`.guidelines` (the parking guidelines of a setting and
+their ground error), :mod:`.guard` (the gate in front of every request: access,
 origin, JSON writes, size limits), :mod:`.app` (the FastAPI app),
 :mod:`.server` (access rule, socket, uvicorn); the page's HTML, JS and CSS in ``static/``.
 """
@@ -26,6 +27,7 @@ from .session import (
     human_name,
 )
 from .pictures import Pictures, params_key, parse_params_key
+from .guidelines import ConsoleGuidelines
 from .guard import Guard, MAX_BODY_BYTES, MAX_TARGET_BYTES
 from .inputs import ConsoleInputError, parse_params, parse_label
 from .outputs import save_params, write_setting_report, params_text
@@ -46,6 +48,7 @@ __all__ = [
     "Pictures",
     "params_key",
     "parse_params_key",
+    "ConsoleGuidelines",
     "Guard",
     "MAX_BODY_BYTES",
     "MAX_TARGET_BYTES",

@@ -4,7 +4,9 @@ Routes: ``GET /`` (the page), ``/static/…`` (its JS and CSS, from the package)
 ``GET /api/session`` (scene, controls, start values, candidates), ``GET /api/fisheye.jpg``,
 ``GET /api/evaluate?q=JSON`` (a parameter set → its ECs, margins, ROI and picture URLs, and
 with ``draft`` and ``inline`` the draft picture itself, base64; a GET: it changes nothing), ``GET /api/picture/{display|draft|annotated}.jpg?p=VALUES`` (the
-picture of a parameter set, :mod:`.pictures`), ``POST /api/save``, ``POST /api/report``.
+picture of a parameter set, :mod:`.pictures`), ``GET /api/guidelines?q=JSON`` (a parameter
+set's parking guidelines and their ground error, :mod:`.guidelines`; a GET too),
+``POST /api/save``, ``POST /api/report``.
 
 Every request passes :class:`~.guard.Guard` first (token or loopback ``Host``, the origin,
 JSON bodies for writes, size limits).  Every error is a JSON ``{"error": "…", "key": "…"}``
@@ -38,7 +40,9 @@ from ..errors import RvmsimError
 from ..isp import IspParams, params_to_dict, roi_outline
 from .candidates import candidate_json
 from .guard import LOOPBACK_HOSTS, MAX_BODY_BYTES, MAX_TARGET_BYTES, TOKEN_HEADER, Guard
-from .inputs import ConsoleInputError, parse_flag, parse_label, parse_params
+from .guidelines import ConsoleGuidelines
+from .inputs import (ConsoleInputError, parse_flag, parse_label, parse_params,
+                     parse_steering)
 from .outputs import save_params, write_setting_report
 from .pictures import PICTURE_KINDS, Pictures, params_key, parse_params_key
 from .session import ConsoleFrame, ConsoleSession, ec_margin, human_name
@@ -128,14 +132,19 @@ def _roi(session: ConsoleSession, params: IspParams) -> list[list[float]]:
 
 
 def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any], frame_id: int,
-                picture_url: Callable[[str, IspParams], str]) -> dict[str, Any]:
-    """One ``/api/evaluate`` answer: the ECs at the RVM image of record, the ROI, and the
-    draft or annotated picture when asked (``frame_id``: the answer's number)."""
+                picture_url: Callable[[str, IspParams], str],
+                guides: ConsoleGuidelines) -> dict[str, Any]:
+    """One ``/api/evaluate`` answer: the ECs at the RVM image of record, the ROI, the
+    draft or annotated picture when asked (``frame_id``: the answer's number), and with
+    ``guidelines`` (a steering angle, % of the range) the parking guidelines of the same
+    setting (``guides``), so the page draws them with the picture they belong to."""
 
     params = parse_params(doc.get("params", {}), session.start)
     annotate = parse_flag(doc.get("annotate"), "annotate")
     draft = parse_flag(doc.get("draft"), "draft")
     inline = parse_flag(doc.get("inline"), "inline")
+    steer = doc.get("guidelines")
+    pct = None if steer is None else parse_steering(steer, "guidelines")
     t0 = time.perf_counter()
     color = None
     if annotate:  # the whole EC image of record, drawn
@@ -150,11 +159,13 @@ def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any]
     t2 = time.perf_counter()
     roi = _roi(session, params)
     t3 = time.perf_counter()
+    lines = None if pct is None else guides.lines_json(params, pct)
+    t4 = time.perf_counter()
     ec = ec_result.as_dict()
     for item, value in zip(ec["ecs"], ec_result.items):
         item["yes_no"] = value.yes_no  # ✓/✗, no margin bar (EcValue.margin_text)
         item["margin"] = None if value.yes_no else ec_margin(item["value"], *item["range"])
-    ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2}
+    ms = {"ecs": t1 - t0, "pictures": t2 - t1, "roi": t3 - t2, "guidelines": t4 - t3}
     return {"frame": frame_id, "params": params_to_dict(params), **ec, "roi": roi,
             "image": picture_url("display", params),
             "draft": picture_url("draft", params) if draft else None,
@@ -162,7 +173,25 @@ def _evaluation(session: ConsoleSession, pictures: Pictures, doc: dict[str, Any]
             # the draft itself, when asked: one round trip per frame while dragging
             **({"draft_jpeg": base64.b64encode(draft_jpeg).decode()} if draft and inline
                else {}),
+            "guidelines": lines,
             "timings_ms": {k: round(1e3 * v, 2) for k, v in ms.items()}}
+
+
+def _guidelines(session: ConsoleSession, guides: ConsoleGuidelines, doc: dict[str, Any]
+                ) -> dict[str, Any]:
+    """One ``/api/guidelines`` answer: the guidelines of ``doc``'s ``params`` at its
+    ``steering_pct`` (% of the steering range) and their ground error (a group whose painted
+    render is not in yet: ``"measuring"``)."""
+    params = parse_params(doc.get("params", {}), session.start)
+    pct = parse_steering(doc.get("steering_pct"))
+    t0 = time.perf_counter()
+    lines = guides.lines_json(params, pct)
+    t1 = time.perf_counter()
+    error = guides.error(params, pct)
+    t2 = time.perf_counter()
+    return {"params": params_to_dict(params), **lines, "error": error,
+            "timings_ms": {"lines": round(1e3 * (t1 - t0), 2),
+                           "error": round(1e3 * (t2 - t1), 2)}}
 
 
 def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
@@ -170,6 +199,7 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
     required on every request (None: no token, and loopback ``Host`` names only)."""
     app = FastAPI(title="rvmsim console", docs_url=None, redoc_url=None, openapi_url=None)
     pictures = Pictures(session)
+    guides = ConsoleGuidelines(session)
     server = secrets.token_hex(6)  # in picture URLs: no browser cache of another console
     frames = itertools.count(1)
     _errors(app)
@@ -179,7 +209,8 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
         return f"/api/picture/{kind}.jpg?v={server}&p={params_key(params)}"
 
     def evaluate(doc: dict[str, Any]) -> dict[str, Any]:
-        return _evaluation(session, pictures, doc, next(frames), picture_url)
+        return _evaluation(session, pictures, doc, next(frames), picture_url, guides)
+
 
     @app.get("/")
     async def index() -> FileResponse:
@@ -191,7 +222,8 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
 
     @app.get("/api/session")
     async def get_session() -> JSONResponse:
-        return JSONResponse({**session_json(session), "server": server},
+        return JSONResponse({**session_json(session), "server": server,
+                             "guidelines": guides.as_json()},
                             headers={"Cache-Control": "no-store"})
 
     @app.get("/api/fisheye.jpg")
@@ -203,6 +235,11 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
         doc = _json_object(q)
         return JSONResponse(await run_in_threadpool(evaluate, doc),
                             headers={"Cache-Control": "no-store"})
+
+    @app.get("/api/guidelines")
+    async def get_guidelines(q: str = "{}") -> JSONResponse:
+        doc = await run_in_threadpool(_guidelines, session, guides, _json_object(q))
+        return JSONResponse(doc, headers={"Cache-Control": "no-store"})
 
     @app.get("/api/picture/{kind}.jpg")
     async def picture(kind: str, p: str = "") -> Response:

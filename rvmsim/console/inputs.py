@@ -12,7 +12,8 @@ import re
 from ..errors import RvmsimError
 from ..isp import PARAM_SPECS, IspParams
 
-__all__ = ["ConsoleInputError", "parse_params", "parse_label", "parse_flag", "MAX_LABEL"]
+__all__ = ["ConsoleInputError", "parse_params", "parse_label", "parse_flag", "parse_steering",
+           "MAX_LABEL"]
 
 _SPEC = {s.name: s for s in PARAM_SPECS}
 #: Longest label of a saved file (characters, after sanitising).
@@ -68,3 +69,21 @@ def parse_flag(value: object, key: str) -> bool:
     if not isinstance(value, bool):
         raise ConsoleInputError(key, "must be true or false")
     return value
+
+
+def parse_steering(value: object, key: str = "steering_pct") -> float:
+    """A steering angle as a percentage of the car's steering range: a number in
+    [−100, 100] (missing: 0, straight ahead).
+
+    Raises
+    ------
+    ConsoleInputError
+        Not a number, or outside [−100, 100].
+    """
+    if value is None:
+        return 0.0
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConsoleInputError(key, "must be a number (% of the steering range)")
+    if not -100.0 <= float(value) <= 100.0:  # NaN fails too
+        raise ConsoleInputError(key, f"{value} is outside [-100, 100] % of the steering range")
+    return float(value) + 0.0

@@ -279,3 +279,45 @@ def test_annotation_toggle_pin_b_and_reset(served_run, browser):
     _settled(page)
     assert page.evaluate("window.rvmConsole.last.params.fov") == session.start.fov
     assert not errors
+
+
+def test_guidelines_toggle_draws_them_and_shows_their_ground_error(served_run, browser):
+    """The toggle draws the guidelines over the picture (the picture on the page changes),
+    their ground error appears ("measuring…" first, then px and cm per line), and the
+    steering slider brings the trajectory lines of its angle."""
+    folder, session, url = served_run
+    page, errors = _open(browser, url)
+    _settled(page)
+    before = page.locator("#rvm-box").screenshot()
+    assert page.locator("#guides-svg polyline").count() == 0
+    page.check("#guides")
+    page.wait_for_function("document.body.dataset.guidesError === 'ready'", timeout=60000)
+    assert page.locator("#guides-svg polyline").count() > 0
+    assert page.locator("#rvm-box").screenshot() != before  # drawn over the picture
+    rows = page.eval_on_selector_all(
+        "#guides-table tbody tr", "rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+    last = page.evaluate("window.rvmConsole.guides.last")
+    assert last["params"] == page.evaluate("window.rvmConsole.shown.params")
+    lines = last["error"]["static"]["lines"] + last["error"]["trajectory"]["lines"]
+    assert [r[0] for r in rows] == [line["name"] for line in lines]
+    measured = [(r, line) for r, line in zip(rows, lines) if line["offset_px"] is not None]
+    assert measured
+    for r, line in measured:
+        assert float(r[3]) == pytest.approx(line["offset_px"], rel=1e-3)
+        assert float(r[4]) == pytest.approx(line["offset_cm"], rel=1e-3)
+    summary = page.text_content("#guides-summary")
+    assert "static: worst" in summary and " px, " in summary and " cm " in summary
+    # full lock to the left: the trajectories of that angle, measured too
+    page.fill("#steer", "-100")
+    page.dispatch_event("#steer", "input")
+    page.wait_for_function("(() => { const g = window.rvmConsole.guides.last; return "
+                           "g.steering_pct === -100 && document.body.dataset.guidesError === "
+                           "'ready'; })()", timeout=60000)
+    angle = page.evaluate("window.rvmConsole.guides.last.error.trajectory.lines[0].steering_deg")
+    assert angle == pytest.approx(-page.evaluate(
+        "window.rvmConsole.session.guidelines.steering_range_deg"))
+    assert "guides=1" in page.evaluate("location.hash")
+    page.uncheck("#guides")
+    assert page.locator("#guides-svg polyline").count() == 0
+    assert page.is_hidden("#guides-view")
+    assert not errors

@@ -270,7 +270,7 @@ def test_sliders_have_human_names(served, browser):
     box = page.get_by_role("spinbutton", name="Advanced vertical shift (adv_v_shift) value",
                            exact=True)
     assert box.count() == 1
-    names = page.eval_on_selector_all("input[type=range]", "els => els.map(e => e.name)")
+    names = page.eval_on_selector_all("#controls input[type=range]", "els => els.map(e => e.name)")
     assert len(names) == 14
     for name in names:
         snap = page.locator(f"#slider-{name}").aria_snapshot()

@@ -18,6 +18,9 @@
     annotate: false, b: null, bCaption: "", bResult: null, last: null, shown: null,
     timings: [], samples: [], server: [], frames: 0, inputs: 0, controls: {},
     dragging: false, lastDraft: false, lastWrite: undefined,
+    // the parking guidelines: on/off, steering (% of the range), the last answer shown
+    guides: {on: false, pct: 0, inflight: false, again: false, timer: null, last: null,
+             lines: null, fetches: 0},
   };
   window.rvmConsole = state;  // for the tests and tools/bench_console.py
 
@@ -127,6 +130,7 @@
     const draft = !!o.draft && !state.annotate;
     state.lastDraft = draft;
     state.pending = {params: {...state.current}, annotate: state.annotate, draft,
+                     guides: guidesWanted() ? state.guides.pct : null,
                      t0: o.t0 === undefined ? performance.now() : o.t0, initial: !!o.initial};
     markStale();
     writeUrl();
@@ -164,9 +168,10 @@
         fullReady = fullImg.decode().then(() => { fullDone = true; });
         fullReady.catch(() => {});  // awaited below
       }
-      const doc = await api("/api/evaluate", null, {params: job.params, annotate: job.annotate,
-                                                    draft: job.draft || full,
-                                                    inline: job.draft || full});
+      const query = {params: job.params, annotate: job.annotate, draft: job.draft || full,
+                     inline: job.draft || full};
+      if (job.guides !== null) query.guidelines = job.guides;
+      const doc = await api("/api/evaluate", null, query);
       const tJson = performance.now();
       let img = fullImg;
       let quick = false;
@@ -261,6 +266,166 @@
     state.frames += 1;
     document.body.dataset.frame = String(doc.frame);
     markStale();
+    // the guidelines of this very setting, drawn with its picture; their ground error is
+    // asked for once the setting is settled (not for every frame of a drag)
+    if (doc.guidelines && doc.guidelines.steering_pct === state.guides.pct) drawGuides(doc.guidelines);
+    else if (!guidesWanted()) drawGuides(null);
+    if (guidesWanted() && !job.draft) fetchGuides();
+    else markGuidesStale();
+  }
+
+  // ------------------------------------------------------------------ guidelines
+  const guidesInfo = () => (state.session && state.session.guidelines) || {available: false};
+  const guidesWanted = () => state.guides.on && guidesInfo().available;
+
+  // The lines over the display picture (null: none), in its pixels (the SVG's viewBox).
+  function drawGuides(g) {
+    const svg = $("guides-svg");
+    svg.replaceChildren();
+    state.guides.lines = g;
+    svg.toggleAttribute("hidden", !g);  // an SVG element has no .hidden property
+    if (!g) return;
+    svg.setAttribute("viewBox", `-0.5 -0.5 ${g.output.width} ${g.output.height}`);
+    for (const line of g.lines) {
+      for (const piece of line.pieces) {
+        const pl = document.createElementNS(svg.namespaceURI, "polyline");  // the SVG's
+        pl.setAttribute("points", piece.map((p) => `${p[0]},${p[1]}`).join(" "));
+        pl.setAttribute("stroke", line.color);
+        pl.setAttribute("stroke-width", String(g.line_width_px));
+        pl.dataset.line = line.name;
+        svg.appendChild(pl);
+      }
+    }
+    document.body.dataset.guides = `${g.steering_pct}:${g.lines.length}`;
+  }
+
+  function steerText() {
+    const r = guidesInfo().steering_range_deg || 0;
+    const pct = state.guides.pct;
+    return `${pct > 0 ? "+" : ""}${pct} % (${fmt(pct / 100 * r)}°)`;
+  }
+
+  // The answer of /api/guidelines is for the setting shown and this steering?
+  const guidesCurrent = (doc) => !!state.shown && same(doc.params, state.shown.params)
+    && doc.steering_pct === state.guides.pct;
+
+  function markGuidesStale() {
+    const last = state.guides.last;
+    $("guides-view").classList.toggle("stale", !last || !guidesCurrent(last));
+  }
+
+  // The lines and the ground error of the setting shown (latest wins: one request in
+  // flight; while a painted render is under way the server says "measuring" and the page
+  // asks again).
+  async function fetchGuides() {
+    clearTimeout(state.guides.timer);
+    state.guides.timer = null;
+    if (!guidesWanted() || !state.shown) return;
+    if (state.guides.inflight) { state.guides.again = true; return; }
+    state.guides.inflight = true;
+    state.guides.again = false;
+    let measuring = false;
+    try {
+      const doc = await api("/api/guidelines", null,
+                            {params: state.shown.params, steering_pct: state.guides.pct});
+      state.guides.fetches += 1;
+      if (guidesWanted() && guidesCurrent(doc)) {
+        drawGuides(doc);
+        showGuideError(doc);
+        measuring = doc.error.static.status === "measuring"
+          || doc.error.trajectory.status === "measuring";
+      } else {
+        state.guides.again = guidesWanted();
+      }
+    } catch (e) {
+      say(`guidelines: ${e.message || e}`, "error");
+    } finally {
+      state.guides.inflight = false;
+      markGuidesStale();
+      if (state.guides.again) fetchGuides();
+      else if (measuring) state.guides.timer = setTimeout(fetchGuides, 400);
+    }
+  }
+
+  function groupSummary(name, g) {
+    if (g.status === "measuring") return `${name}: measuring…`;
+    if (g.status === "failed") return `${name}: not measured (${g.why})`;
+    const w = g.worst;
+    return w ? `${name}: worst ${fmt(w.offset_px)} px, ${fmt(w.offset_cm)} cm (${w.name})`
+             : `${name}: not in the picture`;
+  }
+
+  function showGuideError(doc) {
+    state.guides.last = doc;
+    const e = doc.error;
+    const measuring = e.static.status === "measuring" || e.trajectory.status === "measuring";
+    const sum = $("guides-summary");
+    sum.textContent = `Ground error — ${groupSummary("static", e.static)}; `
+      + `${groupSummary(`trajectory at ${steerText()}`, e.trajectory)}`;
+    sum.classList.toggle("measuring", measuring);
+    $("guides-for").textContent = `(steering ${steerText()})`;
+    const body = $("guides-table").tBodies[0];
+    body.replaceChildren();
+    for (const [what, g] of [["static", e.static], ["trajectory", e.trajectory]]) {
+      if (g.status !== "ready") {
+        const tr = document.createElement("tr");
+        tr.className = g.status;
+        cell(tr, g.status === "measuring" ? `${what}: measuring…` : `${what}: ${g.why}`).colSpan = 5;
+        body.appendChild(tr);
+        continue;
+      }
+      for (const l of g.lines) {
+        const tr = document.createElement("tr");
+        tr.dataset.line = l.name;
+        if (g.worst && g.worst.name === l.name) tr.className = "worst";
+        cell(tr, l.name);
+        cell(tr, l.kind);
+        cell(tr, l.steering_deg === null ? "—" : `${fmt(l.steering_deg)}°`, "num");
+        cell(tr, l.offset_px === null ? "not in the picture" : fmt(l.offset_px), "num px");
+        cell(tr, l.offset_cm === null ? "—" : fmt(l.offset_cm), "num cm");
+        body.appendChild(tr);
+      }
+    }
+    document.body.dataset.guidesError = measuring ? "measuring" : "ready";
+  }
+
+  // The toggle, the steering slider: new lines for the setting shown (its picture stays).
+  function guidesChanged() {
+    const on = guidesWanted();
+    $("guides").checked = state.guides.on;
+    $("steer").value = String(state.guides.pct);
+    $("steer-out").textContent = steerText();
+    $("guides-bar").hidden = !on;
+    $("guides-view").hidden = !on;
+    if (!on) {
+      drawGuides(null);
+      clearTimeout(state.guides.timer);
+      document.body.dataset.guidesError = "";
+    } else {
+      $("guides-summary").textContent = "Ground error — measuring…";
+      $("guides-summary").classList.add("measuring");
+      fetchGuides();
+    }
+    markGuidesStale();
+    writeUrl();
+  }
+
+  function buildGuides() {
+    const g = guidesInfo();
+    const box = $("guides");
+    box.disabled = !g.available;
+    if (!g.available) {
+      state.guides.on = false;
+      $("guides-label").title = g.why || "no guidelines for this scene";
+      $("guides-why").textContent = `Guidelines not offered: ${g.why || "the scene has no running gear"}`;
+      $("guides-why").hidden = false;
+    }
+    box.addEventListener("change", () => { state.guides.on = box.checked; guidesChanged(); });
+    $("steer").addEventListener("input", () => {
+      state.guides.pct = Number($("steer").value);
+      guidesChanged();
+    });
+    guidesChanged();
   }
 
   function marginCell(tr, i) {
@@ -360,6 +525,8 @@
       const h = new URLSearchParams();
       for (const n of names()) if (state.current[n] !== state.session.start[n]) h.set(n, String(state.current[n]));
       if (state.annotate) h.set("annotate", "1");
+      if (state.guides.on) h.set("guides", "1");
+      if (state.guides.on && state.guides.pct) h.set("steer", String(state.guides.pct));
       if (state.b) { h.set("b", encodeParams(state.b)); h.set("bname", state.bCaption); }
       const hash = h.toString();
       if (hash !== location.hash.slice(1)) {
@@ -383,7 +550,12 @@
     };
     for (const [k, v] of h) {
       if (k === "annotate") state.annotate = v === "1";
-      else if (k !== "b" && k !== "bname") take(current, k, v);
+      else if (k === "guides") state.guides.on = v === "1";
+      else if (k === "steer") {
+        const pct = Number(v);
+        if (v.trim() !== "" && Number.isFinite(pct) && pct >= -100 && pct <= 100) state.guides.pct = Math.round(pct / 5) * 5;
+        else problems.push(`steer: ${v} is not a steering angle in [-100, 100] %`);
+      } else if (k !== "b" && k !== "bname") take(current, k, v);
     }
     let b = null;
     if (h.has("b")) {
@@ -569,6 +741,7 @@
     state.current = restored.current;
     syncControls();
     buildCandidates(s.candidates);
+    buildGuides();
     $("annotate").addEventListener("change", (ev) => { state.annotate = ev.target.checked; request(); });
     $("undo").addEventListener("click", () => {
       if (!state.history.length) { say("nothing to undo", "ok"); return; }
