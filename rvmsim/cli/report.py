@@ -24,7 +24,9 @@ __all__ = ["report", "judge"]
 @click.option("--progress/--no-progress", default=True, help="Show a progress bar.")
 def report(path: Path, out: Path | None, markets: str | None, progress: bool) -> None:
     """Write a self-contained HTML review report of a run (PATH = RUN), or of every run in a
-    folder plus an index page (PATH = RUNS_DIR).  The report only reads the run."""
+    folder plus an index page (PATH = RUNS_DIR).  The report only reads the run; beside the
+    page it writes the ECU table of rank 1's parking guidelines (guidelines.bin beside a
+    report.html, NAME.guidelines.bin beside NAME.html), whose SHA-256 the page shows."""
     from ..report import write_any_report
     from ..tune.markets import judge_run_in_markets
 

@@ -16,8 +16,8 @@ __all__ = ["signoff"]
 @click.command(cls=Command, error_path=("out",))
 @click.argument("run", type=click.Path(path_type=Path))
 @click.option("--out", "-o", type=click.Path(path_type=Path), required=True,
-              help="Folder to write signoff.html, signoff.pdf and signoff.json into (its "
-                   "parent must exist).")
+              help="Folder to write signoff.html, signoff.pdf, signoff.json and "
+                   "guidelines.bin (the guidelines' ECU table) into (its parent must exist).")
 @click.option("--robustness", "robustness_dir", type=click.Path(path_type=Path), default=None,
               help="Folder written by rvmsim robustness for this setting (the yield).")
 @click.option("--validation", "validation_dir", type=click.Path(path_type=Path), default=None,
@@ -44,12 +44,14 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
             progress: bool) -> None:
     """Write the sign-off sheet of RUN's best setting: its 14 values, params file and
     SHA-256, the input files with theirs, the tool's version and commit, every EC at the
-    display output of record with its margin, the yield (--robustness), validation and EOL
-    records, the failing samples with the commands that reproduce them, and a signature
-    block.  One self-contained HTML page and its PDF.  Exit status: 0 when nothing the
-    sheet judged fails (the ECs at the display, the markets, the yield against the least
-    yield, the validation, the EOL station; what was not given is not judged), 1 when
-    something fails, 2 on an error."""
+    display output of record with its margin, the car's parking guidelines (their picture,
+    and their ECU table written as guidelines.bin with its SHA-256), the yield
+    (--robustness), validation and EOL records, the failing samples with the commands that
+    reproduce them, and a signature block.  One self-contained HTML page and its PDF.  Exit
+    status: 0 when nothing the sheet judged fails (the ECs at the display, the markets, the
+    yield against the least yield, the validation, the EOL station; what was not given is
+    not judged; the guidelines are shown, not judged), 1 when something fails, 2 on an
+    error."""
     from ..report import signoff as write_signoff
     from ..tune.markets import judge_run_in_markets
 
@@ -67,6 +69,7 @@ def signoff(run: Path, out: Path, robustness_dir: Path | None, validation_dir: P
                f"; {yield_text}; params {result.params_file} sha256 {result.params_sha256}")
     if result.markets_text is not None:
         click.echo(f"markets: {result.markets_text}")
+    click.echo(f"guidelines: {result.guidelines_text}")
     click.echo(f"wrote {result.html}" + ("" if result.pdf is None else f", {result.pdf}"))
     unjudged = [ch.name.lower() for ch in result.checks if ch.passed is None]
     click.echo(f"verdict: {'PASS' if result.passed else 'FAIL'}"

@@ -58,7 +58,7 @@ def write_batch_report(runs_dir: str | Path, out: str | Path | None = None, *,
             try:
                 text, s = _build(run, None, bar)
                 rep = run / "report.html"
-                _write(rep, text, staged)
+                _write(rep, text, staged, s.files)
             except RvmsimError as err:
                 rows.append(f'<tr class="fail"><td>{escape(run.name)}</td>'
                             f'<td colspan="{len(EC_GROUP_NAMES) + 3}">{escape(err)}</td></tr>')

@@ -11,8 +11,12 @@ Everything is embedded (PNG images as ``data:`` URIs, CSS in a ``<style>`` eleme
 needs no network, fonts or scripts.  Every string that comes from a user's files (vehicle
 name, description, file names, criteria name) is HTML-escaped.
 
-Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``params``, ``convergence``,
-``gallery``.
+Sections carry stable ids: ``scene``, ``images``, ``ec-table``, ``guidelines``, ``params``,
+``convergence``, ``gallery``.
+
+The ``guidelines`` section shows rank 1's parking guidelines (:mod:`.guidelines`): the
+pictures, the lines and the ECU table's SHA-256; the table itself is written beside the page
+(``guidelines.bin`` beside ``report.html``), with it or not at all.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from .members import (MemberScene, load_member_scenes, member_scores_html, membe
                       robust_section)
 from .page import data_uri, escape, img_tag, page, shrink
 from .gallery import differences, margins_html
+from .guidelines import GUIDELINE_TABLE, guideline_figures, guideline_table_name, guidelines_html
 from .plots import convergence_png, histogram_png
 from .provenance import provenance
 from .run_notes import display_figure, provenance_line, signoff_note, yield_note
@@ -67,8 +72,8 @@ EC_GROUP_NAMES: dict[str, str] = {
 }
 
 #: The ids of a run report's sections, in page order.
-SECTION_IDS: tuple[str, ...] = ("scene", "images", "ec-table", "params", "convergence",
-                                "gallery")
+SECTION_IDS: tuple[str, ...] = ("scene", "images", "ec-table", "guidelines", "params",
+                                "convergence", "gallery")
 
 #: Longest side of the embedded fisheye image, gallery thumbnails and index thumbnails (px).
 FISHEYE_MAX_PX = 640
@@ -318,17 +323,20 @@ class _Summary:
     passed: bool
     groups: dict[str, str]
     thumb: np.ndarray
+    #: Files to write beside the page, by name (the guidelines' ECU table).
+    files: dict[str, bytes] = field(default_factory=dict)
 
 
 #: The steps of one run's report, as its progress bar counts them.
 _STEPS = 4
 
 
-def _build(run_dir: Path, report_dir: Path | None = None,
-           bar: Any = None) -> tuple[str, _Summary]:
+def _build(run_dir: Path, report_dir: Path | None = None, bar: Any = None,
+           table_name: str = GUIDELINE_TABLE) -> tuple[str, _Summary]:
     """The report page of one run (to be written into ``report_dir``, default the run
-    folder: links are relative to it), and the summary the batch index shows; ``bar``
-    (a progress bar) advances by :data:`_STEPS`."""
+    folder: links are relative to it), and the summary the batch index shows (with the
+    files to write beside the page: the guidelines' table as ``table_name``); ``bar`` (a
+    progress bar) advances by :data:`_STEPS`."""
 
     def step(next_step: str) -> None:
         if bar is not None:
@@ -371,32 +379,49 @@ def _build(run_dir: Path, report_dir: Path | None = None,
                                   r.settings.kind.aggregate or "min")
     if r.robust_rows:
         header += robust_section(r.top, r.robust_rows, r.settings)
-    step("pictures and tables")
+    step("pictures, guidelines and tables")
+    guides = guideline_figures(r.scene, r.top[0].params, r.output, r.images,
+                               shown=(r.output, color))
     body = (header + _scene_section(r) + _images_section(r, color, annotated)
-            + _ec_section(result) + _params_section(r) + _convergence_section(r))
+            + _ec_section(result) + guidelines_html(guides, table_name)
+            + _params_section(r) + _convergence_section(r))
     step(f"the top-{len(r.top)} gallery")
     body += _gallery_section(r, str(run_dir), color)
     step("writing")
     summary = _Summary(title, result.score, result.passed, _group_status(result),
-                       shrink(color, INDEX_THUMB_PX))
+                       shrink(color, INDEX_THUMB_PX),
+                       {} if guides.reason is not None else {table_name: guides.table})
     return page(f"RVM tuning review: {title}", body), summary
 
 
-def _write(path: Path, text: str, staged: StagedFiles | None = None) -> None:
-    """Write ``text`` to ``path`` whole: under a temporary name beside it, renamed into
-    place at once, or by ``staged``'s commit when given (several files, all or none)."""
-    try:
-        if staged is not None:
-            try:
-                write_text(staged.path(path), text)
-            except OSError:
-                staged.drop(path)
-                raise
-            return
-        with StagedFiles() as one:
-            write_text(one.path(path), text)
-    except OSError as err:
-        raise RvmsimError(f"{path}: {write_problem(err, 'cannot write report')}") from None
+def _write(path: Path, text: str, staged: StagedFiles | None = None,
+           files: dict[str, bytes] | None = None) -> None:
+    """Write ``text`` to ``path`` and ``files`` (by name) beside it, whole: under temporary
+    names, renamed into place at once, or by ``staged``'s commit when given (several
+    pages, all or none; a page that fails drops its files from ``staged``)."""
+    items: list[tuple[Path, str | bytes]] = [(path, text)]
+    items += [(path.with_name(name), data) for name, data in (files or {}).items()]
+
+    def put(into: StagedFiles) -> None:
+        target = path
+        try:
+            for target, data in items:
+                where = into.path(target)
+                if isinstance(data, str):
+                    write_text(where, data)
+                else:
+                    where.write_bytes(data)
+        except OSError as err:
+            for done, _ in items:
+                into.drop(done)
+            raise RvmsimError(f"{target}: {write_problem(err, 'cannot write report')}"
+                              ) from None
+
+    if staged is not None:
+        put(staged)
+        return
+    with StagedFiles() as one:
+        put(one)
 
 
 # ---------------------------------------------------------------------------- public API
@@ -409,14 +434,16 @@ def write_report(run_dir: str | Path, out: str | Path | None = None, *,
     run_dir : path
         A run folder written by :func:`rvmsim.tune.tune` (``run.json``, ``run.sqlite``).
     out : path, optional
-        The HTML file to write (default: ``run_dir/report.html``).
+        The HTML file to write (default: ``run_dir/report.html``).  The guidelines' ECU
+        table goes beside it (:func:`~rvmsim.report.guidelines.guideline_table_name`:
+        ``guidelines.bin`` beside a ``report.html``), written with the page or not at all.
     progress : bool
         Show a progress bar over the report's steps on stderr.
 
     Returns
     -------
     Path
-        The file written.
+        The page written.
 
     Raises
     ------
@@ -428,6 +455,6 @@ def write_report(run_dir: str | Path, out: str | Path | None = None, *,
     path = Path(out) if out is not None else run_dir / "report.html"
     with progress_bar(total=_STEPS, desc="report", unit="step", leave=False,
                       disable=not progress) as bar:
-        text, _ = _build(run_dir, path.parent, bar)
-        _write(path, text)
+        text, summary = _build(run_dir, path.parent, bar, guideline_table_name(path))
+        _write(path, text, files=summary.files)
     return path

@@ -11,6 +11,9 @@ It gathers, for the best candidate (rank 1) of a tuning run:
 - the tool: version, commit of its source checkout, date (UTC), machine;
 - every EC at the display output of record (:func:`_record_output`) on the full evaluation
   path, with value, limit, margin and its annotated picture;
+- the car's parking guidelines through the setting (:mod:`.guidelines`): their picture, the
+  steering angles covered and the SHA-256 of the ECU table, written into the output folder
+  as ``guidelines.bin`` (or the reason there are none);
 - the yield before and after compensation, per EC and per load state
   (``--robustness DIR``), or a red "robustness not run" line;
 - the validation against a real capture (``--validation DIR``) and the end-of-line
@@ -46,6 +49,7 @@ from ..tune.markets import load_markets
 from .market_rows import all_markets_pass, markets_rows, markets_verdict_text
 from .pdf import find_chromium, print_pdf
 from .provenance import FileRecord, file_record, provenance, scene_records
+from .guidelines import GUIDELINE_TABLE, guideline_figures
 from .records import (SIGNOFF_JSON, EolRecord, RobustnessRecord, ValidationRecord, load_eol,
                       load_robustness, load_validation, same_setting)
 from .run import _load_run, _Run
@@ -95,6 +99,11 @@ class SignoffResult:
     #: whether none of it fails: the sheet's verdict (``rvmsim signoff`` exits 1 if not).
     checks: tuple[Check, ...] = ()
     passed: bool = True
+    #: The guidelines' ECU table written beside the page and its SHA-256 (None: no
+    #: guidelines, :attr:`guidelines_text` says why).
+    guidelines_file: Path | None = None
+    guidelines_sha256: str | None = None
+    guidelines_text: str = ""
 
 
 def _record_output(criteria: Criteria, scene: Scene, output: OutputSpec) -> OutputSpec:
@@ -275,6 +284,7 @@ def _summary(res: SignoffContent, html: Path, pdf: Path | None) -> dict[str, Any
             "min_yield": res.min_yield, "passed": sheet_passes(checks),
             "checks": [{"name": ch.name, "passed": ch.passed, "detail": ch.detail}
                        for ch in checks],
+            "guidelines": res.guidelines.as_dict(str(html.with_name(GUIDELINE_TABLE))),
             **_markets_summary(res)}
 
 
@@ -300,9 +310,10 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
     run_dir : path
         A tuning run folder (``rvmsim tune``).
     out : path
-        The folder to write ``signoff.html``, ``signoff.json``, ``signoff.pdf`` (and
-        ``params.yaml`` when the run has no params file of its best) into; created if its
-        parent exists.
+        The folder to write ``signoff.html``, ``signoff.json``, ``signoff.pdf``,
+        ``guidelines.bin`` (the guidelines' ECU table, when the scene has the car's running
+        gear) and ``params.yaml`` (when the run has no params file of its best) into;
+        created if its parent exists.
     robustness, validation, eol : path, optional
         Folders written by ``rvmsim robustness``, ``rvmsim validate`` and ``rvmsim eol``.
     reviewer : str
@@ -356,6 +367,9 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
         with staged_folder(out) as stage:
             content = _content(run, out, stage, rob, val, eol_rec, reviewer, bar,
                                tuple(others), _least_yield(min_yield, rob))
+            guides = content.guidelines
+            if guides.reason is None:
+                (stage / GUIDELINE_TABLE).write_bytes(guides.table)
             bar.set_postfix_str("writing the page")
             write_text(stage / html.name, signoff_html(content))
             bar.update()
@@ -379,7 +393,9 @@ def signoff(run_dir: str | Path, out: str | Path, *, robustness: str | Path | No
                          None if m is None else all_markets_pass(m) and content.markets_same_trial,
                          None if m is None else markets_verdict_text(m) if
                          content.markets_same_trial else "markets not judged for this setting",
-                         content.other_setting, checks, sheet_passes(checks))
+                         content.other_setting, checks, sheet_passes(checks),
+                         None if guides.reason is not None else out / GUIDELINE_TABLE,
+                         guides.sha256, guides.summary_text(GUIDELINE_TABLE))
 
 
 def _least_yield(given: float | None, rob: RobustnessRecord | None
@@ -442,6 +458,8 @@ def _content(r: _Run, out: Path, stage: Path, rob: RobustnessRecord | None,
     record = _record_output(r.criteria, r.scene, r.output)
     bar.set_postfix_str(f"ECs at {record.width}x{record.height}")
     ec, color, annotated, each = _record_ecs(r.images, best.params, record, r.criteria)
+    guides = guideline_figures(r.scene, best.params, r.output, r.images,
+                               shown=(record, color))
     bar.update()
     bar.set_postfix_str("hashing the inputs")
     files, changed = _files(r, setting, rob, val, eol)
@@ -455,4 +473,5 @@ def _content(r: _Run, out: Path, stage: Path, rob: RobustnessRecord | None,
         robustness_same_setting=same, changed_files=changed, validation=val, eol=eol,
         reviewer=reviewer, repro=_repro_commands(rob, r, setting, out), markets=markets,
         markets_same_trial=markets is None or markets.get("trial") == best.idx,
-        other_setting=others, min_yield=least[0], min_yield_source=least[1])
+        other_setting=others, min_yield=least[0], min_yield_source=least[1],
+        guidelines=guides)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from .guidelines import GUIDELINE_TABLE, guidelines_html
 from .market_rows import markets_html
 from .page import escape, img_tag, page, path_html, sha_html
 from .provenance import files_table, provenance_html
@@ -24,7 +25,8 @@ __all__ = ["signoff_html", "SECTION_IDS", "NO_ROBUSTNESS", "SignoffContent"]
 #: The signature block follows the summary (what the witness signs); the commands that
 #: reproduce the failing samples close the sheet as an appendix.
 SECTION_IDS: tuple[str, ...] = ("verdict", "signature", "setting", "inputs", "tool", "ecs",
-                                "yield", "failing-samples", "validation", "eol", "reproduce")
+                                "guidelines", "yield", "failing-samples", "validation", "eol",
+                                "reproduce")
 
 _CSS = """<style>
 .red{color:#c02828;font-weight:bold}.amber{color:#8a5a00;font-weight:bold}.redbox{border:2px solid #c02828;padding:.5em .8em}
@@ -312,6 +314,7 @@ def signoff_html(c: SignoffContent) -> str:
         "(--allow-other-setting): " + "; ".join(escape(w) for w in c.other_setting)
         + ". Their figures below do not describe this setting.</p>")
     body = (head + banner + summary_html(c) + _signature(c) + markets + _setting(c) + _inputs(c)
-            + _tool(c) + _ecs(c) + _yield(c) + _failing(c) + _validation(c) + _eol(c)
+            + _tool(c) + _ecs(c) + guidelines_html(c.guidelines, GUIDELINE_TABLE)
+            + _yield(c) + _failing(c) + _validation(c) + _eol(c)
             + _reproduce(c))
     return page(f"Sign-off: {c.title}", body)

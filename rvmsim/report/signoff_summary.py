@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .guidelines import GUIDELINE_TABLE, GuidelineFigures, guidelines_summary_html
 from .market_rows import all_markets_pass, markets_verdict_text
 from .page import escape
 from .provenance import FileRecord, Provenance
@@ -65,6 +66,9 @@ class SignoffContent:
     #: The least yield that passes (None: none given) and where it came from.
     min_yield: float | None = None
     min_yield_source: str = ""
+    #: The car's parking guidelines through the setting (the ECU table signed with it).
+    guidelines: GuidelineFigures = field(
+        default_factory=lambda: GuidelineFigures(reason="not computed"))
 
     @cached_property
     def checks(self) -> tuple[Check, ...]:
@@ -232,6 +236,8 @@ def summary_html(c: SignoffContent) -> str:
     e = c.eol
     rows.append(("End-of-line station", "not given" if e is None else escape(
         f"{e.doc['passed']} of {e.doc['cars']} cars pass")))
+    rows.append(("Parking guidelines (the ECU table signed with the setting)",
+                 guidelines_summary_html(c.guidelines, GUIDELINE_TABLE)))
     body = "".join(f"<tr><th>{escape(a)}</th><td>{b}</td></tr>" for a, b in rows)
     return (f'<section id="verdict"><h2>Summary</h2><table>{body}</table>'
             '<p class="muted">The figures are what the tool measured; the decision is '

@@ -47,9 +47,10 @@ def _sheet_status(out):
 
 
 def _mtimes(run):
-    """Every file of ``run`` but its report, with its modification time (ns)."""
+    """Every file of ``run`` but its report's own (the page and the guidelines' table
+    beside it), with its modification time (ns)."""
     return {f: f.stat().st_mtime_ns for f in run.rglob("*")
-            if f.is_file() and f.name != "report.html"}
+            if f.is_file() and f.name not in ("report.html", "guidelines.bin")}
 
 
 def _market_rows(html: str) -> list[str]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import hashlib
 import html
 import io
 import json
@@ -21,7 +22,15 @@ import yaml
 import pytest
 
 from rvmsim.errors import RvmsimError
+from rvmsim.guidelines import compute_guidelines, guideline_view, running_gear, steering_angles
+from rvmsim.guidelines.draw import draw_lines
+from rvmsim.guidelines.files import shown_angle
+from rvmsim.guidelines.table import table_bytes
+from rvmsim.isp import load_params
+from rvmsim.pipeline import rvm_color
+from rvmsim.render import cached_render
 from rvmsim.report import EC_GROUP_NAMES, SECTION_IDS, write_batch_report, write_report
+from rvmsim.scene import load_scene
 
 from ..cli_runner import run_in_process
 from ..conftest import SCENES
@@ -152,10 +161,10 @@ def test_report_has_every_section_and_decodable_images(runs):
     for ec in ("1-1", "2-4"):
         row = re.search(rf'<tr class="\w+"><td>{ec}</td>.*?</tr>', text)
         assert row is not None and re.search(r'<td class="num">[✓✗]</td>', row.group(0)), ec
-    # fisheye+ROI, RVM, annotated, RVM at the display size, convergence, histogram, and one
-    # per top-M candidate
+    # fisheye+ROI, RVM, annotated, RVM at the display size, the guidelines straight ahead
+    # and at full lock, convergence, histogram, and one per top-M candidate
     imgs = doc.find("img")
-    assert len(imgs) == 6 + TOP_M
+    assert len(imgs) == 8 + TOP_M
     assert _decode_data_png(imgs[3]["src"]).shape[:2] == (720, 1280)
     fisheye = _decode_data_png(imgs[0]["src"])
     assert fisheye.shape[1] <= 640 and fisheye.shape[0] > 100
@@ -237,6 +246,7 @@ def test_batch_index_links_and_groups(runs, tmp_path, monkeypatch):
     for h in hrefs:
         target = index.parent / unquote(h)
         assert target.is_file() and target.name == "report.html", h
+        assert (target.parent / "guidelines.bin").is_file()  # each report's table beside it
     assert len(doc.find("img")) == 2
     words = doc.all_text()
     assert EVIL_NAME in words and "Vehicle B" in words and EVIL_NAME not in text
@@ -331,6 +341,12 @@ def test_cli_report_run_batch_and_bad_path(runs, tmp_path):
     assert res.code == 0, res.stderr
     assert str(out) in res.stdout and out.is_file()
     _assert_self_contained(out.read_text(), _parse(out.read_text()))
+    # a page named other than report.html: its table beside it under its own name
+    table = tmp_path / "r.guidelines.bin"
+    assert table.is_file() and not (tmp_path / "guidelines.bin").exists()
+    assert _guideline_shas(_section_of(out.read_text(), "guidelines")) == [
+        hashlib.sha256(table.read_bytes()).hexdigest()]
+    assert 'href="r.guidelines.bin"' in out.read_text()
     res = _rvmsim("report", str(runs["runs_dir"]), "--out", str(tmp_path / "i.html"), env=env)
     assert res.code == 0, res.stderr
     assert (tmp_path / "i.html").is_file() and "i.html" in res.stdout
@@ -453,3 +469,65 @@ def test_the_display_picture_is_at_the_scenes_size_of_record(tmp_path, monkeypat
     tune(TuneRequest((scene,), "random", cfg, budget=12), run)
     imgs = _parse(write_report(run).read_text(encoding="utf-8")).find("img")
     assert _decode_data_png(imgs[3]["src"]).shape[:2] == (270, 480)
+
+
+def guideline_table(scene_file, params_file) -> tuple[bytes, object]:
+    """The ECU table of a setting's guidelines made here, apart from the pages: the
+    scene's car over its whole steering range, drawn through the params file's values
+    (and mirroring) into the scene's image of record; and the guideline set."""
+    scene = load_scene(scene_file)
+    params, output = load_params(params_file)
+    view = guideline_view(scene, params, output)
+    gset = compute_guidelines(scene, view, steering_angles(running_gear(scene)))
+    return table_bytes(gset), gset
+
+
+def _guideline_shas(fragment: str) -> list[str]:
+    return re.findall(r'<code class="sha">([0-9a-f]{64})</code>', fragment)
+
+
+def _section_of(text: str, sid: str) -> str:
+    start = text.index(f'<section id="{sid}">')
+    return text[start: text.index("</section>", start)]
+
+
+def test_the_report_shows_rank_1s_guidelines_and_their_tables_hash(runs):
+    """The guidelines section: the picture is rank 1's RVM image of record with the static
+    lines and the straight-ahead trajectory drawn; guidelines.bin beside the page is the
+    table made here for the same setting, and the page shows its SHA-256."""
+    text = runs["report"].read_text(encoding="utf-8")
+    section = _section_of(text, "guidelines")
+    table, gset = guideline_table(runs["scene"], runs["evil_run"] / "top" / "rank_1.yaml")
+    digest = hashlib.sha256(table).hexdigest()
+    assert (runs["evil_run"] / "guidelines.bin").read_bytes() == table
+    assert _guideline_shas(section) == [digest]
+    assert 'href="guidelines.bin"' in section and f"{len(table)} bytes" in section
+    angles = gset.steering_deg
+    words = " ".join(html.unescape(re.sub(r"<[^>]+>", " ", section)).split())
+    assert f"{len(angles)} steering-wheel angles, {min(angles):+.1f}° to {max(angles):+.1f}°" \
+        in words
+    for line in gset.static:
+        assert line.name in words
+    pics = {a["alt"]: a["src"] for a in _parse(section).find("img")}
+    assert set(pics) == {"guidelines straight ahead", "guidelines at full lock"}
+    shown = _decode_data_png(pics["guidelines straight ahead"])[..., ::-1]  # BGR → RGB
+    params, _ = load_params(runs["evil_run"] / "top" / "rank_1.yaml")
+    rvm = rvm_color(cached_render(load_scene(runs["scene"]))[0], params, gset.view.output)
+    want = draw_lines(rvm, gset.at(shown_angle(gset)), gset.spec.line_width_px)
+    assert shown.shape == (720, 1280, 3) and np.array_equal(shown, want)
+    assert not np.array_equal(shown, rvm)  # the lines are on it
+
+
+def test_a_scene_without_the_running_gear_gets_the_reason_not_guidelines(runs, tmp_path):
+    """The same run with the scene's wheelbase taken out (the render is the same): the
+    section says why there are no guidelines, and no table is written."""
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(re.sub(r"(?m)^\s*wheelbase:.*\n", "", runs["scene"].read_text()))
+    run = tmp_path / "run"
+    shutil.copytree(runs["evil_run"], run, ignore=shutil.ignore_patterns("*.html", "*.bin"))
+    _record_scene(run, scene)
+    section = _section_of(write_report(run).read_text(encoding="utf-8"), "guidelines")
+    words = " ".join(html.unescape(re.sub(r"<[^>]+>", " ", section)).split())
+    assert "no guidelines: vehicle.wheelbase: missing" in words, words
+    assert "<img" not in section and not _guideline_shas(section)
+    assert not (run / "guidelines.bin").exists()

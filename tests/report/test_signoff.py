@@ -36,7 +36,8 @@ from rvmsim.search import TuningConfig
 from ..cli_runner import run_in_process
 from rvmsim.testing.stations import write_capture, write_inputs
 from rvmsim.testing.scenes import write_small_scene
-from .test_run import _assert_self_contained, _decode_data_png, _parse
+from .test_run import (_assert_self_contained, _decode_data_png, _parse, _record_scene,
+                       guideline_table)
 
 #: A scene file name and vehicle name a page must escape.
 SCENE_NAME = "scene <script>alert(1) & co.yaml"
@@ -279,7 +280,8 @@ def test_the_pdf_pages_are_numbered_headed_and_keep_hashes_whole(made):
     summary = [k for k, text in enumerate(pages) if "Least yield that passes" in text]
     assert signature and summary and signature[0] - summary[0] in (0, 1)
     lines = [ln.strip() for text in pages for ln in text.splitlines()]
-    digests = {f["sha256"] for f in js["files"] if f["sha256"]} | {js["params_sha256"]}
+    digests = {f["sha256"] for f in js["files"] if f["sha256"]} | {
+        js["params_sha256"], js["guidelines"]["sha256"]}
     for digest in digests:
         assert any(digest in ln for ln in lines), digest  # never split across lines
 
@@ -552,3 +554,44 @@ def test_the_least_yield_gates_the_sheet_and_a_model_file_is_named_with_its_hash
     ecs_pass = all(e["passed"] for e in js["ecs"]["ecs"] if e["enabled"])
     assert check["passed"] is True and js["min_yield"] == 0.0
     assert res.code == (0 if ecs_pass else 1), res.stderr
+
+
+def test_the_sheet_signs_the_guidelines_table_by_its_hash(made):
+    """The sheet shows the guidelines' picture, the steering angles covered and the
+    SHA-256 of guidelines.bin, written beside it: the table made here for the same
+    setting; the summary, signoff.json and the command's output give the same hash."""
+    out = made["out"]
+    table, gset = guideline_table(made["scene"], made["params"])
+    digest = hashlib.sha256(table).hexdigest()
+    assert (out / "guidelines.bin").read_bytes() == table
+    text = _page(made)
+    section = _section(text, "guidelines")
+    assert re.findall(r'<code class="sha">([0-9a-f]{64})</code>', section) == [digest]
+    assert digest in _section(text, "verdict")
+    angles = gset.steering_deg
+    covered = f"{len(angles)} steering-wheel angles, {min(angles):+.1f}° to {max(angles):+.1f}°"
+    assert covered in _text(section) and covered in _text(_section(text, "verdict"))
+    [src] = [a["src"] for a in _parse(section).find("img") if a["alt"] ==
+             "guidelines straight ahead"]
+    assert _decode_data_png(src).shape[:2] == (DISPLAY_SIZE[1], DISPLAY_SIZE[0])
+    js = json.loads((out / "signoff.json").read_text())["guidelines"]
+    assert js["sha256"] == digest and js["bytes"] == len(table)
+    assert js["steering_deg"] == sorted(angles) and js["file"] == str(out / "guidelines.bin")
+    assert f"guidelines: guidelines.bin sha256 {digest}; {covered}" in made["stdout"]
+
+
+def test_a_sheet_without_the_running_gear_says_why_it_has_no_guidelines(made, tmp_path):
+    scene = tmp_path / "scene.yaml"
+    scene.write_text(re.sub(r"(?m)^\s*max_road_wheel_deg:.*\n", "", made["scene"].read_text()))
+    run = tmp_path / "run"
+    shutil.copytree(made["run"], run, ignore=shutil.ignore_patterns("signoff"))
+    _record_scene(run, scene)
+    res = signoff(run, tmp_path / "so", pdf=False)
+    text = res.html.read_text()
+    why = "no guidelines: vehicle.max_road_wheel_deg: missing"
+    assert why in _text(_section(text, "guidelines")) and why in _text(_section(text, "verdict"))
+    assert res.guidelines_sha256 is None and res.guidelines_file is None
+    assert res.guidelines_text.startswith(why)
+    assert not (tmp_path / "so" / "guidelines.bin").exists()
+    js = json.loads((tmp_path / "so" / "signoff.json").read_text())
+    assert js["guidelines"]["none"].startswith("vehicle.max_road_wheel_deg: missing")
