@@ -47,7 +47,9 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
     For each capture: the camera's pose from the target's corners, its deviation from the
     nominal mount, the per-car values of the compensation law, and every EC on the car's
     corrected picture.  Writes OUT/<capture name>.yaml (the car's full ISP parameters),
-    its pictures, eol.json, eol.csv and eol.html.  Exit status: 0 every car passes, 1 a
+    beside it <capture name>.guidelines.bin (its parking-guideline table from its measured
+    pose and per-car values, when the scene's vehicle has its running gear), its pictures,
+    eol.json, eol.csv and eol.html.  Exit status: 0 every car passes, 1 a
     car fails (pose not recovered, EOL range exceeded, an EC fails), 2 an error (nothing
     in OUT is written over).
     """
@@ -78,6 +80,8 @@ def eol(scene: Path, params_file: Path, capture_paths: tuple[Path, ...], out: Pa
                f"{result.load_state['name']}")
     click.echo(result.summary())
     n_params = sum("params" in c.files for c in result.cars)
-    click.echo(f"wrote {n_params} parameter files, eol.json, eol.csv and eol.html in {out} "
-               f"({result.timings['total']:.1f} s)")
+    n_tables = sum("guidelines" in c.files for c in result.cars)
+    tables = "" if result.guideline_angles is None else f", {n_tables} guideline tables"
+    click.echo(f"wrote {n_params} parameter files{tables}, eol.json, eol.csv and eol.html in "
+               f"{out} ({result.timings['total']:.1f} s)")
     sys.exit(0 if result.passed else 1)

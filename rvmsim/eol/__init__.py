@@ -5,7 +5,8 @@ Modules: :mod:`.geometry` (load states, the deviation of a measured pose from th
 mount), :mod:`.frames` (frames of a scene from any pose), :mod:`.station` (:class:`Station`:
 one car's step), :mod:`.records` (:class:`CarResult`, :class:`StationResult`),
 :mod:`.body` (the body's outline found in the capture, the body region re-drawn from it),
-:mod:`.outputs` (the per-car parameter files, eol.json, eol.csv, pictures), :mod:`.run`
+:mod:`.outputs` (the per-car parameter files, eol.json, eol.csv, pictures), :mod:`.tables`
+(each car's parking-guideline table), :mod:`.run`
 (:func:`run_station`: capture files in, an output folder out), :mod:`.synthetic` (captures
 of the scene rendered at a deviated pose).  See docs/eol.md.
 """
@@ -18,6 +19,7 @@ from .records import CarResult, StationResult
 from .station import Station, StationSettings
 from .run import car_names, run_station
 from .outputs import RESULT_FILES, Staging, csv_rows, write_car, write_tables
+from .tables import TABLE_SUFFIX, CarTable, car_table, guideline_angles
 from .synthetic import synthetic_capture
 
 __all__ = [
@@ -40,4 +42,8 @@ __all__ = [
     "csv_rows",
     "write_car",
     "write_tables",
+    "TABLE_SUFFIX",
+    "CarTable",
+    "car_table",
+    "guideline_angles",
 ]

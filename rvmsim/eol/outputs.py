@@ -7,6 +7,8 @@ Files (``<name>`` is the capture's stem, numbered when two captures share one):
 
 - ``<name>.yaml``: the car's full ISP parameter set, a params file
   (:func:`rvmsim.isp.params_to_dict`), when its pose was recovered;
+- ``<name>.guidelines.bin``: beside it, the car's parking-guideline table (:mod:`.tables`),
+  when the scene's vehicle has its running gear;
 - ``<name>_rvm.png``: the capture through the car's parameters (its corrected picture),
   ``<name>_annotated.png``: the ECs drawn on it; a car whose pose was not recovered:
   ``<name>_landmarks.png``, ``<name>_overlay.png`` (the validation's pictures);
@@ -33,6 +35,7 @@ from ..isp import OutputSpec, params_to_dict
 from ..scene import MOUNT_AXES
 from ..storage import FolderLock, json_default, write_problem, write_text
 from .records import CarResult, StationResult
+from .tables import TABLE_SUFFIX
 
 __all__ = ["Staging", "write_car", "write_tables", "csv_rows", "RESULT_FILES", "output_lock",
            "earlier_run_files", "STAGING_PREFIX"]
@@ -132,8 +135,9 @@ def write_car(car: CarResult, folder: Path, output: OutputSpec) -> dict[str, str
     Returns
     -------
     dict of str to str
-        File name by kind: ``params``, ``rvm``, ``annotated`` (or ``landmarks``,
-        ``overlay`` for a car whose pose was not recovered).
+        File name by kind: ``params``, ``guidelines`` (the car's guideline table, when it
+        has one), ``rvm``, ``annotated`` (or ``landmarks``, ``overlay`` for a car whose pose
+        was not recovered).
     """
     files: dict[str, str] = {}
     if car.correction is not None:
@@ -143,6 +147,12 @@ def write_car(car: CarResult, folder: Path, output: OutputSpec) -> dict[str, str
         files["params"] = f"{car.name}.yaml"
         _write_text(folder / files["params"], " ".join(head.split()) + "\n"
                     + yaml.safe_dump(doc, sort_keys=False))
+    if car.correction is not None and car.guidelines is not None:
+        files["guidelines"] = f"{car.name}{TABLE_SUFFIX}"
+        try:
+            (folder / files["guidelines"]).write_bytes(car.guidelines.data)
+        except OSError as err:
+            raise RvmsimError(f"{folder / files['guidelines']}: {write_problem(err)}") from None
     keys = ("rvm", "annotated") if car.correction is not None else _FAILURE_PICTURES
     for key in keys:
         if key in car.images:

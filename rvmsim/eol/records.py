@@ -12,8 +12,10 @@ import numpy as np
 
 from ..compensation import Correction, Deviation
 from ..criteria import EcResult
+from ..guidelines.table import TABLE_VERSION
 from ..percar import CarSolution
 from ..scene import MOUNT_AXES
+from .tables import TABLE_SUFFIX, CarTable
 
 __all__ = ["CarResult", "StationResult", "PASS", "FAIL"]
 
@@ -61,6 +63,9 @@ class CarResult:
         ``marginal``, ``infeasible``; each EC's value, margin and uncertainty).
     body_edge : dict or None
         The body's outline found in the capture (:meth:`rvmsim.eol.BodyEdge.as_dict`).
+    guidelines : CarTable or None
+        The car's parking-guideline table (:mod:`.tables`: its measured pose and per-car
+        values); None when its pose was not recovered or the scene has no running gear.
     """
 
     capture: str
@@ -77,6 +82,7 @@ class CarResult:
     files: dict[str, str] = field(default_factory=dict, compare=False)
     solution: CarSolution | None = field(default=None, compare=False)
     body_edge: dict[str, Any] | None = None
+    guidelines: CarTable | None = field(default=None, compare=False)
 
     @property
     def passed(self) -> bool:
@@ -115,6 +121,8 @@ class CarResult:
                 k: v for k, v in self.solution.as_dict().items()
                 if k in ("law", "status", "reasons", "evaluations", "station_ecs")},
             "body_edge": self.body_edge,
+            "guidelines": None if self.guidelines is None else self.guidelines.as_dict(
+                self.files.get("guidelines")),
             "ecs": None if self.ec is None else self.ec.as_dict(),
             "seconds": round(self.seconds, 3), "files": dict(self.files),
         }
@@ -147,6 +155,9 @@ class StationResult:
     platform_isp : dict
         The platform setting's 14 values (what a sign-off checks it judged its own setting
         by; empty: not known).
+    guideline_angles : tuple of float or None
+        The steering-wheel angles of every car's guideline table, degrees (None: the
+        scene's vehicle has no running gear, and no table is written).
     """
 
     scene_name: str
@@ -161,6 +172,7 @@ class StationResult:
     cars: tuple[CarResult, ...]
     timings: dict[str, float] = field(default_factory=dict)
     platform_isp: dict[str, float] = field(default_factory=dict)
+    guideline_angles: tuple[float, ...] | None = None
 
     @property
     def n_pass(self) -> int:
@@ -198,6 +210,10 @@ class StationResult:
             "by_status": {st: self.count(st) for st in ("pass", "marginal", "infeasible",
                                                         "fail", "no pose")},
             "timings": {k: round(v, 3) for k, v in self.timings.items()},
+            "guidelines": None if self.guideline_angles is None else {
+                "format": f"RVMG {TABLE_VERSION}", "file": f"<name>{TABLE_SUFFIX}",
+                "steering_deg": list(self.guideline_angles),
+                "drawn_from": "each car's measured pose and per-car ISP values"},
             "results": [c.as_dict() for c in self.cars],
         }
 

@@ -18,6 +18,7 @@ class _CarRow(ReadModel):
     verdict: str
     reasons: list[str] = []
     status: str = ""
+    guidelines: dict[str, Any] | None = None
 
 
 class EolFile(ReadModel):
@@ -29,3 +30,4 @@ class EolFile(ReadModel):
     cars: int
     passed: int
     results: list[_CarRow]
+    guidelines: dict[str, Any] | None = None

@@ -169,7 +169,9 @@ def _run_into(station: Station, captures: list[Path], names: list[str], staging:
                                                  ) as results:
             for car in results:
                 files = write_car(car, staging.dir, settings.output)
-                cars.append(dataclasses.replace(car, images={}, files=files))
+                cars.append(dataclasses.replace(
+                    car, images={}, files=files,
+                    guidelines=None if car.guidelines is None else car.guidelines.written()))
                 if bar is not None:
                     bar.update(1)
                     bar.set_postfix_str(f"{sum(c.passed for c in cars)} pass")

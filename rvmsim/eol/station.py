@@ -61,6 +61,7 @@ from .body import capture_labels, find_body_edge
 from .frames import PoseRenderer
 from .geometry import deviation_of, mount_at, moved_camera, station_load
 from .records import CarResult, StationResult
+from .tables import car_table, guideline_angles
 
 __all__ = ["StationSettings", "Station"]
 
@@ -159,6 +160,8 @@ class Station:
         self._renderer = PoseRenderer(scene, cam, self.body_pose)
         # the car as designed at the station: where the station's EC uncertainty is read
         nominal = self._renderer.frame(self.nominal_camera, progress=progress)
+        #: The steering angles of every car's guideline table (None: no running gear).
+        self.guideline_angles = guideline_angles(scene)
         self.law: PerCarLaw = make_law(
             scene, settings.params, self.record, settings.compensation, self.criteria,
             ImagePicture(SplitEvaluator(nominal, self.record, self.criteria)), nominal.camera)
@@ -180,7 +183,8 @@ class Station:
             params_file=params_file, output=(self.record.width, self.record.height),
             compensation=s.compensation.as_dict(), criteria=self.criteria.name,
             written=tuple(s.compensation.params), cars=tuple(cars), timings=dict(timings or {}),
-            platform_isp={n: float(getattr(s.params, n)) for n in IspParams.names()})
+            platform_isp={n: float(getattr(s.params, n)) for n in IspParams.names()},
+            guideline_angles=self.guideline_angles)
 
     def _check_target_in_view(self) -> None:
         spec = self.scene.eol
@@ -274,7 +278,10 @@ class Station:
         frame = evaluate_params(images, sol.params, self.record, self.criteria)
         reasons = () if self.law.accepts(sol) else sol.reasons
         assert frame.annotated is not None  # asked for
+        table = None if self.guideline_angles is None else car_table(
+            self.scene, pose, sol.correction.params, self.record, self.guideline_angles)
         return CarResult(capture_name, name, tuple(reasons), deviation, sigma, v.n_inliers,
                          v.rms_after_px, sol.correction, frame.ec,
                          {"rvm": frame.color, "annotated": frame.annotated},
-                         time.perf_counter() - t0, solution=sol, body_edge=edge.as_dict())
+                         time.perf_counter() - t0, solution=sol, body_edge=edge.as_dict(),
+                         guidelines=table)

@@ -201,6 +201,43 @@ Model: {escape(m.source)}.</p>
 platform setting (red: the allowed range).</figcaption></figure>"""
 
 
+def _three(d: dict[str, Any]) -> str:
+    """A ``median``/``p99``/``max`` dict as one cell's text (— where not counted)."""
+    return " / ".join("—" if d[k] is None else f"{d[k]:.2f}" for k in ("median", "p99", "max"))
+
+
+def _guidelines_section(result: RobustnessResult) -> str:
+    """How far the guidelines land from where they claim after the EOL step, per line over
+    the fleet ("" without compensation or without the car's running gear)."""
+    g = result.guidelines
+    if g is None:
+        return ""
+    doc = g.as_dict()
+    eol, plat = doc["eol_table"], doc["platform_table"]
+    rows = "".join(
+        f'<tr><td>{escape(name)}</td>'
+        f'<td class="num">{_three(eol["in_field"][name]["px"])}</td>'
+        f'<td class="num">{_three(eol["in_field"][name]["cm"])}</td>'
+        f'<td class="num">{_three(eol["at_station"][name]["cm"])}</td>'
+        f'<td class="num">{_three(plat["in_field"][name]["cm"])}</td></tr>'
+        for name in doc["groups"])
+    angles = "; ".join(f"{escape(k)}: {', '.join(f'{a:g}' for a in v)}°"
+                       for k, v in doc["steering_deg"].items())
+    return f"""
+<h2>Parking guidelines after the EOL step</h2>
+<p>Each car's guideline table is drawn from the pose the station measured and its per-car
+values (as <code>rvmsim eol</code> writes it), and looked at through its true pose with the
+same values. Per car, a line's error is its largest over its points: on the display, px
+between where the line is drawn and where its ground point shows; on the ground, cm between
+the ground under the drawn line and where it claims. Over the cars: median / 99th percentile
+/ worst. In the field: each car in its own load state; at the station: in the station's
+(its error alone). The platform table (design pose, platform setting) for comparison.
+Steering-wheel angles: {angles}.</p>
+<table><tr><th>line</th><th>EOL table, in the field: px</th><th>in the field: cm</th>
+<th>at the station: cm</th><th>platform table, in the field: cm</th></tr>
+{rows}</table>"""
+
+
 def _station_rows(result: RobustnessResult) -> list[str]:
     """The station's verdicts that keep cars from the yield: infeasible (named apart),
     marginal, and cars it let go that fail in the field."""
@@ -303,6 +340,7 @@ Criteria: {escape(result.criteria_name)}. Variation: {escape(result.variation.so
 seed {result.seed}. The nominal car: {nominal} (EC score {result.nominal.ec.score:.3g}).</p>
 {_setting_section(setting, records or [], result)}
 {_compensation_section(result)}
+{_guidelines_section(result)}
 <h2>Evaluation criteria over the samples{"" if result.compensated is None else " (after compensation)"}</h2>
 <table><tr><th>EC</th><th>measurement</th><th>range</th><th>fails</th><th>worst value</th>
 <th>worst margin</th><th>what drives it: fitted formula (EC unit per mm or degree; [state]:

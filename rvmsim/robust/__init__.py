@@ -5,7 +5,8 @@ Modules: :mod:`.variation` (the variation model), :mod:`.samples` (Sobol draws),
 :mod:`.images` (sample images), :mod:`.stats` (yield, confidence interval, what drives
 failures), :mod:`.sensitivity` (each EC's value as a formula of the offsets and load),
 :mod:`.robustness` (:func:`robustness`), :mod:`.markets` (the yield per market,
-:func:`markets_robustness`), :mod:`.export` (a sample as a scene file).
+:func:`markets_robustness`), :mod:`.export` (a sample as a scene file),
+:mod:`.guideline_errors` (the parking guidelines' errors over a fleet after compensation).
 See docs/robustness.md.
 """
 
@@ -47,6 +48,7 @@ from .robustness import (
     DEFAULT_SCALES,
 )
 from .markets import MarketYield, MarketsRobustness, markets_robustness
+from .guideline_errors import FleetGuidelines, GuidelineErrors, fleet_guideline_errors
 
 __all__ = [
     "AxisDistribution",
@@ -103,4 +105,7 @@ __all__ = [
     "MarketsRobustness",
     "markets_robustness",
     "limiting_ec",
+    "FleetGuidelines",
+    "GuidelineErrors",
+    "fleet_guideline_errors",
 ]

@@ -30,6 +30,7 @@ from ..scene import Scene
 from ..render import TaskRunner
 from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, check_law, make_law
 from .compensated import CarJudge, CompensatedSamples, station_twin
+from .guideline_errors import FleetGuidelines, fleet_guideline_errors
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
 from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
@@ -174,6 +175,10 @@ class RobustnessResult(YieldVerdict):
     #: The RVM image of record every verdict refers to (:mod:`rvmsim.criteria.record`;
     #: None: ``output``).
     judged_at: OutputSpec | None = None
+    #: After compensation, how far the parking guidelines land from where they claim
+    #: (:mod:`rvmsim.robust.guideline_errors`; None: no compensation, or the scene's vehicle
+    #: has no running gear).
+    guidelines: FleetGuidelines | None = None
 
     @property
     def passed(self) -> np.ndarray:
@@ -226,7 +231,9 @@ class RobustnessResult(YieldVerdict):
             return {"compensation": None, "yield_before_compensation": None}
         return {
             "compensation": {**comp.model.as_dict(), "reference_points": self.reference_points,
-                             **comp.distribution()},
+                             **comp.distribution(),
+                             "guidelines": None if self.guidelines is None
+                             else self.guidelines.as_dict()},
             "yield_before_compensation": {
                 **est.as_dict(), "by_load": self.yield_by_load(before=True),
                 "limiting": limiting_dict(self.ecs_before),
@@ -268,6 +275,8 @@ class RobustnessResult(YieldVerdict):
             lines.append(f"  before compensation: {100 * est.yield_:.1f} % (95 % CI "
                          f"{100 * blo:.1f}–{100 * bhi:.1f} %)")
             lines += self.compensated.summary_lines(self.evaluation.all_passed)
+            if self.guidelines is not None:
+                lines.append("  " + self.guidelines.summary_line())
         for e in self.ecs:
             if e.enabled and e.n_fail:
                 lines.append(f"  EC {e.id} fails on {100 * e.failure_rate:.1f} % (worst "
@@ -453,6 +462,9 @@ def robustness(scene: Scene, params: IspParams,
         passed if s == 1.0 else judge(extra[float(s)], folds[float(s)])[1]))
         for s in settings.scales]
     t2 = time.perf_counter()
+    lines = None if fixed is None else fleet_guideline_errors(
+        scene, drawn, fixed.measured, fixed.params, params, output, station_load)
+    t_lines = time.perf_counter() - t2
     n_fail = np.sum(~ev.passed & crit.arrays[-1], axis=1)
     if fixed is not None:  # a car the station rejects is worse than any EC failure
         n_fail = n_fail + len(crit.ids) * ~fixed.accepted
@@ -470,9 +482,10 @@ def robustness(scene: Scene, params: IspParams,
         yield_estimate(passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
         worst_frame, worst, settings.least_yield(var),
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
-         "frames": t3 - t2, "total": t3 - t0, "viewpoints_rendered": float(rendered)},
+         "guidelines": t_lines, "frames": t3 - t2 - t_lines, "total": t3 - t0,
+         "viewpoints_rendered": float(rendered)},
         fixed, before, () if before is None else _ec_stats(crit, drawn, before, var),
-        0 if judge_cars is None else len(judge_cars.law.reference.points), record)
+        0 if judge_cars is None else len(judge_cars.law.reference.points), record, lines)
 
 
 def _station_load(model: CompensationModel | None, var: Variation) -> LoadState:

@@ -9,9 +9,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rvmsim.compensation import Deviation
-from rvmsim.eol import CarResult, Station, StationSettings
+import dataclasses
+import hashlib
+
+from rvmsim.compensation import Deviation, deviated_camera
+from rvmsim.eol import (CarResult, Station, StationResult, StationSettings, guideline_angles,
+                        write_car)
+from rvmsim.guidelines import compute_guidelines, guideline_view, running_gear, steering_angles
+from rvmsim.guidelines.table import GuidelineTable, read_table, table_bytes
 from rvmsim.isp import load_params
+from rvmsim.scene import load_scene
+from rvmsim.testing.scenes import load_small_scene
 
 from ..cli_runner import run_in_process
 from rvmsim.testing.stations import capture, platform, station_scene, write_capture, write_inputs
@@ -62,6 +70,67 @@ def test_a_synthetic_cars_deviation_is_recovered(corner_cars: list[CarResult], k
     assert car.images["rvm"].shape == (720, 1280, 3)
 
 
+def _largest_gap(a: GuidelineTable, b: GuidelineTable) -> float:
+    """The largest distance between two tables' points, px (inf when their lines, pieces or
+    point counts differ)."""
+    if (a.width, a.height, a.steering_deg) != (b.width, b.height, b.steering_deg) or len(
+            a.lines) != len(b.lines):
+        return float("inf")
+    gap = 0.0
+    for la, lb in zip(a.lines, b.lines):
+        if (la.kind, la.color, la.steering_deg) != (lb.kind, lb.color, lb.steering_deg) or [
+                len(p) for p in la.pieces] != [len(p) for p in lb.pieces]:
+            return float("inf")
+        for pa, pb in zip(la.pieces, lb.pieces):
+            gap = max(gap, float(np.abs(pa - pb).max(initial=0.0)))
+    return gap
+
+
+def _direct_table(scene, deviation: Deviation, params, output) -> GuidelineTable:
+    """The table of the car drawn directly: compute_guidelines with the camera at the
+    measured pose and the car's own setting, every steering angle of its range."""
+    view = guideline_view(scene, params, output, camera=deviated_camera(scene, deviation))
+    return read_table(table_bytes(compute_guidelines(scene, view, steering_angles(
+        running_gear(scene)))))
+
+
+def test_a_cars_guideline_table_is_the_overlay_of_the_deviated_car(
+        station: Station, corner_cars: list[CarResult]):
+    """The station's table of each car is the overlay drawn directly for the car at its
+    measured pose with its per-car values, to 1/16 px; the platform's table (design pose,
+    platform values) lands pixels away from it, so the comparison can tell them apart."""
+    sc = station.scene
+    angles = steering_angles(running_gear(sc))
+    platform_table = read_table(table_bytes(compute_guidelines(
+        sc, guideline_view(sc, station.settings.params, station.record), angles)))
+    for car in corner_cars:
+        assert car.guidelines is not None and car.deviation is not None
+        assert car.correction is not None
+        got = read_table(car.guidelines.data)
+        assert got.steering_deg == pytest.approx(angles, abs=0.05)
+        assert len(got.steering_deg) > 50  # the whole range in 10° steps
+        assert car.guidelines.sha256 == hashlib.sha256(car.guidelines.data).hexdigest()
+        direct = _direct_table(sc, car.deviation, car.correction.params, station.record)
+        assert _largest_gap(got, direct) <= 1 / 16
+        assert _largest_gap(got, platform_table) > 1.0
+
+
+def test_no_running_gear_no_guideline_table(corner_cars: list[CarResult], tmp_path: Path):
+    """A vehicle without its running gear: no table angles, no table file beside the car's
+    parameter file, and eol.json says null (for the run and the car)."""
+    bare = load_small_scene("a", edit={"vehicle.wheelbase": None})
+    assert guideline_angles(bare) is None
+    assert guideline_angles(load_small_scene("a")) is not None
+    car = dataclasses.replace(corner_cars[0], guidelines=None)
+    files = write_car(car, tmp_path, platform()[1])
+    assert "guidelines" not in files and "params" in files
+    assert not list(tmp_path.glob("*.guidelines.bin"))
+    assert car.as_dict()["guidelines"] is None
+    run = StationResult("a", "a.yaml", "mat", {}, "p.yaml", (1280, 720), {}, "paper",
+                        ("h_pan",), (car,))
+    assert run.as_dict()["guidelines"] is None
+
+
 def _run(folder: Path, *captures: Path, env: dict[str, str], extra: tuple[str, ...] = ()):
     scene, params = write_inputs(folder)
     args = ["eol", scene, "--params", params, *[a for c in captures for a in ("--capture", c)],
@@ -79,9 +148,24 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
     assert "2 of 2 cars pass" in res.stdout
     out = tmp_path / "out"
     assert sorted(p.name for p in out.iterdir()) == [
-        "car0.yaml", "car0_annotated.png", "car0_rvm.png", "car1.yaml", "car1_annotated.png",
-        "car1_rvm.png", "eol.csv", "eol.html", "eol.json", "eol.lock"]
+        "car0.guidelines.bin", "car0.yaml", "car0_annotated.png", "car0_rvm.png",
+        "car1.guidelines.bin", "car1.yaml", "car1_annotated.png", "car1_rvm.png", "eol.csv",
+        "eol.html", "eol.json", "eol.lock"]
     doc = json.loads((out / "eol.json").read_text())
+    # each car's guideline table: its hash in eol.json, and the overlay drawn directly for
+    # the car at the pose eol.json records with the setting of its parameter file
+    scene = load_scene(tmp_path / "station.yaml")
+    assert doc["guidelines"]["steering_deg"] == list(steering_angles(running_gear(scene)))
+    for k, row in enumerate(doc["results"]):
+        data = (out / f"car{k}.guidelines.bin").read_bytes()
+        assert row["guidelines"]["file"] == f"car{k}.guidelines.bin"
+        assert row["guidelines"]["sha256"] == hashlib.sha256(data).hexdigest()
+        assert row["files"]["guidelines"] == f"car{k}.guidelines.bin"
+        params, output = load_params(out / f"car{k}.yaml")
+        measured = Deviation.from_offsets([row["deviation"][a] for a in (
+            "x_mm", "y_mm", "z_mm", "yaw_deg", "pitch_deg", "roll_deg")])
+        assert _largest_gap(read_table(data), _direct_table(scene, measured, params,
+                                                            output)) <= 1 / 16
     assert doc["all_pass"] and doc["cars"] == 2 and doc["target"] == "station mat"
     assert doc["load_state"]["name"] == "curb" and doc["written_params"] == ["h_pan", "v_pan",
                                                                               "tilt"]
@@ -120,8 +204,8 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
     again = _run(tmp_path, caps / "car1.png", env=env)
     assert again.code == 0, again.stdout + again.stderr
     assert sorted(p.name for p in out.iterdir()) == [
-        "car1.yaml", "car1_annotated.png", "car1_rvm.png", "eol.csv", "eol.html", "eol.json",
-        "eol.lock", "notes.txt"]
+        "car1.guidelines.bin", "car1.yaml", "car1_annotated.png", "car1_rvm.png", "eol.csv",
+        "eol.html", "eol.json", "eol.lock", "notes.txt"]
     assert [r["name"] for r in json.loads((out / "eol.json").read_text())["results"]] == ["car1"]
 
 
@@ -203,3 +287,5 @@ def test_cars_shared_out_to_workers_give_the_same_results(tmp_path: Path,
         assert row["correction"]["values"] == pytest.approx(
             {k: round(v, 6) for k, v in here.correction.values.items()}, abs=1e-5)
         assert row["verdict"] == here.verdict
+        assert here.guidelines is not None  # the same table from a worker process
+        assert row["guidelines"]["sha256"] == here.guidelines.sha256

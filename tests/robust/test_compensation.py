@@ -73,6 +73,14 @@ def test_the_reference_point_law_restores_the_nominal_picture(edge, tmp_path: Pa
     html = (tmp_path / "robustness.html").read_text()
     assert "before compensation" in html and "after compensation" in html
     assert html.count("data:image/png;base64,") == 5
+    # a station that measures exactly: each car's guideline table lands where it claims (no
+    # load states: the field is the station); the platform's table does not
+    lines = doc["compensation"]["guidelines"]
+    assert r.guidelines is not None and lines["groups"][1] == "mark_1m"
+    for name, d in lines["eol_table"]["in_field"].items():
+        assert d["cars"] == 24 and d["cm"]["max"] < 1e-3 and d["px"]["max"] < 1e-3, name
+    assert lines["platform_table"]["in_field"]["mark_1m"]["cm"]["max"] > 1.0
+    assert "Parking guidelines after the EOL step" in html and "mark_1m" in html
 
 
 def test_per_car_values_take_the_fast_path_to_the_full_paths_values(edge):
