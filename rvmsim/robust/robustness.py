@@ -30,13 +30,12 @@ from ..scene import Scene
 from ..render import TaskRunner
 from ..percar import ImagePicture, PerCarLaw, SplitEvaluator, check_law, make_law
 from .compensated import CarJudge, CompensatedSamples, station_twin
+from .ec_stats import EcStats, driver_text, ec_stats
 from .guideline_errors import FleetGuidelines, fleet_guideline_errors
 from .images import Refolder, SampleSet, cover_for, refolder, render_viewpoints, sample_images
 from .samples import MountSample, draw_samples, nominal_sample
-from .sensitivity import Sensitivity, fit_sensitivity, sensitivity_axes
-from .stats import (AxisEffect, YieldEstimate, YieldVerdict, ec_margins, failure_drivers,
-                    limiting_dict, yield_estimate)
-from .variation import MOUNT_AXES, LoadState, Variation, variation_from_scene
+from .stats import YieldEstimate, YieldVerdict, limiting_dict, yield_estimate
+from .variation import LoadState, Variation, variation_from_scene
 
 __all__ = ["EcStats", "ScalePoint", "RobustnessResult", "RobustnessSettings", "evaluate_samples",
            "robustness", "DEFAULT_SCALES"]
@@ -90,48 +89,6 @@ def _scaled_params(scene: Scene, params: IspParams, scale: float) -> IspParams:
         return params
     width = scene.fisheye_camera().scaled(scale).width
     return params.for_input_scale(width / scene.camera.image_size[0])
-
-
-@dataclass(frozen=True)
-class EcStats:
-    """One EC over the samples: failure rate, worst value and margin (signed distance to
-    the nearer end of the range, EC unit; < 0 fails), the margins (histograms), the axes
-    driving its failures (strongest first; :func:`~rvmsim.robust.stats.failure_drivers`)
-    and its value as a formula of the offsets and load
-    (:func:`~rvmsim.robust.sensitivity.fit_sensitivity`; None: too few measured)."""
-
-    id: str
-    name: str
-    unit: str
-    low: float | None
-    high: float | None
-    enabled: bool
-    n_fail: int
-    failure_rate: float
-    worst_value: float | None
-    worst_margin: float | None
-    worst_sample: int
-    margins: tuple[float, ...]
-    drivers: tuple[AxisEffect, ...] = ()
-    sensitivity: Sensitivity | None = None
-
-    @property
-    def driver(self) -> AxisEffect | None:
-        """The axis driving the failures (None when the EC never fails, or fails alike
-        whatever every axis's value, e.g. on every sample)."""
-        top = self.drivers[0] if self.n_fail and self.drivers else None
-        return top if top is not None and top.spread > 0 else None
-
-    def as_dict(self) -> dict[str, Any]:
-        d = self.driver
-        return {"id": self.id, "name": self.name, "unit": self.unit,
-                "range": [self.low, self.high], "enabled": self.enabled,
-                "n_fail": self.n_fail, "failure_rate": self.failure_rate,
-                "worst_value": self.worst_value, "worst_margin": self.worst_margin,
-                "worst_sample": self.worst_sample,
-                "driver": None if d is None else d.describe(),
-                "axes": [e.as_dict() for e in self.drivers],
-                "sensitivity": None if self.sensitivity is None else self.sensitivity.as_dict()}
 
 
 @dataclass(frozen=True)
@@ -281,7 +238,7 @@ class RobustnessResult(YieldVerdict):
             if e.enabled and e.n_fail:
                 lines.append(f"  EC {e.id} fails on {100 * e.failure_rate:.1f} % (worst "
                              f"{_num(e.worst_value)} {e.unit}, margin {_num(e.worst_margin)})"
-                             + _driver_text(e, self.estimate.n))
+                             + driver_text(e, self.estimate.n))
         lines.append("  yield by tolerance scale: " + ", ".join(
             f"{p.scale:g}x {100 * p.estimate.yield_:.0f} %" for p in self.scale_curve))
         return "\n".join(lines)
@@ -296,43 +253,6 @@ def _by_load(passed: np.ndarray, samples: Sequence[MountSample]) -> dict[str, An
 
 def _num(x: float | None) -> str:
     return "—" if x is None else f"{x:.3g}"
-
-
-def _driver_text(e: EcStats, n: int) -> str:
-    """``; 2-3 ≈ |16.0·yaw + 16.5·roll| px, R² 0.99 (terciles: roll_deg …)``."""
-    d = e.driver
-    terciles = (d.describe() if d is not None else
-                "on every sample: no axis drives it" if e.n_fail == n else "")
-    if e.sensitivity is None:
-        return f"; driven by {terciles}" if d is not None else (
-            f"; {terciles}" if terciles else "")
-    return f"; {e.sensitivity.describe()}" + (f" (terciles: {terciles})" if terciles else "")
-
-
-def _ec_stats(crit: Criteria, samples: Sequence[MountSample], ev: EcBatch,
-              variation: Variation) -> tuple[EcStats, ...]:
-    axes = {n: np.array([s.offsets[i] for s in samples])
-            for i, n in enumerate(MOUNT_AXES) if variation.axes[i].varies}
-    loads = np.array([s.load.name for s in samples])
-    seen = sensitivity_axes(samples, variation)
-    states = [s.name for s in variation.load_states]
-    out = []
-    for j, d in enumerate(crit.ecs):
-        c = crit.items[d.id]
-        margins = ec_margins(ev.values[:, j], c.low, c.high)
-        failed = ~ev.passed[:, j]
-        finite = np.where(np.isnan(margins), np.inf, margins)
-        w = int(np.argmin(finite)) if np.isfinite(finite).any() else int(np.argmax(failed))
-        worst_value = ev.values[w, j]
-        out.append(EcStats(
-            d.id, d.name, d.unit, c.low, c.high, c.enabled, int(failed.sum()),
-            float(failed.mean()), None if np.isnan(worst_value) else float(worst_value),
-            None if np.isnan(margins[w]) else float(margins[w]), w,
-            tuple(float(m) for m in margins),
-            tuple(failure_drivers(failed, axes, loads)) if failed.any() else (),
-            fit_sensitivity(ev.values[:, j], seen, loads, states=states, ec_id=d.id,
-                            unit=d.unit)))
-    return tuple(out)
 
 
 def _frame(scene: Scene, sample: MountSample, params: IspParams, output: OutputSpec,
@@ -479,12 +399,12 @@ def robustness(scene: Scene, params: IspParams,
     t3 = time.perf_counter()
     return RobustnessResult(
         scene.name, scene.source, params, output, crit.name, var, seed, tuple(drawn), ev,
-        yield_estimate(passed), _ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
+        yield_estimate(passed), ec_stats(crit, drawn, ev, var), tuple(curve), nominal,
         worst_frame, worst, settings.least_yield(var),
         {"render": t_render - t0, "samples": t1 - t_render, "scale_curve": t2 - t1,
          "guidelines": t_lines, "frames": t3 - t2 - t_lines, "total": t3 - t0,
          "viewpoints_rendered": float(rendered)},
-        fixed, before, () if before is None else _ec_stats(crit, drawn, before, var),
+        fixed, before, () if before is None else ec_stats(crit, drawn, before, var),
         0 if judge_cars is None else len(judge_cars.law.reference.points), record, lines)
 
 
