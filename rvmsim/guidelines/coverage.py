@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from .. import labels as L
-from ..isp import apply_map, build_map_exact
+from ..isp import IspMap, apply_map, build_map
 from ..render import cached_render
 from ..scene import Scene, site_scene
 from .overlay import GuidelineSet
@@ -53,12 +53,10 @@ def required_areas(scene: Scene) -> dict[str, tuple[int, ...]]:
     return areas
 
 
-def _covered(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray
+def _covered(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray, isp_map: IspMap
              ) -> dict[str, dict[str, Any]]:
     """Per required area the lines are drawn over: its shown px, and the px the static lines
     and each steering angle's trajectories cover (only angles that cover some)."""
-    cam = scene.fisheye_camera()
-    isp_map = build_map_exact(gset.view.params, (cam.width, cam.height), gset.view.output)
     rvm = apply_map(fisheye_labels, isp_map, labels=True)
     areas = required_areas(scene)
     lut = np.full(256, -1, np.int64)
@@ -96,5 +94,7 @@ def required_coverage(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarr
     """
     r158 = site_scene(scene, "unr158")
     r158_labels = cached_render(r158, progress=progress)[0].labels
-    return {"fmvss111": _covered(scene, gset, fisheye_labels),
-            "unr158": _covered(r158, gset, r158_labels)}
+    h, w = fisheye_labels.shape  # one camera, one map for both sites
+    isp_map = build_map(gset.view.params, (w, h), gset.view.output)
+    return {"fmvss111": _covered(scene, gset, fisheye_labels, isp_map),
+            "unr158": _covered(r158, gset, r158_labels, isp_map)}
