@@ -69,7 +69,8 @@ def guidelines(scene: Path, params_file: Path | None, out: Path, steering: str |
     failed = False
     checked: dict[str, Any] = {}
     if check:
-        checked = extra["check"] = check_document(check_guidelines(sc, params, output), limit_px)
+        checked = extra["check"] = check_document(
+            check_guidelines(sc, params, output, progress=progress), limit_px)
         failed = not (checked["G-1"]["pass"] and checked["G-2"]["pass"])
     write_guidelines(out, gset, rvm, scene_file=str(scene),
                      params_file=str(params_file or ""), extra=extra)

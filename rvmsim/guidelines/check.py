@@ -24,6 +24,7 @@ The same measurement is the EC family ``G-1`` (static lines) and ``G-2`` (trajec
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -293,8 +294,8 @@ def check_angles(range_deg: float) -> tuple[float, ...]:
 
 def check_guidelines(scene: Scene, params: IspParams, output: OutputSpec, *,
                      steering_deg: Sequence[float] | None = None, scale: float = 1.0,
-                     render: Callable[[Scene, float], np.ndarray] | None = None
-                     ) -> GuidelineCheck:
+                     render: Callable[[Scene, float], np.ndarray] | None = None,
+                     progress: bool = False) -> GuidelineCheck:
     """Check the scene's guidelines through the renderer (see the module docstring).
 
     Parameters
@@ -312,13 +313,15 @@ def check_guidelines(scene: Scene, params: IspParams, output: OutputSpec, *,
     render : callable, optional
         ``render(scene, scale) -> fisheye labels`` (default: the render cache,
         :func:`rvmsim.render.cached_render`).
+    progress : bool
+        With the default ``render``: a progress bar over each render.
 
     Returns
     -------
     GuidelineCheck
     """
     if render is None:
-        render = _cached_labels
+        render = functools.partial(_cached_labels, progress=progress)
     spec = scene_spec(scene)
     gear = running_gear(scene)
     width = scene_vehicle_width(scene)
@@ -339,5 +342,5 @@ def check_guidelines(scene: Scene, params: IspParams, output: OutputSpec, *,
     return GuidelineCheck(view.output, tuple(checks))
 
 
-def _cached_labels(scene: Scene, scale: float) -> np.ndarray:
-    return cached_render(scene, scale=scale)[0].labels
+def _cached_labels(scene: Scene, scale: float, *, progress: bool = False) -> np.ndarray:
+    return cached_render(scene, scale=scale, progress=progress)[0].labels

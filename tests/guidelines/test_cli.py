@@ -62,6 +62,30 @@ def test_outputs_match_the_library_and_the_table_hash(tmp_path: Path) -> None:
     assert "covers" in doc
 
 
+def test_check_judges_exit_0_when_the_lines_lie_on_their_painted_lines_1_when_not(
+        tmp_path: Path) -> None:
+    scene = write_small_scene(tmp_path, "a", edit={"display": {"rvm_image_px": [320, 180]}})
+    params = _params(tmp_path)
+    out = tmp_path / "lines"
+    args = ["guidelines", scene, "--params", params, "--out", out, "--check", "--no-picture",
+            "--steering", "0", "--no-progress"]
+    res = run_in_process(args)
+    assert res.code == 0, res.stderr
+    doc = json.loads((out / "guidelines.json").read_text())
+    check = doc["check"]
+    assert check["G-1"]["pass"] and check["G-2"]["pass"]
+    assert 0 < check["G-1"]["value_px"] <= 1.0
+    kinds = {line["kind"] for line in check["lines"]}
+    assert kinds == {"mark", "width", "trajectory"}
+    assert "G-1 static lines" in res.stdout and "pass" in res.stdout
+    # a limit no render meets: the same lines fail, exit 1, the files still written
+    res = run_in_process([*args, "--limit-px", "0.01"])
+    assert res.code == 1, res.stderr
+    doc = json.loads((out / "guidelines.json").read_text())
+    assert not doc["check"]["G-1"]["pass"] and doc["check"]["limit_px"] == 0.01
+    assert "fail" in res.stdout
+
+
 def _scene(tmp_path: Path, edit: dict[str, object]) -> Path:
     return write_small_scene(tmp_path, "a", edit={**SMALL, **edit})
 
