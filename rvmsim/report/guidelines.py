@@ -17,7 +17,8 @@ Display px of the RVM image of record; steering-wheel angles in degrees, positiv
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,7 @@ import numpy as np
 
 from ..errors import InputFileError, RvmsimError
 from ..guidelines import compute_guidelines, guideline_view, running_gear, steering_angles
+from ..guidelines.coverage import required_coverage
 from ..guidelines.draw import draw_lines
 from ..guidelines.files import shown_angle
 from ..guidelines.project import DisplayLine
@@ -102,6 +104,9 @@ class GuidelineFigures:
         Of those, the ones that land on the RVM image.
     table : bytes
         The ECU table (``RVMG``; empty without guidelines).
+    covers : dict
+        The test objects' required-visible areas the lines are drawn over, per site
+        (:func:`rvmsim.guidelines.coverage.required_coverage`).
     """
 
     reason: str | None = None
@@ -114,6 +119,7 @@ class GuidelineFigures:
     lines: int = 0
     lines_shown: int = 0
     table: bytes = b""
+    covers: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def sha256(self) -> str | None:
@@ -145,7 +151,7 @@ class GuidelineFigures:
         return {"file": file, "format": f"RVMG {TABLE_VERSION}", "bytes": len(self.table),
                 "sha256": self.sha256, "steering_deg": list(self.steering_deg),
                 "shown_deg": self.shown_deg, "lines": self.lines,
-                "lines_shown": self.lines_shown,
+                "lines_shown": self.lines_shown, "covers": dict(self.covers),
                 "output": [self.output.width, self.output.height, self.output.mirror]}
 
 
@@ -214,7 +220,7 @@ def guideline_figures(scene: Scene, params: IspParams, output: OutputSpec,
         reason=None, output=record, steering_deg=tuple(sorted(gset.steering_deg)),
         shown_deg=deg, picture=picture, extremes=extremes, rows=tuple(rows),
         lines=len(every), lines_shown=sum(1 for line in every if line.shown),
-        table=table_bytes(gset))
+        table=table_bytes(gset), covers=required_coverage(scene, gset, images.labels))
 
 
 def guideline_table_name(page_file: str | Path) -> str:
@@ -280,8 +286,30 @@ def guidelines_html(fig: GuidelineFigures, table_name: str, *, link: bool = True
     return (f'{open_}<p class="muted">The car\'s parking guidelines through this setting '
             "(distance marks, width lines, trajectory lines per steering angle), and the "
             "table a camera ECU loads; its SHA-256 is of exactly the file named.</p>"
-            f"{''.join(figs)}{_table_facts(fig, file_html)}<h3>Lines</h3>"
-            f"{_lines_table(fig)}</section>")
+            f"{''.join(figs)}{_table_facts(fig, file_html)}{_covers_html(fig)}"
+            f"<h3>Lines</h3>{_lines_table(fig)}</section>")
+
+
+def _covers_html(fig: GuidelineFigures) -> str:
+    """Which test objects' required-visible areas the lines are drawn over (FMVSS 111's,
+    UN R158's), or that they cover none."""
+    rows = []
+    for site, objs in fig.covers.items():
+        for name, v in objs.items():
+            by = (["static lines"] if v["static_px"] else []) + (
+                [f"trajectories at {len(v['trajectory_px'])} steering angles"]
+                if v["trajectory_px"] else [])
+            rows.append(f"<tr><td>{escape(site)}</td><td>{escape(name)}</td>"
+                        f"<td>{escape(', '.join(by))}</td>"
+                        f'<td class="num">{100 * v["fraction"]:.1f} %</td></tr>')
+    if not rows:
+        return ('<p>The lines cover none of the test objects\' required-visible '
+                "areas (FMVSS 111, UN R158).</p>")
+    return ("<h3>Required-visible areas the lines are drawn over</h3>"
+            '<p class="muted">UN R158 allows reversing information over the field of vision; '
+            "these are the test objects whose required areas a line covers (up to the share "
+            "of the area shown).</p><table><tr><th>site</th><th>object</th><th>by</th>"
+            f"<th>covered</th></tr>{''.join(rows)}</table>")
 
 
 def guidelines_summary_html(fig: GuidelineFigures, table_name: str) -> str:

@@ -23,6 +23,7 @@ import pytest
 
 from rvmsim.errors import RvmsimError
 from rvmsim.guidelines import compute_guidelines, guideline_view, running_gear, steering_angles
+from rvmsim.guidelines.coverage import required_coverage
 from rvmsim.guidelines.draw import draw_lines
 from rvmsim.guidelines.files import shown_angle
 from rvmsim.guidelines.table import table_bytes
@@ -516,6 +517,15 @@ def test_the_report_shows_rank_1s_guidelines_and_their_tables_hash(runs):
     want = draw_lines(rvm, gset.at(shown_angle(gset)), gset.spec.line_width_px)
     assert shown.shape == (720, 1280, 3) and np.array_equal(shown, want)
     assert not np.array_equal(shown, rvm)  # the lines are on it
+    # the required-visible areas the lines are drawn over (FMVSS 111's, UN R158's), or none
+    sc = load_scene(runs["scene"])
+    covers = required_coverage(sc, gset, cached_render(sc)[0].labels)
+    named = [(site, name) for site, objs in covers.items() for name in objs]
+    if named:
+        for site, name in named:
+            assert f"{site} {name}" in words
+    else:
+        assert "The lines cover none of the test objects' required-visible areas" in words
 
 
 def test_a_scene_without_the_running_gear_gets_the_reason_not_guidelines(runs, tmp_path):
