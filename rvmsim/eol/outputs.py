@@ -165,7 +165,8 @@ def csv_rows(result: StationResult) -> tuple[list[str], list[dict[str, Any]]]:
     """The columns of ``eol.csv`` and one row per car: capture, verdict, reason, the
     deviation (mm, degrees), the pose fit (landmarks, RMS px), each written parameter's
     value and offset, the law's residual (px), the EC score and each EC's value and
-    pass/fail, the parameter file, the seconds spent.  Empty cells: not measured."""
+    pass/fail, the parameter file, its guideline table and the table's SHA-256, the seconds
+    spent.  Empty cells: not measured."""
     ec_ids = next((tuple(i.id for i in c.ec.items) for c in result.cars if c.ec is not None),
                   ())
     written = [n for n in result.written]
@@ -174,13 +175,16 @@ def csv_rows(result: StationResult) -> tuple[list[str], list[dict[str, Any]]]:
                + written + [f"offset_{n}" for n in offsets]
                + ["residual_rms_px", "ec_score"]
                + [c for i in ec_ids for c in (f"ec_{i}", f"ec_{i}_pass")]
-               + ["params_file", "seconds"])
+               + ["params_file", "guidelines_file", "guidelines_sha256", "seconds"])
     rows = []
     for car in result.cars:
         row: dict[str, Any] = {"capture": car.capture, "name": car.name,
                                "verdict": car.verdict, "reason": car.reason,
                                "landmarks": car.landmarks, "rms_px": _num(car.rms_px),
                                "params_file": car.files.get("params", ""),
+                               "guidelines_file": car.files.get("guidelines", ""),
+                               "guidelines_sha256": "" if car.guidelines is None
+                               or "guidelines" not in car.files else car.guidelines.sha256,
                                "seconds": round(car.seconds, 3)}
         if car.deviation is not None:
             row.update({n: round(v, 4) for n, v in zip(MOUNT_AXES, car.deviation.as_offsets())})

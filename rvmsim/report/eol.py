@@ -62,7 +62,8 @@ def _car_table(result: StationResult) -> str:
     head = ("<tr><th>car</th><th>verdict</th><th>Δx, Δy, Δz mm</th><th>Δyaw, Δpitch, Δroll °"
             "</th><th>corners (RMS px)</th>"
             + "".join(f"<th>{escape(p)}</th>" for p in result.written)
-            + "<th>residual px</th><th>EC score</th><th>reason</th></tr>")
+            + "<th>residual px</th><th>EC score</th><th>guideline table (SHA-256)</th>"
+            "<th>reason</th></tr>")
     rows = []
     for c in result.cars:
         d, corr = c.deviation, c.correction
@@ -75,11 +76,15 @@ def _car_table(result: StationResult) -> str:
             for p in result.written)
         resid = "-" if corr is None else f"{corr.residual_rms_px:.2f}"
         score = "-" if c.ec is None else f"{c.ec.score:.3f}"
+        table = c.files.get("guidelines")
+        lines = ("-" if table is None or c.guidelines is None else
+                 f'<a href="{escape(table)}"><code>{escape(table)}</code></a> '
+                 f"<code>{c.guidelines.sha256[:16]}…</code>")
         rows.append(f'<tr class="{"pass" if c.passed else "fail"}"><td>{escape(c.name)}</td>'
                     f"<td>{c.verdict} ({escape(c.status)})</td><td class=\"num\">{pos}</td>"
                     f"<td class=\"num\">{ang}</td><td class=\"num\">{fit}</td>{values}"
                     f"<td class=\"num\">{resid}</td><td class=\"num\">{score}</td>"
-                    f"<td>{escape(c.reason)}</td></tr>")
+                    f"<td>{lines}</td><td>{escape(c.reason)}</td></tr>")
     return f"<table>{head}{''.join(rows)}</table>"
 
 

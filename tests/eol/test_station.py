@@ -193,8 +193,13 @@ def test_every_car_passes_exit_0_and_outputs_per_car(tmp_path: Path, env):
     assert rows[0]["verdict"] == "PASS" and rows[0]["ec_2-3_pass"] == "pass"
     assert float(rows[1]["roll_deg"]) == pytest.approx(-1.0, abs=0.05)
     assert float(rows[1]["tilt"]) == doc["results"][1]["correction"]["values"]["tilt"]
+    for row in rows:  # each car's guideline table and its hash
+        table = (out / row["guidelines_file"]).read_bytes()
+        assert row["guidelines_sha256"] == hashlib.sha256(table).hexdigest()
     html = (out / "eol.html").read_text()
     assert "2 of 2 cars pass" in html and 'src="car1_annotated.png"' in html
+    assert all(f'href="{r["guidelines_file"]}"' in html and r["guidelines_sha256"][:16] in html
+               for r in rows)
 
     # The next station run into the folder replaces this one: car0's files go, a killed
     # run's staging folder goes, a file of someone else's stays.
