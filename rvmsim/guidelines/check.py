@@ -7,8 +7,9 @@ painted guidelines and test objects left out, so nothing hides or crosses the st
 the RVM image of record's labels from the fisheye labels with the ISP's exact map (nearest,
 as the ISP maps labels, read at sub-pixel points: no second quantisation by the RVM pixel
 grid), and at points every :data:`SAMPLE_STEP_PX` along the overlay scans across it: the
-strip's two edges in the label image give its centre, and the overlay's signed distance to that centre is the
-offset.  A scan counts only when the strip lies whole between ground on both sides (not cut
+strip's two edges in the label image give its centre, and the overlay's signed distance to
+that centre is the offset.  A line's offset is the largest mean over :data:`SMOOTH_SCANS`
+consecutive scans (a single scan is quantised by the label pixels).  A scan counts only when the strip lies whole between ground on both sides (not cut
 by the picture's border, the body, or another line).  The strip's centre is the image of
 the line's centre to second order (a strip 5 cm wide: < 0.1 px).  The strips lie
 :data:`~rvmsim.scene.site.PAINTED_LINE_LIFT_M` above the ground (against depth fighting), which
@@ -34,12 +35,11 @@ from .. import labels as L
 from ..isp import IspParams, OutputSpec
 from ..isp.exact import map_points
 from ..render import cached_render
-from ..scene import PaintedLine, Scene, TestObject
+from ..scene import PaintedLine, Scene, TestObject, scene_vehicle_width
 from ..scene.site import PAINTED_LINE_LIFT_M
-from .lines import GroundLine, static_lines, trajectory_lines
 from .kinematics import running_gear
+from .lines import GroundLine, static_lines, trajectory_lines
 from .overlay import guideline_view, scene_spec
-from ..scene import scene_vehicle_width
 from .project import GuidelineView, display_to_ground, project_lines
 
 __all__ = ["PAINT_WIDTH_M", "SAMPLE_STEP_PX", "LineCheck", "GuidelineCheck", "painted_lines",
@@ -50,7 +50,7 @@ PAINT_WIDTH_M = 0.05
 #: Spacing of the scans along a line, display px.
 SAMPLE_STEP_PX = 2.0
 #: Consecutive scans a line's offset is averaged over (≈ 18 px of line): a scan's centre is
-#: quantised by the label pixels of both images (± 0.5 px each edge), a line's place is not.
+#: quantised by the fisheye label pixels (± 0.5 px each edge), a line's place is not.
 SMOOTH_SCANS = 9
 _SCAN_STEP_PX = 0.125
 
