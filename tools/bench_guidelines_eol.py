@@ -42,7 +42,7 @@ from _bench_common import cpu_model  # noqa: E402
 
 from rvmsim.compensation import DEFAULT_COMPENSATION, CompensationLaw  # noqa: E402
 from rvmsim.eol import station_load  # noqa: E402
-from rvmsim.guidelines import record_output  # noqa: E402
+from rvmsim.guidelines import guideline_output  # noqa: E402
 from rvmsim.isp import load_params  # noqa: E402
 from rvmsim.robust import (FleetGuidelines, RobustnessSettings, draw_samples,  # noqa: E402
                            fleet_guideline_errors, robustness, station_readings,
@@ -59,7 +59,7 @@ def _geometric(scene: Any, params: Any, output: Any, n: int, seed: int) -> Fleet
     samples = draw_samples(var, n, seed)
     load = station_load(scene, DEFAULT_COMPENSATION, var)
     measured = station_readings(scene, samples, DEFAULT_COMPENSATION, seed, load)
-    law = CompensationLaw(scene, params, record_output(scene, output), DEFAULT_COMPENSATION)
+    law = CompensationLaw(scene, params, guideline_output(scene, output), DEFAULT_COMPENSATION)
     per_car = [law.correct(m).params for m in measured]
     lines = fleet_guideline_errors(scene, samples, measured, per_car, params, output, load)
     if lines is None:

@@ -183,7 +183,7 @@ def guideline_figures(scene: Scene, params: IspParams, output: OutputSpec,
         The setting.
     output : OutputSpec
         The tuning output: its mirroring is kept; the size is the scene's image of record
-        (:func:`rvmsim.guidelines.record_output`).
+        (:func:`rvmsim.guidelines.guideline_output`).
     images : FisheyeImages
         The scene's fisheye render, for the RVM picture.
     shown : (OutputSpec, ndarray), optional
