@@ -27,7 +27,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from _bench_common import cpu_model  # noqa: E402
 
-from rvmsim.guidelines.check import check_guidelines
+from rvmsim.guidelines.check import STATIC_KINDS, TRAJECTORY_KINDS, check_guidelines
 from rvmsim.isp import load_params
 from rvmsim.scene import load_scene
 
@@ -63,7 +63,7 @@ def main() -> None:
             res = check_guidelines(scene, params, output)
             dt = time.perf_counter() - t
             figures = []
-            for kinds in (("mark", "width"), ("trajectory",)):
+            for kinds in (STATIC_KINDS, TRAJECTORY_KINDS):
                 lines = [c for c in res.lines if c.kind in kinds and c.measured]
                 worst = max(lines, key=lambda c: c.offset_px)
                 figures.append(f"{worst.offset_px:.2f} ({max(c.offset_cm for c in lines):.2f})")

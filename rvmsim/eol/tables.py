@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..camera import FisheyeCamera
-from ..guidelines import compute_guidelines, guideline_view, running_gear, steering_angles
+from ..guidelines import (compute_guidelines, guideline_view, has_running_gear, running_gear,
+                          steering_angles)
 from ..guidelines.table import TABLE_VERSION, table_bytes
 from ..isp import IspParams, OutputSpec
 from ..scene import Scene
@@ -57,8 +58,7 @@ class CarTable:
 def guideline_angles(scene: Scene) -> tuple[float, ...] | None:
     """The steering-wheel angles (degrees) of every car's table: the car's whole range in
     10° steps with its ends; None when the scene's vehicle lacks a running-gear key."""
-    v = scene.vehicle
-    if v is None or v.running_gear_problem() is not None:
+    if not has_running_gear(scene):
         return None
     return steering_angles(running_gear(scene))
 

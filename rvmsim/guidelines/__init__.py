@@ -9,7 +9,7 @@ lines on the ground), :mod:`.project` (ground → display px, cut at the picture
 
 from __future__ import annotations
 
-from .kinematics import RunningGear, running_gear, reverse_paths
+from .kinematics import RunningGear, running_gear, has_running_gear, reverse_paths
 from .lines import GroundLine, static_lines, trajectory_lines, half_width_m
 from .project import GuidelineView, DisplayPiece, DisplayLine, project_lines
 from .overlay import (GuidelineSet, scene_spec, guideline_output, guideline_view,
@@ -18,6 +18,7 @@ from .overlay import (GuidelineSet, scene_spec, guideline_output, guideline_view
 __all__ = [
     "RunningGear",
     "running_gear",
+    "has_running_gear",
     "reverse_paths",
     "GroundLine",
     "static_lines",

@@ -36,15 +36,19 @@ from ..isp import IspParams, OutputSpec
 from ..isp.exact import map_points
 from ..render import cached_render
 from ..scene import PaintedLine, Scene, TestObject, scene_vehicle_width
+from ..scene.guideline_spec import LineKind
 from ..scene.site import PAINTED_LINE_LIFT_M
 from .kinematics import running_gear
 from .lines import GroundLine, static_lines, trajectory_lines
 from .overlay import guideline_view, scene_spec
 from .project import GuidelineView, display_to_ground, project_lines
 
-__all__ = ["PAINT_WIDTH_M", "SAMPLE_STEP_PX", "LineCheck", "GuidelineCheck", "painted_lines",
+__all__ = ["STATIC_KINDS", "TRAJECTORY_KINDS", "PAINT_WIDTH_M", "SAMPLE_STEP_PX", "LineCheck", "GuidelineCheck", "painted_lines",
            "painted_scene", "measure_painted", "check_guidelines", "check_angles"]
 
+#: The line kinds G-1 judges (the static lines) and G-2 judges (the trajectories).
+STATIC_KINDS: tuple[LineKind, ...] = ("mark", "width")
+TRAJECTORY_KINDS: tuple[LineKind, ...] = ("trajectory",)
 #: Width of a painted check line, m.
 PAINT_WIDTH_M = 0.05
 #: Spacing of the scans along a line, display px.

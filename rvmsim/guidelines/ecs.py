@@ -25,7 +25,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from ..criteria import EcDefinition, LabelSource, Measurement, MeasureOptions, Sigmoid
-from .check import measure_painted
+from .check import STATIC_KINDS, TRAJECTORY_KINDS, measure_painted
 from .project import GuidelineView
 
 __all__ = ["ECS", "LIMIT_PX"]
@@ -58,13 +58,13 @@ def _whole_image(shape: tuple[int, int], options: MeasureOptions
 ECS = [
     EcDefinition(
         id="G-1", name="static_guidelines_offset", unit="px", groups=(),
-        measure=_measure(("mark", "width")), default_range=(None, LIMIT_PX),
+        measure=_measure(STATIC_KINDS), default_range=(None, LIMIT_PX),
         default_sigmoid=Sigmoid.from_range(None, LIMIT_PX, tolerance=0.5),
         description="largest offset of a distance mark or width line from its painted line",
         regions=_whole_image, uses_scene=True),
     EcDefinition(
         id="G-2", name="trajectory_guidelines_offset", unit="px", groups=(),
-        measure=_measure(("trajectory",)), default_range=(None, LIMIT_PX),
+        measure=_measure(TRAJECTORY_KINDS), default_range=(None, LIMIT_PX),
         default_sigmoid=Sigmoid.from_range(None, LIMIT_PX, tolerance=0.5),
         description="largest offset of a trajectory line from its painted line",
         regions=_whole_image, uses_scene=True),

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..isp import params_to_dict
 from ..storage import staged_folder
-from .check import GuidelineCheck
+from .check import STATIC_KINDS, TRAJECTORY_KINDS, GuidelineCheck
 from .draw import draw_lines, guidelines_svg
 from .overlay import GuidelineSet
 from .project import DisplayLine
@@ -48,8 +48,8 @@ def _png(rgb: np.ndarray) -> bytes:
 
 def check_document(check: GuidelineCheck, limit_px: float) -> dict[str, Any]:
     """The check's figures per line (px), and G-1 / G-2 against ``limit_px``."""
-    g1 = check.worst_px(("mark", "width"))
-    g2 = check.worst_px(("trajectory",))
+    g1 = check.worst_px(STATIC_KINDS)
+    g2 = check.worst_px(TRAJECTORY_KINDS)
     return {
         "limit_px": limit_px,
         "G-1": {"value_px": g1, "pass": bool(g1 <= limit_px)},

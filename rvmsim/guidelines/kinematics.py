@@ -40,7 +40,7 @@ import numpy as np
 from ..errors import SceneError
 from ..scene import Scene
 
-__all__ = ["RunningGear", "running_gear", "reverse_paths"]
+__all__ = ["RunningGear", "running_gear", "has_running_gear", "reverse_paths"]
 
 
 @dataclass(frozen=True)
@@ -88,6 +88,12 @@ class RunningGear:
         ``inf`` at zero steering."""
         delta = math.radians(float(self.road_wheel_deg(steering_wheel_deg)))
         return math.inf if delta == 0.0 else self.wheelbase_m / math.tan(delta)
+
+
+def has_running_gear(scene: Scene) -> bool:
+    """Whether the scene's vehicle has every key the guidelines need
+    (:func:`running_gear` reads them, and names the first one missing)."""
+    return scene.vehicle is not None and scene.vehicle.running_gear_problem() is None
 
 
 def running_gear(scene: Scene) -> RunningGear:

@@ -31,7 +31,7 @@ import numpy as np
 from ..camera import FisheyeCamera
 from ..compensation import Deviation, deviated_camera, loaded_deviation
 from ..guidelines import (DisplayLine, GuidelineSet, compute_guidelines, guideline_view,
-                          running_gear)
+                          has_running_gear, running_gear)
 from ..guidelines.error import line_errors, line_group
 from ..isp import IspParams, OutputSpec
 from ..scene import Scene
@@ -39,16 +39,10 @@ from .compensated import true_deviation
 from .samples import MountSample
 from .variation import LoadState
 
-__all__ = ["STEERING_SHARES", "GuidelineErrors", "FleetGuidelines", "has_running_gear",
-           "fleet_guideline_errors"]
+__all__ = ["STEERING_SHARES", "GuidelineErrors", "FleetGuidelines", "fleet_guideline_errors"]
 
 #: The steering angles the errors are given at: shares of the steering range (both signs).
 STEERING_SHARES = (0.0, 0.5, 1.0)
-
-
-def has_running_gear(scene: Scene) -> bool:
-    """Whether the scene's vehicle has every key the guidelines need."""
-    return scene.vehicle is not None and scene.vehicle.running_gear_problem() is None
 
 
 @dataclass(frozen=True, eq=False)
