@@ -44,9 +44,9 @@ def guidelines(scene: Path, params_file: Path | None, out: Path, steering: str |
     from ..guidelines import (compute_guidelines, guideline_view, running_gear,
                               steering_angles)
     from ..guidelines.check import check_guidelines
-    from ..guidelines.coverage import required_coverage
+    from ..guidelines.coverage import covered_by, required_coverage
     from ..guidelines.files import check_document, write_guidelines
-    from ..pipeline import rvm_color
+    from ..isp import apply_map, build_map
     from ..render import cached_render
     from ..scene import load_scene
 
@@ -64,8 +64,10 @@ def guidelines(scene: Path, params_file: Path | None, out: Path, steering: str |
     covers: dict[str, Any] = {}
     if picture:
         images, _ = cached_render(sc, progress=progress)
-        rvm = rvm_color(images, params, view.output)
-        covers = extra["covers"] = required_coverage(sc, gset, images.labels, progress=progress)
+        isp_map = build_map(params, (images.camera.width, images.camera.height), view.output)
+        rvm = apply_map(images.color, isp_map)  # one map: the picture and the coverage
+        covers = extra["covers"] = required_coverage(sc, gset, images.labels,
+                                                     isp_map=isp_map, progress=progress)
     failed = False
     checked: dict[str, Any] = {}
     if check:
@@ -79,11 +81,8 @@ def guidelines(scene: Path, params_file: Path | None, out: Path, steering: str |
                f"{shown} of {len(gset.lines())} lines shown -> {out}")
     for site, objs in covers.items():
         for name, v in objs.items():
-            by = (["static lines"] if v["static_px"] else []) + (
-                [f"trajectories at {len(v['trajectory_px'])} angles"] if v["trajectory_px"]
-                else [])
             click.echo(f"  covers {site} {name}'s required area (up to "
-                       f"{v['fraction'] * 100:.1f} %): {', '.join(by)}")
+                       f"{v['fraction'] * 100:.1f} %): {covered_by(v)}")
     if check:
         click.echo(f"  G-1 static lines {checked['G-1']['value_px']:.2f} px, G-2 trajectories "
                    f"{checked['G-2']['value_px']:.2f} px (limit {limit_px:g} px): "

@@ -9,7 +9,7 @@ of these areas they cover, and how much of each one's shown pixels.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import cv2
@@ -22,7 +22,7 @@ from ..scene import Scene, site_scene
 from .overlay import GuidelineSet
 from .project import DisplayLine
 
-__all__ = ["line_mask", "required_areas", "required_coverage"]
+__all__ = ["line_mask", "required_areas", "required_coverage", "covered_by"]
 
 
 def line_mask(gset: GuidelineSet, lines: Sequence[DisplayLine]) -> np.ndarray:
@@ -84,17 +84,30 @@ def _covered(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray, isp_m
 
 
 def required_coverage(scene: Scene, gset: GuidelineSet, fisheye_labels: np.ndarray, *,
-                      progress: bool = False) -> dict[str, Any]:
+                      isp_map: IspMap | None = None, progress: bool = False
+                      ) -> dict[str, Any]:
     """The required areas the lines cover: ``{"fmvss111": {...}, "unr158": {...}}``; per
     covered object its shown px, the px the static lines cover, per steering angle the px
     its trajectories cover, and ``fraction``: the largest of these over the shown px.
 
     ``fisheye_labels``: the scene's own render (its FMVSS site); the UN R158 site is
-    rendered (or read from the render cache).
+    rendered (or read from the render cache).  ``isp_map``: the setting's map
+    (:func:`rvmsim.isp.build_map` for the fisheye size and ``gset.view.output``), when the
+    caller has it already; one map serves both sites (one camera).
     """
     r158 = site_scene(scene, "unr158")
     r158_labels = cached_render(r158, progress=progress)[0].labels
-    h, w = fisheye_labels.shape  # one camera, one map for both sites
-    isp_map = build_map(gset.view.params, (w, h), gset.view.output)
+    if isp_map is None:
+        h, w = fisheye_labels.shape
+        isp_map = build_map(gset.view.params, (w, h), gset.view.output)
     return {"fmvss111": _covered(scene, gset, fisheye_labels, isp_map),
             "unr158": _covered(r158, gset, r158_labels, isp_map)}
+
+
+def covered_by(area: Mapping[str, Any]) -> str:
+    """Which lines cover one required area of :func:`required_coverage`'s result, in words
+    (``"static lines, trajectories at 12 steering angles"``)."""
+    by = (["static lines"] if area["static_px"] else []) + (
+        [f"trajectories at {len(area['trajectory_px'])} steering angles"]
+        if area["trajectory_px"] else [])
+    return ", ".join(by)

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import InputFileError, RvmsimError
 from ..guidelines import compute_guidelines, guideline_view, running_gear, steering_angles
-from ..guidelines.coverage import required_coverage
+from ..guidelines.coverage import covered_by, required_coverage
 from ..guidelines.draw import draw_lines
 from ..guidelines.files import shown_angle
 from ..guidelines.project import DisplayLine
@@ -296,11 +296,8 @@ def _covers_html(fig: GuidelineFigures) -> str:
     rows = []
     for site, objs in fig.covers.items():
         for name, v in objs.items():
-            by = (["static lines"] if v["static_px"] else []) + (
-                [f"trajectories at {len(v['trajectory_px'])} steering angles"]
-                if v["trajectory_px"] else [])
             rows.append(f"<tr><td>{escape(site)}</td><td>{escape(name)}</td>"
-                        f"<td>{escape(', '.join(by))}</td>"
+                        f"<td>{escape(covered_by(v))}</td>"
                         f'<td class="num">{100 * v["fraction"]:.1f} %</td></tr>')
     if not rows:
         return ('<p>The lines cover none of the test objects\' required-visible '
