@@ -15,7 +15,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from .._io import (KeyPath, image_size_problem, input_error_from_validation, key_lines,
-                   line_of, parse_yaml, read_text)
+                   line_of, parse_yaml, parse_yaml_mapping, read_text)
 from ..errors import SceneError
 from .guideline_spec import GuidelineSpec
 from .schema import CameraSpec, MeshPart, Scene
@@ -108,15 +108,13 @@ def load_guideline_spec(path: str | Path) -> GuidelineSpec:
         and the key).
     """
     path = Path(path)
-    text = read_text(path, SceneError)
-    data = parse_yaml(text, str(path), SceneError)
-    if not isinstance(data, dict):
-        raise SceneError(str(path), "", "a guideline spec file must be a YAML mapping")
+    text = read_text(path, SceneError, what="guideline spec file")
+    data = parse_yaml_mapping(text, str(path), SceneError, "a guideline spec file")
     try:
         return GuidelineSpec.model_validate(data)
     except ValidationError as err:
-        raise input_error_from_validation(err, str(path), key_lines(text), SceneError,
-                                          _TAGS) from None
+        raise input_error_from_validation(err, str(path), key_lines(text),
+                                          SceneError) from None
 
 
 def _check_sites(scene: Scene, lines: Mapping[KeyPath, int]) -> None:
