@@ -211,7 +211,6 @@ def create_app(session: ConsoleSession, *, token: str | None = None) -> Guard:
     def evaluate(doc: dict[str, Any]) -> dict[str, Any]:
         return _evaluation(session, pictures, doc, next(frames), picture_url, guides)
 
-
     @app.get("/")
     async def index() -> FileResponse:
         return FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
